@@ -1,0 +1,262 @@
+//! The paper's explicit fixed-step scheme (§3), with proven steady-state
+//! detection.
+//!
+//! Per step of `δ = 2π/N` (in the dimensionless variables of [`crate::scene`]):
+//! advance the drive phase, add the drive increment to the spring stretch
+//! (stick trial), clamp the stretch to the friction band `[−w, w]` (the contact
+//! point is moved so that `|f_x| = μ₀f_z`), and accumulate `f_x` and `f_z`;
+//! `μ = ⟨f_x⟩/⟨f_z⟩` over a period (eq. 20). Forces are kept in units of
+//! `k_xW₀ = μ₀k_z u_z0`, which changes the arithmetic only by a constant factor
+//! and keeps µm/GPa-scale inputs in range for `f32`.
+//!
+//! **No transcendental functions per step**: `(cos θ, sin θ)` advance by a
+//! rotation recurrence and are reset to their exact start values at every
+//! period boundary, so the phase stays wrapped and the rounding error cannot
+//! grow beyond one period's worth (≈ N·ε) however long the run.
+//!
+//! **Steady state.** The discrete scheme forgets its history in the forward
+//! (for `V > 0`) slip window: once the stretch is clamped to `+w` inside the
+//! window it stays clamped until the window ends, whatever came before. So a
+//! period that starts after a completed window with a forward clamp is exactly
+//! the periodic state; that is guaranteed two periods after the first period
+//! with a forward clamp. The run reports convergence only then, and only if
+//! additionally `|μ_k − μ_{k−1}| ≤ tol·μ₀`. A bare tolerance test would be
+//! unsafe: at low velocity the transient drifts by ≈ 2πV per period, which can
+//! be below any tolerance while far from the answer. `V < 0` uses backward clamps.
+//! `V = 0` has no unique steady state and is refused.
+
+use crate::float::{Float, Libm, Math};
+use crate::scene::{Drive, Scene, SceneError};
+
+/// Settings of a fixed-step run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FixedStepConfig<T> {
+    /// Steps per drive period `N` (≥ 4; the paper uses ~10⁴).
+    pub steps_per_period: u32,
+    /// Consistency tolerance on `|μ_k − μ_{k−1}|/μ₀` between the last two periods (> 0).
+    pub tol: T,
+    /// Give up after this many periods (≥ 3).
+    pub max_periods: u32,
+}
+
+impl<T: Float> FixedStepConfig<T> {
+    /// `N` steps per period, tolerance 1e-9 (f64) / 1e-5 (f32), 1 000 000 periods.
+    pub fn new(steps_per_period: u32) -> Self {
+        let tol = if T::EPSILON < T::from_f64(1e-10) {
+            1e-9
+        } else {
+            1e-5
+        };
+        FixedStepConfig {
+            steps_per_period,
+            tol: T::from_f64(tol),
+            max_periods: 1_000_000,
+        }
+    }
+}
+
+/// Where a run starts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Start<T> {
+    /// The paper's start: t = 0 (θ = 0) with the contact point at the origin,
+    /// i.e. stretch `s = Δu_x cos φ`, clamped to the band if it exceeds it.
+    Rest,
+    /// A given state.
+    State(State<T>),
+}
+
+/// A state of the integrator.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct State<T> {
+    /// Drive phase θ = ωt, rad (any finite value; the grid is `θ + kδ`).
+    pub phase: T,
+    /// Spring stretch `s = u_x − u_x,c` in units of W₀ (|s| ≤ w(θ)).
+    pub stretch: T,
+}
+
+/// A converged fixed-step result.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FixedStepOutcome<T> {
+    /// `μ/μ₀` of the last (steady) period (eq. 20).
+    pub mu_over_mu0: T,
+    /// Periods integrated.
+    pub periods: u32,
+    /// Steps integrated (`periods · N`).
+    pub steps: u64,
+    /// The state at the end of the run (one period after the start phase, wrapped).
+    pub end: State<T>,
+}
+
+/// Why a fixed-step run gave no converged number.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FixedStepError<T> {
+    /// `steps_per_period < 4`.
+    TooFewSteps,
+    /// `tol` not finite and > 0, or `max_periods < 3`.
+    BadConfig,
+    /// The velocity is NaN, infinite or out of range.
+    BadVelocity(SceneError),
+    /// `v₀ = 0`: the steady state depends on the initial state; use the static analysis.
+    ZeroVelocity,
+    /// The start state is not finite or outside the friction band.
+    BadStart,
+    /// The period limit was reached before a provably steady period.
+    NotConverged {
+        /// Periods integrated.
+        periods: u32,
+        /// `μ/μ₀` of the last period — *not* a steady-state value.
+        last_mu_over_mu0: T,
+        /// `|μ_k − μ_{k−1}|/μ₀` of the last two periods.
+        last_change: T,
+    },
+}
+
+/// Runs the scheme for `scene` at sliding velocity `v0` (m/s).
+///
+/// # Errors
+/// See [`FixedStepError`]; an unconverged run is an error carrying its last value.
+pub fn run<T: Float>(
+    scene: &Scene<T>,
+    v0: T,
+    cfg: &FixedStepConfig<T>,
+    start: Start<T>,
+) -> Result<FixedStepOutcome<T>, FixedStepError<T>> {
+    let v = scene
+        .dimensionless_velocity(v0)
+        .map_err(FixedStepError::BadVelocity)?;
+    run_dimensionless::<T, Libm>(&scene.drive(), v, cfg, start)
+}
+
+/// The scheme in dimensionless form (`V = v₀/(ωW₀)`), with a chosen math
+/// backend for the per-run set-up (`cos δ`, `sin δ`, start phase).
+///
+/// # Errors
+/// See [`FixedStepError`].
+pub fn run_dimensionless<T: Float, M: Math<T>>(
+    d: &Drive<T>,
+    v: T,
+    cfg: &FixedStepConfig<T>,
+    start: Start<T>,
+) -> Result<FixedStepOutcome<T>, FixedStepError<T>> {
+    if cfg.steps_per_period < 4 {
+        return Err(FixedStepError::TooFewSteps);
+    }
+    if !(cfg.tol.is_finite() && cfg.tol > T::ZERO) || cfg.max_periods < 3 {
+        return Err(FixedStepError::BadConfig);
+    }
+    if !v.is_finite() {
+        return Err(FixedStepError::BadVelocity(SceneError::NonFinite(
+            crate::scene::Param::Velocity,
+        )));
+    }
+    if v == T::ZERO {
+        return Err(FixedStepError::ZeroVelocity);
+    }
+    let n = cfg.steps_per_period;
+    let delta = T::TAU / T::from_u32(n);
+    let (sd, cd) = M::sin_cos(delta);
+    let (phase0, mut s) = match start {
+        Start::Rest => {
+            let w = T::ONE - d.a;
+            (T::ZERO, d.bc.max(-w).min(w))
+        }
+        Start::State(st) => {
+            if !(st.phase.is_finite() && st.stretch.is_finite()) {
+                return Err(FixedStepError::BadStart);
+            }
+            let (_, c) = M::sin_cos(st.phase);
+            let w = T::ONE - d.a * c;
+            if st.stretch.abs() > w {
+                return Err(FixedStepError::BadStart);
+            }
+            (st.phase, st.stretch)
+        }
+    };
+    let (s0, c0) = M::sin_cos(phase0);
+    let (a, bc, bs) = (d.a, d.bc, d.bs);
+    let vd = v * delta;
+    let forward = v > T::ZERO;
+
+    let mut prev_mu = T::ZERO;
+    let mut last_change = T::MAX;
+    // Index of the first period with a clamp in the direction of motion.
+    let mut first_clamp: Option<u32> = None;
+    for period in 1..=cfg.max_periods {
+        let (mut cth, mut sth) = (c0, s0);
+        let mut x_prev = bc * cth - bs * sth;
+        let mut sum_s = T::ZERO;
+        let mut sum_w = T::ZERO;
+        let mut clamp_fwd = false;
+        let mut clamp_bwd = false;
+        // One step to (c, s) = (cos θ', sin θ').
+        let mut step = |c_new: T, s_new: T, s: &mut T, acc_s: &mut T, acc_w: &mut T| {
+            let x_new = bc * c_new - bs * s_new;
+            let w_new = T::ONE - a * c_new;
+            let mut st = *s + vd + (x_new - x_prev);
+            if st > w_new {
+                st = w_new;
+                clamp_fwd = true;
+            } else if st < -w_new {
+                st = -w_new;
+                clamp_bwd = true;
+            }
+            *s = st;
+            x_prev = x_new;
+            *acc_s += st;
+            *acc_w += w_new;
+        };
+        // N − 1 rotated steps in blocks (pairwise-style summation), then the
+        // last step lands exactly on the start phase.
+        let mut remaining = n - 1;
+        while remaining > 0 {
+            let m = remaining.min(256);
+            let (mut acc_s, mut acc_w) = (T::ZERO, T::ZERO);
+            for _ in 0..m {
+                let c_new = cth * cd - sth * sd;
+                let s_new = sth * cd + cth * sd;
+                cth = c_new;
+                sth = s_new;
+                step(c_new, s_new, &mut s, &mut acc_s, &mut acc_w);
+            }
+            sum_s += acc_s;
+            sum_w += acc_w;
+            remaining -= m;
+        }
+        let (mut acc_s, mut acc_w) = (T::ZERO, T::ZERO);
+        step(c0, s0, &mut s, &mut acc_s, &mut acc_w);
+        sum_s += acc_s;
+        sum_w += acc_w;
+
+        let mu = sum_s / sum_w;
+        if period > 1 {
+            last_change = (mu - prev_mu).abs();
+        }
+        prev_mu = mu;
+        let clamped = if forward { clamp_fwd } else { clamp_bwd };
+        if clamped && first_clamp.is_none() {
+            first_clamp = Some(period);
+        }
+        let proven = matches!(first_clamp, Some(p) if period >= p + 2);
+        if proven && last_change <= cfg.tol {
+            return Ok(FixedStepOutcome {
+                mu_over_mu0: mu,
+                periods: period,
+                steps: u64::from(period) * u64::from(n),
+                end: State {
+                    phase: phase0,
+                    stretch: s,
+                },
+            });
+        }
+    }
+    Err(FixedStepError::NotConverged {
+        periods: cfg.max_periods,
+        last_mu_over_mu0: prev_mu,
+        last_change,
+    })
+}

@@ -1,0 +1,172 @@
+//! Regime classification (paper §3.2, classes I–III), computed exactly.
+//!
+//! Definitions (μ as a function of the sliding velocity v, with the scene fixed):
+//!
+//! * **Actuator** (III): the contact pushes by itself — the force points along
+//!   the motion for some velocity (`μ(v)·v < 0`) or is non-zero at rest.
+//! * **Active control** (I): not an actuator and the law is symmetric,
+//!   `μ(v) = −μ(−v)` for every v.
+//! * **Dynamic ratchet** (II): neither — asymmetric, dissipative
+//!   (`μ(v)·v ≥ 0`), and the contact can rest with zero force.
+//!
+//! **The exact boundary of the actuator class** is expressed through the
+//! one-sided limits μ(0±) ([`crate::exact::limits_at_zero`]): the scene is an
+//! actuator iff `μ(0⁺) < 0` or `μ(0⁻) > 0`. When a static equilibrium exists,
+//! `μ(0⁺) = hi = 1 − c` and `μ(0⁻) = lo = c' − 1` (the static interval,
+//! [`crate::analytic::StaticFriction`]), so the condition reads `0 ∉ [lo, hi]`,
+//! i.e. `c > 1` or `c' > 1`: the dimensionless critical velocity of either
+//! direction exceeds 1, `v_c± > ωW₀ = ωμ₀k_z u_z0/k_x`. When no equilibrium
+//! exists (`c + c' > 2`), both limits are equal and are the net force at rest,
+//! generally non-zero. That `μ(0±)` decide the sign of μ for all `v` rests on μ(v)
+//! being non-decreasing in v, which holds for the play-type dynamics of the
+//! model and is checked by a brute-force scan in the tests
+//! (`tests/regime.rs`).
+//!
+//! **Where the paper's rules of thumb fail.** The paper states that ratchets
+//! arise for `k_xΔu_x/(μ₀k_zΔu_z) < 1`, drives for `> 1`, and that φ = π/2 is
+//! symmetric. Exactly, with `r` the ratio and `a = Δu_z/u_z0`:
+//! `c² = a²(1 + 2r cos φ + r²)`, so the actuator condition `max(c, c') > 1` is
+//! `a²(1 + 2r|cos φ| + r²) > 1` (with a static equilibrium). At `a = 0.5` and
+//! φ = 0 that is `r > 1` — the paper's rule, which is exact there. At `a = 0.9`,
+//! φ = 0 it is already `r > 0.111`: an actuator at r = 0.7. At `a = 0.2`, φ = 0
+//! it needs `r > 4`: r = 3 is a ratchet. And for φ = π/2, `c = c'`, but once
+//! `c > 1` the scene is an actuator (no force-free rest), however symmetric
+//! its critical velocities.
+
+use crate::analytic::static_friction::StaticFriction;
+use crate::exact::{limits_at_zero, mu_over_mu0, ExactError};
+use crate::float::{Float, Libm, Math};
+use crate::scene::{Drive, Scene};
+
+/// The three classes of the paper (§3.2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Regime {
+    /// I: symmetric, dissipative law.
+    ActiveControl,
+    /// II: asymmetric but dissipative, force-free rest possible.
+    DynamicRatchet,
+    /// III: the contact drives itself (net force at rest or against the motion).
+    Actuator,
+}
+
+impl Regime {
+    /// Stable machine name (`active_control`, `dynamic_ratchet`, `actuator`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Regime::ActiveControl => "active_control",
+            Regime::DynamicRatchet => "dynamic_ratchet",
+            Regime::Actuator => "actuator",
+        }
+    }
+}
+
+/// Options for [`classify`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ClassifyOptions<T> {
+    /// Tolerance on `μ/μ₀` for "zero" and "equal" (default 1e-9 in f64, 1e-4 in f32).
+    pub tol: T,
+    /// Velocities sampled in `(0, max(v_c±))` for the symmetry check (default 64).
+    pub samples: u32,
+}
+
+impl<T: Float> Default for ClassifyOptions<T> {
+    fn default() -> Self {
+        let tol = if T::EPSILON < T::from_f64(1e-10) {
+            1e-9
+        } else {
+            1e-4
+        };
+        ClassifyOptions {
+            tol: T::from_f64(tol),
+            samples: 64,
+        }
+    }
+}
+
+/// A classification with the numbers it rests on (all `μ` as `μ/μ₀`,
+/// velocities as multiples of ωW₀).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Classification<T> {
+    /// The class.
+    pub regime: Regime,
+    /// `μ(0⁺)/μ₀`.
+    pub mu_0plus: T,
+    /// `μ(0⁻)/μ₀`.
+    pub mu_0minus: T,
+    /// The static analysis.
+    pub statics: StaticFriction<T>,
+    /// `c = v_c+/(ωW₀)`.
+    pub c_forward: T,
+    /// `c' = v_c−/(ωW₀)`.
+    pub c_backward: T,
+    /// `max |μ(v) + μ(−v)|/μ₀` over the sampled velocities and v → 0
+    /// (0 for a symmetric law).
+    pub asymmetry: T,
+}
+
+/// Classifies a scene (see module docs for the definitions).
+///
+/// # Errors
+/// [`ExactError::Inconsistent`] from the solver (never observed).
+pub fn classify<T: Float>(
+    scene: &Scene<T>,
+    opts: &ClassifyOptions<T>,
+) -> Result<Classification<T>, ExactError> {
+    classify_drive::<T, Libm>(&scene.drive(), StaticFriction::of(scene), opts)
+}
+
+/// [`classify`] on a dimensionless drive with a chosen math backend.
+///
+/// # Errors
+/// As [`classify`].
+pub fn classify_drive<T: Float, M: Math<T>>(
+    d: &Drive<T>,
+    statics: StaticFriction<T>,
+    opts: &ClassifyOptions<T>,
+) -> Result<Classification<T>, ExactError> {
+    let (mu_0plus, mu_0minus) = limits_at_zero::<T, M>(d)?;
+    let c = d.c_forward::<M>();
+    let cb = d.c_backward::<M>();
+    let tol = opts.tol;
+    let actuator = mu_0plus < -tol || mu_0minus > tol;
+    let mut asymmetry = (mu_0plus + mu_0minus).abs();
+    let vmax = c.max(cb);
+    if (c - cb).abs() > tol * (T::ONE + vmax) {
+        // Different critical velocities: μ = ±1 beyond one and not the other.
+        asymmetry = asymmetry.max(T::ONE - mu_at(d, c.min(cb))?.abs());
+    } else if vmax > T::ZERO {
+        let n = opts.samples.max(1);
+        for i in 1..=n {
+            let v = vmax * T::from_u32(i) / T::from_u32(n + 1);
+            let f = mu_over_mu0::<T, M>(d, v)?;
+            let b = mu_over_mu0::<T, M>(d, -v)?;
+            asymmetry = asymmetry.max((f + b).abs());
+        }
+    }
+    let regime = if actuator {
+        Regime::Actuator
+    } else if asymmetry <= tol {
+        Regime::ActiveControl
+    } else {
+        Regime::DynamicRatchet
+    };
+    Ok(Classification {
+        regime,
+        mu_0plus,
+        mu_0minus,
+        statics,
+        c_forward: c,
+        c_backward: cb,
+        asymmetry,
+    })
+}
+
+fn mu_at<T: Float>(d: &Drive<T>, v: T) -> Result<T, ExactError> {
+    if v == T::ZERO {
+        return Ok(T::ZERO);
+    }
+    mu_over_mu0::<T, Libm>(d, v)
+}

@@ -1,0 +1,69 @@
+//! Safeguarded Newton iteration for a bracketed root of a smooth monotone
+//! function (Newton where it stays in the bracket and shrinks the step,
+//! bisection otherwise). Used for the stick→slip events of the exact solver.
+
+use crate::float::Float;
+
+/// Root of `f` in `[lo, hi]`, where `f(lo)` and `f(hi)` have opposite signs
+/// (`f_lo`, `f_hi` are those values) and `f` is monotone on the interval.
+/// `fd(x)` returns `(f(x), f'(x))`.
+///
+/// Converges to within a few ulps of `x`; at most `max_iter` evaluations.
+/// Always returns a point inside the bracket (never NaN for finite inputs).
+#[inline]
+pub(crate) fn newton_bracketed<T: Float>(
+    mut lo: T,
+    mut hi: T,
+    f_lo: T,
+    f_hi: T,
+    max_iter: u32,
+    mut fd: impl FnMut(T) -> (T, T),
+) -> T {
+    // Orient so that f(lo) < 0 < f(hi).
+    let increasing = f_lo < f_hi;
+    let sgn = if increasing { T::ONE } else { -T::ONE };
+    let (flo, fhi) = (sgn * f_lo, sgn * f_hi);
+    // Regula-falsi start: exact for a linear function.
+    let mut x = lo + (hi - lo) * (flo / (flo - fhi));
+    if !(x > lo && x < hi) {
+        x = T::HALF * (lo + hi);
+    }
+    let mut dx_old = hi - lo;
+    for _ in 0..max_iter {
+        let (f, d) = fd(x);
+        let (f, d) = (sgn * f, sgn * d);
+        if f == T::ZERO {
+            return x;
+        }
+        if f < T::ZERO {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let tol = T::from_f64(4.0) * T::EPSILON * (x.abs() + T::ONE);
+        if hi - lo <= tol {
+            return T::HALF * (lo + hi);
+        }
+        // Newton step if it lands strictly inside the bracket and at least
+        // halves the previous step; bisection otherwise.
+        let mut step_ok = false;
+        let mut xn = x;
+        if d > T::ZERO {
+            let dx = f / d;
+            xn = x - dx;
+            step_ok = xn > lo && xn < hi && (dx + dx).abs() <= dx_old.abs();
+            if step_ok {
+                dx_old = dx;
+                if dx.abs() <= tol {
+                    return xn;
+                }
+            }
+        }
+        if !step_ok {
+            dx_old = hi - lo;
+            xn = T::HALF * (lo + hi);
+        }
+        x = xn;
+    }
+    x
+}

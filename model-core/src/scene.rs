@@ -1,0 +1,447 @@
+//! The scene: the physical parameters of the single-spring contact (paper §2,
+//! eqs. 1–4) and its dimensionless groups (eqs. 25, 26).
+//!
+//! Units are SI throughout: stiffnesses in N/m, displacements in m, angular
+//! frequency in rad/s, phase in rad, velocities in m/s.
+//!
+//! Internally every solver works in the paper's dimensionless variables:
+//! lengths in units of the mean friction-band half-width
+//! `W₀ = μ₀ k_z u_z0 / k_x` (the largest stretch the spring holds at the mean
+//! normal force), time as the drive phase `θ = ωt`. Then the band is
+//! `w(θ) = 1 − a cos θ` with `a = Δu_z/u_z0`, the tangential drive is
+//! `u_x(θ) = Vθ + b cos(θ + φ)` with `b = k_xΔu_x/(μ₀ k_z u_z0)`, the velocity
+//! is `V = v₀/(ω W₀)`, and `μ/μ₀ = ⟨s⟩` with `s = u_x − u_x,c` the spring stretch.
+//! That `μ/μ₀` depends on `(V, a, b, φ)` only is the paper's eq. 25.
+
+use crate::float::{Float, Libm, Math};
+
+/// Which scene parameter an error is about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Param {
+    /// μ₀, the local (Coulomb) coefficient of friction.
+    Mu0,
+    /// k_z, normal contact stiffness.
+    Kz,
+    /// k_x, tangential contact stiffness.
+    Kx,
+    /// u_z0, mean indentation.
+    Uz0,
+    /// Δu_z, normal oscillation amplitude.
+    Duz,
+    /// Δu_x, tangential oscillation amplitude.
+    Dux,
+    /// ω, angular drive frequency.
+    Omega,
+    /// φ, phase of the tangential oscillation against the normal one.
+    Phi,
+    /// Δu_z/u_z0, relative normal amplitude (eq. 25).
+    DuzRel,
+    /// k_xΔu_x/(μ₀k_z u_z0), relative tangential amplitude (eq. 25).
+    DuxRel,
+    /// k_xΔu_x/(μ₀k_zΔu_z), amplitude ratio (eq. 26).
+    Ratio,
+    /// Sliding velocity v₀.
+    Velocity,
+}
+
+impl Param {
+    /// The name used on the command line and in scene files.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Param::Mu0 => "mu0",
+            Param::Kz => "kz",
+            Param::Kx => "kx",
+            Param::Uz0 => "uz0",
+            Param::Duz => "duz",
+            Param::Dux => "dux",
+            Param::Omega => "omega",
+            Param::Phi => "phi",
+            Param::DuzRel => "duz-rel",
+            Param::DuxRel => "dux-rel",
+            Param::Ratio => "ratio",
+            Param::Velocity => "v0",
+        }
+    }
+}
+
+/// Why a scene was rejected.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SceneError {
+    /// The parameter is NaN or infinite.
+    NonFinite(Param),
+    /// The parameter must be > 0 (μ₀, k_z, k_x, u_z0, ω).
+    NotPositive(Param),
+    /// An amplitude (Δu_z, Δu_x, or a relative amplitude / ratio) is negative.
+    Negative(Param),
+    /// Δu_z ≥ u_z0 (or Δu_z/u_z0 ≥ 1): the spring would lift off the plane at
+    /// the trough of the normal oscillation, which is outside this model
+    /// (the paper assumes Δu_z < u_z0, §2).
+    LiftOff,
+    /// The amplitude ratio (eq. 26) needs Δu_z > 0.
+    RatioNeedsNormalAmplitude,
+    /// The parameters are finite but their combination overflows or
+    /// underflows the float type (e.g. W₀ = μ₀k_z u_z0/k_x is 0 or ∞).
+    OutOfRange(Param),
+}
+
+impl core::fmt::Display for SceneError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            SceneError::NonFinite(p) => write!(f, "{}: must be a finite number", p.name()),
+            SceneError::NotPositive(p) => write!(f, "{}: must be > 0", p.name()),
+            SceneError::Negative(p) => write!(f, "{}: must be >= 0", p.name()),
+            SceneError::LiftOff => write!(
+                f,
+                "duz: must be < uz0 (the normal oscillation would lift the contact off the plane)"
+            ),
+            SceneError::RatioNeedsNormalAmplitude => {
+                write!(f, "ratio: needs duz-rel > 0 (it is kx·dux/(mu0·kz·duz))")
+            }
+            SceneError::OutOfRange(p) => write!(
+                f,
+                "{}: the scene's derived scales over- or underflow the number type",
+                p.name()
+            ),
+        }
+    }
+}
+
+/// Unvalidated physical parameters of a scene (SI units). Turn them into a
+/// [`Scene`] with [`Scene::new`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SceneParams<T> {
+    /// μ₀, local coefficient of friction (dimensionless, > 0).
+    pub mu0: T,
+    /// k_z, normal contact stiffness, N/m (> 0).
+    pub kz: T,
+    /// k_x, tangential contact stiffness, N/m (> 0).
+    pub kx: T,
+    /// u_z0, mean indentation, m (> 0), eq. 1.
+    pub uz0: T,
+    /// Δu_z, normal oscillation amplitude, m (0 ≤ Δu_z < u_z0), eq. 1.
+    pub duz: T,
+    /// Δu_x, tangential oscillation amplitude, m (≥ 0), eq. 2.
+    pub dux: T,
+    /// ω, angular frequency, rad/s (> 0).
+    pub omega: T,
+    /// φ, phase of the tangential oscillation, rad (any finite value), eq. 2.
+    pub phi: T,
+}
+
+/// The paper's dimensionless groups (eq. 25): with these and `v₀/v_c`,
+/// `μ/μ₀` is fixed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Groups<T> {
+    /// `a = Δu_z/u_z0`, in `[0, 1)`.
+    pub duz_rel: T,
+    /// `b = k_xΔu_x/(μ₀ k_z u_z0)`, `≥ 0`.
+    pub dux_rel: T,
+    /// φ, rad.
+    pub phi: T,
+}
+
+impl<T: Float> Groups<T> {
+    /// Groups from eq. 26: `ratio = k_xΔu_x/(μ₀ k_zΔu_z) = b/a`, so `b = ratio · a`.
+    ///
+    /// # Errors
+    /// Non-finite or negative inputs, `a ≥ 1` ([`SceneError::LiftOff`]),
+    /// `a = 0` ([`SceneError::RatioNeedsNormalAmplitude`]).
+    pub fn from_ratio(duz_rel: T, ratio: T, phi: T) -> Result<Self, SceneError> {
+        check_finite(duz_rel, Param::DuzRel)?;
+        check_finite(ratio, Param::Ratio)?;
+        check_finite(phi, Param::Phi)?;
+        if ratio < T::ZERO {
+            return Err(SceneError::Negative(Param::Ratio));
+        }
+        if duz_rel < T::ZERO {
+            return Err(SceneError::Negative(Param::DuzRel));
+        }
+        if duz_rel >= T::ONE {
+            return Err(SceneError::LiftOff);
+        }
+        if duz_rel == T::ZERO {
+            return Err(SceneError::RatioNeedsNormalAmplitude);
+        }
+        let g = Groups {
+            duz_rel,
+            dux_rel: ratio * duz_rel,
+            phi,
+        };
+        g.validate()?;
+        Ok(g)
+    }
+
+    /// Checks the groups: finite, `0 ≤ a < 1`, `b ≥ 0`.
+    ///
+    /// # Errors
+    /// The first violated condition.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        check_finite(self.duz_rel, Param::DuzRel)?;
+        check_finite(self.dux_rel, Param::DuxRel)?;
+        check_finite(self.phi, Param::Phi)?;
+        if self.duz_rel < T::ZERO {
+            return Err(SceneError::Negative(Param::DuzRel));
+        }
+        if self.dux_rel < T::ZERO {
+            return Err(SceneError::Negative(Param::DuxRel));
+        }
+        if self.duz_rel >= T::ONE {
+            return Err(SceneError::LiftOff);
+        }
+        Ok(())
+    }
+}
+
+fn check_finite<T: Float>(x: T, p: Param) -> Result<(), SceneError> {
+    if x.is_finite() {
+        Ok(())
+    } else {
+        Err(SceneError::NonFinite(p))
+    }
+}
+
+fn check_positive<T: Float>(x: T, p: Param) -> Result<(), SceneError> {
+    check_finite(x, p)?;
+    if x > T::ZERO {
+        Ok(())
+    } else {
+        Err(SceneError::NotPositive(p))
+    }
+}
+
+fn check_normal<T: Float>(x: T, p: Param) -> Result<(), SceneError> {
+    if x.is_finite() && x >= T::MIN_POSITIVE {
+        Ok(())
+    } else {
+        Err(SceneError::OutOfRange(p))
+    }
+}
+
+/// A validated scene. Every quantity derived from it is finite.
+///
+/// Holds the physical parameters and the dimensionless drive the solvers use
+/// (module docs). Construct with [`Scene::new`], [`Scene::from_groups`] or
+/// [`Scene::dimensionless`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Scene<T> {
+    params: SceneParams<T>,
+    /// W₀ = μ₀ k_z u_z0 / k_x, m.
+    w0: T,
+    drive: Drive<T>,
+}
+
+/// The dimensionless drive of a scene: `w(θ) = 1 − a cos θ`,
+/// `u_x(θ) = Vθ + b cos(θ + φ)`, stored with `b cos φ` and `b sin φ`
+/// so that the mirror image (φ → φ + π) is exact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Drive<T> {
+    /// `a = Δu_z/u_z0`.
+    pub a: T,
+    /// `b = Δu_x/W₀`.
+    pub b: T,
+    /// `b cos φ`.
+    pub bc: T,
+    /// `b sin φ`.
+    pub bs: T,
+}
+
+impl<T: Float> Drive<T> {
+    /// The drive from `a`, `b`, φ (computes `cos φ`, `sin φ` with `M`).
+    pub fn new<M: Math<T>>(a: T, b: T, phi: T) -> Self {
+        let (s, c) = M::sin_cos(phi);
+        Drive {
+            a,
+            b,
+            bc: b * c,
+            bs: b * s,
+        }
+    }
+
+    /// The mirror image `x → −x`: `φ → φ + π`, exact (`μ(v, φ) = −μ(−v, φ + π)`).
+    #[inline]
+    pub fn mirrored(self) -> Self {
+        Drive {
+            bc: -self.bc,
+            bs: -self.bs,
+            ..self
+        }
+    }
+
+    /// Dimensionless critical velocity for forward sliding, `c = |b e^{iφ} + a|`
+    /// (eq. 8 with sgn v₀ = +1, divided by ωW₀).
+    #[inline]
+    pub fn c_forward<M: Math<T>>(&self) -> T {
+        M::hypot(self.a + self.bc, self.bs)
+    }
+
+    /// Dimensionless critical velocity for backward sliding, `c' = |b e^{iφ} − a|`
+    /// (eq. 8 with sgn v₀ = −1).
+    #[inline]
+    pub fn c_backward<M: Math<T>>(&self) -> T {
+        M::hypot(self.bc - self.a, self.bs)
+    }
+}
+
+impl<T: Float> Scene<T> {
+    /// Validates physical parameters.
+    ///
+    /// # Errors
+    /// [`SceneError::NonFinite`] for NaN/∞, [`SceneError::NotPositive`] for
+    /// μ₀, k_z, k_x, u_z0 or ω ≤ 0, [`SceneError::Negative`] for Δu_z or
+    /// Δu_x < 0, [`SceneError::LiftOff`] for Δu_z ≥ u_z0 and
+    /// [`SceneError::OutOfRange`] if W₀ or a dimensionless group over- or
+    /// underflows.
+    pub fn new(p: SceneParams<T>) -> Result<Self, SceneError> {
+        check_positive(p.mu0, Param::Mu0)?;
+        check_positive(p.kz, Param::Kz)?;
+        check_positive(p.kx, Param::Kx)?;
+        check_positive(p.uz0, Param::Uz0)?;
+        check_finite(p.duz, Param::Duz)?;
+        check_finite(p.dux, Param::Dux)?;
+        check_positive(p.omega, Param::Omega)?;
+        check_finite(p.phi, Param::Phi)?;
+        if p.duz < T::ZERO {
+            return Err(SceneError::Negative(Param::Duz));
+        }
+        if p.dux < T::ZERO {
+            return Err(SceneError::Negative(Param::Dux));
+        }
+        if p.duz >= p.uz0 {
+            return Err(SceneError::LiftOff);
+        }
+        // W₀ = μ₀ (k_z/k_x) u_z0, formed so that intermediate products stay in range.
+        let w0 = p.mu0 * (p.kz / p.kx) * p.uz0;
+        check_normal(w0, Param::Kx)?;
+        let a = p.duz / p.uz0;
+        if a >= T::ONE {
+            return Err(SceneError::LiftOff);
+        }
+        let b = p.dux / w0;
+        if !b.is_finite() {
+            return Err(SceneError::OutOfRange(Param::Dux));
+        }
+        // ω W₀ must be a usable velocity scale.
+        check_normal(p.omega * w0, Param::Omega)?;
+        let drive = Drive::new::<Libm>(a, b, p.phi);
+        // The critical velocities must be finite too (b ≤ MAX, a < 1 ⇒ hypot finite
+        // unless b is within a factor 2 of MAX).
+        if !(drive.c_forward::<Libm>() * p.omega * w0).is_finite()
+            || !(drive.c_backward::<Libm>() * p.omega * w0).is_finite()
+        {
+            return Err(SceneError::OutOfRange(Param::Dux));
+        }
+        Ok(Scene {
+            params: p,
+            w0,
+            drive,
+        })
+    }
+
+    /// A scene from base quantities and the dimensionless groups (eq. 25):
+    /// `Δu_z = a·u_z0`, `Δu_x = b·μ₀k_z u_z0/k_x`. Use
+    /// [`Groups::from_ratio`] for eq. 26.
+    ///
+    /// # Errors
+    /// As [`Scene::new`] and [`Groups::validate`].
+    pub fn from_groups(
+        mu0: T,
+        kz: T,
+        kx: T,
+        uz0: T,
+        omega: T,
+        g: Groups<T>,
+    ) -> Result<Self, SceneError> {
+        g.validate()?;
+        check_positive(mu0, Param::Mu0)?;
+        check_positive(kz, Param::Kz)?;
+        check_positive(kx, Param::Kx)?;
+        check_positive(uz0, Param::Uz0)?;
+        let w0 = mu0 * (kz / kx) * uz0;
+        Scene::new(SceneParams {
+            mu0,
+            kz,
+            kx,
+            uz0,
+            duz: g.duz_rel * uz0,
+            dux: g.dux_rel * w0,
+            omega,
+            phi: g.phi,
+        })
+    }
+
+    /// The purely dimensionless scene: μ₀ = k_z = k_x = u_z0 = ω = 1, so
+    /// W₀ = 1, velocities are `V = v₀/(ωW₀)` and forces are `μ/μ₀`.
+    ///
+    /// # Errors
+    /// As [`Groups::validate`].
+    pub fn dimensionless(g: Groups<T>) -> Result<Self, SceneError> {
+        Scene::from_groups(T::ONE, T::ONE, T::ONE, T::ONE, T::ONE, g)
+    }
+
+    /// The physical parameters as given.
+    #[inline]
+    pub fn params(&self) -> &SceneParams<T> {
+        &self.params
+    }
+
+    /// μ₀.
+    #[inline]
+    pub fn mu0(&self) -> T {
+        self.params.mu0
+    }
+
+    /// W₀ = μ₀ k_z u_z0 / k_x, m: the spring stretch at which the mean normal
+    /// force lets the contact slip (the unit of length of the solvers).
+    #[inline]
+    pub fn w0(&self) -> T {
+        self.w0
+    }
+
+    /// The velocity unit ωW₀, m/s: `V = v₀/(ωW₀)`.
+    #[inline]
+    pub fn velocity_scale(&self) -> T {
+        self.params.omega * self.w0
+    }
+
+    /// The dimensionless drive.
+    #[inline]
+    pub fn drive(&self) -> Drive<T> {
+        self.drive
+    }
+
+    /// The dimensionless groups (eq. 25).
+    pub fn groups(&self) -> Groups<T> {
+        Groups {
+            duz_rel: self.drive.a,
+            dux_rel: self.drive.b,
+            phi: self.params.phi,
+        }
+    }
+
+    /// The amplitude ratio of eq. 26, `k_xΔu_x/(μ₀ k_zΔu_z) = b/a`; `None` when Δu_z = 0.
+    pub fn ratio(&self) -> Option<T> {
+        if self.drive.a > T::ZERO {
+            Some(self.drive.b / self.drive.a)
+        } else {
+            None
+        }
+    }
+
+    /// Dimensionless velocity `V = v₀/(ωW₀)` of a sliding velocity in m/s.
+    ///
+    /// # Errors
+    /// [`SceneError::NonFinite`] (`Param::Velocity`) for NaN/∞ or a velocity
+    /// so large that `V` overflows.
+    pub fn dimensionless_velocity(&self, v0: T) -> Result<T, SceneError> {
+        check_finite(v0, Param::Velocity)?;
+        let v = v0 / self.velocity_scale();
+        check_finite(v, Param::Velocity)?;
+        Ok(v)
+    }
+}
