@@ -7,12 +7,12 @@
 //!   rounded `sqrt`, and `sin`/`cos`/`asin`/`atan2` within 1 ulp. This is the
 //!   default everywhere and what every accuracy figure of the crate refers to.
 //! * [`Micromath`] — `micromath`'s fast `f32` approximations (Cortex-M
-//!   friendly, no tables). Measured error bounds (see `tests/micromath_bounds.rs`
-//!   in this crate, a sweep of 2²⁰ arguments over one period against `f64` libm):
-//!   `sin`/`cos` ≤ 1.2e-3 absolute, `sqrt` ≤ 6e-3 relative (≈ 2⁻⁷·⁵, it is a
-//!   bit-trick estimate), `asin` ≤ 1.1e-4 absolute, `atan2` ≤ 1.6e-4 rad.
-//!   Good enough for a waveform table at 8-bit accuracy or a quick look, not
-//!   for the exact solver (whose f32/libm results agree with f64 to ~1e-6).
+//!   friendly, no tables). Measured error bounds (`tests/tests/micromath_bounds.rs`
+//!   in the workspace: 2²⁰ arguments against `f64` libm): `sin`/`cos`
+//!   ≤ 1.1e-3 absolute, `sqrt` ≤ 6.2e-2 *relative* (a bit-trick estimate),
+//!   `asin` ≤ 1.9e-2 rad, `atan2` ≤ 2.9e-3 rad. Usable for a quick look or a
+//!   coarse waveform, not for the exact solver, whose f32 results with
+//!   [`Libm`] agree with f64 to ~3e-7.
 
 use core::fmt::Debug;
 use core::ops::{Add, AddAssign, Div, Mul, MulAssign, Neg, Sub, SubAssign};
