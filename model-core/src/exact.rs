@@ -159,10 +159,11 @@ fn solve_dimensionless<T: Float, M: Math<T>>(
     } else {
         (d.mirrored(), -v, -T::ONE)
     };
-    if vv >= dd.c_forward::<M>() {
+    let c = dd.c_forward::<M>();
+    if vv >= c {
         return Ok(Solution::Sliding { mu_over_mu0: sign });
     }
-    let m = period_forward::<T, M>(&dd, vv, |_| {})?;
+    let m = period_forward::<T, M>(&dd, vv, c, None)?;
     Ok(Solution::StickSlip {
         mu_over_mu0: sign * m,
     })
@@ -185,10 +186,11 @@ pub fn mu_over_mu0<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<T, ExactE
     } else {
         (d.mirrored(), -v, -T::ONE)
     };
-    if vv >= dd.c_forward::<M>() {
+    let c = dd.c_forward::<M>();
+    if vv >= c {
         return Ok(sign);
     }
-    Ok(sign * period_forward::<T, M>(&dd, vv, |_| {})?)
+    Ok(sign * period_forward::<T, M>(&dd, vv, c, None)?)
 }
 
 /// The one-sided limits `(μ(0⁺), μ(0⁻))/μ₀` of the velocity law.
@@ -196,16 +198,18 @@ pub fn mu_over_mu0<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<T, ExactE
 /// # Errors
 /// [`ExactError::Inconsistent`] (internal check).
 pub fn limits_at_zero<T: Float, M: Math<T>>(d: &Drive<T>) -> Result<(T, T), ExactError> {
-    let plus = if d.c_forward::<M>() == T::ZERO {
+    let c = d.c_forward::<M>();
+    let plus = if c == T::ZERO {
         T::ONE
     } else {
-        period_forward::<T, M>(d, T::ZERO, |_| {})?
+        period_forward::<T, M>(d, T::ZERO, c, None)?
     };
     let m = d.mirrored();
-    let minus = if m.c_forward::<M>() == T::ZERO {
+    let cm = m.c_forward::<M>();
+    let minus = if cm == T::ZERO {
         -T::ONE
     } else {
-        -period_forward::<T, M>(&m, T::ZERO, |_| {})?
+        -period_forward::<T, M>(&m, T::ZERO, cm, None)?
     };
     Ok((plus, minus))
 }
@@ -230,7 +234,8 @@ pub fn steady_state<T: Float, M: Math<T>>(
         (d.mirrored(), -v, -T::ONE)
     };
     let mut arcs: Vec<Arc<T>, MAX_ARCS> = Vec::new();
-    if vv >= dd.c_forward::<M>() {
+    let c = dd.c_forward::<M>();
+    if vv >= c {
         let kind = if sign > T::ZERO {
             ArcKind::SlipForward
         } else {
@@ -243,7 +248,7 @@ pub fn steady_state<T: Float, M: Math<T>>(
         });
         return Ok((sign, arcs));
     }
-    let m = period_forward::<T, M>(&dd, vv, |arc| {
+    let mut push = |arc: Arc<T>| {
         let kind = match (arc.kind, sign > T::ZERO) {
             (ArcKind::Stick, _) => ArcKind::Stick,
             (k, true) => k,
@@ -251,8 +256,289 @@ pub fn steady_state<T: Float, M: Math<T>>(
             (ArcKind::SlipBackward, false) => ArcKind::SlipForward,
         };
         let _ = arcs.push(Arc { kind, ..arc });
-    })?;
+    };
+    let m = period_forward::<T, M>(&dd, vv, c, Some(&mut push))?;
     Ok((sign * m, arcs))
+}
+
+/// A phase point `τ` with `sin τ` and `cos τ`.
+#[derive(Clone, Copy, Debug)]
+struct Pt<T> {
+    t: T,
+    s: T,
+    c: T,
+}
+
+/// Rotation of a phase point's trig by an angle given as `(sin, cos)`.
+#[inline(always)]
+fn rot<T: Float>(s: T, c: T, sd: T, cd: T) -> (T, T) {
+    (s * cd + c * sd, c * cd - s * sd)
+}
+
+/// One steady-state period for `0 ≤ V < c` (forward convention, `c` the
+/// forward critical velocity of `d`), returning `⟨s⟩ = μ/μ₀`. `V = 0` gives
+/// the limit `μ(0⁺)/μ₀`. `rec`, if given, sees each arc in order.
+///
+/// All phases are relative to the window end θ_e: τ = θ − θ_e ∈ [0, 2π]. The
+/// trigonometric values at the closed-form points (window ends) come from
+/// rotations of `(V/c, √(1 − V²/c²))` and the drive phasors, so the only
+/// transcendental calls are two `asin`, the square roots, and one `sin_cos`
+/// per Newton iteration of the stick→slip roots.
+#[inline]
+fn period_forward<T: Float, M: Math<T>>(
+    d: &Drive<T>,
+    v: T,
+    c: T,
+    mut rec: Option<&mut dyn FnMut(Arc<T>)>,
+) -> Result<T, ExactError> {
+    let (a, bc, bs) = (d.a, d.bc, d.bs);
+    let pr = a + bc; // Re(b e^{iφ} + a);  c e^{iψ} = pr + i·bs
+                     // Forward window end: α = asin(V/c), θ_e = α − ψ.
+    let sa = (v / c).min(T::ONE);
+    let ca = M::sqrt(((T::ONE - sa) * (T::ONE + sa)).max(T::ZERO));
+    let alpha = M::asin(sa);
+    let (cpsi, spsi) = (pr / c, bs / c);
+    let se = sa * cpsi - ca * spsi; // sin θ_e
+    let ce = ca * cpsi + sa * spsi; // cos θ_e
+                                    // Functions of τ:  A = a cos(τ+θ_e) = m cos τ − n sin τ,  ∫A = m sin τ + n cos τ,
+                                    //                  X = b cos(τ+θ_e+φ) = p cos τ − q sin τ,  ∫X = p sin τ + q cos τ.
+    let (m, n) = (a * ce, a * se);
+    let p = bc * ce - bs * se;
+    let q = bc * se + bs * ce;
+    let p0 = Pt {
+        t: T::ZERO,
+        s: T::ZERO,
+        c: T::ONE,
+    };
+    let pend = Pt {
+        t: T::TAU,
+        s: T::ZERO,
+        c: T::ONE,
+    };
+    // Start of the forward window (h⁺ minimum): τ_s = π − 2α.
+    let ps = Pt {
+        t: T::PI - (alpha + alpha),
+        s: T::TWO * sa * ca,
+        c: T::TWO * sa * sa - T::ONE,
+    };
+
+    // Backward window (h⁻ decreasing) if V < c': pieces inside [0, 2π] in time order.
+    let qr = bc - a; // c' e^{iψ'} = qr + i·bs
+    let cb = M::hypot(qr, bs);
+    let mut back = [(p0, p0); 2];
+    let mut nback = 0usize;
+    let mut curv_b = T::ZERO;
+    if v < cb {
+        let sb = (v / cb).min(T::ONE);
+        let cbb = M::sqrt(((T::ONE - sb) * (T::ONE + sb)).max(T::ZERO));
+        let alpha_b = M::asin(sb);
+        curv_b = cb * cbb;
+        // δ = ψ − ψ' = arg(P·conj P'), P·conj P' = (pr·qr + bs²) − i·2a·bs.
+        let re = pr * qr + bs * bs;
+        let im = -(T::TWO * a * bs);
+        let delta = M::atan2(im, re);
+        let cc = c * cb;
+        let (sd, cd) = (im / cc, re / cc);
+        // Window start σ = α' − ψ' − θ_e = α' − α + δ.
+        let (s1, c1) = rot(sb, cbb, -sa, ca);
+        let (s1, c1) = rot(s1, c1, sd, cd);
+        let start = wrap_tau(alpha_b - alpha + delta);
+        let len = T::PI - (alpha_b + alpha_b);
+        let (s2, c2) = rot(s1, c1, T::TWO * sb * cbb, T::TWO * sb * sb - T::ONE);
+        let end = start + len;
+        let pstart = Pt {
+            t: start,
+            s: s1,
+            c: c1,
+        };
+        if end > T::TAU {
+            back[0] = (
+                p0,
+                Pt {
+                    t: end - T::TAU,
+                    s: s2,
+                    c: c2,
+                },
+            );
+            back[1] = (pstart, pend);
+            nback = 2;
+        } else {
+            back[0] = (
+                pstart,
+                Pt {
+                    t: end,
+                    s: s2,
+                    c: c2,
+                },
+            );
+            nback = 1;
+        }
+    }
+
+    let a_int = |x: &Pt<T>| m * x.s + n * x.c;
+    let x_int = |x: &Pt<T>| p * x.s + q * x.c;
+    let w_at = |x: &Pt<T>| T::ONE - (m * x.c - n * x.s);
+    let x_at = |x: &Pt<T>| p * x.c - q * x.s;
+    // ∫ w dτ over [x0, x1].
+    let w_integral = |x0: &Pt<T>, x1: &Pt<T>| (x1.t - x0.t) - (a_int(x1) - a_int(x0));
+    let mut theta_e = T::ZERO;
+    if rec.is_some() {
+        theta_e = alpha - M::atan2(bs, pr);
+    }
+    let mut emit = |kind: ArcKind, x0: &Pt<T>, x1: &Pt<T>| {
+        if let Some(r) = rec.as_mut() {
+            r(Arc {
+                kind,
+                start: x0.t + theta_e,
+                end: x1.t + theta_e,
+            });
+        }
+    };
+
+    // Rounding level of h± (for the root finder's stopping test).
+    let scale = T::ONE + d.b + a + v * T::TAU;
+    let ftol = |k: T| T::from_f64(8.0) * T::EPSILON * (scale + k.abs());
+    let mut total = T::ZERO;
+    let mut tau0 = p0;
+    // Stick: s(τ) = k + Vτ + X(τ); at τ = 0, s = w(0).
+    let mut k = w_at(&p0) - x_at(&p0);
+    for _ in 0..MAX_ARCS {
+        // h⁺ = s − w = k − 1 + Vτ + X + A; h⁻ = s + w = k + 1 + Vτ + X − A.
+        let hplus = |x: &Pt<T>| k - T::ONE + v * x.t + (p + m) * x.c - (q + n) * x.s;
+        let hminus = |x: &Pt<T>| k + T::ONE + v * x.t + (p - m) * x.c - (q - n) * x.s;
+        let dplus = |x: &Pt<T>| v - (p + m) * x.s - (q + n) * x.c;
+        let dminus = |x: &Pt<T>| v - (p - m) * x.s - (q - n) * x.c;
+        // Forward touch: first zero of h⁺ on its increasing segment [max(τ0, τ_s), 2π].
+        let mut tf: Option<Pt<T>> = None;
+        let l = if tau0.t >= ps.t { tau0 } else { ps };
+        if l.t < pend.t {
+            let fl = hplus(&l);
+            if fl >= T::ZERO {
+                // At the band already at the segment start (rounding only): slip now.
+                tf = Some(l);
+            } else {
+                let fr = hplus(&pend);
+                if fr > T::ZERO {
+                    // Near the minimum h⁺ ≈ h_min + ½·c cos α·(τ − τ_s)².
+                    let curv = c * ca;
+                    let guess = if l.t == ps.t && curv > T::ZERO {
+                        l.t + M::sqrt(-(fl + fl) / curv)
+                    } else {
+                        l.t - fl / dplus(&l)
+                    };
+                    tf = Some(root::<T, M>(l.t, pend.t, fl, fr, guess, ftol(k), |x| {
+                        (hplus(x), dplus(x))
+                    }));
+                }
+            }
+        }
+        // Backward touch before the forward one: zero of h⁻ on a decreasing piece.
+        let horizon = tf.map_or(pend.t, |x| x.t);
+        let mut tb: Option<(Pt<T>, Pt<T>)> = None;
+        for &(pl, pr_) in back.iter().take(nback) {
+            let l = if tau0.t > pl.t { tau0 } else { pl };
+            if l.t >= pr_.t || l.t >= horizon {
+                continue;
+            }
+            let fl = hminus(&l);
+            if fl <= T::ZERO {
+                tb = Some((l, pr_));
+                break;
+            }
+            let fr = hminus(&pr_);
+            if fr < T::ZERO {
+                // Near the maximum h⁻ ≈ h_max − ½·c' cos α'·(τ − σ)².
+                let guess = if l.t == pl.t && curv_b > T::ZERO {
+                    l.t + M::sqrt((fl + fl) / curv_b)
+                } else {
+                    l.t - fl / dminus(&l)
+                };
+                let r = root::<T, M>(l.t, pr_.t, fl, fr, guess, ftol(k), |x| {
+                    (hminus(x), dminus(x))
+                });
+                if r.t < horizon {
+                    tb = Some((r, pr_));
+                }
+                break;
+            }
+        }
+        let stick_integral = |x0: &Pt<T>, x1: &Pt<T>| {
+            k * (x1.t - x0.t)
+                + v * (x1.t - x0.t) * (x1.t + x0.t) * T::HALF
+                + (x_int(x1) - x_int(x0))
+        };
+        match (tb, tf) {
+            (Some((t_b, t_end_b)), _) => {
+                total += stick_integral(&tau0, &t_b);
+                total -= w_integral(&t_b, &t_end_b);
+                emit(ArcKind::Stick, &tau0, &t_b);
+                emit(ArcKind::SlipBackward, &t_b, &t_end_b);
+                if t_end_b.t >= pend.t {
+                    // Slipping backward at the period end: not the steady state.
+                    return Err(ExactError::Inconsistent);
+                }
+                // Stick again from s = −w.
+                k = -w_at(&t_end_b) - v * t_end_b.t - x_at(&t_end_b);
+                tau0 = t_end_b;
+            }
+            (None, Some(t_f)) => {
+                total += stick_integral(&tau0, &t_f);
+                total += w_integral(&t_f, &pend);
+                emit(ArcKind::Stick, &tau0, &t_f);
+                emit(ArcKind::SlipForward, &t_f, &pend);
+                return finish(total);
+            }
+            (None, None) => {
+                // No forward touch: only consistent if s(2π) = w(2π) already
+                // (V → 0 with pure stick; otherwise h⁺(2π) ≥ 2πV).
+                let tol = T::from_f64(64.0) * T::EPSILON * (T::ONE + d.b + v * T::TAU);
+                if hplus(&pend).abs() > tol {
+                    return Err(ExactError::Inconsistent);
+                }
+                total += stick_integral(&tau0, &pend);
+                emit(ArcKind::Stick, &tau0, &pend);
+                return finish(total);
+            }
+        }
+    }
+    Err(ExactError::Inconsistent)
+}
+
+#[inline(always)]
+fn finish<T: Float>(total: T) -> Result<T, ExactError> {
+    let mu = total / T::TAU;
+    // |μ/μ₀| ≤ 1 holds exactly; allow rounding, never more.
+    if !mu.is_finite() || mu.abs() > T::ONE + T::from_f64(1e3) * T::EPSILON {
+        return Err(ExactError::Inconsistent);
+    }
+    Ok(mu.max(-T::ONE).min(T::ONE))
+}
+
+/// Bracketed root of a stick→slip function, returned with its trig.
+#[inline(always)]
+fn root<T: Float, M: Math<T>>(
+    lo: T,
+    hi: T,
+    f_lo: T,
+    f_hi: T,
+    guess: T,
+    f_tol: T,
+    fd: impl Fn(&Pt<T>) -> (T, T),
+) -> Pt<T> {
+    newton_bracketed((lo, hi, f_lo, f_hi), guess, f_tol, 100, |t| {
+        let (s, c) = M::sin_cos(t);
+        let x = Pt { t, s, c };
+        let (f, df) = fd(&x);
+        (f, df, s, c)
+    })
+    .into()
+}
+
+impl<T> From<(T, T, T)> for Pt<T> {
+    #[inline(always)]
+    fn from((t, s, c): (T, T, T)) -> Self {
+        Pt { t, s, c }
+    }
 }
 
 /// Wraps `x` (|x| < 8π) into `[0, 2π)`.
@@ -265,197 +551,4 @@ fn wrap_tau<T: Float>(mut x: T) -> T {
         x -= T::TAU;
     }
     x
-}
-
-/// One steady-state period for `0 ≤ V < c` (forward convention), returning `⟨s⟩`.
-/// `V = 0` gives the limit `μ(0⁺)/μ₀`. `on_arc` sees each arc in order.
-#[inline]
-fn period_forward<T: Float, M: Math<T>>(
-    d: &Drive<T>,
-    v: T,
-    mut on_arc: impl FnMut(Arc<T>),
-) -> Result<T, ExactError> {
-    let (a, bc, bs) = (d.a, d.bc, d.bs);
-    let pr = a + bc; // Re(b e^{iφ} + a)
-    let c = M::hypot(pr, bs);
-    // Window end θ_e = α − ψ, α = asin(V/c) ∈ [0, π/2].
-    let ratio = (v / c).min(T::ONE);
-    let alpha = M::asin(ratio);
-    let psi = M::atan2(bs, pr);
-    let theta_e = alpha - psi;
-    let (se, ce) = M::sin_cos(theta_e);
-    // Functions of τ = θ − θ_e via sincos(τ) only:
-    //   A(τ) = a cos(τ+θ_e) = m cos τ − n sin τ,     ∫A = m sin τ + n cos τ
-    //   X(τ) = b cos(τ+θ_e+φ) = p cos τ − q sin τ,   ∫X = p sin τ + q cos τ
-    let (m, n) = (a * ce, a * se);
-    let p = bc * ce - bs * se;
-    let q = bc * se + bs * ce;
-    let tau_end = T::TAU;
-    // Forward window (h⁺ increasing) inside the period: [π − 2α, 2π].
-    let tau_s = T::PI - (alpha + alpha);
-
-    // Backward window (h⁻ decreasing), if V < c'.
-    let qr = bc - a; // Re(b e^{iφ} − a)
-    let cb = M::hypot(qr, bs);
-    // Pieces of the backward window inside [0, 2π], in time order.
-    let mut back: [(T, T); 2] = [(T::ZERO, T::ZERO); 2];
-    let mut nback = 0usize;
-    if v < cb {
-        let alpha_b = M::asin((v / cb).min(T::ONE));
-        let psi_b = M::atan2(bs, qr);
-        let len = T::PI - (alpha_b + alpha_b);
-        let start = wrap_tau(alpha_b - psi_b - theta_e);
-        let wrapped_end = start + len - T::TAU;
-        if wrapped_end > T::ZERO {
-            back[nback] = (T::ZERO, wrapped_end);
-            nback += 1;
-        }
-        back[nback] = (start, (start + len).min(tau_end));
-        nback += 1;
-    }
-
-    let theta = |tau: T| tau + theta_e;
-    // (A(τ), X(τ), Ȧ, Ẋ) pieces.
-    let trig = |tau: T| M::sin_cos(tau);
-    let mut total = T::ZERO;
-    let mut tau0 = T::ZERO;
-    // Stick constant: s(τ) = k + Vτ + X(τ); at τ = 0, s = w(0) = 1 − A(0).
-    let mut k = T::ONE - m - p;
-    let mut closed = false;
-    for _ in 0..MAX_ARCS {
-        // h⁺(τ) = s − w = k − 1 + Vτ + X + A ;  h⁺' = V − (p+n) sinτ − (q+m) cosτ
-        let hplus = |tau: T| {
-            let (st, ct) = trig(tau);
-            let f = k - T::ONE + v * tau + (p + m) * ct - (q + n) * st;
-            let df = v - (p + m) * st - (q + n) * ct;
-            (f, df)
-        };
-        // h⁻(τ) = s + w = k + 1 + Vτ + X − A ; h⁻' = V − (p−m) sinτ − (q−n) cosτ
-        let hminus = |tau: T| {
-            let (st, ct) = trig(tau);
-            let f = k + T::ONE + v * tau + (p - m) * ct - (q - n) * st;
-            let df = v - (p - m) * st - (q - n) * ct;
-            (f, df)
-        };
-        // Forward touch.
-        let mut tf: Option<T> = None;
-        {
-            let l = tau0.max(tau_s);
-            if l < tau_end {
-                let fl = hplus(l).0;
-                if fl >= T::ZERO {
-                    // Already at the upper band at the start of the increasing
-                    // segment (only at the window start, by rounding): slip now.
-                    tf = Some(l);
-                } else {
-                    let fr = hplus(tau_end).0;
-                    if fr > T::ZERO {
-                        tf = Some(newton_bracketed(l, tau_end, fl, fr, 100, hplus));
-                    }
-                }
-            }
-        }
-        // Backward touch (only if it can come before the forward one).
-        let mut tb: Option<(T, T)> = None;
-        let horizon = tf.unwrap_or(tau_end);
-        for &(pl, pr_) in back.iter().take(nback) {
-            let l = pl.max(tau0);
-            if !(l < pr_) || l >= horizon {
-                continue;
-            }
-            let fl = hminus(l).0;
-            if fl <= T::ZERO {
-                tb = Some((l, pr_));
-                break;
-            }
-            let fr = hminus(pr_).0;
-            if fr < T::ZERO {
-                let r = newton_bracketed(l, pr_, fl, fr, 100, hminus);
-                if r < horizon {
-                    tb = Some((r, pr_));
-                }
-                break;
-            }
-        }
-        let stick_integral = |t0: T, t1: T| {
-            let (s0, c0) = trig(t0);
-            let (s1, c1) = trig(t1);
-            let y = (p * s1 + q * c1) - (p * s0 + q * c0);
-            k * (t1 - t0) + v * (t1 - t0) * (t1 + t0) * T::HALF + y
-        };
-        // ∫ w dτ over [t0, t1].
-        let w_integral = |t0: T, t1: T| {
-            let (s0, c0) = trig(t0);
-            let (s1, c1) = trig(t1);
-            (t1 - t0) - ((m * s1 + n * c1) - (m * s0 + n * c0))
-        };
-        match (tb, tf) {
-            (Some((t_b, t_end_b)), _) => {
-                total += stick_integral(tau0, t_b);
-                total -= w_integral(t_b, t_end_b);
-                on_arc(Arc {
-                    kind: ArcKind::Stick,
-                    start: theta(tau0),
-                    end: theta(t_b),
-                });
-                on_arc(Arc {
-                    kind: ArcKind::SlipBackward,
-                    start: theta(t_b),
-                    end: theta(t_end_b),
-                });
-                // Stick again from s = −w(t_end_b).
-                let (s1, c1) = trig(t_end_b);
-                let w1 = T::ONE - (m * c1 - n * s1);
-                let x1 = p * c1 - q * s1;
-                k = -w1 - v * t_end_b - x1;
-                tau0 = t_end_b;
-                if tau0 >= tau_end {
-                    // Slipping backward at the period end: cannot be the steady state.
-                    return Err(ExactError::Inconsistent);
-                }
-            }
-            (None, Some(t_f)) => {
-                total += stick_integral(tau0, t_f);
-                total += w_integral(t_f, tau_end);
-                on_arc(Arc {
-                    kind: ArcKind::Stick,
-                    start: theta(tau0),
-                    end: theta(t_f),
-                });
-                on_arc(Arc {
-                    kind: ArcKind::SlipForward,
-                    start: theta(t_f),
-                    end: theta(tau_end),
-                });
-                closed = true;
-                break;
-            }
-            (None, None) => {
-                // No forward touch: only consistent if s(2π) = w(2π) already
-                // (V → 0 with pure stick; h⁺(2π) = 2πV otherwise).
-                let h_end = hplus(tau_end).0;
-                let tol = T::from_f64(64.0) * T::EPSILON * (T::ONE + d.b + v * T::TAU);
-                if h_end.abs() > tol {
-                    return Err(ExactError::Inconsistent);
-                }
-                total += stick_integral(tau0, tau_end);
-                on_arc(Arc {
-                    kind: ArcKind::Stick,
-                    start: theta(tau0),
-                    end: theta(tau_end),
-                });
-                closed = true;
-                break;
-            }
-        }
-    }
-    if !closed {
-        return Err(ExactError::Inconsistent);
-    }
-    let mu = total / T::TAU;
-    // |μ/μ₀| ≤ 1 holds exactly; allow rounding.
-    if !mu.is_finite() || mu.abs() > T::ONE + T::from_f64(1e3) * T::EPSILON {
-        return Err(ExactError::Inconsistent);
-    }
-    Ok(mu.max(-T::ONE).min(T::ONE))
 }

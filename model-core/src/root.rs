@@ -4,36 +4,45 @@
 
 use crate::float::Float;
 
-/// Root of `f` in `[lo, hi]`, where `f(lo)` and `f(hi)` have opposite signs
+/// Root of `f` in the bracket `(lo, hi, f_lo, f_hi)`: `[lo, hi]`, where `f(lo)` and `f(hi)` have opposite signs
 /// (`f_lo`, `f_hi` are those values) and `f` is monotone on the interval.
-/// `fd(x)` returns `(f(x), f'(x))`.
+/// `guess` (if inside the bracket) is the first iterate, otherwise regula
+/// falsi; the iteration stops when `|f| ≤ f_tol` (the rounding level of `f`),
+/// when a Newton step is below a few ulps, or when the bracket is that small.
+/// `fd(x)` returns `(f(x), f'(x), sin x, cos x)`; the root is returned as
+/// `(x, sin x, cos x)` (the trig of a final Newton step is extrapolated to
+/// first order, exact to O(step²), i.e. to rounding).
 ///
 /// Converges to within a few ulps of `x`; at most `max_iter` evaluations.
 /// Always returns a point inside the bracket (never NaN for finite inputs).
 #[inline]
 pub(crate) fn newton_bracketed<T: Float>(
-    mut lo: T,
-    mut hi: T,
-    f_lo: T,
-    f_hi: T,
+    (mut lo, mut hi, f_lo, f_hi): (T, T, T, T),
+    guess: T,
+    f_tol: T,
     max_iter: u32,
-    mut fd: impl FnMut(T) -> (T, T),
-) -> T {
+    mut fd: impl FnMut(T) -> (T, T, T, T),
+) -> (T, T, T) {
     // Orient so that f(lo) < 0 < f(hi).
     let increasing = f_lo < f_hi;
     let sgn = if increasing { T::ONE } else { -T::ONE };
     let (flo, fhi) = (sgn * f_lo, sgn * f_hi);
     // Regula-falsi start: exact for a linear function.
-    let mut x = lo + (hi - lo) * (flo / (flo - fhi));
+    let mut x = guess;
+    if !(x > lo && x < hi) {
+        x = lo + (hi - lo) * (flo / (flo - fhi));
+    }
     if !(x > lo && x < hi) {
         x = T::HALF * (lo + hi);
     }
     let mut dx_old = hi - lo;
+    let mut last = (x, T::ZERO, T::ONE);
     for _ in 0..max_iter {
-        let (f, d) = fd(x);
+        let (f, d, sx, cx) = fd(x);
+        last = (x, sx, cx);
         let (f, d) = (sgn * f, sgn * d);
-        if f == T::ZERO {
-            return x;
+        if f.abs() <= f_tol {
+            return last;
         }
         if f < T::ZERO {
             lo = x;
@@ -42,7 +51,7 @@ pub(crate) fn newton_bracketed<T: Float>(
         }
         let tol = T::from_f64(4.0) * T::EPSILON * (x.abs() + T::ONE);
         if hi - lo <= tol {
-            return T::HALF * (lo + hi);
+            return last;
         }
         // Newton step if it lands strictly inside the bracket and at least
         // halves the previous step; bisection otherwise.
@@ -55,7 +64,8 @@ pub(crate) fn newton_bracketed<T: Float>(
             if step_ok {
                 dx_old = dx;
                 if dx.abs() <= tol {
-                    return xn;
+                    // sin(x − dx) ≈ sin x − dx cos x, cos(x − dx) ≈ cos x + dx sin x.
+                    return (xn, sx - dx * cx, cx + dx * sx);
                 }
             }
         }
@@ -65,5 +75,5 @@ pub(crate) fn newton_bracketed<T: Float>(
         }
         x = xn;
     }
-    x
+    last
 }

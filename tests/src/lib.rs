@@ -17,7 +17,8 @@ pub fn scene(a: f64, b: f64, phi: f64) -> Scene<f64> {
 
 /// The dimensionless scene from eq. 26 groups (`ratio = b/a`).
 pub fn scene_ratio(a: f64, ratio: f64, phi: f64) -> Scene<f64> {
-    Scene::dimensionless(Groups::from_ratio(a, ratio, phi).expect("valid groups")).expect("valid test scene")
+    Scene::dimensionless(Groups::from_ratio(a, ratio, phi).expect("valid groups"))
+        .expect("valid test scene")
 }
 
 /// The fixed-step (paper's) scheme from rest with `n` steps per period,

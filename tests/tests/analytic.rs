@@ -31,9 +31,15 @@ fn critical_velocity_matches_eq8_literally() {
     let s = physical();
     let p = s.params();
     let r = p.mu0 * p.kz / p.kx * p.duz;
-    let eq8 = |sgn: f64| p.omega * (p.dux * p.dux + 2.0 * r * p.dux * sgn * p.phi.cos() + r * r).sqrt();
+    let eq8 =
+        |sgn: f64| p.omega * (p.dux * p.dux + 2.0 * r * p.dux * sgn * p.phi.cos() + r * r).sqrt();
     let vc = CriticalVelocity::of(&s);
-    assert!((vc.forward - eq8(1.0)).abs() <= 1e-14 * eq8(1.0), "{} vs {}", vc.forward, eq8(1.0));
+    assert!(
+        (vc.forward - eq8(1.0)).abs() <= 1e-14 * eq8(1.0),
+        "{} vs {}",
+        vc.forward,
+        eq8(1.0)
+    );
     assert!((vc.backward - eq8(-1.0)).abs() <= 1e-14 * eq8(-1.0));
     // Eqs. 9 and 10 bound eq. 8 over φ and are attained at φ = 0 and π.
     assert!(vc.forward <= vc_max(&s) && vc.forward >= vc_min(&s));
@@ -58,11 +64,20 @@ fn sliding_above_vc_is_exactly_mu0() {
     let s = physical();
     let vc = CriticalVelocity::of(&s);
     for f in [1.0 + 1e-12, 1.5, 10.0, 1e6] {
-        assert_eq!(solve(&s, vc.forward * f).unwrap(), Solution::Sliding { mu_over_mu0: 1.0 });
-        assert_eq!(solve(&s, -vc.backward * f).unwrap(), Solution::Sliding { mu_over_mu0: -1.0 });
+        assert_eq!(
+            solve(&s, vc.forward * f).unwrap(),
+            Solution::Sliding { mu_over_mu0: 1.0 }
+        );
+        assert_eq!(
+            solve(&s, -vc.backward * f).unwrap(),
+            Solution::Sliding { mu_over_mu0: -1.0 }
+        );
     }
     // And just below it is strictly less (stick still happens).
-    let m = solve(&s, vc.forward * (1.0 - 1e-3)).unwrap().mu_over_mu0().unwrap();
+    let m = solve(&s, vc.forward * (1.0 - 1e-3))
+        .unwrap()
+        .mu_over_mu0()
+        .unwrap();
     assert!(m < 1.0 && m > 0.99, "{m}");
 }
 
@@ -70,12 +85,19 @@ fn sliding_above_vc_is_exactly_mu0() {
 fn static_interval_matches_brute_force_and_paper() {
     let mut rng = Rng::new(7);
     for _ in 0..200 {
-        let (a, b, phi) = (rng.range(0.0, 0.99), rng.range(0.0, 3.0), rng.range(-PI, PI));
+        let (a, b, phi) = (
+            rng.range(0.0, 0.99),
+            rng.range(0.0, 3.0),
+            rng.range(-PI, PI),
+        );
         let st = StaticFriction::of(&scene(a, b, phi));
         let (lo, hi) = static_interval_grid(a, b, phi, 200_000);
         // Grid error of a smooth extremum: ≤ max|f''|·(π/n)²/2 ≤ (a+b)·1.3e-10.
         let tol = (a + b) * 2e-10 + 1e-15;
-        assert!((st.lo - lo).abs() <= tol && (st.hi - hi).abs() <= tol, "a={a} b={b} φ={phi}: {st:?} vs {lo},{hi}");
+        assert!(
+            (st.lo - lo).abs() <= tol && (st.hi - hi).abs() <= tol,
+            "a={a} b={b} φ={phi}: {st:?} vs {lo},{hi}"
+        );
         // The paper's eq. 18 is the upper end of the exact interval, eq. 19 minus the lower end.
         assert!((st.paper_eq18_forward - st.hi).abs() <= 1e-12);
         assert!((st.paper_eq19_backward + st.lo).abs() <= 1e-12);
@@ -98,16 +120,28 @@ fn static_friction_equals_kinetic_limit_when_equilibrium_exists() {
     let mut rng = Rng::new(11);
     let mut checked = 0;
     for _ in 0..500 {
-        let (a, b, phi) = (rng.range(0.0, 0.99), rng.range(0.0, 2.0), rng.range(-PI, PI));
+        let (a, b, phi) = (
+            rng.range(0.0, 0.99),
+            rng.range(0.0, 2.0),
+            rng.range(-PI, PI),
+        );
         let s = scene(a, b, phi);
         let st = StaticFriction::of(&s);
-        if let Solution::AtRest { mu_0plus, mu_0minus, .. } = solve(&s, 0.0).unwrap() {
+        if let Solution::AtRest {
+            mu_0plus,
+            mu_0minus,
+            ..
+        } = solve(&s, 0.0).unwrap()
+        {
             if st.exists() {
                 checked += 1;
                 assert!((mu_0plus - st.hi).abs() <= 1e-13, "a={a} b={b} φ={phi}");
                 assert!((mu_0minus - st.lo).abs() <= 1e-13);
             } else {
-                assert!((mu_0plus - mu_0minus).abs() <= 1e-12, "no equilibrium: one limit, {mu_0plus} vs {mu_0minus}");
+                assert!(
+                    (mu_0plus - mu_0minus).abs() <= 1e-12,
+                    "no equilibrium: one limit, {mu_0plus} vs {mu_0minus}"
+                );
             }
         } else {
             panic!("v0 = 0 must give AtRest");
@@ -159,13 +193,31 @@ fn approx_error_bound() {
 
 #[test]
 fn approx_validity_domain() {
-    assert_eq!(approx_mu_over_mu0(&scene(0.5, 0.2, 0.0), 0.1), Err(ApproxError::DualMode));
-    assert_eq!(approx_mu_over_mu0(&scene(0.0, 1.5, 0.0), 0.1), Err(ApproxError::TangentialTooLarge));
-    assert_eq!(approx_mu_over_mu0(&scene(0.5, 0.0, 0.0), 0.0), Err(ApproxError::ZeroVelocity));
-    assert_eq!(approx_mu_over_mu0(&scene(0.5, 0.0, 0.0), f64::NAN), Err(ApproxError::NonFiniteVelocity));
-    assert_eq!(approx_mu_over_mu0(&scene(0.0, 1.0, 0.0), 0.1).unwrap().0, ApproxKind::TangentialEq24);
+    assert_eq!(
+        approx_mu_over_mu0(&scene(0.5, 0.2, 0.0), 0.1),
+        Err(ApproxError::DualMode)
+    );
+    assert_eq!(
+        approx_mu_over_mu0(&scene(0.0, 1.5, 0.0), 0.1),
+        Err(ApproxError::TangentialTooLarge)
+    );
+    assert_eq!(
+        approx_mu_over_mu0(&scene(0.5, 0.0, 0.0), 0.0),
+        Err(ApproxError::ZeroVelocity)
+    );
+    assert_eq!(
+        approx_mu_over_mu0(&scene(0.5, 0.0, 0.0), f64::NAN),
+        Err(ApproxError::NonFiniteVelocity)
+    );
+    assert_eq!(
+        approx_mu_over_mu0(&scene(0.0, 1.0, 0.0), 0.1).unwrap().0,
+        ApproxKind::TangentialEq24
+    );
     // Beyond v_c: ±1 exactly.
-    assert_eq!(approx_mu_over_mu0(&scene(0.5, 0.0, 0.0), 0.6).unwrap().1, 1.0);
+    assert_eq!(
+        approx_mu_over_mu0(&scene(0.5, 0.0, 0.0), 0.6).unwrap().1,
+        1.0
+    );
     // Outside the domain (b = 2) eq. 24 deviates strongly at low velocity (Fig. 3b):
     // the exact law there is far from the formula, which is why it is refused.
     let s = scene(0.0, 2.0, 0.0);

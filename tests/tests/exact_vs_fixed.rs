@@ -7,19 +7,21 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use integration_tests::{fixed, scene, Rng};
 use model_core::analytic::CriticalVelocity;
 use model_core::exact::{self, solve, ExactError};
-use model_core::fixed_step::{run, run_dimensionless, FixedStepConfig, FixedStepError, Start, State};
+use model_core::fixed_step::{
+    run, run_dimensionless, FixedStepConfig, FixedStepError, Start, State,
+};
 use model_core::{Drive, Groups, Libm, Scene, SceneParams};
 
 /// Scenes covering the regimes (a, b, φ) and velocities as fractions of v_c.
 const CASES: &[(f64, f64, f64)] = &[
-    (0.5, 0.0, 0.0),        // normal only
-    (0.0, 0.7, 0.4),        // tangential only, small
-    (0.0, 3.0, 0.4),        // tangential only, large (back slip every period)
-    (0.5, 0.25, 1.0),       // ratchet
-    (0.5, 1.0, 0.3),        // actuator
-    (0.9, 0.63, 0.0),       // actuator at ratio 0.7
-    (0.5, 1.0, FRAC_PI_2),  // no static equilibrium
-    (0.95, 0.2, 2.8),       // near lift-off
+    (0.5, 0.0, 0.0),       // normal only
+    (0.0, 0.7, 0.4),       // tangential only, small
+    (0.0, 3.0, 0.4),       // tangential only, large (back slip every period)
+    (0.5, 0.25, 1.0),      // ratchet
+    (0.5, 1.0, 0.3),       // actuator
+    (0.9, 0.63, 0.0),      // actuator at ratio 0.7
+    (0.5, 1.0, FRAC_PI_2), // no static equilibrium
+    (0.95, 0.2, 2.8),      // near lift-off
 ];
 const FRACTIONS: &[f64] = &[-0.95, -0.6, -0.2, 0.05, 0.3, 0.7, 0.97];
 
@@ -49,7 +51,10 @@ fn exact_agrees_with_fine_fixed_step() {
             let err = (f2 - e).abs().min((rich - e).abs());
             worst = worst.max(err);
             // Scheme error at N = 65536 is a few 1e-10; the exact value is inside it.
-            assert!(err <= 2e-9, "a={a} b={b} φ={phi} x={x}: exact {e} fixed {f2} rich {rich}");
+            assert!(
+                err <= 2e-9,
+                "a={a} b={b} φ={phi} x={x}: exact {e} fixed {f2} rich {rich}"
+            );
         }
     }
     println!("worst |exact − fixed(65536)| = {worst:.2e}");
@@ -60,7 +65,11 @@ fn fixed_step_error_falls_like_n_squared() {
     // Least-squares slope of log|error| against log N over N = 2⁶ … 2¹⁴
     // (several N per octave, because the error jitters with where the events
     // fall on the grid), for three scenes.
-    for &(a, b, phi, x) in &[(0.5, 0.0, 0.0, 0.3), (0.5, 0.25, 1.0, 0.4), (0.0, 3.0, 0.4, -0.5)] {
+    for &(a, b, phi, x) in &[
+        (0.5, 0.0, 0.0, 0.3),
+        (0.5, 0.25, 1.0, 0.4),
+        (0.0, 3.0, 0.4, -0.5),
+    ] {
         let d = scene(a, b, phi).drive();
         let v = v_of(&d, x);
         let e = exact::mu_over_mu0::<f64, Libm>(&d, v).unwrap();
@@ -72,12 +81,18 @@ fn fixed_step_error_falls_like_n_squared() {
             n *= 2f64.powf(0.25);
         }
         let m = pts.len() as f64;
-        let (sx, sy) = pts.iter().fold((0.0, 0.0), |(sx, sy), p| (sx + p.0, sy + p.1));
+        let (sx, sy) = pts
+            .iter()
+            .fold((0.0, 0.0), |(sx, sy), p| (sx + p.0, sy + p.1));
         let (mx, my) = (sx / m, sy / m);
         let slope = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>()
             / pts.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum::<f64>();
         println!("a={a} b={b} φ={phi} v/vc={x}: fitted order {:.3}", -slope);
-        assert!((-slope - 2.0).abs() <= 0.35, "order {} (expected 2)", -slope);
+        assert!(
+            (-slope - 2.0).abs() <= 0.35,
+            "order {} (expected 2)",
+            -slope
+        );
     }
 }
 
@@ -88,7 +103,11 @@ fn mirror_symmetry() {
     // of the two scenes against each other (φ+π rounded independently).
     let mut rng = Rng::new(3);
     for _ in 0..40 {
-        let (a, b, phi) = (rng.range(0.0, 0.95), rng.range(0.0, 2.0), rng.range(-PI, PI));
+        let (a, b, phi) = (
+            rng.range(0.0, 0.95),
+            rng.range(0.0, 2.0),
+            rng.range(-PI, PI),
+        );
         let d1 = scene(a, b, phi).drive();
         let d2 = scene(a, b, phi + PI).drive();
         let v = v_of(&d1, rng.range(0.05, 0.95));
@@ -115,7 +134,11 @@ fn mu_over_mu0_depends_only_on_the_dimensionless_groups() {
     };
     let s0 = Scene::new(base).unwrap();
     let vc0 = CriticalVelocity::of(&s0);
-    for &(kw, kk, kzr, ku) in &[(10.0, 1.0, 1.0, 1.0), (0.01, 7.0, 0.3, 1e3), (1e5, 1e-3, 5.0, 1e-4)] {
+    for &(kw, kk, kzr, ku) in &[
+        (10.0, 1.0, 1.0, 1.0),
+        (0.01, 7.0, 0.3, 1e3),
+        (1e5, 1e-3, 5.0, 1e-4),
+    ] {
         let p = SceneParams {
             omega: base.omega * kw,
             kz: base.kz * kk * kzr,
@@ -129,9 +152,18 @@ fn mu_over_mu0_depends_only_on_the_dimensionless_groups() {
         let s = Scene::new(p).unwrap();
         let vc = CriticalVelocity::of(&s);
         for x in [-0.7, -0.1, 0.2, 0.6, 0.95] {
-            let m0 = solve(&s0, x * if x > 0.0 { vc0.forward } else { vc0.backward }).unwrap().mu_over_mu0().unwrap();
-            let m = solve(&s, x * if x > 0.0 { vc.forward } else { vc.backward }).unwrap().mu_over_mu0().unwrap();
-            assert!((m - m0).abs() <= 1e-12, "scaling {kw},{kk},{kzr},{ku} x={x}: {m} vs {m0}");
+            let m0 = solve(&s0, x * if x > 0.0 { vc0.forward } else { vc0.backward })
+                .unwrap()
+                .mu_over_mu0()
+                .unwrap();
+            let m = solve(&s, x * if x > 0.0 { vc.forward } else { vc.backward })
+                .unwrap()
+                .mu_over_mu0()
+                .unwrap();
+            assert!(
+                (m - m0).abs() <= 1e-12,
+                "scaling {kw},{kk},{kzr},{ku} x={x}: {m} vs {m0}"
+            );
         }
     }
 }
@@ -162,7 +194,11 @@ fn f32_agrees_with_f64() {
     let mut rng = Rng::new(5);
     let mut worst = 0.0f64;
     for _ in 0..2000 {
-        let (a, b, phi) = (rng.range(0.0, 0.95), rng.range(0.0, 3.0), rng.range(-PI, PI));
+        let (a, b, phi) = (
+            rng.range(0.0, 0.95),
+            rng.range(0.0, 3.0),
+            rng.range(-PI, PI),
+        );
         let x = rng.range(-0.99, 0.99);
         let d64 = scene(a, b, phi).drive();
         let v = v_of(&d64, x);
@@ -179,11 +215,19 @@ fn f32_agrees_with_f64() {
         let m32 = exact::mu_over_mu0::<f32, Libm>(&s32.drive(), v as f32).unwrap();
         // Reference: the f64 solver on the f32-rounded inputs, so only the
         // arithmetic differs.
-        let d_r = scene(f64::from(a as f32), f64::from(b as f32), f64::from(phi as f32)).drive();
+        let d_r = scene(
+            f64::from(a as f32),
+            f64::from(b as f32),
+            f64::from(phi as f32),
+        )
+        .drive();
         let m_r = exact::mu_over_mu0::<f64, Libm>(&d_r, f64::from(v as f32)).unwrap();
         let err = (f64::from(m32) - m_r).abs();
         worst = worst.max(err);
-        assert!(err <= 1e-5, "a={a} b={b} φ={phi} x={x}: f32 {m32} vs f64 {m_r} (unrounded {m64})");
+        assert!(
+            err <= 1e-5,
+            "a={a} b={b} φ={phi} x={x}: f32 {m32} vs f64 {m_r} (unrounded {m64})"
+        );
     }
     println!("worst |μ_f32 − μ_f64| = {worst:.2e}");
 }
@@ -195,7 +239,9 @@ fn fixed_step_f32_agrees_with_f64() {
         let d32 = Drive::new::<Libm>(a as f32, b as f32, phi as f32);
         let v = v_of(&d, 0.3);
         let cfg = FixedStepConfig::<f32>::new(4096);
-        let m32 = run_dimensionless::<f32, Libm>(&d32, v as f32, &cfg, Start::Rest).unwrap().mu_over_mu0;
+        let m32 = run_dimensionless::<f32, Libm>(&d32, v as f32, &cfg, Start::Rest)
+            .unwrap()
+            .mu_over_mu0;
         let m64 = fixed(&d, v, 4096);
         assert!((f64::from(m32) - m64).abs() <= 5e-5, "{m32} vs {m64}");
     }
@@ -205,14 +251,29 @@ fn fixed_step_f32_agrees_with_f64() {
 fn fixed_step_refusals() {
     let s = scene(0.5, 0.2, 0.3);
     let cfg = FixedStepConfig::<f64>::new(1024);
-    assert_eq!(run(&s, 0.0, &cfg, Start::Rest), Err(FixedStepError::ZeroVelocity));
-    assert_eq!(run(&s, 0.1, &FixedStepConfig::new(3), Start::Rest), Err(FixedStepError::TooFewSteps));
-    assert!(matches!(run(&s, f64::NAN, &cfg, Start::Rest), Err(FixedStepError::BadVelocity(_))));
-    let bad = Start::State(State { phase: 0.0, stretch: 0.9 }); // w(0) = 0.5
+    assert_eq!(
+        run(&s, 0.0, &cfg, Start::Rest),
+        Err(FixedStepError::ZeroVelocity)
+    );
+    assert_eq!(
+        run(&s, 0.1, &FixedStepConfig::new(3), Start::Rest),
+        Err(FixedStepError::TooFewSteps)
+    );
+    assert!(matches!(
+        run(&s, f64::NAN, &cfg, Start::Rest),
+        Err(FixedStepError::BadVelocity(_))
+    ));
+    let bad = Start::State(State {
+        phase: 0.0,
+        stretch: 0.9,
+    }); // w(0) = 0.5
     assert_eq!(run(&s, 0.1, &cfg, bad), Err(FixedStepError::BadStart));
     let mut c2 = cfg;
     c2.tol = -1.0;
-    assert_eq!(run(&s, 0.1, &c2, Start::Rest), Err(FixedStepError::BadConfig));
+    assert_eq!(
+        run(&s, 0.1, &c2, Start::Rest),
+        Err(FixedStepError::BadConfig)
+    );
     // Low velocity from rest: the transient (≈ 1/(2πV) periods) exceeds the limit,
     // and the last value is returned only inside the error — even though the
     // change per period (≈ 2πV ≈ 6e-9) would pass a naive tolerance test.
@@ -220,7 +281,11 @@ fn fixed_step_refusals() {
     c3.max_periods = 1000;
     c3.tol = 1e-6;
     match run(&s, 1e-9, &c3, Start::Rest) {
-        Err(FixedStepError::NotConverged { periods, last_change, .. }) => {
+        Err(FixedStepError::NotConverged {
+            periods,
+            last_change,
+            ..
+        }) => {
             assert_eq!(periods, 1000);
             assert!(last_change < c3.tol);
         }
@@ -239,7 +304,16 @@ fn fixed_step_warm_start_at_the_window_end() {
     let end = arcs.last().unwrap().end; // end of forward slip = window end θ_e (+2π)
     let w = 1.0 - 0.5 * end.cos();
     let cfg = FixedStepConfig::<f64>::new(8192);
-    let warm = run_dimensionless::<f64, Libm>(&d, v, &cfg, Start::State(State { phase: end, stretch: w })).unwrap();
+    let warm = run_dimensionless::<f64, Libm>(
+        &d,
+        v,
+        &cfg,
+        Start::State(State {
+            phase: end,
+            stretch: w,
+        }),
+    )
+    .unwrap();
     let rest = run_dimensionless::<f64, Libm>(&d, v, &cfg, Start::Rest).unwrap();
     let e = exact::mu_over_mu0::<f64, Libm>(&d, v).unwrap();
     assert!((warm.mu_over_mu0 - e).abs() <= 1e-7 && (rest.mu_over_mu0 - e).abs() <= 1e-7);
@@ -248,7 +322,13 @@ fn fixed_step_warm_start_at_the_window_end() {
 #[test]
 fn exact_rejects_bad_velocity() {
     let s = scene(0.5, 0.2, 0.3);
-    assert!(matches!(solve(&s, f64::NAN), Err(ExactError::BadVelocity(_))));
-    assert!(matches!(solve(&s, f64::INFINITY), Err(ExactError::BadVelocity(_))));
+    assert!(matches!(
+        solve(&s, f64::NAN),
+        Err(ExactError::BadVelocity(_))
+    ));
+    assert!(matches!(
+        solve(&s, f64::INFINITY),
+        Err(ExactError::BadVelocity(_))
+    ));
     assert!(exact::mu_over_mu0::<f64, Libm>(&s.drive(), 0.0).is_err());
 }

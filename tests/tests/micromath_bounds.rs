@@ -6,7 +6,8 @@ use model_core::{Libm, Math, Micromath};
 #[test]
 fn micromath_error_bounds() {
     let n = 1 << 20;
-    let (mut e_sin, mut e_cos, mut e_sqrt, mut e_asin, mut e_atan2) = (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let (mut e_sin, mut e_cos, mut e_sqrt, mut e_asin, mut e_atan2) =
+        (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
     for i in 0..n {
         let t = i as f64 / n as f64;
         let x = (-std::f64::consts::PI + std::f64::consts::TAU * t) as f32;
@@ -18,7 +19,8 @@ fn micromath_error_bounds() {
         let r = <Micromath as Math<f32>>::sqrt(y);
         e_sqrt = e_sqrt.max(((f64::from(r) - f64::from(y).sqrt()) / f64::from(y).sqrt()).abs());
         let z = (-1.0 + 2.0 * t) as f32;
-        e_asin = e_asin.max((f64::from(<Micromath as Math<f32>>::asin(z)) - f64::from(z).asin()).abs());
+        e_asin =
+            e_asin.max((f64::from(<Micromath as Math<f32>>::asin(z)) - f64::from(z).asin()).abs());
         let (yy, xx) = (x.sin(), x.cos());
         let at = <Micromath as Math<f32>>::atan2(yy, xx);
         let mut d = (f64::from(at) - f64::from(yy).atan2(f64::from(xx))).abs();

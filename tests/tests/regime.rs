@@ -9,10 +9,20 @@ use model_core::regime::{classify, ClassifyOptions, Regime};
 use model_core::{Drive, Libm};
 
 fn regime(a: f64, ratio: f64, phi: f64) -> Regime {
-    classify(&scene_ratio(a, ratio, phi), &ClassifyOptions::default()).unwrap().regime
+    classify(&scene_ratio(a, ratio, phi), &ClassifyOptions::default())
+        .unwrap()
+        .regime
 }
 
-const PHASES: &[f64] = &[0.0, PI / 4.0, FRAC_PI_2, 3.0 * PI / 4.0, PI, 5.0 * PI / 4.0, 3.0 * FRAC_PI_2];
+const PHASES: &[f64] = &[
+    0.0,
+    PI / 4.0,
+    FRAC_PI_2,
+    3.0 * PI / 4.0,
+    PI,
+    5.0 * PI / 4.0,
+    3.0 * FRAC_PI_2,
+];
 
 #[test]
 fn fig5_ratio_1_ratchets_and_symmetric_at_half_pi() {
@@ -41,7 +51,11 @@ fn fig6_ratio_2_actuator_except_half_pi() {
     // At φ = π/2 the paper calls the law symmetric. Exactly, c = c' = √1.25 > 1:
     // no static equilibrium, and a net force at rest — the symmetry the paper
     // sees in Fig. 6 is only approximate (the scene is an actuator).
-    let c = classify(&scene_ratio(0.5, 2.0, FRAC_PI_2), &ClassifyOptions::default()).unwrap();
+    let c = classify(
+        &scene_ratio(0.5, 2.0, FRAC_PI_2),
+        &ClassifyOptions::default(),
+    )
+    .unwrap();
     assert!(!c.statics.exists());
     assert_eq!(c.regime, Regime::Actuator);
     assert!((c.mu_0plus - c.mu_0minus).abs() < 1e-12 && c.mu_0plus.abs() > 0.01);
@@ -80,7 +94,9 @@ fn single_mode_is_always_active_control() {
     for &(a, b) in &[(0.5, 0.0), (0.99, 0.0), (0.0, 0.3), (0.0, 1.0), (0.0, 5.0)] {
         for phi in [0.0, 1.0, 2.0, 3.0] {
             assert_eq!(
-                classify(&scene(a, b, phi), &ClassifyOptions::default()).unwrap().regime,
+                classify(&scene(a, b, phi), &ClassifyOptions::default())
+                    .unwrap()
+                    .regime,
                 Regime::ActiveControl,
                 "a={a} b={b} φ={phi}"
             );
@@ -98,11 +114,19 @@ fn where_the_rule_of_thumb_fails() {
     assert_eq!(regime(0.3, 10.0, FRAC_PI_2), Regime::Actuator);
     // The exact actuator boundary with a static equilibrium: a²(1 + 2r|cos φ| + r²) = 1.
     for a in [0.2, 0.5, 0.9] {
-        for phi in [0.0, 0.6, 2.0] {
-            let k = (phi as f64).cos().abs();
+        for phi in [0.0f64, 0.6, 2.0] {
+            let k = f64::cos(phi).abs();
             let r_star = -k + (k * k - 1.0 + 1.0 / (a * a)).sqrt();
-            assert_ne!(regime(a, r_star * 0.99, phi), Regime::Actuator, "a={a} φ={phi} r*={r_star}");
-            assert_eq!(regime(a, r_star * 1.01, phi), Regime::Actuator, "a={a} φ={phi} r*={r_star}");
+            assert_ne!(
+                regime(a, r_star * 0.99, phi),
+                Regime::Actuator,
+                "a={a} φ={phi} r*={r_star}"
+            );
+            assert_eq!(
+                regime(a, r_star * 1.01, phi),
+                Regime::Actuator,
+                "a={a} φ={phi} r*={r_star}"
+            );
         }
     }
 }
@@ -116,7 +140,11 @@ fn classification_agrees_with_brute_force_scan() {
     let mut counts = [0usize; 3];
     let mut skipped = 0;
     for _ in 0..400 {
-        let (a, b, phi) = (rng.range(0.0, 0.98), rng.range(0.0, 3.0), rng.range(-PI, PI));
+        let (a, b, phi) = (
+            rng.range(0.0, 0.98),
+            rng.range(0.0, 3.0),
+            rng.range(-PI, PI),
+        );
         let s = scene(a, b, phi);
         let d: Drive<f64> = s.drive();
         let cl = classify(&s, &ClassifyOptions::default()).unwrap();
@@ -157,7 +185,11 @@ fn velocity_law_is_monotone() {
     // The reason μ(0±) decide the actuator class: μ(v) is non-decreasing.
     let mut rng = Rng::new(99);
     for _ in 0..300 {
-        let (a, b, phi) = (rng.range(0.0, 0.98), rng.range(0.0, 4.0), rng.range(-PI, PI));
+        let (a, b, phi) = (
+            rng.range(0.0, 0.98),
+            rng.range(0.0, 4.0),
+            rng.range(-PI, PI),
+        );
         let d = scene(a, b, phi).drive();
         let (c, cb) = (d.c_forward::<Libm>(), d.c_backward::<Libm>());
         let mut prev = -1.0;

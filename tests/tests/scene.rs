@@ -32,7 +32,10 @@ fn valid_scene_is_accepted() {
 fn every_invalid_class_has_its_error() {
     use Param::*;
     for (p, set) in [
-        (Mu0, &(|p: &mut SceneParams<f64>, x| p.mu0 = x) as &dyn Fn(&mut SceneParams<f64>, f64)),
+        (
+            Mu0,
+            &(|p: &mut SceneParams<f64>, x| p.mu0 = x) as &dyn Fn(&mut SceneParams<f64>, f64),
+        ),
         (Kz, &|p, x| p.kz = x),
         (Kx, &|p, x| p.kx = x),
         (Uz0, &|p, x| p.uz0 = x),
@@ -42,11 +45,18 @@ fn every_invalid_class_has_its_error() {
         (Phi, &|p, x| p.phi = x),
     ] {
         for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
-            assert_eq!(with(|q| set(q, bad)), Err(SceneError::NonFinite(p)), "{p:?} = {bad}");
+            assert_eq!(
+                with(|q| set(q, bad)),
+                Err(SceneError::NonFinite(p)),
+                "{p:?} = {bad}"
+            );
         }
     }
     for (p, set) in [
-        (Mu0, &(|p: &mut SceneParams<f64>, x| p.mu0 = x) as &dyn Fn(&mut SceneParams<f64>, f64)),
+        (
+            Mu0,
+            &(|p: &mut SceneParams<f64>, x| p.mu0 = x) as &dyn Fn(&mut SceneParams<f64>, f64),
+        ),
         (Kz, &|p, x| p.kz = x),
         (Kx, &|p, x| p.kx = x),
         (Uz0, &|p, x| p.uz0 = x),
@@ -62,23 +72,55 @@ fn every_invalid_class_has_its_error() {
     // Just below lift-off is fine.
     assert!(with(|q| q.duz = q.uz0 * (1.0 - 1e-12)).is_ok());
     // Combinations that over/underflow the derived scales.
-    assert_eq!(with(|q| { q.kz = 1e-300; q.kx = 1e300 }), Err(SceneError::OutOfRange(Kx)));
+    assert_eq!(
+        with(|q| {
+            q.kz = 1e-300;
+            q.kx = 1e300
+        }),
+        Err(SceneError::OutOfRange(Kx))
+    );
     assert_eq!(with(|q| q.dux = 1e308), Err(SceneError::OutOfRange(Dux)));
-    assert_eq!(with(|q| q.omega = 1e-303), Err(SceneError::OutOfRange(Omega)));
+    assert_eq!(
+        with(|q| q.omega = 1e-303),
+        Err(SceneError::OutOfRange(Omega))
+    );
 }
 
 #[test]
 fn groups_validation() {
-    assert_eq!(Groups::from_ratio(0.0, 1.0, 0.0), Err(SceneError::RatioNeedsNormalAmplitude));
+    assert_eq!(
+        Groups::from_ratio(0.0, 1.0, 0.0),
+        Err(SceneError::RatioNeedsNormalAmplitude)
+    );
     assert_eq!(Groups::from_ratio(1.0, 1.0, 0.0), Err(SceneError::LiftOff));
-    assert_eq!(Groups::from_ratio(0.5, -1.0, 0.0), Err(SceneError::Negative(Param::Ratio)));
-    assert_eq!(Groups::from_ratio(0.5, f64::NAN, 0.0), Err(SceneError::NonFinite(Param::Ratio)));
+    assert_eq!(
+        Groups::from_ratio(0.5, -1.0, 0.0),
+        Err(SceneError::Negative(Param::Ratio))
+    );
+    assert_eq!(
+        Groups::from_ratio(0.5, f64::NAN, 0.0),
+        Err(SceneError::NonFinite(Param::Ratio))
+    );
     let g = Groups::from_ratio(0.5, 2.0, 0.1).unwrap();
     assert_eq!(g.dux_rel, 1.0);
-    let bad = Groups { duz_rel: 0.5, dux_rel: -0.1, phi: 0.0 };
-    assert_eq!(Scene::dimensionless(bad), Err(SceneError::Negative(Param::DuxRel)));
-    let bad = Groups { duz_rel: -0.5, dux_rel: 0.1, phi: 0.0 };
-    assert_eq!(Scene::<f64>::dimensionless(bad), Err(SceneError::Negative(Param::DuzRel)));
+    let bad = Groups {
+        duz_rel: 0.5,
+        dux_rel: -0.1,
+        phi: 0.0,
+    };
+    assert_eq!(
+        Scene::dimensionless(bad),
+        Err(SceneError::Negative(Param::DuxRel))
+    );
+    let bad = Groups {
+        duz_rel: -0.5,
+        dux_rel: 0.1,
+        phi: 0.0,
+    };
+    assert_eq!(
+        Scene::<f64>::dimensionless(bad),
+        Err(SceneError::Negative(Param::DuzRel))
+    );
 }
 
 #[test]
@@ -94,7 +136,10 @@ fn errors_print_one_line_naming_the_parameter() {
         let s = e.to_string();
         assert!(!s.contains('\n'));
         let name = match e {
-            SceneError::NonFinite(p) | SceneError::NotPositive(p) | SceneError::Negative(p) | SceneError::OutOfRange(p) => p.name(),
+            SceneError::NonFinite(p)
+            | SceneError::NotPositive(p)
+            | SceneError::Negative(p)
+            | SceneError::OutOfRange(p) => p.name(),
             SceneError::LiftOff => "duz",
             SceneError::RatioNeedsNormalAmplitude => "ratio",
         };
@@ -117,6 +162,9 @@ fn extreme_si_magnitudes_stay_finite_in_f32() {
     })
     .unwrap();
     let vc = model_core::analytic::CriticalVelocity::of(&s);
-    let m = model_core::exact::solve(&s, 0.5 * vc.forward).unwrap().mu_over_mu0().unwrap();
+    let m = model_core::exact::solve(&s, 0.5 * vc.forward)
+        .unwrap()
+        .mu_over_mu0()
+        .unwrap();
     assert!(m.is_finite() && m.abs() <= 1.0);
 }
