@@ -105,6 +105,27 @@ fn paper_method_vs_exact(c: &mut Criterion) {
     g.bench_function("exact", |b| {
         b.iter(|| exact::mu_over_mu0::<f64, Libm>(black_box(&d), black_box(v)).unwrap())
     });
+    // Low velocity (v = 0.02 v_c): the transient from rest takes many periods.
+    let vl = 0.02 * d.c_forward::<Libm>();
+    let el = exact::mu_over_mu0::<f64, Libm>(&d, vl).unwrap();
+    let out = run_dimensionless::<f64, Libm>(&d, vl, &cfg, Start::Rest).unwrap();
+    assert!(
+        (out.mu_over_mu0 - el).abs() <= 1e-8,
+        "{}",
+        (out.mu_over_mu0 - el).abs()
+    );
+    eprintln!(
+        "low velocity: fixed-step from rest used {} periods",
+        out.periods
+    );
+    g.bench_function("fixed_step_from_rest_N16384_low_v", |b| {
+        b.iter(|| {
+            run_dimensionless::<f64, Libm>(black_box(&d), black_box(vl), &cfg, Start::Rest).unwrap()
+        })
+    });
+    g.bench_function("exact_low_v", |b| {
+        b.iter(|| exact::mu_over_mu0::<f64, Libm>(black_box(&d), black_box(vl)).unwrap())
+    });
     g.finish();
 }
 

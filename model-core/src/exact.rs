@@ -20,7 +20,7 @@
 //!   (`K ∓ 1 + Vθ + c cos(θ+ψ)`, resp. `+ c' cos(θ+ψ')` with
 //!   `c' e^{iψ'} = b e^{iφ} − a`): their critical points are in closed form, so
 //!   each stick→slip event is a bracketed root of a monotone function, found by
-//!   safeguarded Newton to a few ulps ([`crate::root`]).
+//!   safeguarded Newton to a few ulps.
 //! * Slip→stick events are the window ends, in closed form; the integrals of
 //!   `s` over stick (`K + Vθ + b cos(θ+φ)`) and slip (`±w`) arcs are closed form.
 //!

@@ -1,5 +1,5 @@
 //! The paper's closed-form approximations of the velocity law for single-mode
-//! oscillation (§3.1): eq. 21 (normal only, from [14]) and eq. 24 (tangential
+//! oscillation (§3.1): eq. 21 (normal only, from the paper's ref. 14) and eq. 24 (tangential
 //! only, for `k_xΔu_x/(μ₀k_z u_z0) ≤ 1`).
 //!
 //! Both have the form `μ/μ₀ ≈ 1 − A[¾(x − 1)² + ¼(x − 1)⁴]` with

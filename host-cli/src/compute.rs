@@ -1,0 +1,206 @@
+//! μ at one velocity by the chosen method: the single place where the CLI
+//! turns a scene and a velocity into a number (shared by `mu`, `curve`, the
+//! figures).
+
+use clap::ValueEnum;
+use model_core::analytic::approx::{approx_mu_over_mu0, ApproxError};
+use model_core::analytic::CriticalVelocity;
+use model_core::exact::{self, Solution};
+use model_core::fixed_step::{self, FixedStepConfig, FixedStepError, Start};
+use model_core::Scene;
+use serde::Serialize;
+
+use crate::error::{CliError, CliResult};
+
+/// How μ is computed.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Method {
+    /// The cheapest exact answer: ±μ0 beyond v_c, the static analysis at v0 = 0, the exact solver otherwise
+    #[default]
+    Auto,
+    /// The exact event-driven steady-state solver
+    Exact,
+    /// The paper's fixed-step scheme from rest (§3), with proven steady-state detection
+    Fixed,
+    /// The closed-form approximation eq. 21 (normal only) or eq. 24 (tangential only, dux-rel ≤ 1)
+    Approx,
+}
+
+/// The result for one velocity (JSON keys are part of the CLI contract).
+#[derive(Serialize, Debug, Clone, Copy)]
+pub struct MuOutcome {
+    /// Sliding velocity, m/s (in units of ωW0 for a dimensionless scene).
+    pub v0: f64,
+    /// v0/v_c for the direction of motion (null when that v_c is 0).
+    pub v_rel: Option<f64>,
+    /// μ (null at v0 = 0 or when not converged).
+    pub mu: Option<f64>,
+    /// μ/μ0.
+    pub mu_over_mu0: Option<f64>,
+    /// Which computation answered: `sliding`, `exact`, `static`, `fixed`, `approx_eq21`, `approx_eq24`.
+    pub method: &'static str,
+    /// Forward critical velocity (eq. 8).
+    pub vc_forward: f64,
+    /// Backward critical velocity (eq. 8).
+    pub vc_backward: f64,
+    /// At v0 = 0: lim μ/μ0 for v0 → 0⁺.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mu_0plus_over_mu0: Option<f64>,
+    /// At v0 = 0: lim μ/μ0 for v0 → 0⁻.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mu_0minus_over_mu0: Option<f64>,
+    /// Fixed-step: steps per period.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub steps_per_period: Option<u32>,
+    /// Fixed-step: periods integrated.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub periods: Option<u32>,
+    /// Fixed-step: whether a provably steady period was reached.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub converged: Option<bool>,
+    /// Fixed-step, not converged: μ/μ0 of the last period (not a steady-state value).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub last_mu_over_mu0: Option<f64>,
+}
+
+/// `v0/v_c` in the direction of motion, `None` when that `v_c` is 0.
+pub fn v_rel(vc: &CriticalVelocity<f64>, v0: f64) -> Option<f64> {
+    let c = vc.for_velocity(v0);
+    if v0 == 0.0 {
+        Some(0.0)
+    } else if c > 0.0 {
+        Some(v0 / c)
+    } else {
+        None
+    }
+}
+
+/// Velocity from a relative one: `x·v_c` (forward v_c for x > 0, backward for x < 0).
+pub fn from_rel(vc: &CriticalVelocity<f64>, x: f64, flag: &str) -> CliResult<f64> {
+    if !x.is_finite() {
+        return Err(CliError::usage(format!(
+            "--{flag}: must be a finite number"
+        )));
+    }
+    let c = if x > 0.0 { vc.forward } else { vc.backward };
+    if x != 0.0 && c == 0.0 {
+        return Err(CliError::usage(format!(
+            "--{flag}: the critical velocity in this direction is 0 (μ = ±μ0 at any speed); give --v0"
+        )));
+    }
+    Ok(x * c)
+}
+
+/// μ at `v0` by `method`.
+///
+/// Errors: bad velocity (exit 2); a method that does not apply (exit 2); a
+/// solver failure (exit 1). A fixed-step run that does not converge is *not*
+/// an error here: it returns `converged: false` with `mu: null`.
+pub fn mu_at(scene: &Scene<f64>, v0: f64, method: Method, steps: u32) -> CliResult<MuOutcome> {
+    if !v0.is_finite() {
+        return Err(CliError::usage("--v0: must be a finite number"));
+    }
+    let vc = CriticalVelocity::of(scene);
+    let mu0 = scene.mu0();
+    let mut out = MuOutcome {
+        v0,
+        v_rel: v_rel(&vc, v0),
+        mu: None,
+        mu_over_mu0: None,
+        method: "exact",
+        vc_forward: vc.forward,
+        vc_backward: vc.backward,
+        mu_0plus_over_mu0: None,
+        mu_0minus_over_mu0: None,
+        steps_per_period: None,
+        periods: None,
+        converged: None,
+        last_mu_over_mu0: None,
+    };
+    let set = |out: &mut MuOutcome, m: f64, method: &'static str| {
+        out.mu_over_mu0 = Some(m);
+        out.mu = Some(m * mu0);
+        out.method = method;
+    };
+    match method {
+        Method::Auto | Method::Exact => {
+            let sol = exact::solve(scene, v0)
+                .map_err(|e| CliError::failure(format!("exact solver failed: {e:?}")))?;
+            match sol {
+                Solution::Sliding { mu_over_mu0 } => set(
+                    &mut out,
+                    mu_over_mu0,
+                    if method == Method::Auto {
+                        "sliding"
+                    } else {
+                        "exact"
+                    },
+                ),
+                Solution::StickSlip { mu_over_mu0 } => set(&mut out, mu_over_mu0, "exact"),
+                Solution::AtRest {
+                    mu_0plus,
+                    mu_0minus,
+                    ..
+                } => {
+                    out.method = "static";
+                    out.mu_0plus_over_mu0 = Some(mu_0plus);
+                    out.mu_0minus_over_mu0 = Some(mu_0minus);
+                }
+            }
+        }
+        Method::Fixed => {
+            if steps < 4 {
+                return Err(CliError::usage("--steps-per-period: must be >= 4"));
+            }
+            let cfg = FixedStepConfig::<f64>::new(steps);
+            out.method = "fixed";
+            out.steps_per_period = Some(steps);
+            match fixed_step::run(scene, v0, &cfg, Start::Rest) {
+                Ok(r) => {
+                    set(&mut out, r.mu_over_mu0, "fixed");
+                    out.periods = Some(r.periods);
+                    out.converged = Some(true);
+                }
+                Err(FixedStepError::NotConverged {
+                    periods,
+                    last_mu_over_mu0,
+                    ..
+                }) => {
+                    out.periods = Some(periods);
+                    out.converged = Some(false);
+                    out.last_mu_over_mu0 = Some(last_mu_over_mu0);
+                }
+                Err(FixedStepError::ZeroVelocity) => {
+                    return Err(CliError::usage(
+                        "--v0: the fixed-step method needs v0 != 0 (at rest the result depends on the initial state; see `fricctl static`)",
+                    ))
+                }
+                Err(e) => return Err(CliError::usage(format!("--v0: {e:?}"))),
+            }
+        }
+        Method::Approx => match approx_mu_over_mu0(scene, v0) {
+            Ok((kind, m)) => set(
+                &mut out,
+                m,
+                match kind {
+                    model_core::analytic::ApproxKind::NormalEq21 => "approx_eq21",
+                    model_core::analytic::ApproxKind::TangentialEq24 => "approx_eq24",
+                },
+            ),
+            Err(e) => return Err(CliError::usage(match e {
+                ApproxError::DualMode => {
+                    "--method: approx needs a single-mode scene (eq. 21: dux = 0; eq. 24: duz = 0)"
+                        .to_string()
+                }
+                ApproxError::TangentialTooLarge => {
+                    "--method: approx (eq. 24) needs kx·dux/(mu0·kz·uz0) <= 1".to_string()
+                }
+                ApproxError::ZeroVelocity => {
+                    "--v0: approx needs v0 != 0 (see `fricctl static`)".to_string()
+                }
+                ApproxError::NonFiniteVelocity => "--v0: must be a finite number".to_string(),
+            })),
+        },
+    }
+    Ok(out)
+}

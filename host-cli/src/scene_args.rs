@@ -1,0 +1,261 @@
+//! Scene input shared by every model command: physical SI flags, a TOML scene
+//! file, or the paper's dimensionless groups.
+
+use std::f64::consts::TAU;
+use std::path::PathBuf;
+
+use clap::Args;
+use model_core::{Groups, Scene, SceneParams};
+use serde::Deserialize;
+
+use crate::error::{CliError, CliResult};
+
+/// Scene flags (see `fricctl --help`).
+#[derive(Args, Debug, Clone, Default)]
+pub struct SceneArgs {
+    /// Scene file (TOML) with keys mu0, kz, kx, uz0, duz, dux, freq (or omega), phi_deg (or phi_rad); flags override it
+    #[arg(long, value_name = "FILE", help_heading = "Scene")]
+    pub scene: Option<PathBuf>,
+    /// Local coefficient of friction μ0 (> 0)
+    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    pub mu0: Option<f64>,
+    /// Normal contact stiffness k_z, N/m
+    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    pub kz: Option<f64>,
+    /// Tangential contact stiffness k_x, N/m
+    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    pub kx: Option<f64>,
+    /// Mean indentation u_z0, m
+    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    pub uz0: Option<f64>,
+    /// Normal oscillation amplitude Δu_z, m (< uz0)
+    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    pub duz: Option<f64>,
+    /// Tangential oscillation amplitude Δu_x, m
+    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    pub dux: Option<f64>,
+    /// Drive frequency f, Hz
+    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    pub freq: Option<f64>,
+    /// Drive angular frequency ω, rad/s (instead of --freq)
+    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    pub omega: Option<f64>,
+    /// Phase φ of the tangential oscillation, degrees (default 0)
+    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    pub phi_deg: Option<f64>,
+    /// Phase φ, radians (instead of --phi-deg)
+    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    pub phi_rad: Option<f64>,
+    /// Dimensionless: Δu_z/u_z0 (eq. 25); velocities are then relative to v_c
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        help_heading = "Scene (dimensionless, eq. 25/26)"
+    )]
+    pub duz_rel: Option<f64>,
+    /// Dimensionless: k_xΔu_x/(μ0 k_z u_z0) (eq. 25)
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        help_heading = "Scene (dimensionless, eq. 25/26)"
+    )]
+    pub dux_rel: Option<f64>,
+    /// Dimensionless: k_xΔu_x/(μ0 k_z Δu_z) (eq. 26, instead of --dux-rel)
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        help_heading = "Scene (dimensionless, eq. 25/26)"
+    )]
+    pub ratio: Option<f64>,
+}
+
+/// The scene file's keys.
+#[derive(Deserialize, Debug, Default)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    mu0: Option<f64>,
+    kz: Option<f64>,
+    kx: Option<f64>,
+    uz0: Option<f64>,
+    duz: Option<f64>,
+    dux: Option<f64>,
+    freq: Option<f64>,
+    omega: Option<f64>,
+    phi_deg: Option<f64>,
+    phi_rad: Option<f64>,
+}
+
+/// A validated scene and how it was given.
+#[derive(Debug, Clone, Copy)]
+pub struct ResolvedScene {
+    /// The scene (in dimensionless mode: μ0 = k_z = k_x = u_z0 = ω = 1).
+    pub scene: Scene<f64>,
+    /// Given by dimensionless groups: velocities are in units of ωW0 and must be
+    /// given relative to v_c.
+    pub dimensionless: bool,
+}
+
+fn scene_err(e: model_core::SceneError) -> CliError {
+    CliError::usage(format!("--{e}"))
+}
+
+impl SceneArgs {
+    /// Validates and builds the scene.
+    pub fn resolve(&self) -> CliResult<ResolvedScene> {
+        let dimless = self.duz_rel.is_some() || self.dux_rel.is_some() || self.ratio.is_some();
+        if dimless {
+            return self.resolve_dimensionless();
+        }
+        let file = match &self.scene {
+            Some(p) => {
+                let text = std::fs::read_to_string(p).map_err(|e| {
+                    CliError::usage(format!("--scene: cannot read {}: {e}", p.display()))
+                })?;
+                toml::from_str::<SceneFile>(&text).map_err(|e| {
+                    let m = e.message().replace('\n', " ");
+                    CliError::usage(format!("--scene: {}: {}", p.display(), m.trim()))
+                })?
+            }
+            None => SceneFile::default(),
+        };
+        let pick = |flag: Option<f64>, file: Option<f64>| flag.or(file);
+        let need = |v: Option<f64>, name: &str| {
+            v.ok_or_else(|| {
+                CliError::usage(format!(
+                    "--{name}: missing (give it as a flag or in --scene FILE)"
+                ))
+            })
+        };
+        let mu0 = need(pick(self.mu0, file.mu0), "mu0")?;
+        let kz = need(pick(self.kz, file.kz), "kz")?;
+        let kx = need(pick(self.kx, file.kx), "kx")?;
+        let uz0 = need(pick(self.uz0, file.uz0), "uz0")?;
+        let duz = need(pick(self.duz, file.duz), "duz")?;
+        let dux = need(pick(self.dux, file.dux), "dux")?;
+        // Frequency: a flag beats the file; two flags conflict.
+        if self.freq.is_some() && self.omega.is_some() {
+            return Err(CliError::usage(
+                "--omega: give either --freq or --omega, not both",
+            ));
+        }
+        let omega = match (self.freq, self.omega, file.freq, file.omega) {
+            (Some(f), None, _, _) => freq_to_omega(f)?,
+            (None, Some(w), _, _) => w,
+            (None, None, Some(_), Some(_)) => {
+                return Err(CliError::usage(
+                    "--scene: give either freq or omega in the file, not both",
+                ))
+            }
+            (None, None, Some(f), None) => freq_to_omega(f)?,
+            (None, None, None, Some(w)) => w,
+            _ => {
+                return Err(CliError::usage(
+                    "--freq: missing (give --freq <Hz> or --omega <rad/s>)",
+                ))
+            }
+        };
+        let phi = self.phi(file.phi_deg, file.phi_rad)?;
+        let scene = Scene::new(SceneParams {
+            mu0,
+            kz,
+            kx,
+            uz0,
+            duz,
+            dux,
+            omega,
+            phi,
+        })
+        .map_err(scene_err)?;
+        Ok(ResolvedScene {
+            scene,
+            dimensionless: false,
+        })
+    }
+
+    fn phi(&self, file_deg: Option<f64>, file_rad: Option<f64>) -> CliResult<f64> {
+        if self.phi_deg.is_some() && self.phi_rad.is_some() {
+            return Err(CliError::usage(
+                "--phi-rad: give either --phi-deg or --phi-rad, not both",
+            ));
+        }
+        let phi = match (self.phi_deg, self.phi_rad, file_deg, file_rad) {
+            (Some(d), None, _, _) => finite(d, "phi-deg")?.to_radians(),
+            (None, Some(r), _, _) => finite(r, "phi-rad")?,
+            (None, None, Some(_), Some(_)) => {
+                return Err(CliError::usage(
+                    "--scene: give either phi_deg or phi_rad in the file, not both",
+                ))
+            }
+            (None, None, Some(d), None) => finite(d, "phi-deg")?.to_radians(),
+            (None, None, None, Some(r)) => finite(r, "phi-rad")?,
+            _ => 0.0,
+        };
+        Ok(phi)
+    }
+
+    fn resolve_dimensionless(&self) -> CliResult<ResolvedScene> {
+        let physical = [
+            (self.scene.is_some(), "scene"),
+            (self.mu0.is_some(), "mu0"),
+            (self.kz.is_some(), "kz"),
+            (self.kx.is_some(), "kx"),
+            (self.uz0.is_some(), "uz0"),
+            (self.duz.is_some(), "duz"),
+            (self.dux.is_some(), "dux"),
+            (self.freq.is_some(), "freq"),
+            (self.omega.is_some(), "omega"),
+        ];
+        if let Some((_, name)) = physical.iter().find(|(set, _)| *set) {
+            return Err(CliError::usage(format!(
+                "--{name}: cannot be combined with the dimensionless groups (--duz-rel/--dux-rel/--ratio)"
+            )));
+        }
+        let a = self.duz_rel.ok_or_else(|| {
+            CliError::usage("--duz-rel: missing (needed with --dux-rel or --ratio)")
+        })?;
+        let phi = self.phi(None, None)?;
+        let groups = match (self.dux_rel, self.ratio) {
+            (Some(_), Some(_)) => {
+                return Err(CliError::usage(
+                    "--ratio: give either --dux-rel or --ratio, not both",
+                ))
+            }
+            (Some(b), None) => Groups {
+                duz_rel: a,
+                dux_rel: b,
+                phi,
+            },
+            (None, Some(r)) => Groups::from_ratio(a, r, phi).map_err(scene_err)?,
+            (None, None) => {
+                return Err(CliError::usage(
+                    "--dux-rel: missing (give --dux-rel or --ratio)",
+                ))
+            }
+        };
+        let scene = Scene::dimensionless(groups).map_err(scene_err)?;
+        Ok(ResolvedScene {
+            scene,
+            dimensionless: true,
+        })
+    }
+}
+
+fn finite(x: f64, name: &str) -> CliResult<f64> {
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(CliError::usage(format!(
+            "--{name}: must be a finite number"
+        )))
+    }
+}
+
+fn freq_to_omega(f: f64) -> CliResult<f64> {
+    if !f.is_finite() {
+        return Err(CliError::usage("--freq: must be a finite number"));
+    }
+    if f <= 0.0 {
+        return Err(CliError::usage("--freq: must be > 0"));
+    }
+    Ok(TAU * f)
+}

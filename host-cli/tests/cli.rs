@@ -1,0 +1,646 @@
+//! The real `fricctl` binary: each command's happy path against model-core,
+//! every invalid-input class (exit 2, one line naming the parameter), and the
+//! figures command producing valid SVG/PNG files.
+
+use std::f64::consts::TAU;
+
+use assert_cmd::Command;
+use model_core::analytic::{CriticalVelocity, StaticFriction};
+use model_core::exact::{self, Solution};
+use model_core::regime::{classify, ClassifyOptions};
+use model_core::{Groups, Libm, Scene, SceneParams};
+use serde_json::Value;
+
+const PHYS: &[&str] = &[
+    "--mu0",
+    "0.3",
+    "--kz",
+    "2e6",
+    "--kx",
+    "1.5e6",
+    "--uz0",
+    "5e-6",
+    "--duz",
+    "2e-6",
+    "--dux",
+    "0.7e-6",
+    "--freq",
+    "40e3",
+    "--phi-deg",
+    "50",
+];
+
+fn phys_scene() -> Scene<f64> {
+    Scene::new(SceneParams {
+        mu0: 0.3,
+        kz: 2e6,
+        kx: 1.5e6,
+        uz0: 5e-6,
+        duz: 2e-6,
+        dux: 0.7e-6,
+        omega: TAU * 40e3,
+        phi: 50f64.to_radians(),
+    })
+    .unwrap()
+}
+
+fn fricctl() -> Command {
+    Command::cargo_bin("fricctl").unwrap()
+}
+
+fn json(args: &[&str]) -> Value {
+    let out = fricctl().args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+fn close(a: f64, b: f64, tol: f64) -> bool {
+    (a - b).abs() <= tol * (1.0 + b.abs())
+}
+
+#[test]
+fn mu_exact_matches_model_core() {
+    let s = phys_scene();
+    let v = json(&[&["mu", "--v0", "0.01", "--json"], PHYS].concat());
+    let want = exact::solve(&s, 0.01).unwrap().mu_over_mu0().unwrap();
+    assert_eq!(v["method"], "exact");
+    assert!(close(v["mu_over_mu0"].as_f64().unwrap(), want, 1e-15));
+    assert!(close(v["mu"].as_f64().unwrap(), 0.3 * want, 1e-15));
+    let vc = CriticalVelocity::of(&s);
+    assert!(close(v["vc_forward"].as_f64().unwrap(), vc.forward, 1e-15));
+    assert!(close(
+        v["vc_backward"].as_f64().unwrap(),
+        vc.backward,
+        1e-15
+    ));
+}
+
+#[test]
+fn mu_v_rel_uses_the_direction_s_vc() {
+    let s = phys_scene();
+    let vc = CriticalVelocity::of(&s);
+    let v = json(&[&["mu", "--v-rel", "-0.5", "--json"], PHYS].concat());
+    assert!(close(v["v0"].as_f64().unwrap(), -0.5 * vc.backward, 1e-15));
+    let want = exact::solve(&s, -0.5 * vc.backward)
+        .unwrap()
+        .mu_over_mu0()
+        .unwrap();
+    assert!(close(v["mu_over_mu0"].as_f64().unwrap(), want, 1e-15));
+    // Beyond v_c: sliding, exactly μ0.
+    let v = json(&[&["mu", "--v-rel", "1.5", "--json"], PHYS].concat());
+    assert_eq!(v["mu_over_mu0"].as_f64().unwrap(), 1.0);
+    assert_eq!(v["method"], "sliding");
+}
+
+#[test]
+fn mu_fixed_reports_diagnostics() {
+    let s = phys_scene();
+    let v = json(
+        &[
+            &[
+                "mu",
+                "--v0",
+                "0.01",
+                "--method",
+                "fixed",
+                "--steps-per-period",
+                "8192",
+                "--json",
+            ],
+            PHYS,
+        ]
+        .concat(),
+    );
+    assert_eq!(v["method"], "fixed");
+    assert_eq!(v["steps_per_period"], 8192);
+    assert_eq!(v["converged"], true);
+    assert!(v["periods"].as_u64().unwrap() >= 3);
+    let want = exact::solve(&s, 0.01).unwrap().mu_over_mu0().unwrap();
+    assert!((v["mu_over_mu0"].as_f64().unwrap() - want).abs() < 1e-6);
+}
+
+#[test]
+fn mu_dimensionless_and_approx() {
+    let v = json(&[
+        "mu",
+        "--duz-rel",
+        "0.5",
+        "--dux-rel",
+        "0",
+        "--v-rel",
+        "0.3",
+        "--method",
+        "approx",
+        "--json",
+    ]);
+    assert_eq!(v["method"], "approx_eq21");
+    let x: f64 = 0.3 - 1.0;
+    let eq21 = 1.0 - 0.5 * (0.75 * x * x + 0.25 * x.powi(4));
+    assert!(close(v["mu_over_mu0"].as_f64().unwrap(), eq21, 1e-14));
+    // v0 = 0: the static analysis answers, with both limits.
+    let v = json(&[
+        "mu",
+        "--duz-rel",
+        "0.5",
+        "--ratio",
+        "0.5",
+        "--phi-deg",
+        "30",
+        "--v0",
+        "0",
+        "--json",
+    ]);
+    assert_eq!(v["method"], "static");
+    assert!(v["mu"].is_null());
+    let s =
+        Scene::dimensionless(Groups::from_ratio(0.5, 0.5, 30f64.to_radians()).unwrap()).unwrap();
+    let st = StaticFriction::of(&s);
+    assert!(close(
+        v["mu_0plus_over_mu0"].as_f64().unwrap(),
+        st.hi,
+        1e-12
+    ));
+    assert!(close(
+        v["mu_0minus_over_mu0"].as_f64().unwrap(),
+        st.lo,
+        1e-12
+    ));
+}
+
+#[test]
+fn curve_csv_matches_model_core() {
+    let out = fricctl()
+        .args(
+            [
+                &[
+                    "curve", "--v-min", "-0.05", "--v-max", "0.05", "--points", "11",
+                ],
+                PHYS,
+            ]
+            .concat(),
+        )
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next().unwrap(), "v0,v_rel,mu,mu_over_mu0");
+    let s = phys_scene();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    // 11 velocities, v0 = 0 gives two rows (the limits from below and above).
+    assert_eq!(rows.len(), 12);
+    for r in &rows {
+        if r[0] == 0.0 {
+            continue;
+        }
+        let want = exact::solve(&s, r[0]).unwrap().mu_over_mu0().unwrap();
+        assert!(close(r[3], want, 1e-15), "{r:?}");
+        assert!(close(r[2], 0.3 * want, 1e-15));
+    }
+    let zero: Vec<&Vec<f64>> = rows.iter().filter(|r| r[0] == 0.0).collect();
+    let (p, m) = exact::limits_at_zero::<f64, Libm>(&s.drive()).unwrap();
+    assert!(close(zero[0][3], m, 1e-15) && close(zero[1][3], p, 1e-15));
+}
+
+#[test]
+fn curve_writes_csv_and_plot_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("c.csv");
+    let svg = dir.path().join("c.svg");
+    let png = dir.path().join("c.png");
+    for plot in [&svg, &png] {
+        fricctl()
+            .args([
+                "curve",
+                "--duz-rel",
+                "0.5",
+                "--ratio",
+                "2",
+                "--phi-deg",
+                "30",
+                "--v-rel-min",
+                "-1.2",
+                "--v-rel-max",
+                "1.2",
+            ])
+            .args([
+                "--points",
+                "200",
+                "--csv",
+                csv.to_str().unwrap(),
+                "--plot",
+                plot.to_str().unwrap(),
+            ])
+            .assert()
+            .success()
+            .stdout("");
+    }
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(text.lines().count(), 201);
+    check_svg(&svg);
+    check_png(&png);
+}
+
+#[test]
+fn static_json() {
+    let v = json(&[
+        "static",
+        "--duz-rel",
+        "0.5",
+        "--ratio",
+        "2",
+        "--phi-deg",
+        "90",
+        "--json",
+    ]);
+    assert_eq!(v["static_exists"], false);
+    assert!(v["mu_s_forward_over_mu0"].is_null());
+    assert!(close(
+        v["paper_eq18_forward_over_mu0"].as_f64().unwrap(),
+        1.0 - 1.25f64.sqrt(),
+        1e-15
+    ));
+    let v = json(&[&["static", "--json"], PHYS].concat());
+    let st = StaticFriction::of(&phys_scene());
+    assert_eq!(v["static_exists"], true);
+    assert!(close(
+        v["mu_s_forward_over_mu0"].as_f64().unwrap(),
+        st.hi,
+        1e-15
+    ));
+    assert!(close(
+        v["mu_s_backward_over_mu0"].as_f64().unwrap(),
+        -st.lo,
+        1e-15
+    ));
+    assert!(close(
+        v["paper_eq19_backward_over_mu0"].as_f64().unwrap(),
+        st.paper_eq19_backward,
+        1e-15
+    ));
+    for k in ["vc_forward", "vc_backward"] {
+        assert!(v[k].as_f64().unwrap() > 0.0);
+    }
+}
+
+#[test]
+fn classify_json() {
+    let v = json(&["classify", "--duz-rel", "0.9", "--ratio", "0.7", "--json"]);
+    assert_eq!(v["regime"], "actuator");
+    assert_eq!(v["rule_of_thumb"], "dynamic_ratchet");
+    assert_eq!(v["rule_of_thumb_agrees"], false);
+    let s = Scene::dimensionless(Groups::from_ratio(0.9, 0.7, 0.0).unwrap()).unwrap();
+    let c = classify(&s, &ClassifyOptions::default()).unwrap();
+    assert!(close(
+        v["mu_0plus_over_mu0"].as_f64().unwrap(),
+        c.mu_0plus,
+        1e-15
+    ));
+    let v = json(&[
+        "classify",
+        "--duz-rel",
+        "0.5",
+        "--ratio",
+        "1",
+        "--phi-deg",
+        "90",
+        "--json",
+    ]);
+    assert_eq!(v["regime"], "active_control");
+    let v = json(&[&["classify", "--json"], PHYS].concat());
+    assert!(v["regime"].is_string());
+}
+
+#[test]
+fn map_writes_plot_and_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("m.png");
+    let csv = dir.path().join("m.csv");
+    fricctl()
+        .args([
+            "map",
+            "--duz-rel",
+            "0.5",
+            "--res",
+            "12",
+            "--plot",
+            png.to_str().unwrap(),
+            "--csv",
+            csv.to_str().unwrap(),
+        ])
+        .assert()
+        .success()
+        .stdout("");
+    check_png(&png);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(text.lines().count(), 1 + 144);
+    assert!(text.starts_with("phi_deg,ratio,regime,"));
+    // Every cell agrees with model-core.
+    for l in text.lines().skip(1) {
+        let f: Vec<&str> = l.split(',').collect();
+        let (phi, r): (f64, f64) = (f[0].parse().unwrap(), f[1].parse().unwrap());
+        let s = Scene::dimensionless(Groups {
+            duz_rel: 0.5,
+            dux_rel: r * 0.5,
+            phi: phi.to_radians(),
+        })
+        .unwrap();
+        assert_eq!(
+            f[2],
+            classify(&s, &ClassifyOptions::default())
+                .unwrap()
+                .regime
+                .name()
+        );
+    }
+}
+
+fn check_svg(p: &std::path::Path) {
+    let s = std::fs::read_to_string(p).unwrap();
+    assert!(s.len() > 1000, "{}", p.display());
+    assert!(
+        s.contains("<svg") && s.trim_end().ends_with("</svg>"),
+        "{}",
+        p.display()
+    );
+}
+
+fn check_png(p: &std::path::Path) {
+    let b = std::fs::read(p).unwrap();
+    assert!(b.len() > 1000, "{}", p.display());
+    assert_eq!(&b[..8], b"\x89PNG\r\n\x1a\n", "{}", p.display());
+    assert_eq!(&b[b.len() - 8..b.len() - 4], b"IEND", "{}", p.display());
+}
+
+#[test]
+fn figures_are_written() {
+    let dir = tempfile::tempdir().unwrap();
+    fricctl()
+        .args([
+            "figures",
+            "--out",
+            dir.path().to_str().unwrap(),
+            "--map-res",
+            "20",
+        ])
+        .assert()
+        .success()
+        .stdout("");
+    for name in [
+        "fig2",
+        "fig3a",
+        "fig3b",
+        "fig4",
+        "fig5",
+        "fig6",
+        "fig7",
+        "regime_map",
+    ] {
+        check_svg(&dir.path().join(format!("{name}.svg")));
+        check_png(&dir.path().join(format!("{name}.png")));
+    }
+}
+
+/// Runs fricctl, expects exit status 2 and a single stderr line containing `needle`.
+fn bad(args: &[&str], needle: &str) {
+    let out = fricctl().args(args).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert!(out.stdout.is_empty(), "{args:?}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    assert!(err.contains(needle), "{args:?}: {err} (wanted {needle})");
+    assert!(!err.contains("panicked") && !err.contains("backtrace"));
+}
+
+fn with(replace: &str, value: &str) -> Vec<String> {
+    let mut v: Vec<String> = vec!["mu".into(), "--v0".into(), "0.01".into()];
+    let mut i = 0;
+    while i < PHYS.len() {
+        v.push(PHYS[i].into());
+        v.push(if PHYS[i] == replace {
+            value.into()
+        } else {
+            PHYS[i + 1].into()
+        });
+        i += 2;
+    }
+    v
+}
+
+fn without(drop: &str) -> Vec<String> {
+    let mut v: Vec<String> = vec!["mu".into(), "--v0".into(), "0.01".into()];
+    let mut i = 0;
+    while i < PHYS.len() {
+        if PHYS[i] != drop {
+            v.push(PHYS[i].into());
+            v.push(PHYS[i + 1].into());
+        }
+        i += 2;
+    }
+    v
+}
+
+fn refs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
+}
+
+#[test]
+fn invalid_input_classes() {
+    // Missing parameters.
+    for p in ["--mu0", "--kz", "--kx", "--uz0", "--duz", "--dux", "--freq"] {
+        bad(&refs(&without(p)), p);
+    }
+    // Non-numeric.
+    bad(&refs(&with("--kz", "abc")), "--kz");
+    // NaN / infinite.
+    bad(&refs(&with("--kx", "NaN")), "--kx");
+    bad(&refs(&with("--uz0", "inf")), "--uz0");
+    // Non-positive and negative.
+    bad(&refs(&with("--kz", "-1e6")), "--kz");
+    bad(&refs(&with("--mu0", "0")), "--mu0");
+    bad(&refs(&with("--freq", "0")), "--freq");
+    bad(&refs(&with("--dux", "-1e-7")), "--dux");
+    // Lift-off.
+    bad(&refs(&with("--duz", "5e-6")), "--duz");
+    // Velocity.
+    bad(&[&["mu", "--v0", "nan"], PHYS].concat(), "--v0");
+    bad(&[&["mu"], PHYS].concat(), "--v0");
+    // Conflicts and dimensionless misuse.
+    bad(
+        &[&["mu", "--v0", "0.1", "--omega", "1e5"], PHYS].concat(),
+        "--omega",
+    );
+    bad(&["mu", "--duz-rel", "0.5", "--v-rel", "0.1"], "--dux-rel");
+    bad(
+        &[
+            "mu",
+            "--duz-rel",
+            "1.2",
+            "--dux-rel",
+            "0.1",
+            "--v-rel",
+            "0.1",
+        ],
+        "--duz",
+    );
+    bad(
+        &["mu", "--duz-rel", "0", "--ratio", "1", "--v-rel", "0.1"],
+        "--ratio",
+    );
+    bad(
+        &[
+            "mu",
+            "--duz-rel",
+            "0.5",
+            "--dux-rel",
+            "0.1",
+            "--kz",
+            "1",
+            "--v-rel",
+            "0.1",
+        ],
+        "--kz",
+    );
+    // Method that does not apply.
+    bad(
+        &[
+            "mu",
+            "--duz-rel",
+            "0.5",
+            "--dux-rel",
+            "0.1",
+            "--v-rel",
+            "0.1",
+            "--method",
+            "approx",
+        ],
+        "--method",
+    );
+    bad(
+        &[
+            "mu",
+            "--duz-rel",
+            "0.5",
+            "--dux-rel",
+            "0.1",
+            "--v0",
+            "0",
+            "--method",
+            "fixed",
+        ],
+        "--v0",
+    );
+    bad(
+        &[
+            "mu",
+            "--duz-rel",
+            "0.5",
+            "--dux-rel",
+            "0.1",
+            "--v0",
+            "0.1",
+            "--method",
+            "fixed",
+            "--steps-per-period",
+            "2",
+        ],
+        "--steps-per-period",
+    );
+    bad(
+        &[
+            "mu",
+            "--duz-rel",
+            "0.5",
+            "--dux-rel",
+            "0.1",
+            "--v0",
+            "0.1",
+            "--method",
+            "magic",
+        ],
+        "--method",
+    );
+    // Curve and map ranges.
+    bad(
+        &[
+            &["curve", "--v-min", "1", "--v-max", "0", "--points", "10"],
+            PHYS,
+        ]
+        .concat(),
+        "--v-max",
+    );
+    bad(
+        &[
+            &["curve", "--v-min", "0", "--v-max", "1", "--points", "1"],
+            PHYS,
+        ]
+        .concat(),
+        "--points",
+    );
+    bad(
+        &[
+            &[
+                "curve", "--v-min", "0", "--v-max", "1", "--points", "10", "--plot", "x.jpg",
+            ],
+            PHYS,
+        ]
+        .concat(),
+        "--plot",
+    );
+    bad(
+        &["map", "--duz-rel", "1.5", "--res", "4", "--plot", "m.png"],
+        "--duz-rel",
+    );
+    bad(
+        &["map", "--duz-rel", "0.5", "--res", "1", "--plot", "m.png"],
+        "--res",
+    );
+    // Scene file: unknown key, unreadable.
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("s.toml");
+    std::fs::write(&f, "mu0 = 0.3\nkz = 2e6\nkx = 1.5e6\nuz0 = 5e-6\nduz = 2e-6\ndux = 7e-7\nfreq = 4e4\nphi_deg = 50\nbogus = 1\n").unwrap();
+    bad(
+        &["mu", "--v0", "0.01", "--scene", f.to_str().unwrap()],
+        "--scene",
+    );
+    bad(
+        &["mu", "--v0", "0.01", "--scene", "/nonexistent/s.toml"],
+        "--scene",
+    );
+}
+
+#[test]
+fn scene_file_with_flag_override() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("s.toml");
+    std::fs::write(&f, "mu0 = 0.3\nkz = 2e6\nkx = 1.5e6\nuz0 = 5e-6\nduz = 2e-6\ndux = 7e-7\nfreq = 4e4\nphi_deg = 10\n").unwrap();
+    // The file says φ = 10°, the flag 50°: the flag wins, so the result equals PHYS.
+    let a = json(&[
+        "mu",
+        "--v0",
+        "0.01",
+        "--json",
+        "--scene",
+        f.to_str().unwrap(),
+        "--phi-deg",
+        "50",
+    ]);
+    let b = json(&[&["mu", "--v0", "0.01", "--json"], PHYS].concat());
+    assert_eq!(a["mu"], b["mu"]);
+    let c = json(&[
+        "mu",
+        "--v0",
+        "0.01",
+        "--json",
+        "--scene",
+        f.to_str().unwrap(),
+    ]);
+    assert_ne!(a["mu"], c["mu"]);
+    let _ = Solution::<f64>::Sliding { mu_over_mu0: 1.0 };
+}
