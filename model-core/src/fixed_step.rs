@@ -260,3 +260,69 @@ pub fn run_dimensionless<T: Float, M: Math<T>>(
         last_change,
     })
 }
+
+/// A single-step integrator of the same scheme with an arbitrary phase step
+/// `δ` (not necessarily `2π/N`): the plant of a simulated device, sampled at
+/// an ADC rate that is not a multiple of the drive frequency.
+///
+/// `(cos θ, sin θ)` advance by rotation; every 1024 steps the pair is
+/// renormalised to unit length (one Newton step for `1/√r²`), so the phase
+/// stays wrapped and the amplitude error bounded however long it runs.
+#[derive(Debug, Clone, Copy)]
+pub struct Stepper<T> {
+    d: Drive<T>,
+    vd: T,
+    cd: T,
+    sd: T,
+    c: T,
+    s: T,
+    x: T,
+    stretch: T,
+    count: u32,
+}
+
+impl<T: Float> Stepper<T> {
+    /// A stepper at phase `θ0` with stretch `s0` (clamped into the band),
+    /// dimensionless velocity `v` and phase step `delta` (rad).
+    pub fn new<M: Math<T>>(d: Drive<T>, v: T, theta0: T, s0: T, delta: T) -> Self {
+        let (sd, cd) = M::sin_cos(delta);
+        let (s, c) = M::sin_cos(theta0);
+        let w = T::ONE - d.a * c;
+        Stepper {
+            d,
+            vd: v * delta,
+            cd,
+            sd,
+            c,
+            s,
+            x: d.bc * c - d.bs * s,
+            stretch: s0.max(-w).min(w),
+            count: 0,
+        }
+    }
+
+    /// Advances one step; returns `(cos θ, s, w)` after it: the normal force is
+    /// `k_z u_z0 · w` and the tangential force `k_x W₀ · s` (`w = 1 − a cos θ`).
+    #[inline]
+    pub fn step(&mut self) -> (T, T, T) {
+        let c = self.c * self.cd - self.s * self.sd;
+        let s = self.s * self.cd + self.c * self.sd;
+        let (c, s) = if self.count == 1023 {
+            self.count = 0;
+            let r2 = c * c + s * s;
+            let k = (T::from_f64(3.0) - r2) * T::HALF;
+            (c * k, s * k)
+        } else {
+            self.count += 1;
+            (c, s)
+        };
+        self.c = c;
+        self.s = s;
+        let x = self.d.bc * c - self.d.bs * s;
+        let w = T::ONE - self.d.a * c;
+        let st = self.stretch + self.vd + (x - self.x);
+        self.stretch = st.max(-w).min(w);
+        self.x = x;
+        (c, self.stretch, w)
+    }
+}

@@ -10,7 +10,9 @@
 //!   the exact static interval), approximations (eqs. 21, 24);
 //! * [`fixed_step`] — the paper's explicit scheme (§3, eq. 20);
 //! * [`exact`] — the exact event-driven steady-state solver;
-//! * [`regime`] — active control / dynamic ratchet / actuator (§3.2).
+//! * [`regime`] — active control / dynamic ratchet / actuator (§3.2);
+//! * [`dds`] — the two phase-locked DAC waveforms of the driver board;
+//! * [`estimator`] — μ from sampled forces (eq. 20) with lock-in harmonics.
 //!
 //! Everything is generic over [`Float`] (`f32` for the firmware, `f64` for the
 //! host) and, where transcendental functions matter, over a [`Math`] backend
@@ -26,6 +28,8 @@
 #![forbid(unsafe_code)]
 
 pub mod analytic;
+pub mod dds;
+pub mod estimator;
 pub mod exact;
 pub mod fixed_step;
 pub mod float;

@@ -1,0 +1,258 @@
+//! The friction estimator (eq. 20): `μ = Σf_x / Σf_z` over an integer number of
+//! drive periods, from calibrated ADC samples taken on the DAC's timer (so each
+//! sample's drive phase is the DDS accumulator of that tick), plus the first
+//! harmonic (lock-in) of each force, the sample count and a saturation flag.
+//!
+//! Raw ADC counts are summed in `u64` (exact), so the mean force has no
+//! accumulation error however long the window; the lock-in sums use `f32`
+//! blocks of 256 samples added into `f32` totals (rounding grows with the
+//! number of blocks, not of samples). The window opens at the
+//! first accumulator wrap after [`Estimator::start`] and closes at the `n`-th
+//! wrap after that, so it spans exactly `n` drive periods up to one sample at
+//! each end — also for a non-integer number of samples per period.
+
+use crate::dds::SineTable;
+
+/// Linear ADC calibration: `force = gain · (count − offset)` (N per count, counts).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Calibration {
+    /// N per ADC count.
+    pub gain: f32,
+    /// ADC count at zero force.
+    pub offset: f32,
+}
+
+/// First harmonic of a force (lock-in against the drive phase).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Harmonic {
+    /// Amplitude, N.
+    pub amplitude: f32,
+    /// Phase φ_h of `amplitude · cos(θ + φ_h)` against the drive phase θ, rad.
+    pub phase: f32,
+}
+
+/// A finished estimate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Estimate {
+    /// `μ = ⟨f_x⟩/⟨f_z⟩` (eq. 20).
+    pub mu: f32,
+    /// Mean tangential force, N.
+    pub fx_mean: f32,
+    /// Mean normal force, N.
+    pub fz_mean: f32,
+    /// First harmonic of f_x.
+    pub fx_h1: Harmonic,
+    /// First harmonic of f_z.
+    pub fz_h1: Harmonic,
+    /// Samples in the window.
+    pub samples: u32,
+    /// Drive periods in the window.
+    pub periods: u32,
+    /// Some sample was at the ADC's rail (0 or full scale): the estimate is suspect.
+    pub saturated: bool,
+}
+
+/// Why no estimate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum EstimateError {
+    /// The window has not closed yet.
+    NotReady,
+    /// Zero periods requested, or a calibration that is not finite / has zero gain.
+    BadConfig,
+    /// The mean normal force is not > 0 (no contact, or a wrong calibration).
+    NoNormalForce,
+}
+
+#[derive(Debug, Clone, Copy, Default)]
+struct Sums {
+    n: u32,
+    raw_x: u64,
+    raw_z: u64,
+    // Lock-in: Σ count·cos θ, Σ count·sin θ (block + total).
+    bx: [f32; 4],
+    tx: [f32; 4],
+    block: u32,
+}
+
+/// Accumulates samples into an estimate over `periods` drive periods.
+#[derive(Debug, Clone)]
+pub struct Estimator {
+    cal_x: Calibration,
+    cal_z: Calibration,
+    full_scale: u16,
+    periods: u32,
+    state: State,
+    sums: Sums,
+    wraps: u32,
+    saturated: bool,
+    last_phase: u32,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum State {
+    Idle,
+    WaitingForWrap,
+    Running,
+    Done,
+}
+
+impl Estimator {
+    /// An idle estimator for ADC counts in `0..=full_scale`.
+    ///
+    /// # Errors
+    /// [`EstimateError::BadConfig`] for a non-finite calibration or zero gain.
+    pub fn new(
+        cal_x: Calibration,
+        cal_z: Calibration,
+        full_scale: u16,
+    ) -> Result<Self, EstimateError> {
+        for c in [cal_x, cal_z] {
+            if !(c.gain.is_finite() && c.offset.is_finite() && c.gain != 0.0) {
+                return Err(EstimateError::BadConfig);
+            }
+        }
+        Ok(Estimator {
+            cal_x,
+            cal_z,
+            full_scale,
+            periods: 0,
+            state: State::Idle,
+            sums: Sums::default(),
+            wraps: 0,
+            saturated: false,
+            last_phase: 0,
+        })
+    }
+
+    /// Starts a window of `periods` drive periods (it opens at the next wrap).
+    ///
+    /// # Errors
+    /// [`EstimateError::BadConfig`] for 0 periods.
+    pub fn start(&mut self, periods: u32) -> Result<(), EstimateError> {
+        if periods == 0 {
+            return Err(EstimateError::BadConfig);
+        }
+        self.periods = periods;
+        self.state = State::WaitingForWrap;
+        self.sums = Sums::default();
+        self.wraps = 0;
+        self.saturated = false;
+        Ok(())
+    }
+
+    /// Whether the window has closed.
+    pub fn done(&self) -> bool {
+        self.state == State::Done
+    }
+
+    /// Whether a window is open or pending.
+    pub fn busy(&self) -> bool {
+        matches!(self.state, State::WaitingForWrap | State::Running)
+    }
+
+    /// Feeds one sample: raw ADC counts of f_x and f_z taken at drive phase
+    /// `phase` (the DDS accumulator of that tick). `table` gives the lock-in
+    /// reference. Returns `true` when this sample closed the window.
+    #[inline]
+    pub fn push<const N: usize>(
+        &mut self,
+        table: &SineTable<N>,
+        phase: u32,
+        x: u16,
+        z: u16,
+    ) -> bool {
+        let wrapped = phase < self.last_phase;
+        self.last_phase = phase;
+        match self.state {
+            State::Idle | State::Done => return false,
+            State::WaitingForWrap => {
+                if !wrapped {
+                    return false;
+                }
+                self.state = State::Running;
+            }
+            State::Running => {
+                if wrapped {
+                    self.wraps += 1;
+                    if self.wraps == self.periods {
+                        self.flush_block();
+                        self.state = State::Done;
+                        return true;
+                    }
+                }
+            }
+        }
+        if x == 0 || z == 0 || x >= self.full_scale || z >= self.full_scale {
+            self.saturated = true;
+        }
+        let s = &mut self.sums;
+        s.n += 1;
+        s.raw_x += u64::from(x);
+        s.raw_z += u64::from(z);
+        let sn = table.sin(phase);
+        let cs = table.sin(phase.wrapping_add(1 << 30));
+        let (xf, zf) = (f32::from(x), f32::from(z));
+        s.bx[0] += xf * cs;
+        s.bx[1] += xf * sn;
+        s.bx[2] += zf * cs;
+        s.bx[3] += zf * sn;
+        s.block += 1;
+        if s.block == 256 {
+            self.flush_block();
+        }
+        false
+    }
+
+    fn flush_block(&mut self) {
+        let s = &mut self.sums;
+        for i in 0..4 {
+            s.tx[i] += s.bx[i];
+            s.bx[i] = 0.0;
+        }
+        s.block = 0;
+    }
+
+    /// The estimate of the closed window.
+    ///
+    /// # Errors
+    /// [`EstimateError::NotReady`] before the window closes,
+    /// [`EstimateError::NoNormalForce`] if ⟨f_z⟩ ≤ 0.
+    pub fn estimate(&self) -> Result<Estimate, EstimateError> {
+        if self.state != State::Done || self.sums.n == 0 {
+            return Err(EstimateError::NotReady);
+        }
+        let s = &self.sums;
+        let n = s.n as f64;
+        let mean_x = s.raw_x as f64 / n;
+        let mean_z = s.raw_z as f64 / n;
+        let fx = f64::from(self.cal_x.gain) * (mean_x - f64::from(self.cal_x.offset));
+        let fz = f64::from(self.cal_z.gain) * (mean_z - f64::from(self.cal_z.offset));
+        if !(fz > 0.0) {
+            return Err(EstimateError::NoNormalForce);
+        }
+        // Lock-in: f ≈ A cos(θ + φ) ⇒ Σ f cos θ = (n/2) A cos φ, Σ f sin θ = −(n/2) A sin φ.
+        // The DC offset in counts drops out over whole periods.
+        let h = |c: f32, sn: f32, gain: f32| {
+            let re = 2.0 * f64::from(c) / n * f64::from(gain);
+            let im = -2.0 * f64::from(sn) / n * f64::from(gain);
+            Harmonic {
+                amplitude: libm::hypot(re, im) as f32,
+                phase: libm::atan2(im, re) as f32,
+            }
+        };
+        Ok(Estimate {
+            mu: (fx / fz) as f32,
+            fx_mean: fx as f32,
+            fz_mean: fz as f32,
+            fx_h1: h(s.tx[0], s.tx[1], self.cal_x.gain),
+            fz_h1: h(s.tx[2], s.tx[3], self.cal_z.gain),
+            samples: s.n,
+            periods: self.periods,
+            saturated: self.saturated,
+        })
+    }
+}
