@@ -1,0 +1,139 @@
+//! The friction estimator on synthetic forces with a known μ (noise, DC
+//! offsets, a non-integer number of samples per period) and on forces
+//! produced by the model itself.
+
+use std::f64::consts::TAU;
+
+use integration_tests::Rng;
+use model_core::dds::{phase_rad, SineTable};
+use model_core::estimator::{Calibration, EstimateError, Estimator};
+use model_core::fixed_step::Stepper;
+use model_core::{exact, Drive, Libm};
+
+const FULL: u16 = 4095;
+
+/// Feeds `(x, z)` count functions of the drive phase at tuning word `tw`
+/// until the window closes; returns the estimate.
+fn run(
+    est: &mut Estimator,
+    table: &SineTable<1024>,
+    tw: u32,
+    periods: u32,
+    mut f: impl FnMut(f64) -> (u16, u16),
+) -> model_core::estimator::Estimate {
+    est.start(periods).unwrap();
+    let mut acc: u32 = 12345;
+    for _ in 0..(periods as u64 + 3) * (4_294_967_296 / tw as u64 + 2) {
+        let (x, z) = f(phase_rad(acc));
+        if est.push(table, acc, x, z) {
+            return est.estimate().unwrap();
+        }
+        acc = acc.wrapping_add(tw);
+    }
+    panic!("window did not close");
+}
+
+#[test]
+fn known_mu_with_noise_offsets_and_non_integer_period() {
+    let table = SineTable::<1024>::libm();
+    // Calibrations: 0.01 N/count (x) with 300 counts offset, 0.02 N/count (z) with 150.
+    let cx = Calibration { gain: 0.01, offset: 300.0 };
+    let cz = Calibration { gain: 0.02, offset: 150.0 };
+    let mut est = Estimator::new(cx, cz, FULL).unwrap();
+    // f_s/f = 25.0013…: not an integer number of samples per period.
+    let tw = (4_294_967_296.0 / 25.0013) as u32;
+    let mut rng = Rng::new(1);
+    let (fz0, fz1, mu, fx1, phx) = (30.0, 12.0, 0.27, 5.0, 0.8);
+    let r = run(&mut est, &table, tw, 2000, |th| {
+        let noise = |rng: &mut Rng| 3.0 * (rng.uniform() - 0.5); // ±1.5 counts
+        let fz = fz0 - fz1 * th.cos();
+        let fx = mu * fz0 + fx1 * (th + phx).cos();
+        let z = fz / 0.02 + 150.0 + noise(&mut rng);
+        let x = fx / 0.01 + 300.0 + noise(&mut rng);
+        (x.round() as u16, z.round() as u16)
+    });
+    // One sample of window error in ≈ 50 000, noise and rounding: ≤ 1e-3 relative.
+    assert!((f64::from(r.mu) - mu).abs() <= 1e-3 * mu, "{r:?}");
+    assert!((f64::from(r.fz_mean) - fz0).abs() <= 1e-3 * fz0);
+    assert!((f64::from(r.fz_h1.amplitude) - fz1).abs() <= 5e-3 * fz1, "{r:?}");
+    // −12 cos θ = 12 cos(θ + π).
+    assert!((f64::from(r.fz_h1.phase).abs() - std::f64::consts::PI).abs() <= 2e-3, "{r:?}");
+    assert!((f64::from(r.fx_h1.amplitude) - fx1).abs() <= 5e-3 * fx1);
+    assert!((f64::from(r.fx_h1.phase) - phx).abs() <= 2e-3);
+    assert_eq!(r.periods, 2000);
+    let per = 25.0013 * 2000.0;
+    assert!((f64::from(r.samples) - per).abs() <= 1.0, "{}", r.samples);
+    assert!(!r.saturated);
+}
+
+#[test]
+fn saturation_and_refusals() {
+    let table = SineTable::<1024>::libm();
+    let c = Calibration { gain: 1.0, offset: 0.0 };
+    let mut est = Estimator::new(c, c, FULL).unwrap();
+    assert_eq!(est.estimate(), Err(EstimateError::NotReady));
+    assert_eq!(est.start(0), Err(EstimateError::BadConfig));
+    let r = run(&mut est, &table, 1 << 27, 4, |th| (if th < 0.1 { 4095 } else { 100 }, 2000));
+    assert!(r.saturated);
+    let mut est = Estimator::new(c, c, FULL).unwrap();
+    est.start(2).unwrap();
+    let mut acc = 0u32;
+    loop {
+        if est.push(&table, acc, 100, 0) {
+            break;
+        }
+        acc = acc.wrapping_add(1 << 26);
+    }
+    assert_eq!(est.estimate(), Err(EstimateError::NoNormalForce));
+    assert_eq!(
+        Estimator::new(Calibration { gain: 0.0, offset: 0.0 }, c, FULL).err(),
+        Some(EstimateError::BadConfig)
+    );
+    assert_eq!(
+        Estimator::new(Calibration { gain: f32::NAN, offset: 0.0 }, c, FULL).err(),
+        Some(EstimateError::BadConfig)
+    );
+}
+
+#[test]
+fn estimate_of_model_forces_matches_the_exact_solver() {
+    // The plant: the model's own forces at an ADC rate of ≈ 1000.37 samples per
+    // period, digitised to 12 bits, measured by the estimator; compared with the
+    // exact steady-state μ.
+    let table = SineTable::<1024>::libm();
+    for &(a, b, phi, x) in &[(0.5, 0.25, 1.0, 0.3), (0.5, 1.0, 0.3, -0.4), (0.3, 0.0, 0.0, 0.6)] {
+        let d = Drive::new::<Libm>(a, b, phi);
+        let c = if x > 0.0 { d.c_forward::<Libm>() } else { d.c_backward::<Libm>() };
+        let v = x * c;
+        let mu_exact = exact::mu_over_mu0::<f64, Libm>(&d, v).unwrap();
+        let tw = (4_294_967_296.0 / 1000.37) as u32;
+        let delta = TAU * f64::from(tw) / 4_294_967_296.0;
+        let mut plant = Stepper::<f64>::new::<Libm>(d, v, 0.0, 0.0, delta);
+        // Settle for 50 periods.
+        for _ in 0..50_000 {
+            plant.step();
+        }
+        // Forces in counts: f_z = k_z u_z0 · w with k_z u_z0 = 10 N at 0.01 N/count;
+        // f_x = μ0 k_z u_z0 · s with μ0 = 1, offset 2048 counts.
+        let cz = Calibration { gain: 0.01, offset: 0.0 };
+        let cx = Calibration { gain: 0.01, offset: 2048.0 };
+        let mut est = Estimator::new(cx, cz, FULL).unwrap();
+        // The estimator's phase must be the plant's: the plant started at θ = 0
+        // and has advanced 50 000 steps.
+        let acc0 = 50_000u32.wrapping_mul(tw);
+        est.start(200).unwrap();
+        let mut acc = acc0;
+        let r = loop {
+            let (_, s, w) = plant.step();
+            acc = acc.wrapping_add(tw);
+            let z = (w * 1000.0).round() as u16;
+            let xr = (s * 1000.0 + 2048.0).round() as u16;
+            if est.push(&table, acc, xr, z) {
+                break est.estimate().unwrap();
+            }
+        };
+        // Scheme error at ~1000 steps/period (≲ 1e-6 · a few) plus 12-bit rounding
+        // averaged over 2·10⁵ samples: 2e-4.
+        assert!((f64::from(r.mu) - mu_exact).abs() <= 2e-4, "a={a} b={b}: {} vs {mu_exact}", r.mu);
+    }
+}
