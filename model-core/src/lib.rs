@@ -29,6 +29,7 @@
 
 pub mod analytic;
 pub mod dds;
+pub mod device;
 pub mod estimator;
 pub mod exact;
 pub mod fixed_step;

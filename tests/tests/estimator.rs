@@ -37,8 +37,14 @@ fn run(
 fn known_mu_with_noise_offsets_and_non_integer_period() {
     let table = SineTable::<1024>::libm();
     // Calibrations: 0.01 N/count (x) with 300 counts offset, 0.02 N/count (z) with 150.
-    let cx = Calibration { gain: 0.01, offset: 300.0 };
-    let cz = Calibration { gain: 0.02, offset: 150.0 };
+    let cx = Calibration {
+        gain: 0.01,
+        offset: 300.0,
+    };
+    let cz = Calibration {
+        gain: 0.02,
+        offset: 150.0,
+    };
     let mut est = Estimator::new(cx, cz, FULL).unwrap();
     // f_s/f = 25.0013…: not an integer number of samples per period.
     let tw = (4_294_967_296.0 / 25.0013) as u32;
@@ -55,9 +61,15 @@ fn known_mu_with_noise_offsets_and_non_integer_period() {
     // One sample of window error in ≈ 50 000, noise and rounding: ≤ 1e-3 relative.
     assert!((f64::from(r.mu) - mu).abs() <= 1e-3 * mu, "{r:?}");
     assert!((f64::from(r.fz_mean) - fz0).abs() <= 1e-3 * fz0);
-    assert!((f64::from(r.fz_h1.amplitude) - fz1).abs() <= 5e-3 * fz1, "{r:?}");
+    assert!(
+        (f64::from(r.fz_h1.amplitude) - fz1).abs() <= 5e-3 * fz1,
+        "{r:?}"
+    );
     // −12 cos θ = 12 cos(θ + π).
-    assert!((f64::from(r.fz_h1.phase).abs() - std::f64::consts::PI).abs() <= 2e-3, "{r:?}");
+    assert!(
+        (f64::from(r.fz_h1.phase).abs() - std::f64::consts::PI).abs() <= 2e-3,
+        "{r:?}"
+    );
     assert!((f64::from(r.fx_h1.amplitude) - fx1).abs() <= 5e-3 * fx1);
     assert!((f64::from(r.fx_h1.phase) - phx).abs() <= 2e-3);
     assert_eq!(r.periods, 2000);
@@ -69,11 +81,16 @@ fn known_mu_with_noise_offsets_and_non_integer_period() {
 #[test]
 fn saturation_and_refusals() {
     let table = SineTable::<1024>::libm();
-    let c = Calibration { gain: 1.0, offset: 0.0 };
+    let c = Calibration {
+        gain: 1.0,
+        offset: 0.0,
+    };
     let mut est = Estimator::new(c, c, FULL).unwrap();
     assert_eq!(est.estimate(), Err(EstimateError::NotReady));
     assert_eq!(est.start(0), Err(EstimateError::BadConfig));
-    let r = run(&mut est, &table, 1 << 27, 4, |th| (if th < 0.1 { 4095 } else { 100 }, 2000));
+    let r = run(&mut est, &table, 1 << 27, 4, |th| {
+        (if th < 0.1 { 4095 } else { 100 }, 2000)
+    });
     assert!(r.saturated);
     let mut est = Estimator::new(c, c, FULL).unwrap();
     est.start(2).unwrap();
@@ -86,11 +103,27 @@ fn saturation_and_refusals() {
     }
     assert_eq!(est.estimate(), Err(EstimateError::NoNormalForce));
     assert_eq!(
-        Estimator::new(Calibration { gain: 0.0, offset: 0.0 }, c, FULL).err(),
+        Estimator::new(
+            Calibration {
+                gain: 0.0,
+                offset: 0.0
+            },
+            c,
+            FULL
+        )
+        .err(),
         Some(EstimateError::BadConfig)
     );
     assert_eq!(
-        Estimator::new(Calibration { gain: f32::NAN, offset: 0.0 }, c, FULL).err(),
+        Estimator::new(
+            Calibration {
+                gain: f32::NAN,
+                offset: 0.0
+            },
+            c,
+            FULL
+        )
+        .err(),
         Some(EstimateError::BadConfig)
     );
 }
@@ -101,9 +134,17 @@ fn estimate_of_model_forces_matches_the_exact_solver() {
     // period, digitised to 12 bits, measured by the estimator; compared with the
     // exact steady-state μ.
     let table = SineTable::<1024>::libm();
-    for &(a, b, phi, x) in &[(0.5, 0.25, 1.0, 0.3), (0.5, 1.0, 0.3, -0.4), (0.3, 0.0, 0.0, 0.6)] {
+    for &(a, b, phi, x) in &[
+        (0.5, 0.25, 1.0, 0.3),
+        (0.5, 1.0, 0.3, -0.4),
+        (0.3, 0.0, 0.0, 0.6),
+    ] {
         let d = Drive::new::<Libm>(a, b, phi);
-        let c = if x > 0.0 { d.c_forward::<Libm>() } else { d.c_backward::<Libm>() };
+        let c = if x > 0.0 {
+            d.c_forward::<Libm>()
+        } else {
+            d.c_backward::<Libm>()
+        };
         let v = x * c;
         let mu_exact = exact::mu_over_mu0::<f64, Libm>(&d, v).unwrap();
         let tw = (4_294_967_296.0 / 1000.37) as u32;
@@ -115,8 +156,14 @@ fn estimate_of_model_forces_matches_the_exact_solver() {
         }
         // Forces in counts: f_z = k_z u_z0 · w with k_z u_z0 = 10 N at 0.01 N/count;
         // f_x = μ0 k_z u_z0 · s with μ0 = 1, offset 2048 counts.
-        let cz = Calibration { gain: 0.01, offset: 0.0 };
-        let cx = Calibration { gain: 0.01, offset: 2048.0 };
+        let cz = Calibration {
+            gain: 0.01,
+            offset: 0.0,
+        };
+        let cx = Calibration {
+            gain: 0.01,
+            offset: 2048.0,
+        };
         let mut est = Estimator::new(cx, cz, FULL).unwrap();
         // The estimator's phase must be the plant's: the plant started at θ = 0
         // and has advanced 50 000 steps.
@@ -134,6 +181,10 @@ fn estimate_of_model_forces_matches_the_exact_solver() {
         };
         // Scheme error at ~1000 steps/period (≲ 1e-6 · a few) plus 12-bit rounding
         // averaged over 2·10⁵ samples: 2e-4.
-        assert!((f64::from(r.mu) - mu_exact).abs() <= 2e-4, "a={a} b={b}: {} vs {mu_exact}", r.mu);
+        assert!(
+            (f64::from(r.mu) - mu_exact).abs() <= 2e-4,
+            "a={a} b={b}: {} vs {mu_exact}",
+            r.mu
+        );
     }
 }
