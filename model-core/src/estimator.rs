@@ -231,7 +231,7 @@ impl Estimator {
         let mean_z = s.raw_z as f64 / n;
         let fx = f64::from(self.cal_x.gain) * (mean_x - f64::from(self.cal_x.offset));
         let fz = f64::from(self.cal_z.gain) * (mean_z - f64::from(self.cal_z.offset));
-        if !(fz > 0.0) {
+        if fz.is_nan() || fz <= 0.0 {
             return Err(EstimateError::NoNormalForce);
         }
         // Lock-in: f ≈ A cos(θ + φ) ⇒ Σ f cos θ = (n/2) A cos φ, Σ f sin θ = −(n/2) A sin φ.
