@@ -94,7 +94,7 @@ fn phase_between_channels_is_exact_and_does_not_drift() {
     d.set_phase(0, 0);
     let exact = d.set_phase(1, phase_word(phi));
     assert!((exact - phi).abs() <= TAU / 2f64.powi(33));
-    let mut measure = |d: &mut Dds<'_, 1024>| {
+    let measure = |d: &mut Dds<'_, 1024>| {
         let (mut c1, mut c2, mut ph) = (Vec::new(), Vec::new(), Vec::new());
         // Whole periods only (997 periods in 25 000 samples).
         for _ in 0..25_000 {
