@@ -140,7 +140,7 @@ pub enum DdsError {
 }
 
 /// What the DDS actually produces for a request.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Achieved {
     /// Tuning word.

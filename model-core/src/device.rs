@@ -17,7 +17,7 @@ use crate::scene::{Scene, SceneError, SceneParams};
 
 /// Transducer calibration of one DAC channel: displacement
 /// `= (code − zero_code) · metres_per_code`.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DacCal {
     /// Metres of displacement per DAC code (> 0).
@@ -27,7 +27,7 @@ pub struct DacCal {
 }
 
 /// Fixed configuration of a board.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DeviceConfig {
     /// DAC/ADC sample rate, Hz.
@@ -53,7 +53,7 @@ pub struct DeviceConfig {
 }
 
 /// The drive as commanded, physical units.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct DriveSetting {
     /// Drive frequency, Hz.
@@ -69,7 +69,7 @@ pub struct DriveSetting {
 }
 
 /// The contact the device predicts with (the drive supplies u_z0, Δu_z, Δu_x, ω, φ).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Contact {
     /// μ₀.
@@ -81,7 +81,7 @@ pub struct Contact {
 }
 
 /// Which drive parameter an error names.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum DriveParam {
     /// Frequency.
@@ -145,7 +145,7 @@ pub mod faults {
 }
 
 /// What a drive command achieved (exact frequency and phase of the DDS).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Applied {
     /// The DDS frequency.
@@ -155,7 +155,7 @@ pub struct Applied {
 }
 
 /// A model prediction for the current drive.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Prediction {
     /// μ/μ₀ at the velocity (at v₀ = 0: μ(0⁺)).
@@ -167,7 +167,7 @@ pub struct Prediction {
 }
 
 /// Status snapshot.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Status {
     /// Drive running (amplitudes at or ramping to the setting).

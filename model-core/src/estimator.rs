@@ -14,7 +14,7 @@
 use crate::dds::SineTable;
 
 /// Linear ADC calibration: `force = gain · (count − offset)` (N per count, counts).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Calibration {
     /// N per ADC count.
@@ -24,7 +24,7 @@ pub struct Calibration {
 }
 
 /// First harmonic of a force (lock-in against the drive phase).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Harmonic {
     /// Amplitude, N.
@@ -34,7 +34,7 @@ pub struct Harmonic {
 }
 
 /// A finished estimate.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Estimate {
     /// `μ = ⟨f_x⟩/⟨f_z⟩` (eq. 20).

@@ -34,9 +34,11 @@ pub mod estimator;
 pub mod exact;
 pub mod fixed_step;
 pub mod float;
+pub mod protocol;
 pub mod regime;
 mod root;
 pub mod scene;
+pub mod server;
 
 pub use float::{Float, Libm, Math, Micromath};
 pub use scene::{Drive, Groups, Param, Scene, SceneError, SceneParams};

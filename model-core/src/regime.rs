@@ -39,7 +39,7 @@ use crate::float::{Float, Libm, Math};
 use crate::scene::{Drive, Scene};
 
 /// The three classes of the paper (§3.2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Regime {
     /// I: symmetric, dissipative law.

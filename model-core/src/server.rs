@@ -1,0 +1,192 @@
+//! The device side of the protocol: decodes request frames, runs them on a
+//! [`Device`], encodes the responses and the telemetry. The firmware feeds it
+//! the bytes from USART2; the virtual device feeds it the bytes of a
+//! pseudo-terminal — the same code.
+
+use crate::device::Device;
+use crate::protocol::{
+    decode, encode, Body, Deframed, Deframer, Frame, Info, Request, Response, Telemetry, WireError,
+    MAX_FRAME, PROTOCOL_VERSION,
+};
+
+/// Protocol state of a device.
+pub struct Server {
+    deframer: Deframer,
+    info: Info,
+    stream: Option<u32>,
+    telemetry_seq: u32,
+    measuring_for_stream: bool,
+}
+
+impl Server {
+    /// A server announcing `info`.
+    pub fn new(info: Info) -> Self {
+        Server {
+            deframer: Deframer::default(),
+            info,
+            stream: None,
+            telemetry_seq: 0,
+            measuring_for_stream: false,
+        }
+    }
+
+    /// Feeds received bytes; every complete frame is answered by calling
+    /// `send` with the encoded response (at most [`MAX_FRAME`] bytes).
+    pub fn receive<const N: usize>(
+        &mut self,
+        dev: &mut Device<'_, N>,
+        bytes: &[u8],
+        mut send: impl FnMut(&[u8]),
+    ) {
+        for &b in bytes {
+            let reply = match self.deframer.push(b) {
+                Deframed::Pending => None,
+                Deframed::Oversize => Some(error_frame(0, WireError::Oversize)),
+                Deframed::Frame(f) => Some(match decode(f) {
+                    Ok(Frame {
+                        seq,
+                        body: Body::Request(r),
+                        ..
+                    }) => Frame {
+                        version: PROTOCOL_VERSION,
+                        seq,
+                        body: Body::Response(handle(&self.info, &mut self.stream, dev, r)),
+                    },
+                    Ok(Frame { seq, .. }) => error_frame(seq, WireError::UnknownMessage),
+                    Err((e, seq)) => error_frame(seq.unwrap_or(0), e),
+                }),
+            };
+            if let Some(frame) = reply {
+                let mut out = [0u8; MAX_FRAME];
+                if let Ok(bytes) = encode(&frame, &mut out) {
+                    send(bytes);
+                }
+            }
+        }
+    }
+
+    /// Telemetry due now (streamed estimates), encoded into `send`. Call it
+    /// from the main loop after ADC blocks were processed.
+    pub fn poll<const N: usize>(&mut self, dev: &mut Device<'_, N>, mut send: impl FnMut(&[u8])) {
+        let Some(periods) = self.stream else {
+            self.measuring_for_stream = false;
+            return;
+        };
+        if self.measuring_for_stream && !dev.status().measuring {
+            if let Ok(e) = dev.estimate() {
+                self.telemetry_seq = self.telemetry_seq.wrapping_add(1);
+                let f = Frame {
+                    version: PROTOCOL_VERSION,
+                    seq: self.telemetry_seq,
+                    body: Body::Telemetry(Telemetry::Estimate(e)),
+                };
+                let mut out = [0u8; MAX_FRAME];
+                if let Ok(bytes) = encode(&f, &mut out) {
+                    send(bytes);
+                }
+            }
+            self.measuring_for_stream = false;
+        }
+        if !self.measuring_for_stream && !dev.status().measuring && dev.measure(periods).is_ok() {
+            self.measuring_for_stream = true;
+        }
+    }
+
+    /// Sends a telemetry frame (fault notices, ramp done).
+    pub fn telemetry(&mut self, t: Telemetry, mut send: impl FnMut(&[u8])) {
+        self.telemetry_seq = self.telemetry_seq.wrapping_add(1);
+        let f = Frame {
+            version: PROTOCOL_VERSION,
+            seq: self.telemetry_seq,
+            body: Body::Telemetry(t),
+        };
+        let mut out = [0u8; MAX_FRAME];
+        if let Ok(bytes) = encode(&f, &mut out) {
+            send(bytes);
+        }
+    }
+}
+
+fn error_frame(seq: u32, e: WireError) -> Frame {
+    Frame {
+        version: PROTOCOL_VERSION,
+        seq,
+        body: Body::Response(Response::Error(e)),
+    }
+}
+
+fn handle<const N: usize>(
+    info: &Info,
+    stream: &mut Option<u32>,
+    dev: &mut Device<'_, N>,
+    r: Request,
+) -> Response {
+    let res: Result<Response, WireError> = (|| {
+        Ok(match r {
+            Request::Hello => Response::Info(*info),
+            Request::GetDrive => Response::Drive {
+                setting: dev.drive(),
+                applied: dev.applied(),
+            },
+            Request::SetDrive(d) => {
+                let applied = dev.set_drive(d)?;
+                Response::Drive {
+                    setting: dev.drive(),
+                    applied,
+                }
+            }
+            Request::Start => {
+                dev.start()?;
+                Response::Ok
+            }
+            Request::Stop => {
+                dev.stop();
+                Response::Ok
+            }
+            Request::GetContact => Response::Contact(dev.contact()),
+            Request::SetContact(c) => {
+                dev.set_contact(c)?;
+                Response::Ok
+            }
+            Request::Predict { v0 } => Response::Prediction {
+                prediction: dev.predict(v0)?,
+                regime: dev.regime()?,
+            },
+            Request::Measure { periods } => {
+                if stream.is_some() {
+                    return Err(WireError::Busy);
+                }
+                dev.measure(periods)?;
+                Response::Ok
+            }
+            Request::GetEstimate => Response::Estimate(dev.estimate()?),
+            Request::Stream { on, periods } => {
+                if on {
+                    if periods == 0 || periods > 1_000_000 {
+                        return Err(WireError::OutOfRange {
+                            param: crate::device::DriveParam::Periods,
+                            min: 1.0,
+                            max: 1e6,
+                        });
+                    }
+                    *stream = Some(periods);
+                } else {
+                    *stream = None;
+                }
+                Response::Ok
+            }
+            Request::GetStatus => Response::Status(dev.status()),
+            Request::ResetFaults => {
+                dev.reset_faults();
+                Response::Ok
+            }
+        })
+    })();
+    res.unwrap_or_else(Response::Error)
+}
+
+impl From<crate::device::DeviceError> for Response {
+    fn from(e: crate::device::DeviceError) -> Self {
+        Response::Error(e.into())
+    }
+}
