@@ -50,6 +50,11 @@ pub struct DeviceConfig {
     pub slew_m_per_s: f32,
     /// Phase slew, rad/s.
     pub slew_rad_per_s: f32,
+    /// ADC sample `k` sees the DAC word `k − lag` (the STM32 DAC moves its
+    /// holding register to the output on the trigger and only then requests
+    /// the next word by DMA: lag 1). The phase of each ADC sample is shifted
+    /// accordingly.
+    pub adc_lag_samples: u32,
 }
 
 /// The drive as commanded, physical units.
@@ -522,7 +527,8 @@ impl<'t, const N: usize> Device<'t, N> {
     /// Takes the ADC samples `(f_x, f_z)` of the DAC half-buffer `half`
     /// (same timer ticks, same indices).
     pub fn adc_block(&mut self, half: usize, samples: &[(u16, u16)]) {
-        let (mut acc, tw) = self.half[half & 1];
+        let (acc0, tw) = self.half[half & 1];
+        let mut acc = acc0.wrapping_sub(tw.wrapping_mul(self.cfg.adc_lag_samples));
         for &(x, z) in samples {
             if self.est.push(self.table, acc, x, z) {
                 if let Ok(e) = self.est.estimate() {

@@ -37,6 +37,7 @@ fn cfg() -> DeviceConfig {
         freq_range_hz: (1_000.0, 100_000.0),
         slew_m_per_s: 1e-3,
         slew_rad_per_s: 100.0,
+        adc_lag_samples: 0,
     }
 }
 

@@ -1,0 +1,431 @@
+//! STM32F405 driver-board firmware: two phase-locked DAC drives (DDS), force
+//! sampling on the same timer, the friction estimate, and the postcard/COBS
+//! link on USART2. All logic is `model_core::{device, server}` (tested on the
+//! host); this file only wires it to the peripherals, at register level where
+//! no HAL supports the configuration (DMA into the dual DAC register).
+//!
+//! Pins: PA4 = DAC1 (normal transducer), PA5 = DAC2 (tangential), PA0 = ADC1
+//! IN0 (normal force), PA1 = ADC2 IN1 (tangential force), PA2/PA3 = USART2
+//! TX/RX (AF7). Register facts cite RM0090 (STM32F405/407 reference manual).
+//!
+//! Data path, per sample tick (TIM2 update → TRGO, 1 MS/s):
+//! * DAC: the trigger moves DHR → DOR on both channels and raises one DMA
+//!   request; DMA1 Stream5/Channel7 writes the next packed word into DHR12RD
+//!   (circular, double buffer). Half/full-transfer interrupts refill the half
+//!   the DMA has just left with the DDS.
+//! * ADC: ADC1+ADC2 in regular simultaneous mode, triggered by the same TRGO;
+//!   DMA2 Stream0/Channel0 moves ADC_CDR (ADC2 << 16 | ADC1, DMA mode 2) into a
+//!   buffer of the same length, whose halves go to the estimator with the drive
+//!   phase of each sample.
+#![no_std]
+#![no_main]
+
+use core::cell::RefCell;
+
+use cortex_m::interrupt::Mutex;
+use cortex_m_rt::entry;
+use defmt_rtt as _;
+use model_core::dds::SineTable;
+use model_core::device::{faults, Contact, DacCal, Device, DeviceConfig, DriveSetting};
+use model_core::estimator::Calibration;
+use model_core::protocol::{Info, PROTOCOL_VERSION};
+use model_core::server::Server;
+use panic_probe as _;
+use stm32f4::stm32f405::{self as pac, interrupt, Interrupt};
+
+/// Samples per DMA half-buffer (256 µs at 1 MS/s).
+const HALF: usize = 256;
+/// DDS/ADC sample rate.
+const FS_HZ: u32 = 1_000_000;
+/// TIM2 kernel clock: APB1 = 42 MHz, ×2 for timers when APB1 is divided (RM0090 §6.2).
+#[cfg(not(feature = "qemu"))]
+const TIMCLK_HZ: u32 = 84_000_000;
+/// Under QEMU the clock tree is a stub: the 16 MHz HSI stays the system clock.
+#[cfg(feature = "qemu")]
+const TIMCLK_HZ: u32 = 16_000_000;
+/// APB1 clock for the USART baud rate.
+#[cfg(not(feature = "qemu"))]
+const PCLK1_HZ: u32 = 42_000_000;
+#[cfg(feature = "qemu")]
+const PCLK1_HZ: u32 = 16_000_000;
+const TABLE_N: usize = 1024;
+
+static mut DAC_BUF: [u32; 2 * HALF] = [0; 2 * HALF];
+static mut ADC_BUF: [u32; 2 * HALF] = [0; 2 * HALF];
+
+type Dev = Device<'static, TABLE_N>;
+static DEVICE: Mutex<RefCell<Option<Dev>>> = Mutex::new(RefCell::new(None));
+/// Bytes received on USART2, handed from the interrupt to the main loop.
+static RX: Mutex<RefCell<heapless::Deque<u8, 512>>> =
+    Mutex::new(RefCell::new(heapless::Deque::new()));
+
+fn config() -> DeviceConfig {
+    DeviceConfig {
+        sample_rate_hz: FS_HZ as f64,
+        // Board calibration (amplifier + transducer): 2 nm/code normal, 1 nm/code
+        // tangential around mid-scale. Replace with the measured values of a board.
+        dac_z: DacCal {
+            metres_per_code: 2e-9,
+            zero_code: 0.0,
+        },
+        dac_x: DacCal {
+            metres_per_code: 1e-9,
+            zero_code: 2048.0,
+        },
+        adc_x: Calibration {
+            gain: 0.01,
+            offset: 2048.0,
+        },
+        adc_z: Calibration {
+            gain: 0.02,
+            offset: 0.0,
+        },
+        adc_full_scale: 4095,
+        liftoff_margin: 0.05,
+        freq_range_hz: (1_000.0, 100_000.0),
+        slew_m_per_s: 1e-3,
+        slew_rad_per_s: 100.0,
+        // The ADC converts right after the trigger that moved DAC word k−1 to the output.
+        adc_lag_samples: 1,
+    }
+}
+
+fn info(cfg: &DeviceConfig) -> Info {
+    let mut board = [0u8; 16];
+    board[..9].copy_from_slice(b"STM32F405");
+    Info {
+        firmware: [0, 1, 0],
+        protocol: PROTOCOL_VERSION,
+        board,
+        sample_rate_hz: cfg.sample_rate_hz,
+        freq_range_hz: cfg.freq_range_hz,
+        max_amp_x_m: 2047.0 * cfg.dac_x.metres_per_code,
+        max_offset_z_m: (4095.0 - cfg.dac_z.zero_code) * cfg.dac_z.metres_per_code,
+        liftoff_margin: cfg.liftoff_margin,
+    }
+}
+
+#[entry]
+fn main() -> ! {
+    let dp = pac::Peripherals::take().unwrap_or_else(|| defmt::panic!("peripherals taken"));
+    let mut cp =
+        cortex_m::Peripherals::take().unwrap_or_else(|| defmt::panic!("core peripherals taken"));
+
+    let watchdog_reset = dp.RCC.csr().read().bits() & (1 << 29) != 0; // IWDGRSTF (RM0090 §7.3.21)
+    dp.RCC
+        .csr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 24)) }); // RMVF: clear reset flags
+
+    clocks(&dp);
+
+    // Clocks for GPIOA, DMA1, DMA2 (AHB1ENR bits 0, 21, 22), TIM2, USART2, DAC
+    // (APB1ENR bits 0, 17, 29), ADC1, ADC2 (APB2ENR bits 8, 9).
+    dp.RCC
+        .ahb1enr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | 1 | (1 << 21) | (1 << 22)) });
+    dp.RCC
+        .apb1enr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | 1 | (1 << 17) | (1 << 29)) });
+    dp.RCC
+        .apb2enr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 8) | (1 << 9)) });
+
+    // PA0, PA1, PA4, PA5 analog (MODER = 11); PA2, PA3 alternate function (10), AF7.
+    dp.GPIOA.moder().modify(|r, w| unsafe {
+        let m = r.bits() & !(0xF0F | (0xF << 4));
+        w.bits(m | 0b11 | (0b11 << 2) | (0b10 << 4) | (0b10 << 6) | (0b11 << 8) | (0b11 << 10))
+    });
+    dp.GPIOA
+        .afrl()
+        .modify(|r, w| unsafe { w.bits((r.bits() & !(0xFF << 8)) | (7 << 8) | (7 << 12)) });
+
+    // The device: table built once with libm, then the logic of model-core.
+    let table: &'static SineTable<TABLE_N> =
+        cortex_m::singleton!(: SineTable<TABLE_N> = SineTable::libm())
+            .unwrap_or_else(|| defmt::panic!("table"));
+    let cfg = config();
+    let contact = Contact {
+        mu0: 0.3,
+        kz: 1e7,
+        kx: 1e7,
+    };
+    let mut dev =
+        Device::new(cfg, table, contact).unwrap_or_else(|_| defmt::panic!("device config"));
+    if watchdog_reset {
+        defmt::warn!("reset by the independent watchdog");
+        dev.fault(faults::WATCHDOG_RESET);
+    }
+    // A safe default drive (stopped): 40 kHz, zero amplitudes, no preload.
+    let _ = dev.set_drive(DriveSetting {
+        freq_hz: 40_000.0,
+        amp_z_m: 0.0,
+        amp_x_m: 0.0,
+        offset_z_m: 0.0,
+        phase_rad: 0.0,
+    });
+    // Pre-fill both halves before the DMA starts.
+    // SAFETY: the DMA is not running yet; nothing else aliases the buffers.
+    unsafe {
+        let buf = &mut *core::ptr::addr_of_mut!(DAC_BUF);
+        let (a, b) = buf.split_at_mut(HALF);
+        dev.fill_dac(0, a);
+        dev.fill_dac(1, b);
+    }
+    let mut server = Server::new(info(&cfg));
+    cortex_m::interrupt::free(|cs| DEVICE.borrow(cs).replace(Some(dev)));
+
+    dac_dma(&dp);
+    adc_dma(&dp);
+    usart2(&dp);
+    tim2(&dp);
+    watchdog(&dp);
+
+    // SAFETY: the handlers only touch state behind critical sections.
+    unsafe {
+        cp.NVIC.set_priority(Interrupt::DMA1_STREAM5, 0x10);
+        cp.NVIC.set_priority(Interrupt::DMA2_STREAM0, 0x20);
+        cp.NVIC.set_priority(Interrupt::USART2, 0x30);
+        pac::NVIC::unmask(Interrupt::DMA1_STREAM5);
+        pac::NVIC::unmask(Interrupt::DMA2_STREAM0);
+        pac::NVIC::unmask(Interrupt::USART2);
+    }
+    defmt::info!(
+        "driver board up: {} Hz sample rate, protocol v{}",
+        FS_HZ,
+        PROTOCOL_VERSION
+    );
+
+    let mut chunk = [0u8; 64];
+    loop {
+        // Feed the independent watchdog (KR = 0xAAAA, RM0090 §21.4.1).
+        dp.IWDG.kr().write(|w| unsafe { w.bits(0xAAAA) });
+        let n = cortex_m::interrupt::free(|cs| {
+            let mut q = RX.borrow(cs).borrow_mut();
+            let mut n = 0;
+            while n < chunk.len() {
+                match q.pop_front() {
+                    Some(b) => {
+                        chunk[n] = b;
+                        n += 1;
+                    }
+                    None => break,
+                }
+            }
+            n
+        });
+        cortex_m::interrupt::free(|cs| {
+            if let Some(dev) = DEVICE.borrow(cs).borrow_mut().as_mut() {
+                if n > 0 {
+                    server.receive(dev, &chunk[..n], |bytes| send(&dp, bytes));
+                }
+                server.poll(dev, |bytes| send(&dp, bytes));
+            }
+        });
+        if n == 0 {
+            cortex_m::asm::wfi();
+        }
+    }
+}
+
+/// 168 MHz from an 8 MHz HSE: PLL M = 8, N = 336, P = 2, Q = 7; AHB/1,
+/// APB1/4 (42 MHz), APB2/2 (84 MHz); flash 5 wait states (RM0090 §3.5.1, §6.3).
+#[cfg(not(feature = "qemu"))]
+fn clocks(dp: &pac::Peripherals) {
+    let rcc = &dp.RCC;
+    rcc.cr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 16)) }); // HSEON
+    while rcc.cr().read().bits() & (1 << 17) == 0 {} // HSERDY
+    rcc.pllcfgr()
+        .write(|w| unsafe { w.bits(8 | (336 << 6) | (1 << 22) | (7 << 24)) }); // M = 8, N = 336, P = 2 (PLLP = 00), PLLSRC = HSE, Q = 7
+    rcc.cr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 24)) }); // PLLON
+    while rcc.cr().read().bits() & (1 << 25) == 0 {} // PLLRDY
+    dp.FLASH
+        .acr()
+        .write(|w| unsafe { w.bits(5 | (1 << 8) | (1 << 9) | (1 << 10)) }); // LATENCY 5, PRFTEN, ICEN, DCEN
+    rcc.cfgr()
+        .write(|w| unsafe { w.bits((0b101 << 10) | (0b100 << 13) | 0b10) }); // PPRE1 /4, PPRE2 /2, SW = PLL
+    while (rcc.cfgr().read().bits() >> 2) & 0b11 != 0b10 {} // SWS = PLL
+}
+
+/// QEMU: RCC is a stub whose ready bits never set; stay on the 16 MHz HSI.
+#[cfg(feature = "qemu")]
+fn clocks(_dp: &pac::Peripherals) {}
+
+/// DAC1 both channels triggered by TIM2 TRGO, DMA1 Stream5 Channel7 writing
+/// DHR12RD (0x4000_7420), 32-bit, circular, half/full-transfer interrupts.
+fn dac_dma(dp: &pac::Peripherals) {
+    let st = dp.DMA1.st(5);
+    st.cr().write(|w| unsafe { w.bits(0) });
+    while st.cr().read().bits() & 1 != 0 {}
+    let dhr12rd = 0x4000_7400u32 + 0x20;
+    st.par().write(|w| unsafe { w.bits(dhr12rd) });
+    st.m0ar()
+        .write(|w| unsafe { w.bits(core::ptr::addr_of!(DAC_BUF) as u32) });
+    st.ndtr().write(|w| unsafe { w.bits((2 * HALF) as u32) });
+    // CHSEL = 7, PL = high, MSIZE = PSIZE = 32 bit, MINC, CIRC, DIR = memory→peripheral, TCIE, HTIE.
+    st.cr().write(|w| unsafe {
+        w.bits(
+            (7 << 25)
+                | (0b10 << 16)
+                | (0b10 << 13)
+                | (0b10 << 11)
+                | (1 << 10)
+                | (1 << 8)
+                | (0b01 << 6)
+                | (1 << 4)
+                | (1 << 3),
+        )
+    });
+    st.cr().modify(|r, w| unsafe { w.bits(r.bits() | 1) }); // EN
+                                                            // DAC_CR: EN1, TEN1, TSEL1 = 100 (TIM2 TRGO), DMAEN1; EN2, TEN2, TSEL2 = 100.
+                                                            // One request (channel 1) per trigger updates both channels via DHR12RD (RM0090 §14.3.7).
+    dp.DAC.cr().write(|w| unsafe {
+        w.bits(1 | (1 << 2) | (0b100 << 3) | (1 << 12) | (1 << 16) | (1 << 18) | (0b100 << 19))
+    });
+}
+
+/// ADC1 (IN0, f_z) and ADC2 (IN1, f_x) regular simultaneous on TIM2 TRGO
+/// (EXTSEL = 0110), DMA mode 2 via ADC_CDR (0x4001_2308) on DMA2 Stream0 Channel0.
+fn adc_dma(dp: &pac::Peripherals) {
+    let st = dp.DMA2.st(0);
+    st.cr().write(|w| unsafe { w.bits(0) });
+    while st.cr().read().bits() & 1 != 0 {}
+    st.par().write(|w| unsafe { w.bits(0x4001_2308) });
+    st.m0ar()
+        .write(|w| unsafe { w.bits(core::ptr::addr_of!(ADC_BUF) as u32) });
+    st.ndtr().write(|w| unsafe { w.bits((2 * HALF) as u32) });
+    // CHSEL = 0, PL = very high, 32 bit both sides, MINC, CIRC, DIR = peripheral→memory, TCIE, HTIE.
+    st.cr().write(|w| unsafe {
+        w.bits(
+            (0b11 << 16) | (0b10 << 13) | (0b10 << 11) | (1 << 10) | (1 << 8) | (1 << 4) | (1 << 3),
+        )
+    });
+    st.cr().modify(|r, w| unsafe { w.bits(r.bits() | 1) });
+    // Common: ADCPRE = /4 (21 MHz), DMA mode 2, DDS, MULTI = 00110 (regular simultaneous).
+    dp.ADC_COMMON
+        .ccr()
+        .write(|w| unsafe { w.bits((0b01 << 16) | (0b10 << 14) | (1 << 13) | 0b00110) });
+    // One conversion each: SQ1 = IN0 / IN1, 3-cycle sampling (≈ 0.7 µs per conversion).
+    dp.ADC1.sqr1().write(|w| unsafe { w.bits(0) });
+    dp.ADC2.sqr1().write(|w| unsafe { w.bits(0) });
+    dp.ADC1.sqr3().write(|w| unsafe { w.bits(0) });
+    dp.ADC2.sqr3().write(|w| unsafe { w.bits(1) });
+    dp.ADC1.smpr2().write(|w| unsafe { w.bits(0) });
+    dp.ADC2.smpr2().write(|w| unsafe { w.bits(0) });
+    dp.ADC2.cr2().write(|w| unsafe { w.bits(1) }); // ADON (slave)
+                                                   // Master: ADON, EXTEN = rising, EXTSEL = TIM2 TRGO.
+    dp.ADC1
+        .cr2()
+        .write(|w| unsafe { w.bits(1 | (0b0110 << 24) | (0b01 << 28)) });
+}
+
+/// TIM2: update event every TIMCLK/FS ticks, TRGO on update (MMS = 010).
+fn tim2(dp: &pac::Peripherals) {
+    let t = &dp.TIM2;
+    t.psc().write(|w| unsafe { w.bits(0) });
+    t.arr().write(|w| unsafe { w.bits(TIMCLK_HZ / FS_HZ - 1) });
+    t.cr2().write(|w| unsafe { w.bits(0b010 << 4) });
+    t.egr().write(|w| unsafe { w.bits(1) }); // UG: load PSC/ARR
+    t.cr1().write(|w| unsafe { w.bits(1) }); // CEN
+}
+
+/// USART2 115 200 8N1, RXNE interrupt (RM0090 §30.6).
+fn usart2(dp: &pac::Peripherals) {
+    let u = &dp.USART2;
+    u.brr()
+        .write(|w| unsafe { w.bits(((PCLK1_HZ + 57_600) / 115_200) as u16) });
+    u.cr1()
+        .write(|w| unsafe { w.bits((1 << 13) | (1 << 5) | (1 << 3) | (1 << 2)) });
+    // UE, RXNEIE, TE, RE
+}
+
+/// Independent watchdog ≈ 1 s: prescaler /8, reload 4095 at 32 kHz LSI.
+fn watchdog(dp: &pac::Peripherals) {
+    let i = &dp.IWDG;
+    i.kr().write(|w| unsafe { w.bits(0x5555) });
+    i.pr().write(|w| unsafe { w.bits(1) });
+    i.rlr().write(|w| unsafe { w.bits(0xFFF) });
+    i.kr().write(|w| unsafe { w.bits(0xCCCC) });
+}
+
+/// Blocking transmit of a frame on USART2.
+fn send(dp: &pac::Peripherals, bytes: &[u8]) {
+    for &b in bytes {
+        while dp.USART2.sr().read().bits() & (1 << 7) == 0 {} // TXE
+        dp.USART2.dr().write(|w| unsafe { w.bits(u16::from(b)) });
+    }
+}
+
+#[interrupt]
+fn DMA1_STREAM5() {
+    // SAFETY: register access only; HISR/HIFCR of DMA1 (stream 5 flags).
+    let dma = unsafe { &*pac::DMA1::ptr() };
+    let isr = dma.hisr().read().bits();
+    let (ht, tc) = (isr & (1 << 10) != 0, isr & (1 << 11) != 0); // HTIF5, TCIF5
+    dma.hifcr()
+        .write(|w| unsafe { w.bits((1 << 10) | (1 << 11) | (1 << 9) | (1 << 8) | (1 << 6)) });
+    // Half transfer: the DMA is in the second half, refill the first; full: the reverse.
+    let half = if tc {
+        1
+    } else if ht {
+        0
+    } else {
+        return;
+    };
+    cortex_m::interrupt::free(|cs| {
+        if let Some(dev) = DEVICE.borrow(cs).borrow_mut().as_mut() {
+            // SAFETY: the DMA is reading the other half.
+            let buf = unsafe { &mut *core::ptr::addr_of_mut!(DAC_BUF) };
+            let (a, b) = buf.split_at_mut(HALF);
+            dev.fill_dac(half, if half == 0 { a } else { b });
+            if ht && tc {
+                // Both flags at once: we were late by a whole half.
+                dev.fault(faults::DAC_UNDERRUN);
+            }
+        }
+    });
+}
+
+#[interrupt]
+fn DMA2_STREAM0() {
+    // SAFETY: register access only; LISR/LIFCR of DMA2 (stream 0 flags).
+    let dma = unsafe { &*pac::DMA2::ptr() };
+    let isr = dma.lisr().read().bits();
+    let (ht, tc) = (isr & (1 << 4) != 0, isr & (1 << 5) != 0); // HTIF0, TCIF0
+    dma.lifcr().write(|w| unsafe { w.bits(0b11_1101) });
+    let half = if ht {
+        0
+    } else if tc {
+        1
+    } else {
+        return;
+    };
+    // SAFETY: the DMA is writing the other half.
+    let buf = unsafe { &*core::ptr::addr_of!(ADC_BUF) };
+    let words = &buf[half * HALF..(half + 1) * HALF];
+    let mut samples = [(0u16, 0u16); HALF];
+    for (s, &w) in samples.iter_mut().zip(words) {
+        // CDR: ADC1 (f_z) in bits 0–15, ADC2 (f_x) in bits 16–31.
+        *s = ((w >> 16) as u16, (w & 0xFFFF) as u16);
+    }
+    cortex_m::interrupt::free(|cs| {
+        if let Some(dev) = DEVICE.borrow(cs).borrow_mut().as_mut() {
+            dev.adc_block(half, &samples);
+        }
+    });
+}
+
+#[interrupt]
+fn USART2() {
+    // SAFETY: register access only.
+    let u = unsafe { &*pac::USART2::ptr() };
+    let sr = u.sr().read().bits();
+    if sr & (1 << 5) != 0 || sr & (1 << 3) != 0 {
+        // Reading DR clears RXNE (and ORE after the SR read).
+        let b = u.dr().read().bits() as u8;
+        cortex_m::interrupt::free(|cs| {
+            let _ = RX.borrow(cs).borrow_mut().push_back(b);
+        });
+    }
+}
