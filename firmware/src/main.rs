@@ -29,7 +29,7 @@ use model_core::dds::SineTable;
 use model_core::device::{faults, Contact, DacCal, Device, DeviceConfig, DriveSetting};
 use model_core::estimator::Calibration;
 use model_core::protocol::{Info, PROTOCOL_VERSION};
-use model_core::server::Server;
+use model_core::server::{DeviceAccess, Server};
 use panic_probe as _;
 use stm32f4::stm32f405::{self as pac, interrupt, Interrupt};
 
@@ -58,6 +58,20 @@ static DEVICE: Mutex<RefCell<Option<Dev>>> = Mutex::new(RefCell::new(None));
 /// Bytes received on USART2, handed from the interrupt to the main loop.
 static RX: Mutex<RefCell<heapless::Deque<u8, 512>>> =
     Mutex::new(RefCell::new(heapless::Deque::new()));
+
+/// The device behind a critical section per call: requests run with
+/// interrupts enabled, so the DMA refills are never held up by a long model
+/// computation (the server computes predictions on a snapshot).
+struct Shared;
+
+impl DeviceAccess<TABLE_N> for Shared {
+    fn with<R>(&mut self, f: impl FnOnce(&mut Device<'_, TABLE_N>) -> R) -> R {
+        cortex_m::interrupt::free(|cs| match DEVICE.borrow(cs).borrow_mut().as_mut() {
+            Some(d) => f(d),
+            None => defmt::panic!("device not initialised"),
+        })
+    }
+}
 
 fn config() -> DeviceConfig {
     DeviceConfig {
@@ -213,14 +227,10 @@ fn main() -> ! {
             }
             n
         });
-        cortex_m::interrupt::free(|cs| {
-            if let Some(dev) = DEVICE.borrow(cs).borrow_mut().as_mut() {
-                if n > 0 {
-                    server.receive(dev, &chunk[..n], |bytes| send(&dp, bytes));
-                }
-                server.poll(dev, |bytes| send(&dp, bytes));
-            }
-        });
+        if n > 0 {
+            server.receive(&mut Shared, &chunk[..n], |bytes| send(&dp, bytes));
+        }
+        server.poll(&mut Shared, |bytes| send(&dp, bytes));
         if n == 0 {
             cortex_m::asm::wfi();
         }

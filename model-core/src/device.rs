@@ -593,18 +593,7 @@ impl<'t, const N: usize> Device<'t, N> {
     /// # Errors
     /// [`DeviceError::OutOfRange`] for a non-finite velocity, [`DeviceError::Scene`], [`DeviceError::Model`].
     pub fn predict(&self, v0: f32) -> Result<Prediction, DeviceError> {
-        range(v0, -1e3, 1e3, DriveParam::Velocity)?;
-        let s = self.scene()?;
-        let vc = crate::analytic::CriticalVelocity::of(&s);
-        let m = match exact::solve_with::<f32, Libm>(&s, v0).map_err(DeviceError::Model)? {
-            Solution::Sliding { mu_over_mu0 } | Solution::StickSlip { mu_over_mu0 } => mu_over_mu0,
-            Solution::AtRest { mu_0plus, .. } => mu_0plus,
-        };
-        Ok(Prediction {
-            mu_over_mu0: m,
-            mu: m * self.contact.mu0,
-            vc: (vc.forward, vc.backward),
-        })
+        predict(&self.scene()?, v0)
     }
 
     /// The regime of the current drive.
@@ -612,11 +601,37 @@ impl<'t, const N: usize> Device<'t, N> {
     /// # Errors
     /// As [`Device::predict`].
     pub fn regime(&self) -> Result<Regime, DeviceError> {
-        let s = self.scene()?;
-        classify(&s, &ClassifyOptions::default())
-            .map(|c| c.regime)
-            .map_err(DeviceError::Model)
+        regime(&self.scene()?)
     }
+}
+
+/// The model's μ at `v0` (m/s) for a scene (what [`Device::predict`] computes;
+/// callable on a snapshot outside the device's critical section).
+///
+/// # Errors
+/// [`DeviceError::OutOfRange`] for a non-finite velocity, [`DeviceError::Model`].
+pub fn predict(s: &Scene<f32>, v0: f32) -> Result<Prediction, DeviceError> {
+    range(v0, -1e3, 1e3, DriveParam::Velocity)?;
+    let vc = crate::analytic::CriticalVelocity::of(s);
+    let m = match exact::solve_with::<f32, Libm>(s, v0).map_err(DeviceError::Model)? {
+        Solution::Sliding { mu_over_mu0 } | Solution::StickSlip { mu_over_mu0 } => mu_over_mu0,
+        Solution::AtRest { mu_0plus, .. } => mu_0plus,
+    };
+    Ok(Prediction {
+        mu_over_mu0: m,
+        mu: m * s.mu0(),
+        vc: (vc.forward, vc.backward),
+    })
+}
+
+/// The regime of a scene (what [`Device::regime`] computes).
+///
+/// # Errors
+/// [`DeviceError::Model`].
+pub fn regime(s: &Scene<f32>) -> Result<Regime, DeviceError> {
+    classify(s, &ClassifyOptions::default())
+        .map(|c| c.regime)
+        .map_err(DeviceError::Model)
 }
 
 fn dds_err(_: DdsError) -> DeviceError {

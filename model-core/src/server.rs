@@ -3,7 +3,21 @@
 //! the bytes from USART2; the virtual device feeds it the bytes of a
 //! pseudo-terminal — the same code.
 
-use crate::device::Device;
+use crate::device::{self, Device};
+
+/// Access to the device for the server: on the host a plain `&mut Device`;
+/// in the firmware a critical section around each call, so that long model
+/// computations ([`Request::Predict`]) run on a snapshot with interrupts on.
+pub trait DeviceAccess<const N: usize> {
+    /// Runs `f` on the device.
+    fn with<R>(&mut self, f: impl FnOnce(&mut Device<'_, N>) -> R) -> R;
+}
+
+impl<const N: usize> DeviceAccess<N> for Device<'_, N> {
+    fn with<R>(&mut self, f: impl FnOnce(&mut Device<'_, N>) -> R) -> R {
+        f(self)
+    }
+}
 use crate::protocol::{
     decode, encode, Body, Deframed, Deframer, Frame, Info, Request, Response, Telemetry, WireError,
     MAX_FRAME, PROTOCOL_VERSION,
@@ -32,9 +46,9 @@ impl Server {
 
     /// Feeds received bytes; every complete frame is answered by calling
     /// `send` with the encoded response (at most [`MAX_FRAME`] bytes).
-    pub fn receive<const N: usize>(
+    pub fn receive<const N: usize, A: DeviceAccess<N>>(
         &mut self,
-        dev: &mut Device<'_, N>,
+        dev: &mut A,
         bytes: &[u8],
         mut send: impl FnMut(&[u8]),
     ) {
@@ -67,13 +81,18 @@ impl Server {
 
     /// Telemetry due now (streamed estimates), encoded into `send`. Call it
     /// from the main loop after ADC blocks were processed.
-    pub fn poll<const N: usize>(&mut self, dev: &mut Device<'_, N>, mut send: impl FnMut(&[u8])) {
+    pub fn poll<const N: usize, A: DeviceAccess<N>>(
+        &mut self,
+        dev: &mut A,
+        mut send: impl FnMut(&[u8]),
+    ) {
         let Some(periods) = self.stream else {
             self.measuring_for_stream = false;
             return;
         };
-        if self.measuring_for_stream && !dev.status().measuring {
-            if let Ok(e) = dev.estimate() {
+        let measuring = dev.with(|d| d.status().measuring);
+        if self.measuring_for_stream && !measuring {
+            if let Ok(e) = dev.with(|d| d.estimate()) {
                 self.telemetry_seq = self.telemetry_seq.wrapping_add(1);
                 let f = Frame {
                     version: PROTOCOL_VERSION,
@@ -87,7 +106,10 @@ impl Server {
             }
             self.measuring_for_stream = false;
         }
-        if !self.measuring_for_stream && !dev.status().measuring && dev.measure(periods).is_ok() {
+        if !self.measuring_for_stream
+            && !dev.with(|d| d.status().measuring)
+            && dev.with(|d| d.measure(periods)).is_ok()
+        {
             self.measuring_for_stream = true;
         }
     }
@@ -115,51 +137,54 @@ fn error_frame(seq: u32, e: WireError) -> Frame {
     }
 }
 
-fn handle<const N: usize>(
+fn handle<const N: usize, A: DeviceAccess<N>>(
     info: &Info,
     stream: &mut Option<u32>,
-    dev: &mut Device<'_, N>,
+    dev: &mut A,
     r: Request,
 ) -> Response {
     let res: Result<Response, WireError> = (|| {
         Ok(match r {
             Request::Hello => Response::Info(*info),
-            Request::GetDrive => Response::Drive {
-                setting: dev.drive(),
-                applied: dev.applied(),
-            },
-            Request::SetDrive(d) => {
-                let applied = dev.set_drive(d)?;
-                Response::Drive {
-                    setting: dev.drive(),
+            Request::GetDrive => dev.with(|d| Response::Drive {
+                setting: d.drive(),
+                applied: d.applied(),
+            }),
+            Request::SetDrive(s) => dev.with(|d| {
+                d.set_drive(s).map(|applied| Response::Drive {
+                    setting: d.drive(),
                     applied,
-                }
-            }
+                })
+            })?,
             Request::Start => {
-                dev.start()?;
+                dev.with(|d| d.start())?;
                 Response::Ok
             }
             Request::Stop => {
-                dev.stop();
+                dev.with(|d| d.stop());
                 Response::Ok
             }
-            Request::GetContact => Response::Contact(dev.contact()),
+            Request::GetContact => Response::Contact(dev.with(|d| d.contact())),
             Request::SetContact(c) => {
-                dev.set_contact(c)?;
+                dev.with(|d| d.set_contact(c))?;
                 Response::Ok
             }
-            Request::Predict { v0 } => Response::Prediction {
-                prediction: dev.predict(v0)?,
-                regime: dev.regime()?,
-            },
+            Request::Predict { v0 } => {
+                // Snapshot the scene, then compute with the device released.
+                let scene = dev.with(|d| d.scene())?;
+                Response::Prediction {
+                    prediction: device::predict(&scene, v0)?,
+                    regime: device::regime(&scene)?,
+                }
+            }
             Request::Measure { periods } => {
                 if stream.is_some() {
                     return Err(WireError::Busy);
                 }
-                dev.measure(periods)?;
+                dev.with(|d| d.measure(periods))?;
                 Response::Ok
             }
-            Request::GetEstimate => Response::Estimate(dev.estimate()?),
+            Request::GetEstimate => Response::Estimate(dev.with(|d| d.estimate())?),
             Request::Stream { on, periods } => {
                 if on {
                     if periods == 0 || periods > 1_000_000 {
@@ -175,9 +200,9 @@ fn handle<const N: usize>(
                 }
                 Response::Ok
             }
-            Request::GetStatus => Response::Status(dev.status()),
+            Request::GetStatus => Response::Status(dev.with(|d| d.status())),
             Request::ResetFaults => {
-                dev.reset_faults();
+                dev.with(|d| d.reset_faults());
                 Response::Ok
             }
         })
