@@ -203,6 +203,9 @@ fn main() -> ! {
         pac::NVIC::unmask(Interrupt::DMA2_STREAM0);
         pac::NVIC::unmask(Interrupt::USART2);
     }
+    // A byte may have arrived before RXNEIE was set (it then raises no edge):
+    // let the handler look once.
+    pac::NVIC::pend(Interrupt::USART2);
     defmt::info!(
         "driver board up: {} Hz sample rate, protocol v{}",
         FS_HZ,
