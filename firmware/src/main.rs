@@ -8,7 +8,7 @@
 //! IN0 (normal force), PA1 = ADC2 IN1 (tangential force), PA2/PA3 = USART2
 //! TX/RX (AF7). Register facts cite RM0090 (STM32F405/407 reference manual).
 //!
-//! Data path, per sample tick (TIM2 update → TRGO, 1 MS/s):
+//! Data path, per sample tick (TIM2 update → TRGO, 500 kS/s):
 //! * DAC: the trigger moves DHR → DOR on both channels and raises one DMA
 //!   request; DMA1 Stream5/Channel7 writes the next packed word into DHR12RD
 //!   (circular, double buffer). Half/full-transfer interrupts refill the half
@@ -33,10 +33,12 @@ use model_core::server::{DeviceAccess, Server};
 use panic_probe as _;
 use stm32f4::stm32f405::{self as pac, interrupt, Interrupt};
 
-/// Samples per DMA half-buffer (256 µs at 1 MS/s).
+/// Samples per DMA half-buffer (512 µs at 500 kS/s).
 const HALF: usize = 256;
-/// DDS/ADC sample rate.
-const FS_HZ: u32 = 1_000_000;
+/// DDS/ADC sample rate: 12.5 samples per period at 40 kHz. The DDS refill costs
+/// 85 instructions per sample once settled (116 while ramping; measured under
+/// QEMU, see `src/bin/predict_cost.rs`), i.e. ≈ 25 % of the 168 MHz core here.
+const FS_HZ: u32 = 500_000;
 /// TIM2 kernel clock: APB1 = 42 MHz, ×2 for timers when APB1 is divided (RM0090 §6.2).
 #[cfg(not(feature = "qemu"))]
 const TIMCLK_HZ: u32 = 84_000_000;
