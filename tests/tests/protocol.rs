@@ -279,3 +279,43 @@ fn refused_commands_change_nothing_over_the_wire() {
     let r = talk(&mut s, &mut dev, &req(8, Request::GetEstimate));
     assert_eq!(resp(&r[0]), Response::Error(WireError::NotReady));
 }
+
+#[test]
+fn docs_protocol_examples() {
+    // The annotated examples of docs/protocol.md (computed independently with
+    // Python's zlib.crc32 and a hand-written COBS encoder).
+    let mut out = [0u8; MAX_FRAME];
+    let req = encode(
+        &Frame {
+            version: 1,
+            seq: 5,
+            body: Body::Request(Request::GetStatus),
+        },
+        &mut out,
+    )
+    .unwrap();
+    assert_eq!(
+        req,
+        &[0x03, 0x01, 0x05, 0x06, 0x0b, 0x1a, 0xa3, 0xe1, 0x08, 0x00]
+    );
+    let status = model_core::device::Status {
+        running: true,
+        settled: true,
+        faults: 0,
+        measuring: false,
+    };
+    let mut out = [0u8; MAX_FRAME];
+    let resp = encode(
+        &Frame {
+            version: 1,
+            seq: 5,
+            body: Body::Response(Response::Status(status)),
+        },
+        &mut out,
+    )
+    .unwrap();
+    assert_eq!(
+        resp,
+        &[0x07, 0x01, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x05, 0x07, 0xdb, 0xd2, 0x06, 0x00]
+    );
+}
