@@ -7,6 +7,7 @@
 
 mod commands;
 mod compute;
+mod device;
 mod error;
 mod figures;
 mod map;
@@ -107,6 +108,15 @@ enum Command {
     },
     /// Regime map over phase φ and amplitude ratio kxΔux/(μ0 kz Δuz) at fixed Δuz/uz0
     Map(map::MapArgs),
+    /// Talk to the driver board (or QEMU, or the virtual device)
+    Device {
+        #[command(flatten)]
+        target: device::Target,
+        #[command(subcommand)]
+        cmd: device::DeviceCmd,
+    },
+    /// Serve the virtual device on a pseudo-terminal or TCP
+    SimDevice(device::SimArgs),
     /// Regenerate the paper's Figs. 2–7 and the regime map (SVG and PNG)
     Figures {
         /// Output directory (created if missing)
@@ -157,6 +167,8 @@ fn main() -> ExitCode {
         Command::Classify { scene, json } => commands::classify(&scene, json),
         Command::Map(a) => map::run(&a),
         Command::Figures { out, map_res } => figures::run(&out, map_res),
+        Command::Device { target, cmd } => device::run(&target, &cmd),
+        Command::SimDevice(a) => device::serve(&a),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,119 @@
+//! The host side of the protocol: requests with sequence numbers, timeouts,
+//! retries with the same sequence number, telemetry kept aside.
+
+use std::collections::VecDeque;
+use std::time::{Duration, Instant};
+
+use model_core::protocol::{
+    decode, encode, Body, Deframed, Deframer, Frame, Request, Response, Telemetry, MAX_FRAME,
+    PROTOCOL_VERSION,
+};
+
+use super::link::Link;
+use crate::error::CliError;
+
+/// A protocol client over a link.
+pub struct Client {
+    link: Box<dyn Link>,
+    seq: u32,
+    deframer: Deframer,
+    /// Per-attempt timeout.
+    pub timeout: Duration,
+    /// Attempts per request (≥ 1).
+    pub attempts: u32,
+    telemetry: VecDeque<(u32, Telemetry)>,
+}
+
+impl Client {
+    /// A client over `link`.
+    pub fn new(link: Box<dyn Link>, timeout: Duration, attempts: u32) -> Self {
+        Client {
+            link,
+            seq: 0,
+            deframer: Deframer::default(),
+            timeout,
+            attempts: attempts.max(1),
+            telemetry: VecDeque::new(),
+        }
+    }
+
+    /// What answered.
+    pub fn describe(&self) -> String {
+        self.link.describe()
+    }
+
+    /// Sends a request and waits for its response (same `seq`), retrying on
+    /// timeout with the same `seq`.
+    pub fn call(&mut self, req: Request) -> Result<Response, CliError> {
+        self.seq = self.seq.wrapping_add(1);
+        let seq = self.seq;
+        let frame = Frame {
+            version: PROTOCOL_VERSION,
+            seq,
+            body: Body::Request(req),
+        };
+        let mut buf = [0u8; MAX_FRAME];
+        let bytes = encode(&frame, &mut buf)
+            .map_err(|_| CliError::failure("request too large for one frame"))?
+            .to_vec();
+        for _ in 0..self.attempts {
+            self.link.send(&bytes).map_err(|e| gone(&*self.link, &e))?;
+            let deadline = Instant::now() + self.timeout;
+            while Instant::now() < deadline {
+                if let Some(f) = self.next_frame(deadline)? {
+                    match f.body {
+                        Body::Response(r) if f.seq == seq => return Ok(r),
+                        Body::Telemetry(t) => self.telemetry.push_back((f.seq, t)),
+                        // A stale response to an earlier attempt, or an error for garbage: skip.
+                        _ => {}
+                    }
+                }
+            }
+        }
+        Err(CliError::failure(format!(
+            "no answer from {} after {} attempts of {} ms (device gone or not speaking protocol v{PROTOCOL_VERSION})",
+            self.link.describe(),
+            self.attempts,
+            self.timeout.as_millis()
+        )))
+    }
+
+    /// Waits up to `timeout` for one telemetry frame.
+    pub fn next_telemetry(
+        &mut self,
+        timeout: Duration,
+    ) -> Result<Option<(u32, Telemetry)>, CliError> {
+        if let Some(t) = self.telemetry.pop_front() {
+            return Ok(Some(t));
+        }
+        let deadline = Instant::now() + timeout;
+        while Instant::now() < deadline {
+            if let Some(f) = self.next_frame(deadline)? {
+                if let Body::Telemetry(t) = f.body {
+                    return Ok(Some((f.seq, t)));
+                }
+            }
+        }
+        Ok(None)
+    }
+
+    fn next_frame(&mut self, deadline: Instant) -> Result<Option<Frame>, CliError> {
+        let mut b = [0u8; 1];
+        let left = deadline.saturating_duration_since(Instant::now());
+        let n = self
+            .link
+            .recv(&mut b, left)
+            .map_err(|e| gone(&*self.link, &e))?;
+        if n == 0 {
+            return Ok(None);
+        }
+        match self.deframer.push(b[0]) {
+            Deframed::Frame(f) => Ok(decode(f).ok()),
+            _ => Ok(None),
+        }
+    }
+}
+
+fn gone(link: &dyn Link, e: &std::io::Error) -> CliError {
+    CliError::failure(format!("lost {}: {e}", link.describe()))
+}

@@ -1,0 +1,151 @@
+//! Byte links to a device: a serial port (real board or a pty), TCP (QEMU,
+//! `fricctl sim-device --tcp`), or the in-process virtual device.
+
+use std::io::{self, Read, Write};
+use std::net::TcpStream;
+use std::time::{Duration, Instant};
+
+use super::sim::{PlantOptions, VirtualDevice};
+
+/// A bidirectional byte stream with read timeouts.
+pub trait Link {
+    /// Writes all bytes.
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()>;
+    /// Reads what is available within `timeout` (0 bytes on timeout).
+    fn recv(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize>;
+    /// What answered (for messages).
+    fn describe(&self) -> String;
+}
+
+/// A serial port (board or pty).
+pub struct SerialLink {
+    port: Box<dyn serialport::SerialPort>,
+    name: String,
+}
+
+impl SerialLink {
+    /// Opens `path` at 115 200 Bd.
+    pub fn open(path: &str) -> io::Result<Self> {
+        let port = serialport::new(path, 115_200)
+            .timeout(Duration::from_millis(50))
+            .open()
+            .map_err(|e| io::Error::other(format!("{path}: {e}")))?;
+        Ok(SerialLink {
+            port,
+            name: path.to_string(),
+        })
+    }
+}
+
+impl Link for SerialLink {
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.port.write_all(bytes)?;
+        self.port.flush()
+    }
+    fn recv(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize> {
+        self.port
+            .set_timeout(timeout.max(Duration::from_millis(1)))
+            .map_err(io::Error::other)?;
+        match self.port.read(buf) {
+            Ok(n) => Ok(n),
+            Err(e)
+                if e.kind() == io::ErrorKind::TimedOut || e.kind() == io::ErrorKind::WouldBlock =>
+            {
+                Ok(0)
+            }
+            Err(e) => Err(e),
+        }
+    }
+    fn describe(&self) -> String {
+        format!("serial port {}", self.name)
+    }
+}
+
+/// TCP (QEMU's serial backend, or `fricctl sim-device --tcp`).
+pub struct TcpLink {
+    s: TcpStream,
+    addr: String,
+}
+
+impl TcpLink {
+    /// Connects to `addr`.
+    pub fn connect(addr: &str) -> io::Result<Self> {
+        let s = TcpStream::connect(addr)
+            .map_err(|e| io::Error::new(e.kind(), format!("{addr}: {e}")))?;
+        s.set_nodelay(true)?;
+        Ok(TcpLink {
+            s,
+            addr: addr.to_string(),
+        })
+    }
+}
+
+impl Link for TcpLink {
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.s.write_all(bytes)
+    }
+    fn recv(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize> {
+        self.s
+            .set_read_timeout(Some(timeout.max(Duration::from_millis(1))))?;
+        match self.s.read(buf) {
+            Ok(0) => Err(io::Error::new(
+                io::ErrorKind::ConnectionAborted,
+                "the device closed the connection",
+            )),
+            Ok(n) => Ok(n),
+            Err(e)
+                if e.kind() == io::ErrorKind::TimedOut || e.kind() == io::ErrorKind::WouldBlock =>
+            {
+                Ok(0)
+            }
+            Err(e) => Err(e),
+        }
+    }
+    fn describe(&self) -> String {
+        format!("tcp {}", self.addr)
+    }
+}
+
+/// The virtual device in this process; simulated time advances while the
+/// client waits (at the device's sample rate, as fast as the CPU allows).
+pub struct SimLink {
+    dev: VirtualDevice,
+    pending: Vec<u8>,
+}
+
+impl SimLink {
+    /// A fresh virtual device.
+    pub fn new(opts: PlantOptions) -> Self {
+        SimLink {
+            dev: VirtualDevice::new(opts),
+            pending: Vec::new(),
+        }
+    }
+}
+
+impl Link for SimLink {
+    fn send(&mut self, bytes: &[u8]) -> io::Result<()> {
+        let out = self.dev.receive(bytes);
+        self.pending.extend(out);
+        Ok(())
+    }
+    fn recv(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize> {
+        let start = Instant::now();
+        while self.pending.is_empty() && start.elapsed() < timeout {
+            // 10 ms of simulated time per turn.
+            let n = (self.dev.sample_rate() / 100.0) as usize;
+            let t = self.dev.advance(n);
+            self.pending.extend(t);
+            if self.pending.is_empty() {
+                return Ok(0);
+            }
+        }
+        let n = self.pending.len().min(buf.len());
+        buf[..n].copy_from_slice(&self.pending[..n]);
+        self.pending.drain(..n);
+        Ok(n)
+    }
+    fn describe(&self) -> String {
+        "the virtual device (in process)".to_string()
+    }
+}

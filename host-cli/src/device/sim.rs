@@ -1,0 +1,230 @@
+//! The virtual device: the firmware's own device logic and protocol server
+//! (model-core `device`, `server`) plus a simulated plant. The plant is the
+//! paper's spring contact integrated in physical units with 32 sub-steps per
+//! ADC sample, driven by the DDS channels' *current* levels (so ramps act on
+//! it), loaded by a stage sliding at `v0`; its forces go through the ADC
+//! calibrations with optional noise, sample by sample, into the device's
+//! estimator — the same path as on the board.
+
+use std::f64::consts::TAU;
+
+use model_core::dds::{phase_rad, SineTable};
+use model_core::device::{Contact, DacCal, Device, DeviceConfig, DriveSetting};
+use model_core::estimator::Calibration;
+use model_core::protocol::{Info, PROTOCOL_VERSION};
+use model_core::server::Server;
+
+/// Table size of the virtual device (as the firmware).
+pub const TABLE_N: usize = 1024;
+/// Samples per half-buffer (as the firmware).
+pub const HALF: usize = 512;
+/// Sub-steps of the plant per ADC sample.
+const SUB: usize = 32;
+
+/// The virtual board's configuration (the firmware's calibration, 500 kS/s).
+pub fn config() -> DeviceConfig {
+    DeviceConfig {
+        sample_rate_hz: 500_000.0,
+        dac_z: DacCal {
+            metres_per_code: 2e-9,
+            zero_code: 0.0,
+        },
+        dac_x: DacCal {
+            metres_per_code: 1e-9,
+            zero_code: 2048.0,
+        },
+        adc_x: Calibration {
+            gain: 0.01,
+            offset: 2048.0,
+        },
+        adc_z: Calibration {
+            gain: 0.02,
+            offset: 0.0,
+        },
+        adc_full_scale: 4095,
+        liftoff_margin: 0.05,
+        freq_range_hz: (1_000.0, 100_000.0),
+        slew_m_per_s: 1e-3,
+        slew_rad_per_s: 100.0,
+        // The plant reads the drive at the sample's own phase.
+        adc_lag_samples: 0,
+    }
+}
+
+/// `Info` of the virtual board.
+pub fn info(cfg: &DeviceConfig) -> Info {
+    let mut board = [0u8; 16];
+    board[..14].copy_from_slice(b"virtual device");
+    Info {
+        firmware: [0, 1, 0],
+        protocol: PROTOCOL_VERSION,
+        board,
+        sample_rate_hz: cfg.sample_rate_hz,
+        freq_range_hz: cfg.freq_range_hz,
+        max_amp_x_m: 2047.0 * cfg.dac_x.metres_per_code,
+        max_offset_z_m: (4095.0 - cfg.dac_z.zero_code) * cfg.dac_z.metres_per_code,
+        liftoff_margin: cfg.liftoff_margin,
+    }
+}
+
+/// Plant options.
+#[derive(Debug, Clone, Copy)]
+pub struct PlantOptions {
+    /// Stage velocity v0, m/s.
+    pub v0: f64,
+    /// ADC noise, counts (uniform ± this).
+    pub noise_counts: f64,
+}
+
+/// A virtual device with its plant.
+pub struct VirtualDevice {
+    dev: Device<'static, TABLE_N>,
+    server: Server,
+    plant: Plant,
+    dac: Vec<u32>,
+    half: usize,
+    rng: u64,
+    opts: PlantOptions,
+}
+
+struct Plant {
+    /// Contact point u_xc, m.
+    uxc: f64,
+    /// Stage position v0·t, m.
+    stage: f64,
+}
+
+impl VirtualDevice {
+    /// A stopped virtual device with contact μ0 = 0.3, k_z = k_x = 10⁷ N/m.
+    pub fn new(opts: PlantOptions) -> Self {
+        let table: &'static SineTable<TABLE_N> = Box::leak(Box::new(SineTable::libm()));
+        let cfg = config();
+        let dev = Device::new(
+            cfg,
+            table,
+            Contact {
+                mu0: 0.3,
+                kz: 1e7,
+                kx: 1e7,
+            },
+        )
+        .expect("valid virtual configuration");
+        let mut v = VirtualDevice {
+            dev,
+            server: Server::new(info(&cfg)),
+            plant: Plant {
+                uxc: 0.0,
+                stage: 0.0,
+            },
+            dac: vec![0; HALF],
+            half: 0,
+            rng: 0x9E37_79B9_7F4A_7C15,
+            opts,
+        };
+        let _ = v.dev.set_drive(DriveSetting {
+            freq_hz: 40_000.0,
+            amp_z_m: 0.0,
+            amp_x_m: 0.0,
+            offset_z_m: 0.0,
+            phase_rad: 0.0,
+        });
+        v
+    }
+
+    /// Feeds received bytes; returns the bytes to send back.
+    pub fn receive(&mut self, bytes: &[u8]) -> Vec<u8> {
+        let mut out = Vec::new();
+        self.server
+            .receive(&mut self.dev, bytes, |b| out.extend_from_slice(b));
+        out
+    }
+
+    /// Advances the simulation by whole half-buffers covering `samples`;
+    /// returns telemetry bytes produced meanwhile.
+    pub fn advance(&mut self, samples: usize) -> Vec<u8> {
+        let mut out = Vec::new();
+        let halves = samples.div_ceil(HALF).max(1);
+        for _ in 0..halves {
+            self.step_half();
+            self.server
+                .poll(&mut self.dev, |b| out.extend_from_slice(b));
+        }
+        out
+    }
+
+    /// Samples per second.
+    pub fn sample_rate(&self) -> f64 {
+        self.dev.config().sample_rate_hz
+    }
+
+    fn noise(&mut self) -> f64 {
+        self.rng ^= self.rng << 13;
+        self.rng ^= self.rng >> 7;
+        self.rng ^= self.rng << 17;
+        let u = (self.rng >> 11) as f64 / (1u64 << 53) as f64;
+        (2.0 * u - 1.0) * self.opts.noise_counts
+    }
+
+    fn step_half(&mut self) {
+        let cfg = *self.dev.config();
+        let contact = self.dev.contact();
+        // Drive levels now (metres) from the DDS channel states.
+        let ch = *self.dev.dds().channels();
+        let acc0 = self.dev.dds().accumulator();
+        let tw = self.dev.dds().tuning_word();
+        let half = self.half;
+        let mut buf = std::mem::take(&mut self.dac);
+        self.dev.fill_dac(half, &mut buf);
+        self.dac = buf;
+        let (mz, mx) = (
+            f64::from(cfg.dac_z.metres_per_code),
+            f64::from(cfg.dac_x.metres_per_code),
+        );
+        let uz0 = (f64::from(ch[0].dc) - f64::from(cfg.dac_z.zero_code)) * mz;
+        let duz = f64::from(ch[0].amp) * mz;
+        let dux = f64::from(ch[1].amp) * mx;
+        // ch1 = dc + amp·sin(θ + p1), ch2 = zero + amp·sin(θ + p2): u_z = u_z0 + Δu_z sin(θ + p1),
+        // u_x = Δu_x sin(θ + p2) (the device sets p1 = −π/2, p2 = φ + π/2).
+        let (p1, p2) = (phase_rad(ch[0].phase), phase_rad(ch[1].phase));
+        let fs = cfg.sample_rate_hz;
+        let dt = 1.0 / fs / SUB as f64;
+        let (kz, kx, mu0) = (
+            f64::from(contact.kz),
+            f64::from(contact.kx),
+            f64::from(contact.mu0),
+        );
+        let dtheta = TAU * f64::from(tw) / 4_294_967_296.0;
+        let mut samples = Vec::with_capacity(HALF);
+        let mut th = phase_rad(acc0);
+        for _ in 0..HALF {
+            // The sample is taken at θ; then the plant advances to the next tick.
+            let uz = uz0 + duz * (th + p1).sin();
+            let ux = dux * (th + p2).sin() + self.plant.stage;
+            let w = (mu0 * kz / kx * uz).max(0.0);
+            let s = (ux - self.plant.uxc).clamp(-w, w);
+            self.plant.uxc = ux - s;
+            let fz = kz * uz.max(0.0);
+            let fx = kx * s;
+            let z = (fz / f64::from(cfg.adc_z.gain) + f64::from(cfg.adc_z.offset) + self.noise())
+                .round()
+                .clamp(0.0, 4095.0);
+            let x = (fx / f64::from(cfg.adc_x.gain) + f64::from(cfg.adc_x.offset) + self.noise())
+                .round()
+                .clamp(0.0, 4095.0);
+            samples.push((x as u16, z as u16));
+            // Sub-steps to the next sample (the paper's scheme, finer grid).
+            for k in 1..=SUB {
+                let t = th + dtheta * k as f64 / SUB as f64;
+                self.plant.stage += self.opts.v0 * dt;
+                let uz = uz0 + duz * (t + p1).sin();
+                let ux = dux * (t + p2).sin() + self.plant.stage;
+                let w = (mu0 * kz / kx * uz).max(0.0);
+                let s = (ux - self.plant.uxc).clamp(-w, w);
+                self.plant.uxc = ux - s;
+            }
+            th += dtheta;
+        }
+        self.dev.adc_block(half, &samples);
+        self.half ^= 1;
+    }
+}

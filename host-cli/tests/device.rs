@@ -1,0 +1,347 @@
+//! `fricctl device` against the virtual device served on a real pty by
+//! `fricctl sim-device --pty`: every command, refused commands that change
+//! nothing, raw protocol abuse (garbage, bad CRC, oversize, cut-off frame,
+//! unknown message, version mismatch), and a device that does not answer.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::process::{Child, Command as StdCommand, Stdio};
+use std::time::{Duration, Instant};
+
+use assert_cmd::cargo::CommandCargoExt;
+use assert_cmd::Command;
+use model_core::protocol::{
+    decode, encode, Body, Deframed, Deframer, Frame, Request, Response, WireError, CRC, MAX_FRAME,
+    PROTOCOL_VERSION,
+};
+use serde_json::Value;
+use serialport::SerialPort;
+
+struct Sim {
+    child: Child,
+    path: String,
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn sim() -> Sim {
+    let mut child = StdCommand::cargo_bin("fricctl")
+        .unwrap()
+        .args(["sim-device", "--pty", "--seconds", "120"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    let path = line.trim().to_string();
+    assert!(path.starts_with("/dev/"), "{path}");
+    Sim { child, path }
+}
+
+fn dev(s: &Sim, args: &[&str]) -> std::process::Output {
+    Command::cargo_bin("fricctl")
+        .unwrap()
+        .args(["device", "--port", &s.path, "--json"])
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn ok_json(s: &Sim, args: &[&str]) -> Value {
+    let o = dev(s, args);
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+const DRIVE: &[&str] = &[
+    "drive",
+    "set",
+    "--freq",
+    "20000",
+    "--amp-z",
+    "2e-6",
+    "--amp-x",
+    "3e-7",
+    "--offset-z",
+    "4e-6",
+    "--phase-deg",
+    "40",
+];
+
+#[test]
+fn every_command_over_a_pty() {
+    let s = sim();
+    let info = ok_json(&s, &["info"]);
+    assert_eq!(info["protocol"], PROTOCOL_VERSION);
+    assert_eq!(info["board"], "virtual device");
+    let d = ok_json(&s, DRIVE);
+    let f = d["Drive"]["applied"]["achieved"]["freq_hz"]
+        .as_f64()
+        .unwrap();
+    assert!((f - 20_000.0).abs() < 0.001);
+    assert_eq!(ok_json(&s, &["drive", "get"]), d);
+    assert_eq!(
+        ok_json(
+            &s,
+            &["scene", "set", "--mu0", "0.3", "--kz", "1e7", "--kx", "1e7"]
+        ),
+        "Ok"
+    );
+    assert!(
+        (ok_json(&s, &["scene", "get"])["Contact"]["mu0"]
+            .as_f64()
+            .unwrap()
+            - 0.3)
+            .abs()
+            < 1e-7
+    );
+    assert_eq!(ok_json(&s, &["start"]), "Ok");
+    std::thread::sleep(Duration::from_millis(300)); // ramps (≈ 2 ms of device time)
+    assert_eq!(ok_json(&s, &["status"])["Status"]["running"], true);
+    let p = ok_json(&s, &["predict", "--v0", "0.004"]);
+    let pred = p["Prediction"]["prediction"]["mu"].as_f64().unwrap();
+    // The prediction equals the host model for the same scene (f32 tolerance).
+    let m = Command::cargo_bin("fricctl")
+        .unwrap()
+        .args([
+            "mu", "--mu0", "0.3", "--kz", "1e7", "--kx", "1e7", "--uz0", "4e-6", "--duz", "2e-6",
+            "--dux", "3e-7",
+        ])
+        .args([
+            "--freq",
+            "20000",
+            "--phi-deg",
+            "40",
+            "--v0",
+            "0.004",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    let host: Value = serde_json::from_slice(&m.stdout).unwrap();
+    assert!(
+        (pred - host["mu"].as_f64().unwrap()).abs() < 1e-5,
+        "{pred} vs {host}"
+    );
+    // The measurement of the simulated plant (stage at 4 mm/s, the sim's default) agrees.
+    let e = ok_json(&s, &["measure", "--periods", "2000"]);
+    let mu = e["Estimate"]["mu"].as_f64().unwrap();
+    assert!(
+        (mu - pred).abs() < 2e-3 * 0.3,
+        "measured {mu}, predicted {pred}"
+    );
+    assert_eq!(e["Estimate"]["saturated"], false);
+    // watch: two streamed estimates, recorded to CSV.
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("w.csv");
+    let o = dev(
+        &s,
+        &[
+            "watch",
+            "--periods",
+            "200",
+            "--count",
+            "2",
+            "--csv",
+            csv.to_str().unwrap(),
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(String::from_utf8_lossy(&o.stdout).lines().count(), 2);
+    assert_eq!(std::fs::read_to_string(&csv).unwrap().lines().count(), 3);
+    assert_eq!(ok_json(&s, &["stop"]), "Ok");
+    assert_eq!(ok_json(&s, &["reset-faults"]), "Ok");
+}
+
+#[test]
+fn refused_commands_leave_the_drive_unchanged() {
+    let s = sim();
+    ok_json(&s, DRIVE);
+    let before = ok_json(&s, &["drive", "get"]);
+    // Lift-off: Δu_z above (1 − 0.05)·u_z0.
+    let o = dev(
+        &s,
+        &[
+            "drive",
+            "set",
+            "--freq",
+            "20000",
+            "--amp-z",
+            "3.9e-6",
+            "--amp-x",
+            "3e-7",
+            "--offset-z",
+            "4e-6",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--amp-z") && err.contains("lift"), "{err}");
+    // Out of range frequency: named, with the limits.
+    let o = dev(
+        &s,
+        &[
+            "drive",
+            "set",
+            "--freq",
+            "5e6",
+            "--amp-z",
+            "1e-6",
+            "--amp-x",
+            "3e-7",
+            "--offset-z",
+            "4e-6",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--freq") && err.contains("100000"), "{err}");
+    assert_eq!(ok_json(&s, &["drive", "get"]), before);
+}
+
+fn raw_port(s: &Sim) -> Box<dyn SerialPort> {
+    serialport::new(&s.path, 115_200)
+        .timeout(Duration::from_millis(100))
+        .open()
+        .unwrap()
+}
+
+fn read_frames(p: &mut Box<dyn SerialPort>, want: usize) -> Vec<Frame> {
+    let mut df = Deframer::default();
+    let mut out = Vec::new();
+    let t = Instant::now();
+    let mut b = [0u8; 64];
+    while out.len() < want && t.elapsed() < Duration::from_secs(5) {
+        if let Ok(n) = p.read(&mut b) {
+            for &x in &b[..n] {
+                if let Deframed::Frame(f) = df.push(x) {
+                    if let Ok(fr) = decode(f) {
+                        if matches!(fr.body, Body::Response(_)) {
+                            out.push(fr);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+fn req(seq: u32, r: Request) -> Vec<u8> {
+    let mut b = [0u8; MAX_FRAME];
+    encode(
+        &Frame {
+            version: PROTOCOL_VERSION,
+            seq,
+            body: Body::Request(r),
+        },
+        &mut b,
+    )
+    .unwrap()
+    .to_vec()
+}
+
+fn raw_frame(raw: &[u8]) -> Vec<u8> {
+    let mut v = raw.to_vec();
+    v.extend(CRC.checksum(raw).to_le_bytes());
+    let mut out = vec![0u8; v.len() + 2];
+    let n = cobs::encode(&v, &mut out);
+    out.truncate(n);
+    out.push(0);
+    out
+}
+
+fn err_of(f: &Frame) -> WireError {
+    match f.body {
+        Body::Response(Response::Error(e)) => e,
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn protocol_abuse_over_the_pty() {
+    let s = sim();
+    let mut p = raw_port(&s);
+    // Garbage, then a good request: one Malformed, then the answer.
+    p.write_all(&[0x42, 0x13, 0x99, 0x00]).unwrap();
+    p.write_all(&req(1, Request::Hello)).unwrap();
+    let f = read_frames(&mut p, 2);
+    assert_eq!(err_of(&f[0]), WireError::Malformed);
+    assert_eq!(f[1].seq, 1);
+    // Corrupted CRC.
+    let mut b = req(2, Request::GetStatus);
+    let k = b.len() - 2;
+    b[k] = if b[k] == 0x55 { 0x56 } else { 0x55 };
+    p.write_all(&b).unwrap();
+    assert_eq!(err_of(&read_frames(&mut p, 1)[0]), WireError::BadCrc);
+    // Oversize frame.
+    let mut big = vec![0x11u8; 700];
+    big.push(0);
+    p.write_all(&big).unwrap();
+    assert_eq!(err_of(&read_frames(&mut p, 1)[0]), WireError::Oversize);
+    // A frame cut off mid-way, then a good one.
+    let good = req(3, Request::GetContact);
+    p.write_all(&good[..good.len() / 2]).unwrap();
+    p.write_all(&req(4, Request::GetStatus)).unwrap();
+    let f = read_frames(&mut p, 1);
+    assert!(matches!(
+        err_of(&f[0]),
+        WireError::Malformed | WireError::BadCrc
+    ));
+    p.write_all(&req(5, Request::GetStatus)).unwrap();
+    let f = read_frames(&mut p, 1);
+    assert_eq!(f[0].seq, 5);
+    // Unknown message id, version mismatch.
+    p.write_all(&raw_frame(&[PROTOCOL_VERSION as u8, 6, 0, 77]))
+        .unwrap();
+    let f = read_frames(&mut p, 1);
+    assert_eq!((f[0].seq, err_of(&f[0])), (6, WireError::UnknownMessage));
+    p.write_all(&raw_frame(&[9, 7, 0, 0])).unwrap();
+    let f = read_frames(&mut p, 1);
+    assert_eq!(
+        (f[0].seq, err_of(&f[0])),
+        (
+            7,
+            WireError::VersionMismatch {
+                device: PROTOCOL_VERSION
+            }
+        )
+    );
+}
+
+#[test]
+fn a_silent_device_times_out_with_a_clear_message() {
+    // A pty pair where nobody answers on the other side.
+    let (_master, slave) = serialport::TTYPort::pair().unwrap();
+    let path = slave.name().unwrap();
+    let t = Instant::now();
+    let o = Command::cargo_bin("fricctl")
+        .unwrap()
+        .args([
+            "device",
+            "--port",
+            &path,
+            "--timeout-ms",
+            "200",
+            "--attempts",
+            "2",
+            "info",
+        ])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("no answer") && err.contains(&path), "{err}");
+    assert!(t.elapsed() < Duration::from_secs(5));
+}
