@@ -33,8 +33,10 @@ proptest! {
         prop_assert!(m.is_finite() && m.abs() <= 1.0, "{}", m);
     }
 
-    /// The exact solver agrees with a fine fixed-step run (N = 16384; its own
-    /// error is below ~1e-8 for these velocities).
+    /// The exact solver agrees with a fine fixed-step run (N = 16384). The
+    /// scheme's own error is O((drive amplitude · 2π/N)²): bounded here by
+    /// 1.5e-8·(1 + a + b)² (≈ 3e-8 observed at a = 0.91, b = 2.98, converging
+    /// to 5e-11 at N = 262144, so the difference is the scheme's, not the solver's).
     #[test]
     fn exact_matches_fine_fixed_step(a in 0.0f64..0.95, b in 0.0f64..3.0, phi in -PI..PI, x in 0.05f64..0.98, fwd in any::<bool>()) {
         let d = scene(a, b, phi).drive();
@@ -43,6 +45,7 @@ proptest! {
         let v = if fwd { x * c } else { -x * c };
         let e = exact::mu_over_mu0::<f64, Libm>(&d, v).unwrap();
         let f = fixed(&d, v, 1 << 14);
-        prop_assert!((e - f).abs() <= 3e-8, "exact {} fixed {}", e, f);
+        let tol = 1.5e-8 * (1.0 + a + b) * (1.0 + a + b);
+        prop_assert!((e - f).abs() <= tol, "exact {} fixed {} tol {}", e, f, tol);
     }
 }
