@@ -345,3 +345,42 @@ fn a_silent_device_times_out_with_a_clear_message() {
     assert!(err.contains("no answer") && err.contains(&path), "{err}");
     assert!(t.elapsed() < Duration::from_secs(5));
 }
+
+#[test]
+fn in_process_virtual_device_keeps_its_state_and_measures() {
+    let dir = tempfile::tempdir().unwrap();
+    let state = dir.path().join("sim.json");
+    let run = |args: &[&str]| {
+        Command::cargo_bin("fricctl")
+            .unwrap()
+            .env("FRICCTL_SIM_STATE", &state)
+            .args(["device", "--sim", "--json"])
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    assert!(run(DRIVE).status.success());
+    assert!(run(&["start"]).status.success());
+    let o = run(&["measure", "--periods", "2000"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let e: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let p: Value = serde_json::from_slice(&run(&["predict", "--v0", "0.004"]).stdout).unwrap();
+    let (mu, pred) = (
+        e["Estimate"]["mu"].as_f64().unwrap(),
+        p["Prediction"]["prediction"]["mu"].as_f64().unwrap(),
+    );
+    assert!(
+        (mu - pred).abs() < 2e-3 * 0.3,
+        "measured {mu}, predicted {pred}"
+    );
+    // `ports` lists candidates (possibly none here) as JSON.
+    let o = Command::cargo_bin("fricctl")
+        .unwrap()
+        .args(["device", "--json", "ports"])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    assert!(serde_json::from_slice::<Value>(&o.stdout)
+        .unwrap()
+        .is_array());
+}

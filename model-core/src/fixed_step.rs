@@ -326,3 +326,44 @@ impl<T: Float> Stepper<T> {
         (c, self.stretch, w)
     }
 }
+
+/// The single-spring contact of §2 in physical units for an arbitrary drive:
+/// each call is one step of the paper's scheme (stick trial, clamp of the
+/// contact point to the friction band), with the displacements of the upper
+/// spring point given directly. This is the plant of the virtual device,
+/// whose drive comes from the DDS's current (possibly ramping) levels.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpringContact<T> {
+    /// μ₀.
+    pub mu0: T,
+    /// k_z, N/m.
+    pub kz: T,
+    /// k_x, N/m.
+    pub kx: T,
+    /// Contact point u_x,c, m.
+    pub uxc: T,
+}
+
+impl<T: Float> SpringContact<T> {
+    /// A contact at `u_x,c = 0`.
+    pub fn new(mu0: T, kz: T, kx: T) -> Self {
+        SpringContact {
+            mu0,
+            kz,
+            kx,
+            uxc: T::ZERO,
+        }
+    }
+
+    /// Moves the upper point to `(u_x, u_z)` (m) and returns `(f_x, f_z)` (N,
+    /// eqs. 3, 4). With `u_z ≤ 0` the spring is off the plane: no forces and
+    /// the contact point follows (eq. 5 with f_z = 0).
+    #[inline]
+    pub fn step(&mut self, ux: T, uz: T) -> (T, T) {
+        let uz = uz.max(T::ZERO);
+        let w = self.mu0 * (self.kz / self.kx) * uz;
+        let s = (ux - self.uxc).max(-w).min(w);
+        self.uxc = ux - s;
+        (self.kx * s, self.kz * uz)
+    }
+}

@@ -5,7 +5,9 @@ use std::io::{self, Read, Write};
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
 
-use super::sim::{PlantOptions, VirtualDevice};
+use std::path::PathBuf;
+
+use super::sim::{PlantOptions, SimState, VirtualDevice};
 
 /// A bidirectional byte stream with read timeouts.
 pub trait Link {
@@ -108,17 +110,39 @@ impl Link for TcpLink {
 
 /// The virtual device in this process; simulated time advances while the
 /// client waits (at the device's sample rate, as fast as the CPU allows).
+/// Its drive, contact and run state persist between invocations in a small
+/// JSON file (`$FRICCTL_SIM_STATE`, default `fricctl-sim-state.json` in the
+/// temporary directory), so `drive set`, `start`, `measure` work as on a board.
 pub struct SimLink {
     dev: VirtualDevice,
     pending: Vec<u8>,
+    state_file: PathBuf,
 }
 
 impl SimLink {
-    /// A fresh virtual device.
+    /// The virtual device, restored from the state file if there is one.
     pub fn new(opts: PlantOptions) -> Self {
+        let state_file = std::env::var_os("FRICCTL_SIM_STATE")
+            .map(PathBuf::from)
+            .unwrap_or_else(|| std::env::temp_dir().join("fricctl-sim-state.json"));
+        let mut dev = VirtualDevice::new(opts);
+        if let Ok(text) = std::fs::read_to_string(&state_file) {
+            if let Ok(st) = serde_json::from_str::<SimState>(&text) {
+                dev.restore(&st);
+            }
+        }
         SimLink {
-            dev: VirtualDevice::new(opts),
+            dev,
             pending: Vec::new(),
+            state_file,
+        }
+    }
+}
+
+impl Drop for SimLink {
+    fn drop(&mut self) {
+        if let Ok(text) = serde_json::to_string(&self.dev.snapshot()) {
+            let _ = std::fs::write(&self.state_file, text);
         }
     }
 }

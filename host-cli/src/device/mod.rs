@@ -209,7 +209,10 @@ fn wire_error(e: WireError) -> CliError {
         WireError::LiftOffRefused { amp_z_m, limit_m } => CliError::usage(format!(
             "--amp-z: refused by the device: {amp_z_m} m would lift the contact off (limit {limit_m} m)"
         )),
-        WireError::BadScene => CliError::usage("--mu0: refused by the device: not a valid contact".to_string()),
+        WireError::BadScene => CliError::usage(
+            "--offset-z: the device has no valid scene: it needs a contact (scene set) and a drive with a normal offset (drive set)"
+                .to_string(),
+        ),
         other => CliError::failure(format!("device error: {other:?}")),
     }
 }
@@ -370,7 +373,7 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             periods,
             count,
             csv,
-        } => watch(&mut c, t.json, *periods, *count, csv.as_deref()),
+        } => watch(t, c, *periods, *count, csv.as_deref()),
         DeviceCmd::Ports => unreachable!("handled above"),
     }
 }
@@ -380,12 +383,14 @@ fn unexpected(r: Response) -> CliError {
 }
 
 fn watch(
-    c: &mut Client,
-    json: bool,
+    t: &Target,
+    mut c: Client,
     periods: u32,
     count: Option<u64>,
     csv: Option<&std::path::Path>,
 ) -> CliResult {
+    use std::io::IsTerminal;
+    let live = !t.json && std::io::stdout().is_terminal();
     expect(c.call(Request::Stream { on: true, periods })?)?;
     let mut w = match csv {
         Some(p) => Some(
@@ -405,19 +410,30 @@ fn watch(
     let mut n = 0u64;
     let mut idle = Instant::now();
     while count.is_none_or(|k| n < k) {
-        match c.next_telemetry(Duration::from_millis(200))? {
+        let got = match c.next_telemetry(Duration::from_millis(200)) {
+            Ok(g) => g,
+            Err(e) => {
+                // The link is gone: reconnect (same target) for up to 30 s.
+                eprintln!("\n{}; reconnecting", e.msg);
+                c = reconnect(t, periods)?;
+                last_seq = None;
+                idle = Instant::now();
+                continue;
+            }
+        };
+        match got {
             Some((seq, Telemetry::Estimate(e))) => {
                 idle = Instant::now();
                 let dropped = last_seq.map_or(0, |l| seq.wrapping_sub(l).saturating_sub(1));
                 last_seq = Some(seq);
                 n += 1;
-                if json {
+                if t.json {
                     println!(
                         "{}",
                         serde_json::json!({"seq": seq, "estimate": e, "dropped": dropped})
                     );
                 } else {
-                    println!(
+                    let line = format!(
                         "#{seq:<6} mu {:>10.6}  fx {:>9.4} N  fz {:>9.4} N  {} samples{}{}",
                         e.mu,
                         e.fx_mean,
@@ -430,6 +446,13 @@ fn watch(
                             String::new()
                         }
                     );
+                    if live {
+                        // One line, updated in place.
+                        print!("\r\x1b[2K{line}");
+                        let _ = std::io::stdout().flush();
+                    } else {
+                        println!("{line}");
+                    }
                 }
                 if let Some(w) = w.as_mut() {
                     let _ = writeln!(
@@ -450,8 +473,29 @@ fn watch(
             }
         }
     }
+    if live {
+        println!();
+    }
     let _ = c.call(Request::Stream { on: false, periods });
     Ok(())
+}
+
+fn reconnect(t: &Target, periods: u32) -> CliResult<Client> {
+    let start = Instant::now();
+    loop {
+        if let Ok(mut c) = open(t) {
+            if c.call(Request::Stream { on: true, periods }).is_ok() {
+                eprintln!("reconnected to {}", c.describe());
+                return Ok(c);
+            }
+        }
+        if start.elapsed() > Duration::from_secs(30) {
+            return Err(CliError::failure(
+                "the device is gone (no reconnection within 30 s)",
+            ));
+        }
+        std::thread::sleep(Duration::from_secs(1));
+    }
 }
 
 /// Flags of `fricctl sim-device`.

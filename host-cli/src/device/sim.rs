@@ -11,6 +11,7 @@ use std::f64::consts::TAU;
 use model_core::dds::{phase_rad, SineTable};
 use model_core::device::{Contact, DacCal, Device, DeviceConfig, DriveSetting};
 use model_core::estimator::Calibration;
+use model_core::fixed_step::SpringContact;
 use model_core::protocol::{Info, PROTOCOL_VERSION};
 use model_core::server::Server;
 
@@ -67,6 +68,17 @@ pub fn info(cfg: &DeviceConfig) -> Info {
     }
 }
 
+/// What `fricctl device --sim` keeps between invocations.
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
+pub struct SimState {
+    /// The accepted drive.
+    pub drive: DriveSetting,
+    /// The contact parameters.
+    pub contact: Contact,
+    /// Started.
+    pub running: bool,
+}
+
 /// Plant options.
 #[derive(Debug, Clone, Copy)]
 pub struct PlantOptions {
@@ -88,8 +100,8 @@ pub struct VirtualDevice {
 }
 
 struct Plant {
-    /// Contact point u_xc, m.
-    uxc: f64,
+    /// The contact (model-core's scheme in physical units).
+    contact: SpringContact<f64>,
     /// Stage position v0·t, m.
     stage: f64,
 }
@@ -113,7 +125,7 @@ impl VirtualDevice {
             dev,
             server: Server::new(info(&cfg)),
             plant: Plant {
-                uxc: 0.0,
+                contact: SpringContact::new(0.3, 1e7, 1e7),
                 stage: 0.0,
             },
             dac: vec![0; HALF],
@@ -129,6 +141,30 @@ impl VirtualDevice {
             phase_rad: 0.0,
         });
         v
+    }
+
+    /// The drive, contact and run state, to carry the in-process virtual
+    /// device from one `fricctl device --sim` invocation to the next.
+    pub fn snapshot(&self) -> SimState {
+        SimState {
+            drive: self.dev.drive(),
+            contact: self.dev.contact(),
+            running: self.dev.status().running,
+        }
+    }
+
+    /// Restores a snapshot (settling the ramps and the plant for 20 ms of
+    /// device time). Invalid snapshots are ignored.
+    pub fn restore(&mut self, st: &SimState) {
+        let _ = self.dev.set_contact(st.contact);
+        if self.dev.set_drive(st.drive).is_ok() && st.running && self.dev.start().is_ok() {
+            let mut n = 0;
+            while !self.dev.status().settled && n < 10_000 {
+                self.step_half();
+                n += 1;
+            }
+            self.advance((self.sample_rate() / 50.0) as usize);
+        }
     }
 
     /// Feeds received bytes; returns the bytes to send back.
@@ -186,13 +222,10 @@ impl VirtualDevice {
         // ch1 = dc + amp·sin(θ + p1), ch2 = zero + amp·sin(θ + p2): u_z = u_z0 + Δu_z sin(θ + p1),
         // u_x = Δu_x sin(θ + p2) (the device sets p1 = −π/2, p2 = φ + π/2).
         let (p1, p2) = (phase_rad(ch[0].phase), phase_rad(ch[1].phase));
-        let fs = cfg.sample_rate_hz;
-        let dt = 1.0 / fs / SUB as f64;
-        let (kz, kx, mu0) = (
-            f64::from(contact.kz),
-            f64::from(contact.kx),
-            f64::from(contact.mu0),
-        );
+        let dt = 1.0 / cfg.sample_rate_hz / SUB as f64;
+        self.plant.contact.mu0 = f64::from(contact.mu0);
+        self.plant.contact.kz = f64::from(contact.kz);
+        self.plant.contact.kx = f64::from(contact.kx);
         let dtheta = TAU * f64::from(tw) / 4_294_967_296.0;
         let mut samples = Vec::with_capacity(HALF);
         let mut th = phase_rad(acc0);
@@ -200,11 +233,7 @@ impl VirtualDevice {
             // The sample is taken at θ; then the plant advances to the next tick.
             let uz = uz0 + duz * (th + p1).sin();
             let ux = dux * (th + p2).sin() + self.plant.stage;
-            let w = (mu0 * kz / kx * uz).max(0.0);
-            let s = (ux - self.plant.uxc).clamp(-w, w);
-            self.plant.uxc = ux - s;
-            let fz = kz * uz.max(0.0);
-            let fx = kx * s;
+            let (fx, fz) = self.plant.contact.step(ux, uz);
             let z = (fz / f64::from(cfg.adc_z.gain) + f64::from(cfg.adc_z.offset) + self.noise())
                 .round()
                 .clamp(0.0, 4095.0);
@@ -212,15 +241,14 @@ impl VirtualDevice {
                 .round()
                 .clamp(0.0, 4095.0);
             samples.push((x as u16, z as u16));
-            // Sub-steps to the next sample (the paper's scheme, finer grid).
+            // Sub-steps to the next sample (the paper's scheme on a finer grid).
             for k in 1..=SUB {
                 let t = th + dtheta * k as f64 / SUB as f64;
                 self.plant.stage += self.opts.v0 * dt;
-                let uz = uz0 + duz * (t + p1).sin();
-                let ux = dux * (t + p2).sin() + self.plant.stage;
-                let w = (mu0 * kz / kx * uz).max(0.0);
-                let s = (ux - self.plant.uxc).clamp(-w, w);
-                self.plant.uxc = ux - s;
+                self.plant.contact.step(
+                    dux * (t + p2).sin() + self.plant.stage,
+                    uz0 + duz * (t + p1).sin(),
+                );
             }
             th += dtheta;
         }
