@@ -30,6 +30,8 @@ pub struct Server {
     stream: Option<u32>,
     telemetry_seq: u32,
     measuring_for_stream: bool,
+    last_settled: bool,
+    last_faults: u32,
 }
 
 impl Server {
@@ -41,6 +43,8 @@ impl Server {
             stream: None,
             telemetry_seq: 0,
             measuring_for_stream: false,
+            last_settled: true,
+            last_faults: 0,
         }
     }
 
@@ -79,13 +83,25 @@ impl Server {
         }
     }
 
-    /// Telemetry due now (streamed estimates), encoded into `send`. Call it
-    /// from the main loop after ADC blocks were processed.
+    /// Telemetry due now — ramps settled, newly latched faults, streamed
+    /// estimates — encoded into `send`. Call it from the main loop.
     pub fn poll<const N: usize, A: DeviceAccess<N>>(
         &mut self,
         dev: &mut A,
         mut send: impl FnMut(&[u8]),
     ) {
+        // Ramp progress and faults, as telemetry on change.
+        let status = dev.with(|d| d.status());
+        if status.settled && !self.last_settled {
+            self.telemetry(Telemetry::RampDone, &mut send);
+        }
+        self.last_settled = status.settled;
+        let new = status.faults & !self.last_faults;
+        if new != 0 {
+            self.telemetry(Telemetry::Fault(new), &mut send);
+        }
+        self.last_faults = status.faults;
+
         let Some(periods) = self.stream else {
             self.measuring_for_stream = false;
             return;

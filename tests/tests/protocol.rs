@@ -319,3 +319,59 @@ fn docs_protocol_examples() {
         &[0x07, 0x01, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x05, 0x07, 0xdb, 0xd2, 0x06, 0x00]
     );
 }
+
+#[test]
+fn telemetry_reports_ramps_and_faults_with_its_own_counter() {
+    use model_core::protocol::Telemetry;
+    let t = SineTable::<256>::libm();
+    let mut dev = Device::new(
+        cfg(),
+        &t,
+        Contact {
+            mu0: 0.3,
+            kz: 1e7,
+            kx: 1e7,
+        },
+    )
+    .unwrap();
+    let mut s = Server::new(info());
+    let good = DriveSetting {
+        freq_hz: 40e3,
+        amp_z_m: 1e-6,
+        amp_x_m: 2e-7,
+        offset_z_m: 3e-6,
+        phase_rad: 0.5,
+    };
+    talk(&mut s, &mut dev, &req(1, Request::SetDrive(good)));
+    talk(&mut s, &mut dev, &req(2, Request::Start));
+    let mut tele = Vec::new();
+    let mut df = Deframer::default();
+    let mut collect = |s: &mut Server, dev: &mut Device<'_, 256>| {
+        s.poll(dev, |out| {
+            for &b in out {
+                if let Deframed::Frame(f) = df.push(b) {
+                    let f = decode(f).unwrap();
+                    if let Body::Telemetry(t) = f.body {
+                        tele.push((f.seq, t));
+                    }
+                }
+            }
+        });
+    };
+    collect(&mut s, &mut dev);
+    // Phase ramps at 1e-4 rad/sample to 0.5 + π/2 rad: ≈ 20 700 samples.
+    let mut buf = [0u32; 512];
+    for _ in 0..60 {
+        dev.fill_dac(0, &mut buf);
+        collect(&mut s, &mut dev);
+    }
+    dev.fault(model_core::device::faults::EXTERNAL);
+    collect(&mut s, &mut dev);
+    assert_eq!(tele.len(), 2, "{tele:?}");
+    assert_eq!(tele[0].1, Telemetry::RampDone);
+    assert_eq!(
+        tele[1].1,
+        Telemetry::Fault(model_core::device::faults::EXTERNAL)
+    );
+    assert_eq!(tele[1].0, tele[0].0 + 1);
+}

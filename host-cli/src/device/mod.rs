@@ -44,6 +44,9 @@ pub struct Target {
     /// Virtual device: ADC noise, ± counts
     #[arg(long, default_value_t = 1.0)]
     pub sim_noise: f64,
+    /// Virtual device: uncalibrated ADC offset, counts
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub sim_offset: f64,
     /// JSON output
     #[arg(long, global = true)]
     pub json: bool,
@@ -154,6 +157,7 @@ fn open(t: &Target) -> CliResult<Client> {
         Box::new(SimLink::new(PlantOptions {
             v0: t.sim_v0,
             noise_counts: t.sim_noise,
+            offset_counts: t.sim_offset,
         }))
     } else {
         let usb = usb_ports();
@@ -169,6 +173,7 @@ fn open(t: &Target) -> CliResult<Client> {
                 Box::new(SimLink::new(PlantOptions {
                     v0: t.sim_v0,
                     noise_counts: t.sim_noise,
+                    offset_counts: t.sim_offset,
                 }))
             }
             many => {
@@ -513,6 +518,9 @@ pub struct SimArgs {
     /// ADC noise, ± counts
     #[arg(long, default_value_t = 1.0)]
     pub noise: f64,
+    /// Uncalibrated ADC offset, counts
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub offset: f64,
     /// Stop after this many seconds (default: run until killed)
     #[arg(long)]
     pub seconds: Option<f64>,
@@ -523,6 +531,7 @@ pub fn serve(a: &SimArgs) -> CliResult {
     let mut dev = VirtualDevice::new(PlantOptions {
         v0: a.v0,
         noise_counts: a.noise,
+        offset_counts: a.offset,
     });
     let deadline = a
         .seconds

@@ -86,6 +86,8 @@ pub struct PlantOptions {
     pub v0: f64,
     /// ADC noise, counts (uniform ± this).
     pub noise_counts: f64,
+    /// Uncalibrated ADC offset error, counts (added to both channels).
+    pub offset_counts: f64,
 }
 
 /// A virtual device with its plant.
@@ -234,12 +236,18 @@ impl VirtualDevice {
             let uz = uz0 + duz * (th + p1).sin();
             let ux = dux * (th + p2).sin() + self.plant.stage;
             let (fx, fz) = self.plant.contact.step(ux, uz);
-            let z = (fz / f64::from(cfg.adc_z.gain) + f64::from(cfg.adc_z.offset) + self.noise())
-                .round()
-                .clamp(0.0, 4095.0);
-            let x = (fx / f64::from(cfg.adc_x.gain) + f64::from(cfg.adc_x.offset) + self.noise())
-                .round()
-                .clamp(0.0, 4095.0);
+            let z = (fz / f64::from(cfg.adc_z.gain)
+                + f64::from(cfg.adc_z.offset)
+                + self.opts.offset_counts
+                + self.noise())
+            .round()
+            .clamp(0.0, 4095.0);
+            let x = (fx / f64::from(cfg.adc_x.gain)
+                + f64::from(cfg.adc_x.offset)
+                + self.opts.offset_counts
+                + self.noise())
+            .round()
+            .clamp(0.0, 4095.0);
             samples.push((x as u16, z as u16));
             // Sub-steps to the next sample (the paper's scheme on a finer grid).
             for k in 1..=SUB {
