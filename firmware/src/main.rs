@@ -26,8 +26,7 @@ use cortex_m::interrupt::Mutex;
 use cortex_m_rt::entry;
 use defmt_rtt as _;
 use model_core::dds::SineTable;
-use model_core::device::{faults, Contact, DacCal, Device, DeviceConfig, DriveSetting};
-use model_core::estimator::Calibration;
+use model_core::device::{faults, Contact, Device, DeviceConfig, DriveSetting};
 use model_core::protocol::{Info, PROTOCOL_VERSION};
 use model_core::server::{DeviceAccess, Server};
 use panic_probe as _;
@@ -76,49 +75,14 @@ impl DeviceAccess<TABLE_N> for Shared {
 }
 
 fn config() -> DeviceConfig {
-    DeviceConfig {
-        sample_rate_hz: FS_HZ as f64,
-        // Board calibration (amplifier + transducer): 2 nm/code normal, 1 nm/code
-        // tangential around mid-scale. Replace with the measured values of a board.
-        dac_z: DacCal {
-            metres_per_code: 2e-9,
-            zero_code: 0.0,
-        },
-        dac_x: DacCal {
-            metres_per_code: 1e-9,
-            zero_code: 2048.0,
-        },
-        adc_x: Calibration {
-            gain: 0.01,
-            offset: 2048.0,
-        },
-        adc_z: Calibration {
-            gain: 0.02,
-            offset: 0.0,
-        },
-        adc_full_scale: 4095,
-        liftoff_margin: 0.05,
-        freq_range_hz: (1_000.0, 100_000.0),
-        slew_m_per_s: 1e-3,
-        slew_rad_per_s: 100.0,
-        // The ADC converts right after the trigger that moved DAC word k−1 to the output.
-        adc_lag_samples: 1,
-    }
+    // The ADC converts on the trigger that moved DAC word k−1 to the output.
+    let cfg = DeviceConfig::driver_board(1);
+    debug_assert!(cfg.sample_rate_hz == FS_HZ as f64);
+    cfg
 }
 
 fn info(cfg: &DeviceConfig) -> Info {
-    let mut board = [0u8; 16];
-    board[..9].copy_from_slice(b"STM32F405");
-    Info {
-        firmware: [0, 1, 0],
-        protocol: PROTOCOL_VERSION,
-        board,
-        sample_rate_hz: cfg.sample_rate_hz,
-        freq_range_hz: cfg.freq_range_hz,
-        max_amp_x_m: 2047.0 * cfg.dac_x.metres_per_code,
-        max_offset_z_m: (4095.0 - cfg.dac_z.zero_code) * cfg.dac_z.metres_per_code,
-        liftoff_margin: cfg.liftoff_margin,
-    }
+    Info::for_config(cfg, "STM32F405", [0, 1, 0])
 }
 
 #[entry]

@@ -57,6 +57,45 @@ pub struct DeviceConfig {
     pub adc_lag_samples: u32,
 }
 
+impl DeviceConfig {
+    /// The driver board's configuration, shared by the firmware and the
+    /// virtual device: 500 kS/s, 2 nm/code normal and 1 nm/code tangential
+    /// (around mid-scale) transducer calibration, 0.02 N/count (f_z) and
+    /// 0.01 N/count around mid-scale (f_x) force calibration, 5 % lift-off
+    /// margin, 1–100 kHz, 1 mm/s and 100 rad/s slew. Replace the calibrations
+    /// with a board's measured values. `adc_lag_samples` is 1 on the chip (the
+    /// DAC moves its holding register to the output on the trigger, the ADC
+    /// converts on the same trigger) and 0 for a plant that samples at the
+    /// drive phase of the sample itself.
+    pub const fn driver_board(adc_lag_samples: u32) -> Self {
+        DeviceConfig {
+            sample_rate_hz: 500_000.0,
+            dac_z: DacCal {
+                metres_per_code: 2e-9,
+                zero_code: 0.0,
+            },
+            dac_x: DacCal {
+                metres_per_code: 1e-9,
+                zero_code: 2048.0,
+            },
+            adc_x: Calibration {
+                gain: 0.01,
+                offset: 2048.0,
+            },
+            adc_z: Calibration {
+                gain: 0.02,
+                offset: 0.0,
+            },
+            adc_full_scale: 4095,
+            liftoff_margin: 0.05,
+            freq_range_hz: (1_000.0, 100_000.0),
+            slew_m_per_s: 1e-3,
+            slew_rad_per_s: 100.0,
+            adc_lag_samples,
+        }
+    }
+}
+
 /// The drive as commanded, physical units.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -60,6 +60,28 @@ pub struct Info {
     pub liftoff_margin: f32,
 }
 
+impl Info {
+    /// The `Info` of a device with configuration `cfg`, board name `board`
+    /// (ASCII, truncated to 16 bytes) and firmware version `firmware`.
+    pub fn for_config(cfg: &crate::device::DeviceConfig, board: &str, firmware: [u8; 3]) -> Self {
+        let mut name = [0u8; 16];
+        for (d, s) in name.iter_mut().zip(board.bytes()) {
+            *d = s;
+        }
+        Info {
+            firmware,
+            protocol: PROTOCOL_VERSION,
+            board: name,
+            sample_rate_hz: cfg.sample_rate_hz,
+            freq_range_hz: cfg.freq_range_hz,
+            max_amp_x_m: cfg.dac_x.zero_code.min(4095.0 - cfg.dac_x.zero_code)
+                * cfg.dac_x.metres_per_code,
+            max_offset_z_m: (4095.0 - cfg.dac_z.zero_code) * cfg.dac_z.metres_per_code,
+            liftoff_margin: cfg.liftoff_margin,
+        }
+    }
+}
+
 /// Requests (host → device).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

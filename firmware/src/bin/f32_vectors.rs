@@ -27,7 +27,15 @@ fn main() -> ! {
             fails += 1;
         }
     };
-    let phis = [-2.5f64, -1.0, 0.0, 0.7, core::f64::consts::FRAC_PI_2, 2.2, 3.0];
+    let phis = [
+        -2.5f64,
+        -1.0,
+        0.0,
+        0.7,
+        core::f64::consts::FRAC_PI_2,
+        2.2,
+        3.0,
+    ];
     for &a in &[0.0f64, 0.2, 0.5, 0.9] {
         for &b in &[0.0f64, 0.3, 1.0, 2.5] {
             for &phi in &phis {

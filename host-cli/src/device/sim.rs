@@ -9,10 +9,9 @@
 use std::f64::consts::TAU;
 
 use model_core::dds::{phase_rad, SineTable};
-use model_core::device::{Contact, DacCal, Device, DeviceConfig, DriveSetting};
-use model_core::estimator::Calibration;
+use model_core::device::{Contact, Device, DeviceConfig, DriveSetting};
 use model_core::fixed_step::SpringContact;
-use model_core::protocol::{Info, PROTOCOL_VERSION};
+use model_core::protocol::Info;
 use model_core::server::Server;
 
 /// Table size of the virtual device (as the firmware).
@@ -22,50 +21,15 @@ pub const HALF: usize = 512;
 /// Sub-steps of the plant per ADC sample.
 const SUB: usize = 32;
 
-/// The virtual board's configuration (the firmware's calibration, 500 kS/s).
+/// The virtual board's configuration: the driver board's (model-core), with
+/// the plant sampled at each sample's own drive phase (no DAC lag).
 pub fn config() -> DeviceConfig {
-    DeviceConfig {
-        sample_rate_hz: 500_000.0,
-        dac_z: DacCal {
-            metres_per_code: 2e-9,
-            zero_code: 0.0,
-        },
-        dac_x: DacCal {
-            metres_per_code: 1e-9,
-            zero_code: 2048.0,
-        },
-        adc_x: Calibration {
-            gain: 0.01,
-            offset: 2048.0,
-        },
-        adc_z: Calibration {
-            gain: 0.02,
-            offset: 0.0,
-        },
-        adc_full_scale: 4095,
-        liftoff_margin: 0.05,
-        freq_range_hz: (1_000.0, 100_000.0),
-        slew_m_per_s: 1e-3,
-        slew_rad_per_s: 100.0,
-        // The plant reads the drive at the sample's own phase.
-        adc_lag_samples: 0,
-    }
+    DeviceConfig::driver_board(0)
 }
 
 /// `Info` of the virtual board.
 pub fn info(cfg: &DeviceConfig) -> Info {
-    let mut board = [0u8; 16];
-    board[..14].copy_from_slice(b"virtual device");
-    Info {
-        firmware: [0, 1, 0],
-        protocol: PROTOCOL_VERSION,
-        board,
-        sample_rate_hz: cfg.sample_rate_hz,
-        freq_range_hz: cfg.freq_range_hz,
-        max_amp_x_m: 2047.0 * cfg.dac_x.metres_per_code,
-        max_offset_z_m: (4095.0 - cfg.dac_z.zero_code) * cfg.dac_z.metres_per_code,
-        liftoff_margin: cfg.liftoff_margin,
-    }
+    Info::for_config(cfg, "virtual device", [0, 1, 0])
 }
 
 /// What `fricctl device --sim` keeps between invocations.
