@@ -5,6 +5,7 @@
 //! input exits with status 2 and one line naming the parameter; a failed
 //! computation exits with status 1.
 
+mod bench;
 mod commands;
 mod compute;
 mod device;
@@ -115,6 +116,11 @@ enum Command {
         #[command(subcommand)]
         cmd: device::DeviceCmd,
     },
+    /// Speed against accuracy: work-precision charts
+    Bench {
+        #[command(subcommand)]
+        cmd: bench::BenchCmd,
+    },
     /// Serve the virtual device on a pseudo-terminal or TCP
     SimDevice(device::SimArgs),
     /// Regenerate the paper's Figs. 2–7 and the regime map (SVG and PNG)
@@ -169,6 +175,7 @@ fn main() -> ExitCode {
         Command::Figures { out, map_res } => figures::run(&out, map_res),
         Command::Device { target, cmd } => device::run(&target, &cmd),
         Command::SimDevice(a) => device::serve(&a),
+        Command::Bench { cmd } => bench::run(&cmd),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

@@ -644,3 +644,45 @@ fn scene_file_with_flag_override() {
     assert_ne!(a["mu"], c["mu"]);
     let _ = Solution::<f64>::Sliding { mu_over_mu0: 1.0 };
 }
+
+#[test]
+fn bench_work_precision_writes_charts_and_csv() {
+    let dir = tempfile::tempdir().unwrap();
+    fricctl()
+        .args([
+            "bench",
+            "work-precision",
+            "--out",
+            dir.path().to_str().unwrap(),
+            "--max-steps",
+            "128",
+        ])
+        .assert()
+        .success();
+    check_svg(&dir.path().join("work_precision.svg"));
+    check_png(&dir.path().join("work_precision.png"));
+    let csv = std::fs::read_to_string(dir.path().join("work_precision.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    // Every scene has the exact solver and the fixed-step series from 8 to 128 steps.
+    for scene in ["normal only", "dual actuator", "near lift-off"] {
+        assert!(rows
+            .iter()
+            .any(|r| r[0] == scene && r[1] == "exact f64" && r[3] == "0"));
+        let fixed: Vec<&Vec<&str>> = rows
+            .iter()
+            .filter(|r| r[0] == scene && r[1] == "fixed f64 from rest")
+            .collect();
+        assert_eq!(fixed.len(), 17, "{scene}");
+        // The scheme's error at N = 128 is O((2π/128)²) of μ0: below 1e-2 for these scenes.
+        let e128: f64 = fixed.iter().find(|r| r[2] == "128").unwrap()[3]
+            .parse()
+            .unwrap();
+        assert!(e128 < 1e-2 && e128 > 0.0, "{scene}: {e128}");
+    }
+    let orders = std::fs::read_to_string(dir.path().join("convergence_orders.csv")).unwrap();
+    assert!(orders.lines().count() > 8);
+}

@@ -1,0 +1,471 @@
+//! `fricctl bench work-precision`: error against time for every way the
+//! project computes μ, on scenes covering the paper's regimes.
+//!
+//! Error is `|μ − μ_exact,f64|/μ0`; time is the minimum over repeated batches
+//! after a warm-up (the DiffEqDevTools convention). The fixed-step scheme is
+//! run for many steps per period (four per octave from 8 to 65 536: the error
+//! jitters with where the events fall on the grid, so every point is kept),
+//! from rest and warm-started at the exact steady state, in f64 and f32, with
+//! libm and with micromath for its set-up; the convergence order of each
+//! fixed-step series is fitted by least squares.
+
+use std::fmt::Write as _;
+use std::hint::black_box;
+use std::path::Path;
+use std::time::Instant;
+
+use clap::{Args, Subcommand};
+use model_core::analytic::approx::approx_mu_over_mu0;
+use model_core::exact;
+use model_core::fixed_step::{run_dimensionless, FixedStepConfig, Start, State};
+use model_core::{Drive, Float, Groups, Libm, Math, Micromath, Scene};
+use plotters::prelude::*;
+
+use crate::error::{CliError, CliResult};
+use crate::plot::{color, init_font};
+
+/// `fricctl bench …`.
+#[derive(Subcommand, Debug, Clone)]
+pub enum BenchCmd {
+    /// Work-precision charts of every μ computation (CSV + SVG + PNG)
+    WorkPrecision(WpArgs),
+}
+
+/// Flags of `bench work-precision`.
+#[derive(Args, Debug, Clone)]
+pub struct WpArgs {
+    /// Output directory
+    #[arg(long, value_name = "DIR")]
+    pub out: std::path::PathBuf,
+    /// Largest steps per period (power of two, ≤ 65536)
+    #[arg(long, default_value_t = 65536)]
+    pub max_steps: u32,
+}
+
+/// The scenes (dimensionless a, b, φ and v/v_c).
+pub const SCENES: &[(&str, f64, f64, f64, f64)] = &[
+    ("normal only", 0.5, 0.0, 0.0, 0.3),
+    ("tangential small", 0.0, 0.5, 0.4, 0.3),
+    ("tangential large", 0.0, 3.0, 0.4, -0.5),
+    ("dual ratchet", 0.5, 0.25, 1.0, 0.4),
+    ("dual actuator", 0.5, 1.0, 0.3, 0.2),
+    ("near v_c", 0.5, 0.25, 1.0, 0.98),
+    ("low velocity", 0.5, 0.25, 1.0, 0.02),
+    ("near lift-off", 0.97, 0.3, 2.0, 0.4),
+];
+
+/// One measured point.
+#[derive(Debug, Clone)]
+pub struct Point {
+    /// Scene name.
+    pub scene: &'static str,
+    /// Method name.
+    pub method: String,
+    /// Steps per period (fixed-step only).
+    pub steps: Option<u32>,
+    /// |Δμ|/μ0 against exact f64, or `None` on failure.
+    pub error: Option<f64>,
+    /// Seconds per evaluation.
+    pub time_s: f64,
+    /// "ok" or the failure.
+    pub status: String,
+}
+
+/// Minimum time per call over batches, after a warm-up.
+fn time_min(mut f: impl FnMut()) -> f64 {
+    f();
+    let t0 = Instant::now();
+    f();
+    let once = t0.elapsed().as_secs_f64().max(1e-9);
+    let k = ((2e-4 / once).ceil() as usize).clamp(1, 100_000);
+    let mut best = f64::INFINITY;
+    for _ in 0..5 {
+        let t = Instant::now();
+        for _ in 0..k {
+            f();
+        }
+        best = best.min(t.elapsed().as_secs_f64() / k as f64);
+    }
+    best
+}
+
+fn steps_list(max: u32) -> Vec<u32> {
+    let mut v = Vec::new();
+    let mut x = 8.0f64;
+    while x <= f64::from(max) * 1.0001 {
+        v.push(x.round() as u32);
+        x *= 2f64.powf(0.25);
+    }
+    v.dedup();
+    v
+}
+
+/// Warm start: the window end of the exact steady state (s = ±w there).
+fn warm_state<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Option<State<T>> {
+    let (_, arcs) = exact::steady_state::<T, M>(d, v).ok()?;
+    let last = arcs.last()?;
+    let (_, c) = M::sin_cos(last.end);
+    let w = T::ONE - d.a * c;
+    let s = if v > T::ZERO { w } else { -w };
+    Some(State {
+        phase: last.end,
+        stretch: s,
+    })
+}
+
+fn fixed_series<T: Float, M: Math<T>>(
+    out: &mut Vec<Point>,
+    scene: &'static str,
+    (method, warm): (&str, bool),
+    d: &Drive<T>,
+    v: T,
+    reference: f64,
+    steps: &[u32],
+) {
+    for &n in steps {
+        let mut cfg = FixedStepConfig::<T>::new(n);
+        cfg.max_periods = 20_000;
+        let start = if warm {
+            match warm_state::<T, M>(d, v) {
+                Some(s) => Start::State(s),
+                None => Start::Rest,
+            }
+        } else {
+            Start::Rest
+        };
+        match run_dimensionless::<T, M>(d, v, &cfg, start) {
+            Ok(r) => {
+                let t = time_min(|| {
+                    black_box(
+                        run_dimensionless::<T, M>(black_box(d), black_box(v), &cfg, start).ok(),
+                    );
+                });
+                out.push(Point {
+                    scene,
+                    method: method.to_string(),
+                    steps: Some(n),
+                    error: Some((r.mu_over_mu0.to_f64() - reference).abs()),
+                    time_s: t,
+                    status: "ok".into(),
+                });
+            }
+            Err(e) => out.push(Point {
+                scene,
+                method: method.to_string(),
+                steps: Some(n),
+                error: None,
+                time_s: f64::NAN,
+                status: format!("{e:?}")
+                    .split_whitespace()
+                    .next()
+                    .unwrap_or("error")
+                    .to_string(),
+            }),
+        }
+    }
+}
+
+/// All points for one scene.
+pub fn measure_scene(
+    name: &'static str,
+    a: f64,
+    b: f64,
+    phi: f64,
+    x: f64,
+    steps: &[u32],
+) -> CliResult<Vec<Point>> {
+    let s = Scene::dimensionless(Groups {
+        duz_rel: a,
+        dux_rel: b,
+        phi,
+    })
+    .map_err(|e| CliError::failure(e.to_string()))?;
+    let d = s.drive();
+    let v = x * if x > 0.0 {
+        d.c_forward::<Libm>()
+    } else {
+        d.c_backward::<Libm>()
+    };
+    let reference =
+        exact::mu_over_mu0::<f64, Libm>(&d, v).map_err(|e| CliError::failure(format!("{e:?}")))?;
+    let d32 = Drive::new::<Libm>(a as f32, b as f32, phi as f32);
+    let d32m = Drive::new::<Micromath>(a as f32, b as f32, phi as f32);
+    let v32 = v as f32;
+    let mut out = Vec::new();
+    let point = |method: &str, r: Option<f64>, t: f64| Point {
+        scene: name,
+        method: method.to_string(),
+        steps: None,
+        error: r.map(|m| (m - reference).abs()),
+        time_s: t,
+        status: if r.is_some() {
+            "ok".into()
+        } else {
+            "failed".into()
+        },
+    };
+    let r = exact::mu_over_mu0::<f64, Libm>(&d, v).ok();
+    let t = time_min(|| {
+        black_box(exact::mu_over_mu0::<f64, Libm>(black_box(&d), black_box(v)).ok());
+    });
+    out.push(point("exact f64", r, t));
+    let r = exact::mu_over_mu0::<f32, Libm>(&d32, v32)
+        .ok()
+        .map(f64::from);
+    let t = time_min(|| {
+        black_box(exact::mu_over_mu0::<f32, Libm>(black_box(&d32), black_box(v32)).ok());
+    });
+    out.push(point("exact f32", r, t));
+    let r = exact::mu_over_mu0::<f32, Micromath>(&d32m, v32)
+        .ok()
+        .map(f64::from);
+    let t = time_min(|| {
+        black_box(exact::mu_over_mu0::<f32, Micromath>(black_box(&d32m), black_box(v32)).ok());
+    });
+    out.push(point("exact f32 micromath", r, t));
+    if let Ok((kind, m)) = approx_mu_over_mu0(&s, v) {
+        let t = time_min(|| {
+            black_box(approx_mu_over_mu0(black_box(&s), black_box(v)).ok());
+        });
+        let label = match kind {
+            model_core::analytic::ApproxKind::NormalEq21 => "eq. 21",
+            model_core::analytic::ApproxKind::TangentialEq24 => "eq. 24",
+        };
+        out.push(point(label, Some(m), t));
+    }
+    fixed_series::<f64, Libm>(
+        &mut out,
+        name,
+        ("fixed f64 from rest", false),
+        &d,
+        v,
+        reference,
+        steps,
+    );
+    fixed_series::<f64, Libm>(
+        &mut out,
+        name,
+        ("fixed f64 warm", true),
+        &d,
+        v,
+        reference,
+        steps,
+    );
+    fixed_series::<f32, Libm>(
+        &mut out,
+        name,
+        ("fixed f32 from rest", false),
+        &d32,
+        v32,
+        reference,
+        steps,
+    );
+    fixed_series::<f32, Libm>(
+        &mut out,
+        name,
+        ("fixed f32 warm", true),
+        &d32,
+        v32,
+        reference,
+        steps,
+    );
+    fixed_series::<f32, Micromath>(
+        &mut out,
+        name,
+        ("fixed f32 micromath", false),
+        &d32m,
+        v32,
+        reference,
+        steps,
+    );
+    Ok(out)
+}
+
+/// Least-squares slope of −log(error) against log(N), over points above the
+/// rounding floor (1e-13 in f64, 1e-6 in f32).
+pub fn fitted_order(points: &[&Point]) -> Option<f64> {
+    let floor = if points.first()?.method.contains("f32") {
+        1e-6
+    } else {
+        1e-13
+    };
+    let xy: Vec<(f64, f64)> = points
+        .iter()
+        .filter_map(|p| match (p.steps, p.error) {
+            (Some(n), Some(e)) if e > floor => Some((f64::from(n).ln(), e.ln())),
+            _ => None,
+        })
+        .collect();
+    if xy.len() < 4 {
+        return None;
+    }
+    let m = xy.len() as f64;
+    let (mx, my) = (
+        xy.iter().map(|p| p.0).sum::<f64>() / m,
+        xy.iter().map(|p| p.1).sum::<f64>() / m,
+    );
+    let sxx: f64 = xy.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxy: f64 = xy.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    Some(-sxy / sxx)
+}
+
+/// `fricctl bench work-precision`.
+pub fn run(cmd: &BenchCmd) -> CliResult {
+    let BenchCmd::WorkPrecision(a) = cmd;
+    if !a.max_steps.is_power_of_two() || !(8..=65536).contains(&a.max_steps) {
+        return Err(CliError::usage(
+            "--max-steps: must be a power of two in 8..=65536",
+        ));
+    }
+    std::fs::create_dir_all(&a.out)
+        .map_err(|e| CliError::failure(format!("--out: {}: {e}", a.out.display())))?;
+    let steps = steps_list(a.max_steps);
+    let mut all = Vec::new();
+    for &(name, aa, b, phi, x) in SCENES {
+        eprintln!("measuring {name} …");
+        all.extend(measure_scene(name, aa, b, phi, x, &steps)?);
+    }
+    // CSV.
+    let mut csv = String::from("scene,method,steps_per_period,error_over_mu0,time_s,status\n");
+    for p in &all {
+        let _ = writeln!(
+            csv,
+            "{},{},{},{},{},{}",
+            p.scene,
+            p.method,
+            p.steps.map_or(String::new(), |n| n.to_string()),
+            p.error.map_or(String::new(), |e| e.to_string()),
+            p.time_s,
+            p.status
+        );
+    }
+    let csv_path = a.out.join("work_precision.csv");
+    std::fs::write(&csv_path, csv)
+        .map_err(|e| CliError::failure(format!("{}: {e}", csv_path.display())))?;
+    // Orders.
+    let mut orders = String::from("scene,method,fitted_order\n");
+    for &(name, ..) in SCENES {
+        for m in [
+            "fixed f64 from rest",
+            "fixed f64 warm",
+            "fixed f32 from rest",
+            "fixed f32 warm",
+            "fixed f32 micromath",
+        ] {
+            let pts: Vec<&Point> = all
+                .iter()
+                .filter(|p| p.scene == name && p.method == m)
+                .collect();
+            let o = fitted_order(&pts);
+            let _ = writeln!(
+                orders,
+                "{name},{m},{}",
+                o.map_or(String::new(), |o| format!("{o:.3}"))
+            );
+            println!(
+                "{name:18} {m:22} order {}",
+                o.map_or("-".to_string(), |o| format!("{o:.2}"))
+            );
+        }
+    }
+    let op = a.out.join("convergence_orders.csv");
+    std::fs::write(&op, orders).map_err(|e| CliError::failure(format!("{}: {e}", op.display())))?;
+    for ext in ["svg", "png"] {
+        let p = a.out.join(format!("work_precision.{ext}"));
+        render(&p, &all).map_err(|e| CliError::failure(format!("{}: {e}", p.display())))?;
+        eprintln!("wrote {}", p.display());
+    }
+    eprintln!("wrote {} and {}", csv_path.display(), op.display());
+    Ok(())
+}
+
+fn render(path: &Path, all: &[Point]) -> Result<(), String> {
+    init_font();
+    let size = (1800, 1500);
+    if path.extension().and_then(|e| e.to_str()) == Some("svg") {
+        let root = SVGBackend::new(path, size).into_drawing_area();
+        draw(&root, all).map_err(|e| format!("{e:?}"))?;
+        root.present().map_err(|e| format!("{e:?}"))
+    } else {
+        let root = BitMapBackend::new(path, size).into_drawing_area();
+        draw(&root, all).map_err(|e| format!("{e:?}"))?;
+        root.present().map_err(|e| format!("{e:?}"))
+    }
+}
+
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    all: &[Point],
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    root.fill(&WHITE)?;
+    let methods: Vec<String> = {
+        let mut m: Vec<String> = all.iter().map(|p| p.method.clone()).collect();
+        m.sort();
+        m.dedup();
+        m
+    };
+    let areas = root.split_evenly((4, 2));
+    for (area, &(name, ..)) in areas.iter().zip(SCENES) {
+        let pts: Vec<&Point> = all
+            .iter()
+            .filter(|p| p.scene == name && p.error.is_some())
+            .collect();
+        let tmin = pts
+            .iter()
+            .map(|p| p.time_s)
+            .fold(f64::INFINITY, f64::min)
+            .max(1e-9)
+            / 2.0;
+        let tmax = pts
+            .iter()
+            .map(|p| p.time_s)
+            .fold(0.0f64, f64::max)
+            .max(tmin * 10.0)
+            * 2.0;
+        let mut chart = ChartBuilder::on(area)
+            .caption(format!("{name}: error vs time per μ"), ("sans-serif", 18))
+            .margin(10)
+            .x_label_area_size(42)
+            .y_label_area_size(70)
+            .build_cartesian_2d((1e-17f64..1.0f64).log_scale(), (tmin..tmax).log_scale())?;
+        chart
+            .configure_mesh()
+            .x_desc("|μ − μ_exact| / μ0")
+            .y_desc("time per μ, s")
+            .x_label_formatter(&|v| format!("{v:.0e}"))
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .label_style(("sans-serif", 12))
+            .axis_desc_style(("sans-serif", 14))
+            .draw()?;
+        for (i, m) in methods.iter().enumerate() {
+            let c = color(i);
+            let series: Vec<(f64, f64)> = pts
+                .iter()
+                .filter(|p| &p.method == m)
+                .map(|p| (p.error.unwrap_or(1.0).max(1e-17), p.time_s))
+                .collect();
+            if series.is_empty() {
+                continue;
+            }
+            let marker = i;
+            chart
+                .draw_series(series.into_iter().map(move |p| {
+                    if marker % 2 == 0 {
+                        Circle::new(p, 3, c.filled()).into_dyn()
+                    } else {
+                        TriangleMarker::new(p, 4, c.filled()).into_dyn()
+                    }
+                }))?
+                .label(m.as_str())
+                .legend(move |(x, y)| Circle::new((x + 8, y), 4, c.filled()));
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(160, 160, 160))
+            .label_font(("sans-serif", 11))
+            .draw()?;
+    }
+    Ok(())
+}
