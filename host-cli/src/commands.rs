@@ -192,8 +192,8 @@ pub fn curve(a: CurveArgs) -> CliResult {
     if a.points < 2 {
         return Err(CliError::usage("--points: must be >= 2"));
     }
-    if a.points > 100_000_000 {
-        return Err(CliError::usage("--points: at most 100000000"));
+    if a.points > 10_000_000 {
+        return Err(CliError::usage("--points: at most 10000000 (write several curves for more)"));
     }
     if let Some(p) = &a.plot {
         crate::plot::ext(p)?;

@@ -275,8 +275,8 @@ pub fn run(a: &MapArgs) -> CliResult {
             "--phi-max-deg: must be greater than --phi-min-deg",
         ));
     }
-    if a.res < 2 || a.res > 4000 {
-        return Err(CliError::usage("--res: must be between 2 and 4000"));
+    if a.res < 2 || a.res > 1000 {
+        return Err(CliError::usage("--res: must be between 2 and 1000"));
     }
     crate::plot::ext(&a.plot)?;
     let ratios = centres(a.ratio_min, a.ratio_max, a.res);
