@@ -193,7 +193,9 @@ pub fn curve(a: CurveArgs) -> CliResult {
         return Err(CliError::usage("--points: must be >= 2"));
     }
     if a.points > 10_000_000 {
-        return Err(CliError::usage("--points: at most 10000000 (write several curves for more)"));
+        return Err(CliError::usage(
+            "--points: at most 10000000 (write several curves for more)",
+        ));
     }
     if let Some(p) = &a.plot {
         crate::plot::ext(p)?;
