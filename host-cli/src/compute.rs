@@ -152,7 +152,10 @@ pub fn mu_at(scene: &Scene<f64>, v0: f64, method: Method, steps: u32) -> CliResu
             if steps < 4 {
                 return Err(CliError::usage("--steps-per-period: must be >= 4"));
             }
-            let cfg = FixedStepConfig::<f64>::new(steps);
+            // Budget: at most 2·10⁸ steps (≈ 1 s) however small v0 is; past it
+            // the run reports "not converged" instead of appearing to hang.
+            let mut cfg = FixedStepConfig::<f64>::new(steps);
+            cfg.max_periods = (200_000_000 / steps).clamp(3, 1_000_000);
             out.method = "fixed";
             out.steps_per_period = Some(steps);
             match fixed_step::run(scene, v0, &cfg, Start::Rest) {

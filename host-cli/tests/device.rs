@@ -3,16 +3,15 @@
 //! nothing, raw protocol abuse (garbage, bad CRC, oversize, cut-off frame,
 //! unknown message, version mismatch), and a device that does not answer.
 
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{BufRead, BufReader, Write};
 use std::process::{Child, Command as StdCommand, Stdio};
 use std::time::{Duration, Instant};
 
+mod common;
+
 use assert_cmd::cargo::CommandCargoExt;
 use assert_cmd::Command;
-use model_core::protocol::{
-    decode, encode, Body, Deframed, Deframer, Frame, Request, Response, WireError, CRC, MAX_FRAME,
-    PROTOCOL_VERSION,
-};
+use model_core::protocol::{Body, Frame, Request, Response, WireError, PROTOCOL_VERSION};
 use serde_json::Value;
 use serialport::SerialPort;
 
@@ -217,51 +216,6 @@ fn raw_port(s: &Sim) -> Box<dyn SerialPort> {
         .unwrap()
 }
 
-fn read_frames(p: &mut Box<dyn SerialPort>, want: usize) -> Vec<Frame> {
-    let mut df = Deframer::default();
-    let mut out = Vec::new();
-    let t = Instant::now();
-    let mut b = [0u8; 64];
-    while out.len() < want && t.elapsed() < Duration::from_secs(5) {
-        if let Ok(n) = p.read(&mut b) {
-            for &x in &b[..n] {
-                if let Deframed::Frame(f) = df.push(x) {
-                    if let Ok(fr) = decode(f) {
-                        if matches!(fr.body, Body::Response(_)) {
-                            out.push(fr);
-                        }
-                    }
-                }
-            }
-        }
-    }
-    out
-}
-
-fn req(seq: u32, r: Request) -> Vec<u8> {
-    let mut b = [0u8; MAX_FRAME];
-    encode(
-        &Frame {
-            version: PROTOCOL_VERSION,
-            seq,
-            body: Body::Request(r),
-        },
-        &mut b,
-    )
-    .unwrap()
-    .to_vec()
-}
-
-fn raw_frame(raw: &[u8]) -> Vec<u8> {
-    let mut v = raw.to_vec();
-    v.extend(CRC.checksum(raw).to_le_bytes());
-    let mut out = vec![0u8; v.len() + 2];
-    let n = cobs::encode(&v, &mut out);
-    out.truncate(n);
-    out.push(0);
-    out
-}
-
 fn err_of(f: &Frame) -> WireError {
     match f.body {
         Body::Response(Response::Error(e)) => e,
@@ -275,40 +229,44 @@ fn protocol_abuse_over_the_pty() {
     let mut p = raw_port(&s);
     // Garbage, then a good request: one Malformed, then the answer.
     p.write_all(&[0x42, 0x13, 0x99, 0x00]).unwrap();
-    p.write_all(&req(1, Request::Hello)).unwrap();
-    let f = read_frames(&mut p, 2);
+    p.write_all(&common::req(1, Request::Hello)).unwrap();
+    let f = common::read_responses(&mut *p, 2);
     assert_eq!(err_of(&f[0]), WireError::Malformed);
     assert_eq!(f[1].seq, 1);
     // Corrupted CRC.
-    let mut b = req(2, Request::GetStatus);
-    let k = b.len() - 2;
-    b[k] = if b[k] == 0x55 { 0x56 } else { 0x55 };
-    p.write_all(&b).unwrap();
-    assert_eq!(err_of(&read_frames(&mut p, 1)[0]), WireError::BadCrc);
+    p.write_all(&common::corrupt_crc(common::req(2, Request::GetStatus)))
+        .unwrap();
+    assert_eq!(
+        err_of(&common::read_responses(&mut *p, 1)[0]),
+        WireError::BadCrc
+    );
     // Oversize frame.
     let mut big = vec![0x11u8; 700];
     big.push(0);
     p.write_all(&big).unwrap();
-    assert_eq!(err_of(&read_frames(&mut p, 1)[0]), WireError::Oversize);
+    assert_eq!(
+        err_of(&common::read_responses(&mut *p, 1)[0]),
+        WireError::Oversize
+    );
     // A frame cut off mid-way, then a good one.
-    let good = req(3, Request::GetContact);
+    let good = common::req(3, Request::GetContact);
     p.write_all(&good[..good.len() / 2]).unwrap();
-    p.write_all(&req(4, Request::GetStatus)).unwrap();
-    let f = read_frames(&mut p, 1);
+    p.write_all(&common::req(4, Request::GetStatus)).unwrap();
+    let f = common::read_responses(&mut *p, 1);
     assert!(matches!(
         err_of(&f[0]),
         WireError::Malformed | WireError::BadCrc
     ));
-    p.write_all(&req(5, Request::GetStatus)).unwrap();
-    let f = read_frames(&mut p, 1);
+    p.write_all(&common::req(5, Request::GetStatus)).unwrap();
+    let f = common::read_responses(&mut *p, 1);
     assert_eq!(f[0].seq, 5);
     // Unknown message id, version mismatch.
-    p.write_all(&raw_frame(&[PROTOCOL_VERSION as u8, 6, 0, 77]))
+    p.write_all(&common::raw_frame(&[PROTOCOL_VERSION as u8, 6, 0, 77]))
         .unwrap();
-    let f = read_frames(&mut p, 1);
+    let f = common::read_responses(&mut *p, 1);
     assert_eq!((f[0].seq, err_of(&f[0])), (6, WireError::UnknownMessage));
-    p.write_all(&raw_frame(&[9, 7, 0, 0])).unwrap();
-    let f = read_frames(&mut p, 1);
+    p.write_all(&common::raw_frame(&[9, 7, 0, 0])).unwrap();
+    let f = common::read_responses(&mut *p, 1);
     assert_eq!(
         (f[0].seq, err_of(&f[0])),
         (

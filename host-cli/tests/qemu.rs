@@ -3,16 +3,15 @@
 //! built with `--features qemu`; `.ci/run` does both and runs
 //! `cargo test -p host-cli --test qemu -- --ignored` with `FIRMWARE_ELF` set.
 
-use std::io::{Read, Write};
+use std::io::Write;
 use std::net::TcpStream;
 use std::process::{Child, Command as StdCommand, Stdio};
 use std::time::{Duration, Instant};
 
+mod common;
+
 use assert_cmd::Command;
-use model_core::protocol::{
-    decode, encode, Body, Deframed, Deframer, Frame, Request, Response, WireError, MAX_FRAME,
-    PROTOCOL_VERSION,
-};
+use model_core::protocol::{Body, Request, Response, WireError, PROTOCOL_VERSION};
 use serde_json::Value;
 
 struct Qemu {
@@ -167,36 +166,11 @@ fn real_firmware_under_qemu() {
     let mut s = TcpStream::connect(("127.0.0.1", q.port)).unwrap();
     s.set_read_timeout(Some(Duration::from_millis(200)))
         .unwrap();
-    let mut buf = [0u8; MAX_FRAME];
-    let good = encode(
-        &Frame {
-            version: PROTOCOL_VERSION,
-            seq: 41,
-            body: Body::Request(Request::GetStatus),
-        },
-        &mut buf,
-    )
-    .unwrap()
-    .to_vec();
-    let mut bad = good.clone();
-    let k = bad.len() - 2;
-    bad[k] = if bad[k] == 0x55 { 0x56 } else { 0x55 };
+    let good = common::req(41, Request::GetStatus);
     s.write_all(&[0x12, 0x34, 0x00]).unwrap();
-    s.write_all(&bad).unwrap();
+    s.write_all(&common::corrupt_crc(good.clone())).unwrap();
     s.write_all(&good).unwrap();
-    let mut df = Deframer::default();
-    let mut got = Vec::new();
-    let t = Instant::now();
-    let mut b = [0u8; 64];
-    while got.len() < 3 && t.elapsed() < Duration::from_secs(10) {
-        if let Ok(n) = s.read(&mut b) {
-            for &x in &b[..n] {
-                if let Deframed::Frame(f) = df.push(x) {
-                    got.push(decode(f).unwrap());
-                }
-            }
-        }
-    }
+    let got = common::read_responses(&mut s, 3);
     let errs: Vec<_> = got.iter().map(|f| f.body).collect();
     assert_eq!(
         errs[0],

@@ -72,6 +72,9 @@ pub struct Arc<T> {
 pub enum ExactError {
     /// The velocity is NaN, infinite, or overflows the dimensionless scale.
     BadVelocity(SceneError),
+    /// A hand-built [`Drive`] that no validated scene produces
+    /// ([`Drive::is_valid`]): non-finite, `a ∉ [0, 1)` or `b < 0`.
+    BadDrive,
     /// The event walk did not close the period (internal check: the state after
     /// one period must equal the start). Never observed; reported rather than
     /// returning a wrong number.
@@ -176,6 +179,9 @@ fn solve_dimensionless<T: Float, M: Math<T>>(
 /// [`ExactError::BadVelocity`] for `V = 0` or non-finite `V`; [`ExactError::Inconsistent`].
 #[inline]
 pub fn mu_over_mu0<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<T, ExactError> {
+    if !d.is_valid() {
+        return Err(ExactError::BadDrive);
+    }
     if !v.is_finite() || v == T::ZERO {
         return Err(ExactError::BadVelocity(SceneError::NonFinite(
             crate::scene::Param::Velocity,
@@ -198,6 +204,9 @@ pub fn mu_over_mu0<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<T, ExactE
 /// # Errors
 /// [`ExactError::Inconsistent`] (internal check).
 pub fn limits_at_zero<T: Float, M: Math<T>>(d: &Drive<T>) -> Result<(T, T), ExactError> {
+    if !d.is_valid() {
+        return Err(ExactError::BadDrive);
+    }
     let c = d.c_forward::<M>();
     let plus = if c == T::ZERO {
         T::ONE
@@ -223,6 +232,9 @@ pub fn steady_state<T: Float, M: Math<T>>(
     d: &Drive<T>,
     v: T,
 ) -> Result<(T, Vec<Arc<T>, MAX_ARCS>), ExactError> {
+    if !d.is_valid() {
+        return Err(ExactError::BadDrive);
+    }
     if !v.is_finite() || v == T::ZERO {
         return Err(ExactError::BadVelocity(SceneError::NonFinite(
             crate::scene::Param::Velocity,
@@ -544,6 +556,9 @@ impl<T> From<(T, T, T)> for Pt<T> {
 /// Wraps `x` (|x| < 8π) into `[0, 2π)`.
 #[inline]
 fn wrap_tau<T: Float>(mut x: T) -> T {
+    if !x.is_finite() {
+        return T::ZERO;
+    }
     while x < T::ZERO {
         x += T::TAU;
     }

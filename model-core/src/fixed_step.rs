@@ -105,6 +105,8 @@ pub enum FixedStepError<T> {
     ZeroVelocity,
     /// The start state is not finite or outside the friction band.
     BadStart,
+    /// A hand-built drive that no validated scene produces (`Drive::is_valid`).
+    BadDrive,
     /// The period limit was reached before a provably steady period.
     NotConverged {
         /// Periods integrated.
@@ -143,6 +145,9 @@ pub fn run_dimensionless<T: Float, M: Math<T>>(
     cfg: &FixedStepConfig<T>,
     start: Start<T>,
 ) -> Result<FixedStepOutcome<T>, FixedStepError<T>> {
+    if !d.is_valid() {
+        return Err(FixedStepError::BadDrive);
+    }
     if cfg.steps_per_period < 4 {
         return Err(FixedStepError::TooFewSteps);
     }

@@ -263,6 +263,27 @@ impl<T: Float> Drive<T> {
         }
     }
 
+    /// Whether the drive is one a validated scene can produce: all fields
+    /// finite, `0 ≤ a < 1`, `b ≥ 0`, and `b·(cos φ, sin φ)` of length `b`.
+    /// The dimensionless solver entry points refuse any other drive (its
+    /// fields are public, so one can be built by hand).
+    pub fn is_valid(&self) -> bool {
+        let finite =
+            self.a.is_finite() && self.b.is_finite() && self.bc.is_finite() && self.bs.is_finite();
+        if !(finite && self.a >= T::ZERO && self.a < T::ONE && self.b >= T::ZERO) {
+            return false;
+        }
+        // |b e^{iφ}|² = b² (5 % slack: micromath's sin/cos are good to 1e-3),
+        // and twice the largest amplitude must stay finite.
+        let on_circle = if self.b == T::ZERO {
+            self.bc == T::ZERO && self.bs == T::ZERO
+        } else {
+            let (x, y) = (self.bc / self.b, self.bs / self.b);
+            (x * x + y * y - T::ONE).abs() <= T::from_f64(0.05)
+        };
+        on_circle && (T::TWO * (self.a + self.bc.abs() + self.bs.abs())).is_finite()
+    }
+
     /// The mirror image `x → −x`: `φ → φ + π`, exact (`μ(v, φ) = −μ(−v, φ + π)`).
     #[inline]
     pub fn mirrored(self) -> Self {

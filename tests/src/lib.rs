@@ -2,6 +2,7 @@
 //! reference computations (none of them calls the code path it checks).
 #![deny(missing_docs)]
 
+use model_core::device::DeviceConfig;
 use model_core::fixed_step::{run_dimensionless, FixedStepConfig, Start};
 use model_core::{Drive, Groups, Libm, Scene};
 
@@ -64,5 +65,14 @@ impl Rng {
     /// Uniform in `[lo, hi)`.
     pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * self.uniform()
+    }
+}
+
+/// The driver board's configuration (model-core) at 1 MS/s, so that sample
+/// counts in the device tests are microseconds.
+pub fn board_config_1mhz() -> DeviceConfig {
+    DeviceConfig {
+        sample_rate_hz: 1_000_000.0,
+        ..DeviceConfig::driver_board(0)
     }
 }

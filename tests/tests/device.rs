@@ -7,38 +7,13 @@ use std::f64::consts::TAU;
 
 use model_core::dds::{unpack_dual, SineTable};
 use model_core::device::{
-    faults, Contact, DacCal, Device, DeviceConfig, DeviceError, DriveParam, DriveSetting,
+    faults, Contact, Device, DeviceConfig, DeviceError, DriveParam, DriveSetting,
 };
-use model_core::estimator::Calibration;
 use model_core::fixed_step::Stepper;
 use model_core::{exact, Libm, Scene, SceneParams};
 
 fn cfg() -> DeviceConfig {
-    DeviceConfig {
-        sample_rate_hz: 1_000_000.0,
-        dac_z: DacCal {
-            metres_per_code: 2e-9,
-            zero_code: 0.0,
-        }, // 0 … 8.19 µm
-        dac_x: DacCal {
-            metres_per_code: 1e-9,
-            zero_code: 2048.0,
-        }, // ±2.05 µm
-        adc_x: Calibration {
-            gain: 0.01,
-            offset: 2048.0,
-        },
-        adc_z: Calibration {
-            gain: 0.02,
-            offset: 0.0,
-        },
-        adc_full_scale: 4095,
-        liftoff_margin: 0.05,
-        freq_range_hz: (1_000.0, 100_000.0),
-        slew_m_per_s: 1e-3,
-        slew_rad_per_s: 100.0,
-        adc_lag_samples: 0,
-    }
+    integration_tests::board_config_1mhz()
 }
 
 const CONTACT: Contact = Contact {
@@ -241,6 +216,7 @@ fn prediction_in_f32_matches_the_f64_model() {
 
 #[test]
 fn closed_loop_measurement_agrees_with_prediction() {
+    let c = cfg();
     // A simulated plant driven at the DDS rate: the model's forces digitised by
     // the ADC calibrations, fed back per half-buffer like the DMA does.
     let t = SineTable::<1024>::libm();
@@ -291,8 +267,8 @@ fn closed_loop_measurement_agrees_with_prediction() {
             let fz = fz0 * w;
             let fx = fx_scale * st;
             samples.push((
-                (fx / 0.01 + 2048.0).round() as u16,
-                (fz / 0.02).round() as u16,
+                (fx / f64::from(c.adc_x.gain) + f64::from(c.adc_x.offset)).round() as u16,
+                (fz / f64::from(c.adc_z.gain) + f64::from(c.adc_z.offset)).round() as u16,
             ));
         }
         d.adc_block(half, &samples);

@@ -331,4 +331,35 @@ fn exact_rejects_bad_velocity() {
         Err(ExactError::BadVelocity(_))
     ));
     assert!(exact::mu_over_mu0::<f64, Libm>(&s.drive(), 0.0).is_err());
+    // Hand-built drives that no scene produces are refused, never looped on.
+    let good = s.drive();
+    for bad in [
+        Drive {
+            a: f64::NAN,
+            ..good
+        },
+        Drive { a: 1.0, ..good },
+        Drive { b: -0.1, ..good },
+        Drive {
+            bc: f64::INFINITY,
+            ..good
+        },
+        Drive { bc: 5.0, ..good }, // not b·cos φ
+    ] {
+        assert_eq!(
+            exact::mu_over_mu0::<f64, Libm>(&bad, 0.1),
+            Err(ExactError::BadDrive),
+            "{bad:?}"
+        );
+        assert_eq!(
+            exact::limits_at_zero::<f64, Libm>(&bad),
+            Err(ExactError::BadDrive)
+        );
+        assert!(exact::steady_state::<f64, Libm>(&bad, 0.1).is_err());
+        let cfg = FixedStepConfig::<f64>::new(64);
+        assert_eq!(
+            run_dimensionless::<f64, Libm>(&bad, 0.1, &cfg, Start::Rest),
+            Err(FixedStepError::BadDrive)
+        );
+    }
 }

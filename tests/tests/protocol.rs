@@ -3,8 +3,7 @@
 //! mismatch, and refused commands that change nothing.
 
 use model_core::dds::SineTable;
-use model_core::device::{Contact, DacCal, Device, DeviceConfig, DriveSetting};
-use model_core::estimator::Calibration;
+use model_core::device::{Contact, Device, DeviceConfig, DriveSetting};
 use model_core::protocol::{
     decode, encode, Body, Deframed, Deframer, Frame, Info, Request, Response, WireError, CRC,
     MAX_FRAME, PROTOCOL_VERSION,
@@ -12,31 +11,7 @@ use model_core::protocol::{
 use model_core::server::Server;
 
 fn cfg() -> DeviceConfig {
-    DeviceConfig {
-        sample_rate_hz: 1_000_000.0,
-        dac_z: DacCal {
-            metres_per_code: 2e-9,
-            zero_code: 0.0,
-        },
-        dac_x: DacCal {
-            metres_per_code: 1e-9,
-            zero_code: 2048.0,
-        },
-        adc_x: Calibration {
-            gain: 0.01,
-            offset: 2048.0,
-        },
-        adc_z: Calibration {
-            gain: 0.02,
-            offset: 0.0,
-        },
-        adc_full_scale: 4095,
-        liftoff_margin: 0.05,
-        freq_range_hz: (1_000.0, 100_000.0),
-        slew_m_per_s: 1e-3,
-        slew_rad_per_s: 100.0,
-        adc_lag_samples: 0,
-    }
+    integration_tests::board_config_1mhz()
 }
 
 fn info() -> Info {

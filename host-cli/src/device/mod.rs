@@ -42,7 +42,7 @@ pub struct Target {
     #[arg(long, default_value_t = 0.004, allow_hyphen_values = true)]
     pub sim_v0: f64,
     /// Virtual device: ADC noise, ± counts
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
     pub sim_noise: f64,
     /// Virtual device: uncalibrated ADC offset, counts
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
@@ -147,7 +147,25 @@ pub enum SceneCmd {
     },
 }
 
+fn check_sim(v0: f64, noise: f64, offset: f64, names: [&str; 3]) -> CliResult {
+    for (x, n) in [(v0, names[0]), (noise, names[1]), (offset, names[2])] {
+        if !x.is_finite() {
+            return Err(CliError::usage(format!("--{n}: must be a finite number")));
+        }
+    }
+    if noise < 0.0 {
+        return Err(CliError::usage(format!("--{}: must be >= 0", names[1])));
+    }
+    Ok(())
+}
+
 fn open(t: &Target) -> CliResult<Client> {
+    check_sim(
+        t.sim_v0,
+        t.sim_noise,
+        t.sim_offset,
+        ["sim-v0", "sim-noise", "sim-offset"],
+    )?;
     let timeout = Duration::from_millis(t.timeout_ms.max(1));
     let link: Box<dyn Link> = if let Some(p) = &t.port {
         Box::new(SerialLink::open(p).map_err(|e| CliError::failure(format!("--port: {e}")))?)
@@ -516,18 +534,24 @@ pub struct SimArgs {
     #[arg(long, default_value_t = 0.004, allow_hyphen_values = true)]
     pub v0: f64,
     /// ADC noise, ± counts
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
     pub noise: f64,
     /// Uncalibrated ADC offset, counts
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub offset: f64,
     /// Stop after this many seconds (default: run until killed)
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub seconds: Option<f64>,
 }
 
 /// `fricctl sim-device`: the virtual device in real time on a pty or TCP.
 pub fn serve(a: &SimArgs) -> CliResult {
+    check_sim(a.v0, a.noise, a.offset, ["v0", "noise", "offset"])?;
+    if let Some(sec) = a.seconds {
+        if !(sec.is_finite() && sec >= 0.0) {
+            return Err(CliError::usage("--seconds: must be a finite number >= 0"));
+        }
+    }
     let mut dev = VirtualDevice::new(PlantOptions {
         v0: a.v0,
         noise_counts: a.noise,

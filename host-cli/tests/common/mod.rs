@@ -1,0 +1,64 @@
+//! Raw-protocol helpers shared by the device tests (pty) and the QEMU test (TCP).
+#![allow(dead_code)]
+
+use std::io::Read;
+use std::time::{Duration, Instant};
+
+use model_core::protocol::{
+    decode, encode, Body, Deframed, Deframer, Frame, Request, CRC, MAX_FRAME, PROTOCOL_VERSION,
+};
+
+/// An encoded request frame.
+pub fn req(seq: u32, r: Request) -> Vec<u8> {
+    let mut b = [0u8; MAX_FRAME];
+    encode(
+        &Frame {
+            version: PROTOCOL_VERSION,
+            seq,
+            body: Body::Request(r),
+        },
+        &mut b,
+    )
+    .unwrap()
+    .to_vec()
+}
+
+/// A frame around hand-made payload bytes (valid CRC and COBS).
+pub fn raw_frame(raw: &[u8]) -> Vec<u8> {
+    let mut v = raw.to_vec();
+    v.extend(CRC.checksum(raw).to_le_bytes());
+    let mut out = vec![0u8; v.len() + 2];
+    let n = cobs::encode(&v, &mut out);
+    out.truncate(n);
+    out.push(0);
+    out
+}
+
+/// The same request with one CRC byte altered (COBS stays valid).
+pub fn corrupt_crc(mut b: Vec<u8>) -> Vec<u8> {
+    let k = b.len() - 2;
+    b[k] = if b[k] == 0x55 { 0x56 } else { 0x55 };
+    b
+}
+
+/// Reads up to `want` response frames (telemetry skipped) within 10 s.
+pub fn read_responses<R: Read + ?Sized>(r: &mut R, want: usize) -> Vec<Frame> {
+    let mut df = Deframer::default();
+    let mut out = Vec::new();
+    let t = Instant::now();
+    let mut b = [0u8; 64];
+    while out.len() < want && t.elapsed() < Duration::from_secs(10) {
+        if let Ok(n) = r.read(&mut b) {
+            for &x in &b[..n] {
+                if let Deframed::Frame(f) = df.push(x) {
+                    if let Ok(fr) = decode(f) {
+                        if matches!(fr.body, Body::Response(_)) {
+                            out.push(fr);
+                        }
+                    }
+                }
+            }
+        }
+    }
+    out
+}
