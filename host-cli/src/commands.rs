@@ -10,7 +10,7 @@ use model_core::{Libm, Scene};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::compute::{from_rel, mu_at, v_rel, Method, MuOutcome};
+use crate::compute::{from_rel, mu_at, v_rel, MethodArgs, MuOutcome};
 use crate::error::{CliError, CliResult};
 use crate::plot::{render_panels, Mark, Panel, Series};
 use crate::scene_args::{ResolvedScene, SceneArgs};
@@ -40,13 +40,13 @@ pub fn mu(
     args: &SceneArgs,
     v0: Option<f64>,
     vrel: Option<f64>,
-    method: Method,
-    steps: u32,
+    how: &MethodArgs,
     json: bool,
 ) -> CliResult {
+    how.validate()?;
     let rs = args.resolve()?;
     let v = velocity(&rs, v0, vrel)?;
-    let out = mu_at(&rs.scene, v, method, steps)?;
+    let out = mu_at(&rs.scene, v, how)?;
     if json {
         print_json(&out)?;
     } else {
@@ -77,6 +77,9 @@ fn print_mu_text(o: &MuOutcome) {
         println!("mu(0-)/mu0   {m}");
     }
     println!("method       {}", o.method);
+    if let Some(b) = o.error_bound_over_mu0 {
+        println!("error bound  {b:e} (units of mu0)");
+    }
     if let Some(n) = o.steps_per_period {
         println!("steps/period {n}");
         println!("periods      {}", o.periods.unwrap_or(0));
@@ -96,10 +99,8 @@ pub struct CurveArgs {
     pub v_rel_range: Option<(f64, f64)>,
     /// Number of velocities.
     pub points: usize,
-    /// Method.
-    pub method: Method,
-    /// Fixed-step resolution.
-    pub steps: u32,
+    /// Method, resolution, tolerance.
+    pub how: MethodArgs,
     /// CSV file (stdout if none).
     pub csv: Option<PathBuf>,
     /// Plot file.
@@ -117,47 +118,50 @@ pub struct Row {
     pub mu: f64,
     /// μ/μ0.
     pub mu_over_mu0: f64,
+    /// Which computation answered (see `fricctl mu --json`).
+    pub method: &'static str,
+    /// The bound it guarantees, units of μ0.
+    pub error_bound_over_mu0: f64,
 }
 
 /// Rows of μ(v) for the velocities (two rows, μ(0⁻) then μ(0⁺), at v0 = 0),
 /// computed in parallel.
-pub fn curve_rows(
-    scene: &Scene<f64>,
-    vs: &[f64],
-    method: Method,
-    steps: u32,
-) -> CliResult<Vec<Row>> {
+pub fn curve_rows(scene: &Scene<f64>, vs: &[f64], how: &MethodArgs) -> CliResult<Vec<Row>> {
     let vc = CriticalVelocity::of(scene);
     let mu0 = scene.mu0();
     let rows: Vec<CliResult<Vec<Row>>> = vs
         .par_iter()
         .map(|&v| {
-            if v == 0.0 && method != Method::Approx && method != Method::Fixed {
-                let (p, m) = exact::limits_at_zero::<f64, Libm>(&scene.drive()).map_err(|e| {
-                    CliError::failure(format!("exact solver failed at v0 = 0: {e:?}"))
-                })?;
+            let o = mu_at(scene, v, how)?;
+            if let (Some(p), Some(m)) = (o.mu_0plus_over_mu0, o.mu_0minus_over_mu0) {
+                let b = o.error_bound_over_mu0.unwrap_or(0.0);
                 return Ok(vec![
                     Row {
                         v0: 0.0,
                         v_rel: Some(0.0),
                         mu: m * mu0,
                         mu_over_mu0: m,
+                        method: o.method,
+                        error_bound_over_mu0: b,
                     },
                     Row {
                         v0: 0.0,
                         v_rel: Some(0.0),
                         mu: p * mu0,
                         mu_over_mu0: p,
+                        method: o.method,
+                        error_bound_over_mu0: b,
                     },
                 ]);
             }
-            let o = mu_at(scene, v, method, steps)?;
             match o.mu_over_mu0 {
                 Some(m) => Ok(vec![Row {
                     v0: v,
                     v_rel: v_rel(&vc, v),
                     mu: m * mu0,
                     mu_over_mu0: m,
+                    method: o.method,
+                    error_bound_over_mu0: o.error_bound_over_mu0.unwrap_or(f64::NAN),
                 }]),
                 None => Err(CliError::failure(format!(
                     "v0 = {v}: the fixed-step method did not reach a steady state in {} periods",
@@ -171,6 +175,18 @@ pub fn curve_rows(
         out.extend(r?);
     }
     Ok(out)
+}
+
+/// How many rows each method answered, in order of first appearance.
+pub fn method_mix(rows: &[Row]) -> Vec<(&'static str, usize)> {
+    let mut mix: Vec<(&'static str, usize)> = Vec::new();
+    for r in rows {
+        match mix.iter_mut().find(|(m, _)| *m == r.method) {
+            Some(e) => e.1 += 1,
+            None => mix.push((r.method, 1)),
+        }
+    }
+    mix
 }
 
 /// `n` evenly spaced values from `a` to `b` inclusive.
@@ -230,7 +246,18 @@ pub fn curve(a: CurveArgs) -> CliResult {
             ))
         }
     };
-    let rows = curve_rows(&rs.scene, &vs, a.method, a.steps)?;
+    a.how.validate()?;
+    let rows = curve_rows(&rs.scene, &vs, &a.how)?;
+    let mix = method_mix(&rows);
+    eprintln!(
+        "methods: {} (largest error bound {:e} mu0)",
+        mix.iter()
+            .map(|(m, n)| format!("{m} {n}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        rows.iter()
+            .fold(0.0f64, |b, r| b.max(r.error_bound_over_mu0))
+    );
     match &a.csv {
         Some(path) => {
             let f = std::fs::File::create(path).map_err(|e| {
@@ -285,7 +312,14 @@ pub fn curve(a: CurveArgs) -> CliResult {
             x: (x0, if x1 > x0 { x1 } else { x0 + 1.0 }),
             y: (ymin.min(-0.05) - 0.05, 1.08),
             series: vec![Series {
-                label: format!("exact ({} points)", rows.len()),
+                label: format!(
+                    "{} points: {}",
+                    rows.len(),
+                    mix.iter()
+                        .map(|(m, n)| format!("{m} {n}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
                 points: pts,
                 mark: Mark::Line,
                 color: 0,

@@ -3,11 +3,12 @@
 //! figures).
 
 use clap::ValueEnum;
-use model_core::analytic::approx::{approx_mu_over_mu0, ApproxError};
-use model_core::analytic::CriticalVelocity;
-use model_core::exact::{self, Solution};
+use model_core::analytic::approx::{approx_mu_over_mu0, ApproxError, MAX_ERROR_OVER_A};
+use model_core::analytic::{ApproxKind, CriticalVelocity};
+use model_core::exact::{self, ExactError, Solution};
 use model_core::fixed_step::{self, FixedStepConfig, FixedStepError, Start};
-use model_core::Scene;
+use model_core::select::{self, SelectError, Value};
+use model_core::{Libm, Scene};
 use serde::Serialize;
 
 use crate::error::{CliError, CliResult};
@@ -15,7 +16,7 @@ use crate::error::{CliError, CliResult};
 /// How μ is computed.
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Method {
-    /// The cheapest exact answer: ±μ0 beyond v_c, the static analysis at v0 = 0, the exact solver otherwise
+    /// The cheapest method whose error bound meets --tol: ±μ0 beyond v_c, the static analysis at v0 = 0, eq. 21/24 where their bound is within --tol, the exact solver otherwise
     #[default]
     Auto,
     /// The exact event-driven steady-state solver
@@ -39,6 +40,9 @@ pub struct MuOutcome {
     pub mu_over_mu0: Option<f64>,
     /// Which computation answered: `sliding`, `exact`, `static`, `fixed`, `approx_eq21`, `approx_eq24`.
     pub method: &'static str,
+    /// The bound this method guarantees for `mu_over_mu0` (or for μ(0±) at
+    /// rest), in units of μ0 (null when a fixed-step run did not converge).
+    pub error_bound_over_mu0: Option<f64>,
     /// Forward critical velocity (eq. 8).
     pub vc_forward: f64,
     /// Backward critical velocity (eq. 8).
@@ -91,23 +95,68 @@ pub fn from_rel(vc: &CriticalVelocity<f64>, x: f64, flag: &str) -> CliResult<f64
     Ok(x * c)
 }
 
-/// μ at `v0` by `method`.
+/// How to compute μ: the flags shared by `mu`, `curve` and `map`.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct MethodArgs {
+    /// Computation method
+    #[arg(long, value_enum, default_value_t = Method::Auto)]
+    pub method: Method,
+    /// Steps per period for --method fixed
+    #[arg(long, default_value_t = 10_000)]
+    pub steps_per_period: u32,
+    /// Error tolerance of --method auto, in units of μ0: the cheapest method whose guaranteed bound is within it answers (default: the exact solver's bound)
+    #[arg(long, value_name = "TOL")]
+    pub tol: Option<f64>,
+}
+
+impl Default for MethodArgs {
+    fn default() -> Self {
+        MethodArgs {
+            method: Method::Auto,
+            steps_per_period: 10_000,
+            tol: None,
+        }
+    }
+}
+
+impl MethodArgs {
+    /// Checks the flags that do not depend on the scene.
+    pub fn validate(&self) -> CliResult {
+        if let Some(t) = self.tol {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(CliError::usage("--tol: must be a finite number > 0"));
+            }
+            if self.method != Method::Auto {
+                return Err(CliError::usage(
+                    "--tol: only --method auto chooses by tolerance (the other methods report their bound)",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// μ at `v0` by the method in `m`.
 ///
-/// Errors: bad velocity (exit 2); a method that does not apply (exit 2); a
-/// solver failure (exit 1). A fixed-step run that does not converge is *not*
-/// an error here: it returns `converged: false` with `mu: null`.
-pub fn mu_at(scene: &Scene<f64>, v0: f64, method: Method, steps: u32) -> CliResult<MuOutcome> {
+/// Errors: bad velocity (exit 2); a method that does not apply or a
+/// tolerance no method meets (exit 2); a solver failure (exit 1). A
+/// fixed-step run that does not converge is *not* an error here: it returns
+/// `converged: false` with `mu: null`.
+pub fn mu_at(scene: &Scene<f64>, v0: f64, m: &MethodArgs) -> CliResult<MuOutcome> {
+    let (method, steps) = (m.method, m.steps_per_period);
     if !v0.is_finite() {
         return Err(CliError::usage("--v0: must be a finite number"));
     }
     let vc = CriticalVelocity::of(scene);
     let mu0 = scene.mu0();
+    let d = scene.drive();
     let mut out = MuOutcome {
         v0,
         v_rel: v_rel(&vc, v0),
         mu: None,
         mu_over_mu0: None,
         method: "exact",
+        error_bound_over_mu0: None,
         vc_forward: vc.forward,
         vc_backward: vc.backward,
         mu_0plus_over_mu0: None,
@@ -123,20 +172,40 @@ pub fn mu_at(scene: &Scene<f64>, v0: f64, method: Method, steps: u32) -> CliResu
         out.method = method;
     };
     match method {
-        Method::Auto | Method::Exact => {
-            let sol = exact::solve(scene, v0)
-                .map_err(|e| CliError::failure(format!("exact solver failed: {e:?}")))?;
+        Method::Auto => {
+            let tol = m.tol.unwrap_or_else(|| exact::error_bound::<f64, Libm>(&d));
+            let a = select::mu_within::<f64, Libm>(scene, v0, tol).map_err(|e| match e {
+                SelectError::BadTolerance => CliError::usage("--tol: must be a finite number > 0"),
+                SelectError::ToleranceTooTight { best } => CliError::usage(format!(
+                    "--tol: {tol:e} is tighter than any method guarantees for this scene (the exact solver's bound is {best:e})"
+                )),
+                SelectError::Exact(e) => exact_failure(e),
+            })?;
+            out.error_bound_over_mu0 = Some(a.bound);
+            match a.value {
+                Value::Mu(x) => set(&mut out, x, a.method.name()),
+                Value::AtRest {
+                    mu_0plus,
+                    mu_0minus,
+                    ..
+                } => {
+                    out.method = a.method.name();
+                    out.mu_0plus_over_mu0 = Some(mu_0plus);
+                    out.mu_0minus_over_mu0 = Some(mu_0minus);
+                }
+            }
+        }
+        Method::Exact => {
+            let sol = exact::solve(scene, v0).map_err(exact_failure)?;
             match sol {
-                Solution::Sliding { mu_over_mu0 } => set(
-                    &mut out,
-                    mu_over_mu0,
-                    if method == Method::Auto {
-                        "sliding"
-                    } else {
-                        "exact"
-                    },
-                ),
-                Solution::StickSlip { mu_over_mu0 } => set(&mut out, mu_over_mu0, "exact"),
+                Solution::Sliding { mu_over_mu0 } => {
+                    set(&mut out, mu_over_mu0, "exact");
+                    out.error_bound_over_mu0 = Some(0.0);
+                }
+                Solution::StickSlip { mu_over_mu0 } => {
+                    set(&mut out, mu_over_mu0, "exact");
+                    out.error_bound_over_mu0 = Some(exact::error_bound::<f64, Libm>(&d));
+                }
                 Solution::AtRest {
                     mu_0plus,
                     mu_0minus,
@@ -145,17 +214,15 @@ pub fn mu_at(scene: &Scene<f64>, v0: f64, method: Method, steps: u32) -> CliResu
                     out.method = "static";
                     out.mu_0plus_over_mu0 = Some(mu_0plus);
                     out.mu_0minus_over_mu0 = Some(mu_0minus);
+                    out.error_bound_over_mu0 = Some(exact::error_bound::<f64, Libm>(&d));
                 }
             }
         }
         Method::Fixed => {
-            if steps < 4 {
-                return Err(CliError::usage("--steps-per-period: must be >= 4"));
-            }
             // Budget: at most 2·10⁸ steps (≈ 1 s) however small v0 is; past it
             // the run reports "not converged" instead of appearing to hang.
             let mut cfg = FixedStepConfig::<f64>::new(steps);
-            cfg.max_periods = (200_000_000 / steps).clamp(3, 1_000_000);
+            cfg.max_periods = (200_000_000 / steps.max(1)).clamp(3, 1_000_000);
             out.method = "fixed";
             out.steps_per_period = Some(steps);
             match fixed_step::run(scene, v0, &cfg, Start::Rest) {
@@ -163,6 +230,7 @@ pub fn mu_at(scene: &Scene<f64>, v0: f64, method: Method, steps: u32) -> CliResu
                     set(&mut out, r.mu_over_mu0, "fixed");
                     out.periods = Some(r.periods);
                     out.converged = Some(true);
+                    out.error_bound_over_mu0 = Some(r.error_bound);
                 }
                 Err(FixedStepError::NotConverged {
                     periods,
@@ -178,18 +246,37 @@ pub fn mu_at(scene: &Scene<f64>, v0: f64, method: Method, steps: u32) -> CliResu
                         "--v0: the fixed-step method needs v0 != 0 (at rest the result depends on the initial state; see `fricctl static`)",
                     ))
                 }
+                Err(FixedStepError::TooFewSteps { min_steps }) => {
+                    return Err(CliError::usage(format!(
+                        "--steps-per-period: this drive needs at least {min_steps} (fewer cannot resolve its stick windows: the error bound would exceed 10 % of mu0)"
+                    )))
+                }
+                Err(FixedStepError::PrecisionLimit { max_steps }) => {
+                    return Err(CliError::usage(format!(
+                        "--steps-per-period: at most {max_steps} (beyond it rounding grows faster than the discretisation error shrinks)"
+                    )))
+                }
+                Err(FixedStepError::IllConditioned) => {
+                    return Err(CliError::failure(
+                        "the fixed-step method cannot resolve this drive in f64 (dux-rel too large): its error bound exceeds 1 % of mu0 at any step count",
+                    ))
+                }
                 Err(e) => return Err(CliError::usage(format!("--v0: {e:?}"))),
             }
         }
         Method::Approx => match approx_mu_over_mu0(scene, v0) {
-            Ok((kind, m)) => set(
-                &mut out,
-                m,
-                match kind {
-                    model_core::analytic::ApproxKind::NormalEq21 => "approx_eq21",
-                    model_core::analytic::ApproxKind::TangentialEq24 => "approx_eq24",
-                },
-            ),
+            Ok((kind, m)) => {
+                set(&mut out, m, select::Method::Approx(kind).name());
+                let amp = match kind {
+                    ApproxKind::NormalEq21 => d.a,
+                    ApproxKind::TangentialEq24 => d.b,
+                };
+                out.error_bound_over_mu0 = Some(if m.abs() == 1.0 {
+                    0.0
+                } else {
+                    MAX_ERROR_OVER_A * amp
+                });
+            }
             Err(e) => return Err(CliError::usage(match e {
                 ApproxError::DualMode => {
                     "--method: approx needs a single-mode scene (eq. 21: dux = 0; eq. 24: duz = 0)"
@@ -206,4 +293,15 @@ pub fn mu_at(scene: &Scene<f64>, v0: f64, method: Method, steps: u32) -> CliResu
         },
     }
     Ok(out)
+}
+
+/// The one-line message for an exact-solver failure.
+pub fn exact_failure(e: ExactError) -> CliError {
+    match e {
+        ExactError::BadVelocity(s) => CliError::usage(format!("--{s}")),
+        ExactError::IllConditioned => CliError::failure(
+            "the exact solver cannot resolve this drive in f64 (dux-rel too large): its error bound would exceed 1 % of mu0",
+        ),
+        other => CliError::failure(format!("exact solver failed: {other:?}")),
+    }
 }

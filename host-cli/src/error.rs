@@ -20,6 +20,13 @@ impl CliError {
             msg: msg.into(),
         }
     }
+    /// The same error with `at …` appended (where in a map or a sweep it happened).
+    pub fn with_context(self, at: &str) -> Self {
+        CliError {
+            code: self.code,
+            msg: format!("{} (at {at})", self.msg),
+        }
+    }
     /// The computation or I/O failed (exit status 1).
     pub fn failure(msg: impl Into<String>) -> Self {
         CliError {

@@ -20,7 +20,6 @@ use std::process::ExitCode;
 use clap::error::{ContextKind, ContextValue, ErrorKind};
 use clap::{Parser, Subcommand};
 
-use crate::compute::Method;
 use crate::scene_args::SceneArgs;
 
 /// Model tool for dual-mode (normal + tangential) ultrasonic friction control
@@ -49,12 +48,8 @@ enum Command {
         /// Velocity relative to v_c: v0 = X·v_c (forward v_c for X > 0, backward for X < 0)
         #[arg(long, allow_hyphen_values = true, value_name = "X")]
         v_rel: Option<f64>,
-        /// Computation method
-        #[arg(long, value_enum, default_value_t = Method::Auto)]
-        method: Method,
-        /// Steps per period for --method fixed
-        #[arg(long, default_value_t = 10_000)]
-        steps_per_period: u32,
+        #[command(flatten)]
+        how: compute::MethodArgs,
         /// JSON output
         #[arg(long)]
         json: bool,
@@ -78,12 +73,8 @@ enum Command {
         /// Number of velocities (≥ 2)
         #[arg(long)]
         points: usize,
-        /// Computation method
-        #[arg(long, value_enum, default_value_t = Method::Auto)]
-        method: Method,
-        /// Steps per period for --method fixed
-        #[arg(long, default_value_t = 10_000)]
-        steps_per_period: u32,
+        #[command(flatten)]
+        how: compute::MethodArgs,
         /// Write the CSV to FILE instead of stdout
         #[arg(long, value_name = "FILE")]
         csv: Option<std::path::PathBuf>,
@@ -144,10 +135,9 @@ fn main() -> ExitCode {
             scene,
             v0,
             v_rel,
-            method,
-            steps_per_period,
+            how,
             json,
-        } => commands::mu(&scene, v0, v_rel, method, steps_per_period, json),
+        } => commands::mu(&scene, v0, v_rel, &how, json),
         Command::Curve {
             scene,
             v_min,
@@ -155,8 +145,7 @@ fn main() -> ExitCode {
             v_rel_min,
             v_rel_max,
             points,
-            method,
-            steps_per_period,
+            how,
             csv,
             plot,
         } => commands::curve(commands::CurveArgs {
@@ -164,8 +153,7 @@ fn main() -> ExitCode {
             v_range: v_min.zip(v_max),
             v_rel_range: v_rel_min.zip(v_rel_max),
             points,
-            method,
-            steps: steps_per_period,
+            how,
             csv,
             plot,
         }),

@@ -10,8 +10,10 @@ use model_core::{Groups, Scene};
 use plotters::style::RGBColor;
 use rayon::prelude::*;
 
+use crate::compute::{from_rel, mu_at, Method, MethodArgs};
 use crate::error::{CliError, CliResult};
-use crate::plot::{render_map, RegimeMap};
+use crate::plot::{render_heat, render_map, Heat, HeatMap, RegimeMap};
+use model_core::analytic::CriticalVelocity;
 
 /// Flags of `fricctl map`.
 #[derive(Args, Debug, Clone)]
@@ -40,6 +42,154 @@ pub struct MapArgs {
     /// Also write the cells as CSV
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
+    /// Map μ/μ0 at v0 = X·v_c (forward v_c for X > 0, backward for X < 0) instead of the regimes
+    #[arg(long, value_name = "X", allow_hyphen_values = true)]
+    pub v_rel: Option<f64>,
+    /// How μ is computed per cell (with --v-rel)
+    #[command(flatten)]
+    pub how: MethodArgs,
+}
+
+/// One cell of a μ map.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct MuCell {
+    /// φ, degrees.
+    pub phi_deg: f64,
+    /// k_xΔu_x/(μ0 k_z Δu_z).
+    pub ratio: f64,
+    /// v0 in units of ωW0.
+    pub v0: f64,
+    /// μ/μ0 (empty when a fixed-step run did not converge).
+    pub mu_over_mu0: Option<f64>,
+    /// Which computation answered.
+    pub method: &'static str,
+    /// The bound it guarantees, units of μ0.
+    pub error_bound_over_mu0: Option<f64>,
+}
+
+/// μ/μ0 at `v0 = x·v_c` over (ratio rows, phase columns), each cell by the
+/// method choice of `how`, in parallel.
+pub fn mu_cells(
+    a: f64,
+    ratios: &[f64],
+    phis_deg: &[f64],
+    x: f64,
+    how: &MethodArgs,
+) -> CliResult<Vec<MuCell>> {
+    let n = ratios.len() * phis_deg.len();
+    (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let (r, phi) = (ratios[i / phis_deg.len()], phis_deg[i % phis_deg.len()]);
+            let g = Groups {
+                duz_rel: a,
+                dux_rel: r * a,
+                phi: phi.to_radians(),
+            };
+            let s = Scene::dimensionless(g).map_err(|e| CliError::usage(format!("--{e}")))?;
+            let vc = CriticalVelocity::of(&s);
+            let v = from_rel(&vc, x, "v-rel")?;
+            let o =
+                mu_at(&s, v, how).map_err(|e| e.with_context(&format!("ratio {r}, φ {phi}°")))?;
+            Ok(MuCell {
+                phi_deg: phi,
+                ratio: r,
+                v0: v,
+                mu_over_mu0: o.mu_over_mu0,
+                method: o.method,
+                error_bound_over_mu0: o.error_bound_over_mu0,
+            })
+        })
+        .collect()
+}
+
+fn run_mu_map(a: &MapArgs, x: f64) -> CliResult {
+    if x == 0.0 {
+        return Err(CliError::usage(
+            "--v-rel: must be != 0 (at rest μ has two one-sided limits; the regime map shows them)",
+        ));
+    }
+    let ratios = centres(a.ratio_min, a.ratio_max, a.res);
+    let phis = centres(a.phi_min_deg, a.phi_max_deg, a.res);
+    let cells = mu_cells(a.duz_rel, &ratios, &phis, x, &a.how)?;
+    let mut mix: Vec<(&'static str, usize)> = Vec::new();
+    for c in &cells {
+        match mix.iter_mut().find(|(m, _)| *m == c.method) {
+            Some(e) => e.1 += 1,
+            None => mix.push((c.method, 1)),
+        }
+    }
+    let mix_text = mix
+        .iter()
+        .map(|(m, n)| format!("{m} {n}"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let worst = cells
+        .iter()
+        .filter_map(|c| c.error_bound_over_mu0)
+        .fold(0.0f64, f64::max);
+    eprintln!(
+        "{} cells: {mix_text} (largest error bound {worst:e} mu0)",
+        cells.len()
+    );
+    let heat: Vec<Heat> = cells
+        .iter()
+        .map(|c| match c.mu_over_mu0 {
+            Some(m) => Heat::Value(m),
+            None => Heat::Class(0),
+        })
+        .collect();
+    let (lo, hi) = cells
+        .iter()
+        .filter_map(|c| c.mu_over_mu0)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), m| {
+            (l.min(m), h.max(m))
+        });
+    let m = HeatMap {
+        title: format!(
+            "μ/μ0 at v0 = {x}·v_c, Δu_z/u_z0 = {} ({mix_text})",
+            a.duz_rel
+        ),
+        x_label: "phase φ, degrees".to_string(),
+        y_label: "k_xΔu_x / (μ0 k_z Δu_z)".to_string(),
+        xs: phis,
+        ys: ratios,
+        log_x: false,
+        log_y: false,
+        cells: heat,
+        range: if lo < hi {
+            (lo, hi)
+        } else {
+            (lo - 0.5, lo + 0.5)
+        },
+        value_label: "μ/μ0".to_string(),
+        classes: if cells.iter().any(|c| c.mu_over_mu0.is_none()) {
+            vec![("not converged".to_string(), RGBColor(200, 0, 0))]
+        } else {
+            Vec::new()
+        },
+    };
+    render_heat(&a.plot, &m, (1100, 760))?;
+    eprintln!("wrote {}", a.plot.display());
+    if let Some(p) = a.csv.as_deref() {
+        write_rows(p, &cells)?;
+    }
+    Ok(())
+}
+
+/// Writes serialisable rows as CSV to `p`.
+pub fn write_rows<T: serde::Serialize>(p: &Path, rows: &[T]) -> CliResult {
+    let f = std::fs::File::create(p)
+        .map_err(|e| CliError::failure(format!("--csv: cannot create {}: {e}", p.display())))?;
+    let mut w = csv::Writer::from_writer(std::io::BufWriter::new(f));
+    for c in rows {
+        w.serialize(c)
+            .map_err(|e| CliError::failure(format!("--csv: {}: {e}", p.display())))?;
+    }
+    w.flush()
+        .map_err(|e| CliError::failure(format!("--csv: {}: {e}", p.display())))?;
+    eprintln!("wrote {}", p.display());
+    Ok(())
 }
 
 /// One map cell.
@@ -279,6 +429,18 @@ pub fn run(a: &MapArgs) -> CliResult {
         return Err(CliError::usage("--res: must be between 2 and 1000"));
     }
     crate::plot::ext(&a.plot)?;
+    a.how.validate()?;
+    if let Some(x) = a.v_rel {
+        if !x.is_finite() {
+            return Err(CliError::usage("--v-rel: must be a finite number"));
+        }
+        return run_mu_map(a, x);
+    }
+    if a.how.method != Method::Auto || a.how.tol.is_some() {
+        return Err(CliError::usage(
+            "--method: the regime map is always exact; --method and --tol apply to a μ map (--v-rel)",
+        ));
+    }
     let ratios = centres(a.ratio_min, a.ratio_max, a.res);
     let phis = centres(a.phi_min_deg, a.phi_max_deg, a.res);
     let (cells, class) = cells(a.duz_rel, &ratios, &phis, true)?;

@@ -338,3 +338,159 @@ fn draw_map<DB: DrawingBackend>(
         .draw()?;
     Ok(())
 }
+
+/// One heat-map cell: a value on the colour scale, or a named class (e.g. a
+/// failure kind) drawn in its own colour.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Heat {
+    /// A value (clamped to the colour range for drawing only).
+    Value(f64),
+    /// Index into [`HeatMap::classes`].
+    Class(usize),
+}
+
+/// Cells over a grid coloured by value (viridis) or class, with a colour bar.
+/// Axes may be logarithmic: the cell centres are then given as log10 values
+/// and the ticks are written as powers of ten.
+pub struct HeatMap {
+    /// Title.
+    pub title: String,
+    /// x label.
+    pub x_label: String,
+    /// y label.
+    pub y_label: String,
+    /// Cell centres along x (uniform; log10 values if `log_x`).
+    pub xs: Vec<f64>,
+    /// Cell centres along y (uniform; log10 values if `log_y`).
+    pub ys: Vec<f64>,
+    /// Whether x is log10.
+    pub log_x: bool,
+    /// Whether y is log10.
+    pub log_y: bool,
+    /// Cells, row-major over `ys` then `xs`.
+    pub cells: Vec<Heat>,
+    /// Colour range of the values.
+    pub range: (f64, f64),
+    /// Label of the colour bar.
+    pub value_label: String,
+    /// Named classes with their colours (legend).
+    pub classes: Vec<(String, RGBColor)>,
+}
+
+fn viridis(t: f64) -> RGBColor {
+    use plotters::style::colors::colormaps::{ColorMap, ViridisRGB};
+    ViridisRGB.get_color(t.clamp(0.0, 1.0))
+}
+
+/// Renders a [`HeatMap`] to `.svg` or `.png`.
+pub fn render_heat(path: &Path, m: &HeatMap, size: (u32, u32)) -> CliResult<()> {
+    init_font();
+    match ext(path)?.as_str() {
+        "svg" => {
+            let root = SVGBackend::new(path, size).into_drawing_area();
+            draw_heat(&root, m).map_err(draw_err(path))?;
+            root.present().map_err(draw_err(path))
+        }
+        _ => {
+            let root = BitMapBackend::new(path, size).into_drawing_area();
+            draw_heat(&root, m).map_err(draw_err(path))?;
+            root.present().map_err(draw_err(path))
+        }
+    }
+}
+
+fn log_tick(v: f64, log: bool) -> String {
+    if log {
+        if (v - v.round()).abs() < 1e-9 {
+            format!("1e{}", v.round() as i64)
+        } else {
+            String::new()
+        }
+    } else {
+        tick(v)
+    }
+}
+
+fn draw_heat<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    m: &HeatMap,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    root.fill(&WHITE)?;
+    let (w, _) = root.dim_in_pixel();
+    let (main, bar) = root.split_horizontally(w.saturating_sub(130));
+    let (hx, hy) = (half_step(&m.xs), half_step(&m.ys));
+    let x0 = m.xs.first().copied().unwrap_or(0.0) - hx;
+    let x1 = m.xs.last().copied().unwrap_or(1.0) + hx;
+    let y0 = m.ys.first().copied().unwrap_or(0.0) - hy;
+    let y1 = m.ys.last().copied().unwrap_or(1.0) + hy;
+    let mut chart = ChartBuilder::on(&main)
+        .caption(&m.title, ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(50)
+        .y_label_area_size(66)
+        .build_cartesian_2d(x0..x1, y0..y1)?;
+    let (lx, ly) = (m.log_x, m.log_y);
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_desc(m.x_label.as_str())
+        .y_desc(m.y_label.as_str())
+        .axis_desc_style(("sans-serif", 16))
+        .label_style(("sans-serif", 13))
+        .x_labels(12)
+        .y_labels(12)
+        .x_label_formatter(&|v| log_tick(*v, lx))
+        .y_label_formatter(&|v| log_tick(*v, ly))
+        .draw()?;
+    let nx = m.xs.len().max(1);
+    let (lo, hi) = m.range;
+    let span = if hi > lo { hi - lo } else { 1.0 };
+    chart.draw_series(m.cells.iter().enumerate().map(|(i, h)| {
+        let (x, y) = (m.xs[i % nx], m.ys[i / nx]);
+        let c = match *h {
+            Heat::Value(v) => viridis((v - lo) / span),
+            Heat::Class(k) => m.classes.get(k).map(|c| c.1).unwrap_or(RGBColor(0, 0, 0)),
+        };
+        Rectangle::new([(x - hx, y - hy), (x + hx, y + hy)], c.filled())
+    }))?;
+    for (name, c) in &m.classes {
+        let c = *c;
+        chart
+            .draw_series(std::iter::empty::<Rectangle<(f64, f64)>>())?
+            .label(name.as_str())
+            .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 16, y + 6)], c.filled()));
+    }
+    if !m.classes.is_empty() {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 13))
+            .draw()?;
+    }
+    // Colour bar.
+    let mut cb = ChartBuilder::on(&bar)
+        .margin_top(40)
+        .margin_bottom(62)
+        .margin_right(8)
+        .y_label_area_size(48)
+        .caption(&m.value_label, ("sans-serif", 13))
+        .build_cartesian_2d(0.0..1.0, lo..lo + span)?;
+    cb.configure_mesh()
+        .disable_mesh()
+        .disable_x_axis()
+        .label_style(("sans-serif", 12))
+        .y_label_formatter(&|v| tick(*v))
+        .draw()?;
+    let steps = 100;
+    cb.draw_series((0..steps).map(|i| {
+        let a = lo + span * i as f64 / steps as f64;
+        let b = lo + span * (i + 1) as f64 / steps as f64;
+        Rectangle::new(
+            [(0.0, a), (1.0, b)],
+            viridis(i as f64 / (steps - 1) as f64).filled(),
+        )
+    }))?;
+    Ok(())
+}

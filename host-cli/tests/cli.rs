@@ -188,11 +188,31 @@ fn curve_csv_matches_model_core() {
     assert!(out.status.success());
     let text = String::from_utf8(out.stdout).unwrap();
     let mut lines = text.lines();
-    assert_eq!(lines.next().unwrap(), "v0,v_rel,mu,mu_over_mu0");
+    assert_eq!(
+        lines.next().unwrap(),
+        "v0,v_rel,mu,mu_over_mu0,method,error_bound_over_mu0"
+    );
     let s = phys_scene();
+    let lines: Vec<&str> = lines.collect();
     let rows: Vec<Vec<f64>> = lines
-        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .iter()
+        .map(|l| {
+            l.split(',')
+                .filter_map(|x| x.parse().ok())
+                .collect::<Vec<f64>>()
+        })
         .collect();
+    // Default tolerance: never an approximation; the bound is 0 while sliding
+    // and the exact solver's otherwise.
+    let bound = exact::error_bound::<f64, Libm>(&s.drive());
+    for (l, r) in lines.iter().zip(&rows) {
+        let method = l.split(',').nth(4).unwrap();
+        match method {
+            "sliding" => assert_eq!(r[4], 0.0),
+            "exact" | "static" => assert_eq!(r[4], bound),
+            other => panic!("unexpected method {other} in {l}"),
+        }
+    }
     // 11 velocities, v0 = 0 gives two rows (the limits from below and above).
     assert_eq!(rows.len(), 12);
     for r in &rows {
@@ -713,4 +733,177 @@ fn extreme_inputs_end_with_a_clear_error_not_a_hang() {
     bad(&["sim-device", "--pty", "--seconds", "inf"], "--seconds");
     bad(&["sim-device", "--pty", "--noise", "-1"], "--noise");
     bad(&["device", "--sim", "--sim-v0", "nan", "info"], "--sim-v0");
+}
+
+/// `--method auto --tol`: the approximation answers exactly when its bound
+/// 0.0144·A is within the tolerance, and it is then within that bound of the
+/// exact solver; below the exact solver's bound the request is refused.
+#[test]
+fn auto_picks_the_cheapest_method_within_tol() {
+    let base = [
+        "mu",
+        "--duz-rel",
+        "0.4",
+        "--dux-rel",
+        "0",
+        "--phi-deg",
+        "0",
+        "--v-rel",
+        "0.3",
+        "--json",
+    ];
+    let exact_v = json(&[&base[..], &["--method", "exact"]].concat());
+    let m_exact = exact_v["mu_over_mu0"].as_f64().unwrap();
+    // 0.0144·0.4 = 0.00576.
+    for (tol, want) in [
+        ("1e-2", "approx_eq21"),
+        ("0.00576", "approx_eq21"),
+        ("0.0057", "exact"),
+        ("1e-6", "exact"),
+    ] {
+        let v = json(&[&base[..], &["--tol", tol]].concat());
+        assert_eq!(v["method"], want, "tol {tol}");
+        let b = v["error_bound_over_mu0"].as_f64().unwrap();
+        assert!(b <= tol.parse::<f64>().unwrap());
+        let m = v["mu_over_mu0"].as_f64().unwrap();
+        assert!((m - m_exact).abs() <= b, "{m} vs {m_exact} (bound {b})");
+    }
+    // Beyond v_c: sliding, bound 0, whatever the tolerance.
+    let v = json(&[
+        "mu",
+        "--duz-rel",
+        "0.4",
+        "--dux-rel",
+        "0.3",
+        "--phi-deg",
+        "20",
+        "--v-rel",
+        "1.5",
+        "--json",
+    ]);
+    assert_eq!(v["method"], "sliding");
+    assert_eq!(v["mu_over_mu0"], 1.0);
+    assert_eq!(v["error_bound_over_mu0"], 0.0);
+    // Tighter than any method: exit 2, one line naming --tol.
+    let out = fricctl()
+        .args([&base[..], &["--tol", "1e-12"]].concat())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        err.starts_with("error: --tol:") && err.lines().count() == 1,
+        "{err}"
+    );
+    for bad in ["0", "-1", "nan", "inf"] {
+        let out = fricctl()
+            .args([&base[..], &["--tol", bad]].concat())
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "--tol {bad}");
+    }
+    // --tol with a method that does not choose.
+    let out = fricctl()
+        .args([&base[..], &["--method", "exact", "--tol", "1e-3"]].concat())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}
+
+/// The fixed-step method's explicit refusals reach the user as one line.
+#[test]
+fn fixed_step_refusals_are_usage_errors() {
+    let base = [
+        "mu",
+        "--duz-rel",
+        "0.4",
+        "--dux-rel",
+        "3",
+        "--phi-deg",
+        "0",
+        "--v-rel",
+        "0.3",
+        "--method",
+        "fixed",
+    ];
+    // ⌈√(10·(1 + 3)/0.1)⌉ = 20.
+    let out = fricctl()
+        .args([&base[..], &["--steps-per-period", "19"]].concat())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(err.contains("at least 20"), "{err}");
+    let v = json(&[&base[..], &["--steps-per-period", "20", "--json"]].concat());
+    // The stated bound (1 + b)(K_D/N² + N·ε) with K_D = 10.
+    let want = 4.0 * (10.0 / 400.0 + 20.0 * f64::EPSILON);
+    assert!(close(
+        v["error_bound_over_mu0"].as_f64().unwrap(),
+        want,
+        1e-12
+    ));
+    let out = fricctl()
+        .args([&base[..], &["--steps-per-period", "2000000"]].concat())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8(out.stderr).unwrap().contains("at most"));
+}
+
+/// `map --v-rel`: every cell's μ equals an independent per-cell computation;
+/// the cells are dual-mode (ratio > 0 at every cell centre), where no
+/// approximation applies, so even a loose tolerance leaves all 16 exact.
+#[test]
+fn mu_map_cells_follow_the_method_choice() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("m.csv");
+    let png = dir.path().join("m.png");
+    let out = fricctl()
+        .args([
+            "map",
+            "--duz-rel",
+            "0.5",
+            "--ratio-min",
+            "0",
+            "--ratio-max",
+            "2",
+            "--res",
+            "4",
+            "--v-rel",
+            "0.5",
+            "--tol",
+            "1e-2",
+            "--plot",
+            png.to_str().unwrap(),
+            "--csv",
+            csv.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8(out.stderr).unwrap().contains("exact 16"));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut n = 0;
+    for l in text.lines().skip(1) {
+        let f: Vec<&str> = l.split(',').collect();
+        let (phi, ratio): (f64, f64) = (f[0].parse().unwrap(), f[1].parse().unwrap());
+        let s = Scene::dimensionless(model_core::Groups {
+            duz_rel: 0.5,
+            dux_rel: 0.5 * ratio,
+            phi: phi.to_radians(),
+        })
+        .unwrap();
+        let v = 0.5 * model_core::analytic::CriticalVelocity::of(&s).forward;
+        let want = exact::solve(&s, v).unwrap().mu_over_mu0().unwrap();
+        let got: f64 = f[3].parse().unwrap();
+        assert_eq!(f[4], "exact");
+        assert!((got - want).abs() <= 1e-12, "{l}");
+        n += 1;
+    }
+    assert_eq!(n, 16);
+    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
 }

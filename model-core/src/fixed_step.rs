@@ -32,7 +32,8 @@ use crate::scene::{Drive, Scene, SceneError};
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FixedStepConfig<T> {
-    /// Steps per drive period `N` (≥ 4; the paper uses ~10⁴).
+    /// Steps per drive period `N` (the paper uses ~10⁴); accepted from
+    /// [`min_steps_per_period`] (10 for `b = 0`) to [`max_steps_per_period`].
     pub steps_per_period: u32,
     /// Consistency tolerance on `|μ_k − μ_{k−1}|/μ₀` between the last two periods (> 0).
     pub tol: T,
@@ -89,14 +90,94 @@ pub struct FixedStepOutcome<T> {
     pub steps: u64,
     /// The state at the end of the run (one period after the start phase, wrapped).
     pub end: State<T>,
+    /// The stated error bound of `mu_over_mu0`, in units of μ₀ ([`error_bound`]).
+    pub error_bound: T,
+}
+
+/// Measured-bound constant of the discretisation error: `|μ_N − μ|/μ₀ ≤
+/// K_D·(1 + b)/N²` with `K_D` = 10 (measured worst 4.5 over the eight
+/// work-precision scenes and 300 random scenes with `a` up to `1 − 10⁻⁶`, `b`
+/// from 10⁻⁴ to 300 and `v₀/v_c` from 10⁻³ to `1 − 10⁻⁶`; the scheme is
+/// second order, `fricctl bench work-precision`).
+pub const DISCRETISATION_K: f64 = 10.0;
+
+/// Rounding constant: the rounding error of one period's stretch increments
+/// is at most `K_R·N·ε·(1 + b)` with `K_R` = 1 (measured worst 0.1 in f32 at
+/// N = 65 536).
+pub const ROUNDING_K: f64 = 1.0;
+
+/// Largest discretisation part of the bound a run may have (10 % of μ₀):
+/// below it the steps cannot resolve the stick windows and the run is refused
+/// ([`FixedStepError::TooFewSteps`]).
+pub const MAX_DISCRETISATION: f64 = 0.1;
+
+/// Largest achievable bound at which the type still counts as able to
+/// resolve the drive (1 % of μ₀); beyond it [`FixedStepError::IllConditioned`].
+pub const ILL_CONDITIONED_AT: f64 = 1e-2;
+
+/// The stated error bound of a converged run with `n` steps per period, in
+/// units of μ₀ (for a start from rest or from any state):
+/// `(1 + b)·(K_D/N² + K_R·N·ε + M::MAX_REL_ERROR)` — discretisation
+/// ([`DISCRETISATION_K`]), rounding of the stretch increments
+/// ([`ROUNDING_K`]) and the math backend's set-up error.
+pub fn error_bound<T: Float, M: Math<T>>(d: &Drive<T>, n: u32) -> T {
+    let nn = T::from_u32(n.max(1));
+    (T::ONE + d.b)
+        * (T::from_f64(DISCRETISATION_K) / (nn * nn)
+            + T::from_f64(ROUNDING_K) * nn * T::EPSILON
+            + T::from_f64(M::MAX_REL_ERROR))
+}
+
+/// The fewest steps per period whose discretisation bound is within
+/// [`MAX_DISCRETISATION`]: `⌈√(K_D(1 + b)/0.1)⌉` (10 for `b = 0`).
+pub fn min_steps_per_period<T: Float>(d: &Drive<T>) -> u32 {
+    let n = libm::ceil(libm::sqrt(
+        DISCRETISATION_K * (1.0 + d.b.to_f64()) / MAX_DISCRETISATION,
+    ));
+    if n < 4.0 {
+        4
+    } else if n > u32::MAX as f64 {
+        u32::MAX
+    } else {
+        n as u32
+    }
+}
+
+/// The steps per period where the bound is smallest,
+/// `N* = (2K_D/(K_R ε))^{1/3}` (552 for f32, 4.5·10⁵ for f64).
+pub fn optimal_steps_per_period<T: Float>() -> u32 {
+    libm::cbrt(2.0 * DISCRETISATION_K / (ROUNDING_K * T::EPSILON.to_f64())) as u32
+}
+
+/// The most steps per period a run accepts, `4·N*` (2 208 for f32, 1.8·10⁶
+/// for f64): beyond it the rounding error grows faster than the
+/// discretisation error shrinks, so more steps only make the answer worse
+/// (measured: the f32 error grows with N beyond ≈ 500) and the run is
+/// refused with [`FixedStepError::PrecisionLimit`].
+pub fn max_steps_per_period<T: Float>() -> u32 {
+    optimal_steps_per_period::<T>().saturating_mul(4)
 }
 
 /// Why a fixed-step run gave no converged number.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum FixedStepError<T> {
-    /// `steps_per_period < 4`.
-    TooFewSteps,
+    /// Too few steps per period for this drive: the discretisation bound
+    /// exceeds [`MAX_DISCRETISATION`] (the steps cannot resolve the stick windows).
+    TooFewSteps {
+        /// The fewest steps the drive needs ([`min_steps_per_period`]).
+        min_steps: u32,
+    },
+    /// More steps per period than the float type can use: past
+    /// [`max_steps_per_period`] rounding dominates and grows with N.
+    PrecisionLimit {
+        /// The most steps accepted.
+        max_steps: u32,
+    },
+    /// The float type cannot resolve this drive at any step count: the
+    /// smallest achievable bound exceeds [`ILL_CONDITIONED_AT`] (f32 with
+    /// `b ≳ 100`, f64 with `b ≳ 6·10⁷`).
+    IllConditioned,
     /// `tol` not finite and > 0, or `max_periods < 3`.
     BadConfig,
     /// The velocity is NaN, infinite or out of range.
@@ -148,8 +229,18 @@ pub fn run_dimensionless<T: Float, M: Math<T>>(
     if !d.is_valid() {
         return Err(FixedStepError::BadDrive);
     }
-    if cfg.steps_per_period < 4 {
-        return Err(FixedStepError::TooFewSteps);
+    let n = cfg.steps_per_period;
+    let best = optimal_steps_per_period::<T>();
+    if error_bound::<T, Libm>(d, best) > T::from_f64(ILL_CONDITIONED_AT) {
+        return Err(FixedStepError::IllConditioned);
+    }
+    let min_steps = min_steps_per_period(d);
+    if n < min_steps {
+        return Err(FixedStepError::TooFewSteps { min_steps });
+    }
+    let max_steps = max_steps_per_period::<T>();
+    if n > max_steps {
+        return Err(FixedStepError::PrecisionLimit { max_steps });
     }
     if !(cfg.tol.is_finite() && cfg.tol > T::ZERO) || cfg.max_periods < 3 {
         return Err(FixedStepError::BadConfig);
@@ -162,7 +253,6 @@ pub fn run_dimensionless<T: Float, M: Math<T>>(
     if v == T::ZERO {
         return Err(FixedStepError::ZeroVelocity);
     }
-    let n = cfg.steps_per_period;
     let delta = T::TAU / T::from_u32(n);
     let (sd, cd) = M::sin_cos(delta);
     let (phase0, mut s) = match start {
@@ -256,6 +346,7 @@ pub fn run_dimensionless<T: Float, M: Math<T>>(
                     phase: phase0,
                     stretch: s,
                 },
+                error_bound: error_bound::<T, M>(d, n),
             });
         }
     }

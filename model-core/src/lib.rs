@@ -11,6 +11,7 @@
 //! * [`fixed_step`] — the paper's explicit scheme (§3, eq. 20);
 //! * [`exact`] — the exact event-driven steady-state solver;
 //! * [`regime`] — active control / dynamic ratchet / actuator (§3.2);
+//! * [`select`] — the cheapest method whose error bound meets a tolerance;
 //! * [`dds`] — the two phase-locked DAC waveforms of the driver board;
 //! * [`estimator`] — μ from sampled forces (eq. 20) with lock-in harmonics.
 //!
@@ -38,6 +39,7 @@ pub mod protocol;
 pub mod regime;
 mod root;
 pub mod scene;
+pub mod select;
 pub mod server;
 
 pub use float::{Float, Libm, Math, Micromath};

@@ -256,8 +256,9 @@ fn fixed_step_refusals() {
         Err(FixedStepError::ZeroVelocity)
     );
     assert_eq!(
-        run(&s, 0.1, &FixedStepConfig::new(3), Start::Rest),
-        Err(FixedStepError::TooFewSteps)
+        run(&s, 0.1, &FixedStepConfig::new(10), Start::Rest),
+        // ⌈√(K_D(1 + b)/0.1)⌉ = ⌈√120⌉ = 11 for b = 0.2.
+        Err(FixedStepError::TooFewSteps { min_steps: 11 })
     );
     assert!(matches!(
         run(&s, f64::NAN, &cfg, Start::Rest),

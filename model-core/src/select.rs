@@ -1,0 +1,166 @@
+//! The cheapest computation of μ whose error bound meets a tolerance
+//! ("model no more than the scene needs").
+//!
+//! In order of cost, for a scene and a velocity `v₀`:
+//!
+//! 1. `|v₀| ≥ v_c` (eq. 8): continuous sliding, `μ = ±μ₀` exactly (bound 0,
+//!    no integration);
+//! 2. `v₀ = 0`: the static analysis — the one-sided limits μ(0±) and the
+//!    static interval (bound: the exact solver's);
+//! 3. a closed-form approximation, eq. 21 (normal only) or eq. 24 (tangential
+//!    only, `b ≤ 1`), when its measured bound
+//!    [`MAX_ERROR_OVER_A`](crate::analytic::approx::MAX_ERROR_OVER_A)`·A` is within the tolerance;
+//! 4. the exact solver ([`crate::exact`]), bound [`crate::exact::error_bound`].
+//!
+//! The fixed-step integrator is never chosen: it is slower than the exact
+//! solver at every accuracy (`fricctl bench work-precision`) and is used only
+//! when asked for.
+
+use crate::analytic::approx::{approx_mu_over_mu0, ApproxKind, MAX_ERROR_OVER_A};
+use crate::analytic::critical_velocity::CriticalVelocity;
+use crate::analytic::static_friction::StaticFriction;
+use crate::exact::{self, ExactError};
+use crate::float::{Float, Math};
+use crate::scene::Scene;
+
+/// Which computation answered.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Method {
+    /// `|v₀| ≥ v_c`: `±μ₀`.
+    Sliding,
+    /// `v₀ = 0`: the static analysis.
+    Static,
+    /// An approximation (eq. 21 or 24).
+    Approx(ApproxKind),
+    /// The exact steady-state solver.
+    Exact,
+}
+
+impl Method {
+    /// The name used in reports: `sliding`, `static`, `approx_eq21`,
+    /// `approx_eq24`, `exact`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Method::Sliding => "sliding",
+            Method::Static => "static",
+            Method::Approx(ApproxKind::NormalEq21) => "approx_eq21",
+            Method::Approx(ApproxKind::TangentialEq24) => "approx_eq24",
+            Method::Exact => "exact",
+        }
+    }
+}
+
+/// The value computed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Value<T> {
+    /// `μ/μ₀` of a moving contact.
+    Mu(T),
+    /// At rest: the one-sided limits `μ(0±)/μ₀` and the static interval.
+    AtRest {
+        /// `lim μ/μ₀` for `v₀ → 0⁺`.
+        mu_0plus: T,
+        /// `lim μ/μ₀` for `v₀ → 0⁻`.
+        mu_0minus: T,
+        /// The static analysis.
+        statics: StaticFriction<T>,
+    },
+}
+
+/// An answer with the method that gave it and its guaranteed bound.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Answer<T> {
+    /// The value.
+    pub value: Value<T>,
+    /// Which computation answered.
+    pub method: Method,
+    /// Bound of the error of every μ/μ₀ in `value`, in units of μ₀ (≤ `tol`).
+    pub bound: T,
+}
+
+/// Why no answer within the tolerance was given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SelectError<T> {
+    /// The tolerance is NaN, infinite or ≤ 0.
+    BadTolerance,
+    /// No method guarantees this tolerance here; `best` is the smallest bound
+    /// available (the exact solver's).
+    ToleranceTooTight {
+        /// The smallest guaranteed bound, units of μ₀.
+        best: T,
+    },
+    /// The exact solver failed (bad velocity, ill-conditioned drive, …).
+    Exact(ExactError),
+}
+
+/// μ at `v0` (m/s) by the cheapest method whose bound is within `tol`
+/// (units of μ₀), with backend `M` for the exact solver.
+///
+/// # Errors
+/// See [`SelectError`]. A non-finite `v0` gives
+/// `SelectError::Exact(ExactError::BadVelocity(_))`.
+pub fn mu_within<T: Float, M: Math<T>>(
+    scene: &Scene<T>,
+    v0: T,
+    tol: T,
+) -> Result<Answer<T>, SelectError<T>> {
+    if !(tol.is_finite() && tol > T::ZERO) {
+        return Err(SelectError::BadTolerance);
+    }
+    let v = scene
+        .dimensionless_velocity(v0)
+        .map_err(|e| SelectError::Exact(ExactError::BadVelocity(e)))?;
+    let vc = CriticalVelocity::of(scene).for_velocity(v0);
+    if v0 != T::ZERO && v0.abs() >= vc {
+        let s = if v0 > T::ZERO { T::ONE } else { -T::ONE };
+        return Ok(Answer {
+            value: Value::Mu(s),
+            method: Method::Sliding,
+            bound: T::ZERO,
+        });
+    }
+    let d = scene.drive();
+    let exact_bound = exact::error_bound::<T, M>(&d);
+    if v0 == T::ZERO {
+        if exact_bound > tol {
+            return Err(SelectError::ToleranceTooTight { best: exact_bound });
+        }
+        let (mu_0plus, mu_0minus) =
+            exact::limits_at_zero::<T, M>(&d).map_err(SelectError::Exact)?;
+        return Ok(Answer {
+            value: Value::AtRest {
+                mu_0plus,
+                mu_0minus,
+                statics: StaticFriction::of_with::<M>(scene),
+            },
+            method: Method::Static,
+            bound: exact_bound,
+        });
+    }
+    if let Ok((kind, m)) = approx_mu_over_mu0(scene, v0) {
+        let amp = match kind {
+            ApproxKind::NormalEq21 => d.a,
+            ApproxKind::TangentialEq24 => d.b,
+        };
+        let bound = T::from_f64(MAX_ERROR_OVER_A) * amp;
+        if bound <= tol {
+            return Ok(Answer {
+                value: Value::Mu(m),
+                method: Method::Approx(kind),
+                bound,
+            });
+        }
+    }
+    if exact_bound > tol {
+        return Err(SelectError::ToleranceTooTight { best: exact_bound });
+    }
+    let m = exact::mu_over_mu0::<T, M>(&d, v).map_err(SelectError::Exact)?;
+    Ok(Answer {
+        value: Value::Mu(m),
+        method: Method::Exact,
+        bound: exact_bound,
+    })
+}
