@@ -907,3 +907,97 @@ fn mu_map_cells_follow_the_method_choice() {
     assert_eq!(n, 16);
     assert!(std::fs::metadata(&png).unwrap().len() > 1000);
 }
+
+/// `bench stability` at a coarse resolution: every map is written, and no
+/// cell returns a number outside its method's stated bound (the command
+/// fails if one does).
+#[test]
+fn bench_stability_maps_have_no_silent_failures() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = fricctl()
+        .args([
+            "bench",
+            "stability",
+            "--out",
+            dir.path().to_str().unwrap(),
+            "--res",
+            "8",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    for name in [
+        "fixed_f64",
+        "fixed_f32",
+        "exact_lift_off_f64",
+        "exact_lift_off_f32",
+        "exact_ratio_f64",
+        "exact_ratio_f32",
+        "si_f64",
+        "si_f32",
+    ] {
+        check_png(&dir.path().join(format!("{name}.png")));
+        let csv = std::fs::read_to_string(dir.path().join(format!("{name}.csv"))).unwrap();
+        assert_eq!(csv.lines().count(), 65, "{name}");
+        assert!(!csv.contains("exceeds"), "{name}");
+        assert!(text.contains(&format!("{name} ")), "{text}");
+    }
+    // The failure classes the maps are for appear where expected.
+    let f32_fixed = std::fs::read_to_string(dir.path().join("fixed_f32.csv")).unwrap();
+    assert!(f32_fixed.contains("precision limit") && f32_fixed.contains("too few steps"));
+    let ratio = std::fs::read_to_string(dir.path().join("exact_ratio_f32.csv")).unwrap();
+    assert!(ratio.contains("ill-conditioned"));
+    let si = std::fs::read_to_string(dir.path().join("si_f32.csv")).unwrap();
+    assert!(si.contains("out of range"));
+}
+
+/// `bench methods` at small sizes: the CSV has every case × method, and the
+/// mixes say what answered.
+#[test]
+fn bench_methods_reports_times_and_mix() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = fricctl()
+        .args([
+            "bench",
+            "methods",
+            "--out",
+            dir.path().to_str().unwrap(),
+            "--points",
+            "200",
+            "--res",
+            "6",
+            "--fixed-points",
+            "4",
+            "--fixed-res",
+            "2",
+            "--steps-per-period",
+            "512",
+            "--repeats",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = std::fs::read_to_string(dir.path().join("methods.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(lines.len(), 12);
+    // Normal-only curve at tol 1e-2: |v| ≥ v_c slides (v/v_c = −1.5 + 3i/199:
+    // i·3/199 ≤ 0.5 for i ≤ 33, 34 points on each side), the other 132 are
+    // eq. 21 (bound 0.0144·0.4 ≤ 1e-2), or the exact solver at the default tolerance.
+    assert!(
+        lines[0].contains("sliding 68 + approx_eq21 132"),
+        "{}",
+        lines[0]
+    );
+    assert!(lines[1].contains("sliding 68 + exact 132"), "{}", lines[1]);
+    assert!(lines[3].contains("fixed 4"), "{}", lines[3]);
+}

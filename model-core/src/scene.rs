@@ -221,6 +221,40 @@ fn check_normal<T: Float>(x: T, p: Param) -> Result<(), SceneError> {
     }
 }
 
+/// `W₀ = μ₀k_z u_z0/k_x`, with the three operations ordered so that every
+/// intermediate stays as close to 1 as possible (at each step the operation
+/// whose result has the smallest |log|), and every intermediate checked to be
+/// a normal number: a subnormal intermediate (e.g. `k_z/k_x` = 1e-43 in f32)
+/// would carry only a few significant bits and make the scene silently wrong.
+fn w0_of<T: Float>(mu0: T, kz: T, kx: T, uz0: T) -> Result<T, SceneError> {
+    let mut acc = mu0;
+    // (value, divide?, parameter) still to apply.
+    let mut ops = [
+        (kz, false, Param::Kz),
+        (uz0, false, Param::Uz0),
+        (kx, true, Param::Kx),
+    ];
+    let mut left = ops.len();
+    while left > 0 {
+        let mut best = 0;
+        let mut best_mag = f64::INFINITY;
+        for (i, &(x, div, _)) in ops[..left].iter().enumerate() {
+            let r = if div { acc / x } else { acc * x };
+            let mag = libm::fabs(libm::log(r.to_f64()));
+            if mag < best_mag {
+                best = i;
+                best_mag = mag;
+            }
+        }
+        let (x, div, param) = ops[best];
+        acc = if div { acc / x } else { acc * x };
+        check_normal(acc, param)?;
+        ops.swap(best, left - 1);
+        left -= 1;
+    }
+    Ok(acc)
+}
+
 /// A validated scene. Every quantity derived from it is finite.
 ///
 /// Holds the physical parameters and the dimensionless drive the solvers use
@@ -316,8 +350,8 @@ impl<T: Float> Scene<T> {
     /// [`SceneError::NonFinite`] for NaN/∞, [`SceneError::NotPositive`] for
     /// μ₀, k_z, k_x, u_z0 or ω ≤ 0, [`SceneError::Negative`] for Δu_z or
     /// Δu_x < 0, [`SceneError::LiftOff`] for Δu_z ≥ u_z0 and
-    /// [`SceneError::OutOfRange`] if W₀ or a dimensionless group over- or
-    /// underflows.
+    /// [`SceneError::OutOfRange`] for a subnormal input (it has lost relative
+    /// precision) or if W₀ or a dimensionless group over- or underflows.
     pub fn new(p: SceneParams<T>) -> Result<Self, SceneError> {
         check_positive(p.mu0, Param::Mu0)?;
         check_positive(p.kz, Param::Kz)?;
@@ -336,9 +370,25 @@ impl<T: Float> Scene<T> {
         if p.duz >= p.uz0 {
             return Err(SceneError::LiftOff);
         }
+        // Subnormal inputs have lost relative precision (an f32 u_z0 of 1e-41 m
+        // carries three significant bits): the groups formed from them would be
+        // silently wrong, so they are out of range.
+        for (x, param) in [
+            (p.mu0, Param::Mu0),
+            (p.kz, Param::Kz),
+            (p.kx, Param::Kx),
+            (p.uz0, Param::Uz0),
+            (p.omega, Param::Omega),
+        ] {
+            check_normal(x, param)?;
+        }
+        for (x, param) in [(p.duz, Param::Duz), (p.dux, Param::Dux)] {
+            if x != T::ZERO {
+                check_normal(x, param)?;
+            }
+        }
         // W₀ = μ₀ (k_z/k_x) u_z0, formed so that intermediate products stay in range.
-        let w0 = p.mu0 * (p.kz / p.kx) * p.uz0;
-        check_normal(w0, Param::Kx)?;
+        let w0 = w0_of(p.mu0, p.kz, p.kx, p.uz0)?;
         let a = p.duz / p.uz0;
         if a >= T::ONE {
             return Err(SceneError::LiftOff);
@@ -383,7 +433,7 @@ impl<T: Float> Scene<T> {
         check_positive(kz, Param::Kz)?;
         check_positive(kx, Param::Kx)?;
         check_positive(uz0, Param::Uz0)?;
-        let w0 = mu0 * (kz / kx) * uz0;
+        let w0 = w0_of(mu0, kz, kx, uz0)?;
         Scene::new(SceneParams {
             mu0,
             kz,

@@ -12,24 +12,17 @@
 use std::fmt::Write as _;
 use std::hint::black_box;
 use std::path::Path;
-use std::time::Instant;
 
-use clap::{Args, Subcommand};
+use clap::Args;
 use model_core::analytic::approx::approx_mu_over_mu0;
 use model_core::exact;
 use model_core::fixed_step::{run_dimensionless, FixedStepConfig, Start, State};
 use model_core::{Drive, Float, Groups, Libm, Math, Micromath, Scene};
 use plotters::prelude::*;
 
+use super::time_min;
 use crate::error::{CliError, CliResult};
 use crate::plot::{color, init_font};
-
-/// `fricctl bench …`.
-#[derive(Subcommand, Debug, Clone)]
-pub enum BenchCmd {
-    /// Work-precision charts of every μ computation (CSV + SVG + PNG)
-    WorkPrecision(WpArgs),
-}
 
 /// Flags of `bench work-precision`.
 #[derive(Args, Debug, Clone)]
@@ -67,26 +60,10 @@ pub struct Point {
     pub error: Option<f64>,
     /// Seconds per evaluation.
     pub time_s: f64,
+    /// The method's stated error bound, units of μ0.
+    pub bound: Option<f64>,
     /// "ok" or the failure.
     pub status: String,
-}
-
-/// Minimum time per call over batches, after a warm-up.
-fn time_min(mut f: impl FnMut()) -> f64 {
-    f();
-    let t0 = Instant::now();
-    f();
-    let once = t0.elapsed().as_secs_f64().max(1e-9);
-    let k = ((2e-4 / once).ceil() as usize).clamp(1, 100_000);
-    let mut best = f64::INFINITY;
-    for _ in 0..5 {
-        let t = Instant::now();
-        for _ in 0..k {
-            f();
-        }
-        best = best.min(t.elapsed().as_secs_f64() / k as f64);
-    }
-    best
 }
 
 fn steps_list(max: u32) -> Vec<u32> {
@@ -101,7 +78,7 @@ fn steps_list(max: u32) -> Vec<u32> {
 }
 
 /// Warm start: the window end of the exact steady state (s = ±w there).
-fn warm_state<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Option<State<T>> {
+pub fn warm_state<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Option<State<T>> {
     let (_, arcs) = exact::steady_state::<T, M>(d, v).ok()?;
     let last = arcs.last()?;
     let (_, c) = M::sin_cos(last.end);
@@ -146,6 +123,7 @@ fn fixed_series<T: Float, M: Math<T>>(
                     steps: Some(n),
                     error: Some((r.mu_over_mu0.to_f64() - reference).abs()),
                     time_s: t,
+                    bound: Some(r.error_bound.to_f64()),
                     status: "ok".into(),
                 });
             }
@@ -155,6 +133,7 @@ fn fixed_series<T: Float, M: Math<T>>(
                 steps: Some(n),
                 error: None,
                 time_s: f64::NAN,
+                bound: None,
                 status: format!("{e:?}")
                     .split_whitespace()
                     .next()
@@ -192,12 +171,13 @@ pub fn measure_scene(
     let d32m = Drive::new::<Micromath>(a as f32, b as f32, phi as f32);
     let v32 = v as f32;
     let mut out = Vec::new();
-    let point = |method: &str, r: Option<f64>, t: f64| Point {
+    let point = |method: &str, r: Option<f64>, t: f64, bound: f64| Point {
         scene: name,
         method: method.to_string(),
         steps: None,
         error: r.map(|m| (m - reference).abs()),
         time_s: t,
+        bound: Some(bound),
         status: if r.is_some() {
             "ok".into()
         } else {
@@ -208,30 +188,50 @@ pub fn measure_scene(
     let t = time_min(|| {
         black_box(exact::mu_over_mu0::<f64, Libm>(black_box(&d), black_box(v)).ok());
     });
-    out.push(point("exact f64", r, t));
+    out.push(point(
+        "exact f64",
+        r,
+        t,
+        exact::error_bound::<f64, Libm>(&d),
+    ));
     let r = exact::mu_over_mu0::<f32, Libm>(&d32, v32)
         .ok()
         .map(f64::from);
     let t = time_min(|| {
         black_box(exact::mu_over_mu0::<f32, Libm>(black_box(&d32), black_box(v32)).ok());
     });
-    out.push(point("exact f32", r, t));
+    out.push(point(
+        "exact f32",
+        r,
+        t,
+        exact::error_bound::<f32, Libm>(&d32).into(),
+    ));
     let r = exact::mu_over_mu0::<f32, Micromath>(&d32m, v32)
         .ok()
         .map(f64::from);
     let t = time_min(|| {
         black_box(exact::mu_over_mu0::<f32, Micromath>(black_box(&d32m), black_box(v32)).ok());
     });
-    out.push(point("exact f32 micromath", r, t));
+    out.push(point(
+        "exact f32 micromath",
+        r,
+        t,
+        exact::error_bound::<f32, Micromath>(&d32m).into(),
+    ));
     if let Ok((kind, m)) = approx_mu_over_mu0(&s, v) {
         let t = time_min(|| {
             black_box(approx_mu_over_mu0(black_box(&s), black_box(v)).ok());
         });
-        let label = match kind {
-            model_core::analytic::ApproxKind::NormalEq21 => "eq. 21",
-            model_core::analytic::ApproxKind::TangentialEq24 => "eq. 24",
+        let (label, amp) = match kind {
+            model_core::analytic::ApproxKind::NormalEq21 => ("eq. 21", a),
+            model_core::analytic::ApproxKind::TangentialEq24 => ("eq. 24", b),
         };
-        out.push(point(label, Some(m), t));
+        out.push(point(
+            label,
+            Some(m),
+            t,
+            model_core::analytic::approx::MAX_ERROR_OVER_A * amp,
+        ));
     }
     fixed_series::<f64, Libm>(
         &mut out,
@@ -310,8 +310,7 @@ pub fn fitted_order(points: &[&Point]) -> Option<f64> {
 }
 
 /// `fricctl bench work-precision`.
-pub fn run(cmd: &BenchCmd) -> CliResult {
-    let BenchCmd::WorkPrecision(a) = cmd;
+pub fn run(a: &WpArgs) -> CliResult {
     if !a.max_steps.is_power_of_two() || !(8..=65536).contains(&a.max_steps) {
         return Err(CliError::usage(
             "--max-steps: must be a power of two in 8..=65536",
@@ -326,16 +325,19 @@ pub fn run(cmd: &BenchCmd) -> CliResult {
         all.extend(measure_scene(name, aa, b, phi, x, &steps)?);
     }
     // CSV.
-    let mut csv = String::from("scene,method,steps_per_period,error_over_mu0,time_s,status\n");
+    let mut csv = String::from(
+        "scene,method,steps_per_period,error_over_mu0,time_s,error_bound_over_mu0,status\n",
+    );
     for p in &all {
         let _ = writeln!(
             csv,
-            "{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{}",
             p.scene,
             p.method,
             p.steps.map_or(String::new(), |n| n.to_string()),
             p.error.map_or(String::new(), |e| e.to_string()),
             p.time_s,
+            p.bound.map_or(String::new(), |e| e.to_string()),
             p.status
         );
     }

@@ -1,0 +1,60 @@
+//! `fricctl bench …`: speed against accuracy, measured in one process.
+//!
+//! * [`work_precision`] — error against time for every μ computation;
+//! * [`methods`] — `--method auto` against always-exact and always-fixed-step
+//!   on the curve and map commands;
+//! * [`stability`] — maps of where each method stops being trustworthy;
+//! * [`dac`] — the DAC waveform path: spectral purity against time per sample.
+
+use std::time::Instant;
+
+use clap::Subcommand;
+
+use crate::error::CliResult;
+
+pub mod dac;
+pub mod methods;
+pub mod stability;
+pub mod work_precision;
+
+/// `fricctl bench …`.
+#[derive(Subcommand, Debug, Clone)]
+pub enum BenchCmd {
+    /// Work-precision charts of every μ computation (CSV + SVG + PNG)
+    WorkPrecision(work_precision::WpArgs),
+    /// `--method auto` against always-exact and always-fixed-step on curves and maps (CSV)
+    Methods(methods::MethodsArgs),
+    /// Stability maps: where each method fails, and how it says so (CSV + PNG)
+    Stability(stability::StabilityArgs),
+    /// DAC waveform path: SFDR and worst error (LSB) against ns per sample (CSV + SVG + PNG)
+    Dac(dac::DacArgs),
+}
+
+/// Runs a bench.
+pub fn run(cmd: &BenchCmd) -> CliResult {
+    match cmd {
+        BenchCmd::WorkPrecision(a) => work_precision::run(a),
+        BenchCmd::Methods(a) => methods::run(a),
+        BenchCmd::Stability(a) => stability::run(a),
+        BenchCmd::Dac(a) => dac::run(a),
+    }
+}
+
+/// Minimum time per call over batches, after a warm-up (the DiffEqDevTools
+/// convention: the minimum is the least noisy estimate of the cost).
+pub fn time_min(mut f: impl FnMut()) -> f64 {
+    f();
+    let t0 = Instant::now();
+    f();
+    let once = t0.elapsed().as_secs_f64().max(1e-9);
+    let k = ((2e-4 / once).ceil() as usize).clamp(1, 100_000);
+    let mut best = f64::INFINITY;
+    for _ in 0..5 {
+        let t = Instant::now();
+        for _ in 0..k {
+            f();
+        }
+        best = best.min(t.elapsed().as_secs_f64() / k as f64);
+    }
+    best
+}
