@@ -1001,3 +1001,80 @@ fn bench_methods_reports_times_and_mix() {
     assert!(lines[1].contains("sliding 68 + exact 132"), "{}", lines[1]);
     assert!(lines[3].contains("fixed 4"), "{}", lines[3]);
 }
+
+/// `bench dac`: the measured worst errors and SFDR follow the closed forms of
+/// table look-up (amp = 2047 codes): nearest entry ≈ amp·sin(π/N) plus
+/// rounding, linear ≤ amp·(2π/N)²/8 + 0.5; SFDR rises ≈ 6 dB per doubling of N
+/// (nearest) and ≈ 12 dB (linear) until the 12-bit floor; micromath tables
+/// are limited by its sine error (≤ 1.1e-3 ≈ 2.3 LSB).
+#[test]
+fn bench_dac_matches_table_lookup_theory() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = fricctl()
+        .args([
+            "bench",
+            "dac",
+            "--out",
+            dir.path().to_str().unwrap(),
+            "--rounds",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    check_png(&dir.path().join("dac.png"));
+    check_svg(&dir.path().join("dac.svg"));
+    let csv = std::fs::read_to_string(dir.path().join("dac.csv")).unwrap();
+    let rows: Vec<Vec<String>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    assert_eq!(rows.len(), 7 * 4 + 2);
+    let get = |n: usize, interp: &str, backend: &str| -> (f64, f64) {
+        let r = rows
+            .iter()
+            .find(|r| r[0] == n.to_string() && r[1] == interp && r[2] == backend)
+            .unwrap_or_else(|| panic!("{n} {interp} {backend}"));
+        (r[3].parse().unwrap(), r[4].parse().unwrap())
+    };
+    let amp = 2047.0f64;
+    let sizes = [16usize, 64, 256, 1024, 4096, 16384, 65536];
+    for &n in &sizes {
+        let h = std::f64::consts::PI / n as f64;
+        let (_, worst) = get(n, "nearest", "libm");
+        let want = amp * h.sin();
+        assert!(
+            worst >= 0.97 * want && worst <= amp * h + 0.5 + 1e-3,
+            "nearest {n}: {worst} vs {want}"
+        );
+        let (_, worst) = get(n, "linear", "libm");
+        let bound = amp * (2.0 * h).powi(2) / 8.0 + 0.5 + 1e-3;
+        assert!(worst <= bound, "linear {n}: {worst} > {bound}");
+        if n <= 64 {
+            assert!(worst >= bound - 1.0, "linear {n}: {worst} vs {bound}");
+        }
+        let (_, worst) = get(n, "linear", "micromath");
+        assert!(worst > 1.0 && worst < 45.0, "micromath {n}: {worst}");
+    }
+    for w in sizes.windows(2).take(4) {
+        let (a, _) = get(w[0], "nearest", "libm");
+        let (b, _) = get(w[1], "nearest", "libm");
+        assert!((b - a - 12.04).abs() < 2.0, "nearest {w:?}: {a} → {b}");
+    }
+    for w in sizes.windows(2).take(2) {
+        let (a, _) = get(w[0], "linear", "libm");
+        let (b, _) = get(w[1], "linear", "libm");
+        assert!((b - a - 24.08).abs() < 2.0, "linear {w:?}: {a} → {b}");
+    }
+    // 12-bit floor: a full-scale sine quantised to 4096 levels has SNR ≈ 74 dB;
+    // the largest single spur of 2¹⁹ bins sits far below it.
+    let (floor, worst) = get(1024, "linear", "libm");
+    assert!(floor > 90.0 && worst <= 0.52, "{floor} {worst}");
+    let (direct, worst) = get(0, "direct", "libm");
+    assert!(direct > 90.0 && worst <= 0.5 + 1e-3, "{direct} {worst}");
+}

@@ -5,7 +5,8 @@
 //! plus their own phase offset, so the phase between them is exact by
 //! construction (integer arithmetic, no drift however long the run).
 //! Each channel looks up a sine table of `N` entries (built once, with the
-//! [`Libm`] or [`Micromath`] backend) with linear interpolation, scales by its
+//! [`Libm`] or [`Micromath`] backend) with linear interpolation (or the
+//! nearest entry, [`Interp`]), scales by its
 //! amplitude, adds its DC offset (both in DAC codes), rounds and clamps to the
 //! 12-bit range `0..=4095`. [`pack_dual`] makes the 32-bit word of the STM32
 //! DAC's dual 12-bit right-aligned holding register (DHR12RD: channel 1 in bits
@@ -89,7 +90,25 @@ impl<const N: usize> SineTable<N> {
         Self::build::<Micromath>()
     }
 
-    /// Interpolated `sin(2π·phase/2³²)`.
+    /// `sin(2π·phase/2³²)` from the nearest table entry (no interpolation:
+    /// the phase is rounded to `N` positions, worst error `≈ π/N`).
+    #[inline(always)]
+    pub fn sin_nearest(&self, phase: u32) -> f32 {
+        let bits = Self::BITS;
+        let idx = (phase.wrapping_add(1 << (31 - bits)) >> (32 - bits)) as usize;
+        self.t[idx & (N - 1)]
+    }
+
+    /// `sin(2π·phase/2³²)` by the chosen [`Interp`].
+    #[inline(always)]
+    pub fn sin_with(&self, interp: Interp, phase: u32) -> f32 {
+        match interp {
+            Interp::Nearest => self.sin_nearest(phase),
+            Interp::Linear => self.sin(phase),
+        }
+    }
+
+    /// Linearly interpolated `sin(2π·phase/2³²)` (worst error `≈ (π/N)²/2`).
     #[inline(always)]
     pub fn sin(&self, phase: u32) -> f32 {
         let bits = Self::BITS;
@@ -104,6 +123,18 @@ impl<const N: usize> SineTable<N> {
     pub fn entry(&self, i: usize) -> f32 {
         self.t[i % N]
     }
+}
+
+/// How a [`SineTable`] is read between its entries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Interp {
+    /// The nearest entry: one load per sample, error `≈ π/N` of full scale.
+    Nearest,
+    /// Linear between neighbouring entries: a load pair and a multiply-add,
+    /// error `≈ (π/N)²/2` (the board's choice).
+    #[default]
+    Linear,
 }
 
 /// Converts a phase in radians to a 32-bit phase word (wrapping).
@@ -278,6 +309,7 @@ pub struct Dds<'t, const N: usize> {
     /// Channel 1 (normal transducer) and channel 2 (tangential).
     ch: [Channel; 2],
     slew: Slew,
+    interp: Interp,
 }
 
 impl<'t, const N: usize> Dds<'t, N> {
@@ -296,7 +328,18 @@ impl<'t, const N: usize> Dds<'t, N> {
             tw: 0,
             ch: [Channel::default(); 2],
             slew,
+            interp: Interp::Linear,
         })
+    }
+
+    /// Chooses how the table is read (default [`Interp::Linear`]).
+    pub fn set_interp(&mut self, interp: Interp) {
+        self.interp = interp;
+    }
+
+    /// How the table is read.
+    pub fn interp(&self) -> Interp {
+        self.interp
     }
 
     /// The sample rate, Hz.
@@ -393,7 +436,7 @@ impl<'t, const N: usize> Dds<'t, N> {
     /// Value of one channel for accumulator `acc`, as a real code before rounding.
     #[inline(always)]
     fn value(&self, c: &Channel, acc: u32) -> f32 {
-        c.dc + c.amp * self.table.sin(acc.wrapping_add(c.phase))
+        c.dc + c.amp * self.table.sin_with(self.interp, acc.wrapping_add(c.phase))
     }
 
     /// One sample: returns `(drive phase, ch1 code, ch2 code)` and advances.
@@ -414,21 +457,33 @@ impl<'t, const N: usize> Dds<'t, N> {
     /// output is identical, the loop about half as long).
     pub fn fill(&mut self, buf: &mut [u32]) {
         if self.settled() {
-            let (c0, c1) = (self.ch[0], self.ch[1]);
-            let mut acc = self.acc;
-            for w in buf.iter_mut() {
-                let a = quantise(self.value(&c0, acc));
-                let b = quantise(self.value(&c1, acc));
-                *w = pack_dual(a, b);
-                acc = acc.wrapping_add(self.tw);
+            // The interpolation is chosen once per buffer, outside the loop.
+            match self.interp {
+                Interp::Nearest => self.fill_settled(buf, SineTable::<N>::sin_nearest),
+                Interp::Linear => self.fill_settled(buf, SineTable::<N>::sin),
             }
-            self.acc = acc;
             return;
         }
         for w in buf.iter_mut() {
             let (_, a, b) = self.next_codes();
             *w = pack_dual(a, b);
         }
+    }
+}
+
+impl<const N: usize> Dds<'_, N> {
+    #[inline(always)]
+    fn fill_settled(&mut self, buf: &mut [u32], sin: impl Fn(&SineTable<N>, u32) -> f32) {
+        let (c0, c1) = (self.ch[0], self.ch[1]);
+        let t = self.table;
+        let mut acc = self.acc;
+        for w in buf.iter_mut() {
+            let a = quantise(c0.dc + c0.amp * sin(t, acc.wrapping_add(c0.phase)));
+            let b = quantise(c1.dc + c1.amp * sin(t, acc.wrapping_add(c1.phase)));
+            *w = pack_dual(a, b);
+            acc = acc.wrapping_add(self.tw);
+        }
+        self.acc = acc;
     }
 }
 

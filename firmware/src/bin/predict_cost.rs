@@ -153,6 +153,12 @@ fn main() -> ! {
                 "DDS fill, settled: {} instructions per sample (both channels)",
                 (t as f32 / per_insn / 256.0) as u32
             );
+            dds.set_interp(model_core::dds::Interp::Nearest);
+            let t = ticks(|| dds.fill(&mut buf)).saturating_sub(empty);
+            hprintln!(
+                "DDS fill, settled, nearest entry: {} instructions per sample (both channels)",
+                (t as f32 / per_insn / 256.0) as u32
+            );
             core::hint::black_box(&buf);
         }
     }

@@ -42,14 +42,19 @@ pub fn run(cmd: &BenchCmd) -> CliResult {
 
 /// Minimum time per call over batches, after a warm-up (the DiffEqDevTools
 /// convention: the minimum is the least noisy estimate of the cost).
-pub fn time_min(mut f: impl FnMut()) -> f64 {
+pub fn time_min(f: impl FnMut()) -> f64 {
+    time_min_of(5, f)
+}
+
+/// [`time_min`] over `batches` batches of ≈ 0.2 ms each.
+pub fn time_min_of(batches: usize, mut f: impl FnMut()) -> f64 {
     f();
     let t0 = Instant::now();
     f();
     let once = t0.elapsed().as_secs_f64().max(1e-9);
     let k = ((2e-4 / once).ceil() as usize).clamp(1, 100_000);
     let mut best = f64::INFINITY;
-    for _ in 0..5 {
+    for _ in 0..batches.max(1) {
         let t = Instant::now();
         for _ in 0..k {
             f();
