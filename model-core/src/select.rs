@@ -9,7 +9,7 @@
 //!    static interval (bound: the exact solver's);
 //! 3. a closed-form approximation, eq. 21 (normal only) or eq. 24 (tangential
 //!    only, `b ≤ 1`), when its measured bound
-//!    [`MAX_ERROR_OVER_A`](crate::analytic::approx::MAX_ERROR_OVER_A)`·A` is within the tolerance;
+//!    `MAX_ERROR_OVER_A · A` (eqs. 21, 24: 0.0144·A) is within the tolerance;
 //! 4. the exact solver ([`crate::exact`]), bound [`crate::exact::error_bound`].
 //!
 //! The fixed-step integrator is never chosen: it is slower than the exact
