@@ -383,8 +383,8 @@ pub fn statics(args: &SceneArgs, json: bool) -> CliResult {
     let s = &rs.scene;
     let vc = CriticalVelocity::of(s);
     let st = StaticFriction::of(s);
-    let (p, m) = exact::limits_at_zero::<f64, Libm>(&s.drive())
-        .map_err(|e| CliError::failure(format!("exact solver failed: {e:?}")))?;
+    let (p, m) =
+        exact::limits_at_zero::<f64, Libm>(&s.drive()).map_err(crate::compute::exact_failure)?;
     let iv = st.interval_m(s);
     let out = StaticOut {
         vc_forward: vc.forward,
@@ -474,8 +474,8 @@ pub fn rule_of_thumb(s: &Scene<f64>) -> Regime {
 pub fn classify(args: &SceneArgs, json: bool) -> CliResult {
     let rs = args.resolve()?;
     let s = &rs.scene;
-    let c = regime::classify(s, &ClassifyOptions::default())
-        .map_err(|e| CliError::failure(format!("exact solver failed: {e:?}")))?;
+    let c =
+        regime::classify(s, &ClassifyOptions::default()).map_err(crate::compute::exact_failure)?;
     let vc = CriticalVelocity::of(s);
     let g = s.groups();
     let rot = rule_of_thumb(s);

@@ -261,7 +261,10 @@ pub fn mu_at(scene: &Scene<f64>, v0: f64, m: &MethodArgs) -> CliResult<MuOutcome
                         "the fixed-step method cannot resolve this drive in f64 (dux-rel too large): its error bound exceeds 1 % of mu0 at any step count",
                     ))
                 }
-                Err(e) => return Err(CliError::usage(format!("--v0: {e:?}"))),
+                Err(FixedStepError::BadVelocity(e)) => {
+                    return Err(CliError::usage(format!("--{e}")))
+                }
+                Err(e) => return Err(CliError::failure(format!("fixed-step run refused: {e:?}"))),
             }
         }
         Method::Approx => match approx_mu_over_mu0(scene, v0) {

@@ -15,8 +15,7 @@ use crate::map::{cells, centres, write_map};
 use crate::plot::{render_panels, Mark, Panel, Series};
 
 fn mu(d: &Drive<f64>, v: f64) -> CliResult<f64> {
-    exact::mu_over_mu0::<f64, Libm>(d, v)
-        .map_err(|e| CliError::failure(format!("exact solver failed: {e:?}")))
+    exact::mu_over_mu0::<f64, Libm>(d, v).map_err(crate::compute::exact_failure)
 }
 
 fn drive(a: f64, b: f64, phi: f64) -> CliResult<Drive<f64>> {

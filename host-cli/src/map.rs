@@ -238,9 +238,7 @@ pub fn cells(
             };
             let s = Scene::dimensionless(g).map_err(|e| CliError::usage(format!("--{e}")))?;
             let c = classify(&s, &ClassifyOptions::default()).map_err(|e| {
-                CliError::failure(format!(
-                    "classification failed at ratio {r}, φ {phi}°: {e:?}"
-                ))
+                crate::compute::exact_failure(e).with_context(&format!("ratio {r}, φ {phi}°"))
             })?;
             pb.inc(1);
             let k = match c.regime {
@@ -322,8 +320,8 @@ pub fn active_lines(a: f64, ratios: &[f64], phis: &[f64]) -> CliResult<Vec<Vec<(
                 phi: phi.to_radians(),
             })
             .map_err(|e| CliError::usage(format!("--{e}")))?;
-            let c = classify(&s, &ClassifyOptions::default())
-                .map_err(|e| CliError::failure(format!("{e:?}")))?;
+            let c =
+                classify(&s, &ClassifyOptions::default()).map_err(crate::compute::exact_failure)?;
             if c.regime == Regime::ActiveControl {
                 run.push((phi, r));
             } else if !run.is_empty() {
