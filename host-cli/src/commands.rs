@@ -177,16 +177,24 @@ pub fn curve_rows(scene: &Scene<f64>, vs: &[f64], how: &MethodArgs) -> CliResult
     Ok(out)
 }
 
-/// How many rows each method answered, in order of first appearance.
-pub fn method_mix(rows: &[Row]) -> Vec<(&'static str, usize)> {
+/// How many points each method answered, in order of first appearance.
+pub fn method_mix(methods: impl IntoIterator<Item = &'static str>) -> Vec<(&'static str, usize)> {
     let mut mix: Vec<(&'static str, usize)> = Vec::new();
-    for r in rows {
-        match mix.iter_mut().find(|(m, _)| *m == r.method) {
+    for m in methods {
+        match mix.iter_mut().find(|(x, _)| *x == m) {
             Some(e) => e.1 += 1,
-            None => mix.push((r.method, 1)),
+            None => mix.push((m, 1)),
         }
     }
     mix
+}
+
+/// A method mix as text: `exact 120, sliding 40` (with `sep` between entries).
+pub fn mix_text(mix: &[(&'static str, usize)], sep: &str) -> String {
+    mix.iter()
+        .map(|(m, n)| format!("{m} {n}"))
+        .collect::<Vec<_>>()
+        .join(sep)
 }
 
 /// `n` evenly spaced values from `a` to `b` inclusive.
@@ -248,13 +256,10 @@ pub fn curve(a: CurveArgs) -> CliResult {
     };
     a.how.validate()?;
     let rows = curve_rows(&rs.scene, &vs, &a.how)?;
-    let mix = method_mix(&rows);
+    let mix = method_mix(rows.iter().map(|r| r.method));
     eprintln!(
         "methods: {} (largest error bound {:e} mu0)",
-        mix.iter()
-            .map(|(m, n)| format!("{m} {n}"))
-            .collect::<Vec<_>>()
-            .join(", "),
+        mix_text(&mix, ", "),
         rows.iter()
             .fold(0.0f64, |b, r| b.max(r.error_bound_over_mu0))
     );
@@ -312,14 +317,7 @@ pub fn curve(a: CurveArgs) -> CliResult {
             x: (x0, if x1 > x0 { x1 } else { x0 + 1.0 }),
             y: (ymin.min(-0.05) - 0.05, 1.08),
             series: vec![Series {
-                label: format!(
-                    "{} points: {}",
-                    rows.len(),
-                    mix.iter()
-                        .map(|(m, n)| format!("{m} {n}"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
+                label: format!("{} points: {}", rows.len(), mix_text(&mix, ", ")),
                 points: pts,
                 mark: Mark::Line,
                 color: 0,

@@ -10,6 +10,7 @@ use model_core::{Groups, Scene};
 use plotters::style::RGBColor;
 use rayon::prelude::*;
 
+use crate::commands::{method_mix, mix_text};
 use crate::compute::{from_rel, mu_at, Method, MethodArgs};
 use crate::error::{CliError, CliResult};
 use crate::plot::{render_heat, render_map, Heat, HeatMap, RegimeMap};
@@ -112,18 +113,8 @@ fn run_mu_map(a: &MapArgs, x: f64) -> CliResult {
     let ratios = centres(a.ratio_min, a.ratio_max, a.res);
     let phis = centres(a.phi_min_deg, a.phi_max_deg, a.res);
     let cells = mu_cells(a.duz_rel, &ratios, &phis, x, &a.how)?;
-    let mut mix: Vec<(&'static str, usize)> = Vec::new();
-    for c in &cells {
-        match mix.iter_mut().find(|(m, _)| *m == c.method) {
-            Some(e) => e.1 += 1,
-            None => mix.push((c.method, 1)),
-        }
-    }
-    let mix_text = mix
-        .iter()
-        .map(|(m, n)| format!("{m} {n}"))
-        .collect::<Vec<_>>()
-        .join(", ");
+    let mix = method_mix(cells.iter().map(|c| c.method));
+    let mix_text = mix_text(&mix, ", ");
     let worst = cells
         .iter()
         .filter_map(|c| c.error_bound_over_mu0)
@@ -376,16 +367,7 @@ pub fn write_map(
     render_map(plot, &m, (1100, 760))?;
     eprintln!("wrote {}", plot.display());
     if let Some(p) = csv_path {
-        let f = std::fs::File::create(p)
-            .map_err(|e| CliError::failure(format!("--csv: cannot create {}: {e}", p.display())))?;
-        let mut w = csv::Writer::from_writer(std::io::BufWriter::new(f));
-        for c in cells {
-            w.serialize(c)
-                .map_err(|e| CliError::failure(format!("--csv: {}: {e}", p.display())))?;
-        }
-        w.flush()
-            .map_err(|e| CliError::failure(format!("--csv: {}: {e}", p.display())))?;
-        eprintln!("wrote {}", p.display());
+        write_rows(p, cells)?;
     }
     Ok(())
 }

@@ -14,7 +14,7 @@ use std::time::Instant;
 use clap::Args;
 use model_core::{Groups, Scene};
 
-use crate::commands::{curve_rows, linspace, method_mix};
+use crate::commands::{curve_rows, linspace, method_mix, mix_text};
 use crate::compute::{from_rel, Method, MethodArgs};
 use crate::error::{CliError, CliResult};
 use crate::map::{centres, mu_cells};
@@ -69,13 +69,6 @@ impl Timing {
     pub fn per_point(&self) -> f64 {
         self.total_s / self.points as f64
     }
-}
-
-fn mix_text(mix: &[(&'static str, usize)]) -> String {
-    mix.iter()
-        .map(|(m, n)| format!("{m} {n}"))
-        .collect::<Vec<_>>()
-        .join(" + ")
 }
 
 fn best_of<T>(repeats: usize, mut f: impl FnMut() -> CliResult<T>) -> CliResult<(f64, T)> {
@@ -139,7 +132,7 @@ fn curve_case(
             method: label,
             points: n,
             total_s: t,
-            mix: mix_text(&method_mix(&rows)),
+            mix: mix_text(&method_mix(rows.iter().map(|r| r.method)), " + "),
         });
     }
     Ok(())
@@ -152,19 +145,13 @@ fn map_case(a: &MethodsArgs, out: &mut Vec<Timing>) -> CliResult {
         let ratios = centres(0.0, 3.0, res);
         let phis = centres(0.0, 360.0, res);
         let (t, cells) = best_of(a.repeats, || mu_cells(0.5, &ratios, &phis, 0.5, &how))?;
-        let mut mix: Vec<(&'static str, usize)> = Vec::new();
-        for c in &cells {
-            match mix.iter_mut().find(|(m, _)| *m == c.method) {
-                Some(e) => e.1 += 1,
-                None => mix.push((c.method, 1)),
-            }
-        }
+        let mix = method_mix(cells.iter().map(|c| c.method));
         out.push(Timing {
             case: "map --v-rel 0.5 (dual mode)",
             method: label,
             points: cells.len(),
             total_s: t,
-            mix: mix_text(&mix),
+            mix: mix_text(&mix, " + "),
         });
     }
     Ok(())

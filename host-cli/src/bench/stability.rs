@@ -26,6 +26,7 @@ use rayon::prelude::*;
 
 use super::work_precision::warm_state;
 use crate::error::{CliError, CliResult};
+use crate::map::centres;
 use crate::plot::{render_heat, Heat, HeatMap};
 
 /// Flags of `bench stability`.
@@ -155,12 +156,6 @@ struct Plane {
     y: (f64, f64),
     log_x: bool,
     log_y: bool,
-}
-
-fn centres(lo: f64, hi: f64, n: usize) -> Vec<f64> {
-    (0..n)
-        .map(|i| lo + (hi - lo) * (i as f64 + 0.5) / n as f64)
-        .collect()
 }
 
 /// Computes and writes one map; returns (cells, silent failures).
@@ -350,14 +345,11 @@ pub fn si_cell<T: Float>(x: f64, y: f64) -> Outcome {
         dux_rel: 0.3,
         phi: 1.0,
     };
-    let Ok(reference) = Scene::dimensionless(g)
-        .ok()
-        .and_then(|s| {
-            let v = 0.3 * s.drive().c_forward::<Libm>();
-            exact::mu_over_mu0::<f64, Libm>(&s.drive(), v).ok()
-        })
-        .ok_or(())
-    else {
+    let Ok(reference_scene) = Scene::dimensionless(g) else {
+        return Outcome::NoReference;
+    };
+    let d64 = reference_scene.drive();
+    let Ok(reference) = exact::mu_over_mu0::<f64, Libm>(&d64, 0.3 * d64.c_forward::<Libm>()) else {
         return Outcome::NoReference;
     };
     let (uz0, kz, kx, mu0) = (10f64.powf(x), 10f64.powf(y), 1e9, 0.3);
@@ -377,20 +369,12 @@ pub fn si_cell<T: Float>(x: f64, y: f64) -> Outcome {
         Err(e) => return Outcome::Failure(scene_failure(&e)),
     };
     let vc = model_core::analytic::CriticalVelocity::of(&s).forward;
-    let v0 = T::from_f64(0.3) * vc;
-    match exact::solve(&s, v0) {
+    match exact::solve(&s, T::from_f64(0.3) * vc) {
         Ok(sol) => match sol.mu_over_mu0() {
             Some(m) => Outcome::Value {
                 error: (m.to_f64() - reference).abs(),
                 allowed: exact::error_bound::<T, Libm>(&s.drive()).to_f64()
-                    + exact::error_bound::<f64, Libm>(
-                        &Scene::dimensionless(g).map(|s| s.drive()).unwrap_or(Drive {
-                            a: 0.0,
-                            b: 0.0,
-                            bc: 0.0,
-                            bs: 0.0,
-                        }),
-                    ),
+                    + exact::error_bound::<f64, Libm>(&d64),
             },
             None => Outcome::Failure("bad velocity"),
         },
