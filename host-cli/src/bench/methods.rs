@@ -169,6 +169,14 @@ pub fn run(a: &MethodsArgs) -> CliResult {
             "--res: must be between 2 and 1000 (as must --fixed-res)",
         ));
     }
+    if a.points > 10_000_000 || a.fixed_points > 100_000 {
+        return Err(CliError::usage(
+            "--points: at most 10000000 (and --fixed-points at most 100000)",
+        ));
+    }
+    if a.repeats == 0 || a.repeats > 1000 {
+        return Err(CliError::usage("--repeats: must be between 1 and 1000"));
+    }
     if !(a.tol.is_finite() && a.tol > 0.0) {
         return Err(CliError::usage("--tol: must be a finite number > 0"));
     }

@@ -387,8 +387,10 @@ pub fn run(a: &StabilityArgs) -> CliResult {
     if !(4..=400).contains(&a.res) {
         return Err(CliError::usage("--res: must be between 4 and 400"));
     }
-    if a.budget < 1000 {
-        return Err(CliError::usage("--budget: must be >= 1000 steps"));
+    if !(1000..=10_000_000_000).contains(&a.budget) {
+        return Err(CliError::usage(
+            "--budget: must be between 1000 and 10000000000 steps",
+        ));
     }
     std::fs::create_dir_all(&a.out)
         .map_err(|e| CliError::failure(format!("--out: {}: {e}", a.out.display())))?;
