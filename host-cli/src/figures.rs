@@ -67,6 +67,17 @@ fn save(
 const MU_AXIS: &str = "μ / μ0";
 
 /// `fricctl figures --out DIR`.
+/// Eq. 21/24 with amplitude `amp` at `v0/v_c = x` (1 beyond v_c), as points;
+/// values below `ymin` become gaps (NaN) so they are not drawn.
+fn approx_curve(xs: &[f64], amp: f64, ymin: f64) -> Vec<(f64, f64)> {
+    xs.iter()
+        .map(|&x| {
+            let y = if x >= 1.0 { 1.0 } else { law(x, amp) };
+            (x, if y >= ymin { y } else { f64::NAN })
+        })
+        .collect()
+}
+
 pub fn run(out: &Path, map_res: usize) -> CliResult {
     if !(2..=2000).contains(&map_res) {
         return Err(CliError::usage("--map-res: must be between 2 and 2000"));
@@ -86,13 +97,9 @@ pub fn run(out: &Path, map_res: usize) -> CliResult {
             mark: Mark::Line,
             color: i,
         });
-        let approx: Vec<(f64, f64)> = xs
-            .iter()
-            .map(|&x| (x, if x >= 1.0 { 1.0 } else { law(x, a) }))
-            .collect();
         series.push(Series {
             label: String::new(),
-            points: approx,
+            points: approx_curve(&xs, a, f64::NEG_INFINITY),
             mark: Mark::Dashed,
             color: i,
         });
@@ -131,16 +138,9 @@ pub fn run(out: &Path, map_res: usize) -> CliResult {
                 mark: Mark::Points,
                 color: i,
             });
-            let l: Vec<(f64, f64)> = line_x
-                .iter()
-                .map(|&x| {
-                    let y = if x >= 1.0 { 1.0 } else { law(x, b) };
-                    (x, if y >= ymin { y } else { f64::NAN })
-                })
-                .collect();
             series.push(Series {
                 label: String::new(),
-                points: l,
+                points: approx_curve(&line_x, b, ymin),
                 mark: Mark::Line,
                 color: i,
             });

@@ -51,6 +51,17 @@ pub struct MapArgs {
     pub how: MethodArgs,
 }
 
+/// The dimensionless scene of a map cell: `Δu_z/u_z0 = a`, amplitude ratio
+/// `r` (eq. 26), phase in degrees.
+pub fn cell_scene(a: f64, r: f64, phi_deg: f64) -> CliResult<Scene<f64>> {
+    Scene::dimensionless(Groups {
+        duz_rel: a,
+        dux_rel: r * a,
+        phi: phi_deg.to_radians(),
+    })
+    .map_err(|e| CliError::usage(format!("--{e}")))
+}
+
 /// One cell of a μ map.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct MuCell {
@@ -82,12 +93,7 @@ pub fn mu_cells(
         .into_par_iter()
         .map(|i| {
             let (r, phi) = (ratios[i / phis_deg.len()], phis_deg[i % phis_deg.len()]);
-            let g = Groups {
-                duz_rel: a,
-                dux_rel: r * a,
-                phi: phi.to_radians(),
-            };
-            let s = Scene::dimensionless(g).map_err(|e| CliError::usage(format!("--{e}")))?;
+            let s = cell_scene(a, r, phi)?;
             let vc = CriticalVelocity::of(&s);
             let v = from_rel(&vc, x, "v-rel")?;
             let o =
@@ -222,12 +228,7 @@ pub fn cells(
         .into_par_iter()
         .map(|i| {
             let (r, phi) = (ratios[i / phis_deg.len()], phis_deg[i % phis_deg.len()]);
-            let g = Groups {
-                duz_rel: a,
-                dux_rel: r * a,
-                phi: phi.to_radians(),
-            };
-            let s = Scene::dimensionless(g).map_err(|e| CliError::usage(format!("--{e}")))?;
+            let s = cell_scene(a, r, phi)?;
             let c = classify(&s, &ClassifyOptions::default()).map_err(|e| {
                 crate::compute::exact_failure(e).with_context(&format!("ratio {r}, φ {phi}°"))
             })?;
@@ -305,12 +306,7 @@ pub fn active_lines(a: f64, ratios: &[f64], phis: &[f64]) -> CliResult<Vec<Vec<(
         for i in 0..=n {
             let r = (rlo - hy) + (rhi - rlo + 2.0 * hy) * i as f64 / n as f64;
             let r = r.max(0.0);
-            let s = Scene::dimensionless(Groups {
-                duz_rel: a,
-                dux_rel: r * a,
-                phi: phi.to_radians(),
-            })
-            .map_err(|e| CliError::usage(format!("--{e}")))?;
+            let s = cell_scene(a, r, phi)?;
             let c =
                 classify(&s, &ClassifyOptions::default()).map_err(crate::compute::exact_failure)?;
             if c.regime == Regime::ActiveControl {

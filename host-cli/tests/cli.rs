@@ -2,13 +2,11 @@
 //! every invalid-input class (exit 2, one line naming the parameter), and the
 //! figures command producing valid SVG/PNG files.
 
-use std::f64::consts::TAU;
-
 use assert_cmd::Command;
 use model_core::analytic::{CriticalVelocity, StaticFriction};
 use model_core::exact;
 use model_core::regime::{classify, ClassifyOptions};
-use model_core::{Groups, Libm, Scene, SceneParams};
+use model_core::{Groups, Libm, Scene};
 use serde_json::Value;
 
 const PHYS: &[&str] = &[
@@ -30,32 +28,28 @@ const PHYS: &[&str] = &[
     "50",
 ];
 
+/// The scene of the `PHYS` flags.
 fn phys_scene() -> Scene<f64> {
-    Scene::new(SceneParams {
-        mu0: 0.3,
-        kz: 2e6,
-        kx: 1.5e6,
-        uz0: 5e-6,
-        duz: 2e-6,
-        dux: 0.7e-6,
-        omega: TAU * 40e3,
-        phi: 50f64.to_radians(),
-    })
-    .unwrap()
+    integration_tests::physical_scene()
 }
 
 fn fricctl() -> Command {
     Command::cargo_bin("fricctl").unwrap()
 }
 
-fn json(args: &[&str]) -> Value {
+/// Runs fricctl and asserts it succeeded (its stderr in the failure message).
+fn run_ok(args: &[&str]) -> std::process::Output {
     let out = fricctl().args(args).output().unwrap();
     assert!(
         out.status.success(),
         "{args:?}: {}",
         String::from_utf8_lossy(&out.stderr)
     );
-    serde_json::from_slice(&out.stdout).unwrap()
+    out
+}
+
+fn json(args: &[&str]) -> Value {
+    serde_json::from_slice(&run_ok(args).stdout).unwrap()
 }
 
 fn close(a: f64, b: f64, tol: f64) -> bool {
@@ -858,33 +852,25 @@ fn mu_map_cells_follow_the_method_choice() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("m.csv");
     let png = dir.path().join("m.png");
-    let out = fricctl()
-        .args([
-            "map",
-            "--duz-rel",
-            "0.5",
-            "--ratio-min",
-            "0",
-            "--ratio-max",
-            "2",
-            "--res",
-            "4",
-            "--v-rel",
-            "0.5",
-            "--tol",
-            "1e-2",
-            "--plot",
-            png.to_str().unwrap(),
-            "--csv",
-            csv.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = run_ok(&[
+        "map",
+        "--duz-rel",
+        "0.5",
+        "--ratio-min",
+        "0",
+        "--ratio-max",
+        "2",
+        "--res",
+        "4",
+        "--v-rel",
+        "0.5",
+        "--tol",
+        "1e-2",
+        "--plot",
+        png.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
     assert!(String::from_utf8(out.stderr).unwrap().contains("exact 16"));
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut n = 0;
@@ -914,22 +900,14 @@ fn mu_map_cells_follow_the_method_choice() {
 #[test]
 fn bench_stability_maps_have_no_silent_failures() {
     let dir = tempfile::tempdir().unwrap();
-    let out = fricctl()
-        .args([
-            "bench",
-            "stability",
-            "--out",
-            dir.path().to_str().unwrap(),
-            "--res",
-            "8",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = run_ok(&[
+        "bench",
+        "stability",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--res",
+        "8",
+    ]);
     let text = String::from_utf8(out.stdout).unwrap();
     for name in [
         "fixed_f64",
@@ -961,32 +939,24 @@ fn bench_stability_maps_have_no_silent_failures() {
 #[test]
 fn bench_methods_reports_times_and_mix() {
     let dir = tempfile::tempdir().unwrap();
-    let out = fricctl()
-        .args([
-            "bench",
-            "methods",
-            "--out",
-            dir.path().to_str().unwrap(),
-            "--points",
-            "200",
-            "--res",
-            "6",
-            "--fixed-points",
-            "4",
-            "--fixed-res",
-            "2",
-            "--steps-per-period",
-            "512",
-            "--repeats",
-            "1",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    run_ok(&[
+        "bench",
+        "methods",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--points",
+        "200",
+        "--res",
+        "6",
+        "--fixed-points",
+        "4",
+        "--fixed-res",
+        "2",
+        "--steps-per-period",
+        "512",
+        "--repeats",
+        "1",
+    ]);
     let csv = std::fs::read_to_string(dir.path().join("methods.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().skip(1).collect();
     assert_eq!(lines.len(), 12);
@@ -1010,22 +980,14 @@ fn bench_methods_reports_times_and_mix() {
 #[test]
 fn bench_dac_matches_table_lookup_theory() {
     let dir = tempfile::tempdir().unwrap();
-    let out = fricctl()
-        .args([
-            "bench",
-            "dac",
-            "--out",
-            dir.path().to_str().unwrap(),
-            "--rounds",
-            "1",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    run_ok(&[
+        "bench",
+        "dac",
+        "--out",
+        dir.path().to_str().unwrap(),
+        "--rounds",
+        "1",
+    ]);
     check_png(&dir.path().join("dac.png"));
     check_svg(&dir.path().join("dac.svg"));
     let csv = std::fs::read_to_string(dir.path().join("dac.csv")).unwrap();

@@ -111,24 +111,7 @@ fn every_command_over_a_pty() {
     let p = ok_json(&s, &["predict", "--v0", "0.004"]);
     let pred = p["Prediction"]["prediction"]["mu"].as_f64().unwrap();
     // The prediction equals the host model for the same scene (f32 tolerance).
-    let m = Command::cargo_bin("fricctl")
-        .unwrap()
-        .args([
-            "mu", "--mu0", "0.3", "--kz", "1e7", "--kx", "1e7", "--uz0", "4e-6", "--duz", "2e-6",
-            "--dux", "3e-7",
-        ])
-        .args([
-            "--freq",
-            "20000",
-            "--phi-deg",
-            "40",
-            "--v0",
-            "0.004",
-            "--json",
-        ])
-        .output()
-        .unwrap();
-    let host: Value = serde_json::from_slice(&m.stdout).unwrap();
+    let host = common::host_mu_of_test_drive();
     assert!(
         (pred - host["mu"].as_f64().unwrap()).abs() < 1e-5,
         "{pred} vs {host}"

@@ -139,24 +139,7 @@ fn real_firmware_under_qemu() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let p: Value = serde_json::from_slice(&o.stdout).unwrap();
     let pred = p["Prediction"]["prediction"]["mu"].as_f64().unwrap();
-    let m = Command::cargo_bin("fricctl")
-        .unwrap()
-        .args([
-            "mu", "--mu0", "0.3", "--kz", "1e7", "--kx", "1e7", "--uz0", "4e-6", "--duz", "2e-6",
-            "--dux", "3e-7",
-        ])
-        .args([
-            "--freq",
-            "20000",
-            "--phi-deg",
-            "40",
-            "--v0",
-            "0.004",
-            "--json",
-        ])
-        .output()
-        .unwrap();
-    let host: Value = serde_json::from_slice(&m.stdout).unwrap();
+    let host = common::host_mu_of_test_drive();
     assert!(
         (pred - host["mu"].as_f64().unwrap()).abs() <= 1e-5,
         "{pred} vs {host}"

@@ -4,7 +4,7 @@
 
 use model_core::device::DeviceConfig;
 use model_core::fixed_step::{run_dimensionless, FixedStepConfig, Start};
-use model_core::{Drive, Groups, Libm, Scene};
+use model_core::{Drive, Groups, Libm, Scene, SceneParams};
 
 /// The dimensionless scene with groups `(a, b, φ)`.
 pub fn scene(a: f64, b: f64, phi: f64) -> Scene<f64> {
@@ -14,6 +14,23 @@ pub fn scene(a: f64, b: f64, phi: f64) -> Scene<f64> {
         phi,
     })
     .expect("valid test scene")
+}
+
+/// The physical scene of the README's examples (and of the CLI tests' flags):
+/// μ₀ = 0.3, k_z = 2e6 N/m, k_x = 1.5e6 N/m, u_z0 = 5 µm, Δu_z = 2 µm,
+/// Δu_x = 0.7 µm, f = 40 kHz, φ = 50°.
+pub fn physical_scene() -> Scene<f64> {
+    Scene::new(SceneParams {
+        mu0: 0.3,
+        kz: 2e6,
+        kx: 1.5e6,
+        uz0: 5e-6,
+        duz: 2e-6,
+        dux: 0.7e-6,
+        omega: std::f64::consts::TAU * 40e3,
+        phi: 50f64.to_radians(),
+    })
+    .expect("valid physical scene")
 }
 
 /// The dimensionless scene from eq. 26 groups (`ratio = b/a`).

@@ -1,34 +1,18 @@
 //! Closed forms of §2 (critical velocity, static friction) and the §3.1
 //! approximations, against independent computations.
 
-use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::f64::consts::{FRAC_PI_2, PI};
 
-use integration_tests::{fixed, scene, scene_ratio, static_interval_grid, Rng};
+use integration_tests::{fixed, physical_scene, scene, scene_ratio, static_interval_grid, Rng};
 use model_core::analytic::approx::{approx_mu_over_mu0, ApproxError, ApproxKind, MAX_ERROR_OVER_A};
 use model_core::analytic::critical_velocity::{vc_max, vc_min};
 use model_core::analytic::{CriticalVelocity, StaticFriction};
 use model_core::exact::{solve, Solution};
-use model_core::{Scene, SceneParams};
-
-fn physical() -> Scene<f64> {
-    // μ₀ = 0.3, k_z = 2e6 N/m, k_x = 1.5e6 N/m, u_z0 = 5 µm, Δu_z = 2 µm,
-    // Δu_x = 0.7 µm, f = 40 kHz, φ = 50°.
-    Scene::new(SceneParams {
-        mu0: 0.3,
-        kz: 2e6,
-        kx: 1.5e6,
-        uz0: 5e-6,
-        duz: 2e-6,
-        dux: 0.7e-6,
-        omega: TAU * 40e3,
-        phi: 50f64.to_radians(),
-    })
-    .unwrap()
-}
+use model_core::Scene;
 
 #[test]
 fn critical_velocity_matches_eq8_literally() {
-    let s = physical();
+    let s = physical_scene();
     let p = s.params();
     let r = p.mu0 * p.kz / p.kx * p.duz;
     let eq8 =
@@ -61,7 +45,7 @@ fn critical_velocity_matches_eq8_literally() {
 
 #[test]
 fn sliding_above_vc_is_exactly_mu0() {
-    let s = physical();
+    let s = physical_scene();
     let vc = CriticalVelocity::of(&s);
     for f in [1.0 + 1e-12, 1.5, 10.0, 1e6] {
         assert_eq!(

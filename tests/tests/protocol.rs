@@ -117,19 +117,35 @@ fn roundtrip_every_request() {
     assert_eq!(CRC.checksum(b"123456789"), 0xCBF4_3926);
 }
 
-#[test]
-fn server_answers_and_survives_bad_input() {
-    let t = SineTable::<256>::libm();
-    let mut dev = Device::new(
+/// The device of these tests: board configuration, μ0 = 0.3, k_z = k_x = 1e7 N/m.
+fn test_device(t: &SineTable<256>) -> Device<'_, 256> {
+    Device::new(
         cfg(),
-        &t,
+        t,
         Contact {
             mu0: 0.3,
             kz: 1e7,
             kx: 1e7,
         },
     )
-    .unwrap();
+    .unwrap()
+}
+
+/// A drive well inside the limits (no lift-off: 1 µm < 3 µm).
+fn good_drive() -> DriveSetting {
+    DriveSetting {
+        freq_hz: 40e3,
+        amp_z_m: 1e-6,
+        amp_x_m: 2e-7,
+        offset_z_m: 3e-6,
+        phase_rad: 0.5,
+    }
+}
+
+#[test]
+fn server_answers_and_survives_bad_input() {
+    let t = SineTable::<256>::libm();
+    let mut dev = test_device(&t);
     let mut s = Server::new(info());
     // Garbage before a frame: ignored up to the delimiter, then the frame is answered.
     let mut bytes = vec![0x13, 0x37, 0xFF, 0x00];
@@ -197,24 +213,9 @@ fn frame_of_raw(raw: &[u8]) -> Vec<u8> {
 #[test]
 fn refused_commands_change_nothing_over_the_wire() {
     let t = SineTable::<256>::libm();
-    let mut dev = Device::new(
-        cfg(),
-        &t,
-        Contact {
-            mu0: 0.3,
-            kz: 1e7,
-            kx: 1e7,
-        },
-    )
-    .unwrap();
+    let mut dev = test_device(&t);
     let mut s = Server::new(info());
-    let good = DriveSetting {
-        freq_hz: 40e3,
-        amp_z_m: 1e-6,
-        amp_x_m: 2e-7,
-        offset_z_m: 3e-6,
-        phase_rad: 0.5,
-    };
+    let good = good_drive();
     let r = talk(&mut s, &mut dev, &req(1, Request::SetDrive(good)));
     assert!(matches!(resp(&r[0]), Response::Drive { .. }));
     talk(&mut s, &mut dev, &req(2, Request::Start));
@@ -299,24 +300,9 @@ fn docs_protocol_examples() {
 fn telemetry_reports_ramps_and_faults_with_its_own_counter() {
     use model_core::protocol::Telemetry;
     let t = SineTable::<256>::libm();
-    let mut dev = Device::new(
-        cfg(),
-        &t,
-        Contact {
-            mu0: 0.3,
-            kz: 1e7,
-            kx: 1e7,
-        },
-    )
-    .unwrap();
+    let mut dev = test_device(&t);
     let mut s = Server::new(info());
-    let good = DriveSetting {
-        freq_hz: 40e3,
-        amp_z_m: 1e-6,
-        amp_x_m: 2e-7,
-        offset_z_m: 3e-6,
-        phase_rad: 0.5,
-    };
+    let good = good_drive();
     talk(&mut s, &mut dev, &req(1, Request::SetDrive(good)));
     talk(&mut s, &mut dev, &req(2, Request::Start));
     let mut tele = Vec::new();

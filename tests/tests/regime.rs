@@ -24,19 +24,25 @@ const PHASES: &[f64] = &[
     3.0 * FRAC_PI_2,
 ];
 
-#[test]
-fn fig5_ratio_1_ratchets_and_symmetric_at_half_pi() {
-    // Paper §3.2: Fig. 5 (ratio 1, Δu_z/u_z0 = 0.5) is symmetric at φ = π/2,
-    // asymmetric otherwise, the extremes φ = 0, π being ratchets.
+/// At Δu_z/u_z0 = 0.5 and this amplitude ratio: active control (symmetric)
+/// at φ = π/2 and 3π/2, a dynamic ratchet at every other phase of [`PHASES`].
+fn ratchet_except_half_pi(ratio: f64) {
     for &phi in PHASES {
-        let r = regime(0.5, 1.0, phi);
+        let r = regime(0.5, ratio, phi);
         let want = if (phi - FRAC_PI_2).abs() < 1e-12 || (phi - 3.0 * FRAC_PI_2).abs() < 1e-12 {
             Regime::ActiveControl
         } else {
             Regime::DynamicRatchet
         };
-        assert_eq!(r, want, "φ = {phi}");
+        assert_eq!(r, want, "ratio {ratio}, φ = {phi}");
     }
+}
+
+#[test]
+fn fig5_ratio_1_ratchets_and_symmetric_at_half_pi() {
+    // Paper §3.2: Fig. 5 (ratio 1, Δu_z/u_z0 = 0.5) is symmetric at φ = π/2,
+    // asymmetric otherwise, the extremes φ = 0, π being ratchets.
+    ratchet_except_half_pi(1.0);
 }
 
 #[test]
@@ -64,15 +70,7 @@ fn fig6_ratio_2_actuator_except_half_pi() {
 #[test]
 fn fig7_ratio_half_ratchets_and_symmetric_at_half_pi() {
     // "Dynamic ratchets are realized for values of the governing parameter smaller than 1."
-    for &phi in PHASES {
-        let r = regime(0.5, 0.5, phi);
-        let want = if (phi - FRAC_PI_2).abs() < 1e-12 || (phi - 3.0 * FRAC_PI_2).abs() < 1e-12 {
-            Regime::ActiveControl
-        } else {
-            Regime::DynamicRatchet
-        };
-        assert_eq!(r, want, "φ = {phi}");
-    }
+    ratchet_except_half_pi(0.5);
 }
 
 #[test]

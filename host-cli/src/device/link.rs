@@ -48,18 +48,20 @@ impl Link for SerialLink {
         self.port
             .set_timeout(timeout.max(Duration::from_millis(1)))
             .map_err(io::Error::other)?;
-        match self.port.read(buf) {
-            Ok(n) => Ok(n),
-            Err(e)
-                if e.kind() == io::ErrorKind::TimedOut || e.kind() == io::ErrorKind::WouldBlock =>
-            {
-                Ok(0)
-            }
-            Err(e) => Err(e),
-        }
+        empty_on_timeout(self.port.read(buf))
     }
     fn describe(&self) -> String {
         format!("serial port {}", self.name)
+    }
+}
+
+/// A read that timed out (or would block) is "no bytes yet", not an error.
+fn empty_on_timeout(r: io::Result<usize>) -> io::Result<usize> {
+    match r {
+        Err(e) if e.kind() == io::ErrorKind::TimedOut || e.kind() == io::ErrorKind::WouldBlock => {
+            Ok(0)
+        }
+        r => r,
     }
 }
 
@@ -94,13 +96,7 @@ impl Link for TcpLink {
                 io::ErrorKind::ConnectionAborted,
                 "the device closed the connection",
             )),
-            Ok(n) => Ok(n),
-            Err(e)
-                if e.kind() == io::ErrorKind::TimedOut || e.kind() == io::ErrorKind::WouldBlock =>
-            {
-                Ok(0)
-            }
-            Err(e) => Err(e),
+            r => empty_on_timeout(r),
         }
     }
     fn describe(&self) -> String {

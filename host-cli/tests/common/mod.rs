@@ -62,3 +62,38 @@ pub fn read_responses<R: Read + ?Sized>(r: &mut R, want: usize) -> Vec<Frame> {
     }
     out
 }
+
+/// `fricctl mu --json` on the host (f64) for the scene and drive the device
+/// tests set on the board (μ0 = 0.3, k_z = k_x = 1e7 N/m, u_z0 = 4 µm,
+/// Δu_z = 2 µm, Δu_x = 0.3 µm, 20 kHz, φ = 40°) at v0 = 4 mm/s.
+pub fn host_mu_of_test_drive() -> serde_json::Value {
+    use assert_cmd::cargo::CommandCargoExt;
+    let m = std::process::Command::cargo_bin("fricctl")
+        .unwrap()
+        .args([
+            "mu",
+            "--mu0",
+            "0.3",
+            "--kz",
+            "1e7",
+            "--kx",
+            "1e7",
+            "--uz0",
+            "4e-6",
+            "--duz",
+            "2e-6",
+            "--dux",
+            "3e-7",
+            "--freq",
+            "20000",
+            "--phi-deg",
+            "40",
+            "--v0",
+            "0.004",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(m.status.success(), "{}", String::from_utf8_lossy(&m.stderr));
+    serde_json::from_slice(&m.stdout).unwrap()
+}
