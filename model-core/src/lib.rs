@@ -5,6 +5,10 @@
 //! actuators*; equation numbers below refer to that paper), shared by the
 //! `fricctl` host tool and the STM32F405 firmware.
 //!
+//! Two subjects, one folder each: [`model`] (the physics) and [`board`] (the
+//! driver board's logic, which uses the model; the model never uses the
+//! board). Their modules are re-exported at the crate root:
+//!
 //! * [`scene`] — parameters, validation, dimensionless groups (eqs. 1–4, 25, 26);
 //! * [`analytic`] — critical velocity (eq. 8–10), static friction (eqs. 17–19 and
 //!   the exact static interval), approximations (eqs. 21, 24);
@@ -28,19 +32,12 @@
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 
-pub mod analytic;
-pub mod dds;
-pub mod device;
-pub mod estimator;
-pub mod exact;
-pub mod fixed_step;
-pub mod float;
-pub mod protocol;
-pub mod regime;
-mod root;
-pub mod scene;
-pub mod select;
-pub mod server;
+pub mod board;
+pub mod model;
+
+// The public paths used by the firmware and the host (`model_core::scene`, …).
+pub use board::{dds, device, estimator, protocol, server};
+pub use model::{analytic, exact, fixed_step, float, regime, scene, select};
 
 pub use float::{Float, Libm, Math, Micromath};
 pub use scene::{Drive, Groups, Param, Scene, SceneError, SceneParams};

@@ -211,8 +211,8 @@ pub trait Math<T: Float> {
     /// Worst relative error of the backend's functions beyond the rounding of
     /// the float type (0 for libm, whose functions are within an ulp or two;
     /// 0.062 for micromath, its measured `sqrt` worst case). The error bounds
-    /// of the solvers ([`crate::exact::error_bound`],
-    /// [`crate::fixed_step::error_bound`]) add a term proportional to it.
+    /// of the solvers ([`crate::model::exact::error_bound`],
+    /// [`crate::model::fixed_step::error_bound`]) add a term proportional to it.
     const MAX_REL_ERROR: f64;
     /// Square root of a non-negative number.
     fn sqrt(x: T) -> T;

@@ -11,7 +11,7 @@
 //! wrap after that, so it spans exactly `n` drive periods up to one sample at
 //! each end — also for a non-integer number of samples per period.
 
-use crate::dds::SineTable;
+use crate::board::dds::SineTable;
 
 /// Linear ADC calibration: `force = gain · (count − offset)` (N per count, counts).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]

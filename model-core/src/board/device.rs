@@ -8,12 +8,12 @@
 //! Every setter validates its whole input before touching anything: a
 //! refused command leaves the running state exactly as it was.
 
-use crate::dds::{phase_word, Achieved, Dds, DdsError, Level, SineTable, Slew};
-use crate::estimator::{Calibration, Estimate, EstimateError, Estimator};
-use crate::exact::{self, ExactError, Solution};
-use crate::float::Libm;
-use crate::regime::{classify, ClassifyOptions, Regime};
-use crate::scene::{Scene, SceneError, SceneParams};
+use crate::board::dds::{phase_word, Achieved, Dds, DdsError, Level, SineTable, Slew};
+use crate::board::estimator::{Calibration, Estimate, EstimateError, Estimator};
+use crate::model::exact::{self, ExactError, Solution};
+use crate::model::float::Libm;
+use crate::model::regime::{classify, ClassifyOptions, Regime};
+use crate::model::scene::{Scene, SceneError, SceneParams};
 
 /// Transducer calibration of one DAC channel: displacement
 /// `= (code − zero_code) · metres_per_code`.
@@ -487,7 +487,7 @@ impl<'t, const N: usize> Device<'t, N> {
         self.dds.set_phase(1, phases[1]);
         self.applied = Applied {
             achieved,
-            phase_rad: crate::dds::phase_rad(
+            phase_rad: crate::board::dds::phase_rad(
                 phases[1].wrapping_sub(phases[0]).wrapping_sub(1 << 31),
             ),
         };
@@ -651,7 +651,7 @@ impl<'t, const N: usize> Device<'t, N> {
 /// [`DeviceError::OutOfRange`] for a non-finite velocity, [`DeviceError::Model`].
 pub fn predict(s: &Scene<f32>, v0: f32) -> Result<Prediction, DeviceError> {
     range(v0, -1e3, 1e3, DriveParam::Velocity)?;
-    let vc = crate::analytic::CriticalVelocity::of(s);
+    let vc = crate::model::analytic::CriticalVelocity::of(s);
     let m = match exact::solve_with::<f32, Libm>(s, v0).map_err(DeviceError::Model)? {
         Solution::Sliding { mu_over_mu0 } | Solution::StickSlip { mu_over_mu0 } => mu_over_mu0,
         Solution::AtRest { mu_0plus, .. } => mu_0plus,

@@ -10,18 +10,18 @@
 //! 3. a closed-form approximation, eq. 21 (normal only) or eq. 24 (tangential
 //!    only, `b ≤ 1`), when its measured bound
 //!    `MAX_ERROR_OVER_A · A` (eqs. 21, 24: 0.0144·A) is within the tolerance;
-//! 4. the exact solver ([`crate::exact`]), bound [`crate::exact::error_bound`].
+//! 4. the exact solver ([`crate::model::exact`]), bound [`crate::model::exact::error_bound`].
 //!
 //! The fixed-step integrator is never chosen: it is slower than the exact
 //! solver at every accuracy (`fricctl bench work-precision`) and is used only
 //! when asked for.
 
-use crate::analytic::approx::{approx_mu_over_mu0, ApproxKind, MAX_ERROR_OVER_A};
-use crate::analytic::critical_velocity::CriticalVelocity;
-use crate::analytic::static_friction::StaticFriction;
-use crate::exact::{self, ExactError};
-use crate::float::{Float, Math};
-use crate::scene::Scene;
+use crate::model::analytic::approx::{approx_mu_over_mu0, ApproxKind, MAX_ERROR_OVER_A};
+use crate::model::analytic::critical_velocity::CriticalVelocity;
+use crate::model::analytic::static_friction::StaticFriction;
+use crate::model::exact::{self, ExactError};
+use crate::model::float::{Float, Math};
+use crate::model::scene::Scene;
 
 /// Which computation answered.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -15,9 +15,9 @@
 //! function of `x` for all scenes. The value is checked by the test
 //! `approx_error_bound` in `tests/analytic.rs`.
 
-use crate::analytic::critical_velocity::CriticalVelocity;
-use crate::float::Float;
-use crate::scene::Scene;
+use crate::model::analytic::critical_velocity::CriticalVelocity;
+use crate::model::float::Float;
+use crate::model::scene::Scene;
 
 /// The measured bound of `|μ_approx − μ_exact| / (μ₀ A)` for eqs. 21 and 24
 /// inside their validity domain (see module docs).

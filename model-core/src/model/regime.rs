@@ -10,10 +10,10 @@
 //!   (`μ(v)·v ≥ 0`), and the contact can rest with zero force.
 //!
 //! **The exact boundary of the actuator class** is expressed through the
-//! one-sided limits μ(0±) ([`crate::exact::limits_at_zero`]): the scene is an
+//! one-sided limits μ(0±) ([`crate::model::exact::limits_at_zero`]): the scene is an
 //! actuator iff `μ(0⁺) < 0` or `μ(0⁻) > 0`. When a static equilibrium exists,
 //! `μ(0⁺) = hi = 1 − c` and `μ(0⁻) = lo = c' − 1` (the static interval,
-//! [`crate::analytic::StaticFriction`]), so the condition reads `0 ∉ [lo, hi]`,
+//! [`crate::model::analytic::StaticFriction`]), so the condition reads `0 ∉ [lo, hi]`,
 //! i.e. `c > 1` or `c' > 1`: the dimensionless critical velocity of either
 //! direction exceeds 1, `v_c± > ωW₀ = ωμ₀k_z u_z0/k_x`. When no equilibrium
 //! exists (`c + c' > 2`), both limits are equal and are the net force at rest,
@@ -33,10 +33,10 @@
 //! `c > 1` the scene is an actuator (no force-free rest), however symmetric
 //! its critical velocities.
 
-use crate::analytic::static_friction::StaticFriction;
-use crate::exact::{limits_at_zero, mu_over_mu0, ExactError};
-use crate::float::{Float, Libm, Math};
-use crate::scene::{Drive, Scene};
+use crate::model::analytic::static_friction::StaticFriction;
+use crate::model::exact::{limits_at_zero, mu_over_mu0, ExactError};
+use crate::model::float::{Float, Libm, Math};
+use crate::model::scene::{Drive, Scene};
 
 /// The three classes of the paper (§3.2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]

@@ -13,7 +13,7 @@
 //! is `V = v₀/(ω W₀)`, and `μ/μ₀ = ⟨s⟩` with `s = u_x − u_x,c` the spring stretch.
 //! That `μ/μ₀` depends on `(V, a, b, φ)` only is the paper's eq. 25.
 
-use crate::float::{Float, Libm, Math};
+use crate::model::float::{Float, Libm, Math};
 
 /// Which scene parameter an error is about.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

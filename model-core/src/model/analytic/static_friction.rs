@@ -3,7 +3,7 @@
 //!
 //! At rest (`u_x,c` fixed) the spring stretch is `s(θ) = u_x0 + Δu_x cos(θ + φ)`
 //! and the contact sticks for all time iff `|s(θ)| ≤ w(θ)` for every θ
-//! (eq. 12 with the modulus kept). In units of W₀ (see [`crate::scene`]) that is
+//! (eq. 12 with the modulus kept). In units of W₀ (see [`crate::model::scene`]) that is
 //!
 //! ```text
 //!   u_x0 ≤ min_θ [ 1 − a cos θ − b cos(θ+φ) ] = 1 − c     (upper side)
@@ -21,10 +21,10 @@
 //! not empty, `hi` and `−lo` are the largest forward and backward forces (over
 //! `k_z u_z0 μ₀`) that do not make it slip; `hi < 0` or `lo > 0` means that
 //! holding the contact still takes a force *against* the direction it would
-//! otherwise move (an actuator, see [`crate::regime`]).
+//! otherwise move (an actuator, see [`crate::model::regime`]).
 
-use crate::float::{Float, Libm, Math};
-use crate::scene::Scene;
+use crate::model::float::{Float, Libm, Math};
+use crate::model::scene::Scene;
 
 /// Static analysis of a scene.
 #[derive(Debug, Clone, Copy, PartialEq)]

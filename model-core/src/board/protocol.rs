@@ -21,9 +21,11 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::device::{Applied, Contact, DeviceError, DriveParam, DriveSetting, Prediction, Status};
-use crate::estimator::{Estimate, EstimateError};
-use crate::regime::Regime;
+use crate::board::device::{
+    Applied, Contact, DeviceError, DriveParam, DriveSetting, Prediction, Status,
+};
+use crate::board::estimator::{Estimate, EstimateError};
+use crate::model::regime::Regime;
 
 /// Protocol version; a frame with another version is answered with
 /// [`WireError::VersionMismatch`].
@@ -63,7 +65,11 @@ pub struct Info {
 impl Info {
     /// The `Info` of a device with configuration `cfg`, board name `board`
     /// (ASCII, truncated to 16 bytes) and firmware version `firmware`.
-    pub fn for_config(cfg: &crate::device::DeviceConfig, board: &str, firmware: [u8; 3]) -> Self {
+    pub fn for_config(
+        cfg: &crate::board::device::DeviceConfig,
+        board: &str,
+        firmware: [u8; 3],
+    ) -> Self {
         let mut name = [0u8; 16];
         for (d, s) in name.iter_mut().zip(board.bytes()) {
             *d = s;
@@ -165,7 +171,7 @@ pub enum Telemetry {
     Estimate(Estimate),
     /// 1: the ramps have settled.
     RampDone,
-    /// 2: a fault was latched (bits of [`crate::device::faults`]).
+    /// 2: a fault was latched (bits of [`crate::board::device::faults`]).
     Fault(u32),
 }
 

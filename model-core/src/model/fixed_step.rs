@@ -1,7 +1,7 @@
 //! The paper's explicit fixed-step scheme (§3), with proven steady-state
 //! detection.
 //!
-//! Per step of `δ = 2π/N` (in the dimensionless variables of [`crate::scene`]):
+//! Per step of `δ = 2π/N` (in the dimensionless variables of [`crate::model::scene`]):
 //! advance the drive phase, add the drive increment to the spring stretch
 //! (stick trial), clamp the stretch to the friction band `[−w, w]` (the contact
 //! point is moved so that `|f_x| = μ₀f_z`), and accumulate `f_x` and `f_z`;
@@ -25,8 +25,8 @@
 //! be below any tolerance while far from the answer. `V < 0` uses backward clamps.
 //! `V = 0` has no unique steady state and is refused.
 
-use crate::float::{Float, Libm, Math};
-use crate::scene::{Drive, Scene, SceneError};
+use crate::model::float::{Float, Libm, Math};
+use crate::model::scene::{Drive, Scene, SceneError};
 
 /// Settings of a fixed-step run.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -249,7 +249,7 @@ pub fn run_dimensionless<T: Float, M: Math<T>>(
     }
     if !v.is_finite() {
         return Err(FixedStepError::BadVelocity(SceneError::NonFinite(
-            crate::scene::Param::Velocity,
+            crate::model::scene::Param::Velocity,
         )));
     }
     if v == T::ZERO {

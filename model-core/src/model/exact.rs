@@ -1,6 +1,6 @@
 //! The exact steady-state solver: μ(v₀) with no transient and no time step.
 //!
-//! # Method (in the dimensionless variables of [`crate::scene`])
+//! # Method (in the dimensionless variables of [`crate::model::scene`])
 //!
 //! The spring stretch `s` is confined to the friction band `|s| ≤ w(θ)`,
 //! `w = 1 − a cos θ`; it follows the drive `u_x = Vθ + b cos(θ + φ)` while it
@@ -33,10 +33,10 @@
 
 use heapless::Vec;
 
-use crate::analytic::static_friction::StaticFriction;
-use crate::float::{Float, Libm, Math};
-use crate::root::newton_bracketed;
-use crate::scene::{Drive, Scene, SceneError};
+use crate::model::analytic::static_friction::StaticFriction;
+use crate::model::float::{Float, Libm, Math};
+use crate::model::root::newton_bracketed;
+use crate::model::scene::{Drive, Scene, SceneError};
 
 /// Largest number of arcs in one steady-state period (stick, slip back,
 /// stick, slip forward, with the first stick possibly split at the period start).
@@ -227,7 +227,7 @@ pub fn mu_over_mu0<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<T, ExactE
     }
     if !v.is_finite() || v == T::ZERO {
         return Err(ExactError::BadVelocity(SceneError::NonFinite(
-            crate::scene::Param::Velocity,
+            crate::model::scene::Param::Velocity,
         )));
     }
     let (dd, vv, sign) = if v > T::ZERO {
@@ -282,7 +282,7 @@ pub fn steady_state<T: Float, M: Math<T>>(
     }
     if !v.is_finite() || v == T::ZERO {
         return Err(ExactError::BadVelocity(SceneError::NonFinite(
-            crate::scene::Param::Velocity,
+            crate::model::scene::Param::Velocity,
         )));
     }
     let (dd, vv, sign) = if v > T::ZERO {

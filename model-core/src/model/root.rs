@@ -2,7 +2,7 @@
 //! function (Newton where it stays in the bracket and shrinks the step,
 //! bisection otherwise). Used for the stick→slip events of the exact solver.
 
-use crate::float::Float;
+use crate::model::float::Float;
 
 /// Root of `f` in the bracket `(lo, hi, f_lo, f_hi)`: `[lo, hi]`, where `f(lo)` and `f(hi)` have opposite signs
 /// (`f_lo`, `f_hi` are those values) and `f` is monotone on the interval.

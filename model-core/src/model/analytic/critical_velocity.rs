@@ -1,7 +1,7 @@
 //! Critical velocity of controllability (paper §2.1, eq. 8).
 
-use crate::float::{Float, Libm, Math};
-use crate::scene::Scene;
+use crate::model::float::{Float, Libm, Math};
+use crate::model::scene::Scene;
 
 /// The two critical velocities of a scene, m/s (both ≥ 0).
 ///

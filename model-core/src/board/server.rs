@@ -3,7 +3,7 @@
 //! the bytes from USART2; the virtual device feeds it the bytes of a
 //! pseudo-terminal — the same code.
 
-use crate::device::{self, Device};
+use crate::board::device::{self, Device};
 
 /// Access to the device for the server: on the host a plain `&mut Device`;
 /// in the firmware a critical section around each call, so that long model
@@ -18,7 +18,7 @@ impl<const N: usize> DeviceAccess<N> for Device<'_, N> {
         f(self)
     }
 }
-use crate::protocol::{
+use crate::board::protocol::{
     decode, encode, Body, Deframed, Deframer, Frame, Info, Request, Response, Telemetry, WireError,
     MAX_FRAME, PROTOCOL_VERSION,
 };
@@ -205,7 +205,7 @@ fn handle<const N: usize, A: DeviceAccess<N>>(
                 if on {
                     if periods == 0 || periods > 1_000_000 {
                         return Err(WireError::OutOfRange {
-                            param: crate::device::DriveParam::Periods,
+                            param: crate::board::device::DriveParam::Periods,
                             min: 1.0,
                             max: 1e6,
                         });
@@ -226,8 +226,8 @@ fn handle<const N: usize, A: DeviceAccess<N>>(
     res.unwrap_or_else(Response::Error)
 }
 
-impl From<crate::device::DeviceError> for Response {
-    fn from(e: crate::device::DeviceError) -> Self {
+impl From<crate::board::device::DeviceError> for Response {
+    fn from(e: crate::board::device::DeviceError) -> Self {
         Response::Error(e.into())
     }
 }

@@ -1,0 +1,18 @@
+//! **The board**: the driver board's logic, free of hardware types, so that
+//! the firmware and the host's virtual device run the very same code.
+//!
+//! * [`dds`] — the two phase-locked DAC waveforms (direct digital synthesis);
+//! * [`estimator`] — μ from sampled forces (eq. 20) with lock-in harmonics;
+//! * [`device`] — drive settings in physical units, the lift-off guard,
+//!   start/stop ramps, faults, measurement and the model's prediction;
+//! * [`protocol`] — the wire format shared by firmware and host;
+//! * [`server`] — the device side of the protocol.
+//!
+//! **Dependencies.** The board uses [`crate::model`] (scene, solvers, regimes)
+//! and nothing uses the board from inside the model.
+
+pub mod dds;
+pub mod device;
+pub mod estimator;
+pub mod protocol;
+pub mod server;
