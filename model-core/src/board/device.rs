@@ -222,6 +222,10 @@ pub struct Status {
     pub faults: u32,
     /// A measurement is in progress.
     pub measuring: bool,
+    /// Received bytes dropped because the link's receive queue was full, since
+    /// power-up (saturating). Never a silent drop: a host that sees this grow
+    /// pipelined more than the device can hold.
+    pub rx_overflows: u32,
 }
 
 /// The device.
@@ -234,6 +238,7 @@ pub struct Device<'t, const N: usize> {
     contact: Contact,
     running: bool,
     faults: u32,
+    rx_overflows: u32,
     est: Estimator,
     /// Accumulator and tuning word at the start of each DAC half-buffer.
     half: [(u32, u32); 2],
@@ -298,6 +303,7 @@ impl<'t, const N: usize> Device<'t, N> {
             contact,
             running: false,
             faults: 0,
+            rx_overflows: 0,
             est,
             half: [(0, 0); 2],
         };
@@ -377,7 +383,14 @@ impl<'t, const N: usize> Device<'t, N> {
             settled: self.dds.settled(),
             faults: self.faults,
             measuring: self.est.busy(),
+            rx_overflows: self.rx_overflows,
         }
+    }
+
+    /// Counts `n` received bytes the link had to drop (receive queue full);
+    /// reported in [`Status::rx_overflows`].
+    pub fn count_rx_overflow(&mut self, n: u32) {
+        self.rx_overflows = self.rx_overflows.saturating_add(n);
     }
 
     fn check_contact(&self, c: &Contact) -> Result<(), DeviceError> {
