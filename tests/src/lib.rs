@@ -49,6 +49,28 @@ pub fn fixed(d: &Drive<f64>, v: f64, n: u32) -> f64 {
         .mu_over_mu0
 }
 
+/// The fixed-step (paper's) scheme from rest with `n` steps per period at
+/// dimensionless velocity `v`: `(μ/μ₀, its stated error bound)` — the bound
+/// `(1 + b)(K_D/N² + N·ε)` of `fixed_step::error_bound`, whose constants are
+/// measured independently of the exact solver. Panics if it does not converge.
+pub fn fixed_bounded(d: &Drive<f64>, v: f64, n: u32) -> (f64, f64) {
+    let mut cfg = FixedStepConfig::<f64>::new(n);
+    cfg.max_periods = 2_000_000;
+    let r = run_dimensionless::<f64, Libm>(d, v, &cfg, Start::Rest).expect("fixed-step converges");
+    (r.mu_over_mu0, r.error_bound)
+}
+
+/// The dimensionless critical velocities `(c, c')` of eq. 8 written out by
+/// hand: `c = √(a² + 2ab cos φ + b²)` (forward), `c' = √(a² − 2ab cos φ + b²)`
+/// (backward), in units of ωW₀.
+pub fn critical_velocities(a: f64, b: f64, phi: f64) -> (f64, f64) {
+    let k = 2.0 * a * b * phi.cos();
+    (
+        (a * a + k + b * b).max(0.0).sqrt(),
+        (a * a - k + b * b).max(0.0).sqrt(),
+    )
+}
+
 /// Brute-force static interval: `[max_θ(−1 + a cos θ − b cos(θ+φ)), min_θ(1 − a cos θ − b cos(θ+φ))]`
 /// on a grid of `n` phases (an upper bound on `lo`'s error of O(1/n²)).
 pub fn static_interval_grid(a: f64, b: f64, phi: f64, n: usize) -> (f64, f64) {
