@@ -3,7 +3,7 @@
 #![deny(missing_docs)]
 
 use model_core::device::DeviceConfig;
-use model_core::fixed_step::{run_dimensionless, FixedStepConfig, Start};
+use model_core::fixed_step::{run_dimensionless, FixedStepConfig, Start, State};
 use model_core::{Drive, Groups, Libm, Scene, SceneParams};
 
 /// The dimensionless scene with groups `(a, b, φ)`.
@@ -57,6 +57,36 @@ pub fn fixed_bounded(d: &Drive<f64>, v: f64, n: u32) -> (f64, f64) {
     let mut cfg = FixedStepConfig::<f64>::new(n);
     cfg.max_periods = 2_000_000;
     let r = run_dimensionless::<f64, Libm>(d, v, &cfg, Start::Rest).expect("fixed-step converges");
+    (r.mu_over_mu0, r.error_bound)
+}
+
+/// The fixed-step scheme started on the band edge where a clamp in the
+/// direction of motion is certain in the first step: `(μ/μ₀, stated bound)`.
+///
+/// While stuck, the stretch moves at `V − b sin(θ+φ)` and the band edge `+w` at
+/// `a sin θ`, so a forward clamp (V > 0) needs `V > Im((b e^{iφ} + a) e^{iθ})`,
+/// which holds where that sinusoid is at its minimum `−c`: start there with
+/// `s = +w`. For V < 0, start at the maximum `c'` of `Im((b e^{iφ} − a) e^{iθ})`
+/// with `s = −w`. The scheme's steady state does not depend on the start, and
+/// it is proven steady two periods after the first clamp, so the run takes
+/// ≈ 3 periods at any |V| (from rest it takes ≈ 1/(2π|V|)). Panics if the run
+/// does not converge.
+pub fn fixed_warm(d: &Drive<f64>, v: f64, n: u32) -> (f64, f64) {
+    let (bc, bs) = (d.bc, d.bs); // b cos φ, b sin φ
+    let phase = if v > 0.0 {
+        -std::f64::consts::FRAC_PI_2 - bs.atan2(bc + d.a)
+    } else {
+        std::f64::consts::FRAC_PI_2 - bs.atan2(bc - d.a)
+    };
+    // A few ulps inside the band, so rounding of w(θ) cannot reject the start.
+    let w = (1.0 - d.a * phase.cos()) * (1.0 - 4.0 * f64::EPSILON);
+    let start = Start::State(State {
+        phase,
+        stretch: if v > 0.0 { w } else { -w },
+    });
+    let mut cfg = FixedStepConfig::<f64>::new(n);
+    cfg.max_periods = 2_000_000;
+    let r = run_dimensionless::<f64, Libm>(d, v, &cfg, start).expect("fixed-step converges");
     (r.mu_over_mu0, r.error_bound)
 }
 
