@@ -87,13 +87,26 @@ fn static_interval_matches_brute_force_and_paper() {
         // (2/μ₀)(k_x/k_z)Δu_zΔu_x/u_z0² is 2ab): rounding of a few ulps.
         let eq18 = 1.0 - (a * a + 2.0 * a * b * phi.cos() + b * b).sqrt();
         let eq19 = 1.0 - (a * a - 2.0 * a * b * phi.cos() + b * b).sqrt();
-        assert!((st.paper_eq18_forward - eq18).abs() <= 1e-14, "{} vs {eq18}", st.paper_eq18_forward);
+        assert!(
+            (st.paper_eq18_forward - eq18).abs() <= 1e-14,
+            "{} vs {eq18}",
+            st.paper_eq18_forward
+        );
         assert!((st.paper_eq19_backward - eq19).abs() <= 1e-14);
         // Eq. 18 is the largest u_x0 satisfying eq. 12 (upper side, modulus
         // dropped as in the paper) and eq. 19 the largest |u_x0| of the lower
         // side: the brute-force maximum over the phase grid, within its grid error.
-        assert!((st.paper_eq18_forward - hi).abs() <= tol, "eq. 18 {} vs grid {hi}", st.paper_eq18_forward);
-        assert!((st.paper_eq19_backward + lo).abs() <= tol, "eq. 19 {} vs grid {}", st.paper_eq19_backward, -lo);
+        assert!(
+            (st.paper_eq18_forward - hi).abs() <= tol,
+            "eq. 18 {} vs grid {hi}",
+            st.paper_eq18_forward
+        );
+        assert!(
+            (st.paper_eq19_backward + lo).abs() <= tol,
+            "eq. 19 {} vs grid {}",
+            st.paper_eq19_backward,
+            -lo
+        );
         assert_eq!(st.exists(), lo <= hi || (lo - hi).abs() <= tol);
     }
 }

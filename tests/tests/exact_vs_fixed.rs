@@ -205,7 +205,11 @@ fn phi_half_pi_is_symmetric_while_static_equilibrium_exists() {
     let (near2, fb2) = fixed_bounded(&d, 2.0 * v, 1 << 14);
     let extrapolated = 2.0 * near - near2;
     let tol = 2.0 * fb1 + fb2 + 10.0 * v * v;
-    println!("μ(1e-4) − μ(0+) = {:.3e}; 2μ(V) − μ(2V) − μ(0+) = {:.2e} (tol {tol:.1e})", near - p, extrapolated - p);
+    println!(
+        "μ(1e-4) − μ(0+) = {:.3e}; 2μ(V) − μ(2V) − μ(0+) = {:.2e} (tol {tol:.1e})",
+        near - p,
+        extrapolated - p
+    );
     assert!(
         (extrapolated - p).abs() <= tol,
         "2μ(V) − μ(2V) = {extrapolated}, μ(0+) = {p}"

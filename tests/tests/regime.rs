@@ -145,12 +145,18 @@ fn rule_of_thumb_is_exact_on_the_curve_a_equals_one_over_sqrt_2_plus_2_cos_phi()
     // φ = 0°, 180° to 1/√2 at φ = 90°, 270°. On that curve, below ratio 1 both
     // critical velocities are < 1 (a static equilibrium, no actuator) and
     // differ when cos φ ≠ 0 (a ratchet); above it max(c, c') > 1 (an actuator).
-    for deg in [0.0f64, 20.0, 45.0, 60.0, 100.0, 150.0, 180.0, 235.0, 300.0, 350.0] {
+    for deg in [
+        0.0f64, 20.0, 45.0, 60.0, 100.0, 150.0, 180.0, 235.0, 300.0, 350.0,
+    ] {
         let phi = deg.to_radians();
         let a = 1.0 / (2.0 + 2.0 * phi.cos().abs()).sqrt();
         assert!((r_star(a, phi) - 1.0).abs() < 1e-12);
         for r in [0.3, 0.9, 0.99, 0.999] {
-            assert_eq!(regime(a, r, phi), Regime::DynamicRatchet, "φ={deg}° a={a} r={r}");
+            assert_eq!(
+                regime(a, r, phi),
+                Regime::DynamicRatchet,
+                "φ={deg}° a={a} r={r}"
+            );
         }
         for r in [1.001, 1.01, 1.5, 4.0] {
             assert_eq!(regime(a, r, phi), Regime::Actuator, "φ={deg}° a={a} r={r}");
@@ -160,9 +166,17 @@ fn rule_of_thumb_is_exact_on_the_curve_a_equals_one_over_sqrt_2_plus_2_cos_phi()
         let (hi, lo) = (1.1 * a, 0.9 * a);
         assert!(r_star(hi, phi) < 0.95 && r_star(lo, phi) > 1.05);
         let r = (1.0 + r_star(hi, phi)) / 2.0;
-        assert_eq!(regime(hi, r, phi), Regime::Actuator, "φ={deg}° a={hi} r={r}");
+        assert_eq!(
+            regime(hi, r, phi),
+            Regime::Actuator,
+            "φ={deg}° a={hi} r={r}"
+        );
         let r = (1.0 + r_star(lo, phi)) / 2.0;
-        assert_eq!(regime(lo, r, phi), Regime::DynamicRatchet, "φ={deg}° a={lo} r={r}");
+        assert_eq!(
+            regime(lo, r, phi),
+            Regime::DynamicRatchet,
+            "φ={deg}° a={lo} r={r}"
+        );
     }
     // The example: a = 1/√3, φ = 60°.
     let a = 1.0 / 3f64.sqrt();
@@ -187,7 +201,11 @@ fn random_scene(rng: &mut Rng, kind: usize) -> (f64, f64, f64) {
         0 => {
             let a = rng.range(0.05, 0.9);
             let b = rng.range(0.0, (0.95f64 * 0.95 - a * a).sqrt());
-            let phi = if rng.uniform() < 0.5 { FRAC_PI_2 } else { 3.0 * FRAC_PI_2 };
+            let phi = if rng.uniform() < 0.5 {
+                FRAC_PI_2
+            } else {
+                3.0 * FRAC_PI_2
+            };
             (a, b, phi)
         }
         1 => {

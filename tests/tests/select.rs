@@ -53,7 +53,10 @@ fn choice_bound_and_value_over_random_scenes() {
                 // with one rounding of slack.
                 let (c, cb) = critical_velocities(a, b, s.params().phi);
                 let c_here = if v > 0.0 { c } else { cb };
-                assert!(v != 0.0 && v.abs() >= c_here * (1.0 - 1e-15), "v={v} c={c_here}");
+                assert!(
+                    v != 0.0 && v.abs() >= c_here * (1.0 - 1e-15),
+                    "v={v} c={c_here}"
+                );
                 assert_eq!(m, v.signum());
                 assert_eq!(ans.bound, 0.0);
             }
@@ -136,7 +139,9 @@ fn choice_bound_and_value_over_random_scenes() {
             other => panic!("inconsistent answer {other:?}"),
         }
     }
-    println!("sliding/static/eq21/eq24/exact = {seen:?}; worst exact gap / allowed = {worst_exact:.3}");
+    println!(
+        "sliding/static/eq21/eq24/exact = {seen:?}; worst exact gap / allowed = {worst_exact:.3}"
+    );
     // Every branch was exercised.
     assert!(seen.iter().all(|&n| n > 20), "{seen:?}");
 }
