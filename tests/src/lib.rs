@@ -90,6 +90,52 @@ pub fn fixed_warm(d: &Drive<f64>, v: f64, n: u32) -> (f64, f64) {
     (r.mu_over_mu0, r.error_bound)
 }
 
+/// The sampling (quadrature) error of a sampled plant: the range `(min, max)`
+/// over sampling offsets of `⟨s⟩_sampled − ⟨s⟩` (units of μ₀), where the paper's
+/// scheme — written out here, independent of `model_core::fixed_step` — runs
+/// with `samples·sub` steps per period and the mean is taken either over every
+/// step (`⟨s⟩`) or over every `sub`-th step only, as an estimator that sees
+/// `samples` ADC samples per period does. The stretch has kinks (stick → slip),
+/// so the sampled mean is off by O((2π/samples)²), depending on where the
+/// samples fall: this is that error for every offset on the sub-step grid.
+/// The run is steady after `D/(2π|V|) + 4` periods, `D = 2(1 + a + b)` (the
+/// transient bound derived in tests/stability.rs).
+pub fn sampling_error_range(
+    a: f64,
+    b: f64,
+    phi: f64,
+    v: f64,
+    samples: u32,
+    sub: u32,
+) -> (f64, f64) {
+    let n = (samples * sub) as usize;
+    let delta = std::f64::consts::TAU / n as f64;
+    let periods = (2.0 * (1.0 + a + b) / (std::f64::consts::TAU * v.abs())).ceil() as usize + 6;
+    let (mut s, mut x_prev) = (0.0f64, b * phi.cos());
+    let (mut ss, mut ws) = (vec![0.0; n], vec![0.0; n]);
+    for _ in 0..periods {
+        for k in 0..n {
+            let th = delta * (k + 1) as f64;
+            let x = b * (th + phi).cos();
+            let w = 1.0 - a * th.cos();
+            s = (s + v * delta + (x - x_prev)).clamp(-w, w);
+            x_prev = x;
+            ss[k] = s;
+            ws[k] = w;
+        }
+    }
+    let full = ss.iter().sum::<f64>() / ws.iter().sum::<f64>();
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for j in 0..sub as usize {
+        let num: f64 = ss.iter().skip(j).step_by(sub as usize).sum();
+        let den: f64 = ws.iter().skip(j).step_by(sub as usize).sum();
+        let e = num / den - full;
+        lo = lo.min(e);
+        hi = hi.max(e);
+    }
+    (lo, hi)
+}
+
 /// The dimensionless critical velocities `(c, c')` of eq. 8 written out by
 /// hand: `c = √(a² + 2ab cos φ + b²)` (forward), `c' = √(a² − 2ab cos φ + b²)`
 /// (backward), in units of ωW₀.
