@@ -228,7 +228,7 @@ fn classification_agrees_with_brute_force_scan() {
     // Brute force, independent of `classify` (which uses the exact solver's
     // one-sided limits and critical velocities): the paper's fixed-step scheme
     // (N = 2048, each run warm-started on the band edge so it is proven steady
-    // in ≈ 3 periods, with its stated bound fb = 10(1 + b)/N² + N·ε) on a
+    // in ≈ 3 periods, with its stated bound fb = (1 + b)(10/N² + N·ε)) on a
     // grid of ±|v| — 48 velocities up to 1.05·max(v_c±) plus |v| = 10⁻⁶·max(v_c±)
     // for the force at rest. Actuator iff μ(v)·v < −fb somewhere; otherwise
     // active control iff max|μ(v) + μ(−v)| ≤ 2fb (the two errors add), else a
