@@ -61,9 +61,7 @@ fn qemu() -> Qemu {
             "null",
         ])
         .arg("-serial")
-        .arg(format!(
-            "tcp:127.0.0.1:{port},server=on,wait=on,nodelay=on"
-        ))
+        .arg(format!("tcp:127.0.0.1:{port},server=on,wait=on,nodelay=on"))
         .args([
             "-semihosting-config",
             "enable=on,target=native",
@@ -245,7 +243,10 @@ impl RawLink {
             );
             self.send(&[0]);
             self.send(&wire::get_status(0));
-            if self.next(Instant::now() + Duration::from_millis(100)).is_some() {
+            if self
+                .next(Instant::now() + Duration::from_millis(100))
+                .is_some()
+            {
                 break;
             }
         }
@@ -403,6 +404,9 @@ fn pipelined_requests_no_loss_or_counted_overflow() {
         assert_eq!(lost, 0, "requests lost without a counted overflow");
         assert_eq!(errors, 0);
     } else {
-        assert!(lost <= 2 * dropped, "lost {lost} > 2 × {dropped} dropped bytes");
+        assert!(
+            lost <= 2 * dropped,
+            "lost {lost} > 2 × {dropped} dropped bytes"
+        );
     }
 }
