@@ -105,10 +105,11 @@ impl LinkIo for Usart2Link {
 /// Why `WFI` under PRIMASK and not `WFE`/`SEV`: the masked section makes the
 /// check and the sleep one step without any extra state — an interrupt after
 /// the check stays pending and `WFI` does not sleep on a pending interrupt,
-/// whatever PRIMASK says (ARMv7-M ARM B1.5.19). `WFE` needs every handler
-/// that produces work to `SEV` (or SEVONPEND), and its event latch is also set
-/// by unrelated events, so it wakes for nothing more often; the masked
-/// section costs a few cycles of interrupt latency (the check reads two
+/// whatever PRIMASK says (ARMv7-M ARM B1.5.19). `WFE` would need every
+/// handler that produces work to `SEV` (or SCR.SEVONPEND), and its event
+/// register is one more piece of state that any event sets, so the loop
+/// would have to be proved against it as well. The price of the masked
+/// section is a few cycles of added interrupt latency (the check reads two
 /// queue lengths).
 struct CortexM4;
 
