@@ -252,7 +252,7 @@ struct Run {
 /// requests plus the new one total at most w bytes. The device's USART
 /// handler pushes each byte or drops and counts it; its transmit interrupt
 /// sends one byte per tick; its loop runs [`serve`] every `loop_every`
-/// ticks. A GetDrive answer (≈ 50 bytes) is five times its request (10 bytes),
+/// ticks. A GetDrive answer (54 bytes) is over five times its request (10 bytes),
 /// so without a window the answers back up into the queue.
 fn line(n: u32, window: Option<usize>, loop_every: u64) -> Run {
     let t = SineTable::<1024>::libm();
@@ -340,6 +340,32 @@ fn line(n: u32, window: Option<usize>, loop_every: u64) -> Run {
         other => panic!("no status: {other:?}"),
     }
     run
+}
+
+#[test]
+fn get_drive_answers_are_five_times_longer_than_the_requests() {
+    // The premise of the flood below and of the GetDrive example in
+    // docs/protocol.md ("10 bytes in, 54 out").
+    let t = SineTable::<1024>::libm();
+    let mut dev = Device::new(integration_tests::board_config_1mhz(), &t, CONTACT).unwrap();
+    let mut sim = Sim::default();
+    let req = wire::request(1, GET_DRIVE);
+    for &b in &req {
+        sim.arrive(b);
+    }
+    serve(&mut server(), &mut dev, &mut sim);
+    let answer: Vec<u8> = std::iter::from_fn(|| sim.tx.pop()).collect();
+    assert_eq!(req.len(), 10);
+    assert!(
+        answer.len() > 50 && answer.len() >= 5 * req.len(),
+        "{}",
+        answer.len()
+    );
+    eprintln!(
+        "GetDrive: {} bytes in, {} bytes out",
+        req.len(),
+        answer.len()
+    );
 }
 
 #[test]
