@@ -12,7 +12,9 @@ use model_core::board::link::{
 };
 use model_core::dds::SineTable;
 use model_core::device::{Contact, Device};
-use model_core::protocol::{decode, Body, Deframed, Deframer, Frame, Info, Response, MAX_FRAME};
+use model_core::protocol::{
+    decode, Body, Deframed, Deframer, Frame, Info, Response, MAX_FRAME, PROTOCOL_VERSION,
+};
 use model_core::server::Server;
 
 const CONTACT: Contact = Contact {
@@ -31,6 +33,9 @@ fn server() -> Server {
 
 #[test]
 fn hand_frames_follow_the_spec() {
+    // The hand-built frames carry the version of docs/protocol.md; a bump of
+    // the protocol must bump `wire::VERSION` too (one line).
+    assert_eq!(wire::VERSION, PROTOCOL_VERSION, "update wire::VERSION");
     // Check value of CRC-32/ISO-HDLC (docs/protocol.md, "Transport").
     assert_eq!(wire::crc32(b"123456789"), 0xCBF4_3926);
     // Varint example of the postcard table: 300 = ac 02.
