@@ -1,6 +1,7 @@
-//! μ at one velocity by the chosen method: the single place where the CLI
-//! turns a scene and a velocity into a number (shared by `mu`, `curve`, the
-//! figures).
+//! μ at one point by a method: the single place where the CLI turns a scene
+//! and a velocity into a number (shared by `mu`, `curve`, `map --v-rel`, the
+//! figures and the methods bench), and the one-line messages of the solvers'
+//! failures.
 
 use clap::ValueEnum;
 use model_core::analytic::approx::{approx_mu_over_mu0, ApproxError, MAX_ERROR_OVER_A};
