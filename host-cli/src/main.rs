@@ -36,7 +36,7 @@ struct Cli {
 enum Command {
     /// μ at one sliding velocity
     Mu(cmd::mu::MuCmd),
-    /// μ(v) over a velocity range: CSV rows v0,v_rel,mu,mu_over_mu0
+    /// μ(v) over a velocity range: CSV rows v0,v_rel,mu,mu_over_mu0,method,error_bound_over_mu0
     Curve(cmd::curve::CurveCmd),
     /// Critical velocities, the exact static interval and static friction beside the paper's eqs. 18/19
     Static(cmd::statics::StaticCmd),
@@ -51,7 +51,7 @@ enum Command {
         #[command(subcommand)]
         cmd: device::DeviceCmd,
     },
-    /// Speed against accuracy: work-precision charts
+    /// Speed against accuracy: work-precision, methods, stability, dac
     Bench {
         #[command(subcommand)]
         cmd: bench::BenchCmd,
@@ -120,6 +120,14 @@ fn clap_error(e: clap::Error) -> ExitCode {
         .map(|a| a.split_whitespace().next().unwrap_or("").to_string())
         .unwrap_or_default();
     let msg = match e.kind() {
+        ErrorKind::ValueValidation if refused(&e).is_some() => {
+            format!("{arg}: {}", refused(&e).unwrap_or_default())
+        }
+        ErrorKind::InvalidValue if e.get(ContextKind::ValidValue).is_some() => {
+            let val = ctx(ContextKind::InvalidValue).unwrap_or_default();
+            let valid = ctx(ContextKind::ValidValue).unwrap_or_default();
+            format!("{arg}: invalid value '{val}' (one of: {valid})")
+        }
         ErrorKind::InvalidValue | ErrorKind::ValueValidation => {
             let val = ctx(ContextKind::InvalidValue).unwrap_or_default();
             let reason = e
@@ -161,3 +169,11 @@ fn clap_error(e: clap::Error) -> ExitCode {
 }
 
 use std::error::Error as _;
+
+/// The reason of a value refused by one of our value parsers
+/// ([`args::Refused`]), printed as `--flag: reason`.
+fn refused(e: &clap::Error) -> Option<String> {
+    e.source()
+        .and_then(|s| s.downcast_ref::<args::Refused>())
+        .map(|r| r.to_string())
+}

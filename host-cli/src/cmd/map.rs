@@ -32,8 +32,8 @@ pub struct MapCmd {
     /// Largest phase, degrees
     #[arg(long, default_value_t = 360.0, allow_hyphen_values = true)]
     pub phi_max_deg: f64,
-    /// Cells per axis
-    #[arg(long, default_value_t = 120)]
+    /// Cells per axis (2 to 1000)
+    #[arg(long, default_value_t = 120, allow_hyphen_values = true, value_parser = crate::args::count::<usize, 2>)]
     pub res: usize,
     /// Plot file (.svg or .png)
     #[arg(long, value_name = "FILE")]
@@ -84,8 +84,8 @@ impl MapCmd {
                 "--phi-max-deg: must be greater than --phi-min-deg",
             ));
         }
-        if a.res < 2 || a.res > 1000 {
-            return Err(CliError::usage("--res: must be between 2 and 1000"));
+        if a.res > 1000 {
+            return Err(CliError::usage("--res: must be ≤ 1000"));
         }
         crate::plot::ext(&a.plot)?;
         a.how.validate()?;
