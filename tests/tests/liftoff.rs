@@ -440,3 +440,82 @@ fn intermittent_scene_below_one_is_the_permanent_scene() {
         }
     }
 }
+
+#[test]
+fn select_answers_lift_off_scenes_within_tol() {
+    // select::mu_within on intermittent scenes with a ≥ 1: the value against
+    // the brute force (N = 2^16, whose own error is ≤ (1 + a + b)·2.4/N² ≈
+    // 6e-9 here by the measured constant of the same scheme) within the
+    // answer's bound + 1e-8; sliding answers exactly ±1; v0 = 0 gives a value.
+    use model_core::select::{mu_within, Method, Value};
+    let mut counts = [0usize; 2];
+    for (a, b, phi, v) in random_scenes(18, 150) {
+        let g = Groups {
+            duz_rel: a,
+            dux_rel: b,
+            phi,
+        };
+        let s = Scene::dimensionless_with_contact(g, ContactMode::Intermittent).unwrap();
+        let ans = mu_within::<f64, Libm>(&s, v, 1e-6).unwrap();
+        let Value::Mu(m) = ans.value else {
+            panic!("a={a}: lift-off at rest must give one value")
+        };
+        let bf = brute_force(a, b, phi, v, 1 << 16);
+        assert!(
+            (m - bf).abs() <= ans.bound + 1e-8,
+            "a={a} b={b} phi={phi} V={v}: {m} vs {bf}"
+        );
+        match ans.method {
+            Method::Sliding => {
+                assert_eq!(m.abs(), 1.0);
+                counts[0] += 1;
+            }
+            Method::Exact => counts[1] += 1,
+            other => panic!("lift-off answered by {other:?}"),
+        }
+    }
+    // The random velocities reach 1.2 V_c: both kinds of answer occur.
+    assert!(counts[0] > 0 && counts[1] > 0, "{counts:?}");
+    let g = Groups {
+        duz_rel: 1.5,
+        dux_rel: 0.3,
+        phi: 0.2,
+    };
+    let s = Scene::dimensionless_with_contact(g, ContactMode::Intermittent).unwrap();
+    assert!(matches!(
+        mu_within::<f64, Libm>(&s, 0.1, 1e-12),
+        Err(model_core::select::SelectError::ToleranceTooTight { .. })
+    ));
+}
+
+#[test]
+fn regimes_with_lift_off() {
+    // μ(0) by the brute force (N = 2^16, error ≤ 1e-8 as above) decides the
+    // actuator class wherever |μ(0)| is clear of the tolerance; a normal-only
+    // drive (b = 0) is symmetric with μ(0) = 0: active control.
+    use model_core::model::liftoff::regime::classify;
+    use model_core::regime::{ClassifyOptions, Regime};
+    let opts = ClassifyOptions::<f64>::default();
+    let mut actuators = 0;
+    for (a, b, phi, _) in random_scenes(19, 60) {
+        let d = Drive::new::<Libm>(a, b, phi);
+        let c = classify::<f64, Libm>(&d, &opts).unwrap();
+        let m0 = brute_force(a, b, phi, 0.0, 1 << 16);
+        if m0.abs() > 1e-6 {
+            assert_eq!(
+                c.regime,
+                Regime::Actuator,
+                "a={a} b={b} phi={phi}: μ(0) = {m0}"
+            );
+            actuators += 1;
+        }
+        assert!((c.mu_at_rest - m0).abs() <= 1e-7);
+    }
+    assert!(actuators > 0);
+    for a in [1.0, 1.7, 3.0] {
+        let d = Drive::new::<Libm>(a, 0.0, 0.0);
+        let c = classify::<f64, Libm>(&d, &opts).unwrap();
+        assert_eq!(c.regime, Regime::ActiveControl, "a={a}: {c:?}");
+        assert!(brute_force(a, 0.0, 0.0, 0.0, 1 << 12).abs() <= 1e-12);
+    }
+}

@@ -78,11 +78,14 @@
 //!
 //! **Static friction.** There is none in the permanent-contact sense: the
 //! state is reset at every landing, the force at rest `μ(0)` is unique and
-//! the velocity law is continuous through `V = 0`. "Regime" at rest is then
-//! the sign of `μ(0)`: a contact at rest is pushed forward (actuator,
-//! `μ(0) < 0`: the plane is driven backward relative to the body) or backward.
-//! The permanent-contact [`crate::model::regime`], [`crate::model::analytic`]
-//! static analysis and [`crate::model::select`] refuse lift-off drives.
+//! the velocity law is continuous through `V = 0`; no static interval exists
+//! (a body held at rest feels the force `μ(0)·⟨f_z⟩`, whatever its history).
+//! [`regime::classify`] classifies by the sign of `μ(0)` and the symmetry of
+//! the law. [`crate::model::select::mu_within`] answers lift-off scenes with
+//! this solver; the permanent-contact [`crate::model::regime`], the
+//! [`crate::model::analytic`] formulas (critical velocity eq. 8, static
+//! friction, approximations eqs. 21/24, all derived for permanent contact)
+//! and [`crate::model::exact`] refuse or do not apply to lift-off drives.
 //!
 //! The fixed-step counterpart with exact landing is [`stepping`].
 
@@ -91,6 +94,7 @@ use crate::model::exact::precision_constant;
 use crate::model::float::{Float, Libm, Math};
 use crate::model::scene::{ContactMode, Drive, Param, Scene, SceneError};
 
+pub mod regime;
 pub mod stepping;
 
 /// Above this precision part of the bound the solvers refuse with
