@@ -519,3 +519,24 @@ fn regimes_with_lift_off() {
         assert!(brute_force(a, 0.0, 0.0, 0.0, 1 << 12).abs() <= 1e-12);
     }
 }
+
+#[test]
+fn mean_normal_force_closed_form() {
+    // ⟨w⁺⟩ (eq. L4) against the midpoint rule of max(1 − a cos θ, 0) over a
+    // period with 2^20 points (error ≤ a·(2π)²/(24·N²)·… plus the kink at θ_c,
+    // O(a/N²): < 1e-10 here); 1 at a = 1.
+    for a in [1.0, 1.000_001, 1.3, 2.0, 10.0, 1e3] {
+        let n = 1 << 20;
+        let h = TAU / f64::from(n);
+        let numeric: f64 = (0..n)
+            .map(|i| (1.0 - a * ((f64::from(i) + 0.5) * h).cos()).max(0.0))
+            .sum::<f64>()
+            / f64::from(n);
+        let closed = liftoff::mean_band::<f64, Libm>(a);
+        assert!(
+            (closed - numeric).abs() <= 1e-10 * a,
+            "a={a}: {closed} vs {numeric}"
+        );
+    }
+    assert_eq!(liftoff::mean_band::<f64, Libm>(1.0), 1.0);
+}

@@ -93,7 +93,8 @@ pub enum SceneError {
     Negative(Param),
     /// Δu_z ≥ u_z0 (or Δu_z/u_z0 ≥ 1): the spring would lift off the plane at
     /// the trough of the normal oscillation, which is outside this model
-    /// (the paper assumes Δu_z < u_z0, §2).
+    /// (the paper assumes Δu_z < u_z0, §2). Only for [`ContactMode::Permanent`]
+    /// scenes; [`ContactMode::Intermittent`] accepts it.
     LiftOff,
     /// The amplitude ratio (eq. 26) needs Δu_z > 0.
     RatioNeedsNormalAmplitude,
@@ -167,7 +168,7 @@ pub struct SceneParams<T> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Groups<T> {
-    /// `a = Δu_z/u_z0`, in `[0, 1)`.
+    /// `a = Δu_z/u_z0`, in `[0, 1)` (any `a ≥ 0` for [`ContactMode::Intermittent`]).
     pub duz_rel: T,
     /// `b = k_xΔu_x/(μ₀ k_z u_z0)`, `≥ 0`.
     pub dux_rel: T,

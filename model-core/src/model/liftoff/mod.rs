@@ -179,9 +179,7 @@ pub fn error_bound<T: Float, M: Math<T>>(d: &Drive<T>) -> T {
 /// `⟨w⁺⟩ = (π − θ_c + √(a² − 1))/π` (eq. L4): the mean normal force in units
 /// of `k_z u_z0`, for `a ≥ 1` (1 at `a = 1`).
 pub fn mean_band<T: Float, M: Math<T>>(a: T) -> T {
-    let root = M::sqrt(((a - T::ONE) * (a + T::ONE)).max(T::ZERO));
-    let theta_c = M::atan2(root, T::ONE);
-    (T::PI - theta_c + root) / T::PI
+    Window::of::<M>(a).band_integral(a) / T::TAU
 }
 
 /// Checks a drive for the lift-off solvers.
