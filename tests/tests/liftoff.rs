@@ -540,3 +540,58 @@ fn mean_normal_force_closed_form() {
     }
     assert_eq!(liftoff::mean_band::<f64, Libm>(1.0), 1.0);
 }
+
+#[test]
+fn window_arcs_match_the_brute_force_states() {
+    // liftoff::window_arcs against the state of an independent brute-force run
+    // (N = 2^16): inside every arc, away from its ends by 5e-3 rad (the brute
+    // force decides events within a step, 1e-4 rad, and tangential touches
+    // within O(√step)), the brute force sticks where the arc sticks and is
+    // clamped to +w / −w where the arc slips forward / backward. The arcs
+    // tile the window [θ_c, 2π − θ_c] and their μ is the solver's.
+    use model_core::exact::ArcKind;
+    let mut checked = 0usize;
+    for (a, b, phi, v) in random_scenes(20, 120) {
+        let d = Drive::new::<Libm>(a, b, phi);
+        let (m, arcs) = liftoff::window_arcs::<f64, Libm>(&d, v).unwrap();
+        assert_eq!(m, liftoff::mu_over_mu0::<f64, Libm>(&d, v).unwrap());
+        let tc = (1.0 / a).acos();
+        assert!((arcs[0].start - tc).abs() <= 1e-12);
+        assert!((arcs[arcs.len() - 1].end - (TAU - tc)).abs() <= 1e-12);
+        for pair in arcs.windows(2) {
+            assert_eq!(pair[0].end, pair[1].start);
+        }
+        // Brute-force states on the grid from the landing.
+        let n = 1 << 16;
+        let h = TAU / f64::from(n);
+        let ux = |t: f64| v * t + b * (t + phi).cos();
+        let (mut t, mut s) = (tc, 0.0f64);
+        let mut states = Vec::new();
+        while t + h < TAU - tc {
+            let w = 1.0 - a * (t + h).cos();
+            let trial = s + ux(t + h) - ux(t);
+            let kind = if trial > w {
+                ArcKind::SlipForward
+            } else if trial < -w {
+                ArcKind::SlipBackward
+            } else {
+                ArcKind::Stick
+            };
+            s = trial.clamp(-w, w);
+            t += h;
+            states.push((t, kind));
+        }
+        for arc in &arcs {
+            for &(t, kind) in &states {
+                if t > arc.start + 5e-3 && t < arc.end - 5e-3 {
+                    assert_eq!(
+                        kind, arc.kind,
+                        "a={a} b={b} phi={phi} V={v} θ={t}: {arcs:?}"
+                    );
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked > 1_000_000);
+}

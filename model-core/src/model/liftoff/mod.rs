@@ -89,8 +89,10 @@
 //!
 //! The fixed-step counterpart with exact landing is [`stepping`].
 
+use heapless::Vec;
+
 use crate::model::exact::period::{root, wrap_tau, Phase};
-use crate::model::exact::precision_constant;
+use crate::model::exact::{precision_constant, Arc, ArcKind};
 use crate::model::float::{Float, Libm, Math};
 use crate::model::scene::{ContactMode, Drive, Param, Scene, SceneError};
 
@@ -101,10 +103,13 @@ pub mod stepping;
 /// [`LiftOffError::IllConditioned`] (1 % of μ₀), as the permanent solver.
 pub const ILL_CONDITIONED_AT: f64 = 1e-2;
 
-/// Largest number of arcs in one contact window (each of the at most two
-/// forward and two backward slip pieces of a window shorter than 2π, and the
-/// stick arcs between them).
+/// Capacity of [`window_arcs`]' list: a window shorter than 2π holds at most
+/// two forward and two backward slip pieces, each slip runs to its piece's
+/// end, so at most 4 slips and 5 sticks (9 arcs).
 pub const MAX_ARCS: usize = 12;
+
+/// Stick-then-slip steps of the walk (4 slips and the last stick).
+const MAX_STEPS: usize = 5;
 
 /// Why a lift-off solver gave no number.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -311,7 +316,52 @@ pub fn mu_over_mu0<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<T, LiftOf
     if v >= forward_critical::<T, M>(&drive, &window) {
         return Ok(sign);
     }
-    Ok(sign * ContactWindow::new::<M>(&drive, v, window).mean_stretch::<M>()?)
+    Ok(sign * ContactWindow::new::<M>(&drive, v, window).mean_stretch::<M>(None)?)
+}
+
+/// The contact window as a list of arcs (absolute drive phases θ = ωt in
+/// `[θ_L, θ_R]`; the rest of the period is in the air) plus `μ/μ₀`.
+///
+/// # Errors
+/// As [`mu_over_mu0`].
+pub fn window_arcs<T: Float, M: Math<T>>(
+    d: &Drive<T>,
+    v: T,
+) -> Result<(T, Vec<Arc<T>, MAX_ARCS>), LiftOffError> {
+    check_drive(d)?;
+    check_velocity(v)?;
+    let (drive, v, sign) = if v >= T::ZERO {
+        (*d, v, T::ONE)
+    } else {
+        (d.mirrored(), -v, -T::ONE)
+    };
+    let window = Window::of::<M>(drive.a);
+    let mut arcs: Vec<Arc<T>, MAX_ARCS> = Vec::new();
+    if v >= forward_critical::<T, M>(&drive, &window) {
+        let kind = if sign > T::ZERO {
+            ArcKind::SlipForward
+        } else {
+            ArcKind::SlipBackward
+        };
+        let _ = arcs.push(Arc {
+            kind,
+            start: window.landing.at,
+            end: window.lift_off.at,
+        });
+        return Ok((sign, arcs));
+    }
+    // Arcs of the mirrored problem slip the other way.
+    let mirrored = sign < T::ZERO;
+    let mut push = |arc: Arc<T>| {
+        let kind = match (arc.kind, mirrored) {
+            (ArcKind::SlipForward, true) => ArcKind::SlipBackward,
+            (ArcKind::SlipBackward, true) => ArcKind::SlipForward,
+            (kind, _) => kind,
+        };
+        let _ = arcs.push(Arc { kind, ..arc });
+    };
+    let m = ContactWindow::new::<M>(&drive, v, window).mean_stretch::<M>(Some(&mut push))?;
+    Ok((sign * m, arcs))
 }
 
 /// Where an arc ends and what follows.
@@ -499,13 +549,27 @@ impl<T: Float> ContactWindow<T> {
     }
 
     /// `∫ s / ∫ w` over the window: the walk of the module docs.
-    fn mean_stretch<M: Math<T>>(&self) -> Result<T, LiftOffError> {
+    fn mean_stretch<M: Math<T>>(
+        &self,
+        mut record: Option<&mut dyn FnMut(Arc<T>)>,
+    ) -> Result<T, LiftOffError> {
+        let mut emit = |kind: ArcKind, x0: &Phase<T>, x1: &Phase<T>| {
+            if let Some(r) = record.as_mut() {
+                if x1.at > x0.at {
+                    r(Arc {
+                        kind,
+                        start: x0.at,
+                        end: x1.at,
+                    });
+                }
+            }
+        };
         let end = self.window.lift_off;
         let mut total = T::ZERO;
         // Stick from landing with s = 0.
         let mut start = self.window.landing;
         let mut k = -(self.v * start.at) - self.drive_swing(&start);
-        for _ in 0..MAX_ARCS {
+        for _ in 0..MAX_STEPS {
             let forward = self.forward_touch::<M>(k, start.at);
             let backward = self.backward_touch::<M>(k, start.at);
             let event = match (forward, backward) {
@@ -525,11 +589,19 @@ impl<T: Float> ContactWindow<T> {
                         return Err(LiftOffError::Inconsistent);
                     }
                     total += self.stick_integral(k, &start, &end);
+                    emit(ArcKind::Stick, &start, &end);
                     return self.checked_mean(total);
                 }
             };
             total += self.stick_integral(k, &start, &slip_start);
             total += sign * self.band_integral(&slip_start, &slip_end);
+            emit(ArcKind::Stick, &start, &slip_start);
+            let kind = if sign > T::ZERO {
+                ArcKind::SlipForward
+            } else {
+                ArcKind::SlipBackward
+            };
+            emit(kind, &slip_start, &slip_end);
             if slip_end.at >= end.at {
                 return self.checked_mean(total);
             }
