@@ -582,9 +582,12 @@ impl<T: Float> ContactWindow<T> {
                 Some(Event::Forward(s, e)) => (s, e, T::ONE),
                 Some(Event::Backward(s, e)) => (s, e, -T::ONE),
                 None => {
-                    // Stick to lift-off: there s = w = 0 (rounding allowed).
+                    // Stick to lift-off: there s = w = 0, up to rounding and
+                    // the backend's error (a touch its sin/cos misplaced), which
+                    // the bound covers: a miss of δ changes ∫s/∫w by at most δ.
                     let s_end = k + self.v * end.at + self.drive_swing(&end);
-                    let tol = T::from_f64(64.0) * T::EPSILON * (self.rounding_scale + k.abs());
+                    let tol = T::from_f64(64.0) * T::EPSILON * (self.rounding_scale + k.abs())
+                        + T::from_f64(M::MAX_REL_ERROR) * self.rounding_scale;
                     if s_end.abs() > tol {
                         return Err(LiftOffError::Inconsistent);
                     }
