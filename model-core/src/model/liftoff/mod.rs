@@ -593,7 +593,7 @@ impl<T: Float> ContactWindow<T> {
                     }
                     total += self.stick_integral(k, &start, &end);
                     emit(ArcKind::Stick, &start, &end);
-                    return self.checked_mean(total);
+                    return self.checked_mean::<M>(total);
                 }
             };
             total += self.stick_integral(k, &start, &slip_start);
@@ -606,7 +606,7 @@ impl<T: Float> ContactWindow<T> {
             };
             emit(kind, &slip_start, &slip_end);
             if slip_end.at >= end.at {
-                return self.checked_mean(total);
+                return self.checked_mean::<M>(total);
             }
             // Stick again from s = ±w.
             k = sign * self.band(&slip_end) - self.v * slip_end.at - self.drive_swing(&slip_end);
@@ -615,9 +615,13 @@ impl<T: Float> ContactWindow<T> {
         Err(LiftOffError::Inconsistent)
     }
 
-    fn checked_mean(&self, total: T) -> Result<T, LiftOffError> {
+    /// `∫s / ∫w`, checked against `|μ/μ₀| ≤ 1` (exact), allowing rounding
+    /// and the backend's stated error (part of the bound), and clamped to ±1.
+    fn checked_mean<M: Math<T>>(&self, total: T) -> Result<T, LiftOffError> {
         let mu = total / self.window.band_integral(self.a);
-        if !mu.is_finite() || mu.abs() > T::ONE + T::from_f64(1e3) * T::EPSILON {
+        let slack =
+            T::from_f64(1e3) * T::EPSILON + T::from_f64(M::MAX_REL_ERROR) * self.rounding_scale;
+        if !mu.is_finite() || mu.abs() > T::ONE + slack {
             return Err(LiftOffError::Inconsistent);
         }
         Ok(mu.max(-T::ONE).min(T::ONE))
