@@ -177,6 +177,10 @@ impl core::error::Error for LiftOffError {}
 /// `(precision_constant + M::MAX_REL_ERROR)·(1 + a + b)` — the permanent
 /// solver's form with the stretch scale `1 + a + b` (the band reaches `1 + a`).
 /// The ratio to `⟨w⁺⟩ ≥ 1` only shrinks it. Continuous sliding is exact.
+/// Measured (`tests/liftoff.rs`, printed by `cargo test -p integration-tests
+/// --test liftoff -- --nocapture`): against an independent brute force at
+/// N = 65 536 over 300 random scenes the worst gap is 1.2e-9, the brute force's
+/// own O(N⁻²) error; f32 against f64 on the same inputs 9.3e-8·(1 + a + b).
 pub fn error_bound<T: Float, M: Math<T>>(d: &Drive<T>) -> T {
     (precision_constant::<T>() + T::from_f64(M::MAX_REL_ERROR)) * (T::ONE + d.a + d.b)
 }
