@@ -1,4 +1,4 @@
-//! Criterion benches: exact μ evaluation, fixed-step throughput (f32, f64), and
+//! Criterion benches: exact μ evaluation (permanent contact and lift-off), fixed-step throughput (f32, f64), and
 //! the paper's method (fixed-step from rest to 1e-8) against the exact solver.
 //!
 //! `cargo bench -p model-core --bench solvers`
@@ -7,6 +7,7 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use model_core::fixed_step::{run_dimensionless, FixedStepConfig, Start};
+use model_core::model::liftoff::{self, stepping};
 use model_core::{exact, Drive, Libm};
 
 /// A dual-mode ratchet scene with back-and-forth stick–slip (a = 0.5, b = 0.25, φ = 1).
@@ -46,6 +47,47 @@ fn exact_mu(c: &mut Criterion) {
     g.finish();
 }
 
+fn exact_liftoff_mu(c: &mut Criterion) {
+    // The lift-off solver on the same drive with a = 1.5 (the contact is in
+    // the air for |θ| < 48.2°), 64 velocities over (−1.2 V_c⁻, 1.2 V_c⁺)
+    // (about a fifth slide continuously and return ±1 at once).
+    let mut g = c.benchmark_group("exact_liftoff_mu");
+    let d = Drive::new::<Libm>(1.5, 0.25, 1.0);
+    let (cp, cm) = liftoff::critical_velocities::<f64, Libm>(&d).unwrap();
+    let vs: Vec<f64> = (0..64)
+        .map(|i| -1.2 * cm + 1.2 * (cp + cm) * (i as f64 + 0.5) / 64.0)
+        .collect();
+    g.throughput(Throughput::Elements(vs.len() as u64));
+    g.bench_function("f64", |b| {
+        b.iter(|| {
+            let mut acc = 0.0;
+            for &v in &vs {
+                acc += liftoff::mu_over_mu0::<f64, Libm>(black_box(&d), black_box(v)).unwrap();
+            }
+            acc
+        })
+    });
+    let d32 = Drive::new::<Libm>(1.5f32, 0.25, 1.0);
+    let vs32: Vec<f32> = vs.iter().map(|&v| v as f32).collect();
+    g.bench_function("f32", |b| {
+        b.iter(|| {
+            let mut acc = 0.0f32;
+            for &v in &vs32 {
+                acc += liftoff::mu_over_mu0::<f32, Libm>(black_box(&d32), black_box(v)).unwrap();
+            }
+            acc
+        })
+    });
+    // The fixed-step scheme with exact landing at N = 4096 (one window, no
+    // transient), for comparison.
+    g.throughput(Throughput::Elements(1));
+    let v = 0.3 * cp;
+    g.bench_function("stepping_f64_N4096_one_point", |b| {
+        b.iter(|| stepping::mu_over_mu0::<f64, Libm>(black_box(&d), black_box(v), 4096).unwrap())
+    });
+    g.finish();
+}
+
 fn fixed_step_throughput(c: &mut Criterion) {
     let mut g = c.benchmark_group("fixed_step");
     let n = 4096u32;
@@ -61,13 +103,15 @@ fn fixed_step_throughput(c: &mut Criterion) {
             run_dimensionless::<f64, Libm>(black_box(&d), black_box(v), &cfg, Start::Rest).unwrap()
         })
     });
+    // f32 refuses N beyond its precision limit (`max_steps_per_period`, 2 204).
+    let n32 = 2048u32;
     let d32 = Drive::new::<Libm>(0.5f32, 0.25, 1.0);
-    let cfg32 = FixedStepConfig::<f32>::new(n);
+    let cfg32 = FixedStepConfig::<f32>::new(n32);
     let steps32 = run_dimensionless::<f32, Libm>(&d32, v as f32, &cfg32, Start::Rest)
         .unwrap()
         .steps;
     g.throughput(Throughput::Elements(steps32));
-    g.bench_function(BenchmarkId::new("f32_steps", n), |b| {
+    g.bench_function(BenchmarkId::new("f32_steps", n32), |b| {
         b.iter(|| {
             run_dimensionless::<f32, Libm>(
                 black_box(&d32),
@@ -132,6 +176,7 @@ fn paper_method_vs_exact(c: &mut Criterion) {
 criterion_group!(
     benches,
     exact_mu,
+    exact_liftoff_mu,
     fixed_step_throughput,
     paper_method_vs_exact
 );

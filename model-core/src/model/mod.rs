@@ -8,6 +8,7 @@
 //!   (eqs. 17–19 and the exact static interval), approximations (eqs. 21, 24);
 //! * [`fixed_step`] — the paper's explicit scheme (§3, eq. 20);
 //! * [`exact`] — the exact event-driven steady-state solver;
+//! * [`liftoff`] — intermittent contact (`Δu_z ≥ u_z0`): exact and fixed-step solvers;
 //! * [`regime`] — active control / dynamic ratchet / actuator (§3.2);
 //! * [`select`] — the cheapest method whose error bound meets a tolerance.
 //!
@@ -19,6 +20,7 @@ pub mod analytic;
 pub mod exact;
 pub mod fixed_step;
 pub mod float;
+pub mod liftoff;
 pub mod regime;
 pub(crate) mod root;
 pub mod scene;

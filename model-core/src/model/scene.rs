@@ -12,6 +12,22 @@
 //! `u_x(θ) = Vθ + b cos(θ + φ)` with `b = k_xΔu_x/(μ₀ k_z u_z0)`, the velocity
 //! is `V = v₀/(ω W₀)`, and `μ/μ₀ = ⟨s⟩` with `s = u_x − u_x,c` the spring stretch.
 //! That `μ/μ₀` depends on `(V, a, b, φ)` only is the paper's eq. 25.
+//!
+//! # Contact mode
+//!
+//! The paper assumes permanent contact, `Δu_z < u_z0` (`a < 1`), and every
+//! constructor refuses `a ≥ 1` with [`SceneError::LiftOff`] unless the scene
+//! opts in with [`ContactMode::Intermittent`] ([`Scene::new_with_contact`],
+//! [`Scene::from_groups_with_contact`], [`Scene::dimensionless_with_contact`]).
+//! With `a ≥ 1` the spring leaves the plane for `|θ| < θ_c`, `cos θ_c = 1/a`,
+//! and some quantities change meaning (see [`crate::model::liftoff`]):
+//! `μ/μ₀ = ⟨s⟩/⟨w⁺⟩` is normalised by the mean normal force
+//! `⟨f_z⟩ = k_z⟨u_z⁺⟩ = k_z u_z0 ⟨w⁺⟩`, not `k_z u_z0`; the critical velocity
+//! is the one of the contact window, not eq. 8; and the state at rest is
+//! unique (no static interval): the solvers of the permanent contact
+//! ([`crate::model::exact`], [`crate::model::fixed_step`],
+//! [`crate::model::analytic`], [`crate::model::regime`],
+//! [`crate::model::select`]) refuse such drives ([`Drive::is_valid`] is false).
 
 use crate::model::float::{Float, Libm, Math};
 
@@ -77,7 +93,8 @@ pub enum SceneError {
     Negative(Param),
     /// Δu_z ≥ u_z0 (or Δu_z/u_z0 ≥ 1): the spring would lift off the plane at
     /// the trough of the normal oscillation, which is outside this model
-    /// (the paper assumes Δu_z < u_z0, §2).
+    /// (the paper assumes Δu_z < u_z0, §2). Only for [`ContactMode::Permanent`]
+    /// scenes; [`ContactMode::Intermittent`] accepts it.
     LiftOff,
     /// The amplitude ratio (eq. 26) needs Δu_z > 0.
     RatioNeedsNormalAmplitude,
@@ -108,6 +125,20 @@ impl core::fmt::Display for SceneError {
     }
 }
 
+/// Whether the spring may leave the plane (`Δu_z ≥ u_z0`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ContactMode {
+    /// The paper's assumption `Δu_z < u_z0`: `a ≥ 1` is refused
+    /// ([`SceneError::LiftOff`]). The default, and what [`Scene::new`] uses.
+    #[default]
+    Permanent,
+    /// Any `Δu_z ≥ 0`: with `Δu_z ≥ u_z0` the contact lifts off once per
+    /// period ([`crate::model::liftoff`]); with `Δu_z < u_z0` the scene is the
+    /// same as a permanent one.
+    Intermittent,
+}
+
 /// Unvalidated physical parameters of a scene (SI units). Turn them into a
 /// [`Scene`] with [`Scene::new`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -121,7 +152,8 @@ pub struct SceneParams<T> {
     pub kx: T,
     /// u_z0, mean indentation, m (> 0), eq. 1.
     pub uz0: T,
-    /// Δu_z, normal oscillation amplitude, m (0 ≤ Δu_z < u_z0), eq. 1.
+    /// Δu_z, normal oscillation amplitude, m (0 ≤ Δu_z < u_z0, or any
+    /// Δu_z ≥ 0 with [`ContactMode::Intermittent`]), eq. 1.
     pub duz: T,
     /// Δu_x, tangential oscillation amplitude, m (≥ 0), eq. 2.
     pub dux: T,
@@ -136,7 +168,7 @@ pub struct SceneParams<T> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Groups<T> {
-    /// `a = Δu_z/u_z0`, in `[0, 1)`.
+    /// `a = Δu_z/u_z0`, in `[0, 1)` (any `a ≥ 0` for [`ContactMode::Intermittent`]).
     pub duz_rel: T,
     /// `b = k_xΔu_x/(μ₀ k_z u_z0)`, `≥ 0`.
     pub dux_rel: T,
@@ -180,6 +212,15 @@ impl<T: Float> Groups<T> {
     /// # Errors
     /// The first violated condition.
     pub fn validate(&self) -> Result<(), SceneError> {
+        self.validate_with_contact(ContactMode::Permanent)
+    }
+
+    /// Checks the groups for a contact mode: finite, `a ≥ 0` (and `a < 1`
+    /// for [`ContactMode::Permanent`]), `b ≥ 0`.
+    ///
+    /// # Errors
+    /// The first violated condition.
+    pub fn validate_with_contact(&self, contact: ContactMode) -> Result<(), SceneError> {
         check_finite(self.duz_rel, Param::DuzRel)?;
         check_finite(self.dux_rel, Param::DuxRel)?;
         check_finite(self.phi, Param::Phi)?;
@@ -189,7 +230,7 @@ impl<T: Float> Groups<T> {
         if self.dux_rel < T::ZERO {
             return Err(SceneError::Negative(Param::DuxRel));
         }
-        if self.duz_rel >= T::ONE {
+        if self.duz_rel >= T::ONE && contact == ContactMode::Permanent {
             return Err(SceneError::LiftOff);
         }
         Ok(())
@@ -264,6 +305,7 @@ fn w0_of<T: Float>(mu0: T, kz: T, kx: T, uz0: T) -> Result<T, SceneError> {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Scene<T> {
     params: SceneParams<T>,
+    contact: ContactMode,
     /// W₀ = μ₀ k_z u_z0 / k_x, m.
     w0: T,
     drive: Drive<T>,
@@ -297,14 +339,21 @@ impl<T: Float> Drive<T> {
         }
     }
 
-    /// Whether the drive is one a validated scene can produce: all fields
-    /// finite, `0 ≤ a < 1`, `b ≥ 0`, and `b·(cos φ, sin φ)` of length `b`.
-    /// The dimensionless solver entry points refuse any other drive (its
-    /// fields are public, so one can be built by hand).
+    /// Whether the drive is one a validated permanent-contact scene can
+    /// produce: all fields finite, `0 ≤ a < 1`, `b ≥ 0`, and `b·(cos φ, sin φ)`
+    /// of length `b`. The dimensionless solver entry points refuse any other
+    /// drive (its fields are public, so one can be built by hand).
     pub fn is_valid(&self) -> bool {
+        self.is_valid_with_contact(ContactMode::Permanent)
+    }
+
+    /// [`Drive::is_valid`] for a contact mode: [`ContactMode::Intermittent`]
+    /// also accepts any finite `a ≥ 1`.
+    pub fn is_valid_with_contact(&self, contact: ContactMode) -> bool {
         let finite =
             self.a.is_finite() && self.b.is_finite() && self.bc.is_finite() && self.bs.is_finite();
-        if !(finite && self.a >= T::ZERO && self.a < T::ONE && self.b >= T::ZERO) {
+        let a_ok = self.a >= T::ZERO && (self.a < T::ONE || contact == ContactMode::Intermittent);
+        if !(finite && a_ok && self.b >= T::ZERO) {
             return false;
         }
         // |b e^{iφ}|² = b² (5 % slack: micromath's sin/cos are good to 1e-3),
@@ -353,6 +402,16 @@ impl<T: Float> Scene<T> {
     /// [`SceneError::OutOfRange`] for a subnormal input (it has lost relative
     /// precision) or if W₀ or a dimensionless group over- or underflows.
     pub fn new(p: SceneParams<T>) -> Result<Self, SceneError> {
+        Scene::new_with_contact(p, ContactMode::Permanent)
+    }
+
+    /// [`Scene::new`] for a contact mode: [`ContactMode::Intermittent`]
+    /// accepts `Δu_z ≥ u_z0` (the contact lifts off, [`crate::model::liftoff`]).
+    ///
+    /// # Errors
+    /// As [`Scene::new`], without [`SceneError::LiftOff`] for an intermittent contact.
+    pub fn new_with_contact(p: SceneParams<T>, contact: ContactMode) -> Result<Self, SceneError> {
+        let permanent = contact == ContactMode::Permanent;
         check_positive(p.mu0, Param::Mu0)?;
         check_positive(p.kz, Param::Kz)?;
         check_positive(p.kx, Param::Kx)?;
@@ -367,7 +426,7 @@ impl<T: Float> Scene<T> {
         if p.dux < T::ZERO {
             return Err(SceneError::Negative(Param::Dux));
         }
-        if p.duz >= p.uz0 {
+        if permanent && p.duz >= p.uz0 {
             return Err(SceneError::LiftOff);
         }
         // Subnormal inputs have lost relative precision (an f32 u_z0 of 1e-41 m
@@ -390,8 +449,11 @@ impl<T: Float> Scene<T> {
         // W₀ = μ₀ (k_z/k_x) u_z0, formed so that intermediate products stay in range.
         let w0 = w0_of(p.mu0, p.kz, p.kx, p.uz0)?;
         let a = p.duz / p.uz0;
-        if a >= T::ONE {
+        if permanent && a >= T::ONE {
             return Err(SceneError::LiftOff);
+        }
+        if !a.is_finite() {
+            return Err(SceneError::OutOfRange(Param::Duz));
         }
         let b = p.dux / w0;
         if !b.is_finite() {
@@ -409,6 +471,7 @@ impl<T: Float> Scene<T> {
         }
         Ok(Scene {
             params: p,
+            contact,
             w0,
             drive,
         })
@@ -428,22 +491,41 @@ impl<T: Float> Scene<T> {
         omega: T,
         g: Groups<T>,
     ) -> Result<Self, SceneError> {
-        g.validate()?;
+        Scene::from_groups_with_contact(mu0, kz, kx, uz0, omega, g, ContactMode::Permanent)
+    }
+
+    /// [`Scene::from_groups`] for a contact mode.
+    ///
+    /// # Errors
+    /// As [`Scene::new_with_contact`] and [`Groups::validate_with_contact`].
+    pub fn from_groups_with_contact(
+        mu0: T,
+        kz: T,
+        kx: T,
+        uz0: T,
+        omega: T,
+        g: Groups<T>,
+        contact: ContactMode,
+    ) -> Result<Self, SceneError> {
+        g.validate_with_contact(contact)?;
         check_positive(mu0, Param::Mu0)?;
         check_positive(kz, Param::Kz)?;
         check_positive(kx, Param::Kx)?;
         check_positive(uz0, Param::Uz0)?;
         let w0 = w0_of(mu0, kz, kx, uz0)?;
-        Scene::new(SceneParams {
-            mu0,
-            kz,
-            kx,
-            uz0,
-            duz: g.duz_rel * uz0,
-            dux: g.dux_rel * w0,
-            omega,
-            phi: g.phi,
-        })
+        Scene::new_with_contact(
+            SceneParams {
+                mu0,
+                kz,
+                kx,
+                uz0,
+                duz: g.duz_rel * uz0,
+                dux: g.dux_rel * w0,
+                omega,
+                phi: g.phi,
+            },
+            contact,
+        )
     }
 
     /// The purely dimensionless scene: μ₀ = k_z = k_x = u_z0 = ω = 1, so
@@ -453,6 +535,30 @@ impl<T: Float> Scene<T> {
     /// As [`Groups::validate`].
     pub fn dimensionless(g: Groups<T>) -> Result<Self, SceneError> {
         Scene::from_groups(T::ONE, T::ONE, T::ONE, T::ONE, T::ONE, g)
+    }
+
+    /// [`Scene::dimensionless`] for a contact mode.
+    ///
+    /// # Errors
+    /// As [`Groups::validate_with_contact`].
+    pub fn dimensionless_with_contact(
+        g: Groups<T>,
+        contact: ContactMode,
+    ) -> Result<Self, SceneError> {
+        Scene::from_groups_with_contact(T::ONE, T::ONE, T::ONE, T::ONE, T::ONE, g, contact)
+    }
+
+    /// The contact mode the scene was validated with.
+    #[inline]
+    pub fn contact(&self) -> ContactMode {
+        self.contact
+    }
+
+    /// Whether the contact lifts off the plane once per period (`a ≥ 1`,
+    /// only possible with [`ContactMode::Intermittent`]).
+    #[inline]
+    pub fn lifts_off(&self) -> bool {
+        self.drive.a >= T::ONE
     }
 
     /// The physical parameters as given.

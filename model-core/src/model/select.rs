@@ -12,6 +12,14 @@
 //!    `MAX_ERROR_OVER_A · A` (eqs. 21, 24: 0.0144·A) is within the tolerance;
 //! 4. the exact solver ([`crate::model::exact`]), bound [`crate::model::exact::error_bound`].
 //!
+//! A scene that lifts off (`a ≥ 1`, [`crate::model::scene::ContactMode::Intermittent`])
+//! is answered by the lift-off solver ([`crate::model::liftoff`]): continuous
+//! sliding beyond the window's critical velocities ([`Method::Sliding`],
+//! bound 0), otherwise [`Method::Exact`] with bound
+//! [`crate::model::liftoff::error_bound`] — at `v₀ = 0` too, as a
+//! [`Value::Mu`] (μ at rest is unique with lift-off). The approximations and
+//! the static analysis assume permanent contact and are not used.
+//!
 //! The fixed-step integrator is never chosen: it is slower than the exact
 //! solver at every accuracy (`fricctl bench work-precision`) and is used only
 //! when asked for.
@@ -21,6 +29,7 @@ use crate::model::analytic::critical_velocity::CriticalVelocity;
 use crate::model::analytic::static_friction::StaticFriction;
 use crate::model::exact::{self, ExactError};
 use crate::model::float::{Float, Math};
+use crate::model::liftoff::{self, LiftOffError};
 use crate::model::scene::Scene;
 
 /// Which computation answered.
@@ -113,6 +122,9 @@ pub fn mu_within<T: Float, M: Math<T>>(
     let v = scene
         .dimensionless_velocity(v0)
         .map_err(|e| SelectError::Exact(ExactError::BadVelocity(e)))?;
+    if scene.lifts_off() {
+        return lift_off_within::<T, M>(scene, v, tol);
+    }
     let vc = CriticalVelocity::of(scene).for_velocity(v0);
     if v0 != T::ZERO && v0.abs() >= vc {
         let s = if v0 > T::ZERO { T::ONE } else { -T::ONE };
@@ -162,5 +174,43 @@ pub fn mu_within<T: Float, M: Math<T>>(
         value: Value::Mu(m),
         method: Method::Exact,
         bound: exact_bound,
+    })
+}
+
+/// [`mu_within`] for a scene that lifts off (module docs); `v` dimensionless.
+fn lift_off_within<T: Float, M: Math<T>>(
+    scene: &Scene<T>,
+    v: T,
+    tol: T,
+) -> Result<Answer<T>, SelectError<T>> {
+    // The lift-off solver's errors in the exact solver's terms (the only ones
+    // this path can meet: the drive comes from a validated scene with a ≥ 1).
+    let as_exact = |e: LiftOffError| {
+        SelectError::Exact(match e {
+            LiftOffError::BadVelocity(e) => ExactError::BadVelocity(e),
+            LiftOffError::IllConditioned => ExactError::IllConditioned,
+            LiftOffError::Inconsistent => ExactError::Inconsistent,
+            _ => ExactError::BadDrive,
+        })
+    };
+    let d = scene.drive();
+    let (c_forward, c_backward) = liftoff::critical_velocities::<T, M>(&d).map_err(as_exact)?;
+    if v >= c_forward || -v >= c_backward {
+        let s = if v >= c_forward { T::ONE } else { -T::ONE };
+        return Ok(Answer {
+            value: Value::Mu(s),
+            method: Method::Sliding,
+            bound: T::ZERO,
+        });
+    }
+    let bound = liftoff::error_bound::<T, M>(&d);
+    if bound > tol {
+        return Err(SelectError::ToleranceTooTight { best: bound });
+    }
+    let m = liftoff::mu_over_mu0::<T, M>(&d, v).map_err(as_exact)?;
+    Ok(Answer {
+        value: Value::Mu(m),
+        method: Method::Exact,
+        bound,
     })
 }

@@ -1,0 +1,499 @@
+//! One steady-state period of the permanent-contact solver, in the forward
+//! convention (`0 ≤ V < c`), as a walk over its arcs (see the [parent
+//! module](super) for the method).
+//!
+//! All phases are relative to the forward window end θ_e: `τ = θ − θ_e ∈
+//! [0, 2π]`. The trigonometric values at the closed-form points (window ends)
+//! come from angle additions of `(V/c, √(1 − V²/c²))` and the drive phasors,
+//! so the only transcendental calls are two `asin`, the square roots, and one
+//! `sin_cos` per Newton iteration of the stick→slip roots.
+//!
+//! The steps: [`PeriodGeometry::new`] places the slip windows and writes the
+//! band and the drive as sinusoids of τ; [`PeriodGeometry::forward_touch`] and
+//! [`PeriodGeometry::backward_touch`] find the next stick→slip event of a stick
+//! arc; [`mean_stretch`] walks the arcs and adds their closed-form integrals.
+
+use super::{Arc, ArcKind, ExactError, Forward, MAX_ARCS};
+use crate::model::float::{Float, Math};
+use crate::model::root::newton_bracketed;
+
+/// A phase `τ` with its sine and cosine.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Phase<T> {
+    /// The phase, rad.
+    pub(crate) at: T,
+    /// `sin τ`.
+    pub(crate) sin: T,
+    /// `cos τ`.
+    pub(crate) cos: T,
+}
+
+impl<T: Float> Phase<T> {
+    /// `τ = 0`.
+    pub(crate) fn zero() -> Self {
+        Phase {
+            at: T::ZERO,
+            sin: T::ZERO,
+            cos: T::ONE,
+        }
+    }
+}
+
+/// `(sin(x + y), cos(x + y))` from the sines and cosines of `x` and `y`.
+#[inline(always)]
+pub(crate) fn add_angles<T: Float>(sin_x: T, cos_x: T, sin_y: T, cos_y: T) -> (T, T) {
+    (sin_x * cos_y + cos_x * sin_y, cos_x * cos_y - sin_x * sin_y)
+}
+
+/// The forward slip window: `s = +w` persists while `V − c sin(θ + ψ) ≥ 0`.
+/// It ends at τ = 0 (θ_e = α − ψ, `α = asin(V/c)`) and starts at `τ_s = π − 2α`.
+struct ForwardWindow<T> {
+    /// `α = asin(V/c)`.
+    alpha: T,
+    /// `sin α = V/c`.
+    sin_alpha: T,
+    /// `cos α`.
+    cos_alpha: T,
+    /// The window start τ_s, where `s − w` has its minimum.
+    start: Phase<T>,
+}
+
+/// The backward slip window (`s = −w` persists while `V − c' sin(θ + ψ') ≤ 0`),
+/// present when `V < c'`: its pieces inside `[0, 2π]`, in time order.
+struct BackwardWindow<T> {
+    /// `(start, end)` of each piece; the window is one arc of the circle, so
+    /// at most two pieces (when it wraps over τ = 2π).
+    pieces: [(Phase<T>, Phase<T>); 2],
+    /// How many of `pieces` are used (0, 1 or 2).
+    count: usize,
+    /// `c' cos α'`: minus the second derivative of `s + w` at its maximum.
+    curvature: T,
+}
+
+impl<T: Float> BackwardWindow<T> {
+    fn pieces(&self) -> &[(Phase<T>, Phase<T>)] {
+        &self.pieces[..self.count]
+    }
+}
+
+/// Everything about one period that does not depend on the stick arcs: the
+/// slip windows and the band and drive as sinusoids of τ,
+/// `A(τ) = a cos(τ + θ_e) = m cos τ − n sin τ` (so `w = 1 − A`) and
+/// `X(τ) = b cos(τ + θ_e + φ) = p cos τ − q sin τ`.
+struct PeriodGeometry<T> {
+    v: T,
+    c: T,
+    /// `a cos θ_e`.
+    m: T,
+    /// `a sin θ_e`.
+    n: T,
+    /// `b cos(θ_e + φ)`.
+    p: T,
+    /// `b sin(θ_e + φ)`.
+    q: T,
+    forward: ForwardWindow<T>,
+    backward: BackwardWindow<T>,
+    /// Scale of the rounding of `s ∓ w` (without the stick constant).
+    rounding_scale: T,
+}
+
+impl<T: Float> PeriodGeometry<T> {
+    #[inline(always)]
+    fn new<M: Math<T>>(problem: &Forward<T>) -> Self {
+        let d = &problem.drive;
+        let (v, c) = (problem.v, problem.c);
+        let (a, bc, bs) = (d.a, d.bc, d.bs);
+        // c e^{iψ} = b e^{iφ} + a = forward_re + i·bs.
+        let forward_re = a + bc;
+        // Forward window end: α = asin(V/c), θ_e = α − ψ.
+        let sin_alpha = (v / c).min(T::ONE);
+        let cos_alpha = M::sqrt(((T::ONE - sin_alpha) * (T::ONE + sin_alpha)).max(T::ZERO));
+        let alpha = M::asin(sin_alpha);
+        let (cos_psi, sin_psi) = (forward_re / c, bs / c);
+        let sin_end = sin_alpha * cos_psi - cos_alpha * sin_psi; // sin θ_e
+        let cos_end = cos_alpha * cos_psi + sin_alpha * sin_psi; // cos θ_e
+        let forward = ForwardWindow {
+            alpha,
+            sin_alpha,
+            cos_alpha,
+            // h⁺ = s − w has its minimum at τ_s = π − 2α.
+            start: Phase {
+                at: T::PI - (alpha + alpha),
+                sin: T::TWO * sin_alpha * cos_alpha,
+                cos: T::TWO * sin_alpha * sin_alpha - T::ONE,
+            },
+        };
+        let backward = BackwardWindow::new::<M>(problem, &forward, forward_re);
+        PeriodGeometry {
+            v,
+            c,
+            m: a * cos_end,
+            n: a * sin_end,
+            p: bc * cos_end - bs * sin_end,
+            q: bc * sin_end + bs * cos_end,
+            forward,
+            backward,
+            rounding_scale: T::ONE + d.b + a + v * T::TAU,
+        }
+    }
+
+    /// `∫A dτ` at `x`.
+    #[inline(always)]
+    fn band_swing_integral(&self, x: &Phase<T>) -> T {
+        self.m * x.sin + self.n * x.cos
+    }
+
+    /// `∫X dτ` at `x`.
+    #[inline(always)]
+    fn drive_swing_integral(&self, x: &Phase<T>) -> T {
+        self.p * x.sin + self.q * x.cos
+    }
+
+    /// The band half-width `w = 1 − A` at `x`.
+    #[inline(always)]
+    fn band(&self, x: &Phase<T>) -> T {
+        T::ONE - (self.m * x.cos - self.n * x.sin)
+    }
+
+    /// The drive oscillation `X` at `x`.
+    #[inline(always)]
+    fn drive_swing(&self, x: &Phase<T>) -> T {
+        self.p * x.cos - self.q * x.sin
+    }
+
+    /// `∫ w dτ` over `[x0, x1]`.
+    #[inline(always)]
+    fn band_integral(&self, x0: &Phase<T>, x1: &Phase<T>) -> T {
+        (x1.at - x0.at) - (self.band_swing_integral(x1) - self.band_swing_integral(x0))
+    }
+
+    /// `∫ s dτ` over a stick arc `[x0, x1]` with `s = k + Vτ + X(τ)`.
+    #[inline(always)]
+    fn stick_integral(&self, k: T, x0: &Phase<T>, x1: &Phase<T>) -> T {
+        k * (x1.at - x0.at)
+            + self.v * (x1.at - x0.at) * (x1.at + x0.at) * T::HALF
+            + (self.drive_swing_integral(x1) - self.drive_swing_integral(x0))
+    }
+
+    /// `h⁺ = s − w = k − 1 + Vτ + X + A` on a stick arc with constant `k`.
+    #[inline(always)]
+    fn above_upper_band(&self, k: T, x: &Phase<T>) -> T {
+        k - T::ONE + self.v * x.at + (self.p + self.m) * x.cos - (self.q + self.n) * x.sin
+    }
+
+    /// `h⁻ = s + w = k + 1 + Vτ + X − A` on a stick arc with constant `k`.
+    #[inline(always)]
+    fn above_lower_band(&self, k: T, x: &Phase<T>) -> T {
+        k + T::ONE + self.v * x.at + (self.p - self.m) * x.cos - (self.q - self.n) * x.sin
+    }
+
+    /// `dh⁺/dτ`.
+    #[inline(always)]
+    fn above_upper_band_slope(&self, x: &Phase<T>) -> T {
+        self.v - (self.p + self.m) * x.sin - (self.q + self.n) * x.cos
+    }
+
+    /// `dh⁻/dτ`.
+    #[inline(always)]
+    fn above_lower_band_slope(&self, x: &Phase<T>) -> T {
+        self.v - (self.p - self.m) * x.sin - (self.q - self.n) * x.cos
+    }
+
+    /// Rounding level of `h±` on a stick arc with constant `k` (the root
+    /// finder's stopping test).
+    #[inline(always)]
+    fn root_tolerance(&self, k: T) -> T {
+        T::from_f64(8.0) * T::EPSILON * (self.rounding_scale + k.abs())
+    }
+
+    /// The stick constant `k` of the arc that starts at `x` with stretch `s`.
+    #[inline(always)]
+    fn stick_constant(&self, s: T, x: &Phase<T>) -> T {
+        s - self.v * x.at - self.drive_swing(x)
+    }
+
+    /// The forward stick→slip event of a stick arc (constant `k`) that starts
+    /// at `from`: the first zero of `h⁺` on its increasing segment
+    /// `[max(from, τ_s), 2π]`, if any.
+    #[inline(always)]
+    fn forward_touch<M: Math<T>>(&self, k: T, from: &Phase<T>) -> Option<Phase<T>> {
+        let window_start = &self.forward.start;
+        let left = if from.at >= window_start.at {
+            *from
+        } else {
+            *window_start
+        };
+        let period_end = full_period::<T>();
+        if left.at >= period_end.at {
+            return None;
+        }
+        let at_left = self.above_upper_band(k, &left);
+        if at_left >= T::ZERO {
+            // At the band already at the segment start (rounding only): slip now.
+            return Some(left);
+        }
+        let at_right = self.above_upper_band(k, &period_end);
+        if at_right <= T::ZERO {
+            return None;
+        }
+        // Near the minimum h⁺ ≈ h_min + ½·c cos α·(τ − τ_s)².
+        let curvature = self.c * self.forward.cos_alpha;
+        let guess = if left.at == window_start.at && curvature > T::ZERO {
+            left.at + M::sqrt(-(at_left + at_left) / curvature)
+        } else {
+            left.at - at_left / self.above_upper_band_slope(&left)
+        };
+        Some(root::<T, M>(
+            (left.at, period_end.at, at_left, at_right),
+            guess,
+            self.root_tolerance(k),
+            |x| (self.above_upper_band(k, x), self.above_upper_band_slope(x)),
+        ))
+    }
+
+    /// The backward stick→slip event of a stick arc (constant `k`) that starts
+    /// at `from`, if it comes before `horizon`: the first zero of `h⁻` on a
+    /// decreasing piece, returned with that piece's end (where the backward
+    /// slip ends).
+    #[inline(always)]
+    fn backward_touch<M: Math<T>>(
+        &self,
+        k: T,
+        from: &Phase<T>,
+        horizon: T,
+    ) -> Option<(Phase<T>, Phase<T>)> {
+        for &(piece_start, piece_end) in self.backward.pieces() {
+            let left = if from.at > piece_start.at {
+                *from
+            } else {
+                piece_start
+            };
+            if left.at >= piece_end.at || left.at >= horizon {
+                continue;
+            }
+            let at_left = self.above_lower_band(k, &left);
+            if at_left <= T::ZERO {
+                return Some((left, piece_end));
+            }
+            let at_right = self.above_lower_band(k, &piece_end);
+            if at_right < T::ZERO {
+                // Near the maximum h⁻ ≈ h_max − ½·c' cos α'·(τ − σ)².
+                let curvature = self.backward.curvature;
+                let guess = if left.at == piece_start.at && curvature > T::ZERO {
+                    left.at + M::sqrt((at_left + at_left) / curvature)
+                } else {
+                    left.at - at_left / self.above_lower_band_slope(&left)
+                };
+                let touch = root::<T, M>(
+                    (left.at, piece_end.at, at_left, at_right),
+                    guess,
+                    self.root_tolerance(k),
+                    |x| (self.above_lower_band(k, x), self.above_lower_band_slope(x)),
+                );
+                return if touch.at < horizon {
+                    Some((touch, piece_end))
+                } else {
+                    None
+                };
+            }
+            // h⁻ stays positive on this piece: try the next one.
+        }
+        None
+    }
+}
+
+impl<T: Float> BackwardWindow<T> {
+    /// The backward window relative to θ_e; `forward_re = a + b cos φ`.
+    #[inline(always)]
+    fn new<M: Math<T>>(problem: &Forward<T>, forward: &ForwardWindow<T>, forward_re: T) -> Self {
+        let d = &problem.drive;
+        let (v, c) = (problem.v, problem.c);
+        let (a, bc, bs) = (d.a, d.bc, d.bs);
+        let mut window = BackwardWindow {
+            pieces: [(Phase::zero(), Phase::zero()); 2],
+            count: 0,
+            curvature: T::ZERO,
+        };
+        // c' e^{iψ'} = b e^{iφ} − a = backward_re + i·bs.
+        let backward_re = bc - a;
+        let c_back = M::hypot(backward_re, bs);
+        if v >= c_back {
+            return window;
+        }
+        let sin_alpha_b = (v / c_back).min(T::ONE);
+        let cos_alpha_b = M::sqrt(((T::ONE - sin_alpha_b) * (T::ONE + sin_alpha_b)).max(T::ZERO));
+        let alpha_b = M::asin(sin_alpha_b);
+        window.curvature = c_back * cos_alpha_b;
+        // δ = ψ − ψ' = arg(P·conj P'), P·conj P' = (forward_re·backward_re + bs²) − i·2a·bs.
+        let re = forward_re * backward_re + bs * bs;
+        let im = -(T::TWO * a * bs);
+        let delta = M::atan2(im, re);
+        let norm = c * c_back;
+        let (sin_delta, cos_delta) = (im / norm, re / norm);
+        // Window start σ = α' − ψ' − θ_e = α' − α + δ.
+        let (s1, c1) = add_angles(
+            sin_alpha_b,
+            cos_alpha_b,
+            -forward.sin_alpha,
+            forward.cos_alpha,
+        );
+        let (sin_start, cos_start) = add_angles(s1, c1, sin_delta, cos_delta);
+        let start = wrap_tau(alpha_b - forward.alpha + delta);
+        let length = T::PI - (alpha_b + alpha_b);
+        let (sin_end, cos_end) = add_angles(
+            sin_start,
+            cos_start,
+            T::TWO * sin_alpha_b * cos_alpha_b,
+            T::TWO * sin_alpha_b * sin_alpha_b - T::ONE,
+        );
+        let end = start + length;
+        let start = Phase {
+            at: start,
+            sin: sin_start,
+            cos: cos_start,
+        };
+        if end > T::TAU {
+            let wrapped_end = Phase {
+                at: end - T::TAU,
+                sin: sin_end,
+                cos: cos_end,
+            };
+            window.pieces = [(Phase::zero(), wrapped_end), (start, full_period())];
+            window.count = 2;
+        } else {
+            let end = Phase {
+                at: end,
+                sin: sin_end,
+                cos: cos_end,
+            };
+            window.pieces[0] = (start, end);
+            window.count = 1;
+        }
+        window
+    }
+}
+
+/// `τ = 2π`.
+#[inline(always)]
+fn full_period<T: Float>() -> Phase<T> {
+    Phase {
+        at: T::TAU,
+        sin: T::ZERO,
+        cos: T::ONE,
+    }
+}
+
+/// One steady-state period for `0 ≤ V < c` (forward convention), returning
+/// `⟨s⟩` (the caller applies the mirror sign). `V = 0` gives the limit
+/// `μ(0⁺)/μ₀`. `record`, if given, sees each arc in order, in absolute phases.
+#[inline]
+pub(crate) fn mean_stretch<T: Float, M: Math<T>>(
+    problem: &Forward<T>,
+    mut record: Option<&mut dyn FnMut(Arc<T>)>,
+) -> Result<T, ExactError> {
+    let geometry = PeriodGeometry::new::<M>(problem);
+    let d = &problem.drive;
+    let v = problem.v;
+    let window_end = if record.is_some() {
+        geometry.forward.alpha - M::atan2(d.bs, d.a + d.bc)
+    } else {
+        T::ZERO
+    };
+    let mut emit = |kind: ArcKind, x0: &Phase<T>, x1: &Phase<T>| {
+        if let Some(r) = record.as_mut() {
+            r(Arc {
+                kind,
+                start: x0.at + window_end,
+                end: x1.at + window_end,
+            });
+        }
+    };
+
+    let period_end = full_period::<T>();
+    let mut total = T::ZERO;
+    // Stick from τ = 0 with s = w(0): s(τ) = k + Vτ + X(τ).
+    let mut stick_start = Phase::zero();
+    let mut k = geometry.band(&stick_start) - geometry.drive_swing(&stick_start);
+    for _ in 0..MAX_ARCS {
+        let forward = geometry.forward_touch::<M>(k, &stick_start);
+        let horizon = forward.map_or(period_end.at, |x| x.at);
+        let backward = geometry.backward_touch::<M>(k, &stick_start, horizon);
+        match (backward, forward) {
+            (Some((slip_start, slip_end)), _) => {
+                total += geometry.stick_integral(k, &stick_start, &slip_start);
+                total -= geometry.band_integral(&slip_start, &slip_end);
+                emit(ArcKind::Stick, &stick_start, &slip_start);
+                emit(ArcKind::SlipBackward, &slip_start, &slip_end);
+                if slip_end.at >= period_end.at {
+                    // Slipping backward at the period end: not the steady state.
+                    return Err(ExactError::Inconsistent);
+                }
+                // Stick again from s = −w.
+                k = geometry.stick_constant(-geometry.band(&slip_end), &slip_end);
+                stick_start = slip_end;
+            }
+            (None, Some(slip_start)) => {
+                total += geometry.stick_integral(k, &stick_start, &slip_start);
+                total += geometry.band_integral(&slip_start, &period_end);
+                emit(ArcKind::Stick, &stick_start, &slip_start);
+                emit(ArcKind::SlipForward, &slip_start, &period_end);
+                return checked_mean(total);
+            }
+            (None, None) => {
+                // No forward touch: only consistent if s(2π) = w(2π) already
+                // (V → 0 with pure stick; otherwise h⁺(2π) ≥ 2πV).
+                let tol = T::from_f64(64.0) * T::EPSILON * (T::ONE + d.b + v * T::TAU);
+                if geometry.above_upper_band(k, &period_end).abs() > tol {
+                    return Err(ExactError::Inconsistent);
+                }
+                total += geometry.stick_integral(k, &stick_start, &period_end);
+                emit(ArcKind::Stick, &stick_start, &period_end);
+                return checked_mean(total);
+            }
+        }
+    }
+    Err(ExactError::Inconsistent)
+}
+
+/// `⟨s⟩ = ∫s dτ / 2π`, checked against `|μ/μ₀| ≤ 1` (which holds exactly;
+/// rounding is allowed, never more).
+#[inline(always)]
+fn checked_mean<T: Float>(total: T) -> Result<T, ExactError> {
+    let mu = total / T::TAU;
+    if !mu.is_finite() || mu.abs() > T::ONE + T::from_f64(1e3) * T::EPSILON {
+        return Err(ExactError::Inconsistent);
+    }
+    Ok(mu.max(-T::ONE).min(T::ONE))
+}
+
+/// Bracketed root `(lo, hi, f(lo), f(hi))` of a stick→slip function, returned
+/// with its trig. `f_and_slope` gives `(f, f')` at a phase.
+#[inline(always)]
+pub(crate) fn root<T: Float, M: Math<T>>(
+    bracket: (T, T, T, T),
+    guess: T,
+    f_tol: T,
+    f_and_slope: impl Fn(&Phase<T>) -> (T, T),
+) -> Phase<T> {
+    let (at, sin, cos) = newton_bracketed(bracket, guess, f_tol, 100, |at| {
+        let (sin, cos) = M::sin_cos(at);
+        let (f, slope) = f_and_slope(&Phase { at, sin, cos });
+        (f, slope, sin, cos)
+    });
+    Phase { at, sin, cos }
+}
+
+/// Wraps `x` (|x| < 8π) into `[0, 2π)`.
+#[inline]
+pub(crate) fn wrap_tau<T: Float>(mut x: T) -> T {
+    if !x.is_finite() {
+        return T::ZERO;
+    }
+    while x < T::ZERO {
+        x += T::TAU;
+    }
+    while x >= T::TAU {
+        x -= T::TAU;
+    }
+    x
+}
