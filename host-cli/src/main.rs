@@ -11,9 +11,11 @@ mod compute;
 mod device;
 mod error;
 mod figures;
+mod fit;
 mod map;
 mod plot;
 mod scene_args;
+mod sweep_file;
 
 use std::process::ExitCode;
 
