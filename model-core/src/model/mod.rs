@@ -9,7 +9,9 @@
 //! * [`fixed_step`] — the paper's explicit scheme (§3, eq. 20);
 //! * [`exact`] — the exact event-driven steady-state solver;
 //! * [`regime`] — active control / dynamic ratchet / actuator (§3.2);
-//! * [`select`] — the cheapest method whose error bound meets a tolerance.
+//! * [`select`] — the cheapest method whose error bound meets a tolerance;
+//! * [`load_line`] — the contact as an actuator: stall forces, no-load
+//!   velocities, input/output/friction power and efficiency.
 //!
 //! **Dependencies.** The model uses only itself, `libm`/`micromath` and
 //! `heapless`; it never uses [`crate::board`]. New contact models, body
@@ -19,6 +21,7 @@ pub mod analytic;
 pub mod exact;
 pub mod fixed_step;
 pub mod float;
+pub mod load_line;
 pub mod regime;
 pub(crate) mod root;
 pub mod scene;
