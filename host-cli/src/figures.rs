@@ -9,13 +9,14 @@ use model_core::exact;
 use model_core::regime::{classify, ClassifyOptions};
 use model_core::{Drive, Groups, Libm, Scene};
 
-use crate::commands::linspace;
+use crate::cmd::map::write_map;
 use crate::error::{CliError, CliResult};
-use crate::map::{cells, centres, write_map};
 use crate::plot::{render_panels, Mark, Panel, Series};
+use crate::sweep::linspace;
+use crate::sweep::{cells, centres};
 
 fn mu(d: &Drive<f64>, v: f64) -> CliResult<f64> {
-    exact::mu_over_mu0::<f64, Libm>(d, v).map_err(crate::compute::exact_failure)
+    exact::mu_over_mu0::<f64, Libm>(d, v).map_err(crate::eval::exact_failure)
 }
 
 fn drive(a: f64, b: f64, phi: f64) -> CliResult<Drive<f64>> {

@@ -128,7 +128,7 @@ pub struct Residual {
 fn model_mu(row: &SweepRow, mu0: f64, kz: f64, kx: f64, line: usize) -> CliResult<f64> {
     let scene = row.scene(mu0, kz, kx, line)?;
     let sol = exact::solve(&scene, row.v0)
-        .map_err(|e| crate::compute::exact_failure(e).with_context(&format!("line {line}")))?;
+        .map_err(|e| crate::eval::exact_failure(e).with_context(&format!("line {line}")))?;
     let m = match sol {
         Solution::Sliding { mu_over_mu0 } | Solution::StickSlip { mu_over_mu0 } => mu_over_mu0,
         Solution::AtRest {
@@ -327,7 +327,11 @@ pub fn fit(rows: &[SweepRow], which: &[FitParam]) -> CliResult<(FitResult, Vec<R
         .ok_or_else(|| {
             CliError::failure(format!(
                 "fit: {} not identifiable from this sweep (the data do not depend on {})",
-                which.iter().map(|p| p.name()).collect::<Vec<_>>().join(", "),
+                which
+                    .iter()
+                    .map(|p| p.name())
+                    .collect::<Vec<_>>()
+                    .join(", "),
                 if k == 1 { "it" } else { "them independently" }
             ))
         })?
@@ -453,7 +457,11 @@ mod tests {
         // (fixed-step bound ≈ 5e-9 in μ/μ0, amplified by 1/∂μ over a few
         // rows: 1e-6 relative is a generous derived allowance).
         let (f, _) = fit(&clean, &[FitParam::Mu0]).unwrap();
-        assert!((f.mu0 / 0.24 - 1.0).abs() < 1e-6, "noise-free μ0 = {}", f.mu0);
+        assert!(
+            (f.mu0 / 0.24 - 1.0).abs() < 1e-6,
+            "noise-free μ0 = {}",
+            f.mu0
+        );
         // Noisy: within 2 % and the interval covers the truth, over 200
         // independent noise draws: every estimate within 2 % (σ_μ0 ≈ 0.4 % here,
         // so 2 % is 5σ), and coverage consistent with 95 % (binomial, n = 200:
@@ -493,7 +501,11 @@ mod tests {
             .map(|&p| row(p, plant, sigma * g.next(), sigma))
             .collect();
         let (f, res) = fit(&rows, &[FitParam::KxOverKz]).unwrap();
-        assert!((f.kx_over_kz / 0.5 - 1.0).abs() < 0.02, "k_x/k_z = {}", f.kx_over_kz);
+        assert!(
+            (f.kx_over_kz / 0.5 - 1.0).abs() < 0.02,
+            "k_x/k_z = {}",
+            f.kx_over_kz
+        );
         assert!(f.kx_over_kz_ci95_low <= 0.5 && 0.5 <= f.kx_over_kz_ci95_high);
         // μ0 was held: its interval is the point.
         assert_eq!((f.mu0_ci95_low, f.mu0, f.mu0_ci95_high), (0.3, 0.3, 0.3));
@@ -516,14 +528,18 @@ mod tests {
                 let s = r.scene(plant.0, plant.1, plant.2, 0).unwrap();
                 let mut cfg = FixedStepConfig::<f64>::new(65_536);
                 cfg.max_periods = 100_000;
-                r.measured_mu =
-                    plant.0 * run(&s, v0, &cfg, Start::Rest).unwrap().mu_over_mu0 + sigma * g.next();
+                r.measured_mu = plant.0 * run(&s, v0, &cfg, Start::Rest).unwrap().mu_over_mu0
+                    + sigma * g.next();
                 rows.push(r);
             }
         }
         let (f, _) = fit(&rows, &[FitParam::Mu0, FitParam::KxOverKz]).unwrap();
         assert!((f.mu0 / 0.24 - 1.0).abs() < 0.02, "μ0 = {}", f.mu0);
-        assert!((f.kx_over_kz / 0.5 - 1.0).abs() < 0.02, "k_x/k_z = {}", f.kx_over_kz);
+        assert!(
+            (f.kx_over_kz / 0.5 - 1.0).abs() < 0.02,
+            "k_x/k_z = {}",
+            f.kx_over_kz
+        );
         assert!(f.mu0_ci95_low <= 0.24 && 0.24 <= f.mu0_ci95_high);
         assert!(f.kx_over_kz_ci95_low <= 0.5 && 0.5 <= f.kx_over_kz_ci95_high);
     }

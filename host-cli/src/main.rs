@@ -5,24 +5,25 @@
 //! input exits with status 2 and one line naming the parameter; a failed
 //! computation exits with status 1.
 
+mod args;
 mod bench;
-mod commands;
-mod compute;
+mod cmd;
 mod device;
 mod error;
+mod eval;
 mod figures;
 mod fit;
-mod map;
+mod output;
 mod plot;
 mod scene_args;
+mod sweep;
 mod sweep_file;
 
+use std::io::Write;
 use std::process::ExitCode;
 
 use clap::error::{ContextKind, ContextValue, ErrorKind};
 use clap::{Parser, Subcommand};
-
-use crate::scene_args::SceneArgs;
 
 /// Model tool for dual-mode (normal + tangential) ultrasonic friction control
 /// (Popov & Li single-spring model).
@@ -36,72 +37,17 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// μ at one sliding velocity
-    Mu {
-        #[command(flatten)]
-        scene: SceneArgs,
-        /// Sliding velocity v0, m/s (units of ωW0 for a dimensionless scene)
-        #[arg(
-            long,
-            allow_hyphen_values = true,
-            conflicts_with = "v_rel",
-            required_unless_present = "v_rel"
-        )]
-        v0: Option<f64>,
-        /// Velocity relative to v_c: v0 = X·v_c (forward v_c for X > 0, backward for X < 0)
-        #[arg(long, allow_hyphen_values = true, value_name = "X")]
-        v_rel: Option<f64>,
-        #[command(flatten)]
-        how: compute::MethodArgs,
-        /// JSON output
-        #[arg(long)]
-        json: bool,
-    },
-    /// μ(v) over a velocity range: CSV rows v0,v_rel,mu,mu_over_mu0
-    Curve {
-        #[command(flatten)]
-        scene: SceneArgs,
-        /// Lowest velocity, m/s
-        #[arg(long, allow_hyphen_values = true, requires = "v_max", conflicts_with_all = ["v_rel_min", "v_rel_max"])]
-        v_min: Option<f64>,
-        /// Highest velocity, m/s
-        #[arg(long, allow_hyphen_values = true, requires = "v_min")]
-        v_max: Option<f64>,
-        /// Lowest velocity relative to v_c (negative: relative to the backward v_c)
-        #[arg(long, allow_hyphen_values = true, requires = "v_rel_max")]
-        v_rel_min: Option<f64>,
-        /// Highest velocity relative to v_c
-        #[arg(long, allow_hyphen_values = true, requires = "v_rel_min")]
-        v_rel_max: Option<f64>,
-        /// Number of velocities (≥ 2)
-        #[arg(long)]
-        points: usize,
-        #[command(flatten)]
-        how: compute::MethodArgs,
-        /// Write the CSV to FILE instead of stdout
-        #[arg(long, value_name = "FILE")]
-        csv: Option<std::path::PathBuf>,
-        /// Plot μ/μ0 against v to FILE.svg or FILE.png
-        #[arg(long, value_name = "FILE")]
-        plot: Option<std::path::PathBuf>,
-    },
+    Mu(cmd::mu::MuCmd),
+    /// μ(v) over a velocity range: CSV rows v0,v_rel,mu,mu_over_mu0,method,error_bound_over_mu0
+    Curve(cmd::curve::CurveCmd),
     /// Critical velocities, the exact static interval and static friction beside the paper's eqs. 18/19
-    Static {
-        #[command(flatten)]
-        scene: SceneArgs,
-        /// JSON output
-        #[arg(long)]
-        json: bool,
-    },
+    Static(cmd::statics::StaticCmd),
     /// The regime: active_control, dynamic_ratchet or actuator, with the numbers it rests on
-    Classify {
-        #[command(flatten)]
-        scene: SceneArgs,
-        /// JSON output
-        #[arg(long)]
-        json: bool,
-    },
+    Classify(cmd::classify::ClassifyCmd),
     /// Regime map over phase φ and amplitude ratio kxΔux/(μ0 kz Δuz) at fixed Δuz/uz0
-    Map(map::MapArgs),
+    Map(cmd::map::MapCmd),
+    /// Fit the contact (μ0, kx/kz) to a measured sweep: weighted least squares with the exact solver, 95 % intervals
+    Fit(cmd::fit::FitCmd),
     /// Talk to the driver board (or QEMU, or the virtual device)
     Device {
         #[command(flatten)]
@@ -109,7 +55,7 @@ enum Command {
         #[command(subcommand)]
         cmd: device::DeviceCmd,
     },
-    /// Speed against accuracy: work-precision charts
+    /// Speed against accuracy: work-precision, methods, stability, dac
     Bench {
         #[command(subcommand)]
         cmd: bench::BenchCmd,
@@ -132,41 +78,20 @@ fn main() -> ExitCode {
         Ok(c) => c,
         Err(e) => return clap_error(e),
     };
+    let mut out = std::io::stdout();
     let r = match cli.cmd {
-        Command::Mu {
-            scene,
-            v0,
-            v_rel,
-            how,
-            json,
-        } => commands::mu(&scene, v0, v_rel, &how, json),
-        Command::Curve {
-            scene,
-            v_min,
-            v_max,
-            v_rel_min,
-            v_rel_max,
-            points,
-            how,
-            csv,
-            plot,
-        } => commands::curve(commands::CurveArgs {
-            scene,
-            v_range: v_min.zip(v_max),
-            v_rel_range: v_rel_min.zip(v_rel_max),
-            points,
-            how,
-            csv,
-            plot,
-        }),
-        Command::Static { scene, json } => commands::statics(&scene, json),
-        Command::Classify { scene, json } => commands::classify(&scene, json),
-        Command::Map(a) => map::run(&a),
+        Command::Mu(c) => c.run(&mut out),
+        Command::Curve(c) => c.run(&mut out),
+        Command::Static(c) => c.run(&mut out),
+        Command::Classify(c) => c.run(&mut out),
+        Command::Map(c) => c.run(&mut out),
+        Command::Fit(c) => c.run(&mut out),
         Command::Figures { out, map_res } => figures::run(&out, map_res),
         Command::Device { target, cmd } => device::run(&target, &cmd),
         Command::SimDevice(a) => device::serve(&a),
         Command::Bench { cmd } => bench::run(&cmd),
     };
+    let _ = out.flush();
     match r {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -200,6 +125,14 @@ fn clap_error(e: clap::Error) -> ExitCode {
         .map(|a| a.split_whitespace().next().unwrap_or("").to_string())
         .unwrap_or_default();
     let msg = match e.kind() {
+        ErrorKind::ValueValidation if refused(&e).is_some() => {
+            format!("{arg}: {}", refused(&e).unwrap_or_default())
+        }
+        ErrorKind::InvalidValue if e.get(ContextKind::ValidValue).is_some() => {
+            let val = ctx(ContextKind::InvalidValue).unwrap_or_default();
+            let valid = ctx(ContextKind::ValidValue).unwrap_or_default();
+            format!("{arg}: invalid value '{val}' (one of: {valid})")
+        }
         ErrorKind::InvalidValue | ErrorKind::ValueValidation => {
             let val = ctx(ContextKind::InvalidValue).unwrap_or_default();
             let reason = e
@@ -241,3 +174,11 @@ fn clap_error(e: clap::Error) -> ExitCode {
 }
 
 use std::error::Error as _;
+
+/// The reason of a value refused by one of our value parsers
+/// ([`args::Refused`]), printed as `--flag: reason`.
+fn refused(e: &clap::Error) -> Option<String> {
+    e.source()
+        .and_then(|s| s.downcast_ref::<args::Refused>())
+        .map(|r| r.to_string())
+}

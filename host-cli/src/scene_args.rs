@@ -46,7 +46,7 @@ pub struct SceneArgs {
     /// Phase φ, radians (instead of --phi-deg)
     #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
     pub phi_rad: Option<f64>,
-    /// Dimensionless: Δu_z/u_z0 (eq. 25); velocities are then relative to v_c
+    /// Dimensionless: Δu_z/u_z0 (eq. 25); with the groups, μ0 = k_z = k_x = u_z0 = ω = 1 and --v0 is in units of ωW0 = ωμ0k_z u_z0/k_x
     #[arg(
         long,
         allow_hyphen_values = true,

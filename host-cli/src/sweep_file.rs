@@ -95,9 +95,8 @@ pub fn read(path: &Path) -> CliResult<Vec<SweepRow>> {
     for (i, rec) in r.deserialize::<SweepRow>().enumerate() {
         // Row numbers as a spreadsheet shows them: the header is line 1.
         let line = i + 2;
-        let row = rec.map_err(|e| {
-            CliError::usage(format!("--data: {} line {line}: {e}", path.display()))
-        })?;
+        let row = rec
+            .map_err(|e| CliError::usage(format!("--data: {} line {line}: {e}", path.display())))?;
         rows.push(row);
     }
     Ok(rows)

@@ -1040,3 +1040,293 @@ fn bench_dac_matches_table_lookup_theory() {
     let (direct, worst) = get(0, "direct", "libm");
     assert!(direct > 90.0 && worst <= 0.5 + 1e-3, "{direct} {worst}");
 }
+
+/// Runs fricctl expecting bad input: exit 2, nothing on stdout, and exactly
+/// `want` (one line) on stderr.
+fn refused_with(args: &[&str], want: &str) {
+    let out = fricctl().args(args).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert!(out.stdout.is_empty(), "{args:?}");
+    assert_eq!(err, format!("error: {want}\n"), "{args:?}");
+}
+
+const CURVE_0_1: &[&str] = &["curve", "--v-min", "0", "--v-max", "1"];
+
+#[test]
+fn negative_numbers_are_values() {
+    refused_with(
+        &[CURVE_0_1, &["--points", "-5"], PHYS].concat(),
+        "--points: must be ≥ 2",
+    );
+    refused_with(
+        &[
+            "device", "--sim", "scene", "set", "--mu0", "-1", "--kz", "1e6", "--kx", "1e6",
+        ],
+        "--mu0: must be > 0 (got -1)",
+    );
+    refused_with(
+        &["map", "--duz-rel", "0.5", "--res", "-3", "--plot", "m.png"],
+        "--res: must be ≥ 2",
+    );
+}
+
+#[test]
+fn misspelt_enum_value_lists_the_allowed_ones() {
+    refused_with(
+        &[
+            "mu",
+            "--duz-rel",
+            "0.5",
+            "--dux-rel",
+            "0.1",
+            "--v0",
+            "0.1",
+            "--method",
+            "exakt",
+        ],
+        "--method: invalid value 'exakt' (one of: auto, exact, fixed, approx)",
+    );
+}
+
+#[test]
+fn counts_are_read_like_numbers() {
+    // `1e1` is 10: the same bytes as `--points 10`.
+    let a = run_ok(&[CURVE_0_1, &["--points", "1e1"], PHYS].concat()).stdout;
+    let b = run_ok(&[CURVE_0_1, &["--points", "10"], PHYS].concat()).stdout;
+    assert_eq!(a, b);
+    // Header, 10 velocities, and v0 = 0 written twice (μ(0⁻) then μ(0⁺)).
+    assert_eq!(String::from_utf8(a).unwrap().lines().count(), 12);
+    refused_with(
+        &[CURVE_0_1, &["--points", "2.5"], PHYS].concat(),
+        "--points: must be a whole number (got 2.5)",
+    );
+    refused_with(
+        &[CURVE_0_1, &["--points", "2e7"], PHYS].concat(),
+        "--points: at most 10000000 (write several curves for more)",
+    );
+    refused_with(
+        &[CURVE_0_1, &["--points", "many"], PHYS].concat(),
+        "--points: 'many' is not a number",
+    );
+    refused_with(
+        &["device", "--sim", "--attempts", "0", "info"],
+        "--attempts: must be ≥ 1",
+    );
+}
+
+/// Fields of a curve CSV line (`v0,v_rel,mu,mu_over_mu0,method,error_bound_over_mu0`).
+const CURVE_HEADER: &str = "v0,v_rel,mu,mu_over_mu0,method,error_bound_over_mu0";
+
+#[test]
+fn long_curve_streams_whole_rows_to_a_file() {
+    // 70 001 points: more than one 65 536-velocity chunk, so the header must
+    // appear once and the rows stay in order across the chunk boundary.
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("c.csv");
+    let n = 70_001usize;
+    let out = run_ok(&[
+        "curve",
+        "--duz-rel",
+        "0.5",
+        "--ratio",
+        "2",
+        "--phi-deg",
+        "45",
+        "--v-rel-min",
+        "0.001",
+        "--v-rel-max",
+        "3",
+        "--points",
+        "70001",
+        "--csv",
+        f.to_str().unwrap(),
+    ]);
+    // stderr is not a terminal here: no progress bar, only the summary lines.
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(err.lines().count(), 2, "{err}");
+    assert!(err.starts_with("methods: "), "{err}");
+    assert!(err.ends_with(&format!("wrote {n} rows to {}\n", f.display())));
+    let text = std::fs::read_to_string(&f).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some(CURVE_HEADER));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), n);
+    let s =
+        Scene::dimensionless(Groups::from_ratio(0.5, 2.0, 45f64.to_radians()).unwrap()).unwrap();
+    let vc = CriticalVelocity::of(&s);
+    for i in [0, 65_535, 65_536, 65_537, n - 1] {
+        let r = &rows[i];
+        assert_eq!(r.len(), 6);
+        // The i-th velocity is x_i·v_c with x_i evenly spaced from 0.001 to 3.
+        let x = if i == n - 1 {
+            3.0
+        } else {
+            0.001 + (3.0 - 0.001) * i as f64 / (n - 1) as f64
+        };
+        let v: f64 = r[0].parse().unwrap();
+        assert_eq!(v, x * vc.forward, "row {i}");
+        // μ/μ0 equals the exact solver's value at that velocity (±μ0 beyond
+        // v_c): the auto method's default tolerance is the solver's bound.
+        let want = exact::mu_over_mu0::<f64, Libm>(&s.drive(), v).unwrap();
+        let bound = exact::error_bound::<f64, Libm>(&s.drive());
+        let got: f64 = r[3].parse().unwrap();
+        assert!((got - want).abs() <= bound, "row {i}: {got} vs {want}");
+    }
+    // Only the CSV in the directory: no temporary file left behind.
+    let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(names.len(), 1);
+}
+
+/// Sends SIGINT to `child` once `delay` has passed, then collects it (with a
+/// 120 s limit, after which it is killed and the test fails).
+fn interrupt(child: std::process::Child, delay: std::time::Duration) -> std::process::Output {
+    std::thread::sleep(delay);
+    let pid = child.id().to_string();
+    let st = std::process::Command::new("kill")
+        .args(["-INT", &pid])
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let watchdog = std::thread::spawn({
+        let pid = pid.clone();
+        move || {
+            std::thread::sleep(std::time::Duration::from_secs(120));
+            let _ = std::process::Command::new("kill")
+                .args(["-KILL", &pid])
+                .status();
+        }
+    });
+    let out = child.wait_with_output().unwrap();
+    drop(watchdog);
+    out
+}
+
+const HUGE_CURVE: &[&str] = &[
+    "curve",
+    "--duz-rel",
+    "0.5",
+    "--ratio",
+    "2",
+    "--phi-deg",
+    "45",
+    "--v-rel-min",
+    "-1.5",
+    "--v-rel-max",
+    "1.5",
+    "--points",
+    "1e7",
+];
+
+#[test]
+fn ctrl_c_leaves_no_truncated_csv() {
+    use std::process::Stdio;
+    // To a file: nothing appears under its name, and no temporary is left.
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("c.csv");
+    let child = std::process::Command::new(assert_cmd::cargo::cargo_bin("fricctl"))
+        .args(HUGE_CURVE)
+        .args(["--csv", f.to_str().unwrap()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let out = interrupt(child, std::time::Duration::from_millis(1500));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{err}");
+    assert!(
+        err.starts_with("error: interrupted after ")
+            && err.ends_with(&format!(
+                " of 10000000 velocities ({} not written)\n",
+                f.display()
+            )),
+        "{err}"
+    );
+    assert!(!f.exists());
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    // To stdout: whatever was written is whole rows.
+    let child = std::process::Command::new(assert_cmd::cargo::cargo_bin("fricctl"))
+        .args(HUGE_CURVE)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let out = interrupt(child, std::time::Duration::from_millis(1500));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{err}");
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.is_empty() || text.ends_with('\n'));
+    let mut lines = text.lines();
+    let rows = if text.is_empty() {
+        0
+    } else {
+        assert_eq!(lines.next(), Some(CURVE_HEADER));
+        lines
+            .map(|l| assert_eq!(l.split(',').count(), 6, "{l}"))
+            .count()
+    };
+    assert!(
+        err.ends_with(&format!(" velocities ({rows} whole rows written)\n")),
+        "{err} ({rows} rows)"
+    );
+}
+
+#[test]
+fn device_target_errors_name_the_flag() {
+    refused_with(
+        &["device", "--tcp", "localhost", "info"],
+        "--tcp: 'localhost' is not HOST:PORT (e.g. 127.0.0.1:7777)",
+    );
+    refused_with(
+        &["device", "--port", "/dev/null", "info"],
+        "--port: /dev/null is not a serial device",
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("plain");
+    std::fs::write(&f, "").unwrap();
+    refused_with(
+        &["device", "--port", f.to_str().unwrap(), "info"],
+        &format!("--port: {} is not a serial device", f.display()),
+    );
+}
+
+#[test]
+fn zero_critical_velocity_at_phi_180_ratio_1() {
+    // φ = 180°, b = a (ratio 1): eq. 8 gives v_c+ = |b e^{iπ} + a| ωW0 = 0
+    // and v_c− = 2a ωW0 = 1 (ωW0 = 1 in the dimensionless scene). The
+    // computed |b e^{iφ} + a| is 6e-17 (sin of the rounded π), which the
+    // documented 32-ulp rule counts as 0.
+    let g = ["--duz-rel", "0.5", "--ratio", "1", "--phi-deg", "180"];
+    let v = json(&[&["static", "--json"], &g[..]].concat());
+    assert_eq!(v["vc_forward"].as_f64(), Some(0.0));
+    assert!((v["vc_backward"].as_f64().unwrap() - 1.0).abs() <= 2.0 * f64::EPSILON);
+    let v = json(&[&["mu", "--v0", "0.1", "--json"], &g[..]].concat());
+    assert_eq!(v["vc_forward"].as_f64(), Some(0.0));
+    assert!(v["v_rel"].is_null());
+    // Beyond v_c = 0 the contact slides: μ = μ0 exactly.
+    assert_eq!(v["mu_over_mu0"].as_f64(), Some(1.0));
+    let text =
+        String::from_utf8(run_ok(&[&["mu", "--v0", "0.1"], &g[..]].concat()).stdout).unwrap();
+    assert!(
+        text.contains("v0/v_c       (v_c = 0 in this direction)\n"),
+        "{text}"
+    );
+    assert!(text.contains("v_c forward  0\n"), "{text}");
+}
+
+#[test]
+fn help_texts_match_behaviour() {
+    let help = |args: &[&str]| String::from_utf8(run_ok(args).stdout).unwrap();
+    let top = help(&["--help"]);
+    assert!(
+        top.contains("CSV rows v0,v_rel,mu,mu_over_mu0,method,error_bound_over_mu0"),
+        "{top}"
+    );
+    assert!(
+        top.contains("work-precision, methods, stability, dac"),
+        "{top}"
+    );
+    let mu = help(&["mu", "--help"]);
+    assert!(!mu.contains("velocities are then relative to v_c"), "{mu}");
+    assert!(mu.contains("--v0 is in units of ωW0"), "{mu}");
+}

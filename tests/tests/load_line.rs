@@ -115,7 +115,11 @@ fn powers_match_an_independent_simulation() {
                 ("friction", pw.friction, f1, f2),
             ] {
                 let grid = 10.0 * (1.0 + d.b) / (2.0 * n as f64).powi(2);
-                let grid = if name == "mu" { grid } else { grid * (1.0 + d.b) };
+                let grid = if name == "mu" {
+                    grid
+                } else {
+                    grid * (1.0 + d.b)
+                };
                 let allow = 1.5 * (coarse - fine).abs() + grid + 1e-12;
                 assert!(
                     (exact - fine).abs() <= allow,
@@ -180,13 +184,17 @@ fn mirror_symmetry_and_symmetric_law() {
         let l = load_line::<f64, Libm>(&d).unwrap();
         let lm = load_line::<f64, Libm>(&m).unwrap();
         assert!((l.stall_forward - lm.stall_backward).abs() < 1e-12);
-        assert!((l.no_load_forward - lm.no_load_backward).abs() <= 1e-9 * (1.0 + l.no_load_forward));
+        assert!(
+            (l.no_load_forward - lm.no_load_backward).abs() <= 1e-9 * (1.0 + l.no_load_forward)
+        );
     }
     // Normal-only oscillation: a symmetric law (class I), nothing pushes.
     let d = scene_ratio(0.5, 0.0, 0.0).drive();
     let l = load_line::<f64, Libm>(&d).unwrap();
     assert_eq!((l.stall_forward, l.stall_backward), (0.0, 0.0));
-    assert!(best_forward::<f64, Libm>(&d, &l, Objective::Power).unwrap().is_none());
+    assert!(best_forward::<f64, Libm>(&d, &l, Objective::Power)
+        .unwrap()
+        .is_none());
 }
 
 #[test]
@@ -208,7 +216,11 @@ fn best_operating_points_beat_a_dense_scan() {
                 let v = l.no_load_forward * i as f64 / 2000.0;
                 scan_best = scan_best.max(f(powers::<f64, Libm>(&d, v).unwrap()));
             }
-            assert!(f(best.powers) >= scan_best - 1e-12, "{obj:?} {} < scan {scan_best}", f(best.powers));
+            assert!(
+                f(best.powers) >= scan_best - 1e-12,
+                "{obj:?} {} < scan {scan_best}",
+                f(best.powers)
+            );
             assert!(f(best.powers) > 0.0);
         }
     }

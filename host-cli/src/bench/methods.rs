@@ -14,10 +14,9 @@ use std::time::Instant;
 use clap::Args;
 use model_core::{Groups, Scene};
 
-use crate::commands::{curve_rows, linspace, method_mix, mix_text};
-use crate::compute::{from_rel, Method, MethodArgs};
 use crate::error::{CliError, CliResult};
-use crate::map::{centres, mu_cells};
+use crate::eval::{from_rel, Method, MethodArgs};
+use crate::sweep::{centres, curve_rows, linspace, method_mix, mix_text, mu_cells};
 use model_core::analytic::CriticalVelocity;
 
 /// Flags of `bench methods`.

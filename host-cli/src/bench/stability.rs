@@ -26,8 +26,8 @@ use rayon::prelude::*;
 
 use super::work_precision::warm_state;
 use crate::error::{CliError, CliResult};
-use crate::map::centres;
 use crate::plot::{render_heat, Heat, HeatMap};
+use crate::sweep::centres;
 
 /// Flags of `bench stability`.
 #[derive(Args, Debug, Clone)]

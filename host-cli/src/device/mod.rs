@@ -32,11 +32,11 @@ pub struct Target {
     /// The virtual device, in process
     #[arg(long)]
     pub sim: bool,
-    /// Per-attempt timeout, ms
-    #[arg(long, default_value_t = 500)]
+    /// Per-attempt timeout, ms (≥ 1)
+    #[arg(long, default_value_t = 500, allow_hyphen_values = true, value_parser = crate::args::count::<u64, 1>)]
     pub timeout_ms: u64,
-    /// Attempts per request (retries keep the sequence number)
-    #[arg(long, default_value_t = 3)]
+    /// Attempts per request (≥ 1; retries keep the sequence number)
+    #[arg(long, default_value_t = 3, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 1>)]
     pub attempts: u32,
     /// Virtual device: stage velocity v0, m/s
     #[arg(long, default_value_t = 0.004, allow_hyphen_values = true)]
@@ -135,14 +135,14 @@ pub enum SceneCmd {
     Get,
     /// Set μ0, k_z, k_x
     Set {
-        /// μ0
-        #[arg(long)]
+        /// μ0 (> 0)
+        #[arg(long, allow_hyphen_values = true)]
         mu0: f64,
-        /// k_z, N/m
-        #[arg(long)]
+        /// k_z, N/m (> 0)
+        #[arg(long, allow_hyphen_values = true)]
         kz: f64,
-        /// k_x, N/m
-        #[arg(long)]
+        /// k_x, N/m (> 0)
+        #[arg(long, allow_hyphen_values = true)]
         kx: f64,
     },
 }
@@ -166,10 +166,12 @@ fn open(t: &Target) -> CliResult<Client> {
         t.sim_offset,
         ["sim-v0", "sim-noise", "sim-offset"],
     )?;
-    let timeout = Duration::from_millis(t.timeout_ms.max(1));
+    let timeout = Duration::from_millis(t.timeout_ms);
     let link: Box<dyn Link> = if let Some(p) = &t.port {
-        Box::new(SerialLink::open(p).map_err(|e| CliError::failure(format!("--port: {e}")))?)
+        check_serial_path(p)?;
+        Box::new(SerialLink::open(p).map_err(|e| serial_open_error(p, e))?)
     } else if let Some(a) = &t.tcp {
+        check_host_port(a)?;
         Box::new(TcpLink::connect(a).map_err(|e| CliError::failure(format!("--tcp: {e}")))?)
     } else if t.sim {
         Box::new(SimLink::new(PlantOptions {
@@ -203,6 +205,52 @@ fn open(t: &Target) -> CliResult<Client> {
         }
     };
     Ok(Client::new(link, timeout, t.attempts))
+}
+
+/// `--port` must name a character device (a tty); a missing path, a regular
+/// file or a directory is refused before any I/O.
+fn check_serial_path(p: &str) -> CliResult {
+    use std::os::unix::fs::FileTypeExt;
+    match std::fs::metadata(p) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(CliError::usage(format!(
+            "--port: {p} does not exist (`fricctl device ports` lists serial devices)"
+        ))),
+        Ok(m) if !m.file_type().is_char_device() => Err(not_serial(p)),
+        _ => Ok(()),
+    }
+}
+
+fn not_serial(p: &str) -> CliError {
+    CliError::usage(format!("--port: {p} is not a serial device"))
+}
+
+/// A character device that is not a terminal (e.g. `/dev/null`) fails the
+/// serial set-up with ENOTTY: that is bad input, not a failed link.
+fn serial_open_error(p: &str, e: std::io::Error) -> CliError {
+    const ENOTTY: i32 = 25;
+    let text = e.to_string();
+    if e.raw_os_error() == Some(ENOTTY)
+        || text.contains("Inappropriate ioctl")
+        || text.contains("Not a typewriter")
+    {
+        not_serial(p)
+    } else {
+        CliError::failure(format!("--port: {e}"))
+    }
+}
+
+/// `--tcp` must be HOST:PORT with a numeric port.
+fn check_host_port(a: &str) -> CliResult {
+    let ok = a
+        .rsplit_once(':')
+        .is_some_and(|(host, port)| !host.is_empty() && port.parse::<u16>().is_ok());
+    if ok {
+        Ok(())
+    } else {
+        Err(CliError::usage(format!(
+            "--tcp: '{a}' is not HOST:PORT (e.g. 127.0.0.1:7777)"
+        )))
+    }
 }
 
 fn usb_ports() -> Vec<String> {
@@ -291,6 +339,17 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             })
             .collect();
         return out(t.json, &list);
+    }
+    if let DeviceCmd::Scene {
+        cmd: SceneCmd::Set { mu0, kz, kx },
+    } = cmd
+    {
+        // Checked before connecting: the parameters are named, not the device's refusal.
+        for (x, name) in [(mu0, "mu0"), (kz, "kz"), (kx, "kx")] {
+            if !(x.is_finite() && *x > 0.0) {
+                return Err(CliError::usage(format!("--{name}: must be > 0 (got {x})")));
+            }
+        }
     }
     let mut c = open(t)?;
     if !t.json {

@@ -33,6 +33,7 @@
 //! `c > 1` the scene is an actuator (no force-free rest), however symmetric
 //! its critical velocities.
 
+use crate::model::analytic::critical_velocity::ZERO_TOLERANCE_ULPS;
 use crate::model::analytic::static_friction::StaticFriction;
 use crate::model::exact::{limits_at_zero, mu_over_mu0, ExactError};
 use crate::model::float::{Float, Libm, Math};
@@ -169,4 +170,27 @@ fn mu_at<T: Float>(d: &Drive<T>, v: T) -> Result<T, ExactError> {
         return Ok(T::ZERO);
     }
     mu_over_mu0::<T, Libm>(d, v)
+}
+
+/// The paper's rule of thumb (§3.2 and §4), for comparison with [`classify`]:
+/// a single mode (`Δu_z = 0` or `Δu_x = 0`) or φ = π/2 (mod π) is active
+/// control; otherwise an amplitude ratio `k_xΔu_x/(μ₀k_zΔu_z) = b/a`
+/// (eq. 26) above 1 is an actuator and at most 1 a dynamic ratchet.
+///
+/// `cos φ` counts as zero within the same rounding allowance as a zero
+/// critical velocity, `|b cos φ| ≤ 32 ε b`
+/// ([`crate::model::analytic::critical_velocity::is_zero_critical_velocity`]):
+/// φ = 90° or 270° given in degrees lands within `2ε|φ|` of π/2 or 3π/2.
+///
+/// The rule is not exact: see the module docs for where it fails.
+pub fn rule_of_thumb<T: Float>(scene: &Scene<T>) -> Regime {
+    let d = scene.drive();
+    let cos_zero = d.bc.abs() <= T::from_u32(ZERO_TOLERANCE_ULPS) * T::EPSILON * d.b;
+    if d.a == T::ZERO || d.b == T::ZERO || cos_zero {
+        Regime::ActiveControl
+    } else if d.b > d.a {
+        Regime::Actuator
+    } else {
+        Regime::DynamicRatchet
+    }
 }

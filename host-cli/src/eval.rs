@@ -1,6 +1,7 @@
-//! μ at one velocity by the chosen method: the single place where the CLI
-//! turns a scene and a velocity into a number (shared by `mu`, `curve`, the
-//! figures).
+//! μ at one point by a method: the single place where the CLI turns a scene
+//! and a velocity into a number (shared by `mu`, `curve`, `map --v-rel`, the
+//! figures and the methods bench), and the one-line messages of the solvers'
+//! failures.
 
 use clap::ValueEnum;
 use model_core::analytic::approx::{approx_mu_over_mu0, ApproxError, MAX_ERROR_OVER_A};
@@ -102,7 +103,7 @@ pub struct MethodArgs {
     #[arg(long, value_enum, default_value_t = Method::Auto)]
     pub method: Method,
     /// Steps per period for --method fixed
-    #[arg(long, default_value_t = 10_000)]
+    #[arg(long, default_value_t = 10_000, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 1>)]
     pub steps_per_period: u32,
     /// Error tolerance of --method auto, in units of μ0: the cheapest method whose guaranteed bound is within it answers (default: the exact solver's bound)
     #[arg(long, value_name = "TOL")]

@@ -1,0 +1,287 @@
+//! `fricctl map`: the regime map over phase and amplitude ratio (or a μ map
+//! at a fixed relative velocity), drawn with the exact active-control lines.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use model_core::regime::{classify, ClassifyOptions, Regime};
+use plotters::style::RGBColor;
+
+use crate::error::{CliError, CliResult};
+use crate::eval::{exact_failure, Method, MethodArgs};
+use crate::output::write_rows;
+use crate::plot::{render_heat, render_map, Heat, HeatMap, RegimeMap};
+use crate::sweep::{cell_scene, cells, centres, method_mix, mix_text, mu_cells, Cell};
+
+/// Flags of `fricctl map`.
+#[derive(Args, Debug, Clone)]
+pub struct MapCmd {
+    /// Δu_z/u_z0 (fixed for the map)
+    #[arg(long, allow_hyphen_values = true)]
+    pub duz_rel: f64,
+    /// Smallest amplitude ratio k_xΔu_x/(μ0 k_z Δu_z)
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub ratio_min: f64,
+    /// Largest amplitude ratio
+    #[arg(long, default_value_t = 3.0, allow_hyphen_values = true)]
+    pub ratio_max: f64,
+    /// Smallest phase, degrees
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub phi_min_deg: f64,
+    /// Largest phase, degrees
+    #[arg(long, default_value_t = 360.0, allow_hyphen_values = true)]
+    pub phi_max_deg: f64,
+    /// Cells per axis (2 to 1000)
+    #[arg(long, default_value_t = 120, allow_hyphen_values = true, value_parser = crate::args::count::<usize, 2>)]
+    pub res: usize,
+    /// Plot file (.svg or .png)
+    #[arg(long, value_name = "FILE")]
+    pub plot: PathBuf,
+    /// Also write the cells as CSV
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+    /// Map μ/μ0 at v0 = X·v_c (forward v_c for X > 0, backward for X < 0) instead of the regimes
+    #[arg(long, value_name = "X", allow_hyphen_values = true)]
+    pub v_rel: Option<f64>,
+    /// How μ is computed per cell (with --v-rel)
+    #[command(flatten)]
+    pub how: MethodArgs,
+}
+
+impl MapCmd {
+    /// Runs the command (the map goes to files; `out` is unused).
+    pub fn run(self, _out: &mut impl Write) -> CliResult {
+        let a = &self;
+        for (v, name) in [
+            (a.duz_rel, "duz-rel"),
+            (a.ratio_min, "ratio-min"),
+            (a.ratio_max, "ratio-max"),
+            (a.phi_min_deg, "phi-min-deg"),
+            (a.phi_max_deg, "phi-max-deg"),
+        ] {
+            if !v.is_finite() {
+                return Err(CliError::usage(format!(
+                    "--{name}: must be a finite number"
+                )));
+            }
+        }
+        if !(0.0..1.0).contains(&a.duz_rel) || a.duz_rel == 0.0 {
+            return Err(CliError::usage(
+                "--duz-rel: must be in (0, 1) (the ratio needs Δu_z > 0; Δu_z < u_z0)",
+            ));
+        }
+        if a.ratio_min < 0.0 {
+            return Err(CliError::usage("--ratio-min: must be >= 0"));
+        }
+        if a.ratio_max <= a.ratio_min {
+            return Err(CliError::usage(
+                "--ratio-max: must be greater than --ratio-min",
+            ));
+        }
+        if a.phi_max_deg <= a.phi_min_deg {
+            return Err(CliError::usage(
+                "--phi-max-deg: must be greater than --phi-min-deg",
+            ));
+        }
+        if a.res > 1000 {
+            return Err(CliError::usage("--res: must be ≤ 1000"));
+        }
+        crate::plot::ext(&a.plot)?;
+        a.how.validate()?;
+        if let Some(x) = a.v_rel {
+            if !x.is_finite() {
+                return Err(CliError::usage("--v-rel: must be a finite number"));
+            }
+            return run_mu_map(a, x);
+        }
+        if a.how.method != Method::Auto || a.how.tol.is_some() {
+            return Err(CliError::usage(
+            "--method: the regime map is always exact; --method and --tol apply to a μ map (--v-rel)",
+        ));
+        }
+        let ratios = centres(a.ratio_min, a.ratio_max, a.res);
+        let phis = centres(a.phi_min_deg, a.phi_max_deg, a.res);
+        let (cells, class) = cells(a.duz_rel, &ratios, &phis, true)?;
+        let counts = [0u8, 1, 2].map(|k| class.iter().filter(|&&c| c == k).count());
+        eprintln!(
+            "{} cells: {} active control, {} dynamic ratchet, {} actuator",
+            class.len(),
+            counts[0],
+            counts[1],
+            counts[2]
+        );
+        write_map(
+            a.duz_rel,
+            &ratios,
+            &phis,
+            &cells,
+            class,
+            &a.plot,
+            a.csv.as_deref(),
+        )?;
+        let _ = std::io::stderr().flush();
+        Ok(())
+    }
+}
+
+fn run_mu_map(a: &MapCmd, x: f64) -> CliResult {
+    if x == 0.0 {
+        return Err(CliError::usage(
+            "--v-rel: must be != 0 (at rest μ has two one-sided limits; the regime map shows them)",
+        ));
+    }
+    let ratios = centres(a.ratio_min, a.ratio_max, a.res);
+    let phis = centres(a.phi_min_deg, a.phi_max_deg, a.res);
+    let cells = mu_cells(a.duz_rel, &ratios, &phis, x, &a.how)?;
+    let mix = method_mix(cells.iter().map(|c| c.method));
+    let mix_text = mix_text(&mix, ", ");
+    let worst = cells
+        .iter()
+        .filter_map(|c| c.error_bound_over_mu0)
+        .fold(0.0f64, f64::max);
+    eprintln!(
+        "{} cells: {mix_text} (largest error bound {worst:e} mu0)",
+        cells.len()
+    );
+    let heat: Vec<Heat> = cells
+        .iter()
+        .map(|c| match c.mu_over_mu0 {
+            Some(m) => Heat::Value(m),
+            None => Heat::Class(0),
+        })
+        .collect();
+    let (lo, hi) = cells
+        .iter()
+        .filter_map(|c| c.mu_over_mu0)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), m| {
+            (l.min(m), h.max(m))
+        });
+    let m = HeatMap {
+        title: format!(
+            "μ/μ0 at v0 = {x}·v_c, Δu_z/u_z0 = {} ({mix_text})",
+            a.duz_rel
+        ),
+        x_label: "phase φ, degrees".to_string(),
+        y_label: "k_xΔu_x / (μ0 k_z Δu_z)".to_string(),
+        xs: phis,
+        ys: ratios,
+        log_x: false,
+        log_y: false,
+        cells: heat,
+        range: if lo < hi {
+            (lo, hi)
+        } else {
+            (lo - 0.5, lo + 0.5)
+        },
+        value_label: "μ/μ0".to_string(),
+        classes: if cells.iter().any(|c| c.mu_over_mu0.is_none()) {
+            vec![("not converged".to_string(), RGBColor(200, 0, 0))]
+        } else {
+            Vec::new()
+        },
+    };
+    render_heat(&a.plot, &m, (1100, 760))?;
+    eprintln!("wrote {}", a.plot.display());
+    if let Some(p) = a.csv.as_deref() {
+        write_rows(p, &cells)?;
+    }
+    Ok(())
+}
+
+/// The colours of the three classes.
+pub const CLASSES: [(&str, RGBColor); 3] = [
+    ("active control (I)", RGBColor(120, 190, 120)),
+    ("dynamic ratchet (II)", RGBColor(110, 160, 220)),
+    ("actuator (III)", RGBColor(235, 130, 90)),
+];
+
+/// The exact active-control set inside the map: the lines φ = 90°, 270° (mod
+/// 360°) where the law is symmetric, and ratio = 0 (normal oscillation only).
+pub fn active_lines(a: f64, ratios: &[f64], phis: &[f64]) -> CliResult<Vec<Vec<(f64, f64)>>> {
+    let (plo, phi_hi) = (phis[0], *phis.last().unwrap_or(&phis[0]));
+    let (rlo, rhi) = (ratios[0], *ratios.last().unwrap_or(&ratios[0]));
+    let hx = if phis.len() > 1 {
+        (phis[1] - phis[0]) / 2.0
+    } else {
+        0.5
+    };
+    let hy = if ratios.len() > 1 {
+        (ratios[1] - ratios[0]) / 2.0
+    } else {
+        0.5
+    };
+    let mut out = Vec::new();
+    let mut k = ((plo - hx) / 90.0).ceil() as i64;
+    while (k as f64) * 90.0 <= phi_hi + hx {
+        let phi = k as f64 * 90.0;
+        k += 1;
+        if phi.rem_euclid(180.0) != 90.0 {
+            continue;
+        }
+        // Fine sampling along the line; keep runs classified as active control.
+        let n = 400;
+        let mut run: Vec<(f64, f64)> = Vec::new();
+        for i in 0..=n {
+            let r = (rlo - hy) + (rhi - rlo + 2.0 * hy) * i as f64 / n as f64;
+            let r = r.max(0.0);
+            let s = cell_scene(a, r, phi)?;
+            let c = classify(&s, &ClassifyOptions::default()).map_err(exact_failure)?;
+            if c.regime == Regime::ActiveControl {
+                run.push((phi, r));
+            } else if !run.is_empty() {
+                out.push(std::mem::take(&mut run));
+            }
+        }
+        if run.len() > 1 {
+            out.push(run);
+        }
+    }
+    if rlo - hy <= 0.0 {
+        out.push(vec![(plo - hx, 0.0), (phi_hi + hx, 0.0)]);
+    }
+    Ok(out)
+}
+
+/// Renders a map (plot and optional CSV).
+pub fn write_map(
+    a: f64,
+    ratios: &[f64],
+    phis: &[f64],
+    cells: &[Cell],
+    class: Vec<u8>,
+    plot: &Path,
+    csv_path: Option<&Path>,
+) -> CliResult {
+    let (plo, phi_hi) = (phis[0], *phis.last().unwrap_or(&phis[0]));
+    let (rlo, rhi) = (ratios[0], *ratios.last().unwrap_or(&ratios[0]));
+    let mut lines = vec![(
+        "paper's rule: ratio = 1 (ratchet below, drive above)".to_string(),
+        vec![(plo, 1.0), (phi_hi, 1.0)],
+    )];
+    for v in [90.0, 270.0, -90.0, 450.0] {
+        if v > plo && v < phi_hi {
+            lines.push((String::new(), vec![(v, rlo), (v, rhi)]));
+        }
+    }
+    if lines.len() > 1 {
+        lines[1].0 = "paper's rule: φ = π/2 symmetric".to_string();
+    }
+    let m = RegimeMap {
+        title: format!("Regimes at Δu_z/u_z0 = {a} (exact classification)"),
+        x_label: "phase φ, degrees".to_string(),
+        y_label: "k_xΔu_x / (μ0 k_z Δu_z)".to_string(),
+        xs: phis.to_vec(),
+        ys: ratios.to_vec(),
+        class,
+        classes: CLASSES,
+        lines,
+        class0_lines: active_lines(a, ratios, phis)?,
+    };
+    render_map(plot, &m, (1100, 760))?;
+    eprintln!("wrote {}", plot.display());
+    if let Some(p) = csv_path {
+        write_rows(p, cells)?;
+    }
+    Ok(())
+}

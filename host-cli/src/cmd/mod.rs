@@ -1,0 +1,10 @@
+//! One module per model command, each owning its arguments (a clap `Args`
+//! struct) and its `run(self, out)`: data go to `out` (stdout), messages and
+//! progress to stderr.
+
+pub mod classify;
+pub mod curve;
+pub mod fit;
+pub mod map;
+pub mod mu;
+pub mod statics;

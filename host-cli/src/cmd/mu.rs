@@ -1,0 +1,97 @@
+//! `fricctl mu`: μ at one sliding velocity.
+
+use std::io::Write;
+
+use clap::Args;
+use model_core::analytic::CriticalVelocity;
+
+use crate::error::{CliError, CliResult};
+use crate::eval::{from_rel, mu_at, MethodArgs, MuOutcome};
+use crate::output::{stdout_error, write_json};
+use crate::scene_args::{ResolvedScene, SceneArgs};
+
+/// Flags of `fricctl mu`.
+#[derive(Args, Debug, Clone)]
+pub struct MuCmd {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Sliding velocity v0, m/s (units of ωW0 for a dimensionless scene)
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        conflicts_with = "v_rel",
+        required_unless_present = "v_rel"
+    )]
+    v0: Option<f64>,
+    /// Velocity relative to v_c: v0 = X·v_c (forward v_c for X > 0, backward for X < 0)
+    #[arg(long, allow_hyphen_values = true, value_name = "X")]
+    v_rel: Option<f64>,
+    #[command(flatten)]
+    how: MethodArgs,
+    /// JSON output
+    #[arg(long)]
+    json: bool,
+}
+
+impl MuCmd {
+    /// Runs the command.
+    pub fn run(self, out: &mut impl Write) -> CliResult {
+        self.how.validate()?;
+        let rs = self.scene.resolve()?;
+        let v = self.velocity(&rs)?;
+        let o = mu_at(&rs.scene, v, &self.how)?;
+        if self.json {
+            write_json(out, &o)?;
+        } else {
+            write_text(out, &o).map_err(stdout_error)?;
+        }
+        if o.converged == Some(false) {
+            return Err(CliError::failure(format!(
+                "the fixed-step method did not reach a steady state in {} periods (last period's mu/mu0 = {}, not a result)",
+                o.periods.unwrap_or(0),
+                o.last_mu_over_mu0.unwrap_or(f64::NAN)
+            )));
+        }
+        Ok(())
+    }
+
+    fn velocity(&self, rs: &ResolvedScene) -> CliResult<f64> {
+        match (self.v0, self.v_rel) {
+            (Some(v), None) => {
+                if !v.is_finite() {
+                    return Err(CliError::usage("--v0: must be a finite number"));
+                }
+                Ok(v)
+            }
+            (None, Some(x)) => from_rel(&CriticalVelocity::of(&rs.scene), x, "v-rel"),
+            _ => Err(CliError::usage("--v0: give either --v0 or --v-rel")),
+        }
+    }
+}
+
+fn write_text(out: &mut impl Write, o: &MuOutcome) -> std::io::Result<()> {
+    writeln!(out, "v0           {}", o.v0)?;
+    match o.v_rel {
+        Some(x) => writeln!(out, "v0/v_c       {x}")?,
+        None => writeln!(out, "v0/v_c       (v_c = 0 in this direction)")?,
+    }
+    if let Some(m) = o.mu {
+        writeln!(out, "mu           {m}")?;
+        writeln!(out, "mu/mu0       {}", o.mu_over_mu0.unwrap_or(f64::NAN))?;
+    }
+    if let (Some(p), Some(m)) = (o.mu_0plus_over_mu0, o.mu_0minus_over_mu0) {
+        writeln!(out, "mu(0+)/mu0   {p}")?;
+        writeln!(out, "mu(0-)/mu0   {m}")?;
+    }
+    writeln!(out, "method       {}", o.method)?;
+    if let Some(b) = o.error_bound_over_mu0 {
+        writeln!(out, "error bound  {b:e} (units of mu0)")?;
+    }
+    if let Some(n) = o.steps_per_period {
+        writeln!(out, "steps/period {n}")?;
+        writeln!(out, "periods      {}", o.periods.unwrap_or(0))?;
+        writeln!(out, "converged    {}", o.converged.unwrap_or(false))?;
+    }
+    writeln!(out, "v_c forward  {}", o.vc_forward)?;
+    writeln!(out, "v_c backward {}", o.vc_backward)
+}
