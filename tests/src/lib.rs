@@ -3,7 +3,7 @@
 #![deny(missing_docs)]
 
 use model_core::device::DeviceConfig;
-use model_core::fixed_step::{run_dimensionless, FixedStepConfig, Start};
+use model_core::fixed_step::{run_dimensionless, FixedStepConfig, Start, State};
 use model_core::{Drive, Groups, Libm, Scene, SceneParams};
 
 /// The dimensionless scene with groups `(a, b, φ)`.
@@ -47,6 +47,104 @@ pub fn fixed(d: &Drive<f64>, v: f64, n: u32) -> f64 {
     run_dimensionless::<f64, Libm>(d, v, &cfg, Start::Rest)
         .expect("fixed-step converges")
         .mu_over_mu0
+}
+
+/// The fixed-step (paper's) scheme from rest with `n` steps per period at
+/// dimensionless velocity `v`: `(μ/μ₀, its stated error bound)` — the bound
+/// `(1 + b)(K_D/N² + N·ε)` of `fixed_step::error_bound`, whose constants are
+/// measured independently of the exact solver. Panics if it does not converge.
+pub fn fixed_bounded(d: &Drive<f64>, v: f64, n: u32) -> (f64, f64) {
+    let mut cfg = FixedStepConfig::<f64>::new(n);
+    cfg.max_periods = 2_000_000;
+    let r = run_dimensionless::<f64, Libm>(d, v, &cfg, Start::Rest).expect("fixed-step converges");
+    (r.mu_over_mu0, r.error_bound)
+}
+
+/// The fixed-step scheme started on the band edge where a clamp in the
+/// direction of motion is certain in the first step: `(μ/μ₀, stated bound)`.
+///
+/// While stuck, the stretch moves at `V − b sin(θ+φ)` and the band edge `+w` at
+/// `a sin θ`, so a forward clamp (V > 0) needs `V > Im((b e^{iφ} + a) e^{iθ})`,
+/// which holds where that sinusoid is at its minimum `−c`: start there with
+/// `s = +w`. For V < 0, start at the maximum `c'` of `Im((b e^{iφ} − a) e^{iθ})`
+/// with `s = −w`. The scheme's steady state does not depend on the start, and
+/// it is proven steady two periods after the first clamp, so the run takes
+/// ≈ 3 periods at any |V| (from rest it takes ≈ 1/(2π|V|)). Panics if the run
+/// does not converge.
+pub fn fixed_warm(d: &Drive<f64>, v: f64, n: u32) -> (f64, f64) {
+    let (bc, bs) = (d.bc, d.bs); // b cos φ, b sin φ
+    let phase = if v > 0.0 {
+        -std::f64::consts::FRAC_PI_2 - bs.atan2(bc + d.a)
+    } else {
+        std::f64::consts::FRAC_PI_2 - bs.atan2(bc - d.a)
+    };
+    // A few ulps inside the band, so rounding of w(θ) cannot reject the start.
+    let w = (1.0 - d.a * phase.cos()) * (1.0 - 4.0 * f64::EPSILON);
+    let start = Start::State(State {
+        phase,
+        stretch: if v > 0.0 { w } else { -w },
+    });
+    let mut cfg = FixedStepConfig::<f64>::new(n);
+    cfg.max_periods = 2_000_000;
+    let r = run_dimensionless::<f64, Libm>(d, v, &cfg, start).expect("fixed-step converges");
+    (r.mu_over_mu0, r.error_bound)
+}
+
+/// The sampling (quadrature) error of a sampled plant: the range `(min, max)`
+/// over sampling offsets of `⟨s⟩_sampled − ⟨s⟩` (units of μ₀), where the paper's
+/// scheme — written out here, independent of `model_core::fixed_step` — runs
+/// with `samples·sub` steps per period and the mean is taken either over every
+/// step (`⟨s⟩`) or over every `sub`-th step only, as an estimator that sees
+/// `samples` ADC samples per period does. The stretch has kinks (stick → slip),
+/// so the sampled mean is off by O((2π/samples)²), depending on where the
+/// samples fall: this is that error for every offset on the sub-step grid.
+/// The run is steady after `D/(2π|V|) + 4` periods, `D = 2(1 + a + b)` (the
+/// transient bound derived in tests/stability.rs).
+pub fn sampling_error_range(
+    a: f64,
+    b: f64,
+    phi: f64,
+    v: f64,
+    samples: u32,
+    sub: u32,
+) -> (f64, f64) {
+    let n = (samples * sub) as usize;
+    let delta = std::f64::consts::TAU / n as f64;
+    let periods = (2.0 * (1.0 + a + b) / (std::f64::consts::TAU * v.abs())).ceil() as usize + 6;
+    let (mut s, mut x_prev) = (0.0f64, b * phi.cos());
+    let (mut ss, mut ws) = (vec![0.0; n], vec![0.0; n]);
+    for _ in 0..periods {
+        for k in 0..n {
+            let th = delta * (k + 1) as f64;
+            let x = b * (th + phi).cos();
+            let w = 1.0 - a * th.cos();
+            s = (s + v * delta + (x - x_prev)).clamp(-w, w);
+            x_prev = x;
+            ss[k] = s;
+            ws[k] = w;
+        }
+    }
+    let full = ss.iter().sum::<f64>() / ws.iter().sum::<f64>();
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for j in 0..sub as usize {
+        let num: f64 = ss.iter().skip(j).step_by(sub as usize).sum();
+        let den: f64 = ws.iter().skip(j).step_by(sub as usize).sum();
+        let e = num / den - full;
+        lo = lo.min(e);
+        hi = hi.max(e);
+    }
+    (lo, hi)
+}
+
+/// The dimensionless critical velocities `(c, c')` of eq. 8 written out by
+/// hand: `c = √(a² + 2ab cos φ + b²)` (forward), `c' = √(a² − 2ab cos φ + b²)`
+/// (backward), in units of ωW₀.
+pub fn critical_velocities(a: f64, b: f64, phi: f64) -> (f64, f64) {
+    let k = 2.0 * a * b * phi.cos();
+    (
+        (a * a + k + b * b).max(0.0).sqrt(),
+        (a * a - k + b * b).max(0.0).sqrt(),
+    )
 }
 
 /// Brute-force static interval: `[max_θ(−1 + a cos θ − b cos(θ+φ)), min_θ(1 − a cos θ − b cos(θ+φ))]`

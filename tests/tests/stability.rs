@@ -7,12 +7,14 @@
 //! fixed-step scheme and vice versa (they share no code beyond the drive), f64
 //! checks f32, and the dimensionless scene checks extreme SI inputs.
 
+use std::cell::Cell;
 use std::f64::consts::PI;
 
 use model_core::exact::{self, ExactError, Solution};
 use model_core::fixed_step::{self, run_dimensionless, FixedStepConfig, FixedStepError, Start};
 use model_core::{Drive, Groups, Libm, Micromath, Param, Scene, SceneError, SceneParams};
 use proptest::prelude::*;
+use proptest::test_runner::{RngAlgorithm, TestRng, TestRunner};
 
 fn d64(a: f64, b: f64, phi: f64) -> Drive<f64> {
     Drive::new::<Libm>(a, b, phi)
@@ -354,7 +356,7 @@ fn extreme_si_magnitudes() {
 }
 
 /// The micromath backend: a number within its (large) stated bound, or an
-/// explicit failure; never outside.
+/// explicit `Inconsistent` near v_c; never outside, never another refusal.
 #[test]
 fn micromath_within_its_bound_or_explicit() {
     let mut rng = integration_tests::Rng::new(11);
@@ -376,14 +378,90 @@ fn micromath_within_its_bound_or_explicit() {
                 let e = exact64(&d, v);
                 assert!((f64::from(m) - e).abs() <= allowed, "a={a} b={b} x={x}");
             }
-            Err(ExactError::Inconsistent) => failures += 1,
-            Err(e) => panic!("{e:?}"),
+            Err(ExactError::Inconsistent) => {
+                // The only legitimate refusal (documented: micromath near v_c,
+                // where the stick windows are short against its sqrt/asin
+                // errors of 6.2 % / 1.9e-2 rad). Measured: every one at
+                // v/v_c ≥ 0.89 except one at 0.68 (a = 0.984, near lift-off);
+                // the test allows v/v_c ≥ 0.6 and nothing else.
+                assert!(
+                    x >= 0.6,
+                    "Inconsistent far from v_c: a={a} b={b} φ={phi} x={x}"
+                );
+                failures += 1;
+            }
+            Err(e) => panic!("illegitimate refusal {e:?} (a={a} b={b} x={x})"),
         }
     }
-    assert!(failures < 100, "{failures} Inconsistent");
+    println!("micromath: {failures} of 2000 refused (Inconsistent)");
+    // Regression bound: 69 of 2000 measured at this seed.
+    assert!(failures <= 69, "{failures} Inconsistent");
 }
 
 // ------------------------------------------------------------ randomised
+//
+// The randomised tests below accept an explicit refusal instead of a number,
+// so each one (a) asserts that every refusal is legitimate for its inputs —
+// the kind of error, and the inputs for which that kind is the correct
+// answer ([`fixed_refusal_is_legitimate`]) — and (b) counts the refusals and
+// bounds the count. The runs use a fixed seed (deterministic ChaCha), so the
+// counts are reproducible; each bound is the count measured at that seed
+// (a regression bound: a solver change that refuses more fails the test).
+
+/// A deterministic proptest runner with `cases` cases.
+fn runner(cases: u32) -> TestRunner {
+    TestRunner::new_with_rng(
+        ProptestConfig {
+            cases,
+            failure_persistence: None,
+            ..ProptestConfig::default()
+        },
+        TestRng::deterministic_rng(RngAlgorithm::ChaCha),
+    )
+}
+
+/// Whether a fixed-step refusal is the right answer for `(d, v, n)` with the
+/// step budget of [`fixed_run`] in float type `T` (machine epsilon `eps`):
+///
+/// * `TooFewSteps` iff `n < ⌈√(K_D(1 + b)/0.1)⌉`, `PrecisionLimit` iff
+///   `n > 4N*`, `IllConditioned` iff `(1 + b)(K_D/N*² + N*ε) > 1e-2`
+///   (the documented limits, recomputed here from their formulas with
+///   `K_D = 10`, `K_R = 1`, `N* = ⌊(20/ε)^{1/3}⌋`).
+/// * `NotConverged` only when the budget of `P` periods is shorter than the
+///   proven transient: from rest, until the first clamp in the direction of
+///   motion (V > 0) the contact point only moves backward, so the stretch is
+///   at least `s₀ + Vθ − 2b` with `s₀ ≥ −(1 + a)`, and it cannot exceed the band
+///   `1 + a`: the first forward clamp comes within `θ ≤ D/V`,
+///   `D = 2(1 + a + b)`, i.e. within `D/(2π|V|) + 1` periods; the run reports
+///   convergence at most 3 periods later. So a refusal with `P` periods is
+///   legitimate only if `P ≤ D/(2π|V|) + 4`.
+fn fixed_refusal_is_legitimate<T: model_core::Float>(
+    e: &FixedStepError<T>,
+    d: &Drive<f64>,
+    v: f64,
+    n: u32,
+    eps: f64,
+) -> bool {
+    let b = d.b;
+    let n_star = (20.0 / eps).cbrt().floor();
+    match *e {
+        FixedStepError::TooFewSteps { min_steps } => {
+            let want = (10.0 * (1.0 + b) / 0.1).sqrt().ceil() as u32;
+            min_steps == want && n < want
+        }
+        FixedStepError::PrecisionLimit { max_steps } => {
+            max_steps == 4 * n_star as u32 && n > max_steps
+        }
+        FixedStepError::IllConditioned => {
+            (1.0 + b) * (10.0 / (n_star * n_star) + n_star * eps) > 1e-2
+        }
+        FixedStepError::NotConverged { periods, .. } => {
+            let dist = 2.0 * (1.0 + d.a + b);
+            f64::from(periods) <= dist / (2.0 * PI * v.abs()) + 4.0
+        }
+        _ => false,
+    }
+}
 
 fn wide_drive() -> impl Strategy<Value = (f64, f64, f64)> {
     (
@@ -404,82 +482,274 @@ fn wide_velocity() -> impl Strategy<Value = f64> {
     ]
 }
 
-proptest! {
-    #![proptest_config(ProptestConfig::with_cases(400))]
-
-    /// Exact f64 against a fine fixed-step run, wherever both claim success:
-    /// within the sum of their stated bounds.
-    #[test]
-    fn exact_agrees_with_fine_fixed_step((a, b, phi) in wide_drive(), x in wide_velocity(), back in any::<bool>()) {
-        let d = d64(a, b, phi);
-        let c = if back { d.c_backward::<Libm>() } else { d.c_forward::<Libm>() };
-        let v = if back { -x * c } else { x * c };
-        prop_assume!(v != 0.0 && v.is_finite());
-        let n = fixed_step::min_steps_per_period(&d).saturating_mul(16).clamp(4096, 65_536);
-        let (Ok(e), Ok((m, bound))) = (exact::mu_over_mu0::<f64, Libm>(&d, v), fixed_run(&d, v, n)) else {
-            // Explicit failures are allowed; which ones is the business of the class tests.
-            return Ok(());
-        };
-        let allowed = bound + exact::error_bound::<f64, Libm>(&d);
-        prop_assert!((m - e).abs() <= allowed, "a={} b={} phi={} v={} N={}: {} vs {} (allowed {:e})", a, b, phi, v, n, m, e, allowed);
-    }
-
-    /// Exact f32 against exact f64: within the f32 bound, or an explicit failure.
-    #[test]
-    fn exact_f32_within_bound((a, b, phi) in wide_drive(), x in wide_velocity()) {
-        let Ok(s32) = Scene::dimensionless(Groups { duz_rel: a as f32, dux_rel: b as f32, phi: phi as f32 }) else {
-            return Ok(());
-        };
-        let d32 = s32.drive();
-        // The f64 reference for the very drive the f32 scene holds.
-        let d = d64(f64::from(d32.a), f64::from(d32.b), f64::from(phi as f32));
-        let v = x * d.c_forward::<Libm>();
-        prop_assume!(v != 0.0);
-        match exact::mu_over_mu0::<f32, Libm>(&d32, v as f32) {
-            Ok(m) => {
-                let e = exact64(&d, f64::from(v as f32));
-                let allowed = f64::from(exact::error_bound::<f32, Libm>(&d32)) + exact::error_bound::<f64, Libm>(&d);
-                prop_assert!((f64::from(m) - e).abs() <= allowed, "a={} b={} x={}: {} vs {}", a, b, x, m, e);
-            }
-            Err(e) => prop_assert!(matches!(e, ExactError::IllConditioned), "{:?}", e),
-        }
-    }
-
-    /// Fixed-step f32 at any accepted N: within its bound of the exact f64 value.
-    #[test]
-    fn fixed_f32_within_bound(a in 0.0f64..0.99, b in 0.0f64..20.0, phi in -10.0f64..10.0, x in 0.01f64..0.99, k in 0.0f64..1.0) {
-        let d32 = Drive::new::<Libm>(a as f32, b as f32, phi as f32);
-        let d = d64(f64::from(d32.a), f64::from(d32.b), f64::from(phi as f32));
-        let (lo, hi) = (fixed_step::min_steps_per_period(&d32), fixed_step::max_steps_per_period::<f32>());
-        let n = lo + ((hi - lo) as f64 * k) as u32;
-        let v = (x * d.c_forward::<Libm>()) as f32;
-        match fixed_run(&d32, v, n) {
-            Ok((m, bound)) => {
-                let e = exact64(&d, f64::from(v));
-                prop_assert!((m - e).abs() <= bound + 1e-9, "a={} b={} N={}: {} vs {} (bound {:e})", a, b, n, m, e, bound);
-            }
-            Err(e) => prop_assert!(matches!(e, FixedStepError::IllConditioned), "{:?}", e),
-        }
-    }
+/// Exact f64 against a fine fixed-step run: within the sum of their stated
+/// bounds. The exact solver may not refuse at all here (b ≤ 10⁴ keeps its
+/// precision part ≤ 1e-5 < 1e-2, v ≠ 0 is finite); the fixed-step run may
+/// refuse only with a legitimate `NotConverged` (N ≥ 16·N_min and
+/// ≤ 65 536 ≪ 4N* exclude the other kinds), i.e. for
+/// `|V| < D/(2π(P − 4))` with `P = 2·10⁷/N` periods.
+#[test]
+fn exact_agrees_with_fine_fixed_step() {
+    let (cases, refused) = (Cell::new(0u32), Cell::new(0u32));
+    runner(400)
+        .run(
+            &(wide_drive(), wide_velocity(), any::<bool>()),
+            |((a, b, phi), x, back)| {
+                let d = d64(a, b, phi);
+                let c = if back {
+                    d.c_backward::<Libm>()
+                } else {
+                    d.c_forward::<Libm>()
+                };
+                let v = if back { -x * c } else { x * c };
+                if v == 0.0 || !v.is_finite() {
+                    return Ok(());
+                }
+                cases.set(cases.get() + 1);
+                let n = fixed_step::min_steps_per_period(&d)
+                    .saturating_mul(16)
+                    .clamp(4096, 65_536);
+                let e = exact::mu_over_mu0::<f64, Libm>(&d, v);
+                prop_assert!(e.is_ok(), "exact refused a={} b={} v={}: {:?}", a, b, v, e);
+                let e = e.unwrap();
+                match fixed_run(&d, v, n) {
+                    Ok((m, bound)) => {
+                        let allowed = bound + exact::error_bound::<f64, Libm>(&d);
+                        prop_assert!(
+                            (m - e).abs() <= allowed,
+                            "a={} b={} phi={} v={} N={}: {} vs {} (allowed {:e})",
+                            a,
+                            b,
+                            phi,
+                            v,
+                            n,
+                            m,
+                            e,
+                            allowed
+                        );
+                    }
+                    Err(err) => {
+                        prop_assert!(
+                            matches!(err, FixedStepError::NotConverged { .. })
+                                && fixed_refusal_is_legitimate(&err, &d, v, n, f64::EPSILON),
+                            "a={} b={} v={} N={}: illegitimate {:?}",
+                            a,
+                            b,
+                            v,
+                            n,
+                            err
+                        );
+                        refused.set(refused.get() + 1);
+                    }
+                }
+                Ok(())
+            },
+        )
+        .unwrap();
+    let (cases, refused) = (cases.get(), refused.get());
+    println!("fine fixed-step: {refused} of {cases} runs refused (NotConverged, legitimate)");
+    assert!(refused <= REFUSED_FINE, "{refused} of {cases} refused");
 }
 
-proptest! {
-    #![proptest_config(ProptestConfig::with_cases(2000))]
-
-    /// The fixed-step bound where it is most at risk: coarse grids, from the
-    /// fewest accepted steps to 4× that (measured worst error/bound 0.43 over
-    /// 20 000 random scenes).
-    #[test]
-    fn fixed_step_bound_holds_on_coarse_grids((a, b, phi) in wide_drive(), x in wide_velocity(), k in 0.0f64..3.0, back in any::<bool>()) {
-        prop_assume!(b <= 1e3);
-        let d = d64(a, b, phi);
-        let c = if back { d.c_backward::<Libm>() } else { d.c_forward::<Libm>() };
-        let v = if back { -x * c } else { x * c };
-        prop_assume!(v != 0.0);
-        let nmin = fixed_step::min_steps_per_period(&d);
-        let n = nmin + (k * f64::from(nmin)) as u32;
-        let Ok((m, bound)) = fixed_run(&d, v, n) else { return Ok(()); };
-        let e = exact64(&d, v);
-        prop_assert!((m - e).abs() <= bound + exact::error_bound::<f64, Libm>(&d), "a={} b={} phi={} v={} N={}: {} vs {} (bound {:e})", a, b, phi, v, n, m, e, bound);
-    }
+/// Exact f32 against exact f64: within the f32 bound, or `IllConditioned`
+/// exactly when `1e-6·(1 + b) > 1e-2` (b > 9 999).
+#[test]
+fn exact_f32_within_bound() {
+    let (cases, refused, ill) = (Cell::new(0u32), Cell::new(0u32), Cell::new(0u32));
+    runner(400)
+        .run(&(wide_drive(), wide_velocity()), |((a, b, phi), x)| {
+            let Ok(s32) = Scene::dimensionless(Groups {
+                duz_rel: a as f32,
+                dux_rel: b as f32,
+                phi: phi as f32,
+            }) else {
+                // a rounds to 1 in f32 (lift-off, tested in `normal_amplitude_to_lift_off`).
+                prop_assert!(a as f32 >= 1.0);
+                return Ok(());
+            };
+            let d32 = s32.drive();
+            // The f64 reference for the very drive the f32 scene holds.
+            let d = d64(f64::from(d32.a), f64::from(d32.b), f64::from(phi as f32));
+            let v = x * d.c_forward::<Libm>();
+            if v == 0.0 {
+                return Ok(());
+            }
+            cases.set(cases.get() + 1);
+            let should_refuse = 1e-6 * (1.0 + f64::from(d32.b)) > 1e-2;
+            ill.set(ill.get() + u32::from(should_refuse));
+            match exact::mu_over_mu0::<f32, Libm>(&d32, v as f32) {
+                Ok(m) => {
+                    prop_assert!(!should_refuse, "b={} answered {}", b, m);
+                    let e = exact64(&d, f64::from(v as f32));
+                    let allowed = f64::from(exact::error_bound::<f32, Libm>(&d32))
+                        + exact::error_bound::<f64, Libm>(&d);
+                    prop_assert!(
+                        (f64::from(m) - e).abs() <= allowed,
+                        "a={} b={} x={}: {} vs {}",
+                        a,
+                        b,
+                        x,
+                        m,
+                        e
+                    );
+                }
+                Err(e) => {
+                    prop_assert!(
+                        e == ExactError::IllConditioned && should_refuse,
+                        "a={} b={} x={}: {:?}",
+                        a,
+                        b,
+                        x,
+                        e
+                    );
+                    refused.set(refused.get() + 1);
+                }
+            }
+            Ok(())
+        })
+        .unwrap();
+    let (cases, refused, ill) = (cases.get(), refused.get(), ill.get());
+    println!("exact f32: {refused} of {cases} refused (IllConditioned); {ill} had b > 9999");
+    // Every refusal is an ill-conditioned drive and every such drive is refused.
+    assert_eq!(refused, ill);
 }
+
+/// Fixed-step f32 at any accepted N: within its bound of the exact f64 value,
+/// or a legitimate refusal. With b < 20 the smallest f32 bound is
+/// 21·(10/551² + 551ε) = 2.1e-3 < 1e-2, so `IllConditioned` cannot occur; N is
+/// drawn inside [N_min, 4N*]; only `NotConverged` at tiny |V| (c → 0 when
+/// b e^{iφ} ≈ −a) remains.
+#[test]
+fn fixed_f32_within_bound() {
+    let (cases, refused) = (Cell::new(0u32), Cell::new(0u32));
+    let eps32 = f64::from(f32::EPSILON);
+    runner(400)
+        .run(
+            &(
+                0.0f64..0.99,
+                0.0f64..20.0,
+                -10.0f64..10.0,
+                0.01f64..0.99,
+                0.0f64..1.0,
+            ),
+            |(a, b, phi, x, k)| {
+                let d32 = Drive::new::<Libm>(a as f32, b as f32, phi as f32);
+                let d = d64(f64::from(d32.a), f64::from(d32.b), f64::from(phi as f32));
+                let (lo, hi) = (
+                    fixed_step::min_steps_per_period(&d32),
+                    fixed_step::max_steps_per_period::<f32>(),
+                );
+                let n = lo + ((hi - lo) as f64 * k) as u32;
+                let v = (x * d.c_forward::<Libm>()) as f32;
+                if v == 0.0 {
+                    return Ok(());
+                }
+                cases.set(cases.get() + 1);
+                match fixed_run(&d32, v, n) {
+                    Ok((m, bound)) => {
+                        let e = exact64(&d, f64::from(v));
+                        prop_assert!(
+                            (m - e).abs() <= bound + exact::error_bound::<f64, Libm>(&d),
+                            "a={} b={} N={}: {} vs {} (bound {:e})",
+                            a,
+                            b,
+                            n,
+                            m,
+                            e,
+                            bound
+                        );
+                    }
+                    Err(err) => {
+                        prop_assert!(
+                            fixed_refusal_is_legitimate(&err, &d, f64::from(v), n, eps32),
+                            "a={} b={} v={} N={}: illegitimate {:?}",
+                            a,
+                            b,
+                            v,
+                            n,
+                            err
+                        );
+                        refused.set(refused.get() + 1);
+                    }
+                }
+                Ok(())
+            },
+        )
+        .unwrap();
+    let (cases, refused) = (cases.get(), refused.get());
+    println!("fixed f32: {refused} of {cases} refused");
+    assert_eq!(refused, REFUSED_F32, "{refused} of {cases} refused");
+}
+
+/// The fixed-step bound where it is most at risk: coarse grids, from the
+/// fewest accepted steps to 4× that (measured worst error/bound 0.43 over
+/// 20 000 random scenes). N ∈ [N_min, 4N_min] ≤ 1 265 ≪ 4N* excludes every
+/// refusal but a legitimate `NotConverged` (budget P = 2·10⁷/N periods).
+#[test]
+fn fixed_step_bound_holds_on_coarse_grids() {
+    let (cases, refused) = (Cell::new(0u32), Cell::new(0u32));
+    runner(2000)
+        .run(
+            &(wide_drive(), wide_velocity(), 0.0f64..3.0, any::<bool>()),
+            |((a, b, phi), x, k, back)| {
+                if b > 1e3 {
+                    return Ok(());
+                }
+                let d = d64(a, b, phi);
+                let c = if back {
+                    d.c_backward::<Libm>()
+                } else {
+                    d.c_forward::<Libm>()
+                };
+                let v = if back { -x * c } else { x * c };
+                if v == 0.0 {
+                    return Ok(());
+                }
+                cases.set(cases.get() + 1);
+                let nmin = fixed_step::min_steps_per_period(&d);
+                let n = nmin + (k * f64::from(nmin)) as u32;
+                match fixed_run(&d, v, n) {
+                    Ok((m, bound)) => {
+                        let e = exact64(&d, v);
+                        prop_assert!(
+                            (m - e).abs() <= bound + exact::error_bound::<f64, Libm>(&d),
+                            "a={} b={} phi={} v={} N={}: {} vs {} (bound {:e})",
+                            a,
+                            b,
+                            phi,
+                            v,
+                            n,
+                            m,
+                            e,
+                            bound
+                        );
+                    }
+                    Err(err) => {
+                        prop_assert!(
+                            matches!(err, FixedStepError::NotConverged { .. })
+                                && fixed_refusal_is_legitimate(&err, &d, v, n, f64::EPSILON),
+                            "a={} b={} v={} N={}: illegitimate {:?}",
+                            a,
+                            b,
+                            v,
+                            n,
+                            err
+                        );
+                        refused.set(refused.get() + 1);
+                    }
+                }
+                Ok(())
+            },
+        )
+        .unwrap();
+    let (cases, refused) = (cases.get(), refused.get());
+    println!("coarse fixed-step: {refused} of {cases} refused (NotConverged, legitimate)");
+    assert!(refused <= REFUSED_COARSE, "{refused} of {cases} refused");
+}
+
+/// Refusals measured at the fixed seed (`cargo test -p integration-tests
+/// --test stability -- --nocapture`): 22 of 400 fine runs, 0 of 400 f32 runs,
+/// 42 of 1 894 coarse runs (all `NotConverged` at tiny |V|).
+const REFUSED_FINE: u32 = 22;
+const REFUSED_F32: u32 = 0;
+const REFUSED_COARSE: u32 = 42;
