@@ -48,6 +48,8 @@ enum Command {
     Map(cmd::map::MapCmd),
     /// Fit the contact (μ0, kx/kz) to a measured sweep: weighted least squares with the exact solver, 95 % intervals
     Fit(cmd::fit::FitCmd),
+    /// The contact as an actuator: stall forces, no-load velocities, powers and efficiency
+    LoadLine(cmd::load_line::LoadLineCmd),
     /// Talk to the driver board (or QEMU, or the virtual device)
     Device {
         #[command(flatten)]
@@ -86,6 +88,7 @@ fn main() -> ExitCode {
         Command::Classify(c) => c.run(&mut out),
         Command::Map(c) => c.run(&mut out),
         Command::Fit(c) => c.run(&mut out),
+        Command::LoadLine(c) => c.run(&mut out),
         Command::Figures { out, map_res } => figures::run(&out, map_res),
         Command::Device { target, cmd } => device::run(&target, &cmd),
         Command::SimDevice(a) => device::serve(&a),

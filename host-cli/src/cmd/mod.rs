@@ -5,6 +5,7 @@
 pub mod classify;
 pub mod curve;
 pub mod fit;
+pub mod load_line;
 pub mod map;
 pub mod mu;
 pub mod statics;
