@@ -25,6 +25,7 @@ use core::cell::RefCell;
 use cortex_m::interrupt::Mutex;
 use cortex_m_rt::entry;
 use defmt_rtt as _;
+use model_core::board::link::{self, Core, LinkIo, RxQueue, TxRing, RX_CAPACITY, TX_CAPACITY};
 use model_core::dds::SineTable;
 use model_core::device::{faults, Contact, Device, DeviceConfig, DriveSetting};
 use model_core::protocol::{Info, PROTOCOL_VERSION};
@@ -56,9 +57,12 @@ static mut ADC_BUF: [u32; 2 * HALF] = [0; 2 * HALF];
 
 type Dev = Device<'static, TABLE_N>;
 static DEVICE: Mutex<RefCell<Option<Dev>>> = Mutex::new(RefCell::new(None));
-/// Bytes received on USART2, handed from the interrupt to the main loop.
-static RX: Mutex<RefCell<heapless::Deque<u8, 512>>> =
-    Mutex::new(RefCell::new(heapless::Deque::new()));
+/// Bytes received on USART2, handed from the interrupt to the main loop. A
+/// byte that does not fit is counted in `Status::rx_overflows`.
+static RX: Mutex<RefCell<RxQueue<RX_CAPACITY>>> = Mutex::new(RefCell::new(RxQueue::new()));
+/// Frames to transmit on USART2, emptied by the transmit-empty interrupt (and
+/// by [`tx_pump`] from the loop), so the loop never waits on the line.
+static TX: Mutex<RefCell<TxRing<TX_CAPACITY>>> = Mutex::new(RefCell::new(TxRing::new()));
 
 /// The device behind a critical section per call: requests run with
 /// interrupts enabled, so the DMA refills are never held up by a long model
@@ -71,6 +75,51 @@ impl DeviceAccess<TABLE_N> for Shared {
             Some(d) => f(d),
             None => defmt::panic!("device not initialised"),
         })
+    }
+}
+
+/// The link seen by the loop: each access in its own short critical section.
+struct Usart2Link;
+
+impl LinkIo for Usart2Link {
+    fn pop_rx(&mut self) -> Option<u8> {
+        cortex_m::interrupt::free(|cs| RX.borrow(cs).borrow_mut().pop())
+    }
+
+    fn tx_free(&mut self) -> usize {
+        cortex_m::interrupt::free(|cs| TX.borrow(cs).borrow().free())
+    }
+
+    fn send(&mut self, frame: &[u8]) {
+        let queued = cortex_m::interrupt::free(|cs| TX.borrow(cs).borrow_mut().push_frame(frame));
+        if queued.is_err() {
+            // Unreachable: `link::serve` checks the room before every call.
+            defmt::error!("transmit ring full, {} bytes not sent", frame.len());
+        }
+        tx_pump();
+    }
+}
+
+/// The Cortex-M4 for `link::sleep_unless`: PRIMASK and `WFI`.
+///
+/// Why `WFI` under PRIMASK and not `WFE`/`SEV`: the masked section makes the
+/// check and the sleep one step without any extra state — an interrupt after
+/// the check stays pending and `WFI` does not sleep on a pending interrupt,
+/// whatever PRIMASK says (ARMv7-M ARM B1.5.19). `WFE` would need every
+/// handler that produces work to `SEV` (or SCR.SEVONPEND), and its event
+/// register is one more piece of state that any event sets, so the loop
+/// would have to be proved against it as well. The price of the masked
+/// section is a few cycles of added interrupt latency (the check reads two
+/// queue lengths).
+struct CortexM4;
+
+impl Core for CortexM4 {
+    fn masked<R>(&mut self, f: impl FnOnce(&mut Self) -> R) -> R {
+        cortex_m::interrupt::free(|_| f(self))
+    }
+
+    fn wait_for_interrupt(&mut self) {
+        cortex_m::asm::wfi();
     }
 }
 
@@ -178,31 +227,21 @@ fn main() -> ! {
         PROTOCOL_VERSION
     );
 
-    let mut chunk = [0u8; 64];
+    let mut io = Usart2Link;
     loop {
         // Feed the independent watchdog (KR = 0xAAAA, RM0090 §21.4.1).
         dp.IWDG.kr().write(|w| unsafe { w.bits(0xAAAA) });
-        let n = cortex_m::interrupt::free(|cs| {
-            let mut q = RX.borrow(cs).borrow_mut();
-            let mut n = 0;
-            while n < chunk.len() {
-                match q.pop_front() {
-                    Some(b) => {
-                        chunk[n] = b;
-                        n += 1;
-                    }
-                    None => break,
-                }
-            }
-            n
+        // Requests in, answers and telemetry into the transmit ring; never waits.
+        link::serve(&mut server, &mut Shared, &mut io);
+        // The only wait of the loop: check and WFI with interrupts masked, so
+        // a byte that lands after the check still wakes the core (the
+        // USART2 handler runs right after the masked section). The
+        // transmit-empty interrupt wakes it when the ring has room again.
+        link::sleep_unless(&mut CortexM4, |_| {
+            cortex_m::interrupt::free(|cs| {
+                link::has_work(RX.borrow(cs).borrow().len(), TX.borrow(cs).borrow().free())
+            })
         });
-        if n > 0 {
-            server.receive(&mut Shared, &chunk[..n], |bytes| send(&dp, bytes));
-        }
-        server.poll(&mut Shared, |bytes| send(&dp, bytes));
-        if n == 0 {
-            cortex_m::asm::wfi();
-        }
     }
 }
 
@@ -309,15 +348,26 @@ fn tim2(dp: &pac::Peripherals) {
     t.cr1().write(|w| unsafe { w.bits(1) }); // CEN
 }
 
-/// USART2 115 200 8N1, RXNE interrupt (RM0090 §30.6).
+/// USART2 115 200 8N1, RXNE interrupt; TXEIE is set while the transmit
+/// ring holds bytes (RM0090 §30.6).
 fn usart2(dp: &pac::Peripherals) {
     let u = &dp.USART2;
     u.brr()
         .write(|w| unsafe { w.bits(((PCLK1_HZ + 57_600) / 115_200) as u16) });
     u.cr1()
-        .write(|w| unsafe { w.bits((1 << 13) | (1 << 5) | (1 << 3) | (1 << 2)) });
-    // UE, RXNEIE, TE, RE
+        .write(|w| unsafe { w.bits(CR1_UE | CR1_RXNEIE | CR1_TE | CR1_RE) });
 }
+
+/// USART_CR1 bits (RM0090 §30.6.4).
+const CR1_UE: u16 = 1 << 13;
+const CR1_TXEIE: u16 = 1 << 7;
+const CR1_RXNEIE: u16 = 1 << 5;
+const CR1_TE: u16 = 1 << 3;
+const CR1_RE: u16 = 1 << 2;
+/// USART_SR bits (RM0090 §30.6.1).
+const SR_TXE: u16 = 1 << 7;
+const SR_RXNE: u16 = 1 << 5;
+const SR_ORE: u16 = 1 << 3;
 
 /// Independent watchdog ≈ 1 s: prescaler /8, reload 4095 at 32 kHz LSI.
 fn watchdog(dp: &pac::Peripherals) {
@@ -328,12 +378,33 @@ fn watchdog(dp: &pac::Peripherals) {
     i.kr().write(|w| unsafe { w.bits(0xCCCC) });
 }
 
-/// Blocking transmit of a frame on USART2.
-fn send(dp: &pac::Peripherals, bytes: &[u8]) {
-    for &b in bytes {
-        while dp.USART2.sr().read().bits() & (1 << 7) == 0 {} // TXE
-        dp.USART2.dr().write(|w| unsafe { w.bits(u16::from(b)) });
-    }
+/// Moves bytes from the transmit ring into USART2 while its data register is
+/// empty, without waiting: on the board at most two bytes (data register and
+/// shift register), under QEMU (synchronous transmit) the whole ring. Leaves
+/// TXEIE set while bytes remain, so the interrupt continues. Called from the
+/// USART2 handler and from the loop after queuing a frame (QEMU 7.2's USART
+/// raises no transmit-empty interrupt; there the loop's call does it all).
+fn tx_pump() {
+    // SAFETY: register access only, inside the critical section.
+    let u = unsafe { &*pac::USART2::ptr() };
+    cortex_m::interrupt::free(|cs| {
+        let mut tx = TX.borrow(cs).borrow_mut();
+        while u.sr().read().bits() & SR_TXE != 0 {
+            match tx.pop() {
+                Some(b) => {
+                    u.dr().write(|w| unsafe { w.bits(u16::from(b)) });
+                }
+                None => break,
+            }
+        }
+        let cr1 = u.cr1().read().bits();
+        let cr1 = if tx.is_empty() {
+            cr1 & !CR1_TXEIE
+        } else {
+            cr1 | CR1_TXEIE
+        };
+        u.cr1().write(|w| unsafe { w.bits(cr1) });
+    });
 }
 
 #[interrupt]
@@ -400,11 +471,21 @@ fn USART2() {
     // SAFETY: register access only.
     let u = unsafe { &*pac::USART2::ptr() };
     let sr = u.sr().read().bits();
-    if sr & (1 << 5) != 0 || sr & (1 << 3) != 0 {
+    if sr & (SR_RXNE | SR_ORE) != 0 {
         // Reading DR clears RXNE (and ORE after the SR read).
         let b = u.dr().read().bits() as u8;
-        cortex_m::interrupt::free(|cs| {
-            let _ = RX.borrow(cs).borrow_mut().push_back(b);
-        });
+        // ORE: a byte was lost in the USART itself (the handler was late).
+        let lost = u32::from(sr & SR_ORE != 0)
+            + cortex_m::interrupt::free(|cs| {
+                u32::from(RX.borrow(cs).borrow_mut().push(b).is_err())
+            });
+        if lost > 0 {
+            cortex_m::interrupt::free(|cs| {
+                if let Some(dev) = DEVICE.borrow(cs).borrow_mut().as_mut() {
+                    dev.count_rx_overflow(lost);
+                }
+            });
+        }
     }
+    tx_pump();
 }

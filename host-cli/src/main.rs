@@ -69,8 +69,8 @@ enum Command {
         /// Output directory (created if missing)
         #[arg(long, value_name = "DIR")]
         out: std::path::PathBuf,
-        /// Map resolution (cells per axis)
-        #[arg(long, default_value_t = 160)]
+        /// Map resolution (cells per axis, ≥ 2)
+        #[arg(long, default_value_t = 160, allow_hyphen_values = true, value_parser = args::count::<usize, 2>)]
         map_res: usize,
     },
 }

@@ -2,6 +2,8 @@
 //! reference computations (none of them calls the code path it checks).
 #![deny(missing_docs)]
 
+pub mod wire;
+
 use model_core::device::DeviceConfig;
 use model_core::fixed_step::{run_dimensionless, FixedStepConfig, Start, State};
 use model_core::{Drive, Groups, Libm, Scene, SceneParams};

@@ -6,7 +6,9 @@
 //! * [`device`] — drive settings in physical units, the lift-off guard,
 //!   start/stop ramps, faults, measurement and the model's prediction;
 //! * [`protocol`] — the wire format shared by firmware and host;
-//! * [`server`] — the device side of the protocol.
+//! * [`server`] — the device side of the protocol;
+//! * [`link`] — the firmware's serial link: queues, one loop pass, sleeping
+//!   without a lost wake-up.
 //!
 //! **Dependencies.** The board uses [`crate::model`] (scene, solvers, regimes)
 //! and nothing uses the board from inside the model.
@@ -14,5 +16,6 @@
 pub mod dds;
 pub mod device;
 pub mod estimator;
+pub mod link;
 pub mod protocol;
 pub mod server;

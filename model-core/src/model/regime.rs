@@ -194,3 +194,40 @@ pub fn rule_of_thumb<T: Float>(scene: &Scene<T>) -> Regime {
         Regime::DynamicRatchet
     }
 }
+
+#[cfg(test)]
+mod rule_of_thumb_tests {
+    use super::*;
+    use crate::model::scene::Groups;
+
+    fn rule(duz_rel: f64, ratio: f64, phi_deg: f64) -> Regime {
+        let g = Groups::from_ratio(duz_rel, ratio, phi_deg.to_radians()).unwrap();
+        rule_of_thumb(&Scene::dimensionless(g).unwrap())
+    }
+
+    #[test]
+    fn states_the_paper_s_rule() {
+        // §3.2/§4: ratio > 1 actuator, < 1 ratchet; φ = π/2 and single
+        // modes symmetric (active control).
+        assert_eq!(rule(0.5, 2.0, 0.0), Regime::Actuator);
+        assert_eq!(rule(0.5, 0.5, 30.0), Regime::DynamicRatchet);
+        assert_eq!(rule(0.5, 0.0, 30.0), Regime::ActiveControl);
+        let tangential_only = Groups {
+            duz_rel: 0.0,
+            dux_rel: 0.3,
+            phi: 0.0,
+        };
+        assert_eq!(
+            rule_of_thumb(&Scene::dimensionless(tangential_only).unwrap()),
+            Regime::ActiveControl
+        );
+        // 90° and 270° in degrees: cos φ = 6e-17 and 1.8e-16 after rounding,
+        // inside the 32 ε allowance (7.1e-15) — counted as φ = π/2.
+        assert_eq!(rule(0.5, 2.0, 90.0), Regime::ActiveControl);
+        assert_eq!(rule(0.5, 2.0, 270.0), Regime::ActiveControl);
+        // 0.001° away, cos φ = 1.7e-5: the ratio decides again.
+        assert_eq!(rule(0.5, 2.0, 90.001), Regime::Actuator);
+        // Ratio exactly 1 is not above 1: a ratchet by the rule.
+        assert_eq!(rule(0.5, 1.0, 0.0), Regime::DynamicRatchet);
+    }
+}
