@@ -12,10 +12,12 @@ mod device;
 mod error;
 mod eval;
 mod figures;
+mod fit;
 mod output;
 mod plot;
 mod scene_args;
 mod sweep;
+mod sweep_file;
 
 use std::io::Write;
 use std::process::ExitCode;
@@ -44,6 +46,10 @@ enum Command {
     Classify(cmd::classify::ClassifyCmd),
     /// Regime map over phase φ and amplitude ratio kxΔux/(μ0 kz Δuz) at fixed Δuz/uz0
     Map(cmd::map::MapCmd),
+    /// Fit the contact (μ0, kx/kz) to a measured sweep: weighted least squares with the exact solver, 95 % intervals
+    Fit(cmd::fit::FitCmd),
+    /// The contact as an actuator: stall forces, no-load velocities, powers and efficiency
+    LoadLine(cmd::load_line::LoadLineCmd),
     /// Talk to the driver board (or QEMU, or the virtual device)
     Device {
         #[command(flatten)]
@@ -81,6 +87,8 @@ fn main() -> ExitCode {
         Command::Static(c) => c.run(&mut out),
         Command::Classify(c) => c.run(&mut out),
         Command::Map(c) => c.run(&mut out),
+        Command::Fit(c) => c.run(&mut out),
+        Command::LoadLine(c) => c.run(&mut out),
         Command::Figures { out, map_res } => figures::run(&out, map_res),
         Command::Device { target, cmd } => device::run(&target, &cmd),
         Command::SimDevice(a) => device::serve(&a),

@@ -4,6 +4,8 @@
 
 pub mod classify;
 pub mod curve;
+pub mod fit;
+pub mod load_line;
 pub mod map;
 pub mod mu;
 pub mod statics;

@@ -10,7 +10,9 @@
 //! * [`exact`] — the exact event-driven steady-state solver;
 //! * [`liftoff`] — intermittent contact (`Δu_z ≥ u_z0`): exact and fixed-step solvers;
 //! * [`regime`] — active control / dynamic ratchet / actuator (§3.2);
-//! * [`select`] — the cheapest method whose error bound meets a tolerance.
+//! * [`select`] — the cheapest method whose error bound meets a tolerance;
+//! * [`load_line`] — the contact as an actuator: stall forces, no-load
+//!   velocities, input/output/friction power and efficiency.
 //!
 //! **Dependencies.** The model uses only itself, `libm`/`micromath` and
 //! `heapless`; it never uses [`crate::board`]. New contact models, body
@@ -21,6 +23,7 @@ pub mod exact;
 pub mod fixed_step;
 pub mod float;
 pub mod liftoff;
+pub mod load_line;
 pub mod regime;
 pub(crate) mod root;
 pub mod scene;

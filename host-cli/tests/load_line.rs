@@ -1,0 +1,129 @@
+//! `fricctl load-line` and `fricctl fit` from the command line: JSON keys, SI
+//! units against values converted by hand, refusals.
+
+use assert_cmd::Command;
+use serde_json::Value;
+
+fn fricctl() -> Command {
+    Command::cargo_bin("fricctl").unwrap()
+}
+
+fn json(args: &[&str]) -> Value {
+    let out = fricctl().args(args).arg("--json").output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn load_line_units_and_keys() {
+    // Fig. 6's scene at φ = 0 (a = 0.5, ratio 2): it pushes forward.
+    let d = json(&["load-line", "--duz-rel", "0.5", "--ratio", "2", "--phi-deg", "0"]);
+    for key in [
+        "stall_force_over_mu0_fz",
+        "no_load_velocity",
+        "stall_force_backward_over_mu0_fz",
+        "no_load_velocity_backward",
+        "max_power",
+        "max_efficiency",
+    ] {
+        assert!(d[key].is_f64(), "{key} missing");
+    }
+    // Here c + c' = 2 exactly: the static interval is the single point
+    // [c' − 1, 1 − c] = [−0.5, −0.5], so −μ(0⁺)/μ0 = 0.5 (closed form).
+    let stall = d["stall_force_over_mu0_fz"].as_f64().unwrap();
+    assert!((stall - 0.5).abs() < 1e-12, "stall {stall}");
+    assert_eq!(d["stall_force_backward_over_mu0_fz"].as_f64(), Some(0.0));
+    // SI: the same groups with μ0 = 0.3, kz = 2e6, kx = 1.5e6, uz0 = 5 µm,
+    // Δuz = 2.5 µm (a = 0.5) and Δux = ratio·μ0 kz Δuz/kx = 2 µm, 40 kHz.
+    let si = json(&[
+        "load-line", "--mu0", "0.3", "--kz", "2e6", "--kx", "1.5e6", "--uz0", "5e-6", "--duz",
+        "2.5e-6", "--dux", "2e-6", "--freq", "40e3", "--phi-deg", "0",
+    ]);
+    let fz = 2e6 * 5e-6; // N
+    let w0 = 0.3 * 2e6 * 5e-6 / 1.5e6; // m
+    let omega = std::f64::consts::TAU * 40e3;
+    let rel = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1e-300);
+    assert!(rel(si["stall_force"].as_f64().unwrap(), 0.5 * 0.3 * fz));
+    assert!(rel(
+        si["no_load_velocity"].as_f64().unwrap(),
+        d["no_load_velocity"].as_f64().unwrap() * omega * w0
+    ));
+    assert!(rel(
+        si["max_power"].as_f64().unwrap(),
+        d["max_power"].as_f64().unwrap() * 0.3 * fz * omega * w0
+    ));
+}
+
+#[test]
+fn load_line_plot_refused_when_nothing_pushes() {
+    let out = fricctl()
+        .args(["load-line", "--duz-rel", "0.5", "--ratio", "0.5", "--phi-deg", "90"])
+        .args(["--plot", "/tmp/never-written.png"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        String::from_utf8_lossy(&out.stderr).trim(),
+        "error: --plot: this scene does not push forward (μ(0⁺) ≥ 0): there is no forward load line to plot"
+    );
+}
+
+#[test]
+fn fit_reads_a_sweep_file_and_refuses_bad_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("sweep.csv");
+    // A header-only file: no rows.
+    std::fs::write(
+        &data,
+        "param,value,freq_hz,amp_z,amp_x,offset_z,phi_deg,v0,model_mu0,model_kz,model_kx,measured_mu,std_error,predicted_mu,valid,reasons\n",
+    )
+    .unwrap();
+    let out = fricctl()
+        .args(["fit", "--data"])
+        .arg(&data)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        String::from_utf8_lossy(&out.stderr).trim(),
+        "error: --data: the sweep file has no rows"
+    );
+    let out = fricctl()
+        .args(["fit", "--params", "mu0,kz", "--data"])
+        .arg(&data)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    // Rows measured on the model itself (μ = predicted, from `fricctl mu`):
+    // the fit returns the model's μ0 with a zero-width scatter.
+    let mut csv = String::from(
+        "param,value,freq_hz,amp_z,amp_x,offset_z,phi_deg,v0,model_mu0,model_kz,model_kx,measured_mu,std_error,predicted_mu,valid,reasons\n",
+    );
+    for phi in [0.0, 60.0, 120.0, 180.0] {
+        let m = json(&[
+            "mu", "--mu0", "0.3", "--kz", "2e6", "--kx", "1.5e6", "--uz0", "5e-6", "--duz", "2e-6",
+            "--dux", "0.7e-6", "--freq", "40e3", "--phi-deg", &format!("{phi}"), "--v0", "0.01",
+            "--method", "exact",
+        ]);
+        let mu = m["mu"].as_f64().unwrap();
+        csv += &format!(
+            "phase-deg,{phi},40000,2e-6,0.7e-6,5e-6,{phi},0.01,0.3,2e6,1.5e6,{mu},0.001,{mu},true,\n"
+        );
+    }
+    std::fs::write(&data, csv).unwrap();
+    let fit_out = dir.path().join("fit.json");
+    let f = json(&[
+        "fit",
+        "--params",
+        "mu0",
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        fit_out.to_str().unwrap(),
+    ]);
+    assert!((f["mu0"].as_f64().unwrap() - 0.3).abs() < 1e-9);
+    assert_eq!(f["rows_used"].as_u64(), Some(4));
+    assert_eq!(f["dof"].as_u64(), Some(3));
+    let saved: Value = serde_json::from_slice(&std::fs::read(&fit_out).unwrap()).unwrap();
+    assert_eq!(saved["kx"], f["kx"]);
+}

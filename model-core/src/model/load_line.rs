@@ -1,0 +1,307 @@
+//! The contact read as a machine: stall forces, no-load velocities and the
+//! power balance of the steady state (the paper's class III, "functionally
+//! equivalent to a vibrational drive or actuator", §3.2).
+//!
+//! # Conventions
+//! The friction force on the body is `−μ(v)·F̄z` along `+x` (`F̄z = k_z u_z0`,
+//! the mean normal force); an external force `F` on the body is balanced in the
+//! quasi-static steady state when `F = μ(v)·F̄z`. The contact *pushes* forward
+//! where `μ(v) < 0` for `v ≥ 0`.
+//!
+//! * **Stall force** forward: `−μ(0⁺)` when positive (the largest load the
+//!   contact holds against at rest while pushing forward), backward `μ(0⁻)`
+//!   when positive; both in units of `μ₀ F̄z`.
+//! * **No-load velocity**: the root of `μ(v) = 0` between 0 and the critical
+//!   velocity (μ increases with v, so it is unique; bracketed by `μ(0⁺) < 0`
+//!   and `μ(v_c) = 1`).
+//!
+//! # Powers (dimensionless, unit `μ₀ F̄z ω W₀`)
+//! With the stretch `s = u_x − u_x,c` (units W₀, so `f_x = μ₀F̄z s`), the drive
+//! `u_x = Vθ + X(θ)`, `X = b cos(θ+φ)`, and the contact point's velocity
+//! `u̇_x,c = V + X' − s'` (per unit phase θ = ωt):
+//!
+//! * input of the tangential transducer `P_in = ⟨s X'⟩`;
+//! * input of the normal transducer `⟨f_z u̇_z⟩ = k_z⟨u_z u̇_z⟩ = 0`: the
+//!   massless spring returns over a period all it takes (an exact derivative);
+//! * output to the body `P_out = −⟨s⟩V = −(μ/μ₀)V` (positive while the contact
+//!   pushes the body along its motion);
+//! * friction loss `P_fric = ⟨s u̇_x,c⟩ ≥ 0` (only slip arcs contribute, where
+//!   `s = ±w` and `u̇_x,c` has the sign of `s`).
+//!
+//! The spring's energy `s²/2` is periodic, so `⟨s s'⟩ = 0`, i.e.
+//! `P_in = P_out + P_fric` exactly; the efficiency is `η = P_out/P_in`.
+//! Each power is integrated in closed form over the arcs of the exact steady
+//! state ([`exact::steady_state`]): on a stick arc `s = s₀ + V(θ−θ₀) + X(θ) − X(θ₀)`,
+//! on a forward (backward) slip arc `s = +w` (`−w`), `w = 1 − a cos θ`.
+
+use crate::model::exact::{self, ArcKind, ExactError};
+use crate::model::float::{Float, Math};
+use crate::model::scene::Drive;
+
+/// The powers of one steady state (unit `μ₀ F̄z ω W₀`; `F̄z = k_z u_z0`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Powers<T> {
+    /// `μ/μ₀` at this velocity.
+    pub mu_over_mu0: T,
+    /// Input of the tangential transducer, `⟨f_x u̇_x,osc⟩`.
+    pub input: T,
+    /// Output to the body, `−⟨f_x⟩v₀`.
+    pub output: T,
+    /// Friction loss at the contact, `⟨f_x u̇_x,c⟩`.
+    pub friction: T,
+}
+
+impl<T: Float> Powers<T> {
+    /// `η = P_out/P_in` where the contact delivers power (`P_out > 0`), else 0.
+    pub fn efficiency(&self) -> T {
+        if self.output > T::ZERO && self.input > T::ZERO {
+            self.output / self.input
+        } else {
+            T::ZERO
+        }
+    }
+}
+
+/// The powers of the steady state at dimensionless velocity `v ≠ 0`.
+///
+/// # Errors
+/// As [`exact::steady_state`].
+pub fn powers<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<Powers<T>, ExactError> {
+    let (mu, arcs) = exact::steady_state::<T, M>(d, v)?;
+    let (a, bc, bs) = (d.a, d.bc, d.bs);
+    // X(θ) = b cos(θ+φ) = bc cos θ − bs sin θ;  ∫X = bc sin θ + bs cos θ.
+    let x_at = |s: T, c: T| bc * c - bs * s;
+    let x_int = |s: T, c: T| bc * s + bs * c;
+    let w_at = |c: T| T::ONE - a * c;
+    // ∫ w X' dθ = X − a·∫cos θ·X' dθ, and cos θ·X' = −b cos θ sin(θ+φ)
+    // = −(b/2)(sin(2θ+φ) + sin φ): ∫ = (b/4)cos(2θ+φ) − (b sin φ/2)θ, with
+    // b cos(2θ+φ) = bc cos 2θ − bs sin 2θ.
+    let wx_int = |t: T, s: T, c: T| {
+        let (s2, c2) = (T::TWO * s * c, c * c - s * s);
+        x_at(s, c) - a * ((bc * c2 - bs * s2) * T::from_f64(0.25) - bs * T::HALF * t)
+    };
+    let last = arcs.last().ok_or(ExactError::Inconsistent)?;
+    let first = arcs.first().ok_or(ExactError::Inconsistent)?;
+    let (_, c_first) = M::sin_cos(first.start);
+    // The period closes on the last arc's slip: s starts at ±w there.
+    let mut s0 = match last.kind {
+        ArcKind::SlipForward => w_at(c_first),
+        ArcKind::SlipBackward => -w_at(c_first),
+        ArcKind::Stick => return Err(ExactError::Inconsistent),
+    };
+    let (mut input, mut friction) = (T::ZERO, T::ZERO);
+    for arc in &arcs {
+        let (t0, t1) = (arc.start, arc.end);
+        let (sn0, cs0) = M::sin_cos(t0);
+        let (sn1, cs1) = M::sin_cos(t1);
+        match arc.kind {
+            ArcKind::Stick => {
+                // s = C + Vθ + X(θ), C = s₀ − Vθ₀ − X(θ₀).
+                // ∫ s X' = C[X] + V([θX] − [∫X]) + [X²/2].
+                let (x0, x1) = (x_at(sn0, cs0), x_at(sn1, cs1));
+                let cc = s0 - v * t0 - x0;
+                input += cc * (x1 - x0)
+                    + v * ((t1 * x1 - t0 * x0) - (x_int(sn1, cs1) - x_int(sn0, cs0)))
+                    + (x1 * x1 - x0 * x0) * T::HALF;
+                s0 = cc + v * t1 + x1;
+            }
+            ArcKind::SlipForward | ArcKind::SlipBackward => {
+                let sign = if arc.kind == ArcKind::SlipForward {
+                    T::ONE
+                } else {
+                    -T::ONE
+                };
+                // s = ±w: ∫ s X' = ±∫ w X';
+                // ∫ s u̇_c = ±(V∫w + ∫wX') − [w²/2]  (s' = ±a sin θ, w w' = a w sin θ).
+                let wx = wx_int(t1, sn1, cs1) - wx_int(t0, sn0, cs0);
+                let w_int = (t1 - t0) - a * (sn1 - sn0);
+                let (w0, w1) = (w_at(cs0), w_at(cs1));
+                input += sign * wx;
+                friction += sign * (v * w_int + wx) - (w1 * w1 - w0 * w0) * T::HALF;
+                s0 = sign * w1;
+            }
+        }
+    }
+    let inv = T::ONE / T::TAU;
+    Ok(Powers {
+        mu_over_mu0: mu,
+        input: input * inv,
+        output: -mu * v,
+        friction: friction * inv,
+    })
+}
+
+/// The actuator characteristics of a drive (dimensionless: forces in
+/// `μ₀ F̄z`, velocities in `ωW₀`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LoadLine<T> {
+    /// `−μ(0⁺)/μ₀` when positive, else 0.
+    pub stall_forward: T,
+    /// `μ(0⁻)/μ₀` when positive, else 0.
+    pub stall_backward: T,
+    /// Root of μ(V) on `(0, c)` when the contact pushes forward, else 0.
+    pub no_load_forward: T,
+    /// `|V|` of the root of μ(V) on `(−c', 0)` when it pushes backward, else 0.
+    pub no_load_backward: T,
+}
+
+/// Stall forces and no-load velocities.
+///
+/// # Errors
+/// As [`exact::limits_at_zero`] and [`exact::mu_over_mu0`].
+pub fn load_line<T: Float, M: Math<T>>(d: &Drive<T>) -> Result<LoadLine<T>, ExactError> {
+    let (plus, minus) = exact::limits_at_zero::<T, M>(d)?;
+    let forward = if plus < T::ZERO {
+        no_load::<T, M>(d, plus)?
+    } else {
+        T::ZERO
+    };
+    let m = d.mirrored();
+    let backward = if minus > T::ZERO {
+        // μ(−V; d) = −μ(V; mirrored d): the backward root is the mirrored forward one.
+        no_load::<T, M>(&m, -minus)?
+    } else {
+        T::ZERO
+    };
+    Ok(LoadLine {
+        stall_forward: (-plus).max(T::ZERO),
+        stall_backward: minus.max(T::ZERO),
+        no_load_forward: forward,
+        no_load_backward: backward,
+    })
+}
+
+/// The root of μ(V) on `(0, c)` given `μ(0⁺) = mu_plus < 0`: Illinois
+/// regula falsi on the bracket `[0, c]` (μ(c) = 1), to a bracket width of
+/// 8ε·c or 200 iterations. Its error adds the solver's error over the slope.
+fn no_load<T: Float, M: Math<T>>(d: &Drive<T>, mu_plus: T) -> Result<T, ExactError> {
+    let c = d.c_forward::<M>();
+    let (mut lo, mut hi) = (T::ZERO, c);
+    let (mut flo, mut fhi) = (mu_plus, T::ONE);
+    let mut side = 0i8;
+    let width = T::from_f64(8.0) * T::EPSILON * c;
+    for _ in 0..200 {
+        if hi - lo <= width {
+            break;
+        }
+        let mut x = lo - flo * (hi - lo) / (fhi - flo);
+        if !(x > lo && x < hi) {
+            x = (lo + hi) * T::HALF;
+        }
+        let fx = exact::mu_over_mu0::<T, M>(d, x)?;
+        if fx == T::ZERO {
+            return Ok(x);
+        }
+        if fx < T::ZERO {
+            lo = x;
+            flo = fx;
+            if side == -1 {
+                fhi = fhi * T::HALF;
+            }
+            side = -1;
+        } else {
+            hi = x;
+            fhi = fx;
+            if side == 1 {
+                flo = flo * T::HALF;
+            }
+            side = 1;
+        }
+    }
+    Ok((lo + hi) * T::HALF)
+}
+
+/// An operating point on the forward load line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct OperatingPoint<T> {
+    /// Dimensionless velocity V.
+    pub v: T,
+    /// The load `−μ/μ₀` the contact pushes against (units μ₀F̄z).
+    pub force: T,
+    /// The powers there.
+    pub powers: Powers<T>,
+}
+
+/// What to maximise on the load line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Objective {
+    /// Output power `P_out`.
+    Power,
+    /// Efficiency `η = P_out/P_in`.
+    Efficiency,
+}
+
+/// The forward operating point (0 < V < no-load velocity) that maximises
+/// `objective`, or `None` when the contact does not push forward. A scan of
+/// 64 points locates the best cell, golden-section search refines it to a
+/// velocity width of 1e-9·V_nl (the objective is smooth inside the cell).
+///
+/// # Errors
+/// As [`powers`].
+pub fn best_forward<T: Float, M: Math<T>>(
+    d: &Drive<T>,
+    line: &LoadLine<T>,
+    objective: Objective,
+) -> Result<Option<OperatingPoint<T>>, ExactError> {
+    let vnl = line.no_load_forward;
+    if vnl <= T::ZERO {
+        return Ok(None);
+    }
+    let value = |v: T| -> Result<(T, Powers<T>), ExactError> {
+        let p = powers::<T, M>(d, v)?;
+        let f = match objective {
+            Objective::Power => p.output,
+            Objective::Efficiency => p.efficiency(),
+        };
+        Ok((f, p))
+    };
+    const SCAN: usize = 64;
+    let step = vnl / T::from_f64(SCAN as f64);
+    let mut best = (0usize, -T::ONE);
+    for i in 1..SCAN {
+        let (f, _) = value(step * T::from_f64(i as f64))?;
+        if f > best.1 {
+            best = (i, f);
+        }
+    }
+    let mut lo = step * T::from_f64(best.0 as f64 - 1.0);
+    let mut hi = step * T::from_f64(best.0 as f64 + 1.0);
+    if lo <= T::ZERO {
+        lo = step * T::from_f64(1e-6);
+    }
+    let g = T::from_f64(0.618_033_988_749_894_9);
+    let mut x1 = hi - g * (hi - lo);
+    let mut x2 = lo + g * (hi - lo);
+    let mut f1 = value(x1)?.0;
+    let mut f2 = value(x2)?.0;
+    let tol = T::from_f64(1e-9) * vnl;
+    for _ in 0..200 {
+        if hi - lo <= tol {
+            break;
+        }
+        if f1 < f2 {
+            lo = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = lo + g * (hi - lo);
+            f2 = value(x2)?.0;
+        } else {
+            hi = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = hi - g * (hi - lo);
+            f1 = value(x1)?.0;
+        }
+    }
+    let v = (lo + hi) * T::HALF;
+    let (_, p) = value(v)?;
+    Ok(Some(OperatingPoint {
+        v,
+        force: -p.mu_over_mu0,
+        powers: p,
+    }))
+}
