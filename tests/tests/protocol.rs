@@ -94,7 +94,10 @@ fn roundtrip_every_request() {
         Request::GetStatus,
         Request::ResetFaults,
     ];
-    assert_eq!(reqs.len() as u32, model_core::protocol::REQUEST_VARIANTS);
+    assert_eq!(
+        reqs.len() as u32,
+        model_core::protocol::ENDPOINTS.len() as u32
+    );
     for (i, r) in reqs.into_iter().enumerate() {
         let mut bytes = req(i as u32 + 7, r);
         assert_eq!(*bytes.last().unwrap(), 0);
@@ -293,7 +296,10 @@ fn docs_protocol_examples() {
     .unwrap();
     assert_eq!(
         resp,
-        &[0x07, 0x01, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x01, 0x05, 0xf5, 0xa8, 0x60, 0x4c, 0x00]
+        &[
+            0x07, 0x01, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x01, 0x05, 0xf5, 0xa8, 0x60, 0x4c,
+            0x00
+        ]
     );
 }
 

@@ -67,6 +67,22 @@ pub enum EstimateError {
     NoNormalForce,
 }
 
+impl core::fmt::Display for EstimateError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            EstimateError::NotReady => "no finished measurement",
+            EstimateError::BadConfig => {
+                "estimator: zero periods or a calibration that is not finite / has zero gain"
+            }
+            EstimateError::NoNormalForce => {
+                "the mean normal force is not > 0 (no contact or a wrong calibration)"
+            }
+        })
+    }
+}
+
+impl core::error::Error for EstimateError {}
+
 #[derive(Debug, Clone, Copy, Default)]
 struct Sums {
     n: u32,

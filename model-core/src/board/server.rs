@@ -203,13 +203,7 @@ fn handle<const N: usize, A: DeviceAccess<N>>(
             Request::GetEstimate => Response::Estimate(dev.with(|d| d.estimate())?),
             Request::Stream { on, periods } => {
                 if on {
-                    if periods == 0 || periods > 1_000_000 {
-                        return Err(WireError::OutOfRange {
-                            param: crate::board::device::DriveParam::Periods,
-                            min: 1.0,
-                            max: 1e6,
-                        });
-                    }
+                    device::check_periods(periods)?;
                     *stream = Some(periods);
                 } else {
                     *stream = None;

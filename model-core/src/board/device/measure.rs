@@ -1,0 +1,70 @@
+//! The DAC refill and ADC intake bookkeeping (which drive phase each ADC
+//! sample belongs to) and the friction measurement.
+
+use super::config::PERIODS_RANGE;
+use super::{faults, Device, DeviceError, DriveParam};
+use crate::board::estimator::Estimate;
+
+impl<const N: usize> Device<'_, N> {
+    /// Refills DAC half-buffer `half` (0 or 1) with packed words and records
+    /// the drive phase of its first sample for the ADC intake.
+    pub fn fill_dac(&mut self, half: usize, buf: &mut [u32]) {
+        self.half[half & 1] = (self.dds.accumulator(), self.dds.tuning_word());
+        self.dds.fill(buf);
+    }
+
+    /// Takes the ADC samples `(f_x, f_z)` of the DAC half-buffer `half`
+    /// (same timer ticks, same indices).
+    pub fn adc_block(&mut self, half: usize, samples: &[(u16, u16)]) {
+        let (acc0, tw) = self.half[half & 1];
+        let mut acc = acc0.wrapping_sub(tw.wrapping_mul(self.cfg.adc_lag_samples));
+        for &(x, z) in samples {
+            if self.est.push(self.table, acc, x, z) {
+                if let Ok(e) = self.est.estimate() {
+                    if e.saturated {
+                        self.faults |= faults::ADC_SATURATED;
+                    }
+                }
+            }
+            acc = acc.wrapping_add(tw);
+        }
+    }
+
+    /// Starts a measurement over `periods` drive periods.
+    ///
+    /// # Errors
+    /// [`DeviceError::Busy`] if one is running; [`DeviceError::OutOfRange`]
+    /// outside [`PERIODS_RANGE`].
+    pub fn measure(&mut self, periods: u32) -> Result<(), DeviceError> {
+        if self.est.busy() {
+            return Err(DeviceError::Busy);
+        }
+        check_periods(periods)?;
+        self.est.start(periods).map_err(DeviceError::Estimate)
+    }
+
+    /// The last finished measurement.
+    ///
+    /// # Errors
+    /// [`DeviceError::Estimate`] (`NotReady` while running).
+    pub fn estimate(&self) -> Result<Estimate, DeviceError> {
+        self.est.estimate().map_err(DeviceError::Estimate)
+    }
+}
+
+/// `Ok` for a number of periods in [`PERIODS_RANGE`].
+///
+/// # Errors
+/// [`DeviceError::OutOfRange`] naming [`DriveParam::Periods`].
+pub fn check_periods(periods: u32) -> Result<(), DeviceError> {
+    let (lo, hi) = PERIODS_RANGE;
+    if (lo..=hi).contains(&periods) {
+        Ok(())
+    } else {
+        Err(DeviceError::OutOfRange {
+            param: DriveParam::Periods,
+            min: lo as f32,
+            max: hi as f32,
+        })
+    }
+}
