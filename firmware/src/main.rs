@@ -52,6 +52,16 @@ const PCLK1_HZ: u32 = 16_000_000;
 const TABLE_N: usize = 1024;
 
 static mut DAC_BUF: [u32; 2 * HALF] = [0; 2 * HALF];
+/// DAC half-buffers refilled since power-up: the server's clock (one half =
+/// `HALF/FS_HZ` = 512 µs) for the protocol's inter-byte timeout.
+static HALVES: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
+
+/// Microseconds since power-up (wrapping), at the resolution of one half-buffer.
+fn now_us() -> u32 {
+    HALVES
+        .load(core::sync::atomic::Ordering::Relaxed)
+        .wrapping_mul(HALF as u32 * 1_000_000 / FS_HZ)
+}
 static mut ADC_BUF: [u32; 2 * HALF] = [0; 2 * HALF];
 
 type Dev = Device<'static, TABLE_N>;
@@ -197,7 +207,7 @@ fn main() -> ! {
             n
         });
         if n > 0 {
-            server.receive(&mut Shared, &chunk[..n], |bytes| send(&dp, bytes));
+            server.receive(&mut Shared, &chunk[..n], now_us(), |bytes| send(&dp, bytes));
         }
         server.poll(&mut Shared, |bytes| send(&dp, bytes));
         if n == 0 {
@@ -352,6 +362,7 @@ fn DMA1_STREAM5() {
     } else {
         return;
     };
+    HALVES.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
     cortex_m::interrupt::free(|cs| {
         if let Some(dev) = DEVICE.borrow(cs).borrow_mut().as_mut() {
             // SAFETY: the DMA is reading the other half.

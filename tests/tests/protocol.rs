@@ -26,6 +26,10 @@ fn info() -> Info {
         max_amp_x_m: 2e-6,
         max_offset_z_m: 8e-6,
         liftoff_margin: 0.05,
+        max_phase_rad: 1e3,
+        max_velocity_m_s: 1e3,
+        periods_range: (1, 1_000_000),
+        byte_timeout_us: 100_000,
     }
 }
 
@@ -45,11 +49,21 @@ fn req(seq: u32, r: Request) -> Vec<u8> {
 
 /// Sends bytes to a server, returns the decoded replies.
 fn talk(server: &mut Server, dev: &mut Device<'_, 256>, bytes: &[u8]) -> Vec<Frame> {
+    talk_at(server, dev, bytes, 0)
+}
+
+/// Sends bytes arriving at `now_us` to a server, returns the decoded replies.
+fn talk_at(
+    server: &mut Server,
+    dev: &mut Device<'_, 256>,
+    bytes: &[u8],
+    now_us: u32,
+) -> Vec<Frame> {
     let mut replies = Vec::new();
     let mut df = Deframer::default();
-    server.receive(dev, bytes, |out| {
+    server.receive(dev, bytes, now_us, |out| {
         for &b in out {
-            if let Deframed::Frame(f) = df.push(b) {
+            if let Deframed::Frame(f) = df.push(b, 0) {
                 replies.push(decode(f).unwrap());
             }
         }
@@ -266,7 +280,7 @@ fn docs_protocol_examples() {
     let mut out = [0u8; MAX_FRAME];
     let req = encode(
         &Frame {
-            version: 1,
+            version: 2,
             seq: 5,
             body: Body::Request(Request::GetStatus),
         },
@@ -275,7 +289,7 @@ fn docs_protocol_examples() {
     .unwrap();
     assert_eq!(
         req,
-        &[0x03, 0x01, 0x05, 0x06, 0x0b, 0x1a, 0xa3, 0xe1, 0x08, 0x00]
+        &[0x03, 0x02, 0x05, 0x06, 0x0b, 0xf4, 0x0c, 0x54, 0x1a, 0x00]
     );
     let status = model_core::device::Status {
         running: true,
@@ -283,11 +297,14 @@ fn docs_protocol_examples() {
         faults: 0,
         measuring: false,
         rx_overflows: 0,
+        out_amp_z_m: 2e-6,
+        out_amp_x_m: 3e-7,
+        out_offset_z_m: 4e-6,
     };
     let mut out = [0u8; MAX_FRAME];
     let resp = encode(
         &Frame {
-            version: 1,
+            version: 2,
             seq: 5,
             body: Body::Response(Response::Status(status)),
         },
@@ -297,8 +314,8 @@ fn docs_protocol_examples() {
     assert_eq!(
         resp,
         &[
-            0x07, 0x01, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x01, 0x05, 0xf5, 0xa8, 0x60, 0x4c,
-            0x00
+            0x07, 0x02, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x01, 0x11, 0xbd, 0x37, 0x06, 0x36,
+            0xb0, 0x0f, 0xa1, 0x34, 0xbd, 0x37, 0x86, 0x36, 0x29, 0x08, 0x3f, 0x0f, 0x00
         ]
     );
 }
@@ -317,7 +334,7 @@ fn telemetry_reports_ramps_and_faults_with_its_own_counter() {
     let mut collect = |s: &mut Server, dev: &mut Device<'_, 256>| {
         s.poll(dev, |out| {
             for &b in out {
-                if let Deframed::Frame(f) = df.push(b) {
+                if let Deframed::Frame(f) = df.push(b, 0) {
                     let f = decode(f).unwrap();
                     if let Body::Telemetry(t) = f.body {
                         tele.push((f.seq, t));

@@ -22,6 +22,7 @@ pub struct Client {
     /// Attempts per request (≥ 1).
     pub attempts: u32,
     telemetry: VecDeque<(u32, Telemetry)>,
+    opened: Instant,
 }
 
 impl Client {
@@ -34,6 +35,7 @@ impl Client {
             timeout,
             attempts: attempts.max(1),
             telemetry: VecDeque::new(),
+            opened: Instant::now(),
         }
     }
 
@@ -107,7 +109,9 @@ impl Client {
         if n == 0 {
             return Ok(None);
         }
-        match self.deframer.push(b[0]) {
+        // The host's clock for the inter-byte timeout: µs since the client opened.
+        let now_us = self.opened.elapsed().as_micros() as u32;
+        match self.deframer.push(b[0], now_us) {
             Deframed::Frame(f) => Ok(decode(f).ok()),
             _ => Ok(None),
         }

@@ -30,7 +30,8 @@ pub struct Server {
     stream: Option<u32>,
     telemetry_seq: u32,
     measuring_for_stream: bool,
-    last_settled: bool,
+    /// The device's ramp generation last answered with `RampDone`.
+    reported_ramp: u32,
     last_faults: u32,
 }
 
@@ -43,23 +44,28 @@ impl Server {
             stream: None,
             telemetry_seq: 0,
             measuring_for_stream: false,
-            last_settled: true,
+            reported_ramp: 0,
             last_faults: 0,
         }
     }
 
-    /// Feeds received bytes; every complete frame is answered by calling
-    /// `send` with the encoded response (at most [`MAX_FRAME`] bytes).
+    /// Feeds bytes received at time `now_us` (µs, any origin, wrapping: the
+    /// inter-byte timeout [`crate::board::protocol::BYTE_TIMEOUT_US`] is
+    /// measured on it); every complete frame is answered by calling `send`
+    /// with the encoded response (at most [`MAX_FRAME`] bytes).
     pub fn receive<const N: usize, A: DeviceAccess<N>>(
         &mut self,
         dev: &mut A,
         bytes: &[u8],
+        now_us: u32,
         mut send: impl FnMut(&[u8]),
     ) {
         for &b in bytes {
-            let reply = match self.deframer.push(b) {
+            let reply = match self.deframer.push(b, now_us) {
                 Deframed::Pending => None,
-                Deframed::Oversize => Some(error_frame(0, WireError::Oversize)),
+                Deframed::Oversize { seq } => {
+                    Some(error_frame(seq.unwrap_or(0), WireError::Oversize))
+                }
                 Deframed::Frame(f) => Some(match decode(f) {
                     Ok(Frame {
                         seq,
@@ -90,12 +96,12 @@ impl Server {
         dev: &mut A,
         mut send: impl FnMut(&[u8]),
     ) {
-        // Ramp progress and faults, as telemetry on change.
-        let status = dev.with(|d| d.status());
-        if status.settled && !self.last_settled {
+        // One RampDone per change of the ramp generation, once settled.
+        let (status, ramp) = dev.with(|d| (d.status(), d.ramp_generation()));
+        if status.settled && ramp != self.reported_ramp {
+            self.reported_ramp = ramp;
             self.telemetry(Telemetry::RampDone, &mut send);
         }
-        self.last_settled = status.settled;
         let new = status.faults & !self.last_faults;
         if new != 0 {
             self.telemetry(Telemetry::Fault(new), &mut send);

@@ -4,6 +4,7 @@
 
 use crate::board::dds::DAC_MAX;
 use crate::board::estimator::Calibration;
+use crate::board::protocol::framing::BYTE_TIMEOUT_US;
 use crate::board::protocol::messages::{Info, PROTOCOL_VERSION};
 
 /// Transducer calibration of one DAC channel: displacement
@@ -144,6 +145,10 @@ impl Info {
             max_amp_x_m: cfg.max_amp_x_m(),
             max_offset_z_m: cfg.max_offset_z_m(),
             liftoff_margin: cfg.liftoff_margin,
+            max_phase_rad: MAX_PHASE_RAD,
+            max_velocity_m_s: MAX_VELOCITY_M_S,
+            periods_range: PERIODS_RANGE,
+            byte_timeout_us: BYTE_TIMEOUT_US,
         }
     }
 }

@@ -17,8 +17,11 @@ struct Plan {
 
 impl<const N: usize> Device<'_, N> {
     /// DDS levels for a drive (validated, nothing applied). The checks, in
-    /// order: frequency, normal offset, normal amplitude (range, lift-off,
-    /// DAC headroom), tangential amplitude, phase.
+    /// order (the first failing one is reported): frequency; normal offset
+    /// in `[0, max_offset_z_m]`; normal amplitude finite and ≥ 0, then
+    /// ≤ `(1 − margin)·offset` (lift-off, f32, inclusive), then
+    /// ≤ `max_offset_z_m − offset` (DAC headroom, f32, inclusive); tangential
+    /// amplitude in `[0, max_amp_x_m]`; phase in `[−MAX_PHASE_RAD, MAX_PHASE_RAD]`.
     fn plan(&self, d: &DriveSetting) -> Result<Plan, DeviceError> {
         let (fmin, fmax) = self.cfg.freq_range_hz;
         let freq_err = DeviceError::OutOfRange {
@@ -50,6 +53,15 @@ impl<const N: usize> Device<'_, N> {
                 limit_m: limit,
             });
         }
+        // DAC headroom above the offset, computed in f32 like the limit above.
+        let headroom = (self.cfg.max_offset_z_m() - off).max(0.0);
+        if d.amp_z_m > headroom {
+            return Err(DeviceError::OutOfRange {
+                param: DriveParam::AmpZ,
+                min: 0.0,
+                max: headroom,
+            });
+        }
         let amp_x = in_range(d.amp_x_m, 0.0, self.cfg.max_amp_x_m(), DriveParam::AmpX)?;
         let phase = in_range(
             d.phase_rad,
@@ -71,7 +83,7 @@ impl<const N: usize> Device<'_, N> {
         lz.check().map_err(|_| DeviceError::OutOfRange {
             param: DriveParam::AmpZ,
             min: 0.0,
-            max: (self.cfg.max_offset_z_m() - off).max(0.0),
+            max: headroom,
         })?;
         lx.check().map_err(|_| DeviceError::OutOfRange {
             param: DriveParam::AmpX,
@@ -113,6 +125,7 @@ impl<const N: usize> Device<'_, N> {
                     .wrapping_sub(1 << 31),
             ),
         };
+        self.ramp_generation = self.ramp_generation.wrapping_add(1);
         if self.running {
             self.dds.set_level(0, plan.levels[0])?;
             self.dds.set_level(1, plan.levels[1])?;
@@ -136,6 +149,7 @@ impl<const N: usize> Device<'_, N> {
         self.dds.set_level(0, plan.levels[0])?;
         self.dds.set_level(1, plan.levels[1])?;
         self.running = true;
+        self.ramp_generation = self.ramp_generation.wrapping_add(1);
         Ok(())
     }
 
@@ -143,6 +157,7 @@ impl<const N: usize> Device<'_, N> {
     pub fn stop(&mut self) {
         self.dds.ramp_down();
         self.running = false;
+        self.ramp_generation = self.ramp_generation.wrapping_add(1);
     }
 
     /// Latches a fault and enters the safe state: amplitudes and offsets ramp
@@ -150,6 +165,7 @@ impl<const N: usize> Device<'_, N> {
     pub fn fault(&mut self, bits: u32) {
         self.faults |= bits;
         self.running = false;
+        self.ramp_generation = self.ramp_generation.wrapping_add(1);
         // The rest levels were accepted by `new`: they cannot fail now.
         let _ = self.rest_levels();
     }

@@ -33,13 +33,17 @@ impl<const N: usize> Device<'_, N> {
     /// Starts a measurement over `periods` drive periods.
     ///
     /// # Errors
-    /// [`DeviceError::Busy`] if one is running; [`DeviceError::OutOfRange`]
-    /// outside [`PERIODS_RANGE`].
+    /// In this order: [`DeviceError::Faulted`] while a fault is latched (like
+    /// [`Device::start`]); [`DeviceError::OutOfRange`] outside
+    /// [`PERIODS_RANGE`]; [`DeviceError::Busy`] if one is running.
     pub fn measure(&mut self, periods: u32) -> Result<(), DeviceError> {
+        if self.faults != 0 {
+            return Err(DeviceError::Faulted(self.faults));
+        }
+        check_periods(periods)?;
         if self.est.busy() {
             return Err(DeviceError::Busy);
         }
-        check_periods(periods)?;
         self.est.start(periods).map_err(DeviceError::Estimate)
     }
 

@@ -62,6 +62,9 @@ pub struct Device<'t, const N: usize> {
     est: Estimator,
     /// Accumulator and tuning word at the start of each DAC half-buffer.
     half: [(u32, u32); 2],
+    /// +1 per command that sets new DDS targets (accepted `set_drive`,
+    /// `start`, `stop`, `fault`).
+    ramp_generation: u32,
 }
 
 /// `x` if finite and in `[min, max]`, else [`DeviceError::OutOfRange`].
@@ -113,6 +116,7 @@ impl<'t, const N: usize> Device<'t, N> {
             rx_overflows: 0,
             est,
             half: [(0, 0); 2],
+            ramp_generation: 0,
         };
         check_contact(&contact)?;
         d.applied.achieved = d
@@ -171,13 +175,25 @@ impl<'t, const N: usize> Device<'t, N> {
 
     /// Status snapshot.
     pub fn status(&self) -> Status {
+        let ch = self.dds.channels();
+        let (z, x) = (self.cfg.dac_z, self.cfg.dac_x);
         Status {
             running: self.running,
             settled: self.dds.settled(),
             faults: self.faults,
             measuring: self.est.busy(),
             rx_overflows: self.rx_overflows,
+            out_amp_z_m: ch[0].amp.abs() * z.metres_per_code,
+            out_amp_x_m: ch[1].amp.abs() * x.metres_per_code,
+            out_offset_z_m: (ch[0].dc - z.zero_code) * z.metres_per_code,
         }
+    }
+
+    /// Counts the commands that set new DDS targets (accepted `set_drive`,
+    /// `start`, `stop`, `fault`), wrapping: the server sends one `RampDone`
+    /// when the DDS has settled after the count changed.
+    pub fn ramp_generation(&self) -> u32 {
+        self.ramp_generation
     }
 
     /// Counts `n` received bytes the link had to drop (receive queue full);

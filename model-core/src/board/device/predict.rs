@@ -41,14 +41,21 @@ pub fn predict(s: &Scene<f32>, v0: f32) -> Result<Prediction, DeviceError> {
         DriveParam::Velocity,
     )?;
     let vc = crate::model::analytic::CriticalVelocity::of(s);
-    let m = match exact::solve_with::<f32, Libm>(s, v0).map_err(DeviceError::Model)? {
-        Solution::Sliding { mu_over_mu0 } | Solution::StickSlip { mu_over_mu0 } => mu_over_mu0,
-        Solution::AtRest { mu_0plus, .. } => mu_0plus,
+    let (m, m_minus) = match exact::solve_with::<f32, Libm>(s, v0).map_err(DeviceError::Model)? {
+        Solution::Sliding { mu_over_mu0 } | Solution::StickSlip { mu_over_mu0 } => {
+            (mu_over_mu0, mu_over_mu0)
+        }
+        Solution::AtRest {
+            mu_0plus,
+            mu_0minus,
+            ..
+        } => (mu_0plus, mu_0minus),
     };
     Ok(Prediction {
         mu_over_mu0: m,
         mu: m * s.mu0(),
         vc: (vc.forward, vc.backward),
+        mu_0minus_over_mu0: m_minus,
     })
 }
 

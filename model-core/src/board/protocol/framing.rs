@@ -62,18 +62,17 @@ pub fn decode(bytes: &mut [u8]) -> Result<Frame, (WireError, Option<u32>)> {
     let n = cobs::decode_in_place(bytes).map_err(|_| (WireError::Malformed, None))?;
     let raw = &bytes[..n];
     if raw.len() < 4 {
-        return Err((WireError::Malformed, None));
+        return Err((WireError::Malformed, header(raw).map(|h| h.1)));
     }
     let (payload, crc) = raw.split_at(raw.len() - 4);
     let want = u32::from_le_bytes([crc[0], crc[1], crc[2], crc[3]]);
     if CRC.checksum(payload) != want {
-        return Err((WireError::BadCrc, None));
+        // The header may itself be corrupt, but echoing it lets the host match
+        // the error to its request instead of timing out.
+        return Err((WireError::BadCrc, header(payload).map(|h| h.1)));
     }
     // Header first, so a version mismatch or unknown body is reported with its seq.
-    let (version, rest): (u16, &[u8]) =
-        postcard::take_from_bytes(payload).map_err(|_| (WireError::Malformed, None))?;
-    let (seq, rest): (u32, &[u8]) =
-        postcard::take_from_bytes(rest).map_err(|_| (WireError::Malformed, None))?;
+    let (version, seq, rest) = header(payload).ok_or((WireError::Malformed, None))?;
     if version != PROTOCOL_VERSION {
         return Err((
             WireError::VersionMismatch {
@@ -102,14 +101,59 @@ pub fn decode(bytes: &mut [u8]) -> Result<Frame, (WireError, Option<u32>)> {
     }
 }
 
+/// The header of a payload: `version` (varint u16), `seq` (varint u32) and
+/// the bytes after them, if both varints are complete.
+fn header(payload: &[u8]) -> Option<(u16, u32, &[u8])> {
+    let (version, rest): (u16, &[u8]) = postcard::take_from_bytes(payload).ok()?;
+    let (seq, rest): (u32, &[u8]) = postcard::take_from_bytes(rest).ok()?;
+    Some((version, seq, rest))
+}
+
+/// The `seq` of a COBS-encoded frame's first bytes (an oversize frame keeps
+/// only its start): COBS is undone block by block for the first 8 payload
+/// bytes (a version and a seq varint take at most 3 + 5).
+pub fn peek_seq(cobs: &[u8]) -> Option<u32> {
+    let mut raw = [0u8; 8];
+    let (mut n, mut i) = (0, 0);
+    while n < raw.len() && i < cobs.len() {
+        let code = usize::from(cobs[i]);
+        if code == 0 {
+            return None;
+        }
+        i += 1;
+        for _ in 1..code {
+            if i >= cobs.len() || n >= raw.len() {
+                break;
+            }
+            raw[n] = cobs[i];
+            n += 1;
+            i += 1;
+        }
+        // A block shorter than 0xFF stands for its data and one zero.
+        if code != 0xFF && n < raw.len() && i < cobs.len() {
+            raw[n] = 0;
+            n += 1;
+        }
+    }
+    header(&raw[..n]).map(|h| h.1)
+}
+
+/// Largest gap between two bytes of one frame, µs: a frame whose bytes arrive
+/// further apart is dropped (its start is discarded when the late byte comes;
+/// the rest is then a frame of its own and is answered `Malformed` or
+/// `BadCrc`). At 115 200 Bd a whole 256-byte frame takes 22 ms.
+pub const BYTE_TIMEOUT_US: u32 = 100_000;
+
 /// Splits a byte stream into frames at the zero delimiters, with a fixed
 /// buffer of [`MAX_FRAME`] bytes. Garbage and oversize frames are dropped up to
-/// the next delimiter and reported once.
+/// the next delimiter and reported once; a frame whose bytes arrive more than
+/// [`BYTE_TIMEOUT_US`] apart is dropped.
 #[derive(Debug, Clone)]
 pub struct Deframer {
     buf: [u8; MAX_FRAME],
     len: usize,
     overflow: bool,
+    last_us: u32,
 }
 
 /// What one byte completed.
@@ -119,8 +163,12 @@ pub enum Deframed<'a> {
     Pending,
     /// A frame's bytes (without the delimiter), ready for [`decode`].
     Frame(&'a mut [u8]),
-    /// A frame longer than [`MAX_FRAME`] was dropped.
-    Oversize,
+    /// A frame longer than [`MAX_FRAME`] was dropped; `seq` if its first
+    /// bytes held a readable header ([`peek_seq`]).
+    Oversize {
+        /// The dropped frame's sequence number, if readable.
+        seq: Option<u32>,
+    },
 }
 
 impl Default for Deframer {
@@ -129,19 +177,29 @@ impl Default for Deframer {
             buf: [0; MAX_FRAME],
             len: 0,
             overflow: false,
+            last_us: 0,
         }
     }
 }
 
 impl Deframer {
-    /// Feeds one byte.
-    pub fn push(&mut self, b: u8) -> Deframed<'_> {
+    /// Feeds one byte received at time `now_us` (µs, any origin, wrapping).
+    pub fn push(&mut self, b: u8, now_us: u32) -> Deframed<'_> {
+        let gap = now_us.wrapping_sub(self.last_us);
+        self.last_us = now_us;
+        if gap > BYTE_TIMEOUT_US {
+            // A stale partial frame: drop it.
+            self.len = 0;
+            self.overflow = false;
+        }
         if b == 0 {
             let (len, over) = (self.len, self.overflow);
             self.len = 0;
             self.overflow = false;
             if over {
-                return Deframed::Oversize;
+                return Deframed::Oversize {
+                    seq: peek_seq(&self.buf[..len]),
+                };
             }
             if len == 0 {
                 return Deframed::Pending;

@@ -15,7 +15,7 @@ use crate::model::regime::Regime;
 
 /// Protocol version; a frame with another version is answered with
 /// [`WireError::VersionMismatch`].
-pub const PROTOCOL_VERSION: u16 = 1;
+pub const PROTOCOL_VERSION: u16 = 2;
 
 /// The drive as commanded, physical units.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -94,12 +94,15 @@ pub struct Applied {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Prediction {
-    /// μ/μ₀ at the velocity (at v₀ = 0: μ(0⁺)).
+    /// μ/μ₀ at the velocity; at v₀ = 0 exactly the limit μ(0⁺)/μ₀.
     pub mu_over_mu0: f32,
-    /// μ.
+    /// μ = μ₀·`mu_over_mu0`.
     pub mu: f32,
     /// Forward and backward critical velocity, m/s.
     pub vc: (f32, f32),
+    /// At v₀ = 0 exactly the other one-sided limit μ(0⁻)/μ₀ (μ is
+    /// discontinuous at rest); at any other v₀ equal to `mu_over_mu0`.
+    pub mu_0minus_over_mu0: f32,
 }
 
 /// Status snapshot.
@@ -118,6 +121,14 @@ pub struct Status {
     /// power-up (saturating). Never a silent drop: a host that sees this grow
     /// pipelined more than the device can hold.
     pub rx_overflows: u32,
+    /// The normal amplitude the DAC produces now, m (ramps towards the
+    /// setting while running, towards 0 after `Stop`; the setting itself is
+    /// what `GetDrive` reports).
+    pub out_amp_z_m: f32,
+    /// The tangential amplitude produced now, m.
+    pub out_amp_x_m: f32,
+    /// The normal offset produced now, m.
+    pub out_offset_z_m: f32,
 }
 
 /// What the device is (answer to [`Request::Hello`]).
@@ -140,6 +151,14 @@ pub struct Info {
     pub max_offset_z_m: f32,
     /// Lift-off margin: Δu_z ≤ (1 − margin)·u_z0.
     pub liftoff_margin: f32,
+    /// Largest |φ| of a drive, rad.
+    pub max_phase_rad: f32,
+    /// Largest |v₀| of a prediction, m/s.
+    pub max_velocity_m_s: f32,
+    /// Allowed periods of `Measure` and `Stream`, inclusive.
+    pub periods_range: (u32, u32),
+    /// A frame whose bytes arrive more than this apart is dropped, µs.
+    pub byte_timeout_us: u32,
 }
 
 /// Requests (host → device). [`ENDPOINTS`] names the response of each.
