@@ -107,6 +107,7 @@ fn roundtrip_every_request() {
         },
         Request::GetStatus,
         Request::ResetFaults,
+        Request::Reset,
     ];
     assert_eq!(
         reqs.len() as u32,

@@ -30,7 +30,7 @@ impl Client {
     pub fn new(link: Box<dyn Link>, timeout: Duration, attempts: u32) -> Self {
         Client {
             link,
-            seq: 0,
+            seq: session_seq(),
             deframer: Deframer::default(),
             timeout,
             attempts: attempts.max(1),
@@ -116,6 +116,18 @@ impl Client {
             _ => Ok(None),
         }
     }
+}
+
+/// The first sequence number of a session: from the clock and the process
+/// id, so that a new session does not repeat the seq of an earlier one's
+/// `Measure` (the device answers a repeated seq from its memory).
+fn session_seq() -> u32 {
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| {
+            d.subsec_nanos() ^ (d.as_secs() as u32).rotate_left(16)
+        });
+    nanos ^ std::process::id().rotate_left(8)
 }
 
 fn gone(link: &dyn Link, e: &std::io::Error) -> CliError {

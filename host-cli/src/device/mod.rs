@@ -87,6 +87,9 @@ pub enum DeviceCmd {
     Status,
     /// Clear latched faults
     ResetFaults,
+    /// End every stream and measurement and stop the drive (after a host
+    /// crash); settings and latched faults are kept
+    Reset,
     /// Stream estimates (Ctrl-C to stop, or --count)
     Watch {
         /// Periods per estimate
@@ -392,6 +395,7 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
         }
         DeviceCmd::Status => out(t.json, &expect(c.call(Request::GetStatus)?)?),
         DeviceCmd::ResetFaults => out(t.json, &expect(c.call(Request::ResetFaults)?)?),
+        DeviceCmd::Reset => out(t.json, &expect(c.call(Request::Reset)?)?),
         DeviceCmd::Watch {
             periods,
             count,

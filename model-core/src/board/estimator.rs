@@ -160,6 +160,12 @@ impl Estimator {
         Ok(())
     }
 
+    /// Abandons a window (open or pending): the estimator is idle, with no
+    /// estimate.
+    pub fn abort(&mut self) {
+        self.state = State::Idle;
+    }
+
     /// Whether the window has closed.
     pub fn done(&self) -> bool {
         self.state == State::Done

@@ -47,6 +47,14 @@ impl<const N: usize> Device<'_, N> {
         self.est.start(periods).map_err(DeviceError::Estimate)
     }
 
+    /// Abandons a running measurement (nothing if none runs); the last
+    /// estimate is gone too.
+    pub fn abort_measurement(&mut self) {
+        if self.est.busy() {
+            self.est.abort();
+        }
+    }
+
     /// The last finished measurement.
     ///
     /// # Errors

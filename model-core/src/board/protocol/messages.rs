@@ -202,6 +202,10 @@ pub enum Request {
     GetStatus,
     /// 12: clear latched faults.
     ResetFaults,
+    /// 13: end every session: stop the stream (`StreamStopped(Reset)`),
+    /// abort a running measurement, stop the drive (ramped), forget the
+    /// `Measure` seq; settings, contact and latched faults are kept.
+    Reset,
 }
 
 /// Which [`Response`] variant answers a request when it succeeds (any request
@@ -254,6 +258,7 @@ pub const ENDPOINTS: &[Endpoint] = &[
     ep(10, "Stream", Answer::Ok),
     ep(11, "GetStatus", Answer::Status),
     ep(12, "ResetFaults", Answer::Ok),
+    ep(13, "Reset", Answer::Ok),
 ];
 
 const fn ep(index: u32, request: &'static str, answer: Answer) -> Endpoint {
@@ -281,6 +286,7 @@ impl Request {
             Request::Stream { .. } => 10,
             Request::GetStatus => 11,
             Request::ResetFaults => 12,
+            Request::Reset => 13,
         }
     }
 
@@ -303,7 +309,7 @@ pub enum Response {
         /// What the DDS produces.
         applied: Applied,
     },
-    /// 2: done (`Start`, `Stop`, `SetContact`, `Measure`, `Stream`, `ResetFaults`).
+    /// 2: done (`Start`, `Stop`, `SetContact`, `Measure`, `Stream`, `ResetFaults`, `Reset`).
     Ok,
     /// 3: to `GetContact`.
     Contact(Contact),
@@ -348,6 +354,20 @@ pub enum Telemetry {
     RampDone,
     /// 2: a fault was latched (bits of [`crate::board::device::faults`]).
     Fault(u32),
+    /// 3: the stream of estimates ended (no more `Estimate` telemetry).
+    StreamStopped(StreamEnd),
+}
+
+/// Why a stream of estimates ended.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum StreamEnd {
+    /// 0: `Stream { on: false, .. }`.
+    Requested,
+    /// 1: `Reset`.
+    Reset,
+    /// 2: the next measurement was refused (e.g. a latched fault): the error.
+    Refused(WireError),
 }
 
 /// A frame body.
@@ -466,7 +486,7 @@ mod tests {
     use super::*;
 
     /// One request of every variant, in variant order.
-    fn every_request() -> [Request; 13] {
+    fn every_request() -> [Request; 14] {
         let drive = DriveSetting {
             freq_hz: 1e4,
             amp_z_m: 0.0,
@@ -495,6 +515,7 @@ mod tests {
             },
             Request::GetStatus,
             Request::ResetFaults,
+            Request::Reset,
         ]
     }
 
