@@ -3,13 +3,26 @@
 
 use super::config::PERIODS_RANGE;
 use super::{faults, Device, DeviceError, DriveParam};
-use crate::board::estimator::Estimate;
+use crate::board::estimator::{reasons, Estimate};
 
 impl<const N: usize> Device<'_, N> {
     /// Refills DAC half-buffer `half` (0 or 1) with packed words and records
     /// the drive phase of its first sample for the ADC intake.
     pub fn fill_dac(&mut self, half: usize, buf: &mut [u32]) {
         self.half[half & 1] = (self.dds.accumulator(), self.dds.tuning_word());
+        // Settled before the fill stays settled through it (targets change
+        // only between fills).
+        let mut cond = 0;
+        if !self.running {
+            cond |= reasons::NOT_RUNNING;
+        }
+        if !self.dds.settled() {
+            cond |= reasons::NOT_SETTLED;
+        }
+        if self.faults != 0 {
+            cond |= reasons::FAULT;
+        }
+        self.half_conditions[half & 1] = cond;
         self.dds.fill(buf);
     }
 
@@ -18,6 +31,7 @@ impl<const N: usize> Device<'_, N> {
     pub fn adc_block(&mut self, half: usize, samples: &[(u16, u16)]) {
         let (acc0, tw) = self.half[half & 1];
         let mut acc = acc0.wrapping_sub(tw.wrapping_mul(self.cfg.adc_lag_samples));
+        self.est.set_conditions(self.half_conditions[half & 1]);
         for &(x, z) in samples {
             if self.est.push(self.table, acc, x, z) {
                 if let Ok(e) = self.est.estimate() {

@@ -62,6 +62,8 @@ pub struct Device<'t, const N: usize> {
     est: Estimator,
     /// Accumulator and tuning word at the start of each DAC half-buffer.
     half: [(u32, u32); 2],
+    /// Estimate reasons that held while each DAC half-buffer was filled.
+    half_conditions: [u32; 2],
     /// +1 per command that sets new DDS targets (accepted `set_drive`,
     /// `start`, `stop`, `fault`).
     ramp_generation: u32,
@@ -116,6 +118,7 @@ impl<'t, const N: usize> Device<'t, N> {
             rx_overflows: 0,
             est,
             half: [(0, 0); 2],
+            half_conditions: [0; 2],
             ramp_generation: 0,
         };
         check_contact(&contact)?;
