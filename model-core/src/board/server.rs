@@ -4,8 +4,9 @@
 //! pseudo-terminal — the same code.
 //!
 //! **Sessions.** `Measure` is idempotent per `seq`: the server remembers the
-//! last `Measure` (seq, periods, answer) and answers a retry with the same
-//! seq and periods with the same answer without starting anything. The
+//! last accepted `Measure` (seq, periods) and answers a retry with the same
+//! seq and periods `Ok` again without starting anything; a refused one
+//! changed nothing and its retry is judged again. The
 //! stream of estimates ends on `Stream{on: false}`, on `Reset`, or when its
 //! next measurement is refused, and every end is announced by one
 //! `StreamStopped` telemetry frame. `Reset` ends every session a crashed host
@@ -31,12 +32,11 @@ impl<const N: usize> DeviceAccess<N> for Device<'_, N> {
     }
 }
 
-/// The last `Measure` request and its answer (for retries with the same seq).
+/// The last accepted `Measure` (for retries with the same seq).
 #[derive(Debug, Clone, Copy)]
 struct LastMeasure {
     seq: u32,
     periods: u32,
-    answer: Response,
 }
 
 /// The stream of estimates.
@@ -223,7 +223,7 @@ impl Server {
     ) -> Response {
         if let Some(m) = self.last_measure {
             if m.seq == seq && m.periods == periods {
-                return m.answer;
+                return Response::Ok;
             }
         }
         let answer = if self.stream.periods.is_some() {
@@ -244,11 +244,11 @@ impl Server {
                 Err(e) => e.into(),
             }
         };
-        self.last_measure = Some(LastMeasure {
-            seq,
-            periods,
-            answer,
-        });
+        // Only an accepted Measure is remembered: a refusal changed nothing,
+        // so its retry is simply judged again.
+        if answer == Response::Ok {
+            self.last_measure = Some(LastMeasure { seq, periods });
+        }
         answer
     }
 
