@@ -216,3 +216,47 @@ impl Deframer {
         Deframed::Pending
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// COBS of `02 07 00 0b` (version 2, seq 7, Request, GetStatus) and a CRC.
+    const FRAME: [u8; 9] = [0x03, 0x02, 0x07, 0x06, 0x0b, 0x11, 0x22, 0x33, 0x44];
+
+    #[test]
+    fn a_frame_split_beyond_the_byte_timeout_is_dropped() {
+        let mut d = Deframer::default();
+        for &b in &FRAME[..4] {
+            assert_eq!(d.push(b, 1_000), Deframed::Pending);
+        }
+        // The rest arrives 100 ms + 1 µs later: only the rest is a frame.
+        for &b in &FRAME[4..] {
+            assert_eq!(d.push(b, 1_000 + BYTE_TIMEOUT_US + 1), Deframed::Pending);
+        }
+        match d.push(0, 1_000 + BYTE_TIMEOUT_US + 1) {
+            Deframed::Frame(f) => assert_eq!(f, &FRAME[4..]),
+            other => panic!("{other:?}"),
+        }
+        // Exactly at the timeout the frame is kept whole (the limit is inclusive).
+        for &b in &FRAME[..4] {
+            d.push(b, 0);
+        }
+        for &b in &FRAME[4..] {
+            d.push(b, BYTE_TIMEOUT_US);
+        }
+        match d.push(0, BYTE_TIMEOUT_US) {
+            Deframed::Frame(f) => assert_eq!(f, &FRAME[..]),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn peek_seq_reads_the_header_of_a_cut_frame() {
+        assert_eq!(peek_seq(&FRAME[..3]), Some(7));
+        // seq 300 = ac 02 (varint): COBS 04 02 ac 02 …
+        assert_eq!(peek_seq(&[0x04, 0x02, 0xac, 0x02, 0x01]), Some(300));
+        // A seq varint cut off: unreadable.
+        assert_eq!(peek_seq(&[0x03, 0x02, 0xac]), None);
+    }
+}
