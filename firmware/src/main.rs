@@ -53,6 +53,16 @@ const PCLK1_HZ: u32 = 16_000_000;
 const TABLE_N: usize = 1024;
 
 static mut DAC_BUF: [u32; 2 * HALF] = [0; 2 * HALF];
+/// DAC half-buffers refilled since power-up: the server's clock (one half =
+/// `HALF/FS_HZ` = 512 µs) for the protocol's inter-byte timeout.
+static HALVES: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
+
+/// Microseconds since power-up (wrapping), at the resolution of one half-buffer.
+fn now_us() -> u32 {
+    HALVES
+        .load(core::sync::atomic::Ordering::Relaxed)
+        .wrapping_mul(HALF as u32 * 1_000_000 / FS_HZ)
+}
 static mut ADC_BUF: [u32; 2 * HALF] = [0; 2 * HALF];
 
 type Dev = Device<'static, TABLE_N>;
@@ -232,7 +242,7 @@ fn main() -> ! {
         // Feed the independent watchdog (KR = 0xAAAA, RM0090 §21.4.1).
         dp.IWDG.kr().write(|w| unsafe { w.bits(0xAAAA) });
         // Requests in, answers and telemetry into the transmit ring; never waits.
-        link::serve(&mut server, &mut Shared, &mut io);
+        link::serve(&mut server, &mut Shared, &mut io, now_us());
         // The only wait of the loop: check and WFI with interrupts masked, so
         // a byte that lands after the check still wakes the core (the
         // USART2 handler runs right after the masked section). The
@@ -423,6 +433,7 @@ fn DMA1_STREAM5() {
     } else {
         return;
     };
+    HALVES.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
     cortex_m::interrupt::free(|cs| {
         if let Some(dev) = DEVICE.borrow(cs).borrow_mut().as_mut() {
             // SAFETY: the DMA is reading the other half.

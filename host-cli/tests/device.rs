@@ -362,3 +362,100 @@ fn in_process_virtual_device_keeps_its_state_and_measures() {
         .unwrap()
         .is_array());
 }
+
+#[test]
+fn invalid_estimates_exit_1_naming_the_reason_unless_allowed() {
+    let dir = tempfile::tempdir().unwrap();
+    let state = dir.path().join("sim.json");
+    let run = |args: &[&str]| {
+        Command::cargo_bin("fricctl")
+            .unwrap()
+            .env("FRICCTL_SIM_STATE", &state)
+            .args(["device", "--sim", "--json"])
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    // A drive set but not started: the estimate is not valid (drive not running).
+    assert!(run(DRIVE).status.success());
+    let o = run(&["measure", "--periods", "200"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("invalid estimate") && err.contains("not_running"),
+        "{err}"
+    );
+    let o = run(&["measure", "--periods", "200", "--allow-invalid"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let e: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(e["Estimate"]["valid"], false);
+    assert!(e["Estimate"]["reasons"]
+        .as_array()
+        .unwrap()
+        .contains(&Value::from("not_running")));
+    // Started and settled: valid, with a standard error.
+    assert!(run(&["start"]).status.success());
+    let o = run(&["measure", "--periods", "2000"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let e: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(e["Estimate"]["valid"], true);
+    assert_eq!(e["Estimate"]["reasons"], serde_json::json!([]));
+    let se = e["Estimate"]["std_error"].as_f64().unwrap();
+    // ±1 count of uniform ADC noise (the sim's default) on f_x at 0.01 N/count
+    // over N = 2000·12.5 samples, f̄_z = 40 N: σ/(f̄_z √N) = 0.01·(1/√3)/(40·158)
+    // ≈ 9e-7; the batch scatter adds the plant's slow settling, so only the
+    // order of magnitude is fixed: 1e-8 < se < 1e-3 (the μ agreement bound).
+    assert!(se > 1e-8 && se < 1e-3, "{e}");
+}
+
+/// Sends a hand-made payload, returns the one response frame.
+fn ask(p: &mut dyn SerialPort, payload: &[u8]) -> Frame {
+    p.write_all(&common::raw_frame(payload)).unwrap();
+    common::read_responses(p, 1).remove(0)
+}
+
+/// `GetStatus` (index 11) with seq `seq`, written from the spec.
+fn raw_status(p: &mut dyn SerialPort, seq: u8) -> model_core::device::Status {
+    match ask(p, &[2, seq, 0, 11]).body {
+        Body::Response(Response::Status(st)) => st,
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn a_retried_measure_gets_the_same_answer_and_reset_ends_everything() {
+    let s = sim();
+    ok_json(&s, DRIVE);
+    let mut p = raw_port(&s);
+    let p = &mut *p;
+    // Start (index 3); the ramps take ≈ 45 ms of device time.
+    assert_eq!(ask(p, &[2, 30, 0, 3]).body, Body::Response(Response::Ok));
+    std::thread::sleep(Duration::from_millis(300));
+    // Measure{periods: 20000} with seq 40, written from the spec: version 02,
+    // seq 28 (40), Body::Request 00, Request::Measure 08, periods varint a0 9c 01.
+    let measure_40 = [2, 40, 0, 8, 0xa0, 0x9c, 0x01];
+    let f = ask(p, &measure_40);
+    assert_eq!((f.seq, f.body), (40, Body::Response(Response::Ok)));
+    // The retry (same seq) while it runs: the same answer, not Busy.
+    let f = ask(p, &measure_40);
+    assert_eq!((f.seq, f.body), (40, Body::Response(Response::Ok)));
+    assert!(raw_status(p, 43).measuring);
+    // A new seq while it runs: Busy.
+    let f = ask(p, &[2, 41, 0, 8, 0xa0, 0x9c, 0x01]);
+    assert_eq!((f.seq, err_of(&f)), (41, WireError::Busy));
+    // Reset (index 13): ends the measurement and stops the drive.
+    let f = ask(p, &[2, 42, 0, 13]);
+    assert_eq!((f.seq, f.body), (42, Body::Response(Response::Ok)));
+    let st = raw_status(p, 44);
+    assert!(!st.measuring && !st.running, "{st:?}");
+    // A measurement that finished: its retry starts nothing.
+    assert_eq!(ask(p, &[2, 45, 0, 3]).body, Body::Response(Response::Ok));
+    std::thread::sleep(Duration::from_millis(300));
+    let measure_50 = [2, 50, 0, 8, 0xc8, 0x01]; // 200 periods = 10 ms
+    assert_eq!(ask(p, &measure_50).body, Body::Response(Response::Ok));
+    std::thread::sleep(Duration::from_millis(500));
+    assert!(!raw_status(p, 51).measuring);
+    assert_eq!(ask(p, &measure_50).body, Body::Response(Response::Ok));
+    assert!(!raw_status(p, 52).measuring);
+}

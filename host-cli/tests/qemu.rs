@@ -222,7 +222,7 @@ impl RawLink {
                 Err(e) => panic!("{e}"),
             };
             for &x in &b[..n] {
-                if let Deframed::Frame(f) = self.df.push(x) {
+                if let Deframed::Frame(f) = self.df.push(x, 0) {
                     let f = decode(f).expect("the firmware's frames decode");
                     if matches!(f.body, Body::Response(_)) {
                         self.got.push_back(f);

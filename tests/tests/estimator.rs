@@ -188,3 +188,77 @@ fn estimate_of_model_forces_matches_the_exact_solver() {
         );
     }
 }
+
+/// A standard normal deviate (Box–Muller) from the test PRNG.
+fn gauss(rng: &mut Rng) -> f64 {
+    let u1 = rng.uniform().max(1e-300);
+    let u2 = rng.uniform();
+    (-2.0 * u1.ln()).sqrt() * (TAU * u2).cos()
+}
+
+#[test]
+fn std_error_matches_the_closed_form_for_white_noise() {
+    use model_core::estimator::{reasons, BATCHES};
+    // 64 samples per period exactly (tw = 2^26), 320 periods: 32 batches of 10
+    // periods, N = 20 480 samples. f_z = 0.02 N/count · 2000 counts (+ a
+    // harmonic, no noise); f_x = 0.01 N/count · (2048 + 300 cos(θ + 0.4) + g),
+    // g white Gaussian with σ_c = 8 counts, then rounded to counts.
+    let table = SineTable::<1024>::libm();
+    let cx = Calibration {
+        gain: 0.01,
+        offset: 2048.0,
+    };
+    let cz = Calibration {
+        gain: 0.02,
+        offset: 0.0,
+    };
+    let (periods, sigma_c) = (320u32, 8.0);
+    let n = f64::from(periods) * 64.0;
+    // Closed form (estimator docs): σ_μ → σ_fx/(f̄_z √N), where the rounded
+    // noise has variance σ_c² + 1/12 counts² (Sheppard; exact to e^(−2π²σ_c²)).
+    // With equal batches and a noiseless f_z, E[σ_μ²] equals it exactly.
+    let fz_mean = 0.02 * 2000.0;
+    let sigma_fx = 0.01 * (sigma_c * sigma_c + 1.0 / 12.0_f64).sqrt();
+    let expected = sigma_fx / (fz_mean * n.sqrt());
+    let runs = 40;
+    let mut sum_sq = 0.0;
+    for seed in 1..=runs {
+        let mut rng = Rng::new(seed);
+        let mut est = Estimator::new(cx, cz, FULL).unwrap();
+        let r = run(&mut est, &table, 1 << 26, periods, |th| {
+            let x = 2048.0 + 300.0 * (th + 0.4).cos() + sigma_c * gauss(&mut rng);
+            let z = 2000.0 - 500.0 * th.cos();
+            (x.round() as u16, z.round() as u16)
+        });
+        assert_eq!(r.samples as f64, n);
+        assert_eq!(r.reasons, 0, "{r:?}");
+        let se = f64::from(r.std_error);
+        // One run: σ_μ from B − 1 = 31 degrees of freedom has a relative
+        // spread of 1/√(2·31) = 0.127; 0.55 is 4.3 of those.
+        assert!(
+            (se / expected - 1.0).abs() <= 0.55,
+            "seed {seed}: {se} vs {expected}"
+        );
+        sum_sq += se * se;
+    }
+    println!(
+        "mean σ_μ²/closed form = {}",
+        sum_sq / f64::from(runs as u32) / (expected * expected)
+    );
+    // Mean of σ_μ² over 40 runs: relative spread √(2/31)/√40 = 0.040; allow 4×.
+    let ratio = sum_sq / f64::from(runs as u32) / (expected * expected);
+    assert!(
+        (ratio - 1.0).abs() <= 0.16,
+        "mean σ_μ²/closed form = {ratio}"
+    );
+    assert_eq!(BATCHES, 32);
+    // Fewer periods than batches: flagged, and the error still from the batches there are.
+    let mut est = Estimator::new(cx, cz, FULL).unwrap();
+    let mut rng = Rng::new(99);
+    let r = run(&mut est, &table, 1 << 26, 8, |_| {
+        ((2048.0 + sigma_c * gauss(&mut rng)).round() as u16, 2000)
+    });
+    assert_eq!(r.reasons, reasons::FEW_PERIODS);
+    assert!(!r.valid());
+    assert!(r.std_error > 0.0);
+}

@@ -13,7 +13,7 @@ use model_core::board::link::{
 use model_core::dds::SineTable;
 use model_core::device::{Contact, Device};
 use model_core::protocol::{
-    decode, Body, Deframed, Deframer, Frame, Info, Response, MAX_FRAME, PROTOCOL_VERSION,
+    decode, Body, Deframed, Deframer, Frame, Info, Response, Telemetry, MAX_FRAME, PROTOCOL_VERSION,
 };
 use model_core::server::Server;
 
@@ -42,10 +42,10 @@ fn hand_frames_follow_the_spec() {
     let mut v = Vec::new();
     wire::varint(300, &mut v);
     assert_eq!(v, [0xac, 0x02]);
-    // The annotated example: payload 01 05 00 0b (version 1, seq 5, GetStatus).
+    // The annotated example: payload 02 05 00 0b (version 2, seq 5, GetStatus).
     assert_eq!(
-        wire::frame(&[0x01, 0x05, 0x00, 0x0b]),
-        [0x03, 0x01, 0x05, 0x06, 0x0b, 0x1a, 0xa3, 0xe1, 0x08, 0x00]
+        wire::frame(&[0x02, 0x05, 0x00, 0x0b]),
+        [0x03, 0x02, 0x05, 0x06, 0x0b, 0xf4, 0x0c, 0x54, 0x1a, 0x00]
     );
 }
 
@@ -193,7 +193,7 @@ fn a_byte_between_check_and_sleep_wakes_the_loop() {
     for &b in body {
         sim.arrive(b);
     }
-    serve(&mut server, &mut dev, &mut sim);
+    serve(&mut server, &mut dev, &mut sim, 0);
     assert!(sim.tx.is_empty() && sim.rx.is_empty());
 
     let slept = sleep_unless(&mut sim, |c| {
@@ -207,7 +207,7 @@ fn a_byte_between_check_and_sleep_wakes_the_loop() {
     assert_eq!(sim.wfi, 1);
     assert!(!sim.stalled, "lost wake-up");
     assert!(sim.work());
-    serve(&mut server, &mut dev, &mut sim);
+    serve(&mut server, &mut dev, &mut sim, 0);
     let answers = host_decode(
         &mut Deframer::default(),
         std::iter::from_fn(|| sim.tx.pop()),
@@ -232,7 +232,7 @@ fn a_byte_between_check_and_sleep_wakes_the_loop() {
 fn host_decode(df: &mut Deframer, bytes: impl Iterator<Item = u8>) -> Vec<Frame> {
     let mut out = Vec::new();
     for b in bytes {
-        if let Deframed::Frame(f) = df.push(b) {
+        if let Deframed::Frame(f) = df.push(b, 0) {
             out.push(decode(f).expect("device frames decode"));
         }
     }
@@ -249,6 +249,8 @@ struct Run {
     errors: usize,
     /// `rx_overflows` of a `GetStatus` sent after the run.
     reported: u32,
+    /// The last total announced by `RxOverflow` telemetry.
+    announced: u32,
 }
 
 /// The line at one byte time per tick in each direction (same baud rate both
@@ -274,6 +276,7 @@ fn line(n: u32, window: Option<usize>, loop_every: u64) -> Run {
         drive_answers: Vec::new(),
         errors: 0,
         reported: 0,
+        announced: 0,
     };
     let mut tick = 0u64;
     let mut quiet = 0u64;
@@ -310,12 +313,13 @@ fn line(n: u32, window: Option<usize>, loop_every: u64) -> Run {
                         open.retain(|o| o.0 != f.seq);
                     }
                     Body::Response(Response::Error(_)) => run.errors += 1,
+                    Body::Telemetry(Telemetry::RxOverflow(total)) => run.announced = total,
                     other => panic!("unexpected {other:?}"),
                 }
             }
         }
         if tick % loop_every == 0 {
-            serve(&mut server, &mut dev, &mut io);
+            serve(&mut server, &mut dev, &mut io, 0);
         }
         quiet = if active || !io.rx.is_empty() {
             0
@@ -329,7 +333,7 @@ fn line(n: u32, window: Option<usize>, loop_every: u64) -> Run {
         io.rx.push(b).unwrap();
     }
     for _ in 0..4 {
-        serve(&mut server, &mut dev, &mut io);
+        serve(&mut server, &mut dev, &mut io, 0);
     }
     let mut st = host_decode(&mut df, std::iter::from_fn(|| io.tx.pop()));
     if st.len() == 2 && matches!(st[0].body, Body::Response(Response::Error(_))) {
@@ -358,7 +362,7 @@ fn get_drive_answers_are_five_times_longer_than_the_requests() {
     for &b in &req {
         sim.arrive(b);
     }
-    serve(&mut server(), &mut dev, &mut sim);
+    serve(&mut server(), &mut dev, &mut sim, 0);
     let answer: Vec<u8> = std::iter::from_fn(|| sim.tx.pop()).collect();
     assert_eq!(req.len(), 10);
     assert!(
@@ -382,6 +386,7 @@ fn pipelining_within_the_queue_never_overflows() {
     let run = line(n, Some(RX_CAPACITY), 1000);
     assert_eq!(run.dropped, 0);
     assert_eq!(run.reported, 0);
+    assert_eq!(run.announced, 0);
     assert_eq!(run.errors, 0);
     assert_eq!(run.drive_answers, (1..=n).collect::<Vec<_>>());
 }
@@ -394,6 +399,9 @@ fn a_flood_overflows_and_the_status_counts_every_dropped_byte() {
     assert!(run.dropped > 0, "no overflow: the test proves nothing");
     // Every dropped byte is reported, none is silent.
     assert_eq!(run.reported, run.dropped);
+    // ... and announced without being asked (the last announcement may
+    // precede the last drops of the flood, never exceed them).
+    assert!(run.announced > 0 && run.announced <= run.reported);
     // Answers come in order; a lost request had one of its own bytes or its
     // predecessor's closing 0x00 dropped (two frames merged), so at most
     // two requests are lost per dropped byte.

@@ -26,6 +26,10 @@ fn info() -> Info {
         max_amp_x_m: 2e-6,
         max_offset_z_m: 8e-6,
         liftoff_margin: 0.05,
+        max_phase_rad: 1e3,
+        max_velocity_m_s: 1e3,
+        periods_range: (1, 1_000_000),
+        byte_timeout_us: 100_000,
     }
 }
 
@@ -45,11 +49,21 @@ fn req(seq: u32, r: Request) -> Vec<u8> {
 
 /// Sends bytes to a server, returns the decoded replies.
 fn talk(server: &mut Server, dev: &mut Device<'_, 256>, bytes: &[u8]) -> Vec<Frame> {
+    talk_at(server, dev, bytes, 0)
+}
+
+/// Sends bytes arriving at `now_us` to a server, returns the decoded replies.
+fn talk_at(
+    server: &mut Server,
+    dev: &mut Device<'_, 256>,
+    bytes: &[u8],
+    now_us: u32,
+) -> Vec<Frame> {
     let mut replies = Vec::new();
     let mut df = Deframer::default();
-    server.receive(dev, bytes, |out| {
+    server.receive(dev, bytes, now_us, |out| {
         for &b in out {
-            if let Deframed::Frame(f) = df.push(b) {
+            if let Deframed::Frame(f) = df.push(b, 0) {
                 replies.push(decode(f).unwrap());
             }
         }
@@ -93,8 +107,12 @@ fn roundtrip_every_request() {
         },
         Request::GetStatus,
         Request::ResetFaults,
+        Request::Reset,
     ];
-    assert_eq!(reqs.len() as u32, model_core::protocol::REQUEST_VARIANTS);
+    assert_eq!(
+        reqs.len() as u32,
+        model_core::protocol::ENDPOINTS.len() as u32
+    );
     for (i, r) in reqs.into_iter().enumerate() {
         let mut bytes = req(i as u32 + 7, r);
         assert_eq!(*bytes.last().unwrap(), 0);
@@ -263,7 +281,7 @@ fn docs_protocol_examples() {
     let mut out = [0u8; MAX_FRAME];
     let req = encode(
         &Frame {
-            version: 1,
+            version: 2,
             seq: 5,
             body: Body::Request(Request::GetStatus),
         },
@@ -272,7 +290,7 @@ fn docs_protocol_examples() {
     .unwrap();
     assert_eq!(
         req,
-        &[0x03, 0x01, 0x05, 0x06, 0x0b, 0x1a, 0xa3, 0xe1, 0x08, 0x00]
+        &[0x03, 0x02, 0x05, 0x06, 0x0b, 0xf4, 0x0c, 0x54, 0x1a, 0x00]
     );
     let status = model_core::device::Status {
         running: true,
@@ -280,11 +298,14 @@ fn docs_protocol_examples() {
         faults: 0,
         measuring: false,
         rx_overflows: 0,
+        out_amp_z_m: 2e-6,
+        out_amp_x_m: 3e-7,
+        out_offset_z_m: 4e-6,
     };
     let mut out = [0u8; MAX_FRAME];
     let resp = encode(
         &Frame {
-            version: 1,
+            version: 2,
             seq: 5,
             body: Body::Response(Response::Status(status)),
         },
@@ -294,8 +315,8 @@ fn docs_protocol_examples() {
     assert_eq!(
         resp,
         &[
-            0x07, 0x01, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x01, 0x05, 0xf5, 0xa8, 0x60, 0x4c,
-            0x00
+            0x07, 0x02, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x01, 0x11, 0xbd, 0x37, 0x06, 0x36,
+            0xb0, 0x0f, 0xa1, 0x34, 0xbd, 0x37, 0x86, 0x36, 0x29, 0x08, 0x3f, 0x0f, 0x00
         ]
     );
 }
@@ -314,7 +335,7 @@ fn telemetry_reports_ramps_and_faults_with_its_own_counter() {
     let mut collect = |s: &mut Server, dev: &mut Device<'_, 256>| {
         s.poll(dev, |out| {
             for &b in out {
-                if let Deframed::Frame(f) = df.push(b) {
+                if let Deframed::Frame(f) = df.push(b, 0) {
                     let f = decode(f).unwrap();
                     if let Body::Telemetry(t) = f.body {
                         tele.push((f.seq, t));
@@ -339,4 +360,562 @@ fn telemetry_reports_ramps_and_faults_with_its_own_counter() {
         Telemetry::Fault(model_core::device::faults::EXTERNAL)
     );
     assert_eq!(tele[1].0, tele[0].0 + 1);
+}
+
+#[test]
+fn receive_overflow_is_announced_once_per_growth() {
+    // Dropped receive bytes are announced once per growth of the count, with
+    // the new total (never a silent drop).
+    use model_core::protocol::Telemetry;
+    let t = SineTable::<256>::libm();
+    let mut dev = test_device(&t);
+    let mut s = Server::new(info());
+    let mut df = Deframer::default();
+    let mut tele = Vec::new();
+    for grow in [3u32, 0, 2] {
+        dev.count_rx_overflow(grow);
+        s.poll(&mut dev, |out| {
+            for &b in out {
+                if let Deframed::Frame(f) = df.push(b, 0) {
+                    if let Body::Telemetry(t) = decode(f).unwrap().body {
+                        tele.push(t);
+                    }
+                }
+            }
+        });
+    }
+    assert_eq!(tele, [Telemetry::RxOverflow(3), Telemetry::RxOverflow(5)]);
+}
+
+// ---------------------------------------------------------------------------
+// Protocol v2, with frames built by hand from docs/protocol.md's tables and an
+// independent CRC-32 (bitwise) and COBS (written here), so a spec error shows.
+
+/// CRC-32/ISO-HDLC, bit by bit (reflected polynomial 0xEDB88320).
+fn crc32_by_hand(data: &[u8]) -> u32 {
+    let mut crc = 0xFFFF_FFFFu32;
+    for &b in data {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
+
+/// COBS encoding, by hand (blocks of at most 254 data bytes).
+fn cobs_by_hand(data: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut block = Vec::new();
+    for &b in data {
+        if b == 0 {
+            out.push(block.len() as u8 + 1);
+            out.append(&mut block);
+        } else {
+            block.push(b);
+            if block.len() == 254 {
+                out.push(255);
+                out.append(&mut block);
+            }
+        }
+    }
+    out.push(block.len() as u8 + 1);
+    out.extend(block);
+    out
+}
+
+/// COBS decoding, by hand.
+fn uncobs_by_hand(data: &[u8]) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < data.len() {
+        let code = data[i] as usize;
+        out.extend(&data[i + 1..i + code]);
+        i += code;
+        if code != 255 && i < data.len() {
+            out.push(0);
+        }
+    }
+    out
+}
+
+/// The wire bytes of a payload: COBS(payload ‖ CRC LE) 00.
+fn wire(payload: &[u8]) -> Vec<u8> {
+    let mut v = payload.to_vec();
+    v.extend(crc32_by_hand(payload).to_le_bytes());
+    let mut w = cobs_by_hand(&v);
+    w.push(0);
+    w
+}
+
+/// The payloads of the frames in `bytes` (CRC checked by hand).
+fn payloads(bytes: &[u8]) -> Vec<Vec<u8>> {
+    bytes
+        .split(|&b| b == 0)
+        .filter(|f| !f.is_empty())
+        .map(|f| {
+            let raw = uncobs_by_hand(f);
+            let (p, crc) = raw.split_at(raw.len() - 4);
+            assert_eq!(crc32_by_hand(p).to_le_bytes(), crc, "CRC of {raw:02x?}");
+            p.to_vec()
+        })
+        .collect()
+}
+
+/// Sends bytes at `now_us`; returns the payloads of every frame sent back
+/// (responses and the telemetry sent with them).
+fn exchange(s: &mut Server, dev: &mut Device<'_, 256>, bytes: &[u8], now_us: u32) -> Vec<Vec<u8>> {
+    let mut out = Vec::new();
+    s.receive(dev, bytes, now_us, |b| out.extend_from_slice(b));
+    payloads(&out)
+}
+
+/// The one payload answering a request payload.
+fn ask(s: &mut Server, dev: &mut Device<'_, 256>, payload: &[u8]) -> Vec<u8> {
+    let mut r = exchange(s, dev, &wire(payload), 0);
+    assert_eq!(r.len(), 1, "{r:02x?}");
+    r.remove(0)
+}
+
+/// Telemetry payloads produced by one `poll`.
+fn polled(s: &mut Server, dev: &mut Device<'_, 256>) -> Vec<Vec<u8>> {
+    let mut out = Vec::new();
+    s.poll(dev, |b| out.extend_from_slice(b));
+    payloads(&out)
+}
+
+/// A `SetDrive` payload: `DriveSetting` is f64 freq, f32 amp_z, amp_x, offset_z, phase.
+fn set_drive_payload(seq: u8, freq: f64, amp_z: f32, amp_x: f32, off: f32, phase: f32) -> Vec<u8> {
+    let mut p = vec![2, seq, 0, 2];
+    p.extend(freq.to_le_bytes());
+    for x in [amp_z, amp_x, off, phase] {
+        p.extend(x.to_le_bytes());
+    }
+    p
+}
+
+fn cat(parts: &[&[u8]]) -> Vec<u8> {
+    parts.concat()
+}
+
+#[test]
+fn hand_built_frames_get_the_spec_answers() {
+    assert_eq!(crc32_by_hand(b"123456789"), 0xCBF4_3926);
+    let t = SineTable::<256>::libm();
+    let mut dev = test_device(&t);
+    let mut s = Server::new(Info::for_config(&cfg(), "virtual", [0, 1, 0]));
+    // A version-1 Hello: Error(VersionMismatch{device: 2}) with its seq.
+    assert_eq!(ask(&mut s, &mut dev, &[1, 5, 0, 0]), [2, 5, 1, 7, 3, 2]);
+    // Unknown request index 14: Error(UnknownMessage) with its seq.
+    assert_eq!(ask(&mut s, &mut dev, &[2, 10, 0, 14]), [2, 10, 1, 7, 2]);
+    // Bad CRC on GetStatus seq 7: Error(BadCrc) echoing seq 7.
+    let mut w = wire(&[2, 7, 0, 11]);
+    let k = w.len() - 2; // a CRC byte (non-zero after the change below)
+    w[k] = if w[k] == 0x55 { 0x56 } else { 0x55 };
+    assert_eq!(exchange(&mut s, &mut dev, &w, 0), vec![vec![2, 7, 1, 7, 1]]);
+    // Oversize (300 filler bytes) with seq 8: Error(Oversize) echoing seq 8.
+    let big = cat(&[&[2, 8, 0, 11], &[0x55; 300]]);
+    assert_eq!(
+        exchange(&mut s, &mut dev, &wire(&big), 0),
+        vec![vec![2, 8, 1, 7, 4]]
+    );
+    // Hello: Info with every limit, field by field from the Structures table.
+    let mut board = [0u8; 16];
+    board[..7].copy_from_slice(b"virtual");
+    let info = cat(&[
+        &[2, 11, 1, 0], // version, seq, Response, Info
+        &[0, 1, 0],     // firmware
+        &[2],           // protocol
+        &board,
+        &1e6f64.to_le_bytes(),
+        &1e3f64.to_le_bytes(),
+        &1e5f64.to_le_bytes(),
+        // max_amp_x_m = min(2048, 4095 − 2048)·1 nm; max_offset_z_m = 4095·2 nm (f32).
+        &(2047.0f32 * 1e-9f32).to_le_bytes(),
+        &(4095.0f32 * 2e-9f32).to_le_bytes(),
+        &0.05f32.to_le_bytes(),
+        &1000f32.to_le_bytes(), // max_phase_rad
+        &1000f32.to_le_bytes(), // max_velocity_m_s
+        &[1],                   // periods_range.0
+        &[0xc0, 0x84, 0x3d],    // periods_range.1 = 1 000 000
+        &[0xa0, 0x8d, 0x06],    // byte_timeout_us = 100 000
+    ]);
+    assert_eq!(ask(&mut s, &mut dev, &[2, 11, 0, 0]), info);
+    // Inter-byte timeout: GetStatus seq 9 split 300 ms apart is dropped (the
+    // tail is answered with an error, never with a Status) ...
+    let w = wire(&[2, 9, 0, 11]);
+    assert!(exchange(&mut s, &mut dev, &w[..3], 0).is_empty());
+    let r = exchange(&mut s, &mut dev, &w[3..], 300_000);
+    assert_eq!(r.len(), 1);
+    assert_eq!(&r[0][2..4], [1, 7], "an error: {r:02x?}");
+    // ... and 50 ms apart it is answered.
+    assert!(exchange(&mut s, &mut dev, &w[..3], 1_000_000).is_empty());
+    let r = exchange(&mut s, &mut dev, &w[3..], 1_050_000);
+    assert_eq!(&r[0][..4], [2, 9, 1, 6]);
+}
+
+#[test]
+fn drive_limits_are_inclusive_checked_in_order_and_reported_with_their_values() {
+    let t = SineTable::<256>::libm();
+    let mut dev = test_device(&t);
+    let mut s = Server::new(info());
+    let drive_ok = |r: &[u8], seq: u8| assert_eq!(&r[..4], [2, seq, 1, 1], "{r:02x?}");
+    // Lift-off limit L = (1 − 0.05)·4 µm in f32: accepted at L, refused just above.
+    let lim = (1.0f32 - 0.05f32) * 4e-6f32;
+    drive_ok(
+        &ask(
+            &mut s,
+            &mut dev,
+            &set_drive_payload(1, 2e4, lim, 0.0, 4e-6, 0.0),
+        ),
+        1,
+    );
+    let above = f32::from_bits(lim.to_bits() + 1);
+    assert_eq!(
+        ask(
+            &mut s,
+            &mut dev,
+            &set_drive_payload(2, 2e4, above, 0.0, 4e-6, 0.0)
+        ),
+        cat(&[&[2, 2, 1, 7, 6], &above.to_le_bytes(), &lim.to_le_bytes()])
+    );
+    // DAC headroom: offset 8 µm leaves H = 4095·2 nm − 8 µm (f32) for Δu_z.
+    let h = 4095.0f32 * 2e-9f32 - 8e-6f32;
+    drive_ok(
+        &ask(
+            &mut s,
+            &mut dev,
+            &set_drive_payload(3, 2e4, h, 0.0, 8e-6, 0.0),
+        ),
+        3,
+    );
+    assert_eq!(
+        ask(
+            &mut s,
+            &mut dev,
+            &set_drive_payload(4, 2e4, 0.5e-6, 0.0, 8e-6, 0.0)
+        ),
+        cat(&[&[2, 4, 1, 7, 5, 1], &0f32.to_le_bytes(), &h.to_le_bytes()])
+    );
+    // Several bad values: the first check in the table's order (frequency) wins.
+    assert_eq!(
+        ask(
+            &mut s,
+            &mut dev,
+            &set_drive_payload(5, 5e6, -1.0, 1.0, -1.0, 1e9)
+        ),
+        cat(&[
+            &[2, 5, 1, 7, 5, 0],
+            &1e3f32.to_le_bytes(),
+            &1e5f32.to_le_bytes()
+        ])
+    );
+    // Then the offset (check 2) before the amplitudes.
+    assert_eq!(
+        ask(
+            &mut s,
+            &mut dev,
+            &set_drive_payload(6, 2e4, -1.0, 1.0, -1.0, 1e9)
+        ),
+        cat(&[
+            &[2, 6, 1, 7, 5, 3],
+            &0f32.to_le_bytes(),
+            &(4095.0f32 * 2e-9f32).to_le_bytes()
+        ])
+    );
+    // Phase: ±1000 rad inclusive.
+    drive_ok(
+        &ask(
+            &mut s,
+            &mut dev,
+            &set_drive_payload(7, 2e4, 0.0, 0.0, 4e-6, -1000.0),
+        ),
+        7,
+    );
+    assert_eq!(
+        ask(
+            &mut s,
+            &mut dev,
+            &set_drive_payload(8, 2e4, 0.0, 0.0, 4e-6, 1000.001)
+        ),
+        cat(&[
+            &[2, 8, 1, 7, 5, 4],
+            &(-1000f32).to_le_bytes(),
+            &1000f32.to_le_bytes()
+        ])
+    );
+    // Predict: |v0| ≤ 1000 m/s (Velocity = 6); Measure periods 1 … 10⁶ (Periods = 5).
+    assert_eq!(
+        ask(
+            &mut s,
+            &mut dev,
+            &cat(&[&[2, 9, 0, 7], &1001f32.to_le_bytes()])
+        ),
+        cat(&[
+            &[2, 9, 1, 7, 5, 6],
+            &(-1000f32).to_le_bytes(),
+            &1000f32.to_le_bytes()
+        ])
+    );
+    assert_eq!(
+        ask(&mut s, &mut dev, &[2, 10, 0, 8, 0]),
+        cat(&[
+            &[2, 10, 1, 7, 5, 5],
+            &1f32.to_le_bytes(),
+            &1e6f32.to_le_bytes()
+        ])
+    );
+}
+
+/// Reads a little-endian f32 at `at`.
+fn f32_at(p: &[u8], at: usize) -> f32 {
+    f32::from_le_bytes(p[at..at + 4].try_into().unwrap())
+}
+
+#[test]
+fn predict_at_rest_returns_both_one_sided_limits() {
+    use model_core::exact::{solve, Solution};
+    let t = SineTable::<256>::libm();
+    let mut dev = test_device(&t);
+    let mut s = Server::new(info());
+    // A drive with a static interval (φ = 0.5 rad, Δu_z/u_z0 = 1/3, Δu_x = 0.2 µm).
+    let r = ask(
+        &mut s,
+        &mut dev,
+        &set_drive_payload(1, 4e4, 1e-6, 2e-7, 3e-6, 0.5),
+    );
+    assert_eq!(&r[..4], [2, 1, 1, 1]);
+    let a = dev.applied();
+    // Predict{v0: 0} → Prediction: mu_over_mu0, mu, vc.0, vc.1, mu_0minus_over_mu0, regime.
+    let p = ask(
+        &mut s,
+        &mut dev,
+        &cat(&[&[2, 2, 0, 7], &0f32.to_le_bytes()]),
+    );
+    assert_eq!(&p[..4], [2, 2, 1, 4]);
+    assert_eq!(p.len(), 4 + 5 * 4 + 1);
+    let (plus, mu, minus) = (f32_at(&p, 4), f32_at(&p, 8), f32_at(&p, 20));
+    let s64 = model_core::Scene::new(model_core::SceneParams {
+        mu0: 0.3,
+        kz: 1e7,
+        kx: 1e7,
+        uz0: 3e-6,
+        duz: 1e-6,
+        dux: 2e-7,
+        omega: std::f64::consts::TAU * a.achieved.freq_hz,
+        phi: a.phase_rad,
+    })
+    .unwrap();
+    let Solution::AtRest {
+        mu_0plus,
+        mu_0minus,
+        ..
+    } = solve(&s64, 0.0).unwrap()
+    else {
+        panic!("v0 = 0 is at rest");
+    };
+    // f32 exact solver: 1e-6·(1 + b), b = k_xΔu_x/(μ0 k_z u_z0) = 0.22, plus
+    // the f32 rounding of the inputs (≈ 1e-7): 1e-5 is safe.
+    assert!(
+        (f64::from(plus) - mu_0plus).abs() <= 1e-5,
+        "{plus} vs {mu_0plus}"
+    );
+    assert!(
+        (f64::from(minus) - mu_0minus).abs() <= 1e-5,
+        "{minus} vs {mu_0minus}"
+    );
+    assert!((mu - 0.3 * plus).abs() <= 1e-7);
+    // The two limits differ by the static interval: not the same number twice.
+    assert!((mu_0plus - mu_0minus).abs() > 0.1, "{mu_0plus} {mu_0minus}");
+    // Elsewhere both fields are μ(v0).
+    let p = ask(
+        &mut s,
+        &mut dev,
+        &cat(&[&[2, 3, 0, 7], &0.01f32.to_le_bytes()]),
+    );
+    assert_eq!(f32_at(&p, 4), f32_at(&p, 20));
+}
+
+/// Feeds the device's loop with constant forces for `halves` half-buffers.
+fn run_loop(dev: &mut Device<'_, 256>, s: &mut Server, halves: usize) -> Vec<Vec<u8>> {
+    let mut buf = vec![0u32; 500];
+    let samples = vec![(2100u16, 2000u16); 500];
+    let mut tele = Vec::new();
+    for k in 0..halves {
+        dev.fill_dac(k & 1, &mut buf);
+        dev.adc_block(k & 1, &samples);
+        tele.extend(polled(s, dev));
+    }
+    tele
+}
+
+#[test]
+fn measure_is_idempotent_per_seq_and_reset_ends_every_session() {
+    let t = SineTable::<256>::libm();
+    let mut dev = test_device(&t);
+    let mut s = Server::new(info());
+    let g = good_drive();
+    let r = ask(
+        &mut s,
+        &mut dev,
+        &set_drive_payload(
+            1,
+            g.freq_hz,
+            g.amp_z_m,
+            g.amp_x_m,
+            g.offset_z_m,
+            g.phase_rad,
+        ),
+    );
+    assert_eq!(&r[..4], [2, 1, 1, 1]);
+    assert_eq!(ask(&mut s, &mut dev, &[2, 2, 0, 3]), [2, 2, 1, 2]); // Start → Ok
+                                                                    // Measure{100} seq 20 → Ok; its retry → Ok (not Busy); seq 21 → Busy (7).
+    let m20 = [2, 20, 0, 8, 100];
+    assert_eq!(ask(&mut s, &mut dev, &m20), [2, 20, 1, 2]);
+    assert_eq!(ask(&mut s, &mut dev, &m20), [2, 20, 1, 2]);
+    assert_eq!(ask(&mut s, &mut dev, &[2, 21, 0, 8, 100]), [2, 21, 1, 7, 7]);
+    // Stream on while a Measure runs: Busy.
+    assert_eq!(
+        ask(&mut s, &mut dev, &[2, 22, 0, 10, 1, 50]),
+        [2, 22, 1, 7, 7]
+    );
+    // Let it finish; the retry of seq 20 then starts nothing.
+    run_loop(&mut dev, &mut s, 200);
+    assert!(
+        !dev.status().measuring,
+        "{:?} {:?}",
+        dev.status(),
+        dev.estimate()
+    );
+    let e = ask(&mut s, &mut dev, &[2, 23, 0, 9]);
+    assert_eq!(&e[..4], [2, 23, 1, 5]);
+    assert_eq!(ask(&mut s, &mut dev, &m20), [2, 20, 1, 2]);
+    assert!(!dev.status().measuring);
+    assert_eq!(
+        ask(&mut s, &mut dev, &[2, 24, 0, 9]),
+        e[..1]
+            .iter()
+            .chain(&[24])
+            .chain(&e[2..])
+            .copied()
+            .collect::<Vec<_>>(),
+        "the same estimate, not a new one"
+    );
+    // A new measurement, then Reset (13): it ends, the drive stops (ramped).
+    assert_eq!(ask(&mut s, &mut dev, &[2, 25, 0, 8, 100]), [2, 25, 1, 2]);
+    assert!(dev.status().measuring);
+    assert_eq!(ask(&mut s, &mut dev, &[2, 26, 0, 13]), [2, 26, 1, 2]);
+    let st = dev.status();
+    assert!(!st.measuring && !st.running, "{st:?}");
+    assert_eq!(ask(&mut s, &mut dev, &[2, 27, 0, 9]), [2, 27, 1, 7, 11]); // NotReady
+                                                                          // A stream: on (periods 40), estimates as telemetry, then off → Ok and
+                                                                          // StreamStopped(Requested) = telemetry 2, variant 3, StreamEnd 0.
+    assert_eq!(ask(&mut s, &mut dev, &[2, 3, 0, 3]), [2, 3, 1, 2]);
+    assert_eq!(ask(&mut s, &mut dev, &[2, 28, 0, 10, 1, 40]), [2, 28, 1, 2]);
+    let tele = run_loop(&mut dev, &mut s, 200);
+    let estimates = tele.iter().filter(|p| p[2..4] == [2, 0]).count();
+    assert!(estimates >= 2, "{tele:02x?}");
+    let r = exchange(&mut s, &mut dev, &wire(&[2, 29, 0, 10, 0, 40]), 0);
+    assert_eq!(r.len(), 2, "{r:02x?}");
+    assert_eq!(r[0], [2, 29, 1, 2]);
+    assert_eq!(r[1][2..], [2, 3, 0]);
+    assert!(
+        !dev.status().measuring,
+        "the stream's measurement is aborted"
+    );
+    // Reset ends a stream with StreamStopped(Reset).
+    assert_eq!(ask(&mut s, &mut dev, &[2, 30, 0, 10, 1, 40]), [2, 30, 1, 2]);
+    polled(&mut s, &mut dev);
+    let r = exchange(&mut s, &mut dev, &wire(&[2, 31, 0, 13]), 0);
+    assert_eq!(r[0], [2, 31, 1, 2]);
+    assert_eq!(r[1][2..], [2, 3, 1]);
+    // A fault ends a stream: Fault(8) then StreamStopped(Refused(Faulted(8))).
+    assert_eq!(ask(&mut s, &mut dev, &[2, 32, 0, 10, 1, 40]), [2, 32, 1, 2]);
+    dev.fault(model_core::device::faults::EXTERNAL);
+    let tele = polled(&mut s, &mut dev);
+    let kinds: Vec<&[u8]> = tele.iter().map(|p| &p[2..]).collect();
+    assert!(kinds.contains(&&[2u8, 2, 8][..]), "{tele:02x?}");
+    assert!(kinds.contains(&&[2u8, 3, 2, 8, 8][..]), "{tele:02x?}");
+    // A latched fault refuses Measure like Start: Faulted(8).
+    assert_eq!(
+        ask(&mut s, &mut dev, &[2, 33, 0, 8, 100]),
+        [2, 33, 1, 7, 8, 8]
+    );
+    assert_eq!(ask(&mut s, &mut dev, &[2, 34, 0, 3]), [2, 34, 1, 7, 8, 8]);
+}
+
+#[test]
+fn ramp_done_follows_every_start_and_stop_and_status_shows_the_output() {
+    let t = SineTable::<256>::libm();
+    let mut dev = test_device(&t);
+    let mut s = Server::new(info());
+    let g = good_drive();
+    ask(
+        &mut s,
+        &mut dev,
+        &set_drive_payload(
+            1,
+            g.freq_hz,
+            g.amp_z_m,
+            g.amp_x_m,
+            g.offset_z_m,
+            g.phase_rad,
+        ),
+    );
+    let ramp_dones = |tele: &[Vec<u8>]| tele.iter().filter(|p| p[2..] == [2, 1]).count();
+    // No RampDone before any command settles... one for SetDrive (preload ramp).
+    assert_eq!(ramp_dones(&run_loop(&mut dev, &mut s, 100)), 1);
+    for (seq, req) in [(2u8, 3u8), (3, 4), (4, 3), (5, 4)] {
+        // Start (3) / Stop (4): exactly one RampDone each, after the ramps.
+        assert_eq!(ask(&mut s, &mut dev, &[2, seq, 0, req]), [2, seq, 1, 2]);
+        assert_eq!(ramp_dones(&polled(&mut s, &mut dev)), 0, "not settled yet");
+        assert_eq!(ramp_dones(&run_loop(&mut dev, &mut s, 100)), 1);
+    }
+    // After Stop: GetDrive reports the setting, Status the output (amplitudes 0,
+    // offset kept). Status: running, settled, faults, measuring, rx_overflows,
+    // out_amp_z_m, out_amp_x_m, out_offset_z_m.
+    let d = ask(&mut s, &mut dev, &[2, 6, 0, 1]);
+    assert_eq!(f32_at(&d, 4 + 8), g.amp_z_m);
+    let st = ask(&mut s, &mut dev, &[2, 7, 0, 11]);
+    assert_eq!(&st[..9], [2, 7, 1, 6, 0, 1, 0, 0, 0]);
+    assert_eq!(f32_at(&st, 9), 0.0);
+    assert_eq!(f32_at(&st, 13), 0.0);
+    // The offset kept, to f32 rounding of metres → codes → metres (2 ulp).
+    assert!((f32_at(&st, 17) - g.offset_z_m).abs() <= 2.0 * f32::EPSILON * g.offset_z_m);
+    // Running and settled: the output equals the setting (to f32 rounding of
+    // the metres → codes → metres round trip: 2 ulp).
+    ask(&mut s, &mut dev, &[2, 8, 0, 3]);
+    run_loop(&mut dev, &mut s, 100);
+    let st = ask(&mut s, &mut dev, &[2, 9, 0, 11]);
+    assert_eq!(&st[4..6], [1, 1]);
+    assert!((f32_at(&st, 9) - g.amp_z_m).abs() <= 2.0 * f32::EPSILON * g.amp_z_m);
+    assert!((f32_at(&st, 13) - g.amp_x_m).abs() <= 2.0 * f32::EPSILON * g.amp_x_m);
+}
+
+#[test]
+fn the_docs_request_table_is_the_endpoint_table() {
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/protocol.md"))
+        .unwrap();
+    let start = doc.find("| index | request |").unwrap();
+    let rows: Vec<Vec<String>> = doc[start..]
+        .lines()
+        .skip(2)
+        .take_while(|l| l.starts_with('|'))
+        .map(|l| {
+            l.split('|')
+                .map(|c| c.trim().trim_matches('`').to_string())
+                .collect()
+        })
+        .collect();
+    let table = model_core::protocol::ENDPOINTS;
+    assert_eq!(rows.len(), table.len());
+    for (row, ep) in rows.iter().zip(table) {
+        assert_eq!(row[1], ep.index.to_string());
+        assert_eq!(row[2], ep.request);
+        assert_eq!(row[4], format!("{:?}", ep.answer));
+    }
 }

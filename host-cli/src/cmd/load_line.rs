@@ -89,7 +89,9 @@ impl LoadLineCmd {
             best_forward::<f64, Libm>(&d, &line, Objective::Power).map_err(exact_failure)?;
         let best_e =
             best_forward::<f64, Libm>(&d, &line, Objective::Efficiency).map_err(exact_failure)?;
-        let get = |b: &Option<OperatingPoint<f64>>| b.map_or((0.0, 0.0, 0.0), |o| (o.v, o.force, o.powers.output));
+        let get = |b: &Option<OperatingPoint<f64>>| {
+            b.map_or((0.0, 0.0, 0.0), |o| (o.v, o.force, o.powers.output))
+        };
         let (vp, fp, pp) = get(&best_p);
         let (ve, _, _) = get(&best_e);
         let o = LoadLineOut {
@@ -211,7 +213,11 @@ fn write_text(out: &mut impl Write, o: &LoadLineOut) -> std::io::Result<()> {
         "stall force, forward    {:<12.6} μ0·F̄z  = {:.6e} {fu}",
         o.stall_force_over_mu0_fz, o.stall_force
     )?;
-    writeln!(out, "no-load velocity        {:.6e} {vu}", o.no_load_velocity)?;
+    writeln!(
+        out,
+        "no-load velocity        {:.6e} {vu}",
+        o.no_load_velocity
+    )?;
     writeln!(
         out,
         "stall force, backward   {:<12.6} μ0·F̄z  = {:.6e} {fu}",

@@ -22,6 +22,7 @@ pub struct Client {
     /// Attempts per request (≥ 1).
     pub attempts: u32,
     telemetry: VecDeque<(u32, Telemetry)>,
+    opened: Instant,
 }
 
 impl Client {
@@ -29,11 +30,12 @@ impl Client {
     pub fn new(link: Box<dyn Link>, timeout: Duration, attempts: u32) -> Self {
         Client {
             link,
-            seq: 0,
+            seq: session_seq(),
             deframer: Deframer::default(),
             timeout,
             attempts: attempts.max(1),
             telemetry: VecDeque::new(),
+            opened: Instant::now(),
         }
     }
 
@@ -107,11 +109,25 @@ impl Client {
         if n == 0 {
             return Ok(None);
         }
-        match self.deframer.push(b[0]) {
+        // The host's clock for the inter-byte timeout: µs since the client opened.
+        let now_us = self.opened.elapsed().as_micros() as u32;
+        match self.deframer.push(b[0], now_us) {
             Deframed::Frame(f) => Ok(decode(f).ok()),
             _ => Ok(None),
         }
     }
+}
+
+/// The first sequence number of a session: from the clock and the process
+/// id, so that a new session does not repeat the seq of an earlier one's
+/// `Measure` (the device answers a repeated seq from its memory).
+fn session_seq() -> u32 {
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| {
+            d.subsec_nanos() ^ (d.as_secs() as u32).rotate_left(16)
+        });
+    nanos ^ std::process::id().rotate_left(8)
 }
 
 fn gone(link: &dyn Link, e: &std::io::Error) -> CliError {

@@ -77,16 +77,23 @@ pub enum DeviceCmd {
         #[arg(long, allow_hyphen_values = true)]
         v0: f64,
     },
-    /// Measure μ over N drive periods
+    /// Measure μ over N drive periods (exit 1 if the estimate is not valid)
     Measure {
         /// Drive periods
         #[arg(long, default_value_t = 1000)]
         periods: u32,
+        /// Accept an estimate the device marks as not valid (drive stopped or
+        /// ramping, saturated, too few periods, fault)
+        #[arg(long)]
+        allow_invalid: bool,
     },
     /// Status and latched faults
     Status,
     /// Clear latched faults
     ResetFaults,
+    /// End every stream and measurement and stop the drive (after a host
+    /// crash); settings and latched faults are kept
+    Reset,
     /// Stream estimates (Ctrl-C to stop, or --count)
     Watch {
         /// Periods per estimate
@@ -98,6 +105,10 @@ pub enum DeviceCmd {
         /// Also record to CSV
         #[arg(long, value_name = "FILE")]
         csv: Option<PathBuf>,
+        /// Keep going on estimates the device marks as not valid (otherwise
+        /// the first one stops the stream and exits 1)
+        #[arg(long)]
+        allow_invalid: bool,
     },
     /// List candidate serial ports
     Ports,
@@ -284,7 +295,7 @@ fn wire_error(e: WireError) -> CliError {
             "--offset-z: the device has no valid scene: it needs a contact (scene set) and a drive with a normal offset (drive set)"
                 .to_string(),
         ),
-        other => CliError::failure(format!("device error: {other:?}")),
+        other => CliError::failure(format!("device error: {other}")),
     }
 }
 
@@ -432,7 +443,10 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
                 &expect(c.call(Request::Predict { v0: *v0 as f32 })?)?,
             )
         }
-        DeviceCmd::Measure { periods } => {
+        DeviceCmd::Measure {
+            periods,
+            allow_invalid,
+        } => {
             expect(c.call(Request::Measure { periods: *periods })?)?;
             // Wait for the window to close (the virtual device advances while we wait).
             let start = Instant::now();
@@ -447,17 +461,59 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
                     return Err(CliError::failure("measurement did not finish within 120 s"));
                 }
             }
-            out(t.json, &expect(c.call(Request::GetEstimate)?)?)
+            let r = expect(c.call(Request::GetEstimate)?)?;
+            let Response::Estimate(e) = r else {
+                return Err(unexpected(r));
+            };
+            check_valid(&e, *allow_invalid)?;
+            out(
+                t.json,
+                &serde_json::json!({ "Estimate": estimate_json(&e) }),
+            )
         }
         DeviceCmd::Status => out(t.json, &expect(c.call(Request::GetStatus)?)?),
         DeviceCmd::ResetFaults => out(t.json, &expect(c.call(Request::ResetFaults)?)?),
+        DeviceCmd::Reset => out(t.json, &expect(c.call(Request::Reset)?)?),
         DeviceCmd::Watch {
             periods,
             count,
             csv,
-        } => watch(t, c, *periods, *count, csv.as_deref()),
+            allow_invalid,
+        } => watch(t, c, *periods, *count, csv.as_deref(), *allow_invalid),
         DeviceCmd::Ports => unreachable!("handled above"),
     }
+}
+
+/// The names of the reason bits of an estimate.
+fn reason_names(bits: u32) -> Vec<&'static str> {
+    model_core::estimator::reasons::NAMES
+        .iter()
+        .filter(|(b, _)| bits & b != 0)
+        .map(|(_, n)| *n)
+        .collect()
+}
+
+/// An estimate as JSON: its fields, with `reasons` as names and `valid`.
+fn estimate_json(e: &model_core::estimator::Estimate) -> serde_json::Value {
+    let mut v = serde_json::to_value(e).unwrap_or_default();
+    if let Some(o) = v.as_object_mut() {
+        o.insert("valid".into(), e.valid().into());
+        o.insert("reasons".into(), reason_names(e.reasons).into());
+    }
+    v
+}
+
+/// `Err` (exit 1, one line naming the reasons) for an invalid estimate
+/// unless `allow_invalid`.
+fn check_valid(e: &model_core::estimator::Estimate, allow_invalid: bool) -> CliResult {
+    if e.valid() || allow_invalid {
+        return Ok(());
+    }
+    Err(CliError::failure(format!(
+        "invalid estimate (mu = {}): {} (--allow-invalid to accept it)",
+        e.mu,
+        reason_names(e.reasons).join(", ")
+    )))
 }
 
 fn unexpected(r: Response) -> CliError {
@@ -470,6 +526,7 @@ fn watch(
     periods: u32,
     count: Option<u64>,
     csv: Option<&std::path::Path>,
+    allow_invalid: bool,
 ) -> CliResult {
     use std::io::IsTerminal;
     let live = !t.json && std::io::stdout().is_terminal();
@@ -485,7 +542,7 @@ fn watch(
     if let Some(w) = w.as_mut() {
         let _ = writeln!(
             w,
-            "seq,mu,fx_mean,fz_mean,samples,periods,saturated,dropped"
+            "seq,mu,fx_mean,fz_mean,samples,periods,saturated,dropped,std_error,valid,reasons"
         );
     }
     let mut last_seq: Option<u32> = None;
@@ -512,16 +569,22 @@ fn watch(
                 if t.json {
                     println!(
                         "{}",
-                        serde_json::json!({"seq": seq, "estimate": e, "dropped": dropped})
+                        serde_json::json!({"seq": seq, "estimate": estimate_json(&e), "dropped": dropped})
                     );
                 } else {
                     let line = format!(
-                        "#{seq:<6} mu {:>10.6}  fx {:>9.4} N  fz {:>9.4} N  {} samples{}{}",
+                        "#{seq:<6} mu {:>10.6} ± {:<9.2e} fx {:>9.4} N  fz {:>9.4} N  {} samples{}{}{}",
                         e.mu,
+                        e.std_error,
                         e.fx_mean,
                         e.fz_mean,
                         e.samples,
                         if e.saturated { "  SATURATED" } else { "" },
+                        if e.valid() {
+                            String::new()
+                        } else {
+                            format!("  INVALID ({})", reason_names(e.reasons).join(", "))
+                        },
                         if dropped > 0 {
                             format!("  ({dropped} dropped)")
                         } else {
@@ -539,10 +602,39 @@ fn watch(
                 if let Some(w) = w.as_mut() {
                     let _ = writeln!(
                         w,
-                        "{seq},{},{},{},{},{},{},{dropped}",
-                        e.mu, e.fx_mean, e.fz_mean, e.samples, e.periods, e.saturated
+                        "{seq},{},{},{},{},{},{},{dropped},{},{},{}",
+                        e.mu,
+                        e.fx_mean,
+                        e.fz_mean,
+                        e.samples,
+                        e.periods,
+                        e.saturated,
+                        e.std_error,
+                        e.valid(),
+                        reason_names(e.reasons).join(" ")
                     );
+                    let _ = w.flush();
                 }
+                if let Err(err) = check_valid(&e, allow_invalid) {
+                    if live {
+                        println!();
+                    }
+                    let _ = c.call(Request::Stream { on: false, periods });
+                    return Err(err);
+                }
+            }
+            Some((_, Telemetry::StreamStopped(end))) => {
+                use model_core::protocol::StreamEnd;
+                if live {
+                    println!();
+                }
+                return Err(CliError::failure(match end {
+                    StreamEnd::Requested => {
+                        "the stream was stopped (by another request)".to_string()
+                    }
+                    StreamEnd::Reset => "the stream was ended by a device reset".to_string(),
+                    StreamEnd::Refused(e) => format!("the device ended the stream: {e}"),
+                }));
             }
             Some(_) => {}
             None => {

@@ -63,6 +63,8 @@ pub struct VirtualDevice {
     half: usize,
     rng: u64,
     opts: PlantOptions,
+    /// Samples produced since the device was made.
+    samples: u64,
 }
 
 struct Plant {
@@ -98,6 +100,7 @@ impl VirtualDevice {
             half: 0,
             rng: 0x9E37_79B9_7F4A_7C15,
             opts,
+            samples: 0,
         };
         let _ = v.dev.set_drive(DriveSetting {
             freq_hz: 40_000.0,
@@ -133,12 +136,20 @@ impl VirtualDevice {
         }
     }
 
-    /// Feeds received bytes; returns the bytes to send back.
+    /// Feeds received bytes (arriving now, in device time); returns the
+    /// bytes to send back.
     pub fn receive(&mut self, bytes: &[u8]) -> Vec<u8> {
         let mut out = Vec::new();
+        let now_us = self.now_us();
         self.server
-            .receive(&mut self.dev, bytes, |b| out.extend_from_slice(b));
+            .receive(&mut self.dev, bytes, now_us, |b| out.extend_from_slice(b));
         out
+    }
+
+    /// Device time, µs since the virtual device was made (wrapping): the
+    /// samples produced so far over the sample rate.
+    pub fn now_us(&self) -> u32 {
+        (self.samples as f64 * 1e6 / self.sample_rate()) as u64 as u32
     }
 
     /// Advances the simulation by whole half-buffers covering `samples`;
@@ -226,5 +237,6 @@ impl VirtualDevice {
         }
         self.dev.adc_block(half, &samples);
         self.half ^= 1;
+        self.samples += HALF as u64;
     }
 }

@@ -170,6 +170,19 @@ pub enum DdsError {
     SampleRate,
 }
 
+impl core::fmt::Display for DdsError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            DdsError::Frequency => "DDS frequency not finite, <= 0 or at/above Nyquist",
+            DdsError::Level => "DDS amplitude/offset outside the DAC range 0..=4095",
+            DdsError::Slew => "DDS slew rate not finite or <= 0",
+            DdsError::SampleRate => "DDS sample rate not finite or <= 0",
+        })
+    }
+}
+
+impl core::error::Error for DdsError {}
+
 /// What the DDS actually produces for a request.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -10,6 +10,21 @@
 //! first accumulator wrap after [`Estimator::start`] and closes at the `n`-th
 //! wrap after that, so it spans exactly `n` drive periods up to one sample at
 //! each end — also for a non-integer number of samples per period.
+//!
+//! **Quality.** Each estimate carries `reasons` (bit flags, [`reasons`]; the
+//! estimate is valid iff none is set) and the standard error of μ from the
+//! scatter of sub-blocks (batch means): the window's periods are dealt into
+//! `B = min(BATCHES, periods)` batches of whole periods (period `k` of `P`
+//! goes to batch `⌊k·B/P⌋`); with `X_b`, `Z_b` the calibrated force sums of
+//! batch `b`, `X = ΣX_b`, `Z = ΣZ_b` and `μ = X/Z`,
+//!
+//! `σ_μ = √( B/(B−1) · Σ_b (X_b − μ·Z_b)² ) / |Z|`
+//!
+//! (the linearised variance of a ratio of sums; with equal batches it is the
+//! batch-means standard error `s_μb/√B` of the batch ratios `μ_b = X_b/Z_b`).
+//! For white noise of standard deviation σ on f_x and a steady f̄_z over `N`
+//! samples it tends to `σ/(f̄_z·√N)`. Fewer than two batches give `σ_μ = 0`
+//! with [`reasons::FEW_PERIODS`] set.
 
 use crate::board::dds::SineTable;
 
@@ -53,7 +68,48 @@ pub struct Estimate {
     pub periods: u32,
     /// Some sample was at the ADC's rail (0 or full scale): the estimate is suspect.
     pub saturated: bool,
+    /// Standard error of `mu` from the scatter of batches (module docs).
+    pub std_error: f32,
+    /// Why the estimate is not valid: bits of [`reasons`] (0 = valid).
+    pub reasons: u32,
 }
+
+impl Estimate {
+    /// No reason against the estimate ([`Estimate::reasons`] is 0).
+    pub fn valid(&self) -> bool {
+        self.reasons == 0
+    }
+}
+
+/// Bits of [`Estimate::reasons`]: why an estimate is not valid.
+pub mod reasons {
+    /// The drive was not running during part of the window.
+    pub const NOT_RUNNING: u32 = 1 << 0;
+    /// The drive's ramps had not settled during part of the window.
+    pub const NOT_SETTLED: u32 = 1 << 1;
+    /// A sample was at an ADC rail.
+    pub const SATURATED: u32 = 1 << 2;
+    /// Fewer than [`super::MIN_VALID_PERIODS`] periods (too few batches for
+    /// the standard error).
+    pub const FEW_PERIODS: u32 = 1 << 3;
+    /// A fault was latched during part of the window.
+    pub const FAULT: u32 = 1 << 4;
+
+    /// Every reason with its name (as the host prints it).
+    pub const NAMES: [(u32, &str); 5] = [
+        (NOT_RUNNING, "not_running"),
+        (NOT_SETTLED, "not_settled"),
+        (SATURATED, "saturated"),
+        (FEW_PERIODS, "few_periods"),
+        (FAULT, "fault"),
+    ];
+}
+
+/// Batches of the standard error (at most; fewer for fewer periods).
+pub const BATCHES: usize = 32;
+
+/// Fewest periods of a valid estimate (one per batch).
+pub const MIN_VALID_PERIODS: u32 = BATCHES as u32;
 
 /// Why no estimate.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -67,7 +123,23 @@ pub enum EstimateError {
     NoNormalForce,
 }
 
-#[derive(Debug, Clone, Copy, Default)]
+impl core::fmt::Display for EstimateError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            EstimateError::NotReady => "no finished measurement",
+            EstimateError::BadConfig => {
+                "estimator: zero periods or a calibration that is not finite / has zero gain"
+            }
+            EstimateError::NoNormalForce => {
+                "the mean normal force is not > 0 (no contact or a wrong calibration)"
+            }
+        })
+    }
+}
+
+impl core::error::Error for EstimateError {}
+
+#[derive(Debug, Clone, Copy)]
 struct Sums {
     n: u32,
     raw_x: u64,
@@ -76,6 +148,22 @@ struct Sums {
     bx: [f32; 4],
     tx: [f32; 4],
     block: u32,
+    /// Per batch: samples, Σ raw x, Σ raw z.
+    batch: [(u32, u64, u64); BATCHES],
+}
+
+impl Default for Sums {
+    fn default() -> Self {
+        Sums {
+            n: 0,
+            raw_x: 0,
+            raw_z: 0,
+            bx: [0.0; 4],
+            tx: [0.0; 4],
+            block: 0,
+            batch: [(0, 0, 0); BATCHES],
+        }
+    }
 }
 
 /// Accumulates samples into an estimate over `periods` drive periods.
@@ -90,6 +178,12 @@ pub struct Estimator {
     wraps: u32,
     saturated: bool,
     last_phase: u32,
+    /// Reasons that hold for the samples now being pushed ([`Estimator::set_conditions`]).
+    conditions: u32,
+    /// Reasons collected over the window.
+    reasons: u32,
+    /// Batch of the current period.
+    batch: usize,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -125,6 +219,9 @@ impl Estimator {
             wraps: 0,
             saturated: false,
             last_phase: 0,
+            conditions: 0,
+            reasons: 0,
+            batch: 0,
         })
     }
 
@@ -141,7 +238,22 @@ impl Estimator {
         self.sums = Sums::default();
         self.wraps = 0;
         self.saturated = false;
+        self.reasons = 0;
+        self.batch = 0;
         Ok(())
+    }
+
+    /// The [`reasons`] that hold for the samples pushed from now on (e.g. the
+    /// drive is not running); each accumulated sample adds them to the
+    /// estimate's reasons.
+    pub fn set_conditions(&mut self, bits: u32) {
+        self.conditions = bits;
+    }
+
+    /// Abandons a window (open or pending): the estimator is idle, with no
+    /// estimate.
+    pub fn abort(&mut self) {
+        self.state = State::Idle;
     }
 
     /// Whether the window has closed.
@@ -183,16 +295,23 @@ impl Estimator {
                         self.state = State::Done;
                         return true;
                     }
+                    // Period k of P goes to batch ⌊k·B/P⌋ (k·B ≤ 3.2e7: no overflow).
+                    self.batch = (self.wraps as usize * BATCHES) / self.periods as usize;
                 }
             }
         }
         if x == 0 || z == 0 || x >= self.full_scale || z >= self.full_scale {
             self.saturated = true;
         }
+        self.reasons |= self.conditions;
         let s = &mut self.sums;
         s.n += 1;
         s.raw_x += u64::from(x);
         s.raw_z += u64::from(z);
+        let b = &mut s.batch[self.batch];
+        b.0 += 1;
+        b.1 += u64::from(x);
+        b.2 += u64::from(z);
         let sn = table.sin(phase);
         let cs = table.sin(phase.wrapping_add(1 << 30));
         let (xf, zf) = (f32::from(x), f32::from(z));
@@ -244,8 +363,17 @@ impl Estimator {
                 phase: libm::atan2(im, re) as f32,
             }
         };
+        let mu = fx / fz;
+        let std_error = self.std_error(mu);
+        let mut reasons = self.reasons;
+        if self.saturated {
+            reasons |= reasons::SATURATED;
+        }
+        if self.periods < MIN_VALID_PERIODS {
+            reasons |= reasons::FEW_PERIODS;
+        }
         Ok(Estimate {
-            mu: (fx / fz) as f32,
+            mu: mu as f32,
             fx_mean: fx as f32,
             fz_mean: fz as f32,
             fx_h1: h(s.tx[0], s.tx[1], self.cal_x.gain),
@@ -253,6 +381,29 @@ impl Estimator {
             samples: s.n,
             periods: self.periods,
             saturated: self.saturated,
+            std_error: std_error as f32,
+            reasons,
         })
+    }
+
+    /// `σ_μ = √(B/(B−1)·Σ(X_b − μZ_b)²)/|Z|` over the non-empty batches
+    /// (module docs); 0 for fewer than two.
+    fn std_error(&self, mu: f64) -> f64 {
+        let (gx, ox) = (f64::from(self.cal_x.gain), f64::from(self.cal_x.offset));
+        let (gz, oz) = (f64::from(self.cal_z.gain), f64::from(self.cal_z.offset));
+        let (mut used, mut sum_z, mut sum_sq) = (0u32, 0.0f64, 0.0f64);
+        for &(n, rx, rz) in self.sums.batch.iter().filter(|b| b.0 > 0) {
+            let n = f64::from(n);
+            let xb = gx * (rx as f64 - n * ox);
+            let zb = gz * (rz as f64 - n * oz);
+            used += 1;
+            sum_z += zb;
+            sum_sq += (xb - mu * zb) * (xb - mu * zb);
+        }
+        if used < 2 || sum_z == 0.0 {
+            return 0.0;
+        }
+        let b = f64::from(used);
+        libm::sqrt(b / (b - 1.0) * sum_sq) / libm::fabs(sum_z)
     }
 }

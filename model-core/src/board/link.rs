@@ -34,13 +34,13 @@ use crate::board::server::{DeviceAccess, Server};
 pub const RX_CAPACITY: usize = 2048;
 /// Bytes the transmit ring holds (the loop fills it, the USART
 /// transmit-empty interrupt empties it).
-pub const TX_CAPACITY: usize = 1024;
+pub const TX_CAPACITY: usize = 2048;
 /// Requests of any kind a host may have unanswered at once without a
 /// possible overflow: ⌊[`RX_CAPACITY`] / [`MAX_FRAME`]⌋ = 2048 / 256 = 8.
 pub const PIPELINE_DEPTH: usize = RX_CAPACITY / MAX_FRAME;
-/// Frames [`Server::poll`] may send in one call: ramp done, a new fault and a
-/// streamed estimate.
-pub const POLL_FRAMES: usize = 3;
+/// Frames [`Server::poll`] may send in one call: ramp done, a new fault, a
+/// streamed estimate, the stream's end and a receive-overflow notice.
+pub const POLL_FRAMES: usize = 5;
 /// Received bytes [`serve`] handles per call, so that the loop feeds the
 /// watchdog and polls the device between bursts.
 pub const SERVE_BUDGET: usize = 64;
@@ -178,17 +178,20 @@ pub fn has_work(rx_len: usize, tx_free: usize) -> bool {
 /// completes at most one frame, answered with at most [`MAX_FRAME`] bytes),
 /// then lets the server send its telemetry if [`POLL_FRAMES`] frames fit.
 /// Never waits: what does not fit stays in the receive queue for later.
+/// `now_us` is the device clock (µs, wrapping) for the server's inter-byte
+/// timeout.
 pub fn serve<const N: usize, A: DeviceAccess<N>, L: LinkIo>(
     server: &mut Server,
     dev: &mut A,
     io: &mut L,
+    now_us: u32,
 ) {
     for _ in 0..SERVE_BUDGET {
         if io.tx_free() < MAX_FRAME {
             break;
         }
         let Some(b) = io.pop_rx() else { break };
-        server.receive(dev, &[b], |f| io.send(f));
+        server.receive(dev, &[b], now_us, |f| io.send(f));
     }
     if io.tx_free() >= POLL_FRAMES * MAX_FRAME {
         server.poll(dev, |f| io.send(f));

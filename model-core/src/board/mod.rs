@@ -4,9 +4,13 @@
 //! * [`dds`] — the two phase-locked DAC waveforms (direct digital synthesis);
 //! * [`estimator`] — μ from sampled forces (eq. 20) with lock-in harmonics;
 //! * [`device`] — drive settings in physical units, the lift-off guard,
-//!   start/stop ramps, faults, measurement and the model's prediction;
-//! * [`protocol`] — the wire format shared by firmware and host;
-//! * [`server`] — the device side of the protocol;
+//!   start/stop ramps, faults, measurement and the model's prediction
+//!   (`config`, `drive`, `measure`, `predict`, `error`);
+//! * [`protocol`] — the wire format shared by firmware and host
+//!   (`messages`: the wire types and the request → response table;
+//!   `framing`: CRC, COBS, deframing);
+//! * [`server`] — the device side of the protocol, with the session state
+//!   (idempotent `Measure`, the stream, `Reset`);
 //! * [`link`] — the firmware's serial link: queues, one loop pass, sleeping
 //!   without a lost wake-up.
 //!

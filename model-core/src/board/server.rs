@@ -2,8 +2,21 @@
 //! [`Device`], encodes the responses and the telemetry. The firmware feeds it
 //! the bytes from USART2; the virtual device feeds it the bytes of a
 //! pseudo-terminal — the same code.
+//!
+//! **Sessions.** `Measure` is idempotent per `seq`: the server remembers the
+//! last accepted `Measure` (seq, periods) and answers a retry with the same
+//! seq and periods `Ok` again without starting anything; a refused one
+//! changed nothing and its retry is judged again. The
+//! stream of estimates ends on `Stream{on: false}`, on `Reset`, or when its
+//! next measurement is refused, and every end is announced by one
+//! `StreamStopped` telemetry frame. `Reset` ends every session a crashed host
+//! may have left behind.
 
 use crate::board::device::{self, Device};
+use crate::board::protocol::{
+    decode, encode, Body, Deframed, Deframer, Frame, Info, Request, Response, StreamEnd, Telemetry,
+    WireError, MAX_FRAME, PROTOCOL_VERSION,
+};
 
 /// Access to the device for the server: on the host a plain `&mut Device`;
 /// in the firmware a critical section around each call, so that long model
@@ -18,20 +31,37 @@ impl<const N: usize> DeviceAccess<N> for Device<'_, N> {
         f(self)
     }
 }
-use crate::board::protocol::{
-    decode, encode, Body, Deframed, Deframer, Frame, Info, Request, Response, Telemetry, WireError,
-    MAX_FRAME, PROTOCOL_VERSION,
-};
+
+/// The last accepted `Measure` (for retries with the same seq).
+#[derive(Debug, Clone, Copy)]
+struct LastMeasure {
+    seq: u32,
+    periods: u32,
+}
+
+/// The stream of estimates.
+#[derive(Debug, Clone, Copy, Default)]
+struct Stream {
+    /// Periods per estimate while on.
+    periods: Option<u32>,
+    /// The running measurement is the stream's.
+    measuring: bool,
+    /// A `StreamStopped` to announce.
+    ended: Option<StreamEnd>,
+}
 
 /// Protocol state of a device.
 pub struct Server {
     deframer: Deframer,
     info: Info,
-    stream: Option<u32>,
+    stream: Stream,
+    last_measure: Option<LastMeasure>,
     telemetry_seq: u32,
-    measuring_for_stream: bool,
-    last_settled: bool,
+    /// The device's ramp generation last answered with `RampDone`.
+    reported_ramp: u32,
     last_faults: u32,
+    /// `Status::rx_overflows` when last reported.
+    reported_overflows: u32,
 }
 
 impl Server {
@@ -40,26 +70,32 @@ impl Server {
         Server {
             deframer: Deframer::default(),
             info,
-            stream: None,
+            stream: Stream::default(),
+            last_measure: None,
             telemetry_seq: 0,
-            measuring_for_stream: false,
-            last_settled: true,
+            reported_ramp: 0,
             last_faults: 0,
+            reported_overflows: 0,
         }
     }
 
-    /// Feeds received bytes; every complete frame is answered by calling
-    /// `send` with the encoded response (at most [`MAX_FRAME`] bytes).
+    /// Feeds bytes received at time `now_us` (µs, any origin, wrapping: the
+    /// inter-byte timeout [`crate::board::protocol::BYTE_TIMEOUT_US`] is
+    /// measured on it); every complete frame is answered by calling `send`
+    /// with the encoded response (at most [`MAX_FRAME`] bytes).
     pub fn receive<const N: usize, A: DeviceAccess<N>>(
         &mut self,
         dev: &mut A,
         bytes: &[u8],
+        now_us: u32,
         mut send: impl FnMut(&[u8]),
     ) {
         for &b in bytes {
-            let reply = match self.deframer.push(b) {
+            let reply = match self.deframer.push(b, now_us) {
                 Deframed::Pending => None,
-                Deframed::Oversize => Some(error_frame(0, WireError::Oversize)),
+                Deframed::Oversize { seq } => {
+                    Some(error_frame(seq.unwrap_or(0), WireError::Oversize))
+                }
                 Deframed::Frame(f) => Some(match decode(f) {
                     Ok(Frame {
                         seq,
@@ -68,65 +104,84 @@ impl Server {
                     }) => Frame {
                         version: PROTOCOL_VERSION,
                         seq,
-                        body: Body::Response(handle(&self.info, &mut self.stream, dev, r)),
+                        body: Body::Response(self.handle(dev, seq, r)),
                     },
                     Ok(Frame { seq, .. }) => error_frame(seq, WireError::UnknownMessage),
                     Err((e, seq)) => error_frame(seq.unwrap_or(0), e),
                 }),
             };
             if let Some(frame) = reply {
-                let mut out = [0u8; MAX_FRAME];
-                if let Ok(bytes) = encode(&frame, &mut out) {
-                    send(bytes);
-                }
+                send_frame(&frame, &mut send);
+            }
+            if let Some(end) = self.stream.ended.take() {
+                self.telemetry(Telemetry::StreamStopped(end), &mut send);
             }
         }
     }
 
     /// Telemetry due now — ramps settled, newly latched faults, streamed
-    /// estimates — encoded into `send`. Call it from the main loop.
+    /// estimates, the end of a stream — encoded into `send`. Call it from the
+    /// main loop.
     pub fn poll<const N: usize, A: DeviceAccess<N>>(
         &mut self,
         dev: &mut A,
         mut send: impl FnMut(&[u8]),
     ) {
-        // Ramp progress and faults, as telemetry on change.
-        let status = dev.with(|d| d.status());
-        if status.settled && !self.last_settled {
+        // One RampDone per change of the ramp generation, once settled.
+        let (status, ramp) = dev.with(|d| (d.status(), d.ramp_generation()));
+        if status.settled && ramp != self.reported_ramp {
+            self.reported_ramp = ramp;
             self.telemetry(Telemetry::RampDone, &mut send);
         }
-        self.last_settled = status.settled;
         let new = status.faults & !self.last_faults;
         if new != 0 {
             self.telemetry(Telemetry::Fault(new), &mut send);
         }
         self.last_faults = status.faults;
+        if status.rx_overflows != self.reported_overflows {
+            self.reported_overflows = status.rx_overflows;
+            self.telemetry(Telemetry::RxOverflow(status.rx_overflows), &mut send);
+        }
+        self.poll_stream(dev, &mut send);
+        if let Some(end) = self.stream.ended.take() {
+            self.telemetry(Telemetry::StreamStopped(end), &mut send);
+        }
+    }
 
-        let Some(periods) = self.stream else {
-            self.measuring_for_stream = false;
+    /// Sends the stream's finished estimate and starts its next measurement
+    /// (or ends the stream if the device refuses it).
+    fn poll_stream<const N: usize, A: DeviceAccess<N>>(
+        &mut self,
+        dev: &mut A,
+        send: &mut impl FnMut(&[u8]),
+    ) {
+        let Some(periods) = self.stream.periods else {
             return;
         };
         let measuring = dev.with(|d| d.status().measuring);
-        if self.measuring_for_stream && !measuring {
+        if self.stream.measuring && !measuring {
             if let Ok(e) = dev.with(|d| d.estimate()) {
-                self.telemetry_seq = self.telemetry_seq.wrapping_add(1);
-                let f = Frame {
-                    version: PROTOCOL_VERSION,
-                    seq: self.telemetry_seq,
-                    body: Body::Telemetry(Telemetry::Estimate(e)),
-                };
-                let mut out = [0u8; MAX_FRAME];
-                if let Ok(bytes) = encode(&f, &mut out) {
-                    send(bytes);
-                }
+                self.telemetry(Telemetry::Estimate(e), &mut *send);
             }
-            self.measuring_for_stream = false;
+            self.stream.measuring = false;
         }
-        if !self.measuring_for_stream
-            && !dev.with(|d| d.status().measuring)
-            && dev.with(|d| d.measure(periods)).is_ok()
-        {
-            self.measuring_for_stream = true;
+        if !self.stream.measuring && !measuring {
+            match dev.with(|d| d.measure(periods)) {
+                Ok(()) => self.stream.measuring = true,
+                Err(e) => self.end_stream(dev, StreamEnd::Refused(e.into())),
+            }
+        }
+    }
+
+    /// Ends the stream (aborting its running measurement) and queues the
+    /// `StreamStopped` notice; nothing if no stream runs.
+    fn end_stream<const N: usize, A: DeviceAccess<N>>(&mut self, dev: &mut A, why: StreamEnd) {
+        if self.stream.periods.take().is_some() {
+            if self.stream.measuring {
+                dev.with(|d| d.abort_measurement());
+            }
+            self.stream.measuring = false;
+            self.stream.ended = Some(why);
         }
     }
 
@@ -138,10 +193,149 @@ impl Server {
             seq: self.telemetry_seq,
             body: Body::Telemetry(t),
         };
-        let mut out = [0u8; MAX_FRAME];
-        if let Ok(bytes) = encode(&f, &mut out) {
-            send(bytes);
+        send_frame(&f, &mut send);
+    }
+
+    /// Runs one request; the answer is the one [`crate::board::protocol::ENDPOINTS`]
+    /// names, or [`Response::Error`].
+    fn handle<const N: usize, A: DeviceAccess<N>>(
+        &mut self,
+        dev: &mut A,
+        seq: u32,
+        r: Request,
+    ) -> Response {
+        let res = match r {
+            Request::Measure { periods } => Ok(self.measure(dev, seq, periods)),
+            Request::Stream { on, periods } => self.set_stream(dev, on, periods),
+            Request::Reset => {
+                self.end_stream(dev, StreamEnd::Reset);
+                self.last_measure = None;
+                dev.with(|d| {
+                    d.abort_measurement();
+                    d.stop();
+                });
+                Ok(Response::Ok)
+            }
+            other => run(&self.info, dev, other),
+        };
+        res.unwrap_or_else(Response::Error)
+    }
+
+    /// `Measure`, idempotent per seq.
+    fn measure<const N: usize, A: DeviceAccess<N>>(
+        &mut self,
+        dev: &mut A,
+        seq: u32,
+        periods: u32,
+    ) -> Response {
+        if let Some(m) = self.last_measure {
+            if m.seq == seq && m.periods == periods {
+                return Response::Ok;
+            }
         }
+        let answer = if self.stream.periods.is_some() {
+            // Faults and bad periods first, as for a device measurement.
+            match dev.with(|d| {
+                if d.status().faults != 0 {
+                    Err(device::DeviceError::Faulted(d.status().faults))
+                } else {
+                    device::check_periods(periods)
+                }
+            }) {
+                Ok(()) => Response::Error(WireError::Busy),
+                Err(e) => e.into(),
+            }
+        } else {
+            match dev.with(|d| d.measure(periods)) {
+                Ok(()) => Response::Ok,
+                Err(e) => e.into(),
+            }
+        };
+        // Only an accepted Measure is remembered: a refusal changed nothing,
+        // so its retry is simply judged again.
+        if answer == Response::Ok {
+            self.last_measure = Some(LastMeasure { seq, periods });
+        }
+        answer
+    }
+
+    /// `Stream`: on (replacing the periods of a running stream) or off.
+    fn set_stream<const N: usize, A: DeviceAccess<N>>(
+        &mut self,
+        dev: &mut A,
+        on: bool,
+        periods: u32,
+    ) -> Result<Response, WireError> {
+        if on {
+            device::check_periods(periods)?;
+            if self.stream.periods.is_none() && dev.with(|d| d.status().measuring) {
+                // A host measurement runs: it would be stolen by the stream.
+                return Err(WireError::Busy);
+            }
+            self.stream.periods = Some(periods);
+        } else {
+            self.end_stream(dev, StreamEnd::Requested);
+        }
+        Ok(Response::Ok)
+    }
+}
+
+/// The requests without session state.
+fn run<const N: usize, A: DeviceAccess<N>>(
+    info: &Info,
+    dev: &mut A,
+    r: Request,
+) -> Result<Response, WireError> {
+    Ok(match r {
+        Request::Hello => Response::Info(*info),
+        Request::GetDrive => dev.with(|d| Response::Drive {
+            setting: d.drive(),
+            applied: d.applied(),
+        }),
+        Request::SetDrive(s) => dev.with(|d| {
+            d.set_drive(s).map(|applied| Response::Drive {
+                setting: d.drive(),
+                applied,
+            })
+        })?,
+        Request::Start => {
+            dev.with(|d| d.start())?;
+            Response::Ok
+        }
+        Request::Stop => {
+            dev.with(|d| d.stop());
+            Response::Ok
+        }
+        Request::GetContact => Response::Contact(dev.with(|d| d.contact())),
+        Request::SetContact(c) => {
+            dev.with(|d| d.set_contact(c))?;
+            Response::Ok
+        }
+        Request::Predict { v0 } => {
+            // Snapshot the scene, then compute with the device released.
+            let scene = dev.with(|d| d.scene())?;
+            Response::Prediction {
+                prediction: device::predict(&scene, v0)?,
+                regime: device::regime(&scene)?,
+            }
+        }
+        Request::GetEstimate => Response::Estimate(dev.with(|d| d.estimate())?),
+        Request::GetStatus => Response::Status(dev.with(|d| d.status())),
+        Request::ResetFaults => {
+            dev.with(|d| d.reset_faults());
+            Response::Ok
+        }
+        // Handled with the session state in `Server::handle`: never here.
+        Request::Measure { .. } | Request::Stream { .. } | Request::Reset => {
+            return Err(WireError::Internal)
+        }
+    })
+}
+
+fn send_frame(frame: &Frame, send: &mut impl FnMut(&[u8])) {
+    let mut out = [0u8; MAX_FRAME];
+    if let Ok(bytes) = encode(frame, &mut out) {
+        send(bytes);
     }
 }
 
@@ -151,79 +345,6 @@ fn error_frame(seq: u32, e: WireError) -> Frame {
         seq,
         body: Body::Response(Response::Error(e)),
     }
-}
-
-fn handle<const N: usize, A: DeviceAccess<N>>(
-    info: &Info,
-    stream: &mut Option<u32>,
-    dev: &mut A,
-    r: Request,
-) -> Response {
-    let res: Result<Response, WireError> = (|| {
-        Ok(match r {
-            Request::Hello => Response::Info(*info),
-            Request::GetDrive => dev.with(|d| Response::Drive {
-                setting: d.drive(),
-                applied: d.applied(),
-            }),
-            Request::SetDrive(s) => dev.with(|d| {
-                d.set_drive(s).map(|applied| Response::Drive {
-                    setting: d.drive(),
-                    applied,
-                })
-            })?,
-            Request::Start => {
-                dev.with(|d| d.start())?;
-                Response::Ok
-            }
-            Request::Stop => {
-                dev.with(|d| d.stop());
-                Response::Ok
-            }
-            Request::GetContact => Response::Contact(dev.with(|d| d.contact())),
-            Request::SetContact(c) => {
-                dev.with(|d| d.set_contact(c))?;
-                Response::Ok
-            }
-            Request::Predict { v0 } => {
-                // Snapshot the scene, then compute with the device released.
-                let scene = dev.with(|d| d.scene())?;
-                Response::Prediction {
-                    prediction: device::predict(&scene, v0)?,
-                    regime: device::regime(&scene)?,
-                }
-            }
-            Request::Measure { periods } => {
-                if stream.is_some() {
-                    return Err(WireError::Busy);
-                }
-                dev.with(|d| d.measure(periods))?;
-                Response::Ok
-            }
-            Request::GetEstimate => Response::Estimate(dev.with(|d| d.estimate())?),
-            Request::Stream { on, periods } => {
-                if on {
-                    if periods == 0 || periods > 1_000_000 {
-                        return Err(WireError::OutOfRange {
-                            param: crate::board::device::DriveParam::Periods,
-                            min: 1.0,
-                            max: 1e6,
-                        });
-                    }
-                    *stream = Some(periods);
-                } else {
-                    *stream = None;
-                }
-                Response::Ok
-            }
-            Request::GetStatus => Response::Status(dev.with(|d| d.status())),
-            Request::ResetFaults => {
-                dev.with(|d| d.reset_faults());
-                Response::Ok
-            }
-        })
-    })();
-    res.unwrap_or_else(Response::Error)
 }
 
 impl From<crate::board::device::DeviceError> for Response {

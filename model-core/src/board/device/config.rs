@@ -1,0 +1,154 @@
+//! The board's fixed configuration: sample rate, transducer (DAC) and force
+//! (ADC) calibrations, lift-off margin, frequency range, slew rates — and the
+//! limits that follow from it, each written once here.
+
+use crate::board::dds::DAC_MAX;
+use crate::board::estimator::Calibration;
+use crate::board::protocol::framing::BYTE_TIMEOUT_US;
+use crate::board::protocol::messages::{Info, PROTOCOL_VERSION};
+
+/// Transducer calibration of one DAC channel: displacement
+/// `= (code − zero_code) · metres_per_code`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DacCal {
+    /// Metres of displacement per DAC code (> 0).
+    pub metres_per_code: f32,
+    /// DAC code of zero displacement.
+    pub zero_code: f32,
+}
+
+impl DacCal {
+    /// Codes from `zero_code` up to the top of the DAC ([`DAC_MAX`]).
+    pub fn codes_above_zero(&self) -> f32 {
+        f32::from(DAC_MAX) - self.zero_code
+    }
+
+    /// Codes from `zero_code` to the nearer end of the DAC range.
+    pub fn codes_to_nearer_end(&self) -> f32 {
+        self.zero_code.min(self.codes_above_zero())
+    }
+}
+
+/// Fixed configuration of a board.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DeviceConfig {
+    /// DAC/ADC sample rate, Hz.
+    pub sample_rate_hz: f64,
+    /// Channel 1 (normal transducer) calibration.
+    pub dac_z: DacCal,
+    /// Channel 2 (tangential transducer) calibration.
+    pub dac_x: DacCal,
+    /// ADC calibration of the tangential force.
+    pub adc_x: Calibration,
+    /// ADC calibration of the normal force.
+    pub adc_z: Calibration,
+    /// ADC full scale (4095 for 12 bits).
+    pub adc_full_scale: u16,
+    /// Lift-off margin: Δu_z ≤ (1 − margin)·u_z0 (0 ≤ margin < 1).
+    pub liftoff_margin: f32,
+    /// Lowest and highest drive frequency, Hz.
+    pub freq_range_hz: (f64, f64),
+    /// Amplitude and offset slew, m/s; phase slew, rad/s.
+    pub slew_m_per_s: f32,
+    /// Phase slew, rad/s.
+    pub slew_rad_per_s: f32,
+    /// ADC sample `k` sees the DAC word `k − lag` (the STM32 DAC moves its
+    /// holding register to the output on the trigger and only then requests
+    /// the next word by DMA: lag 1). The phase of each ADC sample is shifted
+    /// accordingly.
+    pub adc_lag_samples: u32,
+}
+
+/// Allowed drive periods of a measurement or a streamed estimate, inclusive.
+pub const PERIODS_RANGE: (u32, u32) = (1, 1_000_000);
+
+/// Largest |φ| of a drive, rad (a phase beyond is surely a unit mistake).
+pub const MAX_PHASE_RAD: f32 = 1_000.0;
+
+/// Largest |v₀| of a prediction, m/s.
+pub const MAX_VELOCITY_M_S: f32 = 1_000.0;
+
+impl DeviceConfig {
+    /// The driver board's configuration, shared by the firmware and the
+    /// virtual device: 500 kS/s, 2 nm/code normal and 1 nm/code tangential
+    /// (around mid-scale) transducer calibration, 0.02 N/count (f_z) and
+    /// 0.01 N/count around mid-scale (f_x) force calibration, 5 % lift-off
+    /// margin, 1–100 kHz, 1 mm/s and 100 rad/s slew. Replace the calibrations
+    /// with a board's measured values. `adc_lag_samples` is 1 on the chip (the
+    /// DAC moves its holding register to the output on the trigger, the ADC
+    /// converts on the same trigger) and 0 for a plant that samples at the
+    /// drive phase of the sample itself.
+    pub const fn driver_board(adc_lag_samples: u32) -> Self {
+        DeviceConfig {
+            sample_rate_hz: 500_000.0,
+            dac_z: DacCal {
+                metres_per_code: 2e-9,
+                zero_code: 0.0,
+            },
+            dac_x: DacCal {
+                metres_per_code: 1e-9,
+                zero_code: 2048.0,
+            },
+            adc_x: Calibration {
+                gain: 0.01,
+                offset: 2048.0,
+            },
+            adc_z: Calibration {
+                gain: 0.02,
+                offset: 0.0,
+            },
+            adc_full_scale: 4095,
+            liftoff_margin: 0.05,
+            freq_range_hz: (1_000.0, 100_000.0),
+            slew_m_per_s: 1e-3,
+            slew_rad_per_s: 100.0,
+            adc_lag_samples,
+        }
+    }
+
+    /// Largest normal offset u_z0, m: `(DAC_MAX − zero_code)·metres_per_code`
+    /// of the normal channel (computed in f32).
+    pub fn max_offset_z_m(&self) -> f32 {
+        self.dac_z.codes_above_zero() * self.dac_z.metres_per_code
+    }
+
+    /// Largest tangential amplitude Δu_x, m: the codes from `zero_code` to the
+    /// nearer end of the DAC, times `metres_per_code` (computed in f32).
+    pub fn max_amp_x_m(&self) -> f32 {
+        self.dac_x.codes_to_nearer_end() * self.dac_x.metres_per_code
+    }
+
+    /// The lift-off limit of Δu_z at offset `offset_z_m`:
+    /// `(1 − liftoff_margin)·offset_z_m`, computed in f32 (inclusive: Δu_z
+    /// equal to it is accepted).
+    pub fn liftoff_limit_m(&self, offset_z_m: f32) -> f32 {
+        (1.0 - self.liftoff_margin) * offset_z_m
+    }
+}
+
+impl Info {
+    /// The `Info` of a device with configuration `cfg`, board name `board`
+    /// (ASCII, truncated to 16 bytes) and firmware version `firmware`.
+    pub fn for_config(cfg: &DeviceConfig, board: &str, firmware: [u8; 3]) -> Self {
+        let mut name = [0u8; 16];
+        for (d, s) in name.iter_mut().zip(board.bytes()) {
+            *d = s;
+        }
+        Info {
+            firmware,
+            protocol: PROTOCOL_VERSION,
+            board: name,
+            sample_rate_hz: cfg.sample_rate_hz,
+            freq_range_hz: cfg.freq_range_hz,
+            max_amp_x_m: cfg.max_amp_x_m(),
+            max_offset_z_m: cfg.max_offset_z_m(),
+            liftoff_margin: cfg.liftoff_margin,
+            max_phase_rad: MAX_PHASE_RAD,
+            max_velocity_m_s: MAX_VELOCITY_M_S,
+            periods_range: PERIODS_RANGE,
+            byte_timeout_us: BYTE_TIMEOUT_US,
+        }
+    }
+}

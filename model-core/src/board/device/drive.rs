@@ -1,0 +1,177 @@
+//! Drive settings in physical units → DDS levels: validation in a fixed
+//! order (the first failing check is reported), the lift-off guard, start,
+//! ramped stop, faults with their safe state.
+
+use super::config::MAX_PHASE_RAD;
+use super::{in_range, Applied, Device, DeviceError, DriveParam, DriveSetting};
+use crate::board::dds::{phase_rad, phase_word, Achieved, Level};
+
+/// A validated drive, ready for the DDS.
+struct Plan {
+    achieved: Achieved,
+    /// Normal and tangential channel levels, codes.
+    levels: [Level; 2],
+    /// Phase words of the two channels.
+    phases: [u32; 2],
+}
+
+impl<const N: usize> Device<'_, N> {
+    /// DDS levels for a drive (validated, nothing applied). The checks, in
+    /// order (the first failing one is reported): frequency; normal offset
+    /// in `[0, max_offset_z_m]`; normal amplitude finite and ≥ 0, then
+    /// ≤ `(1 − margin)·offset` (lift-off, f32, inclusive), then
+    /// ≤ `max_offset_z_m − offset` (DAC headroom, f32, inclusive); tangential
+    /// amplitude in `[0, max_amp_x_m]`; phase in `[−MAX_PHASE_RAD, MAX_PHASE_RAD]`.
+    fn plan(&self, d: &DriveSetting) -> Result<Plan, DeviceError> {
+        let (fmin, fmax) = self.cfg.freq_range_hz;
+        let freq_err = DeviceError::OutOfRange {
+            param: DriveParam::Freq,
+            min: fmin as f32,
+            max: fmax as f32,
+        };
+        if !(d.freq_hz.is_finite() && d.freq_hz >= fmin && d.freq_hz <= fmax) {
+            return Err(freq_err);
+        }
+        let (z, x) = (self.cfg.dac_z, self.cfg.dac_x);
+        let off = in_range(
+            d.offset_z_m,
+            0.0,
+            self.cfg.max_offset_z_m(),
+            DriveParam::OffsetZ,
+        )?;
+        let limit = self.cfg.liftoff_limit_m(off);
+        if !(d.amp_z_m.is_finite() && d.amp_z_m >= 0.0) {
+            return Err(DeviceError::OutOfRange {
+                param: DriveParam::AmpZ,
+                min: 0.0,
+                max: limit,
+            });
+        }
+        if d.amp_z_m > limit || (d.amp_z_m > 0.0 && off == 0.0) {
+            return Err(DeviceError::LiftOff {
+                amp_z_m: d.amp_z_m,
+                limit_m: limit,
+            });
+        }
+        // DAC headroom above the offset, computed in f32 like the limit above.
+        let headroom = (self.cfg.max_offset_z_m() - off).max(0.0);
+        if d.amp_z_m > headroom {
+            return Err(DeviceError::OutOfRange {
+                param: DriveParam::AmpZ,
+                min: 0.0,
+                max: headroom,
+            });
+        }
+        let amp_x = in_range(d.amp_x_m, 0.0, self.cfg.max_amp_x_m(), DriveParam::AmpX)?;
+        let phase = in_range(
+            d.phase_rad,
+            -MAX_PHASE_RAD,
+            MAX_PHASE_RAD,
+            DriveParam::Phase,
+        )?;
+        let achieved = self.dds.plan_frequency(d.freq_hz).map_err(|_| freq_err)?;
+        let lz = Level {
+            amp: d.amp_z_m / z.metres_per_code,
+            dc: z.zero_code + off / z.metres_per_code,
+        };
+        let lx = Level {
+            amp: amp_x / x.metres_per_code,
+            dc: x.zero_code,
+        };
+        // Both waveforms must stay inside the DAC range (the normal one by the
+        // lift-off guard and offset range, but check both exactly).
+        lz.check().map_err(|_| DeviceError::OutOfRange {
+            param: DriveParam::AmpZ,
+            min: 0.0,
+            max: headroom,
+        })?;
+        lx.check().map_err(|_| DeviceError::OutOfRange {
+            param: DriveParam::AmpX,
+            min: 0.0,
+            max: self.cfg.max_amp_x_m(),
+        })?;
+        // −cos θ = sin(θ − π/2);  cos(θ + φ) = sin(θ + φ + π/2).
+        let pz = phase_word(-core::f64::consts::FRAC_PI_2);
+        let px = phase_word(f64::from(phase) + core::f64::consts::FRAC_PI_2);
+        Ok(Plan {
+            achieved,
+            levels: [lz, lx],
+            phases: [pz, px],
+        })
+    }
+
+    /// Sets the drive. While running the DDS ramps to it; while stopped it is
+    /// stored and used at the next start.
+    ///
+    /// # Errors
+    /// [`DeviceError::Faulted`] while running with a latched fault, then
+    /// [`DeviceError::OutOfRange`], [`DeviceError::LiftOff`] in the order of
+    /// `plan`; nothing changes on error.
+    pub fn set_drive(&mut self, d: DriveSetting) -> Result<Applied, DeviceError> {
+        if self.faults != 0 && self.running {
+            return Err(DeviceError::Faulted(self.faults));
+        }
+        let plan = self.plan(&d)?;
+        // The plan validated everything the DDS checks: none of these fail.
+        self.dds.set_frequency(d.freq_hz)?;
+        self.drive = d;
+        self.dds.set_phase(0, plan.phases[0]);
+        self.dds.set_phase(1, plan.phases[1]);
+        self.applied = Applied {
+            achieved: plan.achieved,
+            phase_rad: phase_rad(
+                plan.phases[1]
+                    .wrapping_sub(plan.phases[0])
+                    .wrapping_sub(1 << 31),
+            ),
+        };
+        self.ramp_generation = self.ramp_generation.wrapping_add(1);
+        if self.running {
+            self.dds.set_level(0, plan.levels[0])?;
+            self.dds.set_level(1, plan.levels[1])?;
+        } else {
+            // Stopped: the normal offset (preload) is applied, amplitudes stay 0.
+            let dc = plan.levels[0].dc;
+            self.dds.set_level(0, Level { amp: 0.0, dc })?;
+        }
+        Ok(self.applied)
+    }
+
+    /// Starts the drive (soft start at the slew rate).
+    ///
+    /// # Errors
+    /// [`DeviceError::Faulted`] while a fault is latched.
+    pub fn start(&mut self) -> Result<(), DeviceError> {
+        if self.faults != 0 {
+            return Err(DeviceError::Faulted(self.faults));
+        }
+        let plan = self.plan(&self.drive)?;
+        self.dds.set_level(0, plan.levels[0])?;
+        self.dds.set_level(1, plan.levels[1])?;
+        self.running = true;
+        self.ramp_generation = self.ramp_generation.wrapping_add(1);
+        Ok(())
+    }
+
+    /// Stops the drive: amplitudes ramp to zero, the normal offset stays.
+    pub fn stop(&mut self) {
+        self.dds.ramp_down();
+        self.running = false;
+        self.ramp_generation = self.ramp_generation.wrapping_add(1);
+    }
+
+    /// Latches a fault and enters the safe state: amplitudes and offsets ramp
+    /// to zero displacement.
+    pub fn fault(&mut self, bits: u32) {
+        self.faults |= bits;
+        self.running = false;
+        self.ramp_generation = self.ramp_generation.wrapping_add(1);
+        // The rest levels were accepted by `new`: they cannot fail now.
+        let _ = self.rest_levels();
+    }
+
+    /// Clears latched faults (the drive stays stopped).
+    pub fn reset_faults(&mut self) {
+        self.faults = 0;
+    }
+}

@@ -1,0 +1,275 @@
+//! The driver board's logic, free of hardware types so that the host runs the
+//! very same code (native tests, the virtual device), in named steps:
+//!
+//! * [`config`] — the board's configuration and the limits it implies;
+//! * `drive` — drive settings in physical units with the transducer
+//!   calibration, the lift-off guard, start / ramped stop, faults with a safe
+//!   state;
+//! * `measure` — the DAC refill and ADC intake bookkeeping (which drive phase
+//!   each ADC sample belongs to) and the friction measurement;
+//! * `predict` — the model's prediction for the current drive;
+//! * [`error`] — why a command was refused.
+//!
+//! The wire types the device answers with ([`DriveSetting`], [`Contact`],
+//! [`Prediction`], [`Status`], [`Applied`], [`DriveParam`]) live in
+//! [`crate::board::protocol::messages`] and are re-exported here.
+//!
+//! Every setter validates its whole input before touching anything: a
+//! refused command leaves the running state exactly as it was.
+
+pub mod config;
+mod drive;
+pub mod error;
+mod measure;
+mod predict;
+
+pub use config::{DacCal, DeviceConfig, MAX_PHASE_RAD, MAX_VELOCITY_M_S, PERIODS_RANGE};
+pub use error::{ConfigError, DeviceError};
+pub use measure::check_periods;
+pub use predict::{predict, regime};
+
+pub use crate::board::protocol::messages::{
+    Applied, Contact, DriveParam, DriveSetting, Prediction, Status,
+};
+
+use crate::board::dds::{Achieved, Dds, Level, SineTable, Slew};
+use crate::board::estimator::Estimator;
+use crate::model::scene::{Scene, SceneParams};
+
+/// Latched fault bits.
+pub mod faults {
+    /// An ADC sample hit the rail during a measurement.
+    pub const ADC_SATURATED: u32 = 1 << 0;
+    /// The DAC buffer was refilled late (the DMA read a stale half).
+    pub const DAC_UNDERRUN: u32 = 1 << 1;
+    /// The previous reset was by the watchdog.
+    pub const WATCHDOG_RESET: u32 = 1 << 2;
+    /// An external fault input (e.g. an amplifier alarm).
+    pub const EXTERNAL: u32 = 1 << 3;
+}
+
+/// The device.
+pub struct Device<'t, const N: usize> {
+    cfg: DeviceConfig,
+    table: &'t SineTable<N>,
+    dds: Dds<'t, N>,
+    drive: DriveSetting,
+    applied: Applied,
+    contact: Contact,
+    running: bool,
+    faults: u32,
+    rx_overflows: u32,
+    est: Estimator,
+    /// Accumulator and tuning word at the start of each DAC half-buffer.
+    half: [(u32, u32); 2],
+    /// Estimate reasons that held while each DAC half-buffer was filled.
+    half_conditions: [u32; 2],
+    /// +1 per command that sets new DDS targets (accepted `set_drive`,
+    /// `start`, `stop`, `fault`).
+    ramp_generation: u32,
+}
+
+/// `x` if finite and in `[min, max]`, else [`DeviceError::OutOfRange`].
+fn in_range(x: f32, min: f32, max: f32, param: DriveParam) -> Result<f32, DeviceError> {
+    if x.is_finite() && x >= min && x <= max {
+        Ok(x)
+    } else {
+        Err(DeviceError::OutOfRange { param, min, max })
+    }
+}
+
+impl<'t, const N: usize> Device<'t, N> {
+    /// A stopped device with a zero drive.
+    ///
+    /// # Errors
+    /// [`DeviceError::Config`] for a configuration that cannot work,
+    /// [`DeviceError::Scene`] for an invalid contact.
+    pub fn new(
+        cfg: DeviceConfig,
+        table: &'t SineTable<N>,
+        contact: Contact,
+    ) -> Result<Self, DeviceError> {
+        let dds = Dds::new(table, cfg.sample_rate_hz, Self::slew(&cfg)?)
+            .map_err(|_| DeviceError::Config(ConfigError::SampleRate))?;
+        let est = Estimator::new(cfg.adc_x, cfg.adc_z, cfg.adc_full_scale)
+            .map_err(|_| DeviceError::Config(ConfigError::AdcCal))?;
+        check_config(&cfg)?;
+        let mut d = Device {
+            cfg,
+            table,
+            dds,
+            drive: DriveSetting {
+                freq_hz: cfg.freq_range_hz.0,
+                amp_z_m: 0.0,
+                amp_x_m: 0.0,
+                offset_z_m: 0.0,
+                phase_rad: 0.0,
+            },
+            applied: Applied {
+                achieved: Achieved {
+                    tuning_word: 0,
+                    freq_hz: 0.0,
+                },
+                phase_rad: 0.0,
+            },
+            contact,
+            running: false,
+            faults: 0,
+            rx_overflows: 0,
+            est,
+            half: [(0, 0); 2],
+            half_conditions: [0; 2],
+            ramp_generation: 0,
+        };
+        check_contact(&contact)?;
+        d.applied.achieved = d
+            .dds
+            .set_frequency(cfg.freq_range_hz.0)
+            .map_err(|_| DeviceError::Config(ConfigError::FreqRange))?;
+        d.rest_levels()?;
+        Ok(d)
+    }
+
+    fn slew(cfg: &DeviceConfig) -> Result<Slew, DeviceError> {
+        let codes_per_s =
+            cfg.slew_m_per_s / cfg.dac_z.metres_per_code.min(cfg.dac_x.metres_per_code);
+        Slew::from_rates(
+            cfg.sample_rate_hz as f32,
+            codes_per_s,
+            codes_per_s,
+            cfg.slew_rad_per_s,
+        )
+        .map_err(|_| DeviceError::Config(ConfigError::Slew))
+    }
+
+    /// Targets zero displacement on both channels (amplitudes 0, DC at the
+    /// calibrations' zero codes).
+    fn rest_levels(&mut self) -> Result<(), DeviceError> {
+        let (z, x) = (self.cfg.dac_z.zero_code, self.cfg.dac_x.zero_code);
+        self.dds.set_level(0, Level { amp: 0.0, dc: z })?;
+        self.dds.set_level(1, Level { amp: 0.0, dc: x })?;
+        Ok(())
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &DeviceConfig {
+        &self.cfg
+    }
+
+    /// The drive as last accepted (the setting; see [`Status`] for the output).
+    pub fn drive(&self) -> DriveSetting {
+        self.drive
+    }
+
+    /// What the DDS produces for the accepted drive.
+    pub fn applied(&self) -> Applied {
+        self.applied
+    }
+
+    /// The contact parameters.
+    pub fn contact(&self) -> Contact {
+        self.contact
+    }
+
+    /// The DDS (read-only).
+    pub fn dds(&self) -> &Dds<'t, N> {
+        &self.dds
+    }
+
+    /// Status snapshot.
+    pub fn status(&self) -> Status {
+        let ch = self.dds.channels();
+        let (z, x) = (self.cfg.dac_z, self.cfg.dac_x);
+        Status {
+            running: self.running,
+            settled: self.dds.settled(),
+            faults: self.faults,
+            measuring: self.est.busy(),
+            rx_overflows: self.rx_overflows,
+            out_amp_z_m: ch[0].amp.abs() * z.metres_per_code,
+            out_amp_x_m: ch[1].amp.abs() * x.metres_per_code,
+            out_offset_z_m: (ch[0].dc - z.zero_code) * z.metres_per_code,
+        }
+    }
+
+    /// Counts the commands that set new DDS targets (accepted `set_drive`,
+    /// `start`, `stop`, `fault`), wrapping: the server sends one `RampDone`
+    /// when the DDS has settled after the count changed.
+    pub fn ramp_generation(&self) -> u32 {
+        self.ramp_generation
+    }
+
+    /// Counts `n` received bytes the link had to drop (receive queue full);
+    /// reported in [`Status::rx_overflows`].
+    pub fn count_rx_overflow(&mut self, n: u32) {
+        self.rx_overflows = self.rx_overflows.saturating_add(n);
+    }
+
+    /// Sets the contact parameters.
+    ///
+    /// # Errors
+    /// [`DeviceError::Scene`]; nothing changes on error.
+    pub fn set_contact(&mut self, c: Contact) -> Result<(), DeviceError> {
+        check_contact(&c)?;
+        self.contact = c;
+        Ok(())
+    }
+
+    /// The scene of the contact with the accepted drive (f32).
+    ///
+    /// # Errors
+    /// [`DeviceError::Scene`] (e.g. zero offset).
+    pub fn scene(&self) -> Result<Scene<f32>, DeviceError> {
+        let d = &self.drive;
+        Scene::new(SceneParams {
+            mu0: self.contact.mu0,
+            kz: self.contact.kz,
+            kx: self.contact.kx,
+            uz0: d.offset_z_m,
+            duz: d.amp_z_m,
+            dux: d.amp_x_m,
+            omega: (core::f64::consts::TAU * self.applied.achieved.freq_hz) as f32,
+            phi: self.applied.phase_rad as f32,
+        })
+        .map_err(DeviceError::Scene)
+    }
+}
+
+/// The configuration checks the DDS and the estimator do not make themselves.
+fn check_config(cfg: &DeviceConfig) -> Result<(), DeviceError> {
+    let m = cfg.liftoff_margin;
+    if !(m.is_finite() && (0.0..=0.99).contains(&m)) {
+        return Err(DeviceError::Config(ConfigError::LiftoffMargin));
+    }
+    for c in [cfg.dac_z, cfg.dac_x] {
+        let ok = c.metres_per_code.is_finite()
+            && c.metres_per_code > 0.0
+            && c.zero_code.is_finite()
+            && (0.0..=f32::from(crate::board::dds::DAC_MAX)).contains(&c.zero_code);
+        if !ok {
+            return Err(DeviceError::Config(ConfigError::DacCal));
+        }
+    }
+    let (lo, hi) = cfg.freq_range_hz;
+    if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi && hi < cfg.sample_rate_hz / 2.0)
+    {
+        return Err(DeviceError::Config(ConfigError::FreqRange));
+    }
+    Ok(())
+}
+
+/// Validates a contact with a nominal drive so that only the contact is judged.
+fn check_contact(c: &Contact) -> Result<(), DeviceError> {
+    Scene::new(SceneParams {
+        mu0: c.mu0,
+        kz: c.kz,
+        kx: c.kx,
+        uz0: 1e-6,
+        duz: 0.0,
+        dux: 0.0,
+        omega: 1.0,
+        phi: 0.0,
+    })
+    .map(|_| ())
+    .map_err(DeviceError::Scene)
+}

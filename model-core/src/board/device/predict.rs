@@ -1,0 +1,70 @@
+//! The model's prediction for the current drive: μ at a sliding velocity
+//! (exact solver, f32) and the regime (§3.2).
+
+use super::config::MAX_VELOCITY_M_S;
+use super::{in_range, Device, DeviceError, DriveParam, Prediction};
+use crate::model::exact::{self, Solution};
+use crate::model::float::Libm;
+use crate::model::regime::{classify, ClassifyOptions, Regime};
+use crate::model::scene::Scene;
+
+impl<const N: usize> Device<'_, N> {
+    /// The model's μ at sliding velocity `v0` (m/s) for the current drive
+    /// (f32, exact solver).
+    ///
+    /// # Errors
+    /// [`DeviceError::OutOfRange`] for a non-finite velocity, [`DeviceError::Scene`], [`DeviceError::Model`].
+    pub fn predict(&self, v0: f32) -> Result<Prediction, DeviceError> {
+        predict(&self.scene()?, v0)
+    }
+
+    /// The regime of the current drive.
+    ///
+    /// # Errors
+    /// As [`Device::predict`].
+    pub fn regime(&self) -> Result<Regime, DeviceError> {
+        regime(&self.scene()?)
+    }
+}
+
+/// The model's μ at `v0` (m/s) for a scene (what [`Device::predict`] computes;
+/// callable on a snapshot outside the device's critical section).
+///
+/// # Errors
+/// [`DeviceError::OutOfRange`] for a velocity that is not finite or beyond
+/// ±[`MAX_VELOCITY_M_S`], [`DeviceError::Model`].
+pub fn predict(s: &Scene<f32>, v0: f32) -> Result<Prediction, DeviceError> {
+    in_range(
+        v0,
+        -MAX_VELOCITY_M_S,
+        MAX_VELOCITY_M_S,
+        DriveParam::Velocity,
+    )?;
+    let vc = crate::model::analytic::CriticalVelocity::of(s);
+    let (m, m_minus) = match exact::solve_with::<f32, Libm>(s, v0).map_err(DeviceError::Model)? {
+        Solution::Sliding { mu_over_mu0 } | Solution::StickSlip { mu_over_mu0 } => {
+            (mu_over_mu0, mu_over_mu0)
+        }
+        Solution::AtRest {
+            mu_0plus,
+            mu_0minus,
+            ..
+        } => (mu_0plus, mu_0minus),
+    };
+    Ok(Prediction {
+        mu_over_mu0: m,
+        mu: m * s.mu0(),
+        vc: (vc.forward, vc.backward),
+        mu_0minus_over_mu0: m_minus,
+    })
+}
+
+/// The regime of a scene (what [`Device::regime`] computes).
+///
+/// # Errors
+/// [`DeviceError::Model`].
+pub fn regime(s: &Scene<f32>) -> Result<Regime, DeviceError> {
+    classify(s, &ClassifyOptions::default())
+        .map(|c| c.regime)
+        .map_err(DeviceError::Model)
+}

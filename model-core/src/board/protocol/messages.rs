@@ -1,0 +1,539 @@
+//! The messages of the protocol: the [`Frame`] and its [`Body`], every
+//! [`Request`], [`Response`] and [`Telemetry`], the [`WireError`]s and the
+//! structures they carry. Enums are encoded by postcard as a varint variant
+//! index (declaration order) followed by the fields: new variants are only
+//! ever appended. [`ENDPOINTS`] pairs every request with the response that
+//! answers it.
+
+use core::fmt;
+
+use serde::{Deserialize, Serialize};
+
+use crate::board::dds::Achieved;
+use crate::board::estimator::Estimate;
+use crate::model::regime::Regime;
+
+/// Protocol version; a frame with another version is answered with
+/// [`WireError::VersionMismatch`].
+pub const PROTOCOL_VERSION: u16 = 2;
+
+/// The drive as commanded, physical units.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DriveSetting {
+    /// Drive frequency, Hz.
+    pub freq_hz: f64,
+    /// Normal amplitude Δu_z, m (≥ 0).
+    pub amp_z_m: f32,
+    /// Tangential amplitude Δu_x, m (≥ 0).
+    pub amp_x_m: f32,
+    /// Normal offset = mean indentation u_z0, m (> 0).
+    pub offset_z_m: f32,
+    /// Phase φ of the tangential drive, rad.
+    pub phase_rad: f32,
+}
+
+/// The contact the device predicts with (the drive supplies u_z0, Δu_z, Δu_x, ω, φ).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Contact {
+    /// μ₀.
+    pub mu0: f32,
+    /// k_z, N/m.
+    pub kz: f32,
+    /// k_x, N/m.
+    pub kx: f32,
+}
+
+/// Which parameter an error names.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum DriveParam {
+    /// 0: frequency.
+    Freq,
+    /// 1: normal amplitude.
+    AmpZ,
+    /// 2: tangential amplitude.
+    AmpX,
+    /// 3: normal offset.
+    OffsetZ,
+    /// 4: phase.
+    Phase,
+    /// 5: measurement (or stream) periods.
+    Periods,
+    /// 6: velocity of a prediction.
+    Velocity,
+}
+
+impl DriveParam {
+    /// The field's name on the wire (`freq_hz`, `amp_z_m`, …).
+    pub const fn name(self) -> &'static str {
+        match self {
+            DriveParam::Freq => "freq_hz",
+            DriveParam::AmpZ => "amp_z_m",
+            DriveParam::AmpX => "amp_x_m",
+            DriveParam::OffsetZ => "offset_z_m",
+            DriveParam::Phase => "phase_rad",
+            DriveParam::Periods => "periods",
+            DriveParam::Velocity => "v0",
+        }
+    }
+}
+
+/// What a drive command achieved (exact frequency and phase of the DDS).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Applied {
+    /// The DDS frequency.
+    pub achieved: Achieved,
+    /// Exact phase between the channels' waveforms (φ as produced), rad.
+    pub phase_rad: f64,
+}
+
+/// A model prediction for the current drive.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Prediction {
+    /// μ/μ₀ at the velocity; at v₀ = 0 exactly the limit μ(0⁺)/μ₀.
+    pub mu_over_mu0: f32,
+    /// μ = μ₀·`mu_over_mu0`.
+    pub mu: f32,
+    /// Forward and backward critical velocity, m/s.
+    pub vc: (f32, f32),
+    /// At v₀ = 0 exactly the other one-sided limit μ(0⁻)/μ₀ (μ is
+    /// discontinuous at rest); at any other v₀ equal to `mu_over_mu0`.
+    pub mu_0minus_over_mu0: f32,
+}
+
+/// Status snapshot.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Status {
+    /// Drive running (amplitudes at or ramping to the setting).
+    pub running: bool,
+    /// All ramps finished.
+    pub settled: bool,
+    /// Latched fault bits ([`crate::board::device::faults`]).
+    pub faults: u32,
+    /// A measurement is in progress.
+    pub measuring: bool,
+    /// Received bytes dropped because the link's receive queue was full, since
+    /// power-up (saturating). Never a silent drop: a host that sees this grow
+    /// pipelined more than the device can hold.
+    pub rx_overflows: u32,
+    /// The normal amplitude the DAC produces now, m (ramps towards the
+    /// setting while running, towards 0 after `Stop`; the setting itself is
+    /// what `GetDrive` reports).
+    pub out_amp_z_m: f32,
+    /// The tangential amplitude produced now, m.
+    pub out_amp_x_m: f32,
+    /// The normal offset produced now, m.
+    pub out_offset_z_m: f32,
+}
+
+/// What the device is (answer to [`Request::Hello`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Info {
+    /// Firmware version (major, minor, patch).
+    pub firmware: [u8; 3],
+    /// [`PROTOCOL_VERSION`] of the device.
+    pub protocol: u16,
+    /// Board name, ASCII, zero-padded.
+    pub board: [u8; 16],
+    /// DDS / ADC sample rate, Hz.
+    pub sample_rate_hz: f64,
+    /// Drive frequency range, Hz.
+    pub freq_range_hz: (f64, f64),
+    /// Largest tangential amplitude, m.
+    pub max_amp_x_m: f32,
+    /// Largest normal offset (mean indentation), m.
+    pub max_offset_z_m: f32,
+    /// Lift-off margin: Δu_z ≤ (1 − margin)·u_z0.
+    pub liftoff_margin: f32,
+    /// Largest |φ| of a drive, rad.
+    pub max_phase_rad: f32,
+    /// Largest |v₀| of a prediction, m/s.
+    pub max_velocity_m_s: f32,
+    /// Allowed periods of `Measure` and `Stream`, inclusive.
+    pub periods_range: (u32, u32),
+    /// A frame whose bytes arrive more than this apart is dropped, µs.
+    pub byte_timeout_us: u32,
+}
+
+/// Requests (host → device). [`ENDPOINTS`] names the response of each.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Request {
+    /// 0: identify.
+    Hello,
+    /// 1: the accepted drive.
+    GetDrive,
+    /// 2: set the drive (validated whole; refused commands change nothing).
+    SetDrive(DriveSetting),
+    /// 3: start (soft start).
+    Start,
+    /// 4: stop (ramped).
+    Stop,
+    /// 5: the contact parameters.
+    GetContact,
+    /// 6: set the contact parameters.
+    SetContact(Contact),
+    /// 7: model prediction at a sliding velocity (m/s).
+    Predict {
+        /// v₀, m/s.
+        v0: f32,
+    },
+    /// 8: start a measurement over `periods` drive periods.
+    Measure {
+        /// Drive periods.
+        periods: u32,
+    },
+    /// 9: the last finished measurement.
+    GetEstimate,
+    /// 10: stream estimates (each over `periods`) as telemetry, or stop.
+    Stream {
+        /// On or off.
+        on: bool,
+        /// Periods per estimate.
+        periods: u32,
+    },
+    /// 11: status and faults.
+    GetStatus,
+    /// 12: clear latched faults.
+    ResetFaults,
+    /// 13: end every session: stop the stream (`StreamStopped(Reset)`),
+    /// abort a running measurement, stop the drive (ramped), forget the
+    /// `Measure` seq; settings, contact and latched faults are kept.
+    Reset,
+}
+
+/// Which [`Response`] variant answers a request when it succeeds (any request
+/// may instead be answered by [`Response::Error`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Answer {
+    /// [`Response::Info`].
+    Info,
+    /// [`Response::Drive`].
+    Drive,
+    /// [`Response::Ok`].
+    Ok,
+    /// [`Response::Contact`].
+    Contact,
+    /// [`Response::Prediction`].
+    Prediction,
+    /// [`Response::Estimate`].
+    Estimate,
+    /// [`Response::Status`].
+    Status,
+}
+
+/// One row of the request → response table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Endpoint {
+    /// The request's variant index on the wire.
+    pub index: u32,
+    /// The request's name.
+    pub request: &'static str,
+    /// The response that answers it on success.
+    pub answer: Answer,
+}
+
+/// The request → response table, in variant order (`ENDPOINTS[i].index == i`).
+/// Its length is the number of known requests: a larger index is answered
+/// with [`WireError::UnknownMessage`].
+pub const ENDPOINTS: &[Endpoint] = &[
+    ep(0, "Hello", Answer::Info),
+    ep(1, "GetDrive", Answer::Drive),
+    ep(2, "SetDrive", Answer::Drive),
+    ep(3, "Start", Answer::Ok),
+    ep(4, "Stop", Answer::Ok),
+    ep(5, "GetContact", Answer::Contact),
+    ep(6, "SetContact", Answer::Ok),
+    ep(7, "Predict", Answer::Prediction),
+    ep(8, "Measure", Answer::Ok),
+    ep(9, "GetEstimate", Answer::Estimate),
+    ep(10, "Stream", Answer::Ok),
+    ep(11, "GetStatus", Answer::Status),
+    ep(12, "ResetFaults", Answer::Ok),
+    ep(13, "Reset", Answer::Ok),
+];
+
+const fn ep(index: u32, request: &'static str, answer: Answer) -> Endpoint {
+    Endpoint {
+        index,
+        request,
+        answer,
+    }
+}
+
+impl Request {
+    /// The variant index on the wire.
+    pub const fn index(&self) -> u32 {
+        match self {
+            Request::Hello => 0,
+            Request::GetDrive => 1,
+            Request::SetDrive(_) => 2,
+            Request::Start => 3,
+            Request::Stop => 4,
+            Request::GetContact => 5,
+            Request::SetContact(_) => 6,
+            Request::Predict { .. } => 7,
+            Request::Measure { .. } => 8,
+            Request::GetEstimate => 9,
+            Request::Stream { .. } => 10,
+            Request::GetStatus => 11,
+            Request::ResetFaults => 12,
+            Request::Reset => 13,
+        }
+    }
+
+    /// The request's row of [`ENDPOINTS`].
+    pub const fn endpoint(&self) -> &'static Endpoint {
+        &ENDPOINTS[self.index() as usize]
+    }
+}
+
+/// Responses (device → host).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Response {
+    /// 0: to `Hello`.
+    Info(Info),
+    /// 1: to `GetDrive` / `SetDrive`.
+    Drive {
+        /// The accepted drive.
+        setting: DriveSetting,
+        /// What the DDS produces.
+        applied: Applied,
+    },
+    /// 2: done (`Start`, `Stop`, `SetContact`, `Measure`, `Stream`, `ResetFaults`, `Reset`).
+    Ok,
+    /// 3: to `GetContact`.
+    Contact(Contact),
+    /// 4: to `Predict`.
+    Prediction {
+        /// The prediction.
+        prediction: Prediction,
+        /// The regime of the current drive.
+        regime: Regime,
+    },
+    /// 5: to `GetEstimate`.
+    Estimate(Estimate),
+    /// 6: to `GetStatus`.
+    Status(Status),
+    /// 7: the request failed.
+    Error(WireError),
+}
+
+impl Response {
+    /// Which [`Answer`] this is (`None` for [`Response::Error`]).
+    pub const fn answer(&self) -> Option<Answer> {
+        Some(match self {
+            Response::Info(_) => Answer::Info,
+            Response::Drive { .. } => Answer::Drive,
+            Response::Ok => Answer::Ok,
+            Response::Contact(_) => Answer::Contact,
+            Response::Prediction { .. } => Answer::Prediction,
+            Response::Estimate(_) => Answer::Estimate,
+            Response::Status(_) => Answer::Status,
+            Response::Error(_) => return None,
+        })
+    }
+}
+
+/// Unsolicited telemetry (device → host).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Telemetry {
+    /// 0: a streamed estimate.
+    Estimate(Estimate),
+    /// 1: the ramps have settled.
+    RampDone,
+    /// 2: a fault was latched (bits of [`crate::board::device::faults`]).
+    Fault(u32),
+    /// 3: the stream of estimates ended (no more `Estimate` telemetry).
+    StreamStopped(StreamEnd),
+    /// 4: received bytes were dropped because the receive queue was full;
+    /// the new total of [`Status::rx_overflows`] (sent once per poll in
+    /// which it grew).
+    RxOverflow(u32),
+}
+
+/// Why a stream of estimates ended.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum StreamEnd {
+    /// 0: `Stream { on: false, .. }`.
+    Requested,
+    /// 1: `Reset`.
+    Reset,
+    /// 2: the next measurement was refused (e.g. a latched fault): the error.
+    Refused(WireError),
+}
+
+/// A frame body.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Body {
+    /// 0: host → device.
+    Request(Request),
+    /// 1: device → host, `seq` echoes the request.
+    Response(Response),
+    /// 2: device → host, `seq` is the telemetry counter.
+    Telemetry(Telemetry),
+}
+
+/// The names of the [`Body`] variants, in variant order (its length is the
+/// number of known bodies).
+pub const BODY_KINDS: &[&str] = &["Request", "Response", "Telemetry"];
+
+/// One frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Frame {
+    /// [`PROTOCOL_VERSION`].
+    pub version: u16,
+    /// Sequence number.
+    pub seq: u32,
+    /// Contents.
+    pub body: Body,
+}
+
+/// Errors on the wire.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum WireError {
+    /// 0: not valid COBS / postcard.
+    Malformed,
+    /// 1: CRC mismatch.
+    BadCrc,
+    /// 2: unknown request variant.
+    UnknownMessage,
+    /// 3: the device speaks another version.
+    VersionMismatch {
+        /// The device's version.
+        device: u16,
+    },
+    /// 4: frame longer than [`crate::board::protocol::MAX_FRAME`].
+    Oversize,
+    /// 5: a parameter out of range (which one, and the limits).
+    OutOfRange {
+        /// The parameter.
+        param: DriveParam,
+        /// Smallest allowed.
+        min: f32,
+        /// Largest allowed.
+        max: f32,
+    },
+    /// 6: the normal amplitude would lift the contact off.
+    LiftOffRefused {
+        /// Commanded Δu_z, m.
+        amp_z_m: f32,
+        /// Largest allowed, m.
+        limit_m: f32,
+    },
+    /// 7: a measurement is running.
+    Busy,
+    /// 8: a fault is latched.
+    Faulted(u32),
+    /// 9: the contact/drive is not a valid scene.
+    BadScene,
+    /// 10: the model failed.
+    Model,
+    /// 11: no finished measurement yet.
+    NotReady,
+    /// 12: the measurement has no normal force.
+    NoNormalForce,
+    /// 13: an internal inconsistency of the device (never expected; report it).
+    Internal,
+}
+
+impl fmt::Display for WireError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            WireError::Malformed => {
+                f.write_str("malformed frame (not COBS or not a valid message)")
+            }
+            WireError::BadCrc => f.write_str("CRC mismatch"),
+            WireError::UnknownMessage => f.write_str("unknown message"),
+            WireError::VersionMismatch { device } => {
+                write!(f, "protocol version mismatch (the device speaks v{device})")
+            }
+            WireError::Oversize => f.write_str("frame too long"),
+            WireError::OutOfRange { param, min, max } => {
+                write!(f, "{} out of range [{min}, {max}]", param.name())
+            }
+            WireError::LiftOffRefused { amp_z_m, limit_m } => write!(
+                f,
+                "amp_z_m = {amp_z_m} m would lift the contact off (limit {limit_m} m)"
+            ),
+            WireError::Busy => f.write_str("busy: a measurement or stream is running"),
+            WireError::Faulted(bits) => {
+                write!(f, "a fault is latched (bits {bits:#x}): reset it first")
+            }
+            WireError::BadScene => f.write_str("the contact and drive do not form a valid scene"),
+            WireError::Model => f.write_str("the model solver failed"),
+            WireError::NotReady => f.write_str("no finished measurement"),
+            WireError::NoNormalForce => f.write_str("the measurement has no normal force"),
+            WireError::Internal => f.write_str("internal device error"),
+        }
+    }
+}
+
+impl core::error::Error for WireError {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One request of every variant, in variant order.
+    fn every_request() -> [Request; 14] {
+        let drive = DriveSetting {
+            freq_hz: 1e4,
+            amp_z_m: 0.0,
+            amp_x_m: 0.0,
+            offset_z_m: 1e-6,
+            phase_rad: 0.0,
+        };
+        [
+            Request::Hello,
+            Request::GetDrive,
+            Request::SetDrive(drive),
+            Request::Start,
+            Request::Stop,
+            Request::GetContact,
+            Request::SetContact(Contact {
+                mu0: 0.3,
+                kz: 1.0,
+                kx: 1.0,
+            }),
+            Request::Predict { v0: 0.0 },
+            Request::Measure { periods: 1 },
+            Request::GetEstimate,
+            Request::Stream {
+                on: false,
+                periods: 1,
+            },
+            Request::GetStatus,
+            Request::ResetFaults,
+            Request::Reset,
+        ]
+    }
+
+    #[test]
+    fn endpoint_table_matches_the_wire_indices() {
+        let reqs = every_request();
+        assert_eq!(reqs.len(), ENDPOINTS.len());
+        for (i, r) in reqs.iter().enumerate() {
+            assert_eq!(ENDPOINTS[i].index, i as u32);
+            assert_eq!(r.index(), i as u32);
+            let mut buf = [0u8; 64];
+            let bytes = postcard::to_slice(r, &mut buf).unwrap();
+            // Indices < 128 are one varint byte.
+            assert_eq!(u32::from(bytes[0]), r.index(), "{r:?}");
+        }
+    }
+}
