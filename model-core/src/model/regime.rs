@@ -26,8 +26,11 @@
 //! arise for `k_xΔu_x/(μ₀k_zΔu_z) < 1`, drives for `> 1`, and that φ = π/2 is
 //! symmetric. Exactly, with `r` the ratio and `a = Δu_z/u_z0`:
 //! `c² = a²(1 + 2r cos φ + r²)`, so the actuator condition `max(c, c') > 1` is
-//! `a²(1 + 2r|cos φ| + r²) > 1` (with a static equilibrium). At `a = 0.5` and
-//! φ = 0 that is `r > 1` — the paper's rule, which is exact there. At `a = 0.9`,
+//! `a²(1 + 2r|cos φ| + r²) > 1` (with a static equilibrium), i.e. the boundary
+//! `r* = −|cos φ| + √(cos²φ − 1 + 1/a²)`. It lies at `r* = 1` — the paper's
+//! rule — exactly on the curve `a = 1/√(2 + 2|cos φ|)` (0.5 at φ = 0, π; 1/√2
+//! at φ = π/2), and nowhere else (e.g. `a = 1/√3`, φ = 60°: ratchet at r = 0.99,
+//! actuator at r = 1.01; checked in `tests/regime.rs`). At `a = 0.9`,
 //! φ = 0 it is already `r > 0.111`: an actuator at r = 0.7. At `a = 0.2`, φ = 0
 //! it needs `r > 4`: r = 3 is a ratchet. And for φ = π/2, `c = c'`, but once
 //! `c > 1` the scene is an actuator (no force-free rest), however symmetric
