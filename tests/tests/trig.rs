@@ -246,21 +246,42 @@ fn mu_errors<M: Math<f32>>(n: usize, b_max: f64) -> (f64, f64, usize) {
 
 #[test]
 fn exact_solver_mu_fast_f32_matches_f64() {
-    // 20 000 scenes with a ∈ [0, 0.99), b ∈ [0, 5) (weighted to small b),
-    // φ ∈ [−π, π), v ∈ (−1.1, 1.1)·v_c. Each must meet the solver's bound
-    // (1e-6 + 2.5e-7)·(1 + b) ≤ 7.5e-6 < 1e-5 (the issue's target); the
-    // measured worst is printed and compared with the same run on libm's f32.
+    // 20 000 scenes with a ∈ [0, 0.99), b ∈ [0, 5) (weighted to small b; the
+    // README's and the board's scenes have b ≈ 0.25–0.35), φ ∈ [−π, π),
+    // v ∈ (−1.1, 1.1)·v_c. Each must meet the solver's bound
+    // (1e-6 + 3e-7)·(1 + b) ≤ 7.8e-6 < 1e-5 (the issue's target), checked per
+    // scene in `mu_errors`.
     let (w_fast, r_fast, n_ss) = mu_errors::<FastF32>(20_000, 5.0);
     let (w_libm, r_libm, _) = mu_errors::<Libm>(20_000, 5.0);
     println!(
-        "μ/μ₀ f32 vs f64 over 20000 scenes ({n_ss} stick–slip): fast-f32 worst {w_fast:.3e} \
+        "μ/μ₀ f32 vs f64 over 20000 scenes, b < 5 ({n_ss} stick–slip): fast-f32 worst {w_fast:.3e} \
          ({r_fast:.3e}·(1+b)), libm f32 worst {w_libm:.3e} ({r_libm:.3e}·(1+b))"
     );
     assert!(n_ss > 10_000, "most scenes must be stick–slip, got {n_ss}");
     assert!(w_fast <= 1e-5);
-    // Regression bound from the measurement (worst 1.2e-7·(1 + b) at the
-    // time of writing, libm's f32 run 1.0e-7): at most 4× that.
-    assert!(r_fast <= 5e-7, "fast-f32 worst {r_fast:e}·(1+b)");
+    // The backend's own error (≤ 3e-7 rad, a few f32 ulps) is of the order of
+    // the f32 rounding the solver already has with libm: the fast backend may
+    // at most double the libm f32 run's worst error (measured: 2.0e-7·(1 + b)
+    // for both).
+    assert!(
+        r_fast <= 2.0 * r_libm,
+        "fast-f32 {r_fast:e}·(1+b) vs libm {r_libm:e}·(1+b)"
+    );
+}
+
+#[test]
+fn exact_solver_mu_fast_f32_large_b() {
+    // b up to 100: the f32 error grows ∝ 1 + b for both backends (the stretch
+    // swings over ±b while μ is decided by differences of order 1); every
+    // scene within the solver's bound (checked in `mu_errors`), and the fast
+    // backend at most twice libm's worst.
+    let (w_fast, r_fast, _) = mu_errors::<FastF32>(5_000, 100.0);
+    let (w_libm, r_libm, _) = mu_errors::<Libm>(5_000, 100.0);
+    println!(
+        "μ/μ₀ f32 vs f64 over 5000 scenes, b < 100: fast-f32 worst {w_fast:.3e} ({r_fast:.3e}·(1+b)), \
+         libm f32 worst {w_libm:.3e} ({r_libm:.3e}·(1+b))"
+    );
+    assert!(r_fast <= 2.0 * r_libm);
 }
 
 /// Runs `f` over the bit patterns `lo..=hi` on two threads, worst of both.
@@ -326,4 +347,80 @@ fn exhaustive_sqrt() {
         f32::MAX.to_bits() + 1
     );
     assert!(e <= trig::ERR_SQRT);
+}
+
+mod counting {
+    //! A backend that counts calls (FastF32 underneath), to see where the
+    //! exact solver's transcendental work goes.
+    use super::*;
+    use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+
+    pub static CALLS: [AtomicU32; 5] = [const { AtomicU32::new(0) }; 5];
+    pub struct Counting;
+    impl Math<f32> for Counting {
+        const NAME: &'static str = "counting";
+        const MAX_REL_ERROR: f64 = <FastF32 as Math<f32>>::MAX_REL_ERROR;
+        fn sqrt(x: f32) -> f32 {
+            CALLS[0].fetch_add(1, Relaxed);
+            trig::sqrt(x)
+        }
+        fn sin_cos(x: f32) -> (f32, f32) {
+            CALLS[1].fetch_add(1, Relaxed);
+            trig::sin_cos(x)
+        }
+        fn asin(x: f32) -> f32 {
+            CALLS[2].fetch_add(1, Relaxed);
+            trig::asin(x)
+        }
+        fn atan2(y: f32, x: f32) -> f32 {
+            CALLS[3].fetch_add(1, Relaxed);
+            trig::atan2(y, x)
+        }
+        fn hypot(x: f32, y: f32) -> f32 {
+            CALLS[4].fetch_add(1, Relaxed);
+            trig::hypot(x, y)
+        }
+    }
+}
+
+#[test]
+fn calls_per_prediction() {
+    // The transcendental calls of one exact-solver μ (stick–slip, the board's
+    // scene family: a ∈ [0, 0.99), b < 5): per call, at most 2 asin (forward
+    // and backward window) and 1 atan2 (the backward window's phase); the
+    // sin_cos calls are the Newton iterations of the ≤ 2 stick→slip roots
+    // (bounded by the root finder's 100-iteration cap per root).
+    use counting::{Counting, CALLS};
+    use std::sync::atomic::Ordering::Relaxed;
+    let mut rng = Rng::new(99);
+    let n = 2_000;
+    let mut max = [0u32; 5];
+    let mut sum = [0u32; 5];
+    let mut solved = 0;
+    for _ in 0..n {
+        let d = Drive::new::<Libm>(
+            rng.range(0.0, 0.99) as f32,
+            (5.0 * rng.uniform().powi(2)) as f32,
+            rng.range(-3.14, 3.14) as f32,
+        );
+        let v = (rng.range(0.02, 0.98) * f64::from(d.c_forward::<Libm>())) as f32;
+        for c in &CALLS {
+            c.store(0, Relaxed);
+        }
+        if exact::mu_over_mu0::<f32, Counting>(&d, v).is_ok() {
+            solved += 1;
+        }
+        for (k, c) in CALLS.iter().enumerate() {
+            let c = c.load(Relaxed);
+            max[k] = max[k].max(c);
+            sum[k] += c;
+        }
+    }
+    let mean = sum.map(|s| s as f64 / n as f64);
+    println!(
+        "calls per μ (mean / max over {n} stick–slip scenes): sqrt {:.2}/{}, sin_cos {:.2}/{}, asin {:.2}/{}, atan2 {:.2}/{}, hypot {:.2}/{}",
+        mean[0], max[0], mean[1], max[1], mean[2], max[2], mean[3], max[3], mean[4], max[4]
+    );
+    assert_eq!(solved, n);
+    assert!(max[2] <= 2 && max[3] <= 1);
 }

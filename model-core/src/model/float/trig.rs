@@ -67,14 +67,13 @@ const FRAC_2_PI: f32 = 0.636_619_75;
 const PIO2_C1: f32 = 1.570_312_5;
 const PIO2_C2: f32 = 4.837_513e-4;
 const PIO2_C3: f32 = 7.549_79e-8;
-const FRAC_PI_4: f32 = 0.785_398_2;
 
 // Constants as a rounded head and the rounding error: c = HI + LO.
-const PIO2_HI: f32 = 1.570_796_4;
+const PIO2_HI: f32 = core::f32::consts::FRAC_PI_2;
 const PIO2_LO: f32 = -4.371_139e-8;
-const PI_HI: f32 = 3.141_592_7;
+const PI_HI: f32 = core::f32::consts::PI;
 const PI_LO: f32 = -8.742_278e-8;
-const PIO4_HI: f32 = 0.785_398_2;
+const PIO4_HI: f32 = core::f32::consts::FRAC_PI_4;
 const PIO4_LO: f32 = -2.185_569_4e-8;
 const TAN_PI_8: f32 = 0.414_213_57;
 
@@ -102,10 +101,12 @@ const A5: f32 = -0.060_782_17;
 #[inline]
 pub fn sin_cos(x: f32) -> (f32, f32) {
     let ax = x.abs();
+    // NaN fails the comparison and goes to libm too.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     if !(ax <= SIN_COS_MAX_ARG) {
         return libm::sincosf(x);
     }
-    let (r, q) = if ax <= FRAC_PI_4 {
+    let (r, q) = if ax <= PIO4_HI {
         (ax, 0u32)
     } else {
         // ax ≥ 0, so the truncating cast is the floor.
@@ -221,7 +222,7 @@ pub fn atan2(y: f32, x: f32) -> f32 {
 /// over every positive normal `f32`).
 #[inline]
 pub fn sqrt(x: f32) -> f32 {
-    if !(x >= f32::MIN_POSITIVE && x <= f32::MAX) {
+    if !(f32::MIN_POSITIVE..=f32::MAX).contains(&x) {
         return libm::sqrtf(x);
     }
     let y = f32::from_bits(0x5f37_5a86 - (x.to_bits() >> 1));
@@ -239,7 +240,7 @@ pub fn sqrt(x: f32) -> f32 {
 pub fn hypot(x: f32, y: f32) -> f32 {
     let (ax, ay) = (x.abs(), y.abs());
     let big = if ax > ay { ax } else { ay };
-    if !(big <= 1.125_899_9e15 && big >= 8.881_784e-16) {
+    if !(8.881_784_2e-16..=1.125_899_9e15).contains(&big) {
         return if big == 0.0 { 0.0 } else { libm::hypotf(x, y) };
     }
     sqrt(ax * ax + ay * ay)
