@@ -424,3 +424,11 @@ fn calls_per_prediction() {
     assert_eq!(solved, n);
     assert!(max[2] <= 2 && max[3] <= 1);
 }
+
+#[test]
+fn same_bits_as_the_target() {
+    // The firmware's f32_vectors checks the same digest on the Cortex-M4F.
+    let d = trig::digest(4096);
+    println!("digest(4096) = {d:#010x}");
+    assert_eq!(d, trig::DIGEST_4096);
+}

@@ -245,3 +245,37 @@ pub fn hypot(x: f32, y: f32) -> f32 {
     }
     sqrt(ax * ax + ay * ay)
 }
+
+/// FNV-1a digest of the result bits of [`sin_cos`], [`asin`], [`atan2`] and
+/// [`sqrt`] at `n` arguments each, spread evenly over the bit patterns of
+/// their ranges (every exponent). The host, where the bounds are proven by
+/// exhaustive enumeration, and the Cortex-M4F (the firmware's `f32_vectors`)
+/// must both give [`DIGEST_4096`] for `n = 4096`: the same bits on both.
+pub fn digest(n: u32) -> u32 {
+    let mut h: u32 = 0x811c_9dc5;
+    let mut eat = |x: f32| {
+        for b in x.to_bits().to_le_bytes() {
+            h = (h ^ u32::from(b)).wrapping_mul(0x0100_0193);
+        }
+    };
+    let n = n.max(1);
+    for i in 0..n {
+        let at = |hi: u32| f32::from_bits((u64::from(hi) * u64::from(i) / u64::from(n)) as u32);
+        let x = at(SIN_COS_MAX_ARG.to_bits());
+        let (s, c) = sin_cos(x);
+        eat(s);
+        eat(c);
+        eat(sin_cos(-x).0);
+        let u = at(1.0f32.to_bits());
+        eat(asin(u));
+        eat(asin(-u));
+        let t = at(f32::MAX.to_bits());
+        eat(atan2(t, 1.0));
+        eat(atan2(-1.0, -t));
+        eat(sqrt(t));
+    }
+    h
+}
+
+/// [`digest`]`(4096)` (computed on x86-64 and on the emulated Cortex-M4F).
+pub const DIGEST_4096: u32 = 0x7ca5_3fc0;
