@@ -432,3 +432,55 @@ fn same_bits_as_the_target() {
     println!("digest(4096) = {d:#010x}");
     assert_eq!(d, trig::DIGEST_4096);
 }
+
+#[test]
+fn device_prediction_path_with_fast_f32() {
+    // What `device::predict` computes (critical velocities + exact solver on
+    // a physical f32 scene), with FastF32 instead of libm: the board's test
+    // scene of tests/device.rs and predict_cost, within the 1e-5 that
+    // tests/device.rs and the QEMU test require of the device against f64.
+    use model_core::analytic::CriticalVelocity;
+    use model_core::{Scene, SceneParams};
+    let p = |omega: f64, phi: f64| SceneParams {
+        mu0: 0.3,
+        kz: 1e7,
+        kx: 1e7,
+        uz0: 4e-6,
+        duz: 2e-6,
+        dux: 0.3e-6,
+        omega,
+        phi,
+    };
+    let (omega, phi) = (std::f64::consts::TAU * 20e3, 0.7);
+    let pf = p(omega, phi);
+    let s32 = Scene::<f32>::new(SceneParams {
+        mu0: pf.mu0 as f32,
+        kz: pf.kz as f32,
+        kx: pf.kx as f32,
+        uz0: pf.uz0 as f32,
+        duz: pf.duz as f32,
+        dux: pf.dux as f32,
+        omega: omega as f32,
+        phi: phi as f32,
+    })
+    .unwrap();
+    let s64 = Scene::new(p(omega, phi)).unwrap();
+    let vc32 = CriticalVelocity::of_with::<FastF32>(&s32);
+    let vc64 = CriticalVelocity::of(&s64);
+    assert!((f64::from(vc32.forward) / vc64.forward - 1.0).abs() <= 1e-6);
+    assert!((f64::from(vc32.backward) / vc64.backward - 1.0).abs() <= 1e-6);
+    for v0 in [-0.02f32, -0.001, 0.001, 0.004, 0.01, 0.05] {
+        let m32 = exact::solve_with::<f32, FastF32>(&s32, v0)
+            .unwrap()
+            .mu_over_mu0()
+            .unwrap();
+        let m64 = exact::solve(&s64, f64::from(v0))
+            .unwrap()
+            .mu_over_mu0()
+            .unwrap();
+        assert!(
+            (f64::from(m32) - m64).abs() <= 1e-5,
+            "v0={v0}: {m32} vs {m64}"
+        );
+    }
+}
