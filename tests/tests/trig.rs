@@ -401,7 +401,7 @@ fn calls_per_prediction() {
         let d = Drive::new::<Libm>(
             rng.range(0.0, 0.99) as f32,
             (5.0 * rng.uniform().powi(2)) as f32,
-            rng.range(-3.14, 3.14) as f32,
+            rng.range(-std::f64::consts::PI, std::f64::consts::PI) as f32,
         );
         let v = (rng.range(0.02, 0.98) * f64::from(d.c_forward::<Libm>())) as f32;
         for c in &CALLS {
