@@ -10,8 +10,12 @@
 //!   those bounds, since the functions are symmetric by construction
 //!   (computed on `|x|`, sign applied last) and bit-identical on the host and
 //!   the Cortex-M4F (IEEE single, no FMA).
-//! * `exact_solver_mu_*`: μ/μ₀ of the exact solver in `f32` with `FastF32`
-//!   against the `f64` solver over thousands of random scenes.
+//!   (`same_bits_as_the_target`: the digest the firmware's `f32_vectors`
+//!   checks on the emulated M4F).
+//! * `exact_solver_mu_*`, `device_prediction_path_with_fast_f32`: μ/μ₀ of the
+//!   exact solver in `f32` with `FastF32` against the `f64` solver over
+//!   thousands of random scenes and on the board's scene.
+//! * `calls_per_prediction`: where the solver's transcendental calls go.
 
 use integration_tests::Rng;
 use model_core::float::trig;
@@ -142,7 +146,7 @@ fn dense_sqrt_within_bound() {
 
 #[test]
 fn random_pairs_atan2_hypot_within_bound() {
-    // Two-argument functions: 10⁶ random pairs over 80 decades (the division
+    // Two-argument functions: 10⁶ random pairs over 40 decades (the division
     // and the sum of squares round differently for each pair).
     let mut rng = Rng::new(7);
     let (mut ea, mut eh) = (0.0f64, 0.0f64);
