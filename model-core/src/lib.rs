@@ -39,5 +39,5 @@ pub mod model;
 pub use board::{dds, device, estimator, protocol, server};
 pub use model::{analytic, exact, fixed_step, float, regime, scene, select};
 
-pub use float::{Float, Libm, Math, Micromath};
+pub use float::{FastF32, Float, Libm, Math, Micromath};
 pub use scene::{Drive, Groups, Param, Scene, SceneError, SceneParams};

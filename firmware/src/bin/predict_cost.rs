@@ -6,6 +6,13 @@
 //! semihosting and exits with status 0. (QEMU has no DWT cycle counter, and
 //! its instruction count ignores pipeline and flash wait states: on the chip a
 //! cycle count is ≈ 1–1.5× this.)
+//!
+//! Reports one f32 prediction as the device computes it today (`device::predict`,
+//! libm backend), the same computation with the libm and the float-native
+//! `FastF32` backend side by side, the cost of each transcendental function of
+//! both backends, and the CPU share of one prediction per control period at
+//! 1 kHz and 10 kHz next to the DDS refill's share at 500 kS/s (168 MHz core,
+//! one instruction per cycle: a lower bound on the share).
 #![no_std]
 #![no_main]
 
@@ -13,8 +20,11 @@ use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 use defmt_rtt as _;
+use model_core::analytic::CriticalVelocity;
 use model_core::device;
-use model_core::{Scene, SceneParams};
+use model_core::exact::{self, Solution};
+use model_core::float::FastF32;
+use model_core::{Libm, Math, Scene, SceneParams};
 use panic_probe as _;
 // Link the device crate for its interrupt vector table.
 use stm32f4 as _;
@@ -31,6 +41,61 @@ fn ticks(f: impl FnOnce()) -> u32 {
 fn nops_1000() {
     // SAFETY: `nop` has no effect.
     unsafe { core::arch::asm!(".rept 1000", "nop", ".endr", options(nomem, nostack)) }
+}
+
+/// What `device::predict` computes (critical velocities and the exact
+/// solver's μ/μ₀), with a chosen backend.
+#[inline(never)]
+fn predict_with<M: Math<f32>>(scene: &Scene<f32>, v0: f32) -> Option<(f32, f32, f32)> {
+    let vc = CriticalVelocity::of_with::<M>(scene);
+    let m = match exact::solve_with::<f32, M>(scene, v0).ok()? {
+        Solution::Sliding { mu_over_mu0 } | Solution::StickSlip { mu_over_mu0 } => mu_over_mu0,
+        Solution::AtRest { mu_0plus, .. } => mu_0plus,
+    };
+    Some((m, vc.forward, vc.backward))
+}
+
+/// Mean and worst instruction count of one prediction with backend `M` over
+/// 16 velocities in (−0.95 v_c, 0.95 v_c); `None` if one fails.
+fn predict_cost<M: Math<f32>>(
+    scene: &Scene<f32>,
+    vc: &CriticalVelocity<f32>,
+    empty: u32,
+    per_insn: f32,
+) -> Option<(u32, u32)> {
+    let (mut worst, mut sum) = (0u32, 0u32);
+    let n = 16;
+    for i in 0..n {
+        let x = -0.95 + 1.9 * (i as f32 + 0.5) / n as f32;
+        let v = core::hint::black_box(x * if x > 0.0 { vc.forward } else { vc.backward });
+        let mut out = None;
+        let t = ticks(|| out = predict_with::<M>(scene, v)).saturating_sub(empty);
+        out?;
+        let insn = (t as f32 / per_insn) as u32;
+        worst = worst.max(insn);
+        sum += insn;
+    }
+    Some((sum / n, worst))
+}
+
+/// Mean instruction count of one call of `f` over 16 arguments `arg(i)`
+/// (the loop's own cost, measured with an identity `f`, subtracted by the caller).
+fn fn_cost(empty: u32, per_insn: f32, arg: fn(f32) -> f32, f: fn(f32) -> f32) -> f32 {
+    let mut sum = 0u32;
+    for i in 0..16 {
+        let x = core::hint::black_box(arg(i as f32 / 16.0));
+        let t = ticks(|| {
+            core::hint::black_box(f(x));
+        })
+        .saturating_sub(empty);
+        sum += t;
+    }
+    sum as f32 / 16.0 / per_insn
+}
+
+#[inline(never)]
+fn id(x: f32) -> f32 {
+    x
 }
 
 #[entry]
@@ -103,6 +168,74 @@ fn main() -> ! {
         (t as f32 / per_insn) as u32
     );
 
+    // The same prediction with each backend.
+    let mut means = [0u32; 2];
+    for (k, (name, cost)) in [
+        (
+            <Libm as Math<f32>>::NAME,
+            predict_cost::<Libm>(&scene, &vc, empty, per_insn),
+        ),
+        (
+            <FastF32 as Math<f32>>::NAME,
+            predict_cost::<FastF32>(&scene, &vc, empty, per_insn),
+        ),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let Some((mean, worst)) = cost else {
+            debug::exit(debug::EXIT_FAILURE);
+            loop {
+                cortex_m::asm::wfi();
+            }
+        };
+        hprintln!(
+            "predict with {} (critical velocities + exact solver, 16 velocities): mean {} instructions, worst {}",
+            name,
+            mean,
+            worst
+        );
+        means[k] = mean;
+    }
+
+    // Each transcendental function, mean over 16 arguments, loop overhead removed.
+    let base = fn_cost(empty, per_insn, |t| t, id);
+    let c = |arg: fn(f32) -> f32, f: fn(f32) -> f32| fn_cost(empty, per_insn, arg, f) - base;
+    let phase: fn(f32) -> f32 = |t| 6.2 * t + 0.01;
+    let unit: fn(f32) -> f32 = |t| 0.999 * t + 0.003;
+    let pos: fn(f32) -> f32 = |t| 50.0 * t + 0.02;
+    hprintln!("per call, instructions (mean of 16 arguments):      libm  fast-f32");
+    hprintln!(
+        "  {:<40} {:>6} {:>9}",
+        "sin_cos (x in [0, 2pi])",
+        c(phase, |x| <Libm as Math<f32>>::sin_cos(x).0) as u32,
+        c(phase, |x| <FastF32 as Math<f32>>::sin_cos(x).0) as u32
+    );
+    hprintln!(
+        "  {:<40} {:>6} {:>9}",
+        "asin (x in [0, 1])",
+        c(unit, <Libm as Math<f32>>::asin) as u32,
+        c(unit, <FastF32 as Math<f32>>::asin) as u32
+    );
+    hprintln!(
+        "  {:<40} {:>6} {:>9}",
+        "atan2 (y in [0,1], x=1-2y)",
+        c(unit, |y| <Libm as Math<f32>>::atan2(y, 1.0 - 2.0 * y)) as u32,
+        c(unit, |y| <FastF32 as Math<f32>>::atan2(y, 1.0 - 2.0 * y)) as u32
+    );
+    hprintln!(
+        "  {:<40} {:>6} {:>9}",
+        "sqrt (x in [0, 50])",
+        c(pos, <Libm as Math<f32>>::sqrt) as u32,
+        c(pos, <FastF32 as Math<f32>>::sqrt) as u32
+    );
+    hprintln!(
+        "  {:<40} {:>6} {:>9}",
+        "hypot (x in [0, 50], 0.3)",
+        c(pos, |x| <Libm as Math<f32>>::hypot(x, 0.3)) as u32,
+        c(pos, |x| <FastF32 as Math<f32>>::hypot(x, 0.3)) as u32
+    );
+
     // DDS refill of one 256-sample half-buffer (two channels, packed words),
     // and building the 1024-entry table with libm and with micromath.
     use model_core::dds::{Dds, Level, SineTable, Slew};
@@ -149,9 +282,20 @@ fn main() -> ! {
                 dds.fill(&mut buf);
             }
             let t = ticks(|| dds.fill(&mut buf)).saturating_sub(empty);
+            let dds_per_sample = t as f32 / per_insn / 256.0;
             hprintln!(
                 "DDS fill, settled: {} instructions per sample (both channels)",
-                (t as f32 / per_insn / 256.0) as u32
+                dds_per_sample as u32
+            );
+            // CPU shares at 168 MHz, one instruction per cycle.
+            let clock = 168e6f32;
+            hprintln!(
+                "CPU share at 168 MHz: DDS refill at 500 kS/s {:.1} %; one prediction per control period: libm {:.2} % at 1 kHz, {:.1} % at 10 kHz; fast-f32 {:.2} % at 1 kHz, {:.1} % at 10 kHz",
+                dds_per_sample * 500e3 / clock * 100.0,
+                means[0] as f32 * 1e3 / clock * 100.0,
+                means[0] as f32 * 1e4 / clock * 100.0,
+                means[1] as f32 * 1e3 / clock * 100.0,
+                means[1] as f32 * 1e4 / clock * 100.0
             );
             dds.set_interp(model_core::dds::Interp::Nearest);
             let t = ticks(|| dds.fill(&mut buf)).saturating_sub(empty);

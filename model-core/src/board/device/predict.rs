@@ -4,7 +4,7 @@
 use super::config::MAX_VELOCITY_M_S;
 use super::{in_range, Device, DeviceError, DriveParam, Prediction};
 use crate::model::exact::{self, Solution};
-use crate::model::float::Libm;
+use crate::model::float::FastF32;
 use crate::model::regime::{classify, ClassifyOptions, Regime};
 use crate::model::scene::Scene;
 
@@ -40,8 +40,8 @@ pub fn predict(s: &Scene<f32>, v0: f32) -> Result<Prediction, DeviceError> {
         MAX_VELOCITY_M_S,
         DriveParam::Velocity,
     )?;
-    let vc = crate::model::analytic::CriticalVelocity::of(s);
-    let (m, m_minus) = match exact::solve_with::<f32, Libm>(s, v0).map_err(DeviceError::Model)? {
+    let vc = crate::model::analytic::CriticalVelocity::of_with::<FastF32>(s);
+    let (m, m_minus) = match exact::solve_with::<f32, FastF32>(s, v0).map_err(DeviceError::Model)? {
         Solution::Sliding { mu_over_mu0 } | Solution::StickSlip { mu_over_mu0 } => {
             (mu_over_mu0, mu_over_mu0)
         }
