@@ -10,14 +10,26 @@ fn fricctl() -> Command {
 
 fn json(args: &[&str]) -> Value {
     let out = fricctl().args(args).arg("--json").output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     serde_json::from_slice(&out.stdout).unwrap()
 }
 
 #[test]
 fn load_line_units_and_keys() {
     // Fig. 6's scene at φ = 0 (a = 0.5, ratio 2): it pushes forward.
-    let d = json(&["load-line", "--duz-rel", "0.5", "--ratio", "2", "--phi-deg", "0"]);
+    let d = json(&[
+        "load-line",
+        "--duz-rel",
+        "0.5",
+        "--ratio",
+        "2",
+        "--phi-deg",
+        "0",
+    ]);
     for key in [
         "stall_force_over_mu0_fz",
         "no_load_velocity",
@@ -36,8 +48,23 @@ fn load_line_units_and_keys() {
     // SI: the same groups with μ0 = 0.3, kz = 2e6, kx = 1.5e6, uz0 = 5 µm,
     // Δuz = 2.5 µm (a = 0.5) and Δux = ratio·μ0 kz Δuz/kx = 2 µm, 40 kHz.
     let si = json(&[
-        "load-line", "--mu0", "0.3", "--kz", "2e6", "--kx", "1.5e6", "--uz0", "5e-6", "--duz",
-        "2.5e-6", "--dux", "2e-6", "--freq", "40e3", "--phi-deg", "0",
+        "load-line",
+        "--mu0",
+        "0.3",
+        "--kz",
+        "2e6",
+        "--kx",
+        "1.5e6",
+        "--uz0",
+        "5e-6",
+        "--duz",
+        "2.5e-6",
+        "--dux",
+        "2e-6",
+        "--freq",
+        "40e3",
+        "--phi-deg",
+        "0",
     ]);
     let fz = 2e6 * 5e-6; // N
     let w0 = 0.3 * 2e6 * 5e-6 / 1.5e6; // m
@@ -57,7 +84,15 @@ fn load_line_units_and_keys() {
 #[test]
 fn load_line_plot_refused_when_nothing_pushes() {
     let out = fricctl()
-        .args(["load-line", "--duz-rel", "0.5", "--ratio", "0.5", "--phi-deg", "90"])
+        .args([
+            "load-line",
+            "--duz-rel",
+            "0.5",
+            "--ratio",
+            "0.5",
+            "--phi-deg",
+            "90",
+        ])
         .args(["--plot", "/tmp/never-written.png"])
         .output()
         .unwrap();
@@ -101,9 +136,27 @@ fn fit_reads_a_sweep_file_and_refuses_bad_ones() {
     );
     for phi in [0.0, 60.0, 120.0, 180.0] {
         let m = json(&[
-            "mu", "--mu0", "0.3", "--kz", "2e6", "--kx", "1.5e6", "--uz0", "5e-6", "--duz", "2e-6",
-            "--dux", "0.7e-6", "--freq", "40e3", "--phi-deg", &format!("{phi}"), "--v0", "0.01",
-            "--method", "exact",
+            "mu",
+            "--mu0",
+            "0.3",
+            "--kz",
+            "2e6",
+            "--kx",
+            "1.5e6",
+            "--uz0",
+            "5e-6",
+            "--duz",
+            "2e-6",
+            "--dux",
+            "0.7e-6",
+            "--freq",
+            "40e3",
+            "--phi-deg",
+            &format!("{phi}"),
+            "--v0",
+            "0.01",
+            "--method",
+            "exact",
         ]);
         let mu = m["mu"].as_f64().unwrap();
         csv += &format!(

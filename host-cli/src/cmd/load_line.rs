@@ -89,7 +89,9 @@ impl LoadLineCmd {
             best_forward::<f64, Libm>(&d, &line, Objective::Power).map_err(exact_failure)?;
         let best_e =
             best_forward::<f64, Libm>(&d, &line, Objective::Efficiency).map_err(exact_failure)?;
-        let get = |b: &Option<OperatingPoint<f64>>| b.map_or((0.0, 0.0, 0.0), |o| (o.v, o.force, o.powers.output));
+        let get = |b: &Option<OperatingPoint<f64>>| {
+            b.map_or((0.0, 0.0, 0.0), |o| (o.v, o.force, o.powers.output))
+        };
         let (vp, fp, pp) = get(&best_p);
         let (ve, _, _) = get(&best_e);
         let o = LoadLineOut {
@@ -132,6 +134,21 @@ impl LoadLineCmd {
             ));
         }
         let n = self.points;
+        let g = model_core::Groups {
+            duz_rel: d.a,
+            dux_rel: d.b,
+            phi: 0.0,
+        };
+        let ratio = if g.duz_rel > 0.0 {
+            format!("{:.3}", g.dux_rel / g.duz_rel)
+        } else {
+            "∞".into()
+        };
+        let scene = format!(
+            "Δuz/uz0 = {:.3}, kxΔux/(μ0kzΔuz) = {ratio}, φ = {:.1}°",
+            g.duz_rel,
+            d.bs.atan2(d.bc).to_degrees().rem_euclid(360.0)
+        );
         let (vunit, punit) = if o.dimensionless {
             ("v0 (ωW0)", "power (μ0·F̄z·ωW0)")
         } else {
@@ -167,7 +184,7 @@ impl LoadLineCmd {
         };
         let panels = [
             Panel {
-                title: "load line: the force the contact pushes with".into(),
+                title: format!("load line ({scene})"),
                 x_label: vunit.into(),
                 y_label: "load −μ/μ0 (units μ0·F̄z)".into(),
                 x: (0.0, xmax),
@@ -175,15 +192,15 @@ impl LoadLineCmd {
                 series: vec![series("−μ(v)/μ0", force, Mark::Line, 0)],
             },
             Panel {
-                title: "powers: P_in = P_out + P_friction".into(),
+                title: "powers: P_in = P_out + P_friction (normal transducer: 0)".into(),
                 x_label: vunit.into(),
                 y_label: punit.into(),
                 x: (0.0, xmax),
                 y: (0.0, pmax.max(1e-300)),
                 series: vec![
-                    series("P_in (tangential transducer)", pin, Mark::Line, 0),
-                    series("P_out (to the body)", pout, Mark::Line, 1),
+                    series("P_in, tangential transducer", pin, Mark::Line, 0),
                     series("P_friction", pf, Mark::Dashed, 2),
+                    series("P_out, to the body", pout, Mark::Line, 1),
                 ],
             },
             Panel {
@@ -211,7 +228,11 @@ fn write_text(out: &mut impl Write, o: &LoadLineOut) -> std::io::Result<()> {
         "stall force, forward    {:<12.6} μ0·F̄z  = {:.6e} {fu}",
         o.stall_force_over_mu0_fz, o.stall_force
     )?;
-    writeln!(out, "no-load velocity        {:.6e} {vu}", o.no_load_velocity)?;
+    writeln!(
+        out,
+        "no-load velocity        {:.6e} {vu}",
+        o.no_load_velocity
+    )?;
     writeln!(
         out,
         "stall force, backward   {:<12.6} μ0·F̄z  = {:.6e} {fu}",
