@@ -134,6 +134,21 @@ impl LoadLineCmd {
             ));
         }
         let n = self.points;
+        let g = model_core::Groups {
+            duz_rel: d.a,
+            dux_rel: d.b,
+            phi: 0.0,
+        };
+        let ratio = if g.duz_rel > 0.0 {
+            format!("{:.3}", g.dux_rel / g.duz_rel)
+        } else {
+            "∞".into()
+        };
+        let scene = format!(
+            "Δuz/uz0 = {:.3}, kxΔux/(μ0kzΔuz) = {ratio}, φ = {:.1}°",
+            g.duz_rel,
+            d.bs.atan2(d.bc).to_degrees().rem_euclid(360.0)
+        );
         let (vunit, punit) = if o.dimensionless {
             ("v0 (ωW0)", "power (μ0·F̄z·ωW0)")
         } else {
@@ -169,7 +184,7 @@ impl LoadLineCmd {
         };
         let panels = [
             Panel {
-                title: "load line: the force the contact pushes with".into(),
+                title: format!("load line ({scene})"),
                 x_label: vunit.into(),
                 y_label: "load −μ/μ0 (units μ0·F̄z)".into(),
                 x: (0.0, xmax),
@@ -177,15 +192,15 @@ impl LoadLineCmd {
                 series: vec![series("−μ(v)/μ0", force, Mark::Line, 0)],
             },
             Panel {
-                title: "powers: P_in = P_out + P_friction".into(),
+                title: "powers: P_in = P_out + P_friction (normal transducer: 0)".into(),
                 x_label: vunit.into(),
                 y_label: punit.into(),
                 x: (0.0, xmax),
                 y: (0.0, pmax.max(1e-300)),
                 series: vec![
-                    series("P_in (tangential transducer)", pin, Mark::Line, 0),
-                    series("P_out (to the body)", pout, Mark::Line, 1),
+                    series("P_in, tangential transducer", pin, Mark::Line, 0),
                     series("P_friction", pf, Mark::Dashed, 2),
+                    series("P_out, to the body", pout, Mark::Line, 1),
                 ],
             },
             Panel {
