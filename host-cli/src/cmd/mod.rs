@@ -8,3 +8,4 @@ pub mod fit;
 pub mod map;
 pub mod mu;
 pub mod statics;
+pub mod tune;
