@@ -326,8 +326,8 @@ impl TuneCmd {
                     min * scale,
                     max * scale,
                     s.problem.knob().name(),
-                    self.shown(s, lo),
-                    self.shown(s, hi),
+                    knob_text(s.problem.knob().name(), self.shown(s, lo)),
+                    knob_text(s.problem.knob().name(), self.shown(s, hi)),
                 )));
             }
             Err(e) => return Err(inverse_failure(e)),
