@@ -483,14 +483,14 @@ pub fn bracketed<T: Float, M: Math<T>>(
             lo = x;
             glo = g;
             if side == -1 {
-                ghi = ghi * T::HALF;
+                ghi *= T::HALF;
             }
             side = -1;
         } else {
             hi = x;
             ghi = g;
             if side == 1 {
-                glo = glo * T::HALF;
+                glo *= T::HALF;
             }
             side = 1;
         }
@@ -520,6 +520,9 @@ pub fn maximize<T: Float, M: Math<T>>(
     })
 }
 
+/// The least, greatest and last breakpoints of a [`walk`].
+type Walked<T> = (Point<T>, Point<T>, Point<T>);
+
 /// Scans, refines the local extrema, and hands every monotone piece
 /// `(left, right)` to `piece` in order. Returns the least and greatest
 /// breakpoints and the last one.
@@ -528,7 +531,7 @@ fn walk<T: Float>(
     scan: &mut [T],
     f: &mut impl FnMut(T) -> Result<T, InverseError<T>>,
     piece: &mut impl FnMut(Point<T>, Point<T>) -> Result<(), InverseError<T>>,
-) -> Result<(Point<T>, Point<T>, Point<T>), InverseError<T>> {
+) -> Result<Walked<T>, InverseError<T>> {
     let n = scan.len();
     if n < MIN_SCAN_POINTS {
         return Err(InverseError::BadScan);
