@@ -265,7 +265,7 @@ fn out_of_reach_is_refused_with_the_range() {
         err.contains("0.02 is out of reach by adjusting duz at v0 = 0.05 m/s: reachable "),
         "{err}"
     );
-    assert!(err.contains("(duz from 0e0 to 4.75e-6 m)"), "{err}");
+    assert!(err.contains("(duz from 0 to 4.75e-6 m)"), "{err}");
     let range = err.split("reachable ").nth(1).unwrap();
     let range = range.split(" (").next().unwrap();
     let (lo, hi) = range.split_once('…').unwrap();

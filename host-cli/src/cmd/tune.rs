@@ -478,7 +478,7 @@ fn inverse_failure(e: InverseError<f64>) -> CliError {
 
 /// A value of the adjusted quantity as text: metres in `e` notation, degrees plain.
 fn knob_text(adjust: &str, x: f64) -> String {
-    if adjust == "phase" {
+    if adjust == "phase" || x == 0.0 {
         format!("{x}")
     } else {
         format!("{x:e}")
