@@ -317,3 +317,74 @@ fn bad_inputs_are_refused() {
         Err(InverseError::BadScan)
     );
 }
+
+/// The f32 build (the firmware's feedforward): targets attained in f64 at a
+/// random drive are solved in f32, and each f32 solution, evaluated by the
+/// f64 exact solver, gives the target within the f32 solver's bound
+/// (`exact::error_bound::<f32>`, 1e-6·(1 + b)) plus the f32 residual plus the
+/// f64 bound. Refusals can only come from targets within the f32 bound of a
+/// range end (the f32 law differs from f64 by that bound): counted, at most
+/// 2 of 60 allowed, measured below.
+#[test]
+fn f32_solutions_hold_in_f64() {
+    let mut rng = Rng::new(0xf32f_0032);
+    let mut scan = [0.0f32; 65];
+    let (mut cases, mut refused) = (0u32, 0u32);
+    for i in 0..60 {
+        let p64 = random_problem(&mut rng, knob_of(i));
+        let g = p64.groups_at(0.0);
+        let g32 = Groups {
+            duz_rel: g.duz_rel as f32,
+            dux_rel: g.dux_rel as f32,
+            phi: g.phi as f32,
+        };
+        let (lo, hi) = p64.range();
+        let p32 = Problem::new::<Libm>(g32, p64.knob(), lo as f32, hi as f32).unwrap();
+        let v = rng.range(0.02, 0.8);
+        let target = p64.mu_at::<Libm>(rng.range(lo, hi), v).unwrap();
+        if target.abs() >= 0.999 {
+            continue;
+        }
+        cases += 1;
+        match solve_target::<f32, Libm>(&p32, v as f32, target as f32, &mut scan) {
+            Ok(r) => {
+                for s in &r.solutions {
+                    // The f64 problem with the f32 groups, at the f32 solution.
+                    let q = Problem::new::<Libm>(
+                        Groups {
+                            duz_rel: g32.duz_rel as f64,
+                            dux_rel: g32.dux_rel as f64,
+                            phi: g32.phi as f64,
+                        },
+                        p64.knob(),
+                        lo,
+                        hi,
+                    )
+                    .unwrap();
+                    let x = s.x as f64;
+                    let mu64 = q.mu_at::<Libm>(x, v as f32 as f64).unwrap();
+                    let b32 = exact::error_bound::<f32, Libm>(&p32.drive_at::<Libm>(s.x)) as f64;
+                    let b64 = q.bound_at::<Libm>(x);
+                    let res = (s.value as f64 - target as f32 as f64).abs();
+                    assert!(
+                        (mu64 - target as f32 as f64).abs() <= b32 + b64 + res,
+                        "{p32:?} x = {x}: {mu64} vs {target}"
+                    );
+                }
+            }
+            Err(InverseError::OutOfReach { min, max }) => {
+                refused += 1;
+                let b32 = exact::error_bound::<f32, Libm>(&p32.drive_at::<Libm>(hi as f32)) as f64;
+                let t = target;
+                assert!(
+                    (t - min as f64).abs() <= 2.0 * b32 || (t - max as f64).abs() <= 2.0 * b32,
+                    "f32 refused {t} far from its range ends {min}..{max}"
+                );
+            }
+            Err(e) => panic!("{e}"),
+        }
+    }
+    eprintln!("f32: {cases} targets, {refused} refused");
+    assert!(cases >= 40);
+    assert!(refused <= 2);
+}
