@@ -327,7 +327,8 @@ impl<T: Float> Problem<T> {
     }
 }
 
-/// The solutions of a target problem.
+/// The solutions of a target problem (no `defmt::Format`: it holds a
+/// `heapless::Vec`, whose `defmt` support is not enabled).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TargetOutcome<T> {
     /// Solutions in increasing knob order (the phase wrapped into `[0, 2π)`,
@@ -662,4 +663,40 @@ fn golden<T: Float>(
         }
     }
     Ok(best)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn golden_finds_an_interior_maximum_and_never_loses_the_seed() {
+        let mut f = |x: f64| Ok(-(x - 0.3) * (x - 0.3));
+        let seed = Point {
+            x: 0.25,
+            value: -0.0025,
+        };
+        let p = golden(0.0, 1.0, 1.0, seed, &mut f).unwrap();
+        // Near a smooth maximum the value is resolved to ε, the abscissa to √ε.
+        assert!((p.x - 0.3).abs() < 1e-7 && p.value >= seed.value);
+        // A cliff (infeasible beyond 0.6, value −MAX): the best feasible point is kept.
+        let mut g = |x: f64| Ok(if x > 0.6 { -f64::MAX } else { x });
+        let p = golden(0.0, 1.0, 1.0, Point { x: 0.5, value: 0.5 }, &mut g).unwrap();
+        assert!(p.x <= 0.6 && p.x > 0.6 - 1e-12);
+    }
+
+    #[test]
+    fn nearest_uses_the_circle_for_the_phase() {
+        let mut o = TargetOutcome {
+            solutions: Vec::new(),
+            found: 2,
+            min: Point { x: 0.0, value: 0.0 },
+            max: Point { x: 0.0, value: 0.0 },
+        };
+        o.solutions.push(Point { x: 0.1, value: 0.0 }).unwrap();
+        o.solutions.push(Point { x: 3.0, value: 0.0 }).unwrap();
+        // 6.2 rad is 0.183 rad from 0.1 around the circle, 3.2 rad from 3.0.
+        assert_eq!(o.nearest(Knob::Phase, 6.2).unwrap().x, 0.1);
+        assert_eq!(o.nearest(Knob::Dux, 6.2).unwrap().x, 3.0);
+    }
 }
