@@ -1,6 +1,6 @@
 //! `fricctl` — the model tool for dual-mode active friction control.
 //!
-//! Commands: `mu`, `curve`, `static`, `classify`, `map`, `figures`. Data go to
+//! Commands: `mu`, `curve`, `static`, `classify`, `map`, `tune`, `figures`. Data go to
 //! stdout (JSON/CSV, full precision), messages and progress to stderr. Bad
 //! input exits with status 2 and one line naming the parameter; a failed
 //! computation exits with status 1.
@@ -46,6 +46,8 @@ enum Command {
     Classify(cmd::classify::ClassifyCmd),
     /// Regime map over phase φ and amplitude ratio kxΔux/(μ0 kz Δuz) at fixed Δuz/uz0
     Map(cmd::map::MapCmd),
+    /// Inverse design: the Δuz, Δux or φ that attains a target μ, or maximises ratchet asymmetry or stall force
+    Tune(cmd::tune::TuneCmd),
     /// Fit the contact (μ0, kx/kz) to a measured sweep: weighted least squares with the exact solver, 95 % intervals
     Fit(cmd::fit::FitCmd),
     /// The contact as an actuator: stall forces, no-load velocities, powers and efficiency
@@ -89,6 +91,7 @@ fn main() -> ExitCode {
         Command::Map(c) => c.run(&mut out),
         Command::Fit(c) => c.run(&mut out),
         Command::LoadLine(c) => c.run(&mut out),
+        Command::Tune(c) => c.run(&mut out),
         Command::Figures { out, map_res } => figures::run(&out, map_res),
         Command::Device { target, cmd } => device::run(&target, &cmd),
         Command::SimDevice(a) => device::serve(&a),

@@ -9,3 +9,4 @@ pub mod load_line;
 pub mod map;
 pub mod mu;
 pub mod statics;
+pub mod tune;

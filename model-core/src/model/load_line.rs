@@ -198,14 +198,14 @@ fn no_load<T: Float, M: Math<T>>(d: &Drive<T>, mu_plus: T) -> Result<T, ExactErr
             lo = x;
             flo = fx;
             if side == -1 {
-                fhi = fhi * T::HALF;
+                fhi *= T::HALF;
             }
             side = -1;
         } else {
             hi = x;
             fhi = fx;
             if side == 1 {
-                flo = flo * T::HALF;
+                flo *= T::HALF;
             }
             side = 1;
         }

@@ -12,7 +12,9 @@
 //! * [`regime`] — active control / dynamic ratchet / actuator (§3.2);
 //! * [`select`] — the cheapest method whose error bound meets a tolerance;
 //! * [`load_line`] — the contact as an actuator: stall forces, no-load
-//!   velocities, input/output/friction power and efficiency.
+//!   velocities, input/output/friction power and efficiency;
+//! * [`inverse`] — inverse design: the drive value that attains a target μ
+//!   or maximises an objective (ratchet asymmetry, stall force).
 //!
 //! **Dependencies.** The model uses only itself, `libm`/`micromath` and
 //! `heapless`; it never uses [`crate::board`]. New contact models, body
@@ -22,6 +24,7 @@ pub mod analytic;
 pub mod exact;
 pub mod fixed_step;
 pub mod float;
+pub mod inverse;
 pub mod liftoff;
 pub mod load_line;
 pub mod regime;

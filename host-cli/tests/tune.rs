@@ -1,0 +1,487 @@
+//! `fricctl tune`: JSON keys and values checked by an independent computation
+//! (the fixed-step scheme at fine N, or a dense brute-force scan), the text
+//! layout, and every refusal (exit 2, one line naming the flag).
+
+use assert_cmd::Command;
+use integration_tests::fixed_warm;
+use model_core::exact;
+use model_core::regime::{classify, ClassifyOptions};
+use model_core::{Groups, Libm, Scene, SceneParams};
+use serde_json::Value;
+
+/// The README's physical scene (`integration_tests::physical_scene`):
+/// μ0 = 0.3, kz = 2e6 N/m, kx = 1.5e6 N/m, uz0 = 5 µm, Δuz = 2 µm,
+/// Δux = 0.7 µm, 40 kHz, φ = 50°; W0 = μ0 kz uz0/kx = 2 µm.
+const PHYS: &[&str] = &[
+    "--mu0",
+    "0.3",
+    "--kz",
+    "2e6",
+    "--kx",
+    "1.5e6",
+    "--uz0",
+    "5e-6",
+    "--duz",
+    "2e-6",
+    "--dux",
+    "0.7e-6",
+    "--freq",
+    "40e3",
+    "--phi-deg",
+    "50",
+];
+
+fn fricctl() -> Command {
+    Command::cargo_bin("fricctl").unwrap()
+}
+
+fn run(args: &[&str]) -> std::process::Output {
+    fricctl()
+        .args(["tune"])
+        .args(args)
+        .args(PHYS)
+        .output()
+        .unwrap()
+}
+
+fn json(args: &[&str]) -> Value {
+    let out = run(args);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// Runs a refused command: exit 2, nothing on stdout, one stderr line starting
+/// with `error: --{flag}`; returns that line.
+fn refused(args: &[&str], flag: &str) -> String {
+    let out = run(args);
+    assert_eq!(out.status.code(), Some(2), "{args:?}");
+    assert!(out.stdout.is_empty(), "{args:?}: stdout not empty");
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+    assert!(
+        err.starts_with(&format!("error: --{flag}")),
+        "{args:?}: {err}"
+    );
+    err
+}
+
+/// The physical scene with Δuz, Δux, φ replaced.
+fn scene_with(duz: f64, dux: f64, phi_deg: f64) -> Scene<f64> {
+    Scene::new(SceneParams {
+        mu0: 0.3,
+        kz: 2e6,
+        kx: 1.5e6,
+        uz0: 5e-6,
+        duz,
+        dux,
+        omega: std::f64::consts::TAU * 40e3,
+        phi: phi_deg.to_radians(),
+    })
+    .unwrap()
+}
+
+fn f(v: &Value, key: &str) -> f64 {
+    v[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} missing in {v}"))
+}
+
+/// Round trip through the CLI: the reported drive, rebuilt from the JSON's
+/// own `duz`, `dux`, `phi_deg`, gives the target under the fixed-step scheme
+/// at N = 65 536 within that scheme's stated bound plus the exact bound and
+/// the reported residual (tests/tests/inverse.rs explains the sum).
+#[test]
+fn target_json_round_trips() {
+    for adjust in ["duz", "dux", "phase"] {
+        let v = json(&[
+            "--v0",
+            "0.05",
+            "--target-mu-rel",
+            "0.6",
+            "--adjust",
+            adjust,
+            "--json",
+        ]);
+        for key in [
+            "adjust",
+            "duz",
+            "dux",
+            "phi_deg",
+            "duz_rel",
+            "dux_rel",
+            "range_lo",
+            "range_hi",
+            "scan_cells",
+            "v0",
+            "target_mu",
+            "target_mu_over_mu0",
+            "mu",
+            "mu_over_mu0",
+            "residual_over_mu0",
+            "method",
+            "error_bound_over_mu0",
+            "solutions",
+            "solutions_found",
+            "start",
+            "reachable_min_over_mu0",
+            "reachable_max_over_mu0",
+        ] {
+            assert!(v.get(key).is_some(), "{adjust}: {key} missing in {v}");
+        }
+        assert_eq!(v["adjust"], adjust);
+        assert_eq!(v["method"], "exact");
+        assert_eq!(f(&v, "target_mu"), 0.6 * 0.3);
+        let s = scene_with(f(&v, "duz"), f(&v, "dux"), f(&v, "phi_deg"));
+        let d = s.drive();
+        let vv = s.dimensionless_velocity(0.05).unwrap();
+        let (mu_ref, ref_bound) = fixed_warm(&d, vv, 65_536);
+        let bound = f(&v, "error_bound_over_mu0");
+        // The bound (1e-9·(1 + b)) of the drive rebuilt from the printed values:
+        // equal up to the rounding of b through dux → W0.
+        let rebuilt = exact::error_bound::<f64, Libm>(&d);
+        assert!((bound - rebuilt).abs() <= 1e-12 * rebuilt);
+        let residual = f(&v, "residual_over_mu0");
+        assert!(residual.abs() <= bound);
+        assert!(
+            (mu_ref - 0.6).abs() <= ref_bound + bound + residual.abs(),
+            "{adjust}: fixed-step {mu_ref}"
+        );
+        // The reported solution is among the listed ones, and the nearest to the scene's value.
+        let sols: Vec<f64> = v["solutions"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        let shown = match adjust {
+            "duz" => f(&v, "duz"),
+            "dux" => f(&v, "dux"),
+            _ => f(&v, "phi_deg"),
+        };
+        assert!(sols.contains(&shown), "{adjust}: {shown} not in {sols:?}");
+        let start = f(&v, "start");
+        let dist = |x: f64| {
+            let d = (x - start).abs();
+            if adjust == "phase" {
+                d.min(360.0 - d)
+            } else {
+                d
+            }
+        };
+        assert!(sols.iter().all(|&x| dist(shown) <= dist(x)));
+    }
+}
+
+/// The amplitude limits: defaults (1 − 0.05)·uz0 = 4.75 µm and 10·W0 = 20 µm.
+#[test]
+fn default_limits() {
+    let v = json(&[
+        "--v0",
+        "0.05",
+        "--target-mu-rel",
+        "0.6",
+        "--adjust",
+        "duz",
+        "--json",
+    ]);
+    assert!((f(&v, "range_hi") - 4.75e-6).abs() <= 1e-20);
+    let v = json(&[
+        "--v0",
+        "0.05",
+        "--target-mu-rel",
+        "0.6",
+        "--adjust",
+        "dux",
+        "--json",
+    ]);
+    assert!((f(&v, "range_hi") - 20e-6).abs() <= 1e-18);
+    let v = json(&[
+        "--v0",
+        "0.05",
+        "--target-mu-rel",
+        "0.6",
+        "--adjust",
+        "duz",
+        "--liftoff-margin",
+        "0.2",
+        "--json",
+    ]);
+    assert!((f(&v, "range_hi") - 4e-6).abs() <= 1e-20);
+    assert!(f(&v, "duz") <= 4e-6);
+}
+
+#[test]
+fn target_text_layout() {
+    let out = run(&["--v0", "0.05", "--target-mu-rel", "0.6", "--adjust", "duz"]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    let heads: Vec<&str> = text
+        .lines()
+        .map(|l| l.split_whitespace().next().unwrap_or(""))
+        .collect();
+    assert_eq!(
+        heads,
+        [
+            "adjust",
+            "v0",
+            "target",
+            "duz",
+            "dux",
+            "phi",
+            "mu",
+            "residual",
+            "error",
+            "solutions",
+            "reachable",
+            "search"
+        ]
+    );
+    // Values start in one column (16), units are named.
+    for l in text.lines() {
+        let b = l.as_bytes();
+        assert!(b.len() > 16 && b[15] == b' ' && b[16] != b' ', "{l:?}");
+    }
+    assert!(text.contains(" m/s"));
+    assert!(text.contains("duz             ") && text.contains(" m "));
+    assert!(text.contains("(units of mu0, method exact)"));
+}
+
+/// Out of reach: the message gives the reachable range, whose ends are
+/// checked against a dense brute-force scan of the exact law over the
+/// default range a = Δuz/uz0 ∈ [0, 0.95] (4 097 points, 16× the search's
+/// scan): the reported ends are attained values (so no wider than the law's
+/// range) and no narrower than the dense scan's by more than the solver's bound.
+#[test]
+fn out_of_reach_is_refused_with_the_range() {
+    let err = refused(
+        &["--v0", "0.05", "--target-mu-rel", "0.02", "--adjust", "duz"],
+        "target-mu-rel",
+    );
+    assert!(
+        err.contains("0.02 is out of reach by adjusting duz at v0 = 0.05 m/s: reachable "),
+        "{err}"
+    );
+    assert!(err.contains("(duz from 0 to 4.75e-6 m)"), "{err}");
+    let range = err.split("reachable ").nth(1).unwrap();
+    let range = range.split(" (").next().unwrap();
+    let (lo, hi) = range.split_once('…').unwrap();
+    let (lo, hi): (f64, f64) = (lo.parse().unwrap(), hi.parse().unwrap());
+    let s = integration_tests::physical_scene();
+    let g = s.groups();
+    let vv = s.dimensionless_velocity(0.05).unwrap();
+    let (mut dmin, mut dmax) = (f64::INFINITY, f64::NEG_INFINITY);
+    for i in 0..4097 {
+        let a = 0.95 * i as f64 / 4096.0;
+        let d = model_core::Drive::new::<Libm>(a, g.dux_rel, g.phi);
+        let m = exact::mu_over_mu0::<f64, Libm>(&d, vv).unwrap();
+        dmin = dmin.min(m);
+        dmax = dmax.max(m);
+    }
+    let bound = exact::error_bound::<f64, Libm>(&s.drive());
+    assert!(
+        lo <= dmin + bound && hi >= dmax - bound,
+        "{lo}..{hi} vs dense {dmin}..{dmax}"
+    );
+    assert!(lo >= dmin - 1e-3 && hi <= dmax + 1e-3);
+    assert!(0.02 < lo);
+    // In units of μ with --target-mu.
+    let err = refused(
+        &["--v0", "0.05", "--target-mu", "0.006", "--adjust", "duz"],
+        "target-mu",
+    );
+    assert!(err.contains("0.006 is out of reach"), "{err}");
+}
+
+/// `--maximize asymmetry` over the phase: JSON keys, a non-actuator result,
+/// and no worse than a dense scan of `regime::classify` over 1 440 phases.
+#[test]
+fn maximize_asymmetry_json() {
+    let v = json(&["--maximize", "asymmetry", "--adjust", "phase", "--json"]);
+    for key in [
+        "adjust",
+        "objective",
+        "value",
+        "error_bound_over_mu0",
+        "regime",
+        "asymmetry",
+        "stall_force_forward",
+        "mu_0plus_over_mu0",
+        "mu_0minus_over_mu0",
+        "duz",
+        "dux",
+        "phi_deg",
+        "scan_cells",
+    ] {
+        assert!(v.get(key).is_some(), "{key} missing in {v}");
+    }
+    assert_eq!(v["objective"], "asymmetry");
+    assert_ne!(v["regime"], "actuator");
+    let s = integration_tests::physical_scene();
+    let g = s.groups();
+    let mut dense: f64 = 0.0;
+    for i in 0..1440 {
+        let phi = std::f64::consts::TAU * i as f64 / 1440.0;
+        let sc = Scene::dimensionless(Groups { phi, ..g }).unwrap();
+        let c = classify(&sc, &ClassifyOptions::default()).unwrap();
+        if c.regime != model_core::regime::Regime::Actuator {
+            dense = dense.max(c.asymmetry);
+        }
+    }
+    assert!(f(&v, "value") >= dense - f(&v, "error_bound_over_mu0"));
+    assert_eq!(f(&v, "value"), f(&v, "asymmetry"));
+}
+
+/// `--maximize stall-force` over Δux: text layout and the value against a dense scan.
+#[test]
+fn maximize_stall_force_text() {
+    let out = run(&["--maximize", "stall-force", "--adjust", "dux"]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.starts_with("adjust          dux\nmaximize        stall_force\nvalue           "));
+    assert!(text.contains("regime          actuator"));
+    let value: f64 = text
+        .lines()
+        .nth(2)
+        .unwrap()
+        .split_whitespace()
+        .nth(1)
+        .unwrap()
+        .parse()
+        .unwrap();
+    let s = integration_tests::physical_scene();
+    let g = s.groups();
+    let mut dense = f64::NEG_INFINITY;
+    for i in 0..4097 {
+        let b = 10.0 * i as f64 / 4096.0;
+        let d = model_core::Drive::new::<Libm>(g.duz_rel, b, g.phi);
+        dense = dense.max(-exact::limits_at_zero::<f64, Libm>(&d).unwrap().0);
+    }
+    // Bound: the exact solver's at b = 10, (1 + 10)·1e-9.
+    assert!(value >= dense - 11e-9, "{value} < dense {dense}");
+}
+
+#[test]
+fn refusals_name_the_flag() {
+    refused(
+        &[
+            "--v0",
+            "0.05",
+            "--target-mu-rel",
+            "0.5",
+            "--target-mu",
+            "0.1",
+            "--adjust",
+            "duz",
+        ],
+        "target-mu",
+    );
+    refused(&["--v0", "0.05", "--adjust", "duz"], "target-mu-rel");
+    let e = refused(&["--target-mu-rel", "0.5", "--adjust", "duz"], "v0");
+    assert!(e.contains("missing"));
+    let e = refused(
+        &["--v0", "0", "--target-mu-rel", "0.5", "--adjust", "duz"],
+        "v0",
+    );
+    assert!(e.contains("!= 0"));
+    let e = refused(
+        &["--v0", "0.05", "--target-mu-rel", "1", "--adjust", "duz"],
+        "target-mu-rel",
+    );
+    assert!(e.contains("strictly inside (−1, 1)"), "{e}");
+    refused(
+        &["--v0", "0.05", "--target-mu-rel", "nan", "--adjust", "duz"],
+        "target-mu-rel",
+    );
+    let e = refused(
+        &[
+            "--v0",
+            "0.05",
+            "--target-mu-rel",
+            "0.5",
+            "--adjust",
+            "duz",
+            "--max-duz",
+            "4.9e-6",
+        ],
+        "max-duz",
+    );
+    assert!(e.contains("lift-off limit"), "{e}");
+    refused(
+        &[
+            "--v0",
+            "0.05",
+            "--target-mu-rel",
+            "0.5",
+            "--adjust",
+            "duz",
+            "--max-duz",
+            "-1",
+        ],
+        "max-duz",
+    );
+    refused(
+        &[
+            "--v0",
+            "0.05",
+            "--target-mu-rel",
+            "0.5",
+            "--adjust",
+            "phase",
+            "--max-dux",
+            "1e-6",
+        ],
+        "max-dux",
+    );
+    refused(
+        &[
+            "--v0",
+            "0.05",
+            "--target-mu-rel",
+            "0.5",
+            "--adjust",
+            "duz",
+            "--liftoff-margin",
+            "0",
+        ],
+        "liftoff-margin",
+    );
+    refused(
+        &["--v0", "0.05", "--maximize", "asymmetry", "--adjust", "duz"],
+        "v0",
+    );
+    refused(
+        &["--v0", "0.05", "--target-mu-rel", "0.5", "--adjust", "amp"],
+        "adjust",
+    );
+}
+
+/// A scene that never pushes forward however Δuz is set (Δux = 0: single
+/// mode, μ(0⁺) = 1 − a > 0): the stall-force objective is refused.
+#[test]
+fn stall_force_without_push_is_refused() {
+    let out = fricctl()
+        .args([
+            "tune",
+            "--maximize",
+            "stall-force",
+            "--adjust",
+            "duz",
+            "--duz-rel",
+            "0.3",
+            "--dux-rel",
+            "0",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(err.lines().count(), 1);
+    assert!(
+        err.starts_with("error: --maximize: the contact never pushes forward"),
+        "{err}"
+    );
+}
