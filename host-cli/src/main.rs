@@ -13,6 +13,7 @@ mod error;
 mod eval;
 mod figures;
 mod fit;
+mod motion;
 mod output;
 mod plot;
 mod scene_args;
@@ -48,6 +49,8 @@ enum Command {
     Map(cmd::map::MapCmd),
     /// Fit the contact (μ0, kx/kz) to a measured sweep: weighted least squares with the exact solver, 95 % intervals
     Fit(cmd::fit::FitCmd),
+    /// A body moved by the vibrated contact under a slow force: drift, stick fraction, trajectory
+    Motion(cmd::motion::MotionCmd),
     /// Talk to the driver board (or QEMU, or the virtual device)
     Device {
         #[command(flatten)]
@@ -86,6 +89,7 @@ fn main() -> ExitCode {
         Command::Classify(c) => c.run(&mut out),
         Command::Map(c) => c.run(&mut out),
         Command::Fit(c) => c.run(&mut out),
+        Command::Motion(c) => c.run(&mut out),
         Command::Figures { out, map_res } => figures::run(&out, map_res),
         Command::Device { target, cmd } => device::run(&target, &cmd),
         Command::SimDevice(a) => device::serve(&a),

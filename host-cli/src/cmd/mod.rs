@@ -6,5 +6,6 @@ pub mod classify;
 pub mod curve;
 pub mod fit;
 pub mod map;
+pub mod motion;
 pub mod mu;
 pub mod statics;
