@@ -68,7 +68,8 @@ fn motion_doubtful(scene: &[String], extra: &[&str]) -> Value {
 }
 
 fn num(v: &Value, k: &str) -> f64 {
-    v[k].as_f64().unwrap_or_else(|| panic!("{k} missing in {v}"))
+    v[k].as_f64()
+        .unwrap_or_else(|| panic!("{k} missing in {v}"))
 }
 
 /// The velocity where μ(V)/μ₀ = g, by bisection on the exact solver
@@ -271,7 +272,11 @@ fn symmetric_law_gives_zero_drift() {
         .iter()
         .map(|s| s.to_string())
         .collect();
-    for (mass, method) in [("0", "homogenised"), ("1000", "homogenised"), ("1000", "resolved")] {
+    for (mass, method) in [
+        ("0", "homogenised"),
+        ("1000", "homogenised"),
+        ("1000", "resolved"),
+    ] {
         let o = motion(
             &scene,
             &[
@@ -327,7 +332,10 @@ fn mirror_reverses_drift() {
         let m = run(220.0, "-0.1");
         let (vp, vm) = (num(&p, "mean_velocity"), num(&m, "mean_velocity"));
         let bound = num(&p, "numerical_error") + num(&m, "numerical_error") + 1e-12;
-        assert!(vp.abs() > 10.0 * bound, "{method}: drift {vp:e} too small to test");
+        assert!(
+            vp.abs() > 10.0 * bound,
+            "{method}: drift {vp:e} too small to test"
+        );
         assert!(
             (vp + vm).abs() <= bound,
             "{method}: {vp:e} and {vm:e} are not opposite (bound {bound:e})"
@@ -347,7 +355,14 @@ fn ratchet_drifts_forward() {
     let scene = fig7(0.0);
     let m0 = motion(
         &scene,
-        &["--mass", "0", "--force-amp-rel", "0.5", "--force-omega", "1e-5"],
+        &[
+            "--mass",
+            "0",
+            "--force-amp-rel",
+            "0.5",
+            "--force-omega",
+            "1e-5",
+        ],
     );
     assert!((num(&m0, "mu_0plus_over_mu0") - 0.25).abs() < 1e-9);
     assert!((num(&m0, "mu_0minus_over_mu0") + 0.75).abs() < 1e-9);
@@ -404,15 +419,115 @@ fn spring_stops_drift() {
 fn bad_input_names_the_flag() {
     let base = fig7(0.0);
     for (extra, flag) in [
-        (vec!["--mass", "-1", "--force-amp-rel", "0.5", "--force-omega", "1e-3"], "--mass"),
-        (vec!["--mass", "1", "--force-amp-rel", "0.5", "--force-omega", "0"], "--force-omega"),
-        (vec!["--mass", "1", "--force-amp-rel", "nan", "--force-omega", "1e-3"], "--force-amp-rel"),
-        (vec!["--mass", "1", "--force-amp-rel", "0.5", "--force-omega", "1e-3", "--tol", "0"], "--tol"),
-        (vec!["--mass", "0", "--force-amp-rel", "0.5", "--force-omega", "1e-3", "--method", "resolved"], "--mass"),
-        (vec!["--mass", "0", "--force-amp-rel", "1.2", "--force-omega", "1e-3"], "--force-amp-rel"),
-        (vec!["--mass", "1", "--force-amp-rel", "0.5", "--force-offset-rel", "1.5", "--force-omega", "1e-3"], "--force-offset-rel"),
-        (vec!["--mass", "1", "--force-amp-rel", "0.5", "--force-omega", "1e-3", "--duration", "1"], "--duration"),
-        (vec!["--mass", "1", "--force-amp-rel", "0.5", "--force-omega", "1e-3", "--spring", "-2"], "--spring"),
+        (
+            vec![
+                "--mass",
+                "-1",
+                "--force-amp-rel",
+                "0.5",
+                "--force-omega",
+                "1e-3",
+            ],
+            "--mass",
+        ),
+        (
+            vec![
+                "--mass",
+                "1",
+                "--force-amp-rel",
+                "0.5",
+                "--force-omega",
+                "0",
+            ],
+            "--force-omega",
+        ),
+        (
+            vec![
+                "--mass",
+                "1",
+                "--force-amp-rel",
+                "nan",
+                "--force-omega",
+                "1e-3",
+            ],
+            "--force-amp-rel",
+        ),
+        (
+            vec![
+                "--mass",
+                "1",
+                "--force-amp-rel",
+                "0.5",
+                "--force-omega",
+                "1e-3",
+                "--tol",
+                "0",
+            ],
+            "--tol",
+        ),
+        (
+            vec![
+                "--mass",
+                "0",
+                "--force-amp-rel",
+                "0.5",
+                "--force-omega",
+                "1e-3",
+                "--method",
+                "resolved",
+            ],
+            "--mass",
+        ),
+        (
+            vec![
+                "--mass",
+                "0",
+                "--force-amp-rel",
+                "1.2",
+                "--force-omega",
+                "1e-3",
+            ],
+            "--force-amp-rel",
+        ),
+        (
+            vec![
+                "--mass",
+                "1",
+                "--force-amp-rel",
+                "0.5",
+                "--force-offset-rel",
+                "1.5",
+                "--force-omega",
+                "1e-3",
+            ],
+            "--force-offset-rel",
+        ),
+        (
+            vec![
+                "--mass",
+                "1",
+                "--force-amp-rel",
+                "0.5",
+                "--force-omega",
+                "1e-3",
+                "--duration",
+                "1",
+            ],
+            "--duration",
+        ),
+        (
+            vec![
+                "--mass",
+                "1",
+                "--force-amp-rel",
+                "0.5",
+                "--force-omega",
+                "1e-3",
+                "--spring",
+                "-2",
+            ],
+            "--spring",
+        ),
     ] {
         let out = Command::cargo_bin("fricctl")
             .unwrap()

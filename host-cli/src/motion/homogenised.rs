@@ -195,7 +195,11 @@ fn run_n(
             let t = t0 + h * i as f64;
             if let Some(r) = rec.as_deref_mut() {
                 if i % every == 0 {
-                    let vv = if p.mass > 0.0 { v } else { body.massless_v(t, x) };
+                    let vv = if p.mass > 0.0 {
+                        v
+                    } else {
+                        body.massless_v(t, x)
+                    };
                     r.push(Sample {
                         t,
                         x,
@@ -220,7 +224,8 @@ fn run_n(
                 let k4 = f(t + h, x + h * k3);
                 let w = [k1 == 0.0, k2 == 0.0 && k3 == 0.0, k4 == 0.0];
                 stuck += h
-                    * (f64::from(u8::from(w[0])) + 4.0 * f64::from(u8::from(w[1]))
+                    * (f64::from(u8::from(w[0]))
+                        + 4.0 * f64::from(u8::from(w[1]))
                         + f64::from(u8::from(w[2])))
                     / 6.0;
                 x += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);

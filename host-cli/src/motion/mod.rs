@@ -102,7 +102,8 @@ impl Recorder {
         if self.periods.len() == KEPT_PERIODS {
             self.periods.pop_front();
         }
-        self.periods.push_back(Vec::with_capacity(SAMPLES_PER_PERIOD + 1));
+        self.periods
+            .push_back(Vec::with_capacity(SAMPLES_PER_PERIOD + 1));
     }
 
     /// Adds a sample to the current period.

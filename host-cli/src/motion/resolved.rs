@@ -44,7 +44,9 @@ const MAX_STEPS: u64 = 1024;
 
 /// The first step count per ultrasonic period.
 pub fn start_steps(d: &Drive<f64>) -> u64 {
-    u64::from(fixed_step::min_steps_per_period(d)).saturating_mul(2).max(64)
+    u64::from(fixed_step::min_steps_per_period(d))
+        .saturating_mul(2)
+        .max(64)
 }
 
 /// The cost of a run in steps per load period at `n` steps per ultrasonic period.
