@@ -13,6 +13,7 @@ mod error;
 mod eval;
 mod figures;
 mod fit;
+mod motion;
 mod output;
 mod plot;
 mod scene_args;
@@ -52,6 +53,8 @@ enum Command {
     Fit(cmd::fit::FitCmd),
     /// The contact as an actuator: stall forces, no-load velocities, powers and efficiency
     LoadLine(cmd::load_line::LoadLineCmd),
+    /// A body moved by the vibrated contact under a slow force: drift, stick fraction, trajectory
+    Motion(cmd::motion::MotionCmd),
     /// Talk to the driver board (or QEMU, or the virtual device)
     Device {
         #[command(flatten)]
@@ -92,6 +95,7 @@ fn main() -> ExitCode {
         Command::Fit(c) => c.run(&mut out),
         Command::LoadLine(c) => c.run(&mut out),
         Command::Tune(c) => c.run(&mut out),
+        Command::Motion(c) => c.run(&mut out),
         Command::Figures { out, map_res } => figures::run(&out, map_res),
         Command::Device { target, cmd } => device::run(&target, &cmd),
         Command::SimDevice(a) => device::serve(&a),

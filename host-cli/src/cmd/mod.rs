@@ -7,6 +7,7 @@ pub mod curve;
 pub mod fit;
 pub mod load_line;
 pub mod map;
+pub mod motion;
 pub mod mu;
 pub mod statics;
 pub mod tune;

@@ -1,0 +1,523 @@
+//! `fricctl motion`: a body of mass M driven by a slow force over the
+//! vibrated contact (issue 14 §2; the physics in [`crate::motion`]).
+//!
+//! # Method choice (`--method auto`)
+//! The homogenised model replaces the contact by its steady-state law. Its
+//! error (units ωW₀, estimated, not proven) is
+//! `E_h = C_H·(ν·v_ref + 2π·(1 + |f0| + |f|)/m̃)`: the first term is the scale
+//! separation `ν = Ω/ω` (the contact's state lags the law by a few ultrasonic
+//! periods while the load moves on), the second the body's velocity change
+//! within one ultrasonic period (force at most `1 + |f0| + |f|` in μ₀F̄z over
+//! the reduced mass `m̃ = Mω²/k_x`), i.e. the ultrasonic period against the
+//! body's response time. `v_ref = max(v_c, v_c')/(ωW₀)` is the larger
+//! critical velocity (eq. 8). `C_H` = [`C_H`] is calibrated on resolved runs
+//! (see [`C_H`]).
+//! With `M = 0` only the first term applies. `auto` takes the homogenised
+//! model when `E_h` plus its numerical error is within `--tol·v_ref`, the
+//! resolved one otherwise (`M = 0` is always homogenised: a massless body
+//! has no resolved dynamics).
+
+use std::f64::consts::TAU;
+use std::io::Write;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::{Args, ValueEnum};
+use serde::Serialize;
+
+use crate::error::{CliError, CliResult};
+use crate::motion::table::MuTable;
+use crate::motion::{homogenised, resolved, Problem, Run};
+use crate::output::{stdout_error, write_json, write_rows};
+use crate::plot::{render_panels, Mark, Panel, Series};
+use crate::scene_args::SceneArgs;
+use crate::sweep::progress_bar;
+
+/// Calibration constant of the homogenisation error estimate (module docs),
+/// from resolved runs on the paper's Fig. 7 scene (φ = 0, f = 0.5, f0 = 0):
+/// over `m̃ν ∈ {1, 10}` and ν from 3·10⁻⁴ to 10⁻² the measured |homogenised −
+/// resolved| was at most 0.44 of the bracket `ν·v_ref + 2π(1 + |f0| + |f|)/m̃`,
+/// so `C_H = 1` (≈ 2× margin). At `m̃ν = 10` the error is not monotone in ν
+/// (7.3e-4 at ν = 10⁻³, 1.7e-4 at 3·10⁻⁴, 3.7e-6 at 10⁻⁵, drift 7.3e-3): the
+/// resolved body rings on the contact's tangential stiffness while stuck
+/// (period `2π√(M/k_x)`), which the homogenised model, sticking rigidly, lacks.
+pub const C_H: f64 = 1.0;
+
+/// Most load periods when running until the periodic regime.
+const MAX_PERIODS: u32 = 2000;
+
+/// Which model integrates the body.
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MotionMethod {
+    /// Homogenised where its estimated error is within --tol, resolved otherwise
+    Auto,
+    /// The averaged law μ(v) as the friction force
+    Homogenised,
+    /// Body and contact together at the ultrasonic scale
+    Resolved,
+}
+
+/// Flags of `fricctl motion`.
+#[derive(Args, Debug, Clone)]
+pub struct MotionCmd {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Mass of the body M, kg (0: massless, quasi-static; units k_x/ω² for a dimensionless scene)
+    #[arg(long, allow_hyphen_values = true)]
+    mass: f64,
+    /// Force amplitude f: F(t) = μ0·kz·uz0·(f0 + f·sin Ωt)
+    #[arg(long, allow_hyphen_values = true)]
+    force_amp_rel: f64,
+    /// Angular frequency Ω of the force, rad/s (units of ω for a dimensionless scene)
+    #[arg(long, allow_hyphen_values = true)]
+    force_omega: f64,
+    /// Mean force f0, units of μ0·kz·uz0
+    #[arg(long, allow_hyphen_values = true, default_value_t = 0.0)]
+    force_offset_rel: f64,
+    /// Stiffness K of a spring tying the body to ground, N/m (units of k_x for a dimensionless scene)
+    #[arg(long, allow_hyphen_values = true, default_value_t = 0.0)]
+    spring: f64,
+    /// Simulated time, s: whole load periods 2π/Ω (default: until periodic, at most 2000 periods)
+    #[arg(long, allow_hyphen_values = true)]
+    duration: Option<f64>,
+    /// Model
+    #[arg(long, value_enum, default_value_t = MotionMethod::Auto)]
+    method: MotionMethod,
+    /// Tolerance on the mean velocity, relative to the larger critical velocity
+    #[arg(long, allow_hyphen_values = true, default_value_t = 1e-3)]
+    tol: f64,
+    /// Write the trajectory (t, x, v, force, stuck; the last ≤ 50 load periods) to FILE
+    #[arg(long, value_name = "FILE")]
+    csv: Option<PathBuf>,
+    /// Plot velocity and force over the last three load periods to FILE.svg or FILE.png
+    #[arg(long, value_name = "FILE")]
+    plot: Option<PathBuf>,
+    /// JSON output
+    #[arg(long)]
+    json: bool,
+}
+
+/// The result (`--json` keys; velocities in m/s, units of ωW₀ for a dimensionless scene).
+#[derive(Serialize, Debug)]
+struct Outcome {
+    method: &'static str,
+    /// Drift over the last load period, m/s.
+    mean_velocity: f64,
+    /// Estimated error of mean_velocity, m/s (model + numerics).
+    error_estimate: f64,
+    /// The larger critical velocity, m/s: the unit of --tol.
+    v_ref: f64,
+    mean_velocity_over_v_ref: f64,
+    error_estimate_over_v_ref: f64,
+    /// The homogenised model's estimated error E_h, m/s (also for resolved runs: why auto chose).
+    homogenisation_error_estimate: f64,
+    /// Numerical error (step halving + period-to-period change), m/s.
+    numerical_error: f64,
+    stick_fraction: f64,
+    periodic: bool,
+    periods: u32,
+    /// Steps per load period (homogenised) or per ultrasonic period (resolved).
+    steps: u64,
+    /// ω/Ω.
+    scale_separation: f64,
+    /// Body's response time M/(largest slope of μ(v)·F̄z), s.
+    response_time: f64,
+    /// Mω²/k_x.
+    mass_rel: f64,
+    mu_0plus_over_mu0: f64,
+    mu_0minus_over_mu0: f64,
+    /// Nodes of the μ(v) table.
+    table_nodes: usize,
+    /// Interpolation error of the table, units of μ0.
+    table_error_over_mu0: f64,
+    /// Wall time of the integration, s.
+    wall_time: f64,
+}
+
+/// One CSV row.
+#[derive(Serialize)]
+struct Row {
+    /// s.
+    t: f64,
+    /// m.
+    x: f64,
+    /// m/s.
+    v: f64,
+    /// Applied force F(t), N.
+    force: f64,
+    /// 1 while the body is at rest on the contact.
+    stuck: u8,
+}
+
+fn finite(x: f64, flag: &str) -> CliResult<f64> {
+    if x.is_finite() {
+        Ok(x)
+    } else {
+        Err(CliError::usage(format!(
+            "--{flag}: must be a finite number"
+        )))
+    }
+}
+
+impl MotionCmd {
+    /// Runs the command.
+    pub fn run(self, out: &mut impl Write) -> CliResult {
+        let rs = self.scene.resolve()?;
+        let scene = rs.scene;
+        let prm = *scene.params();
+        let mass = finite(self.mass, "mass")?;
+        if mass < 0.0 {
+            return Err(CliError::usage("--mass: must be >= 0"));
+        }
+        let f = finite(self.force_amp_rel, "force-amp-rel")?;
+        let f0 = finite(self.force_offset_rel, "force-offset-rel")?;
+        let big_omega = finite(self.force_omega, "force-omega")?;
+        if big_omega <= 0.0 {
+            return Err(CliError::usage("--force-omega: must be > 0"));
+        }
+        let spring = finite(self.spring, "spring")?;
+        if spring < 0.0 {
+            return Err(CliError::usage("--spring: must be >= 0"));
+        }
+        let tol = finite(self.tol, "tol")?;
+        if !(tol > 0.0 && tol < 1.0) {
+            return Err(CliError::usage("--tol: must be > 0 and < 1"));
+        }
+        if let Some(p) = &self.plot {
+            crate::plot::ext(p)?;
+        }
+        let load_period = TAU / big_omega;
+        let periods = match self.duration {
+            None => None,
+            Some(t) => {
+                let t = finite(t, "duration")?;
+                let n = (t / load_period).floor();
+                if n < 1.0 {
+                    return Err(CliError::usage(format!(
+                        "--duration: shorter than one load period 2π/Ω = {load_period:e} s"
+                    )));
+                }
+                if n > f64::from(u32::MAX) {
+                    return Err(CliError::usage("--duration: too many load periods"));
+                }
+                Some(n as u32)
+            }
+        };
+        let p = Problem {
+            f0,
+            f,
+            nu: big_omega / prm.omega,
+            mass: mass * prm.omega * prm.omega / prm.kx,
+            kappa: spring / prm.kx,
+        };
+        if !p.mass.is_finite() || (mass > 0.0 && p.mass < f64::MIN_POSITIVE) {
+            return Err(CliError::usage("--mass: out of range for this scene"));
+        }
+        if mass == 0.0 && f0.abs() + f.abs() >= 1.0 {
+            return Err(CliError::usage(
+                "--force-amp-rel: a massless body needs |f0| + |f| < 1 (beyond μ0·F̄z it would run away)",
+            ));
+        }
+        if spring == 0.0 && f0.abs() >= 1.0 {
+            return Err(CliError::usage(
+                "--force-offset-rel: |f0| >= 1 with no spring: the mean force exceeds μ0·F̄z and the body accelerates without bound",
+            ));
+        }
+        let method = match (self.method, mass == 0.0) {
+            (MotionMethod::Resolved, true) => {
+                return Err(CliError::usage(
+                    "--mass: the resolved model needs a body with mass > 0",
+                ))
+            }
+            (m, _) => m,
+        };
+        let d = scene.drive();
+        let vs = scene.velocity_scale();
+        let started = Instant::now();
+        let law = MuTable::new(&d, (0.02 * tol).max(1e-9))
+            .map_err(|e| CliError::failure(e.to_string()))?;
+        let c = law.c_forward.max(law.c_backward);
+        let v_ref = if c > 0.0 { c } else { 1.0 };
+        let tol_v = tol * v_ref;
+        // Velocity error of the table: its force error over the mean slope of each side.
+        let inv_slope = [
+            law.c_forward / (1.0 - law.mu_0plus).max(1e-12),
+            law.c_backward / (1.0 + law.mu_0minus).max(1e-12),
+        ]
+        .into_iter()
+        .fold(0.0, f64::max);
+        let e_table = law.interpolation_error * inv_slope;
+        let e_h = if mass == 0.0 {
+            C_H * p.nu * v_ref
+        } else {
+            C_H * (p.nu * v_ref + TAU * (1.0 + f0.abs() + f.abs()) / p.mass)
+        };
+        let use_h = match method {
+            MotionMethod::Homogenised => true,
+            MotionMethod::Resolved => false,
+            MotionMethod::Auto => mass == 0.0 || e_h + e_table <= tol_v,
+        };
+        let total = periods.unwrap_or(MAX_PERIODS);
+        let pb = progress_bar(
+            u64::from(total),
+            "motion {bar:40} {pos} load periods (of at most {len} per run)",
+        );
+        let tick = || pb.inc(1);
+        let run: Run = if use_h {
+            let s = homogenised::Settings {
+                tol: 0.1 * tol_v,
+                periods,
+                max_periods: MAX_PERIODS,
+            };
+            homogenised::run(&p, &law, &s, &mut || {
+                tick();
+            })
+        } else {
+            let s = resolved::Settings {
+                tol: 0.1 * tol_v,
+                periods,
+                max_periods: MAX_PERIODS,
+            };
+            resolved::run(&p, &d, &s, &mut || {
+                tick();
+            })
+        };
+        pb.finish_and_clear();
+        let wall = started.elapsed().as_secs_f64();
+        let numerical = run.numerical_error + if use_h { e_table } else { 0.0 };
+        let error = numerical + if use_h { e_h } else { 0.0 };
+        let slope = law.max_slope();
+        let o = Outcome {
+            method: if use_h { "homogenised" } else { "resolved" },
+            mean_velocity: run.mean_velocity * vs,
+            error_estimate: error * vs,
+            v_ref: v_ref * vs,
+            mean_velocity_over_v_ref: run.mean_velocity / v_ref,
+            error_estimate_over_v_ref: error / v_ref,
+            homogenisation_error_estimate: e_h * vs,
+            numerical_error: numerical * vs,
+            stick_fraction: run.stick_fraction,
+            periodic: run.periodic,
+            periods: run.periods,
+            steps: run.steps,
+            scale_separation: 1.0 / p.nu,
+            response_time: if slope > 0.0 {
+                p.mass / slope / prm.omega
+            } else {
+                f64::INFINITY
+            },
+            mass_rel: p.mass,
+            mu_0plus_over_mu0: law.mu_0plus,
+            mu_0minus_over_mu0: law.mu_0minus,
+            table_nodes: law.nodes(),
+            table_error_over_mu0: law.interpolation_error,
+            wall_time: wall,
+        };
+        let fz = prm.mu0 * prm.kz * prm.uz0;
+        if let Some(path) = &self.csv {
+            let rows: Vec<Row> = run
+                .trajectory
+                .iter()
+                .map(|s| Row {
+                    t: s.t / big_omega,
+                    x: s.x * scene.w0(),
+                    v: s.v * vs,
+                    force: s.force * fz,
+                    stuck: u8::from(s.stuck),
+                })
+                .collect();
+            write_rows(path, &rows)?;
+        }
+        if let Some(path) = &self.plot {
+            let g = scene.groups();
+            let sf = (f0, f, g.duz_rel, g.dux_rel, g.phi.to_degrees());
+            plot(
+                path,
+                &run,
+                &o,
+                big_omega,
+                vs,
+                fz,
+                &law,
+                rs.dimensionless,
+                sf,
+            )?;
+        }
+        if self.json {
+            write_json(out, &o)?;
+        } else {
+            write_text(out, &o, rs.dimensionless).map_err(stdout_error)?;
+        }
+        if !run.periodic {
+            return Err(CliError::failure(format!(
+                "no periodic regime after {} load periods: mean_velocity is the last period's, not the drift",
+                run.periods
+            )));
+        }
+        if o.error_estimate_over_v_ref > tol {
+            return Err(CliError::failure(format!(
+                "estimated error {:.3e} v_ref exceeds --tol {tol:e}{}",
+                o.error_estimate_over_v_ref,
+                if use_h && mass > 0.0 {
+                    " (try --method resolved)"
+                } else {
+                    ""
+                }
+            )));
+        }
+        Ok(())
+    }
+}
+
+fn write_text(out: &mut impl Write, o: &Outcome, dimless: bool) -> std::io::Result<()> {
+    let (v, s) = if dimless {
+        ("ωW0", "1/ω")
+    } else {
+        ("m/s", "s")
+    };
+    writeln!(out, "method                 {}", o.method)?;
+    writeln!(out, "mean velocity          {:.6e} {v}", o.mean_velocity)?;
+    writeln!(out, "error estimate         {:.3e} {v}", o.error_estimate)?;
+    writeln!(
+        out,
+        "  homogenisation       {:.3e} {v}",
+        o.homogenisation_error_estimate
+    )?;
+    writeln!(out, "  numerical            {:.3e} {v}", o.numerical_error)?;
+    writeln!(out, "v_ref (max v_c)        {:.6e} {v}", o.v_ref)?;
+    writeln!(
+        out,
+        "mean velocity / v_ref  {:.6}",
+        o.mean_velocity_over_v_ref
+    )?;
+    writeln!(out, "stick fraction         {:.4}", o.stick_fraction)?;
+    writeln!(out, "periodic               {}", o.periodic)?;
+    writeln!(out, "load periods           {}", o.periods)?;
+    writeln!(out, "steps                  {}", o.steps)?;
+    writeln!(out, "ω/Ω                    {:.4e}", o.scale_separation)?;
+    writeln!(out, "response time          {:.3e} {s}", o.response_time)?;
+    writeln!(out, "Mω²/k_x                {:.4e}", o.mass_rel)?;
+    writeln!(
+        out,
+        "static band            [{:.6}, {:.6}] μ0·F̄z",
+        o.mu_0minus_over_mu0, o.mu_0plus_over_mu0
+    )?;
+    writeln!(
+        out,
+        "μ(v) table             {} nodes, error {:.2e} μ0",
+        o.table_nodes, o.table_error_over_mu0
+    )?;
+    writeln!(out, "wall time              {:.3} s", o.wall_time)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn plot(
+    path: &std::path::Path,
+    run: &Run,
+    o: &Outcome,
+    big_omega: f64,
+    vs: f64,
+    fz: f64,
+    law: &MuTable,
+    dimless: bool,
+    scene_f: (f64, f64, f64, f64, f64),
+) -> CliResult {
+    let last = run.trajectory.last().map_or(0.0, |s| s.t);
+    let from = last - 3.0 * TAU;
+    let pts: Vec<_> = run.trajectory.iter().filter(|s| s.t >= from).collect();
+    let t_of = |t: f64| t / big_omega;
+    let (t0, t1) = (
+        pts.first().map_or(0.0, |s| t_of(s.t)),
+        pts.last().map_or(1.0, |s| t_of(s.t)),
+    );
+    let t1 = if t1 > t0 { t1 } else { t0 + 1.0 };
+    let vel: Vec<(f64, f64)> = pts.iter().map(|s| (t_of(s.t), s.v * vs)).collect();
+    let force: Vec<(f64, f64)> = pts.iter().map(|s| (t_of(s.t), s.force * fz)).collect();
+    let stuck: Vec<(f64, f64)> = pts
+        .iter()
+        .map(|s| (t_of(s.t), if s.stuck { 0.0 } else { f64::NAN }))
+        .collect();
+    let span = |v: &[(f64, f64)], extra: &[f64]| {
+        let (lo, hi) = v
+            .iter()
+            .map(|p| p.1)
+            .chain(extra.iter().copied())
+            .filter(|y| y.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| {
+                (a.min(y), b.max(y))
+            });
+        let pad = 0.08 * (hi - lo).max(1e-300);
+        (lo - pad, hi + pad)
+    };
+    let (tu, vu, fu) = if dimless {
+        ("t, 1/ω", "v, ωW0", "F, μ0 k_z u_z0")
+    } else {
+        ("t, s", "v, m/s", "F, N")
+    };
+    let band = [law.mu_0plus * fz, law.mu_0minus * fz];
+    let panels = [
+        Panel {
+            title: format!(
+                "{} body, M ω²/k_x = {:.3e}, ω/Ω = {:.3e}",
+                o.method, o.mass_rel, o.scale_separation
+            ),
+            x_label: tu.to_string(),
+            y_label: vu.to_string(),
+            x: (t0, t1),
+            y: span(&vel, &[0.0, o.mean_velocity]),
+            series: vec![
+                Series {
+                    label: "velocity".into(),
+                    points: vel,
+                    mark: Mark::Line,
+                    color: 0,
+                },
+                Series {
+                    label: format!("mean (drift) {:.4e}", o.mean_velocity),
+                    points: vec![(t0, o.mean_velocity), (t1, o.mean_velocity)],
+                    mark: Mark::Dashed,
+                    color: 1,
+                },
+                Series {
+                    label: format!("stuck ({:.1} % of a period)", 100.0 * o.stick_fraction),
+                    points: stuck,
+                    mark: Mark::Points,
+                    color: 2,
+                },
+            ],
+        },
+        Panel {
+            title: format!(
+                "f0 = {}, f = {}; Δu_z/u_z0 = {:.3}, k_xΔu_x/(μ0k_z u_z0) = {:.3}, φ = {:.1}°",
+                scene_f.0, scene_f.1, scene_f.2, scene_f.3, scene_f.4
+            ),
+            x_label: tu.to_string(),
+            y_label: fu.to_string(),
+            x: (t0, t1),
+            y: span(&force, &band),
+            series: vec![
+                Series {
+                    label: "applied force F(t)".into(),
+                    points: force,
+                    mark: Mark::Line,
+                    color: 0,
+                },
+                Series {
+                    label: "μ(0⁺)·F̄z".into(),
+                    points: vec![(t0, band[0]), (t1, band[0])],
+                    mark: Mark::Dashed,
+                    color: 1,
+                },
+                Series {
+                    label: "μ(0⁻)·F̄z".into(),
+                    points: vec![(t0, band[1]), (t1, band[1])],
+                    mark: Mark::Dashed,
+                    color: 3,
+                },
+            ],
+        },
+    ];
+    render_panels(path, &panels, 2, 1, (1000, 800))?;
+    eprintln!("wrote {}", path.display());
+    Ok(())
+}

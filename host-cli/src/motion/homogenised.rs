@@ -1,0 +1,292 @@
+//! The homogenised body: the averaged law μ(V) as the friction force, in the
+//! load phase `T = Ωt` (module docs of [`crate::motion`]).
+//!
+//! * `M > 0`: classical RK4 on `(X, V)` with a fixed step per load period.
+//!   The law jumps at `V = 0`, so every stage evaluates it on the side the
+//!   body moves to (`dir`); a step whose velocity changes sign is cut at the
+//!   crossing, located by bisection on the step length to 1e-14 of a step.
+//!   At rest the body stays while `μ(0⁻) ≤ g ≤ μ(0⁺)` (the static band,
+//!   `exact::limits_at_zero`); leaving the band is located by bisection on
+//!   `g(T)` too, and the body starts on the side of the violated edge.
+//! * `M = 0`: `V = μ⁻¹(g)` ([`MuTable::inverse`]) and RK4 on `dX/dT = V/ν`
+//!   (Simpson's rule when `K = 0`).
+//!
+//! The step count doubles from 256 per load period until two successive runs
+//! agree on the mean velocity within the requested integration tolerance;
+//! their difference is the reported numerical error.
+
+use std::f64::consts::TAU;
+
+use super::table::MuTable;
+use super::{Problem, Recorder, Run, Sample, SAMPLES_PER_PERIOD};
+
+/// Settings of a homogenised run.
+#[derive(Debug, Clone, Copy)]
+pub struct Settings {
+    /// Tolerance on the mean velocity (units ωW₀), for both step halving and periodicity.
+    pub tol: f64,
+    /// Load periods: `Some(n)` runs exactly `n`; `None` runs until periodic.
+    pub periods: Option<u32>,
+    /// Most load periods when running until periodic.
+    pub max_periods: u32,
+}
+
+/// Fewest and most steps per load period.
+const MIN_STEPS: u64 = 256;
+const MAX_STEPS: u64 = 1 << 20;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Mode {
+    /// Moving (or about to) in direction +1 / −1.
+    Moving(i8),
+    Stuck,
+}
+
+struct Body<'a> {
+    p: &'a Problem,
+    law: &'a MuTable,
+}
+
+impl Body<'_> {
+    #[inline]
+    fn g(&self, t: f64, x: f64) -> f64 {
+        self.p.applied(t) - self.p.kappa * x
+    }
+
+    /// The law on side `dir` (stage values past 0 are clamped to 0).
+    #[inline]
+    fn mu(&self, v: f64, dir: i8) -> f64 {
+        if dir > 0 {
+            self.law.mu(v.max(0.0), 1)
+        } else {
+            self.law.mu(v.min(0.0), -1)
+        }
+    }
+
+    /// `(dX/dT, dV/dT)` while moving on side `dir`.
+    #[inline]
+    fn rhs(&self, t: f64, x: f64, v: f64, dir: i8) -> (f64, f64) {
+        let beta = self.p.mass * self.p.nu;
+        (v / self.p.nu, (self.g(t, x) - self.mu(v, dir)) / beta)
+    }
+
+    fn rk4(&self, t: f64, x: f64, v: f64, dir: i8, h: f64) -> (f64, f64) {
+        let (k1x, k1v) = self.rhs(t, x, v, dir);
+        let (k2x, k2v) = self.rhs(t + 0.5 * h, x + 0.5 * h * k1x, v + 0.5 * h * k1v, dir);
+        let (k3x, k3v) = self.rhs(t + 0.5 * h, x + 0.5 * h * k2x, v + 0.5 * h * k2v, dir);
+        let (k4x, k4v) = self.rhs(t + h, x + h * k3x, v + h * k3v, dir);
+        (
+            x + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
+            v + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v),
+        )
+    }
+
+    /// The mode of a body at rest at `(t, x)`.
+    fn at_rest(&self, t: f64, x: f64) -> Mode {
+        let g = self.g(t, x);
+        if g > self.law.mu_0plus {
+            Mode::Moving(1)
+        } else if g < self.law.mu_0minus {
+            Mode::Moving(-1)
+        } else {
+            Mode::Stuck
+        }
+    }
+
+    /// Advances `(x, v, mode)` from `t` by `h`; returns the time stuck in it.
+    fn step(&self, t: f64, x: &mut f64, v: &mut f64, mode: &mut Mode, h: f64) -> f64 {
+        let (mut t, end) = (t, t + h);
+        let mut stuck = 0.0;
+        // At most a few events per step (each bisection consumes part of it).
+        for _ in 0..8 {
+            let left = end - t;
+            if left <= 0.0 {
+                break;
+            }
+            match *mode {
+                Mode::Stuck => {
+                    let m = self.at_rest(end, *x);
+                    if m == Mode::Stuck {
+                        stuck += left;
+                        return stuck;
+                    }
+                    // Leaves the band inside the step: bisect on g.
+                    let (mut lo, mut hi) = (t, end);
+                    for _ in 0..60 {
+                        let mid = 0.5 * (lo + hi);
+                        if self.at_rest(mid, *x) == Mode::Stuck {
+                            lo = mid;
+                        } else {
+                            hi = mid;
+                        }
+                    }
+                    stuck += hi - t;
+                    t = hi;
+                    *v = 0.0;
+                    *mode = m;
+                }
+                Mode::Moving(dir) => {
+                    let (xn, vn) = self.rk4(t, *x, *v, dir, left);
+                    let reversed = (dir > 0 && vn < 0.0) || (dir < 0 && vn > 0.0);
+                    if !reversed {
+                        *x = xn;
+                        *v = vn;
+                        return stuck;
+                    }
+                    // Cut the step where V crosses 0.
+                    let (mut lo, mut hi) = (0.0, left);
+                    for _ in 0..60 {
+                        let mid = 0.5 * (lo + hi);
+                        let (_, vm) = self.rk4(t, *x, *v, dir, mid);
+                        if (dir > 0 && vm > 0.0) || (dir < 0 && vm < 0.0) {
+                            lo = mid;
+                        } else {
+                            hi = mid;
+                        }
+                    }
+                    let (xc, _) = self.rk4(t, *x, *v, dir, hi);
+                    *x = xc;
+                    *v = 0.0;
+                    t += hi;
+                    // At rest: stick, or pass through into the other side.
+                    *mode = match self.at_rest(t, *x) {
+                        Mode::Moving(d) if d != dir => Mode::Moving(d),
+                        _ => Mode::Stuck,
+                    };
+                }
+            }
+        }
+        stuck
+    }
+
+    fn massless_v(&self, t: f64, x: f64) -> f64 {
+        self.law.inverse(self.g(t, x))
+    }
+}
+
+/// One run at `n` steps per load period.
+fn run_n(
+    p: &Problem,
+    law: &MuTable,
+    s: &Settings,
+    n: u64,
+    mut rec: Option<&mut Recorder>,
+    tick: &mut dyn FnMut(),
+) -> Run {
+    let body = Body { p, law };
+    let h = TAU / n as f64;
+    let (mut x, mut v) = (0.0f64, 0.0f64);
+    let mut mode = body.at_rest(0.0, 0.0);
+    let every = (n / SAMPLES_PER_PERIOD as u64).max(1);
+    let limit = s.periods.unwrap_or(s.max_periods);
+    let (mut prev_mean, mut prev_v, mut prev_x_end) = (f64::NAN, f64::NAN, f64::NAN);
+    let (mut mean, mut stick_fraction, mut change) = (0.0, 0.0, f64::INFINITY);
+    let mut periods = 0;
+    let mut periodic = false;
+    for k in 1..=limit {
+        periods = k;
+        if let Some(r) = rec.as_deref_mut() {
+            r.new_period();
+        }
+        let t0 = TAU * f64::from(k - 1);
+        let x0 = x;
+        let mut stuck = 0.0;
+        for i in 0..n {
+            let t = t0 + h * i as f64;
+            if let Some(r) = rec.as_deref_mut() {
+                if i % every == 0 {
+                    let vv = if p.mass > 0.0 {
+                        v
+                    } else {
+                        body.massless_v(t, x)
+                    };
+                    r.push(Sample {
+                        t,
+                        x,
+                        v: vv,
+                        force: p.applied(t),
+                        stuck: if p.mass > 0.0 {
+                            mode == Mode::Stuck
+                        } else {
+                            vv == 0.0
+                        },
+                    });
+                }
+            }
+            if p.mass > 0.0 {
+                stuck += body.step(t, &mut x, &mut v, &mut mode, h);
+            } else {
+                // dX/dT = V(T, X)/ν, RK4; stick time by Simpson weights.
+                let f = |tt: f64, xx: f64| body.massless_v(tt, xx) / p.nu;
+                let k1 = f(t, x);
+                let k2 = f(t + 0.5 * h, x + 0.5 * h * k1);
+                let k3 = f(t + 0.5 * h, x + 0.5 * h * k2);
+                let k4 = f(t + h, x + h * k3);
+                let w = [k1 == 0.0, k2 == 0.0 && k3 == 0.0, k4 == 0.0];
+                stuck += h
+                    * (f64::from(u8::from(w[0]))
+                        + 4.0 * f64::from(u8::from(w[1]))
+                        + f64::from(u8::from(w[2])))
+                    / 6.0;
+                x += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+            }
+        }
+        tick();
+        mean = (x - x0) * p.nu / TAU;
+        stick_fraction = stuck / TAU;
+        if k > 1 {
+            // Change of the period's mean and of the state it ends in.
+            let dv = (v - prev_v).abs();
+            let dx = if p.kappa > 0.0 {
+                p.kappa * (x - prev_x_end).abs()
+            } else {
+                0.0
+            };
+            change = (mean - prev_mean).abs().max(dv).max(dx);
+        }
+        prev_mean = mean;
+        prev_v = v;
+        prev_x_end = x;
+        // Without a spring and mass the massless body is periodic at once.
+        let exact_periodic = p.mass == 0.0 && p.kappa == 0.0;
+        if exact_periodic || (k > 1 && change <= s.tol) {
+            periodic = true;
+            if s.periods.is_none() {
+                if exact_periodic {
+                    change = 0.0;
+                }
+                break;
+            }
+        }
+    }
+    Run {
+        mean_velocity: mean,
+        stick_fraction,
+        numerical_error: if change.is_finite() { change } else { 0.0 },
+        periods,
+        periodic,
+        steps: n,
+        trajectory: rec.map(|_| Vec::new()).unwrap_or_default(),
+    }
+}
+
+/// Integrates with step halving until the mean velocity is within `s.tol`.
+/// The trajectory is that of the final run. `tick` is called once per load
+/// period integrated (for progress).
+pub fn run(p: &Problem, law: &MuTable, s: &Settings, tick: &mut dyn FnMut()) -> Run {
+    let mut n = MIN_STEPS;
+    let mut prev = run_n(p, law, s, n, None, tick);
+    loop {
+        n *= 2;
+        let last = n >= MAX_STEPS;
+        let mut rec = Recorder::default();
+        let mut cur = run_n(p, law, s, n, Some(&mut rec), tick);
+        let halving = (cur.mean_velocity - prev.mean_velocity).abs();
+        if halving <= s.tol || last {
+            cur.numerical_error += halving;
+            cur.trajectory = rec.finish();
+            return cur;
+        }
+        prev = cur;
+    }
+}

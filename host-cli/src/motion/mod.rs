@@ -1,0 +1,120 @@
+//! A body moved by the vibrated contact (issue 14 §2): the slow dynamics of
+//! the paper's "substrate subjected to a low-frequency tangential force".
+//!
+//! # Conventions
+//! The friction force on the body is `−μ(v)·F̄z` along `+x` (`F̄z = k_z u_z0`,
+//! the mean normal force, as in `model::load_line`); the external force is
+//! `F(t) = μ₀F̄z·(f0 + f sin Ωt)`, a ground spring adds `−K x`. The body's
+//! slow coordinate `x` carries the transducers: the upper spring point is at
+//! `u_x = x + Δu_x cos(ωt + φ)` (eq. 2 with `v₀t → x(t)`).
+//!
+//! # Dimensionless form
+//! Lengths in `W₀ = μ₀k_z u_z0/k_x`, forces in `μ₀F̄z = k_x W₀`, velocities
+//! `V = v/(ωW₀)`, the ultrasonic phase `τ = ωt` and the load phase `T = Ωt`.
+//! With `m̃ = Mω²/k_x`, `κ = K/k_x`, `ν = Ω/ω` and `g = f0 + f sin T − κX`:
+//!
+//! * **homogenised** (`μ` replaced by its steady-state law, [`table`]):
+//!   `m̃ν dV/dT = g − μ(V)/μ₀`, `dX/dT = V/ν`; stuck (`V = 0`) while
+//!   `μ(0⁻) ≤ g·μ₀ ≤ μ(0⁺)`; with `M = 0`, `V = μ⁻¹(g)` ([`homogenised`]);
+//! * **resolved** (no separation of scales): `m̃ d²X/dτ² = g − s` with the
+//!   spring stretch `s = X + b cos(τ + φ) − X_c` kept in the band
+//!   `|s| ≤ 1 − a cos τ` by the paper's clamp ([`resolved`]).
+
+pub mod homogenised;
+pub mod resolved;
+pub mod table;
+
+/// The dimensionless problem.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Problem {
+    /// Mean force `f0` (units μ₀F̄z).
+    pub f0: f64,
+    /// Force amplitude `f` (units μ₀F̄z).
+    pub f: f64,
+    /// `ν = Ω/ω`.
+    pub nu: f64,
+    /// `m̃ = Mω²/k_x` (0: massless).
+    pub mass: f64,
+    /// `κ = K/k_x`.
+    pub kappa: f64,
+}
+
+impl Problem {
+    /// The applied force `f0 + f sin T` (units μ₀F̄z) at load phase `T`.
+    #[inline]
+    pub fn applied(&self, t: f64) -> f64 {
+        self.f0 + self.f * t.sin()
+    }
+}
+
+/// One trajectory sample (dimensionless).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// Load phase `T = Ωt`, rad.
+    pub t: f64,
+    /// Position `X = x/W₀`.
+    pub x: f64,
+    /// Velocity `V = v/(ωW₀)` (resolved: averaged over the sample's ultrasonic periods).
+    pub v: f64,
+    /// Applied force `f0 + f sin T` (units μ₀F̄z).
+    pub force: f64,
+    /// The body is at rest on the contact (resolved: no slip of the contact
+    /// point during the sample's ultrasonic periods).
+    pub stuck: bool,
+}
+
+/// The result of a run (dimensionless).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Run {
+    /// Mean velocity over the last load period (units ωW₀).
+    pub mean_velocity: f64,
+    /// Fraction of the last load period the body was stuck.
+    pub stick_fraction: f64,
+    /// Estimated numerical error of `mean_velocity` (units ωW₀): the step
+    /// halving difference plus the last period-to-period change.
+    pub numerical_error: f64,
+    /// Load periods integrated (of the final, finest run).
+    pub periods: u32,
+    /// Whether the periodic regime was reached (the last two periods agree
+    /// within the requested tolerance).
+    pub periodic: bool,
+    /// Steps per load period (homogenised) or per ultrasonic period (resolved)
+    /// of the final run.
+    pub steps: u64,
+    /// The recorded trajectory (the last periods).
+    pub trajectory: Vec<Sample>,
+}
+
+/// Samples kept per load period of the trajectory.
+pub const SAMPLES_PER_PERIOD: usize = 400;
+/// Load periods kept in the trajectory (the last ones).
+pub const KEPT_PERIODS: usize = 50;
+
+/// Keeps the samples of the last [`KEPT_PERIODS`] load periods.
+#[derive(Debug, Default)]
+pub struct Recorder {
+    periods: std::collections::VecDeque<Vec<Sample>>,
+}
+
+impl Recorder {
+    /// Starts a new load period.
+    pub fn new_period(&mut self) {
+        if self.periods.len() == KEPT_PERIODS {
+            self.periods.pop_front();
+        }
+        self.periods
+            .push_back(Vec::with_capacity(SAMPLES_PER_PERIOD + 1));
+    }
+
+    /// Adds a sample to the current period.
+    pub fn push(&mut self, s: Sample) {
+        if let Some(p) = self.periods.back_mut() {
+            p.push(s);
+        }
+    }
+
+    /// All kept samples in time order.
+    pub fn finish(self) -> Vec<Sample> {
+        self.periods.into_iter().flatten().collect()
+    }
+}
