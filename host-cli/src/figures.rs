@@ -298,8 +298,8 @@ fn figs5_7(out: &Path) -> CliResult {
         for (i, &phi) in phases.iter().enumerate() {
             let s = scene(a, b, phi)?;
             let d = s.drive();
-            let cl = classify(&s, &ClassifyOptions::default())
-                .map_err(crate::compute::exact_failure)?;
+            let cl =
+                classify(&s, &ClassifyOptions::default()).map_err(crate::compute::exact_failure)?;
             let mut pts = Vec::with_capacity(vs.len() + 1);
             for &v in &vs {
                 if v == 0.0 {
@@ -316,10 +316,7 @@ fn figs5_7(out: &Path) -> CliResult {
                 Regime::Actuator => "actuator",
             };
             let panel = Panel {
-                title: format!(
-                    "Fig. {fig}, φ = {:.0}°: {regime}",
-                    phi.to_degrees()
-                ),
+                title: format!("Fig. {fig}, φ = {:.0}°: {regime}", phi.to_degrees()),
                 x_label: "v0 / (ωW0),  W0 = μ0 k_z u_z0 / k_x".to_string(),
                 y_label: MU_AXIS.to_string(),
                 x: (-vmax, vmax),

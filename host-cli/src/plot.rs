@@ -383,7 +383,11 @@ fn draw_marker<DB: DrawingBackend>(
     let (fill, stroke) = (c.filled(), c.stroke_width(2));
     let t = r + 1;
     // Equilateral triangle of circumradius t, point up, centred on (x, y).
-    let tri = [(x, y - t), (x + t * 87 / 100, y + t / 2), (x - t * 87 / 100, y + t / 2)];
+    let tri = [
+        (x, y - t),
+        (x + t * 87 / 100, y + t / 2),
+        (x - t * 87 / 100, y + t / 2),
+    ];
     match m {
         Marker::Circle => b.draw_circle((x, y), r as u32, &fill, true),
         Marker::Triangle => b.fill_polygon(tri, &fill),
@@ -529,8 +533,7 @@ fn draw_figure<'a, DB: DrawingBackend + 'a>(
     let (w, h) = root.dim_in_pixel();
     let layout = legend_layout(root, &f.legend, w as i32);
     let legend_rows = layout.last().map_or(0, |&(_, r)| r + 1);
-    let footer =
-        legend_rows * LEGEND_LINE + f.caption.len() as i32 * CAPTION_LINE;
+    let footer = legend_rows * LEGEND_LINE + f.caption.len() as i32 * CAPTION_LINE;
     let footer = if footer > 0 { footer + 16 } else { 0 };
     let (grid, foot) = root.split_vertically(h as i32 - footer);
     let areas = grid.split_evenly((f.rows, f.cols));
@@ -640,8 +643,7 @@ where
                 }
             };
             if !drawn && !s.label.is_empty() {
-                anno.label(s.label.as_str())
-                    .legend(sample(mark, c));
+                anno.label(s.label.as_str()).legend(sample(mark, c));
                 any_label = true;
             }
             drawn = true;
@@ -672,7 +674,11 @@ where
             .draw()?;
     }
     if !e.notes.is_empty() {
-        draw_notes(&chart.plotting_area().strip_coord_spec(), &e.notes, e.notes_at)?;
+        draw_notes(
+            &chart.plotting_area().strip_coord_spec(),
+            &e.notes,
+            e.notes_at,
+        )?;
     }
     Ok(())
 }
@@ -687,7 +693,10 @@ fn draw_notes<DB: DrawingBackend>(
     let line = 19;
     let width = notes
         .iter()
-        .map(|n| area.estimate_text_size(n, &font).map_or(0, |(w, _)| w as i32))
+        .map(|n| {
+            area.estimate_text_size(n, &font)
+                .map_or(0, |(w, _)| w as i32)
+        })
         .max()
         .unwrap_or(0)
         + 16;
@@ -805,8 +814,7 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
             BLACK.stroke_width(2),
         ))?;
         if !label.is_empty() {
-            a.label(label.as_str())
-                .legend(sample(Mark::Dashed, BLACK));
+            a.label(label.as_str()).legend(sample(Mark::Dashed, BLACK));
         }
     }
     chart
@@ -979,6 +987,9 @@ mod tests {
     #[test]
     fn segments_split_at_gaps() {
         let s = segments(&[(0.0, 1.0), (1.0, f64::NAN), (2.0, 2.0), (3.0, 3.0)]);
-        assert_eq!(s, vec![vec![(0.0, 1.0)], vec![(2.0, 3.0 - 1.0), (3.0, 3.0)]]);
+        assert_eq!(
+            s,
+            vec![vec![(0.0, 1.0)], vec![(2.0, 3.0 - 1.0), (3.0, 3.0)]]
+        );
     }
 }

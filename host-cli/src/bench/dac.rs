@@ -266,10 +266,34 @@ pub fn run(a: &DacArgs) -> CliResult {
 
 /// The table series: (interp, backend, palette index, marker, legend text).
 const TABLE_SERIES: [(&str, &str, usize, Marker, &str); 4] = [
-    ("nearest", "libm", 0, Marker::Square, "nearest entry, libm table"),
-    ("nearest", "micromath", 5, Marker::OpenSquare, "nearest entry, micromath table"),
-    ("linear", "libm", 1, Marker::Circle, "linear interpolation, libm table"),
-    ("linear", "micromath", 4, Marker::Ring, "linear interpolation, micromath table"),
+    (
+        "nearest",
+        "libm",
+        0,
+        Marker::Square,
+        "nearest entry, libm table",
+    ),
+    (
+        "nearest",
+        "micromath",
+        5,
+        Marker::OpenSquare,
+        "nearest entry, micromath table",
+    ),
+    (
+        "linear",
+        "libm",
+        1,
+        Marker::Circle,
+        "linear interpolation, libm table",
+    ),
+    (
+        "linear",
+        "micromath",
+        4,
+        Marker::Ring,
+        "linear interpolation, micromath table",
+    ),
 ];
 /// The direct rows: (backend, palette index, legend text).
 const DIRECT_SERIES: [(&str, usize, &str); 2] = [
@@ -297,7 +321,10 @@ fn chart(pts: &[DacPoint]) -> Figure {
             });
         }
         for (backend, color, _) in DIRECT_SERIES {
-            if let Some(p) = pts.iter().find(|p| p.interp == "direct" && p.backend == backend) {
+            if let Some(p) = pts
+                .iter()
+                .find(|p| p.interp == "direct" && p.backend == backend)
+            {
                 series.push(Series {
                     label: String::new(),
                     points: vec![(n_lo, value(p)), (n_hi, value(p))],

@@ -247,14 +247,28 @@ pub fn run(a: &MethodsArgs) -> CliResult {
     Ok(())
 }
 
-/// Seconds as ns or µs, three significant digits.
+/// `x` with three significant digits (x ≥ 0.001).
+fn sig3(x: f64) -> String {
+    let decimals = if x >= 100.0 {
+        0
+    } else if x >= 10.0 {
+        1
+    } else if x >= 1.0 {
+        2
+    } else {
+        3
+    };
+    format!("{x:.decimals$}")
+}
+
+/// Seconds as ns, µs or ms, three significant digits.
 fn time_text(s: f64) -> String {
     if s < 1e-6 {
-        format!("{:.3} ns", s * 1e9)
+        format!("{} ns", sig3(s * 1e9))
     } else if s < 1e-3 {
-        format!("{:.3} µs", s * 1e6)
+        format!("{} µs", sig3(s * 1e6))
     } else {
-        format!("{:.3} ms", s * 1e3)
+        format!("{} ms", sig3(s * 1e3))
     }
 }
 
@@ -301,7 +315,9 @@ fn chart(path: &std::path::Path, rows: &[Timing]) -> CliResult {
             .configure_mesh()
             .disable_y_mesh()
             .disable_y_axis()
-            .x_desc("time per point, s (wall clock, rayon on all cores, minimum of repeats; log scale)")
+            .x_desc(
+                "time per point, s (wall clock, rayon on all cores, minimum of repeats; log scale)",
+            )
             .x_label_formatter(&|v| log_axis_tick(*v))
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 16))
@@ -330,10 +346,10 @@ fn chart(path: &std::path::Path, rows: &[Timing]) -> CliResult {
                 )))?;
                 chart.draw_series(std::iter::once(Text::new(
                     format!(
-                        "{}: {} per point (×{:.1}), {} points; {}",
+                        "{}: {} per point (×{}), {} points; {}",
                         t.method,
                         time_text(v),
-                        v / base,
+                        sig3(v / base),
                         t.points,
                         t.mix
                     ),

@@ -396,7 +396,8 @@ pub fn run(a: &StabilityArgs) -> CliResult {
     let budget = a.budget;
     let vlog = "v0/v_c";
     let mut silent = 0;
-    let fixed = |t: &str| Plane {
+    let fixed = |t: &str| {
+        Plane {
         name: "",
         title: format!(
             "Fixed-step from rest ({t}): Δu_z/u_z0 = 0.5, b = 0.25, φ = 1 rad (57.3°), budget {budget:e} steps"
@@ -407,6 +408,7 @@ pub fn run(a: &StabilityArgs) -> CliResult {
         y: (0.6, 6.6),
         log_x: true,
         log_y: true,
+    }
     };
     silent += map(
         a,
@@ -484,7 +486,9 @@ pub fn run(a: &StabilityArgs) -> CliResult {
     .1;
     let si = |t: &str, r: f64| Plane {
         name: "",
-        title: format!("SI magnitudes ({t}): k_x = 1e9 N/m, Δu_z/u_z0 = 0.4, b = 0.3, φ = 1 rad, v0 = 0.3 v_c"),
+        title: format!(
+            "SI magnitudes ({t}): k_x = 1e9 N/m, Δu_z/u_z0 = 0.4, b = 0.3, φ = 1 rad, v0 = 0.3 v_c"
+        ),
         x_label: "u_z0, m",
         y_label: "k_z, N/m",
         x: (-r, r),
