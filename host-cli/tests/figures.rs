@@ -8,17 +8,25 @@ fn fricctl() -> Command {
     Command::cargo_bin("fricctl").unwrap()
 }
 
-/// Runs fricctl, expects exit status `code`, and returns stderr, which must be
-/// exactly one line with no Rust Debug dump in it.
-fn fails_with_one_line(args: &[&str], code: i32) -> String {
+/// Runs fricctl, expects exit status `code`, and returns its error line: the
+/// last stderr line, the only one starting with `error: `, with no Rust
+/// Debug dump anywhere in stderr.
+fn error_line(args: &[&str], code: i32) -> (String, usize) {
     let out = fricctl().args(args).output().unwrap();
     let err = String::from_utf8(out.stderr).unwrap();
     assert_eq!(out.status.code(), Some(code), "{args:?}: {err}");
-    assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    let lines: Vec<&str> = err.trim_end().lines().collect();
+    assert_eq!(
+        lines.iter().filter(|l| l.starts_with("error: ")).count(),
+        1,
+        "{args:?}: {err}"
+    );
+    let last = lines.last().copied().unwrap_or_default();
+    assert!(last.starts_with("error: "), "{args:?}: {err}");
     for debug in ["Os {", "Error(", "kind:", "BackendError"] {
         assert!(!err.contains(debug), "{args:?}: {err}");
     }
-    err
+    (last.to_string(), lines.len())
 }
 
 /// `--out` naming an existing regular file: exit 2, naming `--out`, for the
@@ -37,10 +45,11 @@ fn out_onto_a_regular_file_is_refused_naming_out() {
         vec!["bench", "stability", "--out", f],
         vec!["bench", "dac", "--out", f],
     ] {
-        let err = fails_with_one_line(&args, 2);
-        assert!(err.starts_with("--out: "), "{args:?}: {err}");
+        // One line in all: the refusal comes before any progress output.
+        let (err, lines) = error_line(&args, 2);
+        assert_eq!(lines, 1, "{args:?}: {err}");
+        assert!(err.starts_with("error: --out: "), "{args:?}: {err}");
         assert!(err.contains("not a directory"), "{args:?}: {err}");
-        assert!(!err.contains("measuring"), "{args:?}: {err}");
     }
     assert_eq!(std::fs::read_to_string(&file).unwrap(), "keep");
 }
@@ -59,9 +68,10 @@ fn out_that_cannot_be_created_is_refused_naming_out() {
         vec!["bench", "stability", "--out", s],
         vec!["bench", "work-precision", "--out", s],
     ] {
-        let err = fails_with_one_line(&args, 2);
+        let (err, lines) = error_line(&args, 2);
+        assert_eq!(lines, 1, "{args:?}: {err}");
         assert!(
-            err.starts_with("--out: ") && err.contains("cannot create"),
+            err.starts_with("error: --out: ") && err.contains("cannot create"),
             "{args:?}: {err}"
         );
     }
@@ -74,7 +84,7 @@ fn unwritable_plot_file_is_one_line() {
     let dir = tempfile::tempdir().unwrap();
     let target = dir.path().join("c.png");
     std::fs::create_dir(&target).unwrap();
-    let err = fails_with_one_line(
+    let (err, _) = error_line(
         &[
             "curve",
             "--duz-rel",
