@@ -1,17 +1,22 @@
 //! `fricctl figures`: the paper's Figs. 2–7 from the exact solver, and the
 //! regime map, as SVG and PNG.
+//!
+//! Every panel names its fixed parameters; the dimensionless groups are
+//! those of eqs. 25/26: `Δu_z/u_z0`, `k_xΔu_x/(μ0 k_z u_z0)` and the ratio
+//! `k_xΔu_x/(μ0 k_z Δu_z)`; velocities are in units of `v_c` (eq. 8) or of
+//! `ωW0`, `W0 = μ0 k_z u_z0 / k_x`.
 
 use std::f64::consts::PI;
 use std::path::Path;
 
 use model_core::analytic::approx::law;
 use model_core::exact;
-use model_core::regime::{classify, ClassifyOptions};
+use model_core::regime::{classify, Classification, ClassifyOptions, Regime};
 use model_core::{Drive, Groups, Libm, Scene};
 
-use crate::cmd::map::write_map;
 use crate::error::{CliError, CliResult};
-use crate::plot::{render_panels, Mark, Panel, Series};
+use crate::cmd::map::write_map;
+use crate::plot::{prepare_out_dir, render_figure, Corner, Extras, Figure, Mark, Panel, Series};
 use crate::sweep::linspace;
 use crate::sweep::{cells, centres};
 
@@ -19,14 +24,21 @@ fn mu(d: &Drive<f64>, v: f64) -> CliResult<f64> {
     exact::mu_over_mu0::<f64, Libm>(d, v).map_err(crate::eval::exact_failure)
 }
 
-fn drive(a: f64, b: f64, phi: f64) -> CliResult<Drive<f64>> {
+fn scene(a: f64, b: f64, phi: f64) -> CliResult<Scene<f64>> {
     Scene::dimensionless(Groups {
         duz_rel: a,
         dux_rel: b,
         phi,
     })
-    .map(|s| s.drive())
     .map_err(|e| CliError::failure(format!("figure scene: {e}")))
+}
+
+fn drive(a: f64, b: f64, phi: f64) -> CliResult<Drive<f64>> {
+    scene(a, b, phi).map(|s| s.drive())
+}
+
+fn limits(d: &Drive<f64>) -> CliResult<(f64, f64)> {
+    exact::limits_at_zero::<f64, Libm>(d).map_err(crate::eval::exact_failure)
 }
 
 /// μ/μ0 against v/v_c (per-side normalisation as in the paper's Fig. 4) on
@@ -36,8 +48,7 @@ fn normalised_curve(d: &Drive<f64>, xs: &[f64]) -> CliResult<Vec<(f64, f64)>> {
     let mut pts = Vec::with_capacity(xs.len() + 2);
     for &x in xs {
         if x == 0.0 {
-            let (p, m) = exact::limits_at_zero::<f64, Libm>(d)
-                .map_err(|e| CliError::failure(format!("{e:?}")))?;
+            let (p, m) = limits(d)?;
             pts.push((0.0, m));
             pts.push((0.0, p));
             continue;
@@ -49,127 +60,168 @@ fn normalised_curve(d: &Drive<f64>, xs: &[f64]) -> CliResult<Vec<(f64, f64)>> {
     Ok(pts)
 }
 
-fn save(
-    out: &Path,
-    name: &str,
-    panels: &[Panel],
-    rows: usize,
-    cols: usize,
-    size: (u32, u32),
-) -> CliResult {
+fn save(out: &Path, name: &str, f: &Figure) -> CliResult {
     for ext in ["svg", "png"] {
         let p = out.join(format!("{name}.{ext}"));
-        render_panels(&p, panels, rows, cols, size)?;
+        render_figure(&p, f)?;
         eprintln!("wrote {}", p.display());
     }
     Ok(())
 }
 
 const MU_AXIS: &str = "μ / μ0";
+/// The group of eq. 25 for the tangential amplitude.
+const B_NAME: &str = "k_xΔu_x/(μ0 k_z u_z0)";
+/// The ratio of eq. 26.
+const RATIO_NAME: &str = "k_xΔu_x/(μ0 k_z Δu_z)";
 
-/// `fricctl figures --out DIR`.
-/// Eq. 21/24 with amplitude `amp` at `v0/v_c = x` (1 beyond v_c), as points;
-/// values below `ymin` become gaps (NaN) so they are not drawn.
-fn approx_curve(xs: &[f64], amp: f64, ymin: f64) -> Vec<(f64, f64)> {
+/// Eq. 21/24 with amplitude `amp` at `v0/v_c = x` (1 beyond v_c), as points.
+fn approx_curve(xs: &[f64], amp: f64) -> Vec<(f64, f64)> {
     xs.iter()
-        .map(|&x| {
-            let y = if x >= 1.0 { 1.0 } else { law(x, amp) };
-            (x, if y >= ymin { y } else { f64::NAN })
-        })
+        .map(|&x| (x, if x >= 1.0 { 1.0 } else { law(x, amp) }))
         .collect()
 }
 
-pub fn run(out: &Path, map_res: usize) -> CliResult {
-    if !(2..=2000).contains(&map_res) {
-        return Err(CliError::usage("--map-res: must be between 2 and 2000"));
+/// A legend-only entry (black sample, no points).
+fn key(label: &str, mark: Mark) -> Series {
+    Series {
+        label: label.to_string(),
+        points: Vec::new(),
+        mark,
+        color: 6,
     }
-    std::fs::create_dir_all(out)
-        .map_err(|e| CliError::failure(format!("--out: cannot create {}: {e}", out.display())))?;
+}
 
-    // Fig. 2: normal oscillation only, μ/μ0 against v0/v_c for several Δu_z/u_z0.
+fn one_panel(panel: Panel, extras: Extras, caption: Vec<String>) -> Figure {
+    Figure {
+        panels: vec![(panel, extras)],
+        rows: 1,
+        cols: 1,
+        size: (1000, 700),
+        legend: Vec::new(),
+        caption,
+    }
+}
+
+/// Fig. 2: normal oscillation only, μ/μ0 against v0/v_c for several Δu_z/u_z0.
+fn fig2(out: &Path) -> CliResult {
     let xs = linspace(0.0, 1.2, 481);
     let mut series = Vec::new();
     for (i, a) in [0.1, 0.3, 0.5, 0.7, 0.9].into_iter().enumerate() {
         let d = drive(a, 0.0, 0.0)?;
-        let pts: Vec<(f64, f64)> = normalised_curve(&d, &xs[1..])?;
         series.push(Series {
             label: format!("Δu_z/u_z0 = {a}"),
-            points: pts,
+            points: normalised_curve(&d, &xs[1..])?,
             mark: Mark::Line,
             color: i,
         });
         series.push(Series {
             label: String::new(),
-            points: approx_curve(&xs, a, f64::NEG_INFINITY),
+            points: approx_curve(&xs, a),
             mark: Mark::Dashed,
             color: i,
         });
     }
-    series.push(Series {
-        label: "dashed: eq. (21)".to_string(),
-        points: vec![],
-        mark: Mark::Dashed,
-        color: 6,
-    });
-    let fig2 = Panel {
-        title: "Fig. 2 — normal oscillation only (Δu_x = 0), exact".to_string(),
+    series.push(key("solid: exact solver", Mark::Line));
+    series.push(key("dashed: eq. (21)", Mark::Dashed));
+    let panel = Panel {
+        title: "Fig. 2 — normal oscillation only".to_string(),
         x_label: "v0 / v_c".to_string(),
         y_label: MU_AXIS.to_string(),
         x: (0.0, 1.2),
         y: (0.0, 1.05),
         series,
     };
-    save(out, "fig2", &[fig2], 1, 1, (1000, 680))?;
-
-    // Fig. 3: tangential only; exact points, eq. (24) lines.
-    let pts_x = linspace(0.0, 1.2, 31);
-    let line_x = linspace(0.0, 1.2, 241);
-    let fig3 = |bs: &[f64], title: &str, ymin: f64| -> CliResult<Panel> {
-        let mut series = Vec::new();
-        for (i, &b) in bs.iter().enumerate() {
-            let d = drive(0.0, b, 0.0)?;
-            let c = d.c_forward::<Libm>();
-            let mut pts = Vec::new();
-            for &x in &pts_x[1..] {
-                pts.push((x, mu(&d, x * c)?));
-            }
-            series.push(Series {
-                label: format!("k_xΔu_x/(μ0k_z u_z0) = {b}"),
-                points: pts,
-                mark: Mark::Points,
-                color: i,
-            });
-            series.push(Series {
-                label: String::new(),
-                points: approx_curve(&line_x, b, ymin),
-                mark: Mark::Line,
-                color: i,
-            });
-        }
-        Ok(Panel {
-            title: title.to_string(),
-            x_label: "v0 / v_c  (v_c = ωΔu_x)".to_string(),
-            y_label: MU_AXIS.to_string(),
-            x: (0.0, 1.2),
-            y: (ymin, 1.05),
-            series,
-        })
+    let extras = Extras {
+        notes: vec!["Δu_x = 0 (φ has no effect)".to_string()],
+        notes_at: Corner::UpperLeft,
+        ..Extras::default()
     };
-    let a = fig3(
-        &[0.25, 0.5, 0.75, 1.0],
-        "Fig. 3a — tangential only, small amplitude: exact (dots), eq. (24) (lines)",
-        0.0,
-    )?;
-    save(out, "fig3a", &[a], 1, 1, (1000, 680))?;
-    let b = fig3(
-        &[1.0, 2.0, 5.0, 10.0, 20.0],
-        "Fig. 3b — tangential only, large amplitude: exact (dots), eq. (24) (lines)",
-        -1.0,
-    )?;
-    save(out, "fig3b", &[b], 1, 1, (1000, 680))?;
+    let caption = vec!["v_c = ω μ0 k_z Δu_z / k_x (eq. 8 with Δu_x = 0).".to_string()];
+    save(out, "fig2", &one_panel(panel, extras, caption))
+}
 
-    // Fig. 4: φ = 0, Δu_z/u_z0 = 0 … 0.95, per-side normalised velocity.
-    let xs4 = linspace(-1.5, 1.5, 601);
+/// Fig. 3: tangential only; exact points, eq. (24) lines. Eq. 24 holds for
+/// `k_xΔu_x/(μ0 k_z u_z0) ≤ 1`; beyond, it is drawn dashed and only where it
+/// stays a friction coefficient (μ/μ0 ≥ −1), with a cross where it leaves.
+fn fig3(out: &Path, name: &str, bs: &[f64], title: &str, ymin: f64) -> CliResult {
+    let pts_x = linspace(0.0, 1.2, 31);
+    let line_x = linspace(0.0, 1.2, 1201);
+    let mut series = Vec::new();
+    let mut left_domain = false;
+    for (i, &b) in bs.iter().enumerate() {
+        let d = drive(0.0, b, 0.0)?;
+        let c = d.c_forward::<Libm>();
+        let mut pts = Vec::new();
+        for &x in &pts_x[1..] {
+            pts.push((x, mu(&d, x * c)?));
+        }
+        series.push(Series {
+            label: format!("{B_NAME} = {b}"),
+            points: pts,
+            mark: Mark::Points,
+            color: i,
+        });
+        let inside = b <= 1.0;
+        let mut line = approx_curve(&line_x, b);
+        if !inside {
+            left_domain = true;
+            // The first x where eq. 24 is back at μ/μ0 ≥ ymin: mark it.
+            if let Some(k) = line.iter().position(|&(_, y)| y >= ymin) {
+                if k > 0 {
+                    series.push(Series {
+                        label: String::new(),
+                        points: vec![line[k]],
+                        mark: Mark::Markers(crate::plot::Marker::Cross),
+                        color: i,
+                    });
+                }
+            }
+            for p in &mut line {
+                if p.1 < ymin {
+                    p.1 = f64::NAN;
+                }
+            }
+        }
+        series.push(Series {
+            label: String::new(),
+            points: line,
+            mark: if inside { Mark::Line } else { Mark::Dashed },
+            color: i,
+        });
+    }
+    series.push(key("dots: exact solver", Mark::Points));
+    series.push(key("solid: eq. (24), inside its domain", Mark::Line));
+    if left_domain {
+        series.push(key("dashed: eq. (24) outside it", Mark::Dashed));
+        series.push(key(
+            "×: eq. (24) below μ/μ0 = −1 to the left",
+            Mark::Markers(crate::plot::Marker::Cross),
+        ));
+    }
+    let panel = Panel {
+        title: title.to_string(),
+        x_label: "v0 / v_c".to_string(),
+        y_label: MU_AXIS.to_string(),
+        x: (0.0, 1.2),
+        y: (ymin, 1.05),
+        series,
+    };
+    let extras = Extras {
+        notes: vec![
+            "Δu_z = 0 (φ has no effect)".to_string(),
+            format!("eq. (24) holds for {B_NAME} ≤ 1"),
+        ],
+        notes_at: Corner::UpperLeft,
+        ..Extras::default()
+    };
+    let caption = vec!["v_c = ωΔu_x (eq. 8 with Δu_z = 0).".to_string()];
+    save(out, name, &one_panel(panel, extras, caption))
+}
+
+/// Fig. 4: φ = 0, Δu_z/u_z0 = 0 … 0.95, per-side normalised velocity.
+fn fig4(out: &Path) -> CliResult {
+    let xs = linspace(-1.5, 1.5, 601);
     let mut panels = Vec::new();
     for (tag, b) in [("a", 1.0), ("b", 2.0), ("c", 0.5)] {
         let mut series = Vec::new();
@@ -177,59 +229,96 @@ pub fn run(out: &Path, map_res: usize) -> CliResult {
             let d = drive(a, b, 0.0)?;
             series.push(Series {
                 label: format!("Δu_z/u_z0 = {a}"),
-                points: normalised_curve(&d, &xs4)?,
+                points: normalised_curve(&d, &xs)?,
                 mark: Mark::Line,
                 color: i,
             });
         }
-        panels.push(Panel {
-            title: format!("Fig. 4{tag} — φ = 0, k_xΔu_x/(μ0k_z u_z0) = {b}"),
+        let panel = Panel {
+            title: format!("Fig. 4{tag} — φ = 0°, {B_NAME} = {b}"),
             x_label: "v0 / v_c  (v_c of each direction)".to_string(),
             y_label: MU_AXIS.to_string(),
             x: (-1.5, 1.5),
             y: (-1.1, 1.1),
             series,
-        });
+        };
+        let extras = Extras {
+            notes: vec!["φ = 0°".to_string(), format!("{B_NAME} = {b}")],
+            notes_at: Corner::LowerRight,
+            legend_at: Corner::UpperLeft,
+            ..Extras::default()
+        };
+        panels.push((panel, extras));
     }
-    save(out, "fig4", &panels, 1, 3, (1800, 620))?;
+    let f = Figure {
+        panels,
+        rows: 1,
+        cols: 3,
+        size: (1800, 660),
+        legend: Vec::new(),
+        caption: vec![
+            "v_c per direction from eq. 8: v_c± = ω·|Δu_x·e^(iφ) ± μ0 (k_z/k_x) Δu_z|; \
+             μ(0±) are the exact one-sided limits."
+                .to_string(),
+        ],
+    };
+    save(out, "fig4", &f)
+}
 
-    // Figs. 5–7: Δu_z/u_z0 = 0.5, ratio 1, 2, 0.5, phases 0 … π; dimensional velocity.
+/// Notes for a Figs. 5–7 panel: the fixed parameters, and at φ = 90° without
+/// a static equilibrium why the law is not the paper's symmetric one.
+fn dual_notes(a: f64, ratio: f64, phi: f64, cl: &Classification<f64>) -> Vec<String> {
+    let mut notes = vec![
+        format!("Δu_z/u_z0 = {a}, φ = {:.0}°", phi.to_degrees()),
+        format!("{RATIO_NAME} = {ratio}"),
+    ];
+    if (phi - PI / 2.0).abs() < 1e-12 && !cl.statics.exists() {
+        notes.push("Differs from the paper (symmetric at φ = 90°):".to_string());
+        notes.push(format!(
+            "c = c' = {:.3} > 1 → no static equilibrium;",
+            cl.c_forward
+        ));
+        notes.push(format!(
+            "net force at rest μ(0±)/μ0 = {:.4} → {}",
+            cl.mu_0plus,
+            cl.regime.name().replace('_', " ")
+        ));
+    }
+    notes
+}
+
+/// Figs. 5–7: Δu_z/u_z0 = 0.5, ratio 1, 2, 0.5, phases 0 … π; velocity in ωW0.
+fn figs5_7(out: &Path) -> CliResult {
     let phases = [0.0, PI / 4.0, PI / 2.0, 3.0 * PI / 4.0, PI];
-    for (fig, ratio) in [("fig5", 1.0), ("fig6", 2.0), ("fig7", 0.5)] {
-        let a = 0.5;
+    let a = 0.5;
+    for (fig, ratio) in [("5", 1.0), ("6", 2.0), ("7", 0.5)] {
         let b = ratio * a;
         let vmax = 1.25 * (a + b);
         let vs = linspace(-vmax, vmax, 801);
         let mut panels = Vec::new();
         for (i, &phi) in phases.iter().enumerate() {
-            let d = drive(a, b, phi)?;
-            let s = Scene::dimensionless(Groups {
-                duz_rel: a,
-                dux_rel: b,
-                phi,
-            })
-            .map_err(|e| CliError::failure(e.to_string()))?;
-            let regime = classify(&s, &ClassifyOptions::default())
-                .map_err(|e| CliError::failure(format!("{e:?}")))?
-                .regime;
+            let s = scene(a, b, phi)?;
+            let d = s.drive();
+            let cl =
+                classify(&s, &ClassifyOptions::default()).map_err(crate::eval::exact_failure)?;
             let mut pts = Vec::with_capacity(vs.len() + 1);
             for &v in &vs {
                 if v == 0.0 {
-                    let (p, m) = exact::limits_at_zero::<f64, Libm>(&d)
-                        .map_err(|e| CliError::failure(format!("{e:?}")))?;
+                    let (p, m) = limits(&d)?;
                     pts.push((0.0, m));
                     pts.push((0.0, p));
                 } else {
                     pts.push((v, mu(&d, v)?));
                 }
             }
-            panels.push(Panel {
-                title: format!(
-                    "φ = {:.0}° — {}",
-                    phi.to_degrees(),
-                    regime.name().replace('_', " ")
-                ),
-                x_label: "v0 / (ω μ0 k_z u_z0 / k_x)".to_string(),
+            let regime = match cl.regime {
+                Regime::ActiveControl => "active control",
+                Regime::DynamicRatchet => "dynamic ratchet",
+                Regime::Actuator => "actuator",
+            };
+            let panel = Panel {
+                title: format!("Fig. {fig}, φ = {:.0}°: {regime}", phi.to_degrees()),
+                x_label: "v0 / (ωW0),  W0 = μ0 k_z u_z0 / k_x".to_string(),
                 y_label: MU_AXIS.to_string(),
                 x: (-vmax, vmax),
                 y: (-1.1, 1.1),
@@ -239,15 +328,57 @@ pub fn run(out: &Path, map_res: usize) -> CliResult {
                     mark: Mark::Line,
                     color: i,
                 }],
-            });
+            };
+            let extras = Extras {
+                notes: dual_notes(a, ratio, phi, &cl),
+                notes_at: Corner::UpperLeft,
+                ..Extras::default()
+            };
+            panels.push((panel, extras));
         }
-        let n = fig[3..].to_string();
-        for p in &mut panels {
-            p.title = format!("Fig. {n}, ratio {ratio}: {}", p.title);
-        }
-        save(out, fig, &panels, 2, 3, (1800, 1050))?;
+        let f = Figure {
+            panels,
+            rows: 2,
+            cols: 3,
+            size: (1800, 1080),
+            legend: Vec::new(),
+            caption: vec![
+                format!(
+                    "Fig. {fig}: Δu_z/u_z0 = {a}, {RATIO_NAME} = {ratio}; exact solver. \
+                     Regime from the exact classification (fricctl classify)."
+                ),
+                "c, c' = v_c±/(ωW0) (eq. 8); a static equilibrium exists iff c + c' ≤ 2."
+                    .to_string(),
+            ],
+        };
+        save(out, &format!("fig{fig}"), &f)?;
     }
+    Ok(())
+}
 
+/// `fricctl figures --out DIR`.
+pub fn run(out: &Path, map_res: usize) -> CliResult {
+    if !(2..=2000).contains(&map_res) {
+        return Err(CliError::usage("--map-res: must be between 2 and 2000"));
+    }
+    prepare_out_dir(out)?;
+    fig2(out)?;
+    fig3(
+        out,
+        "fig3a",
+        &[0.25, 0.5, 0.75, 1.0],
+        "Fig. 3a — tangential only, small amplitude",
+        0.0,
+    )?;
+    fig3(
+        out,
+        "fig3b",
+        &[1.0, 2.0, 5.0, 10.0, 20.0],
+        "Fig. 3b — tangential only, large amplitude",
+        -1.0,
+    )?;
+    fig4(out)?;
+    figs5_7(out)?;
     // The regime map at Δu_z/u_z0 = 0.5.
     let ratios = centres(0.0, 3.0, map_res);
     let phis = centres(0.0, 360.0, map_res);

@@ -31,7 +31,7 @@ use rustfft::{num_complex::Complex, FftPlanner};
 
 use super::time_min_of;
 use crate::error::{CliError, CliResult};
-use crate::plot::{render_panels, Mark, Panel, Series};
+use crate::plot::{prepare_out_dir, render_figure, Extras, Figure, Mark, Marker, Panel, Series};
 
 /// Flags of `bench dac`.
 #[derive(Args, Debug, Clone)]
@@ -227,11 +227,10 @@ pub fn measure(rounds: usize) -> CliResult<Vec<DacPoint>> {
 
 /// `fricctl bench dac`.
 pub fn run(a: &DacArgs) -> CliResult {
-    std::fs::create_dir_all(&a.out)
-        .map_err(|e| CliError::failure(format!("--out: {}: {e}", a.out.display())))?;
     if a.rounds == 0 || a.rounds > 10_000 {
         return Err(CliError::usage("--rounds: must be between 1 and 10000"));
     }
+    prepare_out_dir(&a.out)?;
     let pts = measure(a.rounds)?;
     let mut csv = String::from("table_size,interp,backend,sfdr_db,worst_lsb,ns_per_sample\n");
     for p in &pts {
@@ -256,76 +255,174 @@ pub fn run(a: &DacArgs) -> CliResult {
     }
     let p = a.out.join("dac.csv");
     std::fs::write(&p, csv).map_err(|e| CliError::failure(format!("{}: {e}", p.display())))?;
-    let series = |y: fn(&DacPoint) -> f64| -> Vec<Series> {
-        let mut v = Vec::new();
-        for (i, (interp, backend)) in [
-            ("nearest", "libm"),
-            ("nearest", "micromath"),
-            ("linear", "libm"),
-            ("linear", "micromath"),
-            ("direct", "libm"),
-            ("direct", "micromath"),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let pts: Vec<(f64, f64)> = pts
-                .iter()
-                .filter(|p| p.interp == interp && p.backend == backend)
-                .map(|p| (p.ns_per_sample, y(p)))
-                .collect();
-            v.push(Series {
-                label: if interp == "direct" {
-                    format!("direct sin per sample, {backend}")
-                } else {
-                    format!("{interp}, {backend} table (N = 16 … 65536)")
-                },
-                points: pts,
-                mark: if interp == "direct" {
-                    Mark::Points
-                } else {
-                    Mark::Line
-                },
-                color: i,
-            });
-            if interp != "direct" {
-                let pts: Vec<(f64, f64)> = v.last().map(|s| s.points.clone()).unwrap_or_default();
-                v.push(Series {
-                    label: String::new(),
-                    points: pts,
-                    mark: Mark::Points,
-                    color: i,
-                });
-            }
-        }
-        v
-    };
-    let xmax = pts.iter().map(|p| p.ns_per_sample).fold(0.0, f64::max) * 1.08;
-    let ymax = pts.iter().map(|p| p.sfdr_db).fold(0.0, f64::max) + 8.0;
-    let lmax = pts.iter().map(|p| p.worst_lsb).fold(0.0, f64::max);
-    let panels = [
-        Panel {
-            title: "DAC waveform: SFDR against cost (12-bit, 500 kS/s, 40 kHz)".to_string(),
-            x_label: "ns per sample (both channels, this host)".to_string(),
-            y_label: "SFDR, dBc (points: N = 16, 64, …, 65536)".to_string(),
-            x: (0.0, xmax),
-            y: (0.0, ymax),
-            series: series(|p| p.sfdr_db),
-        },
-        Panel {
-            title: "DAC waveform: worst error against cost".to_string(),
-            x_label: "ns per sample (both channels, this host)".to_string(),
-            y_label: "max |code − ideal|, LSB (log10)".to_string(),
-            x: (0.0, xmax),
-            y: (-0.5, (lmax.log10() + 0.3).max(1.0)),
-            series: series(|p| p.worst_lsb.log10()),
-        },
-    ];
     for ext in ["svg", "png"] {
         let path = a.out.join(format!("dac.{ext}"));
-        render_panels(&path, &panels, 1, 2, (1800, 760))?;
+        render_figure(&path, &chart(&pts))?;
         eprintln!("wrote {}", path.display());
     }
     eprintln!("wrote {}", p.display());
     Ok(())
+}
+
+/// The table series: (interp, backend, palette index, marker, legend text).
+const TABLE_SERIES: [(&str, &str, usize, Marker, &str); 4] = [
+    (
+        "nearest",
+        "libm",
+        0,
+        Marker::Square,
+        "nearest entry, libm table",
+    ),
+    (
+        "nearest",
+        "micromath",
+        5,
+        Marker::OpenSquare,
+        "nearest entry, micromath table",
+    ),
+    (
+        "linear",
+        "libm",
+        1,
+        Marker::Circle,
+        "linear interpolation, libm table",
+    ),
+    (
+        "linear",
+        "micromath",
+        4,
+        Marker::Ring,
+        "linear interpolation, micromath table",
+    ),
+];
+/// The direct rows: (backend, palette index, legend text).
+const DIRECT_SERIES: [(&str, usize, &str); 2] = [
+    ("libm", 6, "sin per sample, libm (no table)"),
+    ("micromath", 8, "sin per sample, micromath (no table)"),
+];
+/// The board's setting, marked in every panel.
+const CHOSEN: (usize, &str, &str) = (1024, "linear", "libm");
+
+/// Three panels over the table size N: SFDR, worst error (log) and cost.
+fn chart(pts: &[DacPoint]) -> Figure {
+    let (n_lo, n_hi) = (10.0, 1.0e5);
+    let panel = |title: &str, y_label: &str, y: (f64, f64), value: fn(&DacPoint) -> f64| {
+        let mut series = Vec::new();
+        for (interp, backend, color, marker, _) in TABLE_SERIES {
+            series.push(Series {
+                label: String::new(),
+                points: pts
+                    .iter()
+                    .filter(|p| p.interp == interp && p.backend == backend)
+                    .map(|p| (p.table as f64, value(p)))
+                    .collect(),
+                mark: Mark::LineMarkers(marker),
+                color,
+            });
+        }
+        for (backend, color, _) in DIRECT_SERIES {
+            if let Some(p) = pts
+                .iter()
+                .find(|p| p.interp == "direct" && p.backend == backend)
+            {
+                series.push(Series {
+                    label: String::new(),
+                    points: vec![(n_lo, value(p)), (n_hi, value(p))],
+                    mark: Mark::Dashed,
+                    color,
+                });
+            }
+        }
+        series.push(Series {
+            label: String::new(),
+            points: pts
+                .iter()
+                .filter(|p| (p.table, p.interp, p.backend) == CHOSEN)
+                .map(|p| (p.table as f64, value(p)))
+                .collect(),
+            mark: Mark::Markers(Marker::Highlight),
+            color: 6,
+        });
+        Panel {
+            title: title.to_string(),
+            x_label: "sine table entries N".to_string(),
+            y_label: y_label.to_string(),
+            x: (n_lo, n_hi),
+            y,
+            series,
+        }
+    };
+    let max = |f: fn(&DacPoint) -> f64| pts.iter().map(f).fold(0.0, f64::max);
+    let log = Extras {
+        log_x: true,
+        ..Extras::default()
+    };
+    let log_log = Extras {
+        log_x: true,
+        log_y: true,
+        ..Extras::default()
+    };
+    let mut legend: Vec<Series> = TABLE_SERIES
+        .iter()
+        .map(|&(_, _, color, marker, text)| Series {
+            label: text.to_string(),
+            points: Vec::new(),
+            mark: Mark::LineMarkers(marker),
+            color,
+        })
+        .collect();
+    legend.extend(DIRECT_SERIES.iter().map(|&(_, color, text)| Series {
+        label: text.to_string(),
+        points: Vec::new(),
+        mark: Mark::Dashed,
+        color,
+    }));
+    legend.push(Series {
+        label: "the board's setting: libm table, N = 1024, linear".to_string(),
+        points: Vec::new(),
+        mark: Mark::Markers(Marker::Highlight),
+        color: 6,
+    });
+    Figure {
+        panels: vec![
+            (
+                panel(
+                    "Spectral purity",
+                    "SFDR, dBc",
+                    (0.0, max(|p| p.sfdr_db) + 10.0),
+                    |p| p.sfdr_db,
+                ),
+                log.clone(),
+            ),
+            (
+                panel(
+                    "Worst error",
+                    "max |code − ideal|, LSB",
+                    (0.3, (max(|p| p.worst_lsb) * 2.0).max(10.0)),
+                    |p| p.worst_lsb,
+                ),
+                log_log,
+            ),
+            (
+                panel(
+                    "Cost on this host",
+                    "ns per sample (both channels)",
+                    (0.0, max(|p| p.ns_per_sample) * 1.15),
+                    |p| p.ns_per_sample,
+                ),
+                log,
+            ),
+        ],
+        rows: 1,
+        cols: 3,
+        size: (1800, 740),
+        legend,
+        caption: vec![format!(
+            "DDS of the board: 12-bit DAC at {:.0} kS/s, {:.1} kHz ({CYCLES} cycles in {SAMPLES} \
+             samples, coherent), amplitude 2047 codes; SFDR over the {SAMPLES}-point FFT; \
+             error against the ideal sine in f64 (0.5 LSB = rounding alone).",
+            FS / 1e3,
+            f64::from(CYCLES) * FS / SAMPLES as f64 / 1e3
+        )],
+    }
 }

@@ -16,13 +16,14 @@ use model_core::{Groups, Scene};
 
 use crate::error::{CliError, CliResult};
 use crate::eval::{from_rel, Method, MethodArgs};
+use crate::plot::{color, log_axis_tick, prepare_out_dir, write_chart};
 use crate::sweep::{centres, curve_rows, linspace, method_mix, mix_text, mu_cells};
 use model_core::analytic::CriticalVelocity;
 
 /// Flags of `bench methods`.
 #[derive(Args, Debug, Clone)]
 pub struct MethodsArgs {
-    /// Output directory (methods.csv)
+    /// Output directory (methods.csv, methods.svg, methods.png)
     #[arg(long, value_name = "DIR")]
     pub out: std::path::PathBuf,
     /// Velocities per curve (even, so that v0 = 0 is not among them)
@@ -146,7 +147,7 @@ fn map_case(a: &MethodsArgs, out: &mut Vec<Timing>) -> CliResult {
         let (t, cells) = best_of(a.repeats, || mu_cells(0.5, &ratios, &phis, 0.5, &how))?;
         let mix = method_mix(cells.iter().map(|c| c.method));
         out.push(Timing {
-            case: "map --v-rel 0.5 (dual mode)",
+            case: "map --v-rel 0.5 (dual mode, Δu_z/u_z0 = 0.5, φ × ratio over 0…360° × 0…3)",
             method: label,
             points: cells.len(),
             total_s: t,
@@ -179,13 +180,12 @@ pub fn run(a: &MethodsArgs) -> CliResult {
     if !(a.tol.is_finite() && a.tol > 0.0) {
         return Err(CliError::usage("--tol: must be a finite number > 0"));
     }
-    std::fs::create_dir_all(&a.out)
-        .map_err(|e| CliError::failure(format!("--out: {}: {e}", a.out.display())))?;
+    prepare_out_dir(&a.out)?;
     let mut out = Vec::new();
     eprintln!("timing curves …");
     curve_case(
         a,
-        "curve, normal only (a = 0.4), v/v_c in [-1.5, 1.5]",
+        "curve, normal only (Δu_z/u_z0 = 0.4), v/v_c in [-1.5, 1.5]",
         Groups {
             duz_rel: 0.4,
             dux_rel: 0.0,
@@ -195,7 +195,7 @@ pub fn run(a: &MethodsArgs) -> CliResult {
     )?;
     curve_case(
         a,
-        "curve, dual mode (a = 0.5, b = 0.25, φ = 1), v/v_c in [-1.5, 1.5]",
+        "curve, dual mode (Δu_z/u_z0 = 0.5, k_xΔu_x/(μ0 k_z u_z0) = 0.25, φ = 1 rad = 57.3°), v/v_c in [-1.5, 1.5]",
         Groups {
             duz_rel: 0.5,
             dux_rel: 0.25,
@@ -238,5 +238,127 @@ pub fn run(a: &MethodsArgs) -> CliResult {
     let p = a.out.join("methods.csv");
     std::fs::write(&p, csv).map_err(|e| CliError::failure(format!("{}: {e}", p.display())))?;
     eprintln!("wrote {}", p.display());
+    for ext in ["svg", "png"] {
+        let path = a.out.join(format!("methods.{ext}"));
+        chart(&path, &out)?;
+        eprintln!("wrote {}", path.display());
+    }
     Ok(())
+}
+
+/// `x` with three significant digits (x ≥ 0.001).
+fn sig3(x: f64) -> String {
+    let decimals = if x >= 100.0 {
+        0
+    } else if x >= 10.0 {
+        1
+    } else if x >= 1.0 {
+        2
+    } else {
+        3
+    };
+    format!("{x:.decimals$}")
+}
+
+/// Seconds as ns, µs or ms, three significant digits.
+fn time_text(s: f64) -> String {
+    if s < 1e-6 {
+        format!("{} ns", sig3(s * 1e9))
+    } else if s < 1e-3 {
+        format!("{} µs", sig3(s * 1e6))
+    } else {
+        format!("{} ms", sig3(s * 1e3))
+    }
+}
+
+/// Palette index of a method label.
+fn method_color(method: &str) -> usize {
+    if method.starts_with("auto --tol") {
+        2
+    } else if method.starts_with("auto") {
+        0
+    } else if method == "exact" {
+        1
+    } else {
+        8
+    }
+}
+
+/// A bar per case × method: time per point on a log axis, with the method,
+/// its cost relative to the case's first row and the mix that answered.
+fn chart(path: &std::path::Path, rows: &[Timing]) -> CliResult {
+    use plotters::prelude::*;
+    use plotters::style::text_anchor::{HPos, Pos, VPos};
+    let mut cases: Vec<&str> = Vec::new();
+    for t in rows {
+        if !cases.contains(&t.case) {
+            cases.push(t.case);
+        }
+    }
+    let per: Vec<f64> = rows.iter().map(Timing::per_point).collect();
+    let lo = per.iter().copied().fold(f64::INFINITY, f64::min) / 3.0;
+    let hi = per.iter().copied().fold(0.0, f64::max) * 3000.0;
+    let n_rows = (cases.len() + rows.len()) as f64 + 0.5 * cases.len() as f64;
+    write_chart(path, (1500, 820), |root| {
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(root)
+            .caption(
+                "bench methods: time per point of the curve and map commands",
+                ("sans-serif", 20),
+            )
+            .margin(16)
+            .x_label_area_size(50)
+            .y_label_area_size(8)
+            .build_cartesian_2d((lo..hi).log_scale(), 0.0..n_rows)?;
+        chart
+            .configure_mesh()
+            .disable_y_mesh()
+            .disable_y_axis()
+            .x_desc(
+                "time per point, s (wall clock, rayon on all cores, minimum of repeats; log scale)",
+            )
+            .x_label_formatter(&|v| log_axis_tick(*v))
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 16))
+            .light_line_style(RGBColor(238, 238, 238))
+            .bold_line_style(RGBColor(210, 210, 210))
+            .draw()?;
+        let left = Pos::new(HPos::Left, VPos::Center);
+        let head = TextStyle::from(("sans-serif", 16).into_font()).pos(left);
+        let text = TextStyle::from(("sans-serif", 14).into_font()).pos(left);
+        let mut y = n_rows - 0.7;
+        for case in &cases {
+            chart.draw_series(std::iter::once(Text::new(
+                case.to_string(),
+                (lo * 1.1, y),
+                head.clone(),
+            )))?;
+            y -= 1.0;
+            let mut first = None;
+            for t in rows.iter().filter(|t| t.case == *case) {
+                let v = t.per_point();
+                let base = *first.get_or_insert(v);
+                let c = color(method_color(&t.method));
+                chart.draw_series(std::iter::once(Rectangle::new(
+                    [(lo, y - 0.32), (v, y + 0.32)],
+                    c.filled(),
+                )))?;
+                chart.draw_series(std::iter::once(Text::new(
+                    format!(
+                        "{}: {} per point (×{}), {} points; {}",
+                        t.method,
+                        time_text(v),
+                        sig3(v / base),
+                        t.points,
+                        t.mix
+                    ),
+                    (v * 1.25, y),
+                    text.clone(),
+                )))?;
+                y -= 1.0;
+            }
+            y -= 0.5;
+        }
+        Ok(())
+    })
 }

@@ -26,7 +26,7 @@ use rayon::prelude::*;
 
 use super::work_precision::warm_state;
 use crate::error::{CliError, CliResult};
-use crate::plot::{render_heat, Heat, HeatMap};
+use crate::plot::{prepare_out_dir, render_heat, Heat, HeatMap};
 use crate::sweep::centres;
 
 /// Flags of `bench stability`.
@@ -392,15 +392,15 @@ pub fn run(a: &StabilityArgs) -> CliResult {
             "--budget: must be between 1000 and 10000000000 steps",
         ));
     }
-    std::fs::create_dir_all(&a.out)
-        .map_err(|e| CliError::failure(format!("--out: {}: {e}", a.out.display())))?;
+    prepare_out_dir(&a.out)?;
     let budget = a.budget;
     let vlog = "v0/v_c";
     let mut silent = 0;
-    let fixed = |t: &str| Plane {
+    let fixed = |t: &str| {
+        Plane {
         name: "",
         title: format!(
-            "Fixed-step from rest ({t}), a = 0.5, b = 0.25, φ = 1, budget {budget:e} steps"
+            "Fixed-step from rest ({t}): Δu_z/u_z0 = 0.5, b = 0.25, φ = 1 rad (57.3°), budget {budget:e} steps"
         ),
         x_label: vlog,
         y_label: "steps per period N",
@@ -408,6 +408,7 @@ pub fn run(a: &StabilityArgs) -> CliResult {
         y: (0.6, 6.6),
         log_x: true,
         log_y: true,
+    }
     };
     silent += map(
         a,
@@ -429,7 +430,7 @@ pub fn run(a: &StabilityArgs) -> CliResult {
     .1;
     let lift = |t: &str| Plane {
         name: "",
-        title: format!("Exact solver ({t}) near lift-off and near v_c, b = 0.3, φ = 2"),
+        title: format!("Exact solver ({t}) near lift-off and v_c: b = 0.3, φ = 2 rad (114.6°)"),
         x_label: "1 − Δu_z/u_z0",
         y_label: "1 − v0/v_c",
         x: (-12.0, 0.0),
@@ -457,7 +458,7 @@ pub fn run(a: &StabilityArgs) -> CliResult {
     .1;
     let ratio = |t: &str| Plane {
         name: "",
-        title: format!("Exact solver ({t}) over b and v0 → 0, a = 0.5, φ = 1"),
+        title: format!("Exact solver ({t}) over b and v0 → 0: Δu_z/u_z0 = 0.5, φ = 1 rad (57.3°)"),
         x_label: "b = k_xΔu_x/(μ0k_z u_z0)",
         y_label: vlog,
         x: (-6.0, 9.0),
@@ -485,7 +486,9 @@ pub fn run(a: &StabilityArgs) -> CliResult {
     .1;
     let si = |t: &str, r: f64| Plane {
         name: "",
-        title: format!("SI magnitudes ({t}): k_x = 1 GPa/m, groups fixed, v0 = 0.3 v_c"),
+        title: format!(
+            "SI magnitudes ({t}): k_x = 1e9 N/m, Δu_z/u_z0 = 0.4, b = 0.3, φ = 1 rad, v0 = 0.3 v_c"
+        ),
         x_label: "u_z0, m",
         y_label: "k_z, N/m",
         x: (-r, r),
