@@ -14,8 +14,8 @@ use model_core::exact;
 use model_core::regime::{classify, Classification, ClassifyOptions, Regime};
 use model_core::{Drive, Groups, Libm, Scene};
 
-use crate::error::{CliError, CliResult};
 use crate::cmd::map::write_map;
+use crate::error::{CliError, CliResult};
 use crate::plot::{prepare_out_dir, render_figure, Corner, Extras, Figure, Mark, Panel, Series};
 use crate::sweep::linspace;
 use crate::sweep::{cells, centres};
