@@ -103,8 +103,9 @@ pub fn read_as(path: &Path, flag: &str) -> CliResult<Vec<SweepRow>> {
     for (i, rec) in r.deserialize::<SweepRow>().enumerate() {
         // Row numbers as a spreadsheet shows them: the header is line 1.
         let line = i + 2;
-        let row = rec
-            .map_err(|e| CliError::usage(format!("--{flag}: {} line {line}: {e}", path.display())))?;
+        let row = rec.map_err(|e| {
+            CliError::usage(format!("--{flag}: {} line {line}: {e}", path.display()))
+        })?;
         rows.push(row);
     }
     Ok(rows)

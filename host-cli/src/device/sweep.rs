@@ -277,12 +277,20 @@ fn resume_rows(a: &SweepArgs, values: &[f64], probe: &SweepRow) -> CliResult<Vec
     for (i, r) in rows.iter().enumerate() {
         let line = i + 2;
         if r.param != a.param.name() {
-            return Err(other(line, format!("param {} (this sweep: {})", r.param, a.param.name())));
+            return Err(other(
+                line,
+                format!("param {} (this sweep: {})", r.param, a.param.name()),
+            ));
         }
         if !same(r.value, values[i]) {
             return Err(other(
                 line,
-                format!("value {} (this sweep's point {}: {})", r.value, i + 1, values[i]),
+                format!(
+                    "value {} (this sweep's point {}: {})",
+                    r.value,
+                    i + 1,
+                    values[i]
+                ),
             ));
         }
         let mut checks = fixed_columns(a.param, r);
@@ -335,8 +343,7 @@ pub fn run(c: &mut Client, a: &SweepArgs, json: bool) -> CliResult {
     } else {
         Vec::new()
     };
-    let fresh = rows.is_empty()
-        && std::fs::metadata(&a.csv).map_or(true, |m| m.len() == 0);
+    let fresh = rows.is_empty() && std::fs::metadata(&a.csv).map_or(true, |m| m.len() == 0);
     let file = std::fs::OpenOptions::new()
         .create(true)
         .append(!fresh)
@@ -371,8 +378,7 @@ pub fn run(c: &mut Client, a: &SweepArgs, json: bool) -> CliResult {
     bar.set_position(rows.len() as u64);
     for &x in &values[rows.len()..] {
         bar.set_message(format!("{} = {x} {}", a.param.name(), a.param.unit()));
-        let (setting, freq, phi) =
-            drive_of(ask(c, Request::SetDrive(a.param.apply(base, x)))?)?;
+        let (setting, freq, phi) = drive_of(ask(c, Request::SetDrive(a.param.apply(base, x)))?)?;
         wait_status(c, Duration::from_secs(60), "settling of the ramps", |s| {
             s.settled
         })?;
@@ -381,12 +387,15 @@ pub fn run(c: &mut Client, a: &SweepArgs, json: bool) -> CliResult {
         let limit = Duration::from_secs_f64(60.0 + 10.0 * f64::from(a.periods) / freq);
         wait_status(c, limit, "the end of the measurement", |s| !s.measuring)?;
         let Response::Estimate(e) = ask(c, Request::GetEstimate)? else {
-            return Err(CliError::failure("the device did not answer with an estimate"));
+            return Err(CliError::failure(
+                "the device did not answer with an estimate",
+            ));
         };
-        let Response::Prediction { prediction, .. } =
-            ask(c, Request::Predict { v0: a.v0 as f32 })?
+        let Response::Prediction { prediction, .. } = ask(c, Request::Predict { v0: a.v0 as f32 })?
         else {
-            return Err(CliError::failure("the device did not answer with a prediction"));
+            return Err(CliError::failure(
+                "the device did not answer with a prediction",
+            ));
         };
         let mut r = row_for(a, x, &setting, freq, phi, contact);
         r.measured_mu = f64::from(e.mu);
@@ -437,14 +446,7 @@ const HEADER: [&str; 16] = [
 ];
 
 /// A row with the drive and contact filled in (results empty).
-fn row_for(
-    a: &SweepArgs,
-    x: f64,
-    d: &DriveSetting,
-    freq: f64,
-    phi: f64,
-    k: Contact,
-) -> SweepRow {
+fn row_for(a: &SweepArgs, x: f64, d: &DriveSetting, freq: f64, phi: f64, k: Contact) -> SweepRow {
     SweepRow {
         param: a.param.name().to_string(),
         value: x,
@@ -544,7 +546,11 @@ fn plot(path: &Path, a: &SweepArgs, rows: &[SweepRow]) -> CliResult {
         pred.push((r.value, r.predicted_mu));
         xlo = xlo.min(r.value);
         xhi = xhi.max(r.value);
-        for y in [r.measured_mu - r.std_error, r.measured_mu + r.std_error, r.predicted_mu] {
+        for y in [
+            r.measured_mu - r.std_error,
+            r.measured_mu + r.std_error,
+            r.predicted_mu,
+        ] {
             ylo = ylo.min(y);
             yhi = yhi.max(y);
         }
@@ -635,7 +641,9 @@ pub fn scene_values(
         match x {
             Some(x) if x.is_finite() && *x > 0.0 => *o = *x,
             Some(x) => {
-                return Err(CliError::usage(format!("{src}{name}: must be > 0 (got {x})")));
+                return Err(CliError::usage(format!(
+                    "{src}{name}: must be > 0 (got {x})"
+                )));
             }
             None => return Err(CliError::usage(format!("{src}{name}: missing"))),
         }
