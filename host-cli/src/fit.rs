@@ -340,13 +340,13 @@ pub fn fit(rows: &[SweepRow], which: &[FitParam]) -> CliResult<(FitResult, Vec<R
         .map_err(|e| CliError::failure(format!("fit: Student's t: {e}")))?
         .inverse_cdf(0.975);
     let mut ci = [[0.0; 2]; 2];
-    for i in 0..2 {
+    for (i, c) in ci.iter_mut().enumerate() {
         let v = problem.logs[i];
         let half = which
             .iter()
             .position(|p| Problem::index(*p) == i)
             .map_or(0.0, |kk| t * cov[(kk, kk)].sqrt());
-        ci[i] = [(v - half).exp(), (v + half).exp()];
+        *c = [(v - half).exp(), (v + half).exp()];
     }
     let (mu0, ratio) = (problem.logs[0].exp(), problem.logs[1].exp());
     let mut residuals = Vec::with_capacity(used.len());

@@ -381,3 +381,62 @@ fn plant_and_sweep_flags_are_checked_with_one_line() {
         "kx",
     );
 }
+
+#[test]
+fn a_lagging_plant_needs_settle_periods() {
+    // Transducer amplitudes lag the DAC's with τ = 100 drive periods (5 ms).
+    let s = sim(&["--plant-lag-periods", "100"]);
+    drive_and_start(&s);
+    let dir = tempfile::tempdir().unwrap();
+    let step = |name: &str, settle: &str| -> (f64, f64) {
+        let csv = dir.path().join(name);
+        ok_json(
+            &s,
+            &[
+                "sweep",
+                "--param",
+                "amp-x",
+                "--from",
+                "3e-7",
+                "--to",
+                "1e-7",
+                "--points",
+                "2",
+                "--periods",
+                "200",
+                "--settle-periods",
+                settle,
+                "--v0",
+                "0.004",
+                "--csv",
+                csv.to_str().unwrap(),
+            ],
+        );
+        let r = rows(&csv);
+        (f(&r[1], MEASURED), f(&r[1], STD_ERROR))
+    };
+    // Measured as soon as the device's ramp is done: the plant's Δu_x is
+    // still on its way down from 3e-7 m.
+    let (m0, se0) = step("fast.csv", "0");
+    // 1000 periods = 10 τ after the ramp: e⁻¹⁰ = 4.5e-5 of the step remains.
+    let (m1, se1) = step("slow.csv", "1000");
+    // The reference: the same drive long after the step.
+    std::thread::sleep(Duration::from_millis(200));
+    let m = ok_json(&s, &["measure", "--periods", "200"]);
+    let (mr, ser) = (
+        m["Estimate"]["mu"].as_f64().unwrap(),
+        m["Estimate"]["std_error"].as_f64().unwrap(),
+    );
+    // Repeat measurements of one drive on one plant differ by noise only
+    // (σ = √(se₁² + se₂²), 5σ), plus the e⁻¹⁰ remainder of the lag.
+    let sigma1 = (se1 * se1 + ser * ser).sqrt();
+    assert!(
+        (m1 - mr).abs() <= 5.0 * sigma1 + 4.5e-5 * (m0 - mr).abs(),
+        "settled {m1} vs reference {mr} (σ {sigma1})"
+    );
+    let sigma0 = (se0 * se0 + ser * ser).sqrt();
+    assert!(
+        (m0 - mr).abs() > 20.0 * sigma0,
+        "unsettled {m0} vs reference {mr} (σ {sigma0}): the lag did not show"
+    );
+}

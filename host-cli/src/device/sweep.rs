@@ -500,10 +500,13 @@ fn print_rows(a: &SweepArgs, rows: &[SweepRow], json: bool) -> CliResult {
     )
     .map_err(fail)?;
     for r in rows {
+        let value = match a.param {
+            SweepParam::PhaseDeg | SweepParam::Freq => format!("{:.4}", r.value),
+            _ => format!("{:.4e}", r.value),
+        };
         writeln!(
             out,
-            "{:>16.6e}  {:>10.6}  {:>9.2e}  {:>10.6}  {:>10.2e}  {}",
-            r.value,
+            "{value:>16}  {:>10.6}  {:>9.2e}  {:>10.6}  {:>10.2e}  {}",
             r.measured_mu,
             r.std_error,
             r.predicted_mu,
