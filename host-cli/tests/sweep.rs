@@ -444,3 +444,61 @@ fn a_lagging_plant_needs_settle_periods() {
         "unsettled {m0} vs reference {mr} (σ {sigma0}): the lag did not show"
     );
 }
+
+#[test]
+fn a_velocity_profile_step_acts_like_the_new_constant_velocity() {
+    // The in-process virtual device: deterministic device time (each
+    // invocation restores the drive, settles the ramps from power-up, which
+    // takes far longer than 2 ms, then runs 20 ms before the request).
+    let dir = tempfile::tempdir().unwrap();
+    let prof = dir.path().join("v0.csv");
+    // 4 mm/s, then at device time 1 ms a step (over 1 ms) to 20 mm/s.
+    std::fs::write(&prof, "t_s,v0_m_s\n0,0.004\n0.001,0.004\n0.002,0.02\n").unwrap();
+    let mu = |name: &str, plant: &[&str]| -> (f64, f64) {
+        let state = dir.path().join(name);
+        let run = |args: &[&str]| {
+            let o = Command::cargo_bin("fricctl")
+                .unwrap()
+                .env("FRICCTL_SIM_STATE", &state)
+                .args(["device", "--sim", "--json"])
+                .args(plant)
+                .args(args)
+                .output()
+                .unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            o.stdout
+        };
+        run(&[
+            "drive",
+            "set",
+            "--freq",
+            "20000",
+            "--amp-z",
+            "2e-6",
+            "--amp-x",
+            "3e-7",
+            "--offset-z",
+            "4e-6",
+            "--phase-deg",
+            "40",
+        ]);
+        run(&["start"]);
+        let m: Value = serde_json::from_slice(&run(&["measure", "--periods", "300"])).unwrap();
+        (
+            m["Estimate"]["mu"].as_f64().unwrap(),
+            m["Estimate"]["std_error"].as_f64().unwrap(),
+        )
+    };
+    let (ms, ss) = mu("stepped.json", &["--v0-profile", prof.to_str().unwrap()]);
+    let (mf, sf) = mu("fast.json", &["--sim-v0", "0.02"]);
+    let (ml, sl) = mu("slow.json", &["--sim-v0", "0.004"]);
+    eprintln!("profile: stepped {ms} ± {ss}, 20 mm/s {mf} ± {sf}, 4 mm/s {ml} ± {sl}");
+    // Same drive, same plant, same velocity once the stage has run > 20 ms at
+    // 20 mm/s: the estimates differ by noise only (σ = √(se₁² + se₂²), 5σ).
+    // The stage position differs, but the steady state does not depend on it.
+    let s1 = (ss * ss + sf * sf).sqrt();
+    assert!((ms - mf).abs() <= 5.0 * s1, "{ms} vs {mf} (σ {s1})");
+    // …and the step showed: beyond 10σ of noise from the 4 mm/s plant.
+    let s2 = (ss * ss + sl * sl).sqrt();
+    assert!((ms - ml).abs() > 10.0 * s2, "{ms} vs {ml} (σ {s2})");
+}
