@@ -88,7 +88,7 @@ pub struct SweepArgs {
     /// Drive periods measured per point (≥ 1)
     #[arg(long, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 1>)]
     pub periods: u32,
-    /// Extra drive periods waited after the device's ramps have settled (for a lagging plant)
+    /// Extra drive periods waited (in device time: a discarded measurement) after the device's ramps have settled, for a lagging plant
     #[arg(long, default_value_t = 0, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 0>)]
     pub settle_periods: u32,
     /// Stage (sliding) velocity during the sweep, m/s: the device cannot know it; used for its prediction and written to every row
@@ -151,19 +151,6 @@ impl SweepArgs {
 /// What a request answered, or a one-line error.
 fn ask(c: &mut Client, req: Request) -> CliResult<Response> {
     expect(c.call(req)?)
-}
-
-/// Waits `secs` seconds while draining telemetry (the in-process virtual
-/// device advances at least that much device time meanwhile).
-fn wait(c: &mut Client, secs: f64) -> CliResult {
-    let end = Instant::now() + Duration::from_secs_f64(secs);
-    loop {
-        let now = Instant::now();
-        if now >= end {
-            return Ok(());
-        }
-        let _ = c.next_telemetry((end - now).min(Duration::from_millis(20)))?;
-    }
 }
 
 /// Polls the status until `done` or `limit` elapses.
@@ -382,7 +369,25 @@ pub fn run(c: &mut Client, a: &SweepArgs, json: bool) -> CliResult {
         wait_status(c, Duration::from_secs(60), "settling of the ramps", |s| {
             s.settled
         })?;
-        wait(c, f64::from(a.settle_periods) / freq)?;
+        if a.settle_periods > 0 {
+            // S periods of *device* time: a measurement whose result is
+            // dropped (a host clock would be wrong for a device that runs
+            // slower than real time, like a virtual one on a busy machine).
+            ask(
+                c,
+                Request::Measure {
+                    periods: a.settle_periods,
+                },
+            )
+            .map_err(|e| CliError {
+                code: e.code,
+                msg: e.msg.replace("--periods", "--settle-periods"),
+            })?;
+            let limit = Duration::from_secs_f64(60.0 + 10.0 * f64::from(a.settle_periods) / freq);
+            wait_status(c, limit, "the end of the settling periods", |s| {
+                !s.measuring
+            })?;
+        }
         ask(c, Request::Measure { periods: a.periods })?;
         let limit = Duration::from_secs_f64(60.0 + 10.0 * f64::from(a.periods) / freq);
         wait_status(c, limit, "the end of the measurement", |s| !s.measuring)?;
