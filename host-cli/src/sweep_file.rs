@@ -89,14 +89,23 @@ impl SweepRow {
 /// # Errors
 /// A one-line error naming the file and the row for unreadable or malformed data.
 pub fn read(path: &Path) -> CliResult<Vec<SweepRow>> {
+    read_as(path, "data")
+}
+
+/// Reads a sweep file given by the flag `--{flag}` (named in errors).
+///
+/// # Errors
+/// As [`read`].
+pub fn read_as(path: &Path, flag: &str) -> CliResult<Vec<SweepRow>> {
     let mut r = csv::Reader::from_path(path)
-        .map_err(|e| CliError::usage(format!("--data: cannot read {}: {e}", path.display())))?;
+        .map_err(|e| CliError::usage(format!("--{flag}: cannot read {}: {e}", path.display())))?;
     let mut rows = Vec::new();
     for (i, rec) in r.deserialize::<SweepRow>().enumerate() {
         // Row numbers as a spreadsheet shows them: the header is line 1.
         let line = i + 2;
-        let row = rec
-            .map_err(|e| CliError::usage(format!("--data: {} line {line}: {e}", path.display())))?;
+        let row = rec.map_err(|e| {
+            CliError::usage(format!("--{flag}: {} line {line}: {e}", path.display()))
+        })?;
         rows.push(row);
     }
     Ok(rows)

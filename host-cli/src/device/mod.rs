@@ -4,6 +4,7 @@
 pub mod client;
 pub mod link;
 pub mod sim;
+pub mod sweep;
 
 use std::io::{Read, Write};
 use std::path::PathBuf;
@@ -17,7 +18,7 @@ use serialport::SerialPort;
 
 use self::client::Client;
 use self::link::{Link, SerialLink, SimLink, TcpLink};
-use self::sim::{PlantOptions, VirtualDevice};
+use self::sim::VirtualDevice;
 use crate::error::{CliError, CliResult};
 
 /// Where the device is.
@@ -47,6 +48,9 @@ pub struct Target {
     /// Virtual device: uncalibrated ADC offset, counts
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub sim_offset: f64,
+    /// Virtual device: the plant (true contact and transducers)
+    #[command(flatten)]
+    pub plant: sim::PlantArgs,
     /// JSON output
     #[arg(long, global = true)]
     pub json: bool,
@@ -112,6 +116,8 @@ pub enum DeviceCmd {
     },
     /// List candidate serial ports
     Ports,
+    /// Sweep one drive parameter: per point set the drive, settle, measure, predict; one CSV row each
+    Sweep(sweep::SweepArgs),
 }
 
 /// `drive get|set`.
@@ -144,34 +150,25 @@ pub enum DriveCmd {
 pub enum SceneCmd {
     /// The contact parameters
     Get,
-    /// Set μ0, k_z, k_x
+    /// Set μ0, k_z, k_x (or all three from `fricctl fit --out FILE`)
     Set {
         /// μ0 (> 0)
-        #[arg(long, allow_hyphen_values = true)]
-        mu0: f64,
+        #[arg(long, allow_hyphen_values = true, required_unless_present = "from_fit")]
+        mu0: Option<f64>,
         /// k_z, N/m (> 0)
-        #[arg(long, allow_hyphen_values = true)]
-        kz: f64,
+        #[arg(long, allow_hyphen_values = true, required_unless_present = "from_fit")]
+        kz: Option<f64>,
         /// k_x, N/m (> 0)
-        #[arg(long, allow_hyphen_values = true)]
-        kx: f64,
+        #[arg(long, allow_hyphen_values = true, required_unless_present = "from_fit")]
+        kx: Option<f64>,
+        /// Take mu0, kz, kx from the JSON written by `fricctl fit --out FILE`
+        #[arg(long, value_name = "FILE", conflicts_with_all = ["mu0", "kz", "kx"])]
+        from_fit: Option<PathBuf>,
     },
 }
 
-fn check_sim(v0: f64, noise: f64, offset: f64, names: [&str; 3]) -> CliResult {
-    for (x, n) in [(v0, names[0]), (noise, names[1]), (offset, names[2])] {
-        if !x.is_finite() {
-            return Err(CliError::usage(format!("--{n}: must be a finite number")));
-        }
-    }
-    if noise < 0.0 {
-        return Err(CliError::usage(format!("--{}: must be >= 0", names[1])));
-    }
-    Ok(())
-}
-
 fn open(t: &Target) -> CliResult<Client> {
-    check_sim(
+    let plant = t.plant.options(
         t.sim_v0,
         t.sim_noise,
         t.sim_offset,
@@ -185,11 +182,7 @@ fn open(t: &Target) -> CliResult<Client> {
         check_host_port(a)?;
         Box::new(TcpLink::connect(a).map_err(|e| CliError::failure(format!("--tcp: {e}")))?)
     } else if t.sim {
-        Box::new(SimLink::new(PlantOptions {
-            v0: t.sim_v0,
-            noise_counts: t.sim_noise,
-            offset_counts: t.sim_offset,
-        }))
+        Box::new(SimLink::new(plant))
     } else {
         let usb = usb_ports();
         match usb.as_slice() {
@@ -201,11 +194,7 @@ fn open(t: &Target) -> CliResult<Client> {
             }
             [] => {
                 eprintln!("no USB serial device found: using the virtual device");
-                Box::new(SimLink::new(PlantOptions {
-                    v0: t.sim_v0,
-                    noise_counts: t.sim_noise,
-                    offset_counts: t.sim_offset,
-                }))
+                Box::new(SimLink::new(plant))
             }
             many => {
                 return Err(CliError::usage(format!(
@@ -351,16 +340,22 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             .collect();
         return out(t.json, &list);
     }
+    // Checked before connecting: the parameters are named, not the device's refusal.
+    let mut scene = None;
     if let DeviceCmd::Scene {
-        cmd: SceneCmd::Set { mu0, kz, kx },
+        cmd:
+            SceneCmd::Set {
+                mu0,
+                kz,
+                kx,
+                from_fit,
+            },
     } = cmd
     {
-        // Checked before connecting: the parameters are named, not the device's refusal.
-        for (x, name) in [(mu0, "mu0"), (kz, "kz"), (kx, "kx")] {
-            if !(x.is_finite() && *x > 0.0) {
-                return Err(CliError::usage(format!("--{name}: must be > 0 (got {x})")));
-            }
-        }
+        scene = Some(sweep::scene_values(*mu0, *kz, *kx, from_fit.as_deref())?);
+    }
+    if let DeviceCmd::Sweep(a) = cmd {
+        a.check()?;
     }
     let mut c = open(t)?;
     if !t.json {
@@ -425,12 +420,13 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             out(t.json, &expect(c.call(Request::GetContact)?)?)
         }
         DeviceCmd::Scene {
-            cmd: SceneCmd::Set { mu0, kz, kx },
+            cmd: SceneCmd::Set { .. },
         } => {
+            let (mu0, kz, kx) = scene.unwrap_or_default();
             let contact = Contact {
-                mu0: *mu0 as f32,
-                kz: *kz as f32,
-                kx: *kx as f32,
+                mu0: mu0 as f32,
+                kz: kz as f32,
+                kx: kx as f32,
             };
             out(t.json, &expect(c.call(Request::SetContact(contact))?)?)
         }
@@ -481,6 +477,7 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             allow_invalid,
         } => watch(t, c, *periods, *count, csv.as_deref(), *allow_invalid),
         DeviceCmd::Ports => unreachable!("handled above"),
+        DeviceCmd::Sweep(a) => sweep::run(&mut c, a, t.json),
     }
 }
 
@@ -690,6 +687,9 @@ pub struct SimArgs {
     /// Uncalibrated ADC offset, counts
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     pub offset: f64,
+    /// The plant (true contact and transducers)
+    #[command(flatten)]
+    pub plant: sim::PlantArgs,
     /// Stop after this many seconds (default: run until killed)
     #[arg(long, allow_hyphen_values = true)]
     pub seconds: Option<f64>,
@@ -697,17 +697,15 @@ pub struct SimArgs {
 
 /// `fricctl sim-device`: the virtual device in real time on a pty or TCP.
 pub fn serve(a: &SimArgs) -> CliResult {
-    check_sim(a.v0, a.noise, a.offset, ["v0", "noise", "offset"])?;
+    let plant = a
+        .plant
+        .options(a.v0, a.noise, a.offset, ["v0", "noise", "offset"])?;
     if let Some(sec) = a.seconds {
         if !(sec.is_finite() && sec >= 0.0) {
             return Err(CliError::usage("--seconds: must be a finite number >= 0"));
         }
     }
-    let mut dev = VirtualDevice::new(PlantOptions {
-        v0: a.v0,
-        noise_counts: a.noise,
-        offset_counts: a.offset,
-    });
+    let mut dev = VirtualDevice::new(plant);
     let deadline = a
         .seconds
         .map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0)));

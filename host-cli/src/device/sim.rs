@@ -5,6 +5,20 @@
 //! it), loaded by a stage sliding at `v0`; its forces go through the ADC
 //! calibrations with optional noise, sample by sample, into the device's
 //! estimator — the same path as on the board.
+//!
+//! The plant is *not* the device's model: its contact (μ₀, k_z, k_x) is its
+//! own ([`PlantOptions`], default equal to the device's power-up contact
+//! 0.3, 10⁷ N/m, 10⁷ N/m) and `scene set` does not change it. On top of the
+//! true contact the plant has
+//! - transducers whose displacement amplitudes Δu_z, Δu_x follow the DAC's
+//!   with a first-order lag of time constant τ = `lag_periods`/f
+//!   (dA/dt = (A_DAC − A)/τ, advanced exactly per ADC sample);
+//! - a drifting friction coefficient μ₀(t) = μ₀ + `mu0_drift`·t (t = device
+//!   time, s; μ₀(t) stops at 0 rather than change sign);
+//! - a stage velocity that is constant (`v0`) or follows a piecewise-linear
+//!   profile v₀(t) read from a CSV file (`t_s,v0_m_s`; held at the end values
+//!   before the first and after the last row);
+//! - ADC noise (uniform ± counts) and an uncalibrated ADC offset.
 
 use std::f64::consts::TAU;
 
@@ -43,15 +57,181 @@ pub struct SimState {
     pub running: bool,
 }
 
+/// The device's power-up contact (and the plant's default): μ₀, k_z (N/m), k_x (N/m).
+pub const DEFAULT_CONTACT: (f64, f64, f64) = (0.3, 1e7, 1e7);
+
 /// Plant options.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct PlantOptions {
-    /// Stage velocity v0, m/s.
+    /// Stage velocity v0, m/s (used when `v0_profile` is `None`).
     pub v0: f64,
     /// ADC noise, counts (uniform ± this).
     pub noise_counts: f64,
     /// Uncalibrated ADC offset error, counts (added to both channels).
     pub offset_counts: f64,
+    /// The true μ₀ at device time 0.
+    pub mu0: f64,
+    /// The true k_z, N/m.
+    pub kz: f64,
+    /// The true k_x, N/m.
+    pub kx: f64,
+    /// Time constant of the transducers' amplitude lag, in drive periods (0 = none).
+    pub lag_periods: f64,
+    /// dμ₀/dt, 1/s.
+    pub mu0_drift: f64,
+    /// Stage velocity profile (t s, v₀ m/s), piecewise linear, t strictly increasing.
+    pub v0_profile: Option<Vec<(f64, f64)>>,
+}
+
+impl PlantOptions {
+    /// Stage velocity at device time `t` s: the profile interpolated
+    /// linearly (held at its end values outside), else `v0`.
+    pub fn v0_at(&self, t: f64) -> f64 {
+        let Some(p) = self.v0_profile.as_deref() else {
+            return self.v0;
+        };
+        match p {
+            [] => self.v0,
+            [(t0, v), ..] if t <= *t0 => *v,
+            [.., (tn, v)] if t >= *tn => *v,
+            _ => {
+                // t0 < t < tn: the segment [a, b] with a.t ≤ t < b.t.
+                let i = p.partition_point(|(ti, _)| *ti <= t);
+                let ((ta, va), (tb, vb)) = (p[i - 1], p[i]);
+                va + (vb - va) * (t - ta) / (tb - ta)
+            }
+        }
+    }
+
+    /// μ₀ at device time `t` s (eq. of the module doc; not below 0).
+    pub fn mu0_at(&self, t: f64) -> f64 {
+        (self.mu0 + self.mu0_drift * t).max(0.0)
+    }
+}
+
+/// The plant's flags, shared by `fricctl sim-device` and `fricctl device --sim`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct PlantArgs {
+    /// Virtual plant: true μ0 (the device's model keeps its own, see `scene`)
+    #[arg(long, default_value_t = DEFAULT_CONTACT.0, allow_hyphen_values = true)]
+    pub plant_mu0: f64,
+    /// Virtual plant: true k_z, N/m
+    #[arg(long, default_value_t = DEFAULT_CONTACT.1, allow_hyphen_values = true)]
+    pub plant_kz: f64,
+    /// Virtual plant: true k_x, N/m
+    #[arg(long, default_value_t = DEFAULT_CONTACT.2, allow_hyphen_values = true)]
+    pub plant_kx: f64,
+    /// Virtual plant: first-order lag of the transducers' displacement amplitudes, time constant in drive periods (0 = none)
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub plant_lag_periods: f64,
+    /// Virtual plant: drift of μ0, per second of device time (μ0 stops at 0)
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub plant_mu0_drift: f64,
+    /// Virtual plant: stage velocity profile, CSV `t_s,v0_m_s` (header line, t strictly increasing), piecewise linear in device time, held outside; replaces the constant velocity
+    #[arg(long, value_name = "FILE")]
+    pub v0_profile: Option<std::path::PathBuf>,
+}
+
+impl PlantArgs {
+    /// The checked plant options with the constant velocity `v0` (m/s), ADC
+    /// noise and offset (counts); `names` are the flag names of those three.
+    ///
+    /// # Errors
+    /// One line naming the flag for a value out of its domain or an
+    /// unreadable profile.
+    pub fn options(
+        &self,
+        v0: f64,
+        noise: f64,
+        offset: f64,
+        names: [&str; 3],
+    ) -> crate::error::CliResult<PlantOptions> {
+        use crate::error::CliError;
+        for (x, n) in [
+            (v0, names[0]),
+            (noise, names[1]),
+            (offset, names[2]),
+            (self.plant_mu0_drift, "plant-mu0-drift"),
+        ] {
+            if !x.is_finite() {
+                return Err(CliError::usage(format!("--{n}: must be a finite number")));
+            }
+        }
+        if noise < 0.0 {
+            return Err(CliError::usage(format!("--{}: must be >= 0", names[1])));
+        }
+        for (x, n) in [
+            (self.plant_mu0, "plant-mu0"),
+            (self.plant_kz, "plant-kz"),
+            (self.plant_kx, "plant-kx"),
+        ] {
+            if !(x.is_finite() && x > 0.0) {
+                return Err(CliError::usage(format!("--{n}: must be > 0 (got {x})")));
+            }
+        }
+        if !(self.plant_lag_periods.is_finite() && self.plant_lag_periods >= 0.0) {
+            return Err(CliError::usage(format!(
+                "--plant-lag-periods: must be >= 0 (got {})",
+                self.plant_lag_periods
+            )));
+        }
+        let v0_profile = match &self.v0_profile {
+            Some(p) => Some(read_profile(p)?),
+            None => None,
+        };
+        Ok(PlantOptions {
+            v0,
+            noise_counts: noise,
+            offset_counts: offset,
+            mu0: self.plant_mu0,
+            kz: self.plant_kz,
+            kx: self.plant_kx,
+            lag_periods: self.plant_lag_periods,
+            mu0_drift: self.plant_mu0_drift,
+            v0_profile,
+        })
+    }
+}
+
+/// Reads a velocity profile: CSV with a header line and rows `t_s,v0_m_s`,
+/// finite, t strictly increasing, at least one row.
+///
+/// # Errors
+/// One line naming `--v0-profile`, the file and the line.
+pub fn read_profile(path: &std::path::Path) -> crate::error::CliResult<Vec<(f64, f64)>> {
+    use crate::error::CliError;
+    let bad = |m: String| CliError::usage(format!("--v0-profile: {}: {m}", path.display()));
+    let mut r = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .map_err(|e| bad(e.to_string()))?;
+    let mut out: Vec<(f64, f64)> = Vec::new();
+    for (i, rec) in r.records().enumerate() {
+        let line = i + 2;
+        let rec = rec.map_err(|e| bad(format!("line {line}: {e}")))?;
+        if rec.len() != 2 {
+            return Err(bad(format!(
+                "line {line}: expected 2 columns t_s,v0_m_s, got {}",
+                rec.len()
+            )));
+        }
+        let num = |k: usize| -> crate::error::CliResult<f64> {
+            rec[k]
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| bad(format!("line {line}: '{}' is not a finite number", &rec[k])))
+        };
+        let (t, v) = (num(0)?, num(1)?);
+        if out.last().is_some_and(|(tl, _)| t <= *tl) {
+            return Err(bad(format!("line {line}: t_s must increase strictly")));
+        }
+        out.push((t, v));
+    }
+    if out.is_empty() {
+        return Err(bad("no rows (expected a header and rows t_s,v0_m_s)".into()));
+    }
+    Ok(out)
 }
 
 /// A virtual device with its plant.
@@ -70,12 +250,15 @@ pub struct VirtualDevice {
 struct Plant {
     /// The contact (model-core's scheme in physical units).
     contact: SpringContact<f64>,
-    /// Stage position v0·t, m.
+    /// Stage position ∫v0 dt, m.
     stage: f64,
+    /// The transducers' amplitudes Δu_z, Δu_x now (lagging the DAC's), m.
+    amp: (f64, f64),
 }
 
 impl VirtualDevice {
-    /// A stopped virtual device with contact μ0 = 0.3, k_z = k_x = 10⁷ N/m.
+    /// A stopped virtual device whose model has contact μ0 = 0.3,
+    /// k_z = k_x = 10⁷ N/m ([`DEFAULT_CONTACT`]), with the plant `opts`.
     pub fn new(opts: PlantOptions) -> Self {
         let table: &'static SineTable<TABLE_N> = Box::leak(Box::new(SineTable::libm()));
         let cfg = config();
@@ -83,9 +266,9 @@ impl VirtualDevice {
             cfg,
             table,
             Contact {
-                mu0: 0.3,
-                kz: 1e7,
-                kx: 1e7,
+                mu0: DEFAULT_CONTACT.0 as f32,
+                kz: DEFAULT_CONTACT.1 as f32,
+                kx: DEFAULT_CONTACT.2 as f32,
             },
         )
         .expect("valid virtual configuration");
@@ -93,8 +276,9 @@ impl VirtualDevice {
             dev,
             server: Server::new(info(&cfg)),
             plant: Plant {
-                contact: SpringContact::new(0.3, 1e7, 1e7),
+                contact: SpringContact::new(opts.mu0, opts.kz, opts.kx),
                 stage: 0.0,
+                amp: (0.0, 0.0),
             },
             dac: vec![0; HALF],
             half: 0,
@@ -180,7 +364,6 @@ impl VirtualDevice {
 
     fn step_half(&mut self) {
         let cfg = *self.dev.config();
-        let contact = self.dev.contact();
         // Drive levels now (metres) from the DDS channel states.
         let ch = *self.dev.dds().channels();
         let acc0 = self.dev.dds().accumulator();
@@ -194,19 +377,32 @@ impl VirtualDevice {
             f64::from(cfg.dac_x.metres_per_code),
         );
         let uz0 = (f64::from(ch[0].dc) - f64::from(cfg.dac_z.zero_code)) * mz;
-        let duz = f64::from(ch[0].amp) * mz;
-        let dux = f64::from(ch[1].amp) * mx;
+        let duz_dac = f64::from(ch[0].amp) * mz;
+        let dux_dac = f64::from(ch[1].amp) * mx;
         // ch1 = dc + amp·sin(θ + p1), ch2 = zero + amp·sin(θ + p2): u_z = u_z0 + Δu_z sin(θ + p1),
         // u_x = Δu_x sin(θ + p2) (the device sets p1 = −π/2, p2 = φ + π/2).
         let (p1, p2) = (phase_rad(ch[0].phase), phase_rad(ch[1].phase));
-        let dt = 1.0 / cfg.sample_rate_hz / SUB as f64;
-        self.plant.contact.mu0 = f64::from(contact.mu0);
-        self.plant.contact.kz = f64::from(contact.kz);
-        self.plant.contact.kx = f64::from(contact.kx);
+        let ts = 1.0 / cfg.sample_rate_hz;
+        let dt = ts / SUB as f64;
         let dtheta = TAU * f64::from(tw) / 4_294_967_296.0;
+        // Amplitude lag per sample: exact solution of dA/dt = (A_DAC − A)/τ
+        // over one sample with A_DAC constant, τ = lag_periods/f = lag_periods·2π/(dθ·f_s).
+        let keep = if self.opts.lag_periods > 0.0 && dtheta > 0.0 {
+            (-dtheta / (TAU * self.opts.lag_periods)).exp()
+        } else {
+            0.0
+        };
+        if keep == 0.0 {
+            // No lag: the transducers follow the DAC exactly.
+            self.plant.amp = (duz_dac, dux_dac);
+        }
         let mut samples = Vec::with_capacity(HALF);
         let mut th = phase_rad(acc0);
-        for _ in 0..HALF {
+        for i in 0..HALF {
+            let t_s = (self.samples + i as u64) as f64 * ts;
+            self.plant.contact.mu0 = self.opts.mu0_at(t_s);
+            let v0 = self.opts.v0_at(t_s);
+            let (duz, dux) = self.plant.amp;
             // The sample is taken at θ; then the plant advances to the next tick.
             let uz = uz0 + duz * (th + p1).sin();
             let ux = dux * (th + p2).sin() + self.plant.stage;
@@ -227,13 +423,18 @@ impl VirtualDevice {
             // Sub-steps to the next sample (the paper's scheme on a finer grid).
             for k in 1..=SUB {
                 let t = th + dtheta * k as f64 / SUB as f64;
-                self.plant.stage += self.opts.v0 * dt;
+                self.plant.stage += v0 * dt;
                 self.plant.contact.step(
                     dux * (t + p2).sin() + self.plant.stage,
                     uz0 + duz * (t + p1).sin(),
                 );
             }
             th += dtheta;
+            // The transducers move towards the DAC's amplitudes for the next sample.
+            self.plant.amp = (
+                duz_dac + (duz - duz_dac) * keep,
+                dux_dac + (dux - dux_dac) * keep,
+            );
         }
         self.dev.adc_block(half, &samples);
         self.half ^= 1;

@@ -1,0 +1,660 @@
+//! `fricctl device sweep`: one drive parameter stepped over a grid; per
+//! point the drive is set (the other drive values stay as set on the
+//! device), the ramps and `--settle-periods` more periods are waited for,
+//! μ is measured over `--periods` periods and the device's model predicts μ
+//! at `--v0`; each point becomes one row of the sweep file
+//! ([`crate::sweep_file`]), written whole as soon as it is measured, so an
+//! interrupted sweep continues with `--resume`. Also `scene set --from-fit`.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use clap::{Args, ValueEnum};
+use model_core::device::{Contact, DriveSetting};
+use model_core::protocol::{Request, Response};
+use serde::Serialize;
+
+use super::client::Client;
+use super::{expect, reason_names, unexpected};
+use crate::error::{CliError, CliResult};
+use crate::plot::{render_panels, Mark, Panel, Series};
+use crate::sweep_file::{self, SweepRow};
+
+/// The drive parameter a sweep steps.
+#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SweepParam {
+    /// Phase φ, degrees.
+    PhaseDeg,
+    /// Normal amplitude Δu_z, m.
+    AmpZ,
+    /// Tangential amplitude Δu_x, m.
+    AmpX,
+    /// Normal offset u_z0, m.
+    OffsetZ,
+    /// Frequency, Hz.
+    Freq,
+}
+
+impl SweepParam {
+    /// The name (as in `--param` and the file's `param` column).
+    pub fn name(self) -> &'static str {
+        match self {
+            SweepParam::PhaseDeg => "phase-deg",
+            SweepParam::AmpZ => "amp-z",
+            SweepParam::AmpX => "amp-x",
+            SweepParam::OffsetZ => "offset-z",
+            SweepParam::Freq => "freq",
+        }
+    }
+
+    /// The unit of the value.
+    pub fn unit(self) -> &'static str {
+        match self {
+            SweepParam::PhaseDeg => "°",
+            SweepParam::Freq => "Hz",
+            _ => "m",
+        }
+    }
+
+    /// `d` with this parameter set to `x`.
+    fn apply(self, mut d: DriveSetting, x: f64) -> DriveSetting {
+        match self {
+            SweepParam::PhaseDeg => d.phase_rad = x.to_radians() as f32,
+            SweepParam::AmpZ => d.amp_z_m = x as f32,
+            SweepParam::AmpX => d.amp_x_m = x as f32,
+            SweepParam::OffsetZ => d.offset_z_m = x as f32,
+            SweepParam::Freq => d.freq_hz = x,
+        }
+        d
+    }
+}
+
+/// Flags of `fricctl device sweep`.
+#[derive(Args, Debug, Clone)]
+pub struct SweepArgs {
+    /// The drive parameter to sweep (its unit: ° for phase-deg, Hz for freq, m otherwise)
+    #[arg(long, value_enum)]
+    pub param: SweepParam,
+    /// First value
+    #[arg(long, allow_hyphen_values = true)]
+    pub from: f64,
+    /// Last value
+    #[arg(long, allow_hyphen_values = true)]
+    pub to: f64,
+    /// Number of points, evenly spaced from --from to --to (≥ 1)
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::args::count::<usize, 1>)]
+    pub points: usize,
+    /// Drive periods measured per point (≥ 1)
+    #[arg(long, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 1>)]
+    pub periods: u32,
+    /// Extra drive periods waited (in device time: a discarded measurement) after the device's ramps have settled, for a lagging plant
+    #[arg(long, default_value_t = 0, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 0>)]
+    pub settle_periods: u32,
+    /// Stage (sliding) velocity during the sweep, m/s: the device cannot know it; used for its prediction and written to every row
+    #[arg(long, allow_hyphen_values = true)]
+    pub v0: f64,
+    /// The sweep file (one row per point; refused if it exists, unless --resume)
+    #[arg(long, value_name = "FILE")]
+    pub csv: PathBuf,
+    /// Plot measured μ (±1 standard error) and the device's predicted μ against the swept value to FILE.svg or FILE.png
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+    /// Continue the sweep in --csv: its rows must be this sweep's first points (same parameter and grid, v0, other drive values and device contact); the remaining points are measured and appended
+    #[arg(long)]
+    pub resume: bool,
+}
+
+impl SweepArgs {
+    /// Checks the flags before connecting.
+    ///
+    /// # Errors
+    /// One line naming the flag.
+    pub fn check(&self) -> CliResult {
+        for (x, n) in [(self.from, "from"), (self.to, "to"), (self.v0, "v0")] {
+            if !x.is_finite() {
+                return Err(CliError::usage(format!("--{n}: must be a finite number")));
+            }
+        }
+        if self.points == 1 && self.from != self.to {
+            return Err(CliError::usage(
+                "--points: 1 point needs --from equal to --to",
+            ));
+        }
+        if !self.resume && self.csv.exists() {
+            return Err(CliError::usage(format!(
+                "--csv: {} exists (--resume to continue that sweep, or choose another file)",
+                self.csv.display()
+            )));
+        }
+        if let Some(p) = &self.plot {
+            crate::plot::ext(p)?;
+        }
+        Ok(())
+    }
+
+    /// The swept values, evenly spaced (exact end points).
+    pub fn values(&self) -> Vec<f64> {
+        let n = self.points;
+        (0..n)
+            .map(|i| {
+                if i + 1 == n {
+                    self.to
+                } else {
+                    self.from + (self.to - self.from) * i as f64 / (n - 1).max(1) as f64
+                }
+            })
+            .collect()
+    }
+}
+
+/// What a request answered, or a one-line error.
+fn ask(c: &mut Client, req: Request) -> CliResult<Response> {
+    expect(c.call(req)?)
+}
+
+/// Polls the status until `done` or `limit` elapses.
+fn wait_status(
+    c: &mut Client,
+    limit: Duration,
+    what: &str,
+    done: impl Fn(&model_core::protocol::Status) -> bool,
+) -> CliResult<model_core::protocol::Status> {
+    let start = Instant::now();
+    loop {
+        if let Response::Status(s) = ask(c, Request::GetStatus)? {
+            if done(&s) {
+                return Ok(s);
+            }
+        }
+        if start.elapsed() > limit {
+            return Err(CliError::failure(format!(
+                "{what} did not happen within {} s",
+                limit.as_secs()
+            )));
+        }
+        let _ = c.next_telemetry(Duration::from_millis(20))?;
+    }
+}
+
+/// `(setting, produced frequency Hz, produced phase °)` of a `Drive` answer.
+fn drive_of(r: Response) -> CliResult<(DriveSetting, f64, f64)> {
+    match r {
+        Response::Drive { setting, applied } => Ok((
+            setting,
+            applied.achieved.freq_hz,
+            applied.phase_rad.to_degrees(),
+        )),
+        other => Err(unexpected(other)),
+    }
+}
+
+/// Equal to 1e-9 relative (values written to and read from the file).
+fn same(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(f64::MIN_POSITIVE)
+}
+
+/// The non-swept drive columns of a row, to compare with the device's.
+fn fixed_columns(p: SweepParam, r: &SweepRow) -> Vec<(&'static str, f64)> {
+    let mut v = vec![
+        ("freq_hz", r.freq_hz),
+        ("amp_z", r.amp_z),
+        ("amp_x", r.amp_x),
+        ("offset_z", r.offset_z),
+        ("phi_deg", r.phi_deg),
+    ];
+    let skip = match p {
+        SweepParam::Freq => "freq_hz",
+        SweepParam::AmpZ => "amp_z",
+        SweepParam::AmpX => "amp_x",
+        SweepParam::OffsetZ => "offset_z",
+        SweepParam::PhaseDeg => "phi_deg",
+    };
+    v.retain(|(n, _)| *n != skip);
+    v
+}
+
+/// The rows already in `path` for `--resume` (a cut-off last line is
+/// dropped from the file), checked against this sweep; `probe` is a row
+/// with the device's current non-swept drive, v0 and contact.
+fn resume_rows(a: &SweepArgs, values: &[f64], probe: &SweepRow) -> CliResult<Vec<SweepRow>> {
+    let path = &a.csv;
+    let text = match std::fs::read(path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => {
+            return Err(CliError::failure(format!("--csv: {}: {e}", path.display())));
+        }
+    };
+    if text.is_empty() {
+        return Ok(Vec::new());
+    }
+    if !text.ends_with(b"\n") {
+        // A row cut off by a kill: drop it (it is measured again).
+        let keep = text.iter().rposition(|b| *b == b'\n').map_or(0, |i| i + 1);
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(|e| CliError::failure(format!("--csv: {}: {e}", path.display())))?;
+        f.set_len(keep as u64)
+            .map_err(|e| CliError::failure(format!("--csv: {}: {e}", path.display())))?;
+        eprintln!(
+            "--resume: dropped a cut-off last line of {}",
+            path.display()
+        );
+        if keep == 0 {
+            return Ok(Vec::new());
+        }
+    }
+    let rows = sweep_file::read_as(path, "csv")?;
+    if rows.len() > values.len() {
+        return Err(CliError::usage(format!(
+            "--resume: {} has {} rows, more than --points {}",
+            path.display(),
+            rows.len(),
+            values.len()
+        )));
+    }
+    let other = |line: usize, what: String| {
+        CliError::usage(format!(
+            "--resume: {} line {line} belongs to another sweep: {what}",
+            path.display()
+        ))
+    };
+    for (i, r) in rows.iter().enumerate() {
+        let line = i + 2;
+        if r.param != a.param.name() {
+            return Err(other(
+                line,
+                format!("param {} (this sweep: {})", r.param, a.param.name()),
+            ));
+        }
+        if !same(r.value, values[i]) {
+            return Err(other(
+                line,
+                format!(
+                    "value {} (this sweep's point {}: {})",
+                    r.value,
+                    i + 1,
+                    values[i]
+                ),
+            ));
+        }
+        let mut checks = fixed_columns(a.param, r);
+        checks.extend([
+            ("v0", r.v0),
+            ("model_mu0", r.model_mu0),
+            ("model_kz", r.model_kz),
+            ("model_kx", r.model_kx),
+        ]);
+        let mut now = fixed_columns(a.param, probe);
+        now.extend([
+            ("v0", probe.v0),
+            ("model_mu0", probe.model_mu0),
+            ("model_kz", probe.model_kz),
+            ("model_kx", probe.model_kx),
+        ]);
+        for ((n, x), (_, y)) in checks.iter().zip(&now) {
+            if !same(*x, *y) {
+                return Err(other(line, format!("{n} {x} (now {y})")));
+            }
+        }
+    }
+    Ok(rows)
+}
+
+/// `fricctl device sweep`.
+///
+/// # Errors
+/// One line: bad flags or a file of another sweep (exit 2), a device that
+/// refuses or does not answer, or invalid estimates at some points (exit 1,
+/// after all rows are written).
+pub fn run(c: &mut Client, a: &SweepArgs, json: bool) -> CliResult {
+    let values = a.values();
+    let (base, freq0, phi0) = drive_of(ask(c, Request::GetDrive)?)?;
+    let Response::Contact(contact) = ask(c, Request::GetContact)? else {
+        return Err(CliError::failure("the device did not report its contact"));
+    };
+    let Response::Status(st) = ask(c, Request::GetStatus)? else {
+        return Err(CliError::failure("the device did not report its status"));
+    };
+    if !st.running {
+        return Err(CliError::failure(
+            "the drive is stopped: `fricctl device start` first (a sweep measures a running drive)",
+        ));
+    }
+    // A row with the device's current drive: the fixed columns of this sweep.
+    let probe = row_for(a, f64::NAN, &base, freq0, phi0, contact);
+    let mut rows = if a.resume {
+        resume_rows(a, &values, &probe)?
+    } else {
+        Vec::new()
+    };
+    let fresh = rows.is_empty() && std::fs::metadata(&a.csv).map_or(true, |m| m.len() == 0);
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(!fresh)
+        .write(true)
+        .truncate(fresh)
+        .open(&a.csv)
+        .map_err(|e| CliError::failure(format!("--csv: {}: {e}", a.csv.display())))?;
+    let io = |e: csv::Error| CliError::failure(format!("--csv: {}: {e}", a.csv.display()));
+    let mut w = csv::WriterBuilder::new()
+        .has_headers(false)
+        .from_writer(file);
+    if fresh {
+        // The header first, on disk before any measurement.
+        w.write_record(HEADER).map_err(io)?;
+        w.flush().map_err(|e| io(e.into()))?;
+    }
+    if !rows.is_empty() {
+        eprintln!(
+            "resuming: {} of {} points already in {}",
+            rows.len(),
+            values.len(),
+            a.csv.display()
+        );
+    }
+    let bar = indicatif::ProgressBar::new(values.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:30} {pos}/{len} points  {msg}  [{elapsed_precise}, eta {eta}]",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar.set_position(rows.len() as u64);
+    for &x in &values[rows.len()..] {
+        bar.set_message(format!("{} = {x} {}", a.param.name(), a.param.unit()));
+        let (setting, freq, phi) = drive_of(ask(c, Request::SetDrive(a.param.apply(base, x)))?)?;
+        wait_status(c, Duration::from_secs(60), "settling of the ramps", |s| {
+            s.settled
+        })?;
+        if a.settle_periods > 0 {
+            // S periods of *device* time: a measurement whose result is
+            // dropped (a host clock would be wrong for a device that runs
+            // slower than real time, like a virtual one on a busy machine).
+            ask(
+                c,
+                Request::Measure {
+                    periods: a.settle_periods,
+                },
+            )
+            .map_err(|e| CliError {
+                code: e.code,
+                msg: e.msg.replace("--periods", "--settle-periods"),
+            })?;
+            let limit = Duration::from_secs_f64(60.0 + 10.0 * f64::from(a.settle_periods) / freq);
+            wait_status(c, limit, "the end of the settling periods", |s| {
+                !s.measuring
+            })?;
+        }
+        ask(c, Request::Measure { periods: a.periods })?;
+        let limit = Duration::from_secs_f64(60.0 + 10.0 * f64::from(a.periods) / freq);
+        wait_status(c, limit, "the end of the measurement", |s| !s.measuring)?;
+        let Response::Estimate(e) = ask(c, Request::GetEstimate)? else {
+            return Err(CliError::failure(
+                "the device did not answer with an estimate",
+            ));
+        };
+        let Response::Prediction { prediction, .. } = ask(c, Request::Predict { v0: a.v0 as f32 })?
+        else {
+            return Err(CliError::failure(
+                "the device did not answer with a prediction",
+            ));
+        };
+        let mut r = row_for(a, x, &setting, freq, phi, contact);
+        r.measured_mu = f64::from(e.mu);
+        r.std_error = f64::from(e.std_error);
+        r.predicted_mu = f64::from(prediction.mu);
+        r.valid = e.valid();
+        r.reasons = reason_names(e.reasons).join(";");
+        w.serialize(&r).map_err(io)?;
+        w.flush().map_err(|e| io(e.into()))?;
+        bar.inc(1);
+        rows.push(r);
+    }
+    bar.finish_and_clear();
+    if let Some(p) = &a.plot {
+        plot(p, a, &rows)?;
+        eprintln!("wrote {}", p.display());
+    }
+    print_rows(a, &rows, json)?;
+    let bad = rows.iter().filter(|r| !r.valid).count();
+    if bad > 0 {
+        return Err(CliError::failure(format!(
+            "{bad} of {} points gave invalid estimates (kept in {} with valid = false; fit skips them)",
+            rows.len(),
+            a.csv.display()
+        )));
+    }
+    Ok(())
+}
+
+/// The file's header (the field names of [`SweepRow`], in order).
+const HEADER: [&str; 16] = [
+    "param",
+    "value",
+    "freq_hz",
+    "amp_z",
+    "amp_x",
+    "offset_z",
+    "phi_deg",
+    "v0",
+    "model_mu0",
+    "model_kz",
+    "model_kx",
+    "measured_mu",
+    "std_error",
+    "predicted_mu",
+    "valid",
+    "reasons",
+];
+
+/// A row with the drive and contact filled in (results empty).
+fn row_for(a: &SweepArgs, x: f64, d: &DriveSetting, freq: f64, phi: f64, k: Contact) -> SweepRow {
+    SweepRow {
+        param: a.param.name().to_string(),
+        value: x,
+        freq_hz: freq,
+        amp_z: f64::from(d.amp_z_m),
+        amp_x: f64::from(d.amp_x_m),
+        offset_z: f64::from(d.offset_z_m),
+        phi_deg: phi,
+        v0: a.v0,
+        model_mu0: f64::from(k.mu0),
+        model_kz: f64::from(k.kz),
+        model_kx: f64::from(k.kx),
+        measured_mu: f64::NAN,
+        std_error: 0.0,
+        predicted_mu: f64::NAN,
+        valid: false,
+        reasons: String::new(),
+    }
+}
+
+#[derive(Serialize)]
+struct SweepOut<'a> {
+    csv: String,
+    param: &'a str,
+    v0: f64,
+    periods: u32,
+    settle_periods: u32,
+    rows: &'a [SweepRow],
+}
+
+fn print_rows(a: &SweepArgs, rows: &[SweepRow], json: bool) -> CliResult {
+    let mut out = std::io::stdout().lock();
+    let fail = |e: std::io::Error| CliError::failure(format!("stdout: {e}"));
+    if json {
+        let s = serde_json::to_string_pretty(&SweepOut {
+            csv: a.csv.display().to_string(),
+            param: a.param.name(),
+            v0: a.v0,
+            periods: a.periods,
+            settle_periods: a.settle_periods,
+            rows,
+        })
+        .map_err(|e| CliError::failure(format!("JSON: {e}")))?;
+        return writeln!(out, "{s}").map_err(fail);
+    }
+    let head = format!("{} ({})", a.param.name(), a.param.unit());
+    writeln!(
+        out,
+        "{head:>16}  {:>10}  {:>9}  {:>10}  {:>10}  valid",
+        "measured μ", "± std err", "predicted", "meas−pred"
+    )
+    .map_err(fail)?;
+    for r in rows {
+        let value = match a.param {
+            SweepParam::PhaseDeg | SweepParam::Freq => format!("{:.4}", r.value),
+            _ => format!("{:.4e}", r.value),
+        };
+        writeln!(
+            out,
+            "{value:>16}  {:>10.6}  {:>9.2e}  {:>10.6}  {:>10.2e}  {}",
+            r.measured_mu,
+            r.std_error,
+            r.predicted_mu,
+            r.measured_mu - r.predicted_mu,
+            if r.valid {
+                "yes".to_string()
+            } else {
+                format!("no ({})", r.reasons)
+            }
+        )
+        .map_err(fail)?;
+    }
+    writeln!(
+        out,
+        "{} points, v0 = {} m/s, {} periods each (+{} settle), rows in {}",
+        rows.len(),
+        a.v0,
+        a.periods,
+        a.settle_periods,
+        a.csv.display()
+    )
+    .map_err(fail)
+}
+
+/// Measured μ with ±1 standard-error bars and the device's predicted μ
+/// against the swept value.
+fn plot(path: &Path, a: &SweepArgs, rows: &[SweepRow]) -> CliResult {
+    let mut meas = Vec::new();
+    let mut bars = Vec::new();
+    let mut pred = Vec::new();
+    let (mut xlo, mut xhi) = (f64::INFINITY, f64::NEG_INFINITY);
+    let (mut ylo, mut yhi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for r in rows.iter().filter(|r| r.measured_mu.is_finite()) {
+        meas.push((r.value, r.measured_mu));
+        bars.extend([
+            (r.value, r.measured_mu - r.std_error),
+            (r.value, r.measured_mu + r.std_error),
+            (r.value, f64::NAN),
+        ]);
+        pred.push((r.value, r.predicted_mu));
+        xlo = xlo.min(r.value);
+        xhi = xhi.max(r.value);
+        for y in [
+            r.measured_mu - r.std_error,
+            r.measured_mu + r.std_error,
+            r.predicted_mu,
+        ] {
+            ylo = ylo.min(y);
+            yhi = yhi.max(y);
+        }
+    }
+    if meas.is_empty() {
+        return Err(CliError::failure("--plot: no measured point to plot"));
+    }
+    let xpad = if xhi > xlo { 0.05 * (xhi - xlo) } else { 1.0 };
+    let ypad = if yhi > ylo { 0.1 * (yhi - ylo) } else { 0.01 };
+    let r0 = &rows[0];
+    let mut fixed: Vec<String> = fixed_columns(a.param, r0)
+        .into_iter()
+        .map(|(n, v)| match n {
+            "freq_hz" => format!("f = {v:.1} Hz"),
+            "phi_deg" => format!("φ = {v:.2}°"),
+            "amp_z" => format!("Δu_z = {v:.2e} m"),
+            "amp_x" => format!("Δu_x = {v:.2e} m"),
+            _ => format!("u_z0 = {v:.2e} m"),
+        })
+        .collect();
+    fixed.push(format!("v0 = {} m/s", a.v0));
+    let panel = Panel {
+        title: format!("sweep of {}: {}", a.param.name(), fixed.join(", ")),
+        x_label: format!("{} ({})", a.param.name(), a.param.unit()),
+        y_label: format!(
+            "μ (device model: μ0 = {:.4}, kz = {:.3e} N/m, kx = {:.3e} N/m)",
+            r0.model_mu0, r0.model_kz, r0.model_kx
+        ),
+        x: (xlo - xpad, xhi + xpad),
+        y: (ylo - ypad, yhi + ypad),
+        series: vec![
+            Series {
+                label: "predicted μ (device model)".into(),
+                points: pred,
+                mark: Mark::Line,
+                color: 1,
+            },
+            Series {
+                label: "measured μ".into(),
+                points: meas,
+                mark: Mark::Points,
+                color: 0,
+            },
+            Series {
+                label: "±1 standard error".into(),
+                points: bars,
+                mark: Mark::Line,
+                color: 0,
+            },
+        ],
+    };
+    render_panels(path, &[panel], 1, 1, (1100, 650))
+}
+
+/// μ0, k_z, k_x for `scene set`: from the flags, or from the JSON that
+/// `fricctl fit --out` wrote (keys `mu0`, `kz`, `kx`).
+///
+/// # Errors
+/// One line naming the flag (or the file and key) for a value that is not > 0
+/// or a file that is not a fit result.
+pub fn scene_values(
+    mu0: Option<f64>,
+    kz: Option<f64>,
+    kx: Option<f64>,
+    from_fit: Option<&Path>,
+) -> CliResult<(f64, f64, f64)> {
+    let (vals, src): ([Option<f64>; 3], String) = match from_fit {
+        Some(p) => {
+            let text = std::fs::read_to_string(p).map_err(|e| {
+                CliError::usage(format!("--from-fit: cannot read {}: {e}", p.display()))
+            })?;
+            let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+                CliError::usage(format!(
+                    "--from-fit: {} is not JSON (expected `fricctl fit --out` output): {e}",
+                    p.display()
+                ))
+            })?;
+            let get = |k: &str| v.get(k).and_then(serde_json::Value::as_f64);
+            (
+                [get("mu0"), get("kz"), get("kx")],
+                format!("--from-fit: {} key ", p.display()),
+            )
+        }
+        None => ([mu0, kz, kx], "--".to_string()),
+    };
+    let mut out = [0.0; 3];
+    for ((x, name), o) in vals.iter().zip(["mu0", "kz", "kx"]).zip(&mut out) {
+        match x {
+            Some(x) if x.is_finite() && *x > 0.0 => *o = *x,
+            Some(x) => {
+                return Err(CliError::usage(format!(
+                    "{src}{name}: must be > 0 (got {x})"
+                )));
+            }
+            None => return Err(CliError::usage(format!("{src}{name}: missing"))),
+        }
+    }
+    Ok((out[0], out[1], out[2]))
+}
