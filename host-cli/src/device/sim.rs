@@ -165,6 +165,20 @@ impl VirtualDevice {
         out
     }
 
+    /// Drive stopped and settled, no measurement (nor stream): the plant's
+    /// samples reach nothing, so a server loop may [`VirtualDevice::skip`]
+    /// instead of simulating them.
+    pub fn quiescent(&self) -> bool {
+        let s = self.dev.status();
+        !s.running && s.settled && !s.measuring
+    }
+
+    /// Moves the device clock on by `samples` without simulating the plant
+    /// (for a [`VirtualDevice::quiescent`] device).
+    pub fn skip(&mut self, samples: u64) {
+        self.samples += samples;
+    }
+
     /// Samples per second.
     pub fn sample_rate(&self) -> f64 {
         self.dev.config().sample_rate_hz
