@@ -18,8 +18,8 @@ use model_core::protocol::{Request, Response, WireError};
 use serialport::SerialPort;
 
 use self::client::Client;
-use self::render::Report;
 use self::link::{Link, SerialLink, SimLink, TcpLink};
+use self::render::Report;
 use self::sim::{PlantOptions, VirtualDevice};
 use crate::error::{CliError, CliResult};
 
@@ -429,7 +429,11 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
                 kz: *kz as f32,
                 kx: *kx as f32,
             };
-            done(c.call(Request::SetContact(contact))?, "scene set", "")?;
+            done(
+                c.call(Request::SetContact(contact))?,
+                "scene set",
+                "contact set",
+            )?;
             out(t.json, &render::contact(&contact))
         }
         DeviceCmd::Predict { v0 } => {
@@ -536,7 +540,11 @@ fn print_ports(json: bool, list: &[(String, String)]) -> CliResult {
             .iter()
             .map(|(p, k)| serde_json::json!({"port": p, "kind": k}))
             .collect();
-        writeln!(o, "{}", serde_json::to_string_pretty(&v).unwrap_or_default())
+        writeln!(
+            o,
+            "{}",
+            serde_json::to_string_pretty(&v).unwrap_or_default()
+        )
     } else if list.is_empty() {
         writeln!(o, "no serial ports found")
     } else {

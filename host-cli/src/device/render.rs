@@ -35,6 +35,21 @@ fn deg(rad: f64) -> f64 {
     (rad.to_degrees() * 1e9).round() / 1e9
 }
 
+/// Degrees of an `f32` phase: the shortest decimal number of degrees that
+/// converts back to the same `f32` radians (40° prints as 40, not as
+/// 40.0000022 — the f32's own resolution is ≈ 4e-6° there).
+fn deg32(rad: f32) -> f64 {
+    let d = f64::from(rad).to_degrees();
+    for p in 0..=9 {
+        if let Ok(x) = format!("{d:.p$}").parse::<f64>() {
+            if x.to_radians() as f32 == rad {
+                return x;
+            }
+        }
+    }
+    d
+}
+
 impl Report {
     /// A row with a value and a unit ("" for none).
     pub fn row(
@@ -123,8 +138,13 @@ pub fn info(answered_by: &str, i: &Info) -> Report {
         .row("freq_max_hz", "frequency max", i.freq_range_hz.1, "Hz")
         .row("max_amp_x_m", "max dux", f32v(i.max_amp_x_m), "m")
         .row("max_offset_z_m", "max uz0", f32v(i.max_offset_z_m), "m")
-        .row("liftoff_margin", "lift-off margin", f32v(i.liftoff_margin), "")
-        .row("max_phi_deg", "max |phi|", deg(f64::from(i.max_phase_rad)), "deg")
+        .row(
+            "liftoff_margin",
+            "lift-off margin",
+            f32v(i.liftoff_margin),
+            "",
+        )
+        .row("max_phi_deg", "max |phi|", deg32(i.max_phase_rad), "deg")
         .row("max_v0", "max |v0|", f32v(i.max_velocity_m_s), "m/s")
         .row("periods_min", "periods min", i.periods_range.0, "")
         .row("periods_max", "periods max", i.periods_range.1, "")
@@ -132,7 +152,9 @@ pub fn info(answered_by: &str, i: &Info) -> Report {
 }
 
 fn board_name(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).trim_end_matches('\0').to_string()
+    String::from_utf8_lossy(b)
+        .trim_end_matches('\0')
+        .to_string()
 }
 
 /// The accepted drive and what the DDS produces.
@@ -142,7 +164,7 @@ pub fn drive(d: &DriveSetting, a: &Applied) -> Report {
         .row("duz", "duz", f32v(d.amp_z_m), "m")
         .row("dux", "dux", f32v(d.amp_x_m), "m")
         .row("uz0", "uz0", f32v(d.offset_z_m), "m")
-        .row("phi_deg", "phi", deg(f64::from(d.phase_rad)), "deg")
+        .row("phi_deg", "phi", deg32(d.phase_rad), "deg")
         .row("freq_achieved", "freq achieved", a.achieved.freq_hz, "Hz")
         .row("tuning_word", "tuning word", a.achieved.tuning_word, "")
         .row("phi_achieved_deg", "phi achieved", deg(a.phase_rad), "deg")
@@ -160,7 +182,8 @@ pub fn contact(c: &Contact) -> Report {
 pub fn done(command: &'static str, what: &'static str) -> Report {
     Report::default()
         .row("command", "command", command, "")
-        .row("ok", "done", what, "")
+        .row("ok", "ok", true, "")
+        .row("note", "note", what, "")
 }
 
 /// The model's μ at `v0` for the current drive (keys of `fricctl mu`): at
@@ -228,18 +251,28 @@ pub fn estimate(e: &Estimate) -> Report {
         .row("saturated", "saturated", e.saturated, "")
         .row("fx_mean", "fx mean", f32v(e.fx_mean), "N")
         .row("fz_mean", "fz mean", f32v(e.fz_mean), "N")
-        .row("fx_h1_amplitude", "fx 1st harmonic", f32v(e.fx_h1.amplitude), "N")
+        .row(
+            "fx_h1_amplitude",
+            "fx 1st harmonic",
+            f32v(e.fx_h1.amplitude),
+            "N",
+        )
         .row(
             "fx_h1_phase_deg",
             "fx 1st harmonic phase",
-            deg(f64::from(e.fx_h1.phase)),
+            deg32(e.fx_h1.phase),
             "deg",
         )
-        .row("fz_h1_amplitude", "fz 1st harmonic", f32v(e.fz_h1.amplitude), "N")
+        .row(
+            "fz_h1_amplitude",
+            "fz 1st harmonic",
+            f32v(e.fz_h1.amplitude),
+            "N",
+        )
         .row(
             "fz_h1_phase_deg",
             "fz 1st harmonic phase",
-            deg(f64::from(e.fz_h1.phase)),
+            deg32(e.fz_h1.phase),
             "deg",
         )
 }
@@ -268,10 +301,7 @@ mod tests {
             kz: 1e7,
             kx: 2.5e6,
         });
-        assert_eq!(
-            r.text(),
-            "mu0  0.3\nkz   10000000 N/m\nkx   2500000 N/m\n"
-        );
+        assert_eq!(r.text(), "mu0  0.3\nkz   10000000 N/m\nkx   2500000 N/m\n");
         assert_eq!(
             r.json(),
             serde_json::json!({"mu0": 0.3, "kz": 1e7, "kx": 2.5e6})

@@ -52,7 +52,9 @@ fn send(p: &mut dyn Port, bytes: &[u8], lost: &mut u64) -> io::Result<()> {
             Err(e)
                 if matches!(
                     e.kind(),
-                    io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock | io::ErrorKind::Interrupted
+                    io::ErrorKind::TimedOut
+                        | io::ErrorKind::WouldBlock
+                        | io::ErrorKind::Interrupted
                 ) =>
             {
                 // The host's deframer resynchronises on the next delimiter.
@@ -128,11 +130,7 @@ pub fn serve_pty(
 
 /// Serves TCP clients one at a time until `deadline`; the device runs on
 /// between connections.
-pub fn serve_tcp(
-    dev: &mut VirtualDevice,
-    l: TcpListener,
-    deadline: Option<Instant>,
-) -> CliResult {
+pub fn serve_tcp(dev: &mut VirtualDevice, l: TcpListener, deadline: Option<Instant>) -> CliResult {
     let (tx, rx) = mpsc::channel();
     std::thread::spawn(move || {
         for s in l.incoming() {
@@ -148,7 +146,11 @@ pub fn serve_tcp(
             report_lost(lost);
             return Ok(());
         }
-        let wait = if dev.quiescent() { IDLE_WAIT } else { BUSY_WAIT };
+        let wait = if dev.quiescent() {
+            IDLE_WAIT
+        } else {
+            BUSY_WAIT
+        };
         match rx.recv_timeout(wait) {
             Ok(Ok(mut s)) => {
                 let peer = s.peer_addr().map(|a| a.to_string()).unwrap_or_default();
@@ -185,7 +187,11 @@ fn pump(
         if deadline.is_some_and(|d| Instant::now() >= d) {
             return Ok(());
         }
-        let want = if dev.quiescent() { IDLE_WAIT } else { BUSY_WAIT };
+        let want = if dev.quiescent() {
+            IDLE_WAIT
+        } else {
+            BUSY_WAIT
+        };
         if want != wait {
             s.set_wait(want)?;
             wait = want;
@@ -199,7 +205,9 @@ fn pump(
             Err(e)
                 if matches!(
                     e.kind(),
-                    io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock | io::ErrorKind::Interrupted
+                    io::ErrorKind::TimedOut
+                        | io::ErrorKind::WouldBlock
+                        | io::ErrorKind::Interrupted
                 ) => {}
             Err(e) => return Err(e),
         }
