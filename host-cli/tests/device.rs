@@ -812,5 +812,8 @@ fn the_virtual_device_survives_a_host_that_stops_reading() {
     // `reset` ends the stream; the device answers and nothing measures.
     assert_eq!(ok_json(&s, &["reset"])["ok"], true);
     let st = ok_json(&s, &["status"]);
-    assert_eq!((&st["measuring"], &st["running"]), (&Value::from(false), &Value::from(false)));
+    assert_eq!(
+        (&st["measuring"], &st["running"]),
+        (&Value::from(false), &Value::from(false))
+    );
 }

@@ -89,15 +89,10 @@ impl Clock {
         self.last = now;
         let half = sim::HALF as f64;
         if dev.quiescent() {
-            // Move the clock, keep one half-buffer per turn simulated so that
-            // telemetry due (e.g. RampDone) is still polled.
+            // Move the clock in whole half-buffers; nothing is simulated.
             let whole = (self.debt / half).floor();
-            if whole >= 1.0 {
-                dev.skip((whole as u64 - 1) * sim::HALF as u64);
-                self.debt -= whole * half;
-                return dev.advance(sim::HALF);
-            }
-            return Vec::new();
+            self.debt -= whole * half;
+            return dev.skip(whole as u64 * sim::HALF as u64);
         }
         // At most 50 ms of simulation per turn, so requests stay responsive.
         let n = self.debt.min(rate / 20.0);
@@ -199,6 +194,10 @@ fn pump(
         match s.read(&mut buf) {
             Ok(0) => return Ok(()),
             Ok(n) => {
+                // The device's clock first: the bytes arrive at its "now"
+                // (the inter-byte timeout is measured on it).
+                let t = clock.tick(dev);
+                send(s, &t, lost)?;
                 let reply = dev.receive(&buf[..n]);
                 send(s, &reply, lost)?;
             }

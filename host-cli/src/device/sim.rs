@@ -174,9 +174,13 @@ impl VirtualDevice {
     }
 
     /// Moves the device clock on by `samples` without simulating the plant
-    /// (for a [`VirtualDevice::quiescent`] device).
-    pub fn skip(&mut self, samples: u64) {
+    /// (for a [`VirtualDevice::quiescent`] device); returns the telemetry due.
+    pub fn skip(&mut self, samples: u64) -> Vec<u8> {
         self.samples += samples;
+        let mut out = Vec::new();
+        self.server
+            .poll(&mut self.dev, |b| out.extend_from_slice(b));
+        out
     }
 
     /// Samples per second.
