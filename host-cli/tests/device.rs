@@ -694,7 +694,7 @@ fn stream_status(s: &Sim) -> Value {
 }
 
 #[test]
-fn watch_stops_its_stream_on_count_on_ctrl_c_and_on_a_closed_stdout() {
+fn watch_stops_its_stream_on_count_ctrl_c_sigterm_and_a_closed_stdout() {
     let s = sim();
     ok_json(&s, DRIVE);
     ok_json(&s, &["start"]);
@@ -765,6 +765,33 @@ fn watch_stops_its_stream_on_count_on_ctrl_c_and_on_a_closed_stdout() {
     assert!(text.ends_with('\n'));
     assert_eq!(stream_status(&s)["measuring"], false);
     assert_eq!(ok_json(&s, &["measure", "--periods", "200"])["valid"], true);
+
+    // SIGTERM (as `timeout` sends): the same.
+    let mut child = StdCommand::cargo_bin("fricctl")
+        .unwrap()
+        .args(["device", "--port", &s.path, "watch", "--periods", "200"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut first = String::new();
+    out.read_line(&mut first).unwrap();
+    let k = StdCommand::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(k.success());
+    let t = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        assert!(
+            t.elapsed() < Duration::from_secs(10),
+            "watch ignored SIGTERM"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    drop(out);
+    assert_eq!(stream_status(&s)["measuring"], false);
 
     // stdout closed after the first line (as `| head -1`): the stream is stopped.
     let mut child = StdCommand::cargo_bin("fricctl")

@@ -19,7 +19,8 @@ use crate::error::{CliError, CliResult};
 pub const CSV_HEADER: &str =
     "seq,dropped,mu,std_error,valid,reasons,periods,samples,saturated,fx_mean,fz_mean";
 
-/// A flag set by Ctrl-C (SIGINT) once the handler is installed.
+/// A flag set by Ctrl-C (SIGINT), SIGTERM (`timeout`, `kill`) or SIGHUP (the
+/// terminal closed) once the handler is installed.
 fn interrupt_flag() -> Arc<AtomicBool> {
     let flag = Arc::new(AtomicBool::new(false));
     let f = flag.clone();
