@@ -844,3 +844,51 @@ fn the_virtual_device_survives_a_host_that_stops_reading() {
         (&Value::from(false), &Value::from(false))
     );
 }
+
+#[test]
+fn over_tcp_the_device_runs_between_connections_and_measures_as_over_a_pty() {
+    let mut child = StdCommand::cargo_bin("fricctl")
+        .unwrap()
+        .args(["sim-device", "--tcp", "127.0.0.1:0", "--seconds", "60"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    let addr = line.trim().to_string();
+    let run = |args: &[&str]| {
+        let o = Command::cargo_bin("fricctl")
+            .unwrap()
+            .args(["device", "--tcp", &addr, "--json"])
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        serde_json::from_slice::<Value>(&o.stdout).unwrap()
+    };
+    run(DRIVE);
+    run(&["start"]);
+    // No client for 300 ms: the soft start (≈ 45 ms of device time) must go on
+    // meanwhile (it stood still before, and `measure` then gave μ = 0.1145,
+    // `not_settled, saturated`).
+    std::thread::sleep(Duration::from_millis(300));
+    let e = run(&["measure", "--periods", "2000"]);
+    let p = run(&["predict", "--v0", "0.004"]);
+    let (mu, pred) = (e["mu"].as_f64().unwrap(), p["mu"].as_f64().unwrap());
+    let allowed = measured_vs_predicted_bound(&e);
+    println!(
+        "tcp sim: measured {mu}, predicted {pred}, |Δ| = {:.1e} ≤ {allowed:.1e}",
+        (mu - pred).abs()
+    );
+    assert_eq!(e["valid"], true, "{e}");
+    assert!((mu - pred).abs() <= allowed, "{e}");
+    let _ = child.kill();
+    let _ = child.wait();
+}
