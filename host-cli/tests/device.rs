@@ -594,6 +594,8 @@ fn json_is_flat_with_the_model_commands_keys_and_text_has_units() {
             "regime",
         ],
     );
+    // v0 as the device received it (f32), in its shortest form.
+    assert_eq!(p["v0"], Value::from(0.004));
     let host = common::host_mu_of_test_drive();
     for k in ["mu", "mu_over_mu0", "vc_forward", "vc_backward"] {
         // f32 device model vs the f64 host model: 1e-5 relative (f32's 6e-8

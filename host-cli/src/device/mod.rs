@@ -443,7 +443,7 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             match expect(c.call(Request::Predict { v0: *v0 as f32 })?)? {
                 Response::Prediction { prediction, regime } => out(
                     t.json,
-                    &render::prediction(f64::from(*v0 as f32), &prediction, regime),
+                    &render::prediction(render::f32v(*v0 as f32), &prediction, regime),
                 ),
                 other => Err(unexpected(other)),
             }
