@@ -112,9 +112,7 @@ fn every_command_over_a_pty() {
     assert_eq!(info["protocol"], PROTOCOL_VERSION);
     assert_eq!(info["board"], "virtual device");
     let d = ok_json(&s, DRIVE);
-    let f = d["Drive"]["applied"]["achieved"]["freq_hz"]
-        .as_f64()
-        .unwrap();
+    let f = d["freq_achieved"].as_f64().unwrap();
     assert!((f - 20_000.0).abs() < 0.001);
     assert_eq!(ok_json(&s, &["drive", "get"]), d);
     assert_eq!(
@@ -122,21 +120,14 @@ fn every_command_over_a_pty() {
             &s,
             &["scene", "set", "--mu0", "0.3", "--kz", "1e7", "--kx", "1e7"]
         ),
-        "Ok"
+        serde_json::json!({"mu0": 0.3, "kz": 1e7, "kx": 1e7})
     );
-    assert!(
-        (ok_json(&s, &["scene", "get"])["Contact"]["mu0"]
-            .as_f64()
-            .unwrap()
-            - 0.3)
-            .abs()
-            < 1e-7
-    );
-    assert_eq!(ok_json(&s, &["start"]), "Ok");
+    assert!((ok_json(&s, &["scene", "get"])["mu0"].as_f64().unwrap() - 0.3).abs() < 1e-7);
+    assert_eq!(ok_json(&s, &["start"])["ok"], true);
     std::thread::sleep(Duration::from_millis(300)); // ramps (≈ 2 ms of device time)
-    assert_eq!(ok_json(&s, &["status"])["Status"]["running"], true);
+    assert_eq!(ok_json(&s, &["status"])["running"], true);
     let p = ok_json(&s, &["predict", "--v0", "0.004"]);
-    let pred = p["Prediction"]["prediction"]["mu"].as_f64().unwrap();
+    let pred = p["mu"].as_f64().unwrap();
     // The prediction equals the host model for the same scene (f32 tolerance).
     let host = common::host_mu_of_test_drive();
     assert!(
@@ -145,8 +136,8 @@ fn every_command_over_a_pty() {
     );
     // The measurement of the simulated plant (stage at 4 mm/s, the sim's default) agrees.
     let e = ok_json(&s, &["measure", "--periods", "2000"]);
-    let mu = e["Estimate"]["mu"].as_f64().unwrap();
-    let allowed = measured_vs_predicted_bound(&e["Estimate"]);
+    let mu = e["mu"].as_f64().unwrap();
+    let allowed = measured_vs_predicted_bound(&e);
     println!(
         "pty sim: measured {mu}, predicted {pred}, |Δ| = {:.1e} ≤ {allowed:.1e}",
         (mu - pred).abs()
@@ -155,7 +146,7 @@ fn every_command_over_a_pty() {
         (mu - pred).abs() <= allowed,
         "measured {mu}, predicted {pred} (bound {allowed:e})"
     );
-    assert_eq!(e["Estimate"]["saturated"], false);
+    assert_eq!(e["saturated"], false);
     // watch: two streamed estimates, recorded to CSV.
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("w.csv");
@@ -174,8 +165,8 @@ fn every_command_over_a_pty() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(String::from_utf8_lossy(&o.stdout).lines().count(), 2);
     assert_eq!(std::fs::read_to_string(&csv).unwrap().lines().count(), 3);
-    assert_eq!(ok_json(&s, &["stop"]), "Ok");
-    assert_eq!(ok_json(&s, &["reset-faults"]), "Ok");
+    assert_eq!(ok_json(&s, &["stop"])["ok"], true);
+    assert_eq!(ok_json(&s, &["reset-faults"])["ok"], true);
 }
 
 #[test]
@@ -338,11 +329,8 @@ fn in_process_virtual_device_keeps_its_state_and_measures() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let e: Value = serde_json::from_slice(&o.stdout).unwrap();
     let p: Value = serde_json::from_slice(&run(&["predict", "--v0", "0.004"]).stdout).unwrap();
-    let (mu, pred) = (
-        e["Estimate"]["mu"].as_f64().unwrap(),
-        p["Prediction"]["prediction"]["mu"].as_f64().unwrap(),
-    );
-    let allowed = measured_vs_predicted_bound(&e["Estimate"]);
+    let (mu, pred) = (e["mu"].as_f64().unwrap(), p["mu"].as_f64().unwrap());
+    let allowed = measured_vs_predicted_bound(&e);
     println!(
         "in-process sim: measured {mu}, predicted {pred}, |Δ| = {:.1e} ≤ {allowed:.1e}",
         (mu - pred).abs()
@@ -389,8 +377,8 @@ fn invalid_estimates_exit_1_naming_the_reason_unless_allowed() {
     let o = run(&["measure", "--periods", "200", "--allow-invalid"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let e: Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(e["Estimate"]["valid"], false);
-    assert!(e["Estimate"]["reasons"]
+    assert_eq!(e["valid"], false);
+    assert!(e["reasons"]
         .as_array()
         .unwrap()
         .contains(&Value::from("not_running")));
@@ -399,9 +387,9 @@ fn invalid_estimates_exit_1_naming_the_reason_unless_allowed() {
     let o = run(&["measure", "--periods", "2000"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let e: Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(e["Estimate"]["valid"], true);
-    assert_eq!(e["Estimate"]["reasons"], serde_json::json!([]));
-    let se = e["Estimate"]["std_error"].as_f64().unwrap();
+    assert_eq!(e["valid"], true);
+    assert_eq!(e["reasons"], serde_json::json!([]));
+    let se = e["std_error"].as_f64().unwrap();
     // ±1 count of uniform ADC noise (the sim's default) on f_x at 0.01 N/count
     // over N = 2000·12.5 samples, f̄_z = 40 N: σ/(f̄_z √N) = 0.01·(1/√3)/(40·158)
     // ≈ 9e-7; the batch scatter adds the plant's slow settling, so only the
@@ -458,4 +446,451 @@ fn a_retried_measure_gets_the_same_answer_and_reset_ends_everything() {
     assert!(!raw_status(p, 51).measuring);
     assert_eq!(ask(p, &measure_50).body, Body::Response(Response::Ok));
     assert!(!raw_status(p, 52).measuring);
+}
+
+/// `fricctl device --port P ARGS` in text mode (no `--json`).
+fn dev_text(s: &Sim, args: &[&str]) -> String {
+    let o = Command::cargo_bin("fricctl")
+        .unwrap()
+        .args(["device", "--port", &s.path])
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8(o.stdout).unwrap()
+}
+
+/// The keys of a flat JSON object (every value a number, string, bool, null
+/// or an array of strings — no nested object, no enum wrapper).
+fn flat_keys(v: &Value) -> Vec<String> {
+    let o = v
+        .as_object()
+        .unwrap_or_else(|| panic!("not an object: {v}"));
+    for (k, x) in o {
+        match x {
+            Value::Object(_) => panic!("{k} is nested: {v}"),
+            Value::Array(a) => assert!(a.iter().all(Value::is_string), "{k}: {v}"),
+            _ => {}
+        }
+    }
+    o.keys().cloned().collect()
+}
+
+/// The documented keys of docs/device-json.md, in order.
+const INFO_KEYS: &[&str] = &[
+    "answered_by",
+    "board",
+    "firmware",
+    "protocol",
+    "sample_rate_hz",
+    "freq_min_hz",
+    "freq_max_hz",
+    "max_amp_x_m",
+    "max_offset_z_m",
+    "liftoff_margin",
+    "max_phi_deg",
+    "max_v0",
+    "periods_min",
+    "periods_max",
+    "byte_timeout_us",
+];
+const DRIVE_KEYS: &[&str] = &[
+    "freq",
+    "duz",
+    "dux",
+    "uz0",
+    "phi_deg",
+    "freq_achieved",
+    "tuning_word",
+    "phi_achieved_deg",
+];
+const ESTIMATE_KEYS: &[&str] = &[
+    "mu",
+    "std_error",
+    "valid",
+    "reasons",
+    "periods",
+    "samples",
+    "saturated",
+    "fx_mean",
+    "fz_mean",
+    "fx_h1_amplitude",
+    "fx_h1_phase_deg",
+    "fz_h1_amplitude",
+    "fz_h1_phase_deg",
+];
+const STATUS_KEYS: &[&str] = &[
+    "running",
+    "settled",
+    "measuring",
+    "faults",
+    "rx_overflows",
+    "out_duz",
+    "out_dux",
+    "out_uz0",
+];
+
+fn sorted(k: &[&str]) -> Vec<String> {
+    let mut v: Vec<String> = k.iter().map(|s| s.to_string()).collect();
+    v.sort();
+    v
+}
+
+fn assert_keys(v: &Value, want: &[&str]) {
+    let mut got = flat_keys(v);
+    got.sort();
+    assert_eq!(got, sorted(want), "{v}");
+}
+
+#[test]
+fn json_is_flat_with_the_model_commands_keys_and_text_has_units() {
+    let s = sim();
+    assert_keys(&ok_json(&s, &["info"]), INFO_KEYS);
+    let d = ok_json(&s, DRIVE);
+    assert_keys(&d, DRIVE_KEYS);
+    // The achieved frequency is tw·fs/2³² (docs/protocol.md) with the tuning
+    // word the nearest to f/fs·2³² (fs = 500 kHz): within half a step.
+    let tw = d["tuning_word"].as_f64().unwrap();
+    let exact = 20e3 / 500e3 * 4_294_967_296.0;
+    assert!((tw - exact).abs() <= 0.5, "{d}");
+    assert_eq!(
+        d["freq_achieved"].as_f64().unwrap(),
+        tw * 500e3 / 4_294_967_296.0
+    );
+    assert_eq!(
+        (&d["freq"], &d["duz"], &d["dux"], &d["uz0"], &d["phi_deg"]),
+        (
+            &Value::from(20000.0),
+            &Value::from(2e-6),
+            &Value::from(3e-7),
+            &Value::from(4e-6),
+            &Value::from(40.0)
+        )
+    );
+    assert_keys(&ok_json(&s, &["status"]), STATUS_KEYS);
+    for cmd in ["start", "stop", "reset-faults", "reset"] {
+        let v = ok_json(&s, &[cmd]);
+        assert_keys(&v, &["command", "ok", "note"]);
+        assert_eq!(
+            (&v["command"], &v["ok"]),
+            (&Value::from(cmd), &Value::from(true))
+        );
+    }
+    // predict: the keys of `fricctl mu` (mu, mu_over_mu0, vc_*; at v0 = 0 the
+    // one-sided limits, with mu null as there).
+    let p = ok_json(&s, &["predict", "--v0", "0.004"]);
+    assert_keys(
+        &p,
+        &[
+            "v0",
+            "mu",
+            "mu_over_mu0",
+            "vc_forward",
+            "vc_backward",
+            "regime",
+        ],
+    );
+    // v0 as the device received it (f32), in its shortest form.
+    assert_eq!(p["v0"], Value::from(0.004));
+    let host = common::host_mu_of_test_drive();
+    for k in ["mu", "mu_over_mu0", "vc_forward", "vc_backward"] {
+        // f32 device model vs the f64 host model: 1e-5 relative (f32's 6e-8
+        // per operation over the solver's few hundred operations, with margin).
+        let (a, b) = (p[k].as_f64().unwrap(), host[k].as_f64().unwrap());
+        assert!((a - b).abs() <= 1e-5 * b.abs().max(1e-3), "{k}: {a} vs {b}");
+    }
+    let p0 = ok_json(&s, &["predict", "--v0", "0"]);
+    assert_keys(
+        &p0,
+        &[
+            "v0",
+            "mu",
+            "mu_over_mu0",
+            "mu_0plus_over_mu0",
+            "mu_0minus_over_mu0",
+            "vc_forward",
+            "vc_backward",
+            "regime",
+        ],
+    );
+    assert!(p0["mu"].is_null() && p0["mu_0plus_over_mu0"].is_number());
+    // Text: aligned `label  value unit`, no Rust Debug output anywhere.
+    assert_eq!(
+        dev_text(&s, &["scene", "get"]),
+        "mu0  0.3\nkz   10000000 N/m\nkx   10000000 N/m\n"
+    );
+    let t = dev_text(&s, DRIVE);
+    let lines: Vec<&str> = t.lines().collect();
+    assert_eq!(
+        lines[..5],
+        [
+            "freq           20000 Hz",
+            "duz            2e-6 m",
+            "dux            3e-7 m",
+            "uz0            4e-6 m",
+            "phi            40 deg",
+        ]
+    );
+    assert_eq!(lines[6], format!("tuning word    {tw}"));
+    assert_eq!(
+        dev_text(&s, &["stop"]),
+        "command  stop\nok       yes\nnote     drive stopping (ramped)\n"
+    );
+    for args in [
+        &["info"][..],
+        &["status"],
+        &["drive", "get"],
+        &["predict", "--v0", "0.004"],
+        &["predict", "--v0", "0"],
+        &["start"],
+        &["reset"],
+    ] {
+        let t = dev_text(&s, args);
+        for bad in ["{", "}", "Some(", "(\"", "Status", "Response"] {
+            assert!(!t.contains(bad), "{args:?} prints {bad:?}:\n{t}");
+        }
+        // Every line is `label  value…` with the values in one column.
+        let value_col = |l: &str| {
+            let gap = l.find("  ").unwrap_or_else(|| panic!("{args:?}: {l:?}"));
+            gap + l[gap..].find(|c| c != ' ').unwrap()
+        };
+        let cols: Vec<usize> = t.lines().map(value_col).collect();
+        assert!(cols.iter().all(|&c| c == cols[0]), "{args:?}:\n{t}");
+    }
+    let i = dev_text(&s, &["info"]);
+    assert!(i.contains("Hz\n") && i.contains(" m\n"), "{i}");
+}
+
+#[test]
+fn measure_over_the_pty_flat_json_and_invalid_exit() {
+    let s = sim();
+    ok_json(&s, DRIVE);
+    // Not started: exit 1, one line naming the reason, the numbers still on stdout.
+    let o = dev(&s, &["measure", "--periods", "200"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let last = err.trim().lines().last().unwrap();
+    assert!(
+        last.starts_with("error: invalid estimate (mu = ") && last.contains("not_running"),
+        "{err}"
+    );
+    let e: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_keys(&e, ESTIMATE_KEYS);
+    assert_eq!(e["valid"], false);
+    ok_json(&s, &["start"]);
+    std::thread::sleep(Duration::from_millis(300));
+    let e = ok_json(&s, &["measure", "--periods", "500"]);
+    assert_keys(&e, ESTIMATE_KEYS);
+    assert_eq!(
+        (&e["valid"], &e["periods"]),
+        (&Value::from(true), &Value::from(500))
+    );
+}
+
+fn stream_status(s: &Sim) -> Value {
+    ok_json(s, &["status"])
+}
+
+#[test]
+fn watch_stops_its_stream_on_count_ctrl_c_sigterm_and_a_closed_stdout() {
+    let s = sim();
+    ok_json(&s, DRIVE);
+    ok_json(&s, &["start"]);
+    std::thread::sleep(Duration::from_millis(300));
+    // --count: the stream is stopped, measure is not Busy.
+    let o = dev(&s, &["watch", "--periods", "200", "--count", "2"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let lines: Vec<Value> = String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 2);
+    let mut want = ESTIMATE_KEYS.to_vec();
+    want.extend(["seq", "dropped"]);
+    assert_keys(&lines[0], &want);
+    assert_eq!(stream_status(&s)["measuring"], false);
+    assert_eq!(ok_json(&s, &["measure", "--periods", "200"])["valid"], true);
+
+    // Ctrl-C (SIGINT) on watch --csv: exit 0, header and whole rows, stream stopped.
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("mu.csv");
+    let mut child = StdCommand::cargo_bin("fricctl")
+        .unwrap()
+        .args(["device", "--port", &s.path, "watch", "--periods", "200"])
+        .args(["--csv", csv.to_str().unwrap()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut first = String::new();
+    out.read_line(&mut first).unwrap();
+    assert!(first.starts_with('#') && first.contains("mu"), "{first}");
+    let k = StdCommand::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(k.success());
+    let t = Instant::now();
+    let st = loop {
+        if let Some(st) = child.try_wait().unwrap() {
+            break st;
+        }
+        assert!(
+            t.elapsed() < Duration::from_secs(10),
+            "watch ignored SIGINT"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let mut err = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
+    assert!(st.success(), "{st:?}: {err}");
+    assert!(err.contains("interrupted: stream stopped"), "{err}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut rows = text.lines();
+    let header = rows.next().unwrap();
+    assert_eq!(
+        header,
+        "seq,dropped,mu,std_error,valid,reasons,periods,samples,saturated,fx_mean,fz_mean"
+    );
+    let mut n = 0;
+    for r in rows {
+        assert_eq!(r.split(',').count(), 11, "{r}");
+        assert_eq!(r.split(',').nth(6), Some("200"), "{r}");
+        n += 1;
+    }
+    assert!(n >= 1, "{text}");
+    assert!(text.ends_with('\n'));
+    assert_eq!(stream_status(&s)["measuring"], false);
+    assert_eq!(ok_json(&s, &["measure", "--periods", "200"])["valid"], true);
+
+    // SIGTERM (as `timeout` sends): the same.
+    let mut child = StdCommand::cargo_bin("fricctl")
+        .unwrap()
+        .args(["device", "--port", &s.path, "watch", "--periods", "200"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut first = String::new();
+    out.read_line(&mut first).unwrap();
+    let k = StdCommand::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(k.success());
+    let t = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        assert!(
+            t.elapsed() < Duration::from_secs(10),
+            "watch ignored SIGTERM"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    drop(out);
+    assert_eq!(stream_status(&s)["measuring"], false);
+
+    // stdout closed after the first line (as `| head -1`): the stream is stopped.
+    let mut child = StdCommand::cargo_bin("fricctl")
+        .unwrap()
+        .args(["device", "--port", &s.path, "watch", "--periods", "200"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut out = BufReader::new(child.stdout.take().unwrap());
+    let mut first = String::new();
+    out.read_line(&mut first).unwrap();
+    drop(out);
+    let t = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        assert!(
+            t.elapsed() < Duration::from_secs(10),
+            "watch ignored a closed stdout"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert_eq!(stream_status(&s)["measuring"], false);
+    assert_eq!(ok_json(&s, &["measure", "--periods", "200"])["valid"], true);
+}
+
+#[test]
+fn the_virtual_device_survives_a_host_that_stops_reading() {
+    let mut s = sim();
+    ok_json(&s, DRIVE);
+    ok_json(&s, &["start"]);
+    std::thread::sleep(Duration::from_millis(300));
+    let mut p = raw_port(&s);
+    // Stream{on: true, periods: 20} (index 10), from the spec: version 02, seq 60,
+    // Body::Request 00, Stream 0a, bool 01, varint 14. 20 periods = 1 ms of
+    // device time: ~70-byte estimates fill the pty's few-kB buffer well within
+    // the 3 s nobody reads here (the old device exited when a write timed out).
+    p.write_all(&common::raw_frame(&[2, 60, 0, 0x0a, 1, 0x14]))
+        .unwrap();
+    std::thread::sleep(Duration::from_secs(3));
+    assert!(
+        s.child.try_wait().unwrap().is_none(),
+        "the virtual device exited"
+    );
+    drop(p);
+    // `reset` ends the stream; the device answers and nothing measures.
+    assert_eq!(ok_json(&s, &["reset"])["ok"], true);
+    let st = ok_json(&s, &["status"]);
+    assert_eq!(
+        (&st["measuring"], &st["running"]),
+        (&Value::from(false), &Value::from(false))
+    );
+}
+
+#[test]
+fn over_tcp_the_device_runs_between_connections_and_measures_as_over_a_pty() {
+    let mut child = StdCommand::cargo_bin("fricctl")
+        .unwrap()
+        .args(["sim-device", "--tcp", "127.0.0.1:0", "--seconds", "60"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    let addr = line.trim().to_string();
+    let run = |args: &[&str]| {
+        let o = Command::cargo_bin("fricctl")
+            .unwrap()
+            .args(["device", "--tcp", &addr, "--json"])
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        serde_json::from_slice::<Value>(&o.stdout).unwrap()
+    };
+    run(DRIVE);
+    run(&["start"]);
+    // No client for 300 ms: the soft start (≈ 45 ms of device time) must go on
+    // meanwhile (it stood still before, and `measure` then gave μ = 0.1145,
+    // `not_settled, saturated`).
+    std::thread::sleep(Duration::from_millis(300));
+    let e = run(&["measure", "--periods", "2000"]);
+    let p = run(&["predict", "--v0", "0.004"]);
+    let (mu, pred) = (e["mu"].as_f64().unwrap(), p["mu"].as_f64().unwrap());
+    let allowed = measured_vs_predicted_bound(&e);
+    println!(
+        "tcp sim: measured {mu}, predicted {pred}, |Δ| = {:.1e} ≤ {allowed:.1e}",
+        (mu - pred).abs()
+    );
+    assert_eq!(e["valid"], true, "{e}");
+    assert!((mu - pred).abs() <= allowed, "{e}");
+    let _ = child.kill();
+    let _ = child.wait();
 }

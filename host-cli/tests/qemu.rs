@@ -149,7 +149,7 @@ fn real_firmware_under_qemu() {
     let o = dev(&q, &["predict", "--v0", "0.004"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let p: Value = serde_json::from_slice(&o.stdout).unwrap();
-    let pred = p["Prediction"]["prediction"]["mu"].as_f64().unwrap();
+    let pred = p["mu"].as_f64().unwrap();
     let host = common::host_mu_of_test_drive();
     assert!(
         (pred - host["mu"].as_f64().unwrap()).abs() <= 1e-5,

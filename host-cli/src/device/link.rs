@@ -55,10 +55,17 @@ impl Link for SerialLink {
     }
 }
 
-/// A read that timed out (or would block) is "no bytes yet", not an error.
+/// A read that timed out, would block or was interrupted by a signal (Ctrl-C
+/// during `watch`, whose handler then stops the stream) is "no bytes yet",
+/// not a lost link.
 fn empty_on_timeout(r: io::Result<usize>) -> io::Result<usize> {
     match r {
-        Err(e) if e.kind() == io::ErrorKind::TimedOut || e.kind() == io::ErrorKind::WouldBlock => {
+        Err(e)
+            if matches!(
+                e.kind(),
+                io::ErrorKind::TimedOut | io::ErrorKind::WouldBlock | io::ErrorKind::Interrupted
+            ) =>
+        {
             Ok(0)
         }
         r => r,

@@ -3,21 +3,24 @@
 
 pub mod client;
 pub mod link;
+pub mod render;
+pub mod serve;
 pub mod sim;
 pub mod sweep;
+pub mod watch;
 
-use std::io::{Read, Write};
+use std::io::Write;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use clap::{Args, Subcommand};
 use model_core::device::{Contact, DriveSetting};
-use model_core::protocol::{Request, Response, Telemetry, WireError};
-use serde::Serialize;
+use model_core::protocol::{Request, Response, WireError};
 use serialport::SerialPort;
 
 use self::client::Client;
 use self::link::{Link, SerialLink, SimLink, TcpLink};
+use self::render::Report;
 use self::sim::VirtualDevice;
 use crate::error::{CliError, CliResult};
 
@@ -295,28 +298,26 @@ fn expect(r: Response) -> CliResult<Response> {
     }
 }
 
-fn out<T: Serialize + std::fmt::Debug>(json: bool, v: &T) -> CliResult {
-    if json {
-        let s =
-            serde_json::to_string_pretty(v).map_err(|e| CliError::failure(format!("JSON: {e}")))?;
-        println!("{s}");
-    } else {
-        println!("{v:#?}");
-    }
-    Ok(())
+/// Prints a report (text or `--json`) to stdout.
+fn out(json: bool, r: &Report) -> CliResult {
+    r.print(json, &mut std::io::stdout().lock())
+        .map_err(crate::output::stdout_error)
 }
 
-#[derive(Serialize, Debug)]
-struct InfoOut {
-    answered_by: String,
-    firmware: String,
-    protocol: u16,
-    board: String,
-    sample_rate_hz: f64,
-    freq_range_hz: (f64, f64),
-    max_amp_x_m: f32,
-    max_offset_z_m: f32,
-    liftoff_margin: f32,
+/// The report of a `Drive` answer.
+fn drive_report(r: Response) -> CliResult<Report> {
+    match expect(r)? {
+        Response::Drive { setting, applied } => Ok(render::drive(&setting, &applied)),
+        other => Err(unexpected(other)),
+    }
+}
+
+/// The report of an `Ok` answer.
+fn done(r: Response, command: &'static str, what: &'static str) -> CliResult<Report> {
+    match expect(r)? {
+        Response::Ok => Ok(render::done(command, what)),
+        other => Err(unexpected(other)),
+    }
 }
 
 /// `fricctl device …`.
@@ -338,7 +339,7 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
                 (p.port_name, kind)
             })
             .collect();
-        return out(t.json, &list);
+        return print_ports(t.json, &list);
     }
     // Checked before connecting: the parameters are named, not the device's refusal.
     let mut scene = None;
@@ -363,26 +364,11 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
     }
     match cmd {
         DeviceCmd::Info => match expect(c.call(Request::Hello)?)? {
-            Response::Info(i) => out(
-                t.json,
-                &InfoOut {
-                    answered_by: c.describe(),
-                    firmware: format!("{}.{}.{}", i.firmware[0], i.firmware[1], i.firmware[2]),
-                    protocol: i.protocol,
-                    board: String::from_utf8_lossy(&i.board)
-                        .trim_end_matches('\0')
-                        .to_string(),
-                    sample_rate_hz: i.sample_rate_hz,
-                    freq_range_hz: i.freq_range_hz,
-                    max_amp_x_m: i.max_amp_x_m,
-                    max_offset_z_m: i.max_offset_z_m,
-                    liftoff_margin: i.liftoff_margin,
-                },
-            ),
+            Response::Info(i) => out(t.json, &render::info(&c.describe(), &i)),
             other => Err(unexpected(other)),
         },
         DeviceCmd::Drive { cmd: DriveCmd::Get } => {
-            out(t.json, &expect(c.call(Request::GetDrive)?)?)
+            out(t.json, &drive_report(c.call(Request::GetDrive)?)?)
         }
         DeviceCmd::Drive {
             cmd:
@@ -412,13 +398,24 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
                 offset_z_m: *offset_z as f32,
                 phase_rad: phase_deg.to_radians() as f32,
             };
-            out(t.json, &expect(c.call(Request::SetDrive(d))?)?)
+            out(t.json, &drive_report(c.call(Request::SetDrive(d))?)?)
         }
-        DeviceCmd::Start => out(t.json, &expect(c.call(Request::Start)?)?),
-        DeviceCmd::Stop => out(t.json, &expect(c.call(Request::Stop)?)?),
-        DeviceCmd::Scene { cmd: SceneCmd::Get } => {
-            out(t.json, &expect(c.call(Request::GetContact)?)?)
-        }
+        DeviceCmd::Start => out(
+            t.json,
+            &done(
+                c.call(Request::Start)?,
+                "start",
+                "drive starting (soft start; `status` shows when settled)",
+            )?,
+        ),
+        DeviceCmd::Stop => out(
+            t.json,
+            &done(c.call(Request::Stop)?, "stop", "drive stopping (ramped)")?,
+        ),
+        DeviceCmd::Scene { cmd: SceneCmd::Get } => match expect(c.call(Request::GetContact)?)? {
+            Response::Contact(k) => out(t.json, &render::contact(&k)),
+            other => Err(unexpected(other)),
+        },
         DeviceCmd::Scene {
             cmd: SceneCmd::Set { .. },
         } => {
@@ -428,16 +425,24 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
                 kz: kz as f32,
                 kx: kx as f32,
             };
-            out(t.json, &expect(c.call(Request::SetContact(contact))?)?)
+            done(
+                c.call(Request::SetContact(contact))?,
+                "scene set",
+                "contact set",
+            )?;
+            out(t.json, &render::contact(&contact))
         }
         DeviceCmd::Predict { v0 } => {
             if !v0.is_finite() {
                 return Err(CliError::usage("--v0: must be a finite number"));
             }
-            out(
-                t.json,
-                &expect(c.call(Request::Predict { v0: *v0 as f32 })?)?,
-            )
+            match expect(c.call(Request::Predict { v0: *v0 as f32 })?)? {
+                Response::Prediction { prediction, regime } => out(
+                    t.json,
+                    &render::prediction(render::f32v(*v0 as f32), &prediction, regime),
+                ),
+                other => Err(unexpected(other)),
+            }
         }
         DeviceCmd::Measure {
             periods,
@@ -461,212 +466,90 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             let Response::Estimate(e) = r else {
                 return Err(unexpected(r));
             };
-            check_valid(&e, *allow_invalid)?;
-            out(
-                t.json,
-                &serde_json::json!({ "Estimate": estimate_json(&e) }),
-            )
+            // The numbers are shown even when invalid; the exit code says so.
+            out(t.json, &render::estimate(&e))?;
+            check_valid(&e, *allow_invalid)
         }
-        DeviceCmd::Status => out(t.json, &expect(c.call(Request::GetStatus)?)?),
-        DeviceCmd::ResetFaults => out(t.json, &expect(c.call(Request::ResetFaults)?)?),
-        DeviceCmd::Reset => out(t.json, &expect(c.call(Request::Reset)?)?),
+        DeviceCmd::Status => match expect(c.call(Request::GetStatus)?)? {
+            Response::Status(st) => out(t.json, &render::status(&st)),
+            other => Err(unexpected(other)),
+        },
+        DeviceCmd::ResetFaults => out(
+            t.json,
+            &done(
+                c.call(Request::ResetFaults)?,
+                "reset-faults",
+                "latched faults cleared",
+            )?,
+        ),
+        DeviceCmd::Reset => out(
+            t.json,
+            &done(
+                c.call(Request::Reset)?,
+                "reset",
+                "streams and measurements ended, drive stopping",
+            )?,
+        ),
         DeviceCmd::Watch {
             periods,
             count,
             csv,
             allow_invalid,
-        } => watch(t, c, *periods, *count, csv.as_deref(), *allow_invalid),
+        } => watch::watch(t, c, *periods, *count, csv.as_deref(), *allow_invalid),
         DeviceCmd::Ports => unreachable!("handled above"),
         DeviceCmd::Sweep(a) => sweep::run(&mut c, a, t.json),
     }
 }
 
-/// The names of the reason bits of an estimate.
-fn reason_names(bits: u32) -> Vec<&'static str> {
-    model_core::estimator::reasons::NAMES
-        .iter()
-        .filter(|(b, _)| bits & b != 0)
-        .map(|(_, n)| *n)
-        .collect()
-}
-
-/// An estimate as JSON: its fields, with `reasons` as names and `valid`.
-fn estimate_json(e: &model_core::estimator::Estimate) -> serde_json::Value {
-    let mut v = serde_json::to_value(e).unwrap_or_default();
-    if let Some(o) = v.as_object_mut() {
-        o.insert("valid".into(), e.valid().into());
-        o.insert("reasons".into(), reason_names(e.reasons).into());
-    }
-    v
-}
-
 /// `Err` (exit 1, one line naming the reasons) for an invalid estimate
 /// unless `allow_invalid`.
-fn check_valid(e: &model_core::estimator::Estimate, allow_invalid: bool) -> CliResult {
+pub(crate) fn check_valid(e: &model_core::estimator::Estimate, allow_invalid: bool) -> CliResult {
     if e.valid() || allow_invalid {
         return Ok(());
     }
     Err(CliError::failure(format!(
         "invalid estimate (mu = {}): {} (--allow-invalid to accept it)",
-        e.mu,
-        reason_names(e.reasons).join(", ")
+        render::f32v(e.mu),
+        render::reason_names(e.reasons).join(", ")
     )))
 }
 
 fn unexpected(r: Response) -> CliError {
-    CliError::failure(format!("unexpected response: {r:?}"))
-}
-
-fn watch(
-    t: &Target,
-    mut c: Client,
-    periods: u32,
-    count: Option<u64>,
-    csv: Option<&std::path::Path>,
-    allow_invalid: bool,
-) -> CliResult {
-    use std::io::IsTerminal;
-    let live = !t.json && std::io::stdout().is_terminal();
-    expect(c.call(Request::Stream { on: true, periods })?)?;
-    let mut w = match csv {
-        Some(p) => Some(
-            std::fs::File::create(p)
-                .map(std::io::BufWriter::new)
-                .map_err(|e| CliError::failure(format!("--csv: {}: {e}", p.display())))?,
-        ),
-        None => None,
+    use model_core::protocol::Answer;
+    let what = match r.answer() {
+        Some(Answer::Info) => "Info",
+        Some(Answer::Drive) => "Drive",
+        Some(Answer::Ok) => "Ok",
+        Some(Answer::Contact) => "Contact",
+        Some(Answer::Prediction) => "Prediction",
+        Some(Answer::Estimate) => "Estimate",
+        Some(Answer::Status) => "Status",
+        None => "an error",
     };
-    if let Some(w) = w.as_mut() {
-        let _ = writeln!(
-            w,
-            "seq,mu,fx_mean,fz_mean,samples,periods,saturated,dropped,std_error,valid,reasons"
-        );
-    }
-    let mut last_seq: Option<u32> = None;
-    let mut n = 0u64;
-    let mut idle = Instant::now();
-    while count.is_none_or(|k| n < k) {
-        let got = match c.next_telemetry(Duration::from_millis(200)) {
-            Ok(g) => g,
-            Err(e) => {
-                // The link is gone: reconnect (same target) for up to 30 s.
-                eprintln!("\n{}; reconnecting", e.msg);
-                c = reconnect(t, periods)?;
-                last_seq = None;
-                idle = Instant::now();
-                continue;
-            }
-        };
-        match got {
-            Some((seq, Telemetry::Estimate(e))) => {
-                idle = Instant::now();
-                let dropped = last_seq.map_or(0, |l| seq.wrapping_sub(l).saturating_sub(1));
-                last_seq = Some(seq);
-                n += 1;
-                if t.json {
-                    println!(
-                        "{}",
-                        serde_json::json!({"seq": seq, "estimate": estimate_json(&e), "dropped": dropped})
-                    );
-                } else {
-                    let line = format!(
-                        "#{seq:<6} mu {:>10.6} ± {:<9.2e} fx {:>9.4} N  fz {:>9.4} N  {} samples{}{}{}",
-                        e.mu,
-                        e.std_error,
-                        e.fx_mean,
-                        e.fz_mean,
-                        e.samples,
-                        if e.saturated { "  SATURATED" } else { "" },
-                        if e.valid() {
-                            String::new()
-                        } else {
-                            format!("  INVALID ({})", reason_names(e.reasons).join(", "))
-                        },
-                        if dropped > 0 {
-                            format!("  ({dropped} dropped)")
-                        } else {
-                            String::new()
-                        }
-                    );
-                    if live {
-                        // One line, updated in place.
-                        print!("\r\x1b[2K{line}");
-                        let _ = std::io::stdout().flush();
-                    } else {
-                        println!("{line}");
-                    }
-                }
-                if let Some(w) = w.as_mut() {
-                    let _ = writeln!(
-                        w,
-                        "{seq},{},{},{},{},{},{},{dropped},{},{},{}",
-                        e.mu,
-                        e.fx_mean,
-                        e.fz_mean,
-                        e.samples,
-                        e.periods,
-                        e.saturated,
-                        e.std_error,
-                        e.valid(),
-                        reason_names(e.reasons).join(" ")
-                    );
-                    let _ = w.flush();
-                }
-                if let Err(err) = check_valid(&e, allow_invalid) {
-                    if live {
-                        println!();
-                    }
-                    let _ = c.call(Request::Stream { on: false, periods });
-                    return Err(err);
-                }
-            }
-            Some((_, Telemetry::StreamStopped(end))) => {
-                use model_core::protocol::StreamEnd;
-                if live {
-                    println!();
-                }
-                return Err(CliError::failure(match end {
-                    StreamEnd::Requested => {
-                        "the stream was stopped (by another request)".to_string()
-                    }
-                    StreamEnd::Reset => "the stream was ended by a device reset".to_string(),
-                    StreamEnd::Refused(e) => format!("the device ended the stream: {e}"),
-                }));
-            }
-            Some(_) => {}
-            None => {
-                if idle.elapsed() > Duration::from_secs(10) {
-                    return Err(CliError::failure(format!(
-                        "no estimate from {} for 10 s",
-                        c.describe()
-                    )));
-                }
-            }
-        }
-    }
-    if live {
-        println!();
-    }
-    let _ = c.call(Request::Stream { on: false, periods });
-    Ok(())
+    CliError::failure(format!("unexpected answer from the device: {what}"))
 }
 
-fn reconnect(t: &Target, periods: u32) -> CliResult<Client> {
-    let start = Instant::now();
-    loop {
-        if let Ok(mut c) = open(t) {
-            if c.call(Request::Stream { on: true, periods }).is_ok() {
-                eprintln!("reconnected to {}", c.describe());
-                return Ok(c);
-            }
-        }
-        if start.elapsed() > Duration::from_secs(30) {
-            return Err(CliError::failure(
-                "the device is gone (no reconnection within 30 s)",
-            ));
-        }
-        std::thread::sleep(Duration::from_secs(1));
-    }
+/// `ports`: an aligned table, or a JSON array of `{port, kind}`.
+fn print_ports(json: bool, list: &[(String, String)]) -> CliResult {
+    let mut o = std::io::stdout().lock();
+    let r = if json {
+        let v: Vec<_> = list
+            .iter()
+            .map(|(p, k)| serde_json::json!({"port": p, "kind": k}))
+            .collect();
+        writeln!(
+            o,
+            "{}",
+            serde_json::to_string_pretty(&v).unwrap_or_default()
+        )
+    } else if list.is_empty() {
+        writeln!(o, "no serial ports found")
+    } else {
+        let w = list.iter().map(|(p, _)| p.len()).max().unwrap_or(0);
+        list.iter()
+            .try_for_each(|(p, k)| writeln!(o, "{p:<w$}  {k}"))
+    };
+    r.map_err(crate::output::stdout_error)
 }
 
 /// Flags of `fricctl sim-device`.
@@ -716,11 +599,8 @@ pub fn serve(a: &SimArgs) -> CliResult {
         println!("{name}");
         let _ = std::io::stdout().flush();
         eprintln!("virtual device serving on {name}");
-        master
-            .set_timeout(Duration::from_millis(2))
-            .map_err(|e| CliError::failure(e.to_string()))?;
         let _keep = slave;
-        pump(&mut dev, &mut master, deadline)
+        serve::serve_pty(&mut dev, &mut master, deadline)
     } else if let Some(addr) = &a.tcp {
         let l = std::net::TcpListener::bind(addr)
             .map_err(|e| CliError::failure(format!("--tcp: {addr}: {e}")))?;
@@ -729,64 +609,8 @@ pub fn serve(a: &SimArgs) -> CliResult {
             l.local_addr().map(|a| a.to_string()).unwrap_or_default()
         );
         let _ = std::io::stdout().flush();
-        loop {
-            let (mut s, peer) = l
-                .accept()
-                .map_err(|e| CliError::failure(format!("--tcp: {e}")))?;
-            eprintln!("client {peer}");
-            s.set_read_timeout(Some(Duration::from_millis(2)))
-                .map_err(|e| CliError::failure(e.to_string()))?;
-            let _ = pump(&mut dev, &mut s, deadline);
-            if deadline.is_some_and(|d| Instant::now() >= d) {
-                return Ok(());
-            }
-        }
+        serve::serve_tcp(&mut dev, l, deadline)
     } else {
         Err(CliError::usage("--pty: give --pty or --tcp ADDR"))
-    }
-}
-
-/// Moves bytes between a stream and the virtual device, advancing the
-/// simulation in real time.
-fn pump<S: Read + Write>(
-    dev: &mut VirtualDevice,
-    s: &mut S,
-    deadline: Option<Instant>,
-) -> CliResult {
-    let mut buf = [0u8; 512];
-    let mut last = Instant::now();
-    let mut debt = 0.0f64;
-    loop {
-        if deadline.is_some_and(|d| Instant::now() >= d) {
-            return Ok(());
-        }
-        match s.read(&mut buf) {
-            Ok(0) => return Ok(()),
-            Ok(n) => {
-                let reply = dev.receive(&buf[..n]);
-                if !reply.is_empty() && s.write_all(&reply).is_err() {
-                    return Ok(());
-                }
-            }
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    std::io::ErrorKind::TimedOut | std::io::ErrorKind::WouldBlock
-                ) => {}
-            Err(_) => return Ok(()),
-        }
-        let now = Instant::now();
-        debt += now.duration_since(last).as_secs_f64() * dev.sample_rate();
-        last = now;
-        // At most 50 ms of simulation per turn, so requests stay responsive.
-        let n = debt.min(dev.sample_rate() / 20.0);
-        if n >= sim::HALF as f64 {
-            let t = dev.advance(n as usize);
-            debt -= (n as usize).div_ceil(sim::HALF) as f64 * sim::HALF as f64;
-            if !t.is_empty() && s.write_all(&t).is_err() {
-                return Ok(());
-            }
-        }
-        debt = debt.min(dev.sample_rate());
     }
 }

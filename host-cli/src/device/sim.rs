@@ -349,6 +349,24 @@ impl VirtualDevice {
         out
     }
 
+    /// Drive stopped and settled, no measurement (nor stream): the plant's
+    /// samples reach nothing, so a server loop may [`VirtualDevice::skip`]
+    /// instead of simulating them.
+    pub fn quiescent(&self) -> bool {
+        let s = self.dev.status();
+        !s.running && s.settled && !s.measuring
+    }
+
+    /// Moves the device clock on by `samples` without simulating the plant
+    /// (for a [`VirtualDevice::quiescent`] device); returns the telemetry due.
+    pub fn skip(&mut self, samples: u64) -> Vec<u8> {
+        self.samples += samples;
+        let mut out = Vec::new();
+        self.server
+            .poll(&mut self.dev, |b| out.extend_from_slice(b));
+        out
+    }
+
     /// Samples per second.
     pub fn sample_rate(&self) -> f64 {
         self.dev.config().sample_rate_hz

@@ -16,7 +16,8 @@ use model_core::protocol::{Request, Response};
 use serde::Serialize;
 
 use super::client::Client;
-use super::{expect, reason_names, unexpected};
+use super::render::reason_names;
+use super::{expect, unexpected};
 use crate::error::{CliError, CliResult};
 use crate::plot::{render_panels, Mark, Panel, Series};
 use crate::sweep_file::{self, SweepRow};

@@ -1,0 +1,310 @@
+//! What the device commands print: one [`Report`] per answer, shown as an
+//! aligned text summary with units or, with `--json`, as one flat JSON object
+//! with the same keys as the model commands where the quantity is the same
+//! (`mu`, `mu_over_mu0`, `v0`, `vc_forward`, `mu0`, `kz`, `uz0`, `duz`,
+//! `phi_deg`, …). The keys and units of every command are in
+//! `docs/device-json.md`.
+
+use std::io::Write;
+
+use model_core::device::{Contact, DriveSetting, Status};
+use model_core::estimator::Estimate;
+use model_core::protocol::{Applied, Info, Prediction};
+use model_core::regime::Regime;
+use serde_json::{Map, Value};
+
+/// One answer: rows of (JSON key, text label, value, unit), in print order.
+#[derive(Default)]
+pub struct Report {
+    rows: Vec<(&'static str, &'static str, Value, &'static str)>,
+}
+
+/// An `f32` as the `f64` with the same shortest decimal form (0.1f32 is
+/// 0.1, not 0.10000000149011612).
+pub fn f32v(x: f32) -> f64 {
+    if x.is_finite() {
+        x.to_string().parse().unwrap_or(f64::from(x))
+    } else {
+        f64::NAN
+    }
+}
+
+/// Degrees from radians, rounded to 1e-9 ° (the f32 phase's resolution is
+/// far coarser), so that 40° does not print as 39.99999974.
+fn deg(rad: f64) -> f64 {
+    (rad.to_degrees() * 1e9).round() / 1e9
+}
+
+/// Degrees of an `f32` phase: the shortest decimal number of degrees that
+/// converts back to the same `f32` radians (40° prints as 40, not as
+/// 40.0000022 — the f32's own resolution is ≈ 4e-6° there).
+fn deg32(rad: f32) -> f64 {
+    let d = f64::from(rad).to_degrees();
+    for p in 0..=9 {
+        if let Ok(x) = format!("{d:.p$}").parse::<f64>() {
+            if x.to_radians() as f32 == rad {
+                return x;
+            }
+        }
+    }
+    d
+}
+
+impl Report {
+    /// A row with a value and a unit ("" for none).
+    pub fn row(
+        mut self,
+        key: &'static str,
+        label: &'static str,
+        v: impl Into<Value>,
+        unit: &'static str,
+    ) -> Self {
+        self.rows.push((key, label, v.into(), unit));
+        self
+    }
+
+    /// The flat JSON object.
+    pub fn json(&self) -> Value {
+        let mut m = Map::new();
+        for (k, _, v, _) in &self.rows {
+            m.insert((*k).to_string(), v.clone());
+        }
+        Value::Object(m)
+    }
+
+    /// The aligned text: `label  value unit`, labels padded to the longest.
+    pub fn text(&self) -> String {
+        let w = self.rows.iter().map(|r| r.1.len()).max().unwrap_or(0);
+        let mut s = String::new();
+        for (_, label, v, unit) in &self.rows {
+            let value = match v {
+                Value::Number(n) => n.as_f64().map_or_else(|| n.to_string(), num),
+                Value::String(t) => t.clone(),
+                Value::Array(a) if a.is_empty() => "none".to_string(),
+                Value::Array(a) => a
+                    .iter()
+                    .map(|x| x.as_str().map_or_else(|| x.to_string(), str::to_string))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                Value::Bool(b) => if *b { "yes" } else { "no" }.to_string(),
+                Value::Null => "-".to_string(),
+                Value::Object(_) => v.to_string(),
+            };
+            let line = format!("{label:<w$}  {value} {unit}");
+            s.push_str(line.trim_end());
+            s.push('\n');
+        }
+        s
+    }
+
+    /// Prints the report (text or pretty JSON) to `out`.
+    pub fn print(&self, json: bool, out: &mut impl Write) -> std::io::Result<()> {
+        if json {
+            let s = serde_json::to_string_pretty(&self.json()).unwrap_or_default();
+            writeln!(out, "{s}")
+        } else {
+            write!(out, "{}", self.text())
+        }
+    }
+}
+
+/// A number for people: integers as integers, small and large magnitudes in
+/// exponent form, others in the shortest decimal form.
+fn num(x: f64) -> String {
+    let a = x.abs();
+    if x == x.trunc() && a < 1e15 {
+        format!("{}", x as i64)
+    } else if a != 0.0 && !(1e-3..1e6).contains(&a) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
+/// `Info`, with what answered.
+pub fn info(answered_by: &str, i: &Info) -> Report {
+    Report::default()
+        .row("answered_by", "answered by", answered_by, "")
+        .row("board", "board", board_name(&i.board), "")
+        .row(
+            "firmware",
+            "firmware",
+            format!("{}.{}.{}", i.firmware[0], i.firmware[1], i.firmware[2]),
+            "",
+        )
+        .row("protocol", "protocol", i.protocol, "")
+        .row("sample_rate_hz", "sample rate", i.sample_rate_hz, "Hz")
+        .row("freq_min_hz", "frequency min", i.freq_range_hz.0, "Hz")
+        .row("freq_max_hz", "frequency max", i.freq_range_hz.1, "Hz")
+        .row("max_amp_x_m", "max dux", f32v(i.max_amp_x_m), "m")
+        .row("max_offset_z_m", "max uz0", f32v(i.max_offset_z_m), "m")
+        .row(
+            "liftoff_margin",
+            "lift-off margin",
+            f32v(i.liftoff_margin),
+            "",
+        )
+        .row("max_phi_deg", "max |phi|", deg32(i.max_phase_rad), "deg")
+        .row("max_v0", "max |v0|", f32v(i.max_velocity_m_s), "m/s")
+        .row("periods_min", "periods min", i.periods_range.0, "")
+        .row("periods_max", "periods max", i.periods_range.1, "")
+        .row("byte_timeout_us", "byte timeout", i.byte_timeout_us, "us")
+}
+
+fn board_name(b: &[u8]) -> String {
+    String::from_utf8_lossy(b)
+        .trim_end_matches('\0')
+        .to_string()
+}
+
+/// The accepted drive and what the DDS produces.
+pub fn drive(d: &DriveSetting, a: &Applied) -> Report {
+    Report::default()
+        .row("freq", "freq", d.freq_hz, "Hz")
+        .row("duz", "duz", f32v(d.amp_z_m), "m")
+        .row("dux", "dux", f32v(d.amp_x_m), "m")
+        .row("uz0", "uz0", f32v(d.offset_z_m), "m")
+        .row("phi_deg", "phi", deg32(d.phase_rad), "deg")
+        .row("freq_achieved", "freq achieved", a.achieved.freq_hz, "Hz")
+        .row("tuning_word", "tuning word", a.achieved.tuning_word, "")
+        .row("phi_achieved_deg", "phi achieved", deg(a.phase_rad), "deg")
+}
+
+/// The contact parameters.
+pub fn contact(c: &Contact) -> Report {
+    Report::default()
+        .row("mu0", "mu0", f32v(c.mu0), "")
+        .row("kz", "kz", f32v(c.kz), "N/m")
+        .row("kx", "kx", f32v(c.kx), "N/m")
+}
+
+/// A command that answers `Ok`: what it did.
+pub fn done(command: &'static str, what: &'static str) -> Report {
+    Report::default()
+        .row("command", "command", command, "")
+        .row("ok", "ok", true, "")
+        .row("note", "note", what, "")
+}
+
+/// The model's μ at `v0` for the current drive (keys of `fricctl mu`): at
+/// v0 = 0, `mu` and `mu_over_mu0` are null and the one-sided limits are given.
+pub fn prediction(v0: f64, p: &Prediction, regime: Regime) -> Report {
+    let r = Report::default().row("v0", "v0", v0, "m/s");
+    let r = if v0 == 0.0 {
+        r.row("mu", "mu", Value::Null, "")
+            .row("mu_over_mu0", "mu/mu0", Value::Null, "")
+            .row("mu_0plus_over_mu0", "mu(0+)/mu0", f32v(p.mu_over_mu0), "")
+            .row(
+                "mu_0minus_over_mu0",
+                "mu(0-)/mu0",
+                f32v(p.mu_0minus_over_mu0),
+                "",
+            )
+    } else {
+        r.row("mu", "mu", f32v(p.mu), "")
+            .row("mu_over_mu0", "mu/mu0", f32v(p.mu_over_mu0), "")
+    };
+    r.row("vc_forward", "v_c forward", f32v(p.vc.0), "m/s")
+        .row("vc_backward", "v_c backward", f32v(p.vc.1), "m/s")
+        .row("regime", "regime", regime.name(), "")
+}
+
+/// The names of the reason bits of an estimate.
+pub fn reason_names(bits: u32) -> Vec<&'static str> {
+    model_core::estimator::reasons::NAMES
+        .iter()
+        .filter(|(b, _)| bits & b != 0)
+        .map(|(_, n)| *n)
+        .collect()
+}
+
+/// The names of latched fault bits.
+pub fn fault_names(bits: u32) -> Vec<String> {
+    use model_core::device::faults::*;
+    let known = [
+        (ADC_SATURATED, "adc_saturated"),
+        (DAC_UNDERRUN, "dac_underrun"),
+        (WATCHDOG_RESET, "watchdog_reset"),
+        (EXTERNAL, "external"),
+    ];
+    let mut v: Vec<String> = known
+        .iter()
+        .filter(|(b, _)| bits & b != 0)
+        .map(|(_, n)| (*n).to_string())
+        .collect();
+    let rest = bits & !known.iter().fold(0, |a, (b, _)| a | b);
+    if rest != 0 {
+        v.push(format!("0x{rest:x}"));
+    }
+    v
+}
+
+/// An estimate (`measure`, each line of `watch`).
+pub fn estimate(e: &Estimate) -> Report {
+    Report::default()
+        .row("mu", "mu", f32v(e.mu), "")
+        .row("std_error", "std error", f32v(e.std_error), "")
+        .row("valid", "valid", e.valid(), "")
+        .row("reasons", "reasons", reason_names(e.reasons), "")
+        .row("periods", "periods", e.periods, "")
+        .row("samples", "samples", e.samples, "")
+        .row("saturated", "saturated", e.saturated, "")
+        .row("fx_mean", "fx mean", f32v(e.fx_mean), "N")
+        .row("fz_mean", "fz mean", f32v(e.fz_mean), "N")
+        .row(
+            "fx_h1_amplitude",
+            "fx 1st harmonic",
+            f32v(e.fx_h1.amplitude),
+            "N",
+        )
+        .row(
+            "fx_h1_phase_deg",
+            "fx 1st harmonic phase",
+            deg32(e.fx_h1.phase),
+            "deg",
+        )
+        .row(
+            "fz_h1_amplitude",
+            "fz 1st harmonic",
+            f32v(e.fz_h1.amplitude),
+            "N",
+        )
+        .row(
+            "fz_h1_phase_deg",
+            "fz 1st harmonic phase",
+            deg32(e.fz_h1.phase),
+            "deg",
+        )
+}
+
+/// Status and latched faults.
+pub fn status(s: &Status) -> Report {
+    Report::default()
+        .row("running", "running", s.running, "")
+        .row("settled", "settled", s.settled, "")
+        .row("measuring", "measuring", s.measuring, "")
+        .row("faults", "faults", fault_names(s.faults), "")
+        .row("rx_overflows", "rx overflows", s.rx_overflows, "bytes")
+        .row("out_duz", "output duz", f32v(s.out_amp_z_m), "m")
+        .row("out_dux", "output dux", f32v(s.out_amp_x_m), "m")
+        .row("out_uz0", "output uz0", f32v(s.out_offset_z_m), "m")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn text_is_aligned_with_units_and_json_is_flat() {
+        let r = contact(&Contact {
+            mu0: 0.3,
+            kz: 1e7,
+            kx: 2.5e6,
+        });
+        assert_eq!(r.text(), "mu0  0.3\nkz   10000000 N/m\nkx   2500000 N/m\n");
+        assert_eq!(
+            r.json(),
+            serde_json::json!({"mu0": 0.3, "kz": 1e7, "kx": 2.5e6})
+        );
+    }
+}
