@@ -186,10 +186,7 @@ fn mu0_mismatch_is_fitted_applied_and_then_measure_agrees_with_predict() {
     // misses the plant at the sweep's last point (φ = 180°, where the drive stays).
     let m = ok_json(&s, &["measure", "--periods", "300"]);
     let p = ok_json(&s, &["predict", "--v0", "0.004"]);
-    let (mu_m, se) = (
-        m["mu"].as_f64().unwrap(),
-        m["std_error"].as_f64().unwrap(),
-    );
+    let (mu_m, se) = (m["mu"].as_f64().unwrap(), m["std_error"].as_f64().unwrap());
     let mu_p = p["mu"].as_f64().unwrap();
     // Tolerance: 3 standard errors of this estimate, plus the plant's
     // discretisation bias (sampled estimator, sub-stepped plant vs the exact
@@ -208,10 +205,7 @@ fn mu0_mismatch_is_fitted_applied_and_then_measure_agrees_with_predict() {
     assert!((got["mu0"].as_f64().unwrap() - mu0).abs() < 1e-7 * mu0);
     let m = ok_json(&s, &["measure", "--periods", "300"]);
     let p = ok_json(&s, &["predict", "--v0", "0.004"]);
-    let (mu_m, se) = (
-        m["mu"].as_f64().unwrap(),
-        m["std_error"].as_f64().unwrap(),
-    );
+    let (mu_m, se) = (m["mu"].as_f64().unwrap(), m["std_error"].as_f64().unwrap());
     let mu_p = p["mu"].as_f64().unwrap();
     let tol = 3.0 * se + 7f64.sqrt() * rms + 1e-6;
     assert!(
@@ -434,10 +428,7 @@ fn a_lagging_plant_needs_settle_periods() {
     // The reference: the same drive long after the step.
     std::thread::sleep(Duration::from_millis(200));
     let m = ok_json(&s, &["measure", "--periods", "200"]);
-    let (mr, ser) = (
-        m["mu"].as_f64().unwrap(),
-        m["std_error"].as_f64().unwrap(),
-    );
+    let (mr, ser) = (m["mu"].as_f64().unwrap(), m["std_error"].as_f64().unwrap());
     // Repeat measurements of one drive on one plant differ by noise only
     // (σ = √(se₁² + se₂²), 5σ), plus the e⁻¹⁰ remainder of the lag.
     let sigma1 = (se1 * se1 + ser * ser).sqrt();
@@ -493,10 +484,7 @@ fn a_velocity_profile_step_acts_like_the_new_constant_velocity() {
         ]);
         run(&["start"]);
         let m: Value = serde_json::from_slice(&run(&["measure", "--periods", "300"])).unwrap();
-        (
-            m["mu"].as_f64().unwrap(),
-            m["std_error"].as_f64().unwrap(),
-        )
+        (m["mu"].as_f64().unwrap(), m["std_error"].as_f64().unwrap())
     };
     let (ms, ss) = mu("stepped.json", &["--v0-profile", prof.to_str().unwrap()]);
     let (mf, sf) = mu("fast.json", &["--sim-v0", "0.02"]);
