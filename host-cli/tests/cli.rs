@@ -1332,6 +1332,15 @@ fn device_target_errors_name_the_flag() {
         &["device", "--port", f.to_str().unwrap(), "info"],
         &format!("--port: {} is not a serial device", f.display()),
     );
+    // Counts of the device commands are read like the model commands' ones.
+    refused_with(
+        &["device", "--sim", "measure", "--periods", "-5"],
+        "--periods: must be ≥ 1",
+    );
+    refused_with(
+        &["device", "--sim", "watch", "--count", "0"],
+        "--count: must be ≥ 1",
+    );
 }
 
 #[test]

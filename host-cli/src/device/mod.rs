@@ -86,8 +86,8 @@ pub enum DeviceCmd {
     },
     /// Measure μ over N drive periods (exit 1 if the estimate is not valid)
     Measure {
-        /// Drive periods
-        #[arg(long, default_value_t = 1000)]
+        /// Drive periods (1 … 10⁶, as the device's Info advertises)
+        #[arg(long, default_value_t = 1000, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 1>)]
         periods: u32,
         /// Accept an estimate the device marks as not valid (drive stopped or
         /// ramping, saturated, too few periods, fault)
@@ -103,11 +103,11 @@ pub enum DeviceCmd {
     Reset,
     /// Stream estimates (Ctrl-C to stop, or --count)
     Watch {
-        /// Periods per estimate
-        #[arg(long, default_value_t = 1000)]
+        /// Periods per estimate (1 … 10⁶)
+        #[arg(long, default_value_t = 1000, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 1>)]
         periods: u32,
         /// Stop after this many estimates
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true, value_parser = crate::args::count::<u64, 1>)]
         count: Option<u64>,
         /// Also record to CSV
         #[arg(long, value_name = "FILE")]
