@@ -265,7 +265,7 @@ pub fn mu_at(scene: &Scene<f64>, v0: f64, m: &MethodArgs) -> CliResult<MuOutcome
                 Err(FixedStepError::BadVelocity(e)) => {
                     return Err(CliError::usage(format!("--{e}")))
                 }
-                Err(e) => return Err(CliError::failure(format!("fixed-step run refused: {e:?}"))),
+                Err(e) => return Err(CliError::failure(format!("fixed-step run refused: {e}"))),
             }
         }
         Method::Approx => match approx_mu_over_mu0(scene, v0) {
@@ -306,6 +306,6 @@ pub fn exact_failure(e: ExactError) -> CliError {
         ExactError::IllConditioned => CliError::failure(
             "the exact solver cannot resolve this drive in f64 (dux-rel too large): its error bound would exceed 1 % of mu0",
         ),
-        other => CliError::failure(format!("exact solver failed: {other:?}")),
+        other => CliError::failure(format!("exact solver failed: {other}")),
     }
 }

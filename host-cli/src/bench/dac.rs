@@ -114,7 +114,7 @@ fn table_point<const N: usize>(
     interp: Interp,
     backend: &'static str,
 ) -> CliResult<(DacPoint, Timer)> {
-    let err = |e| CliError::failure(format!("DDS: {e:?}"));
+    let err = |e| CliError::failure(format!("DDS: {e}"));
     let mut d = Dds::new(t, FS, slew()).map_err(err)?;
     d.set_interp(interp);
     let a = d

@@ -133,11 +133,7 @@ fn fixed_series<T: Float, M: Math<T>>(
                 error: None,
                 time_s: f64::NAN,
                 bound: None,
-                status: format!("{e:?}")
-                    .split_whitespace()
-                    .next()
-                    .unwrap_or("error")
-                    .to_string(),
+                status: refusal_kind(&e).to_string(),
             }),
         }
     }
@@ -165,7 +161,7 @@ pub fn measure_scene(
         d.c_backward::<Libm>()
     };
     let reference =
-        exact::mu_over_mu0::<f64, Libm>(&d, v).map_err(|e| CliError::failure(format!("{e:?}")))?;
+        exact::mu_over_mu0::<f64, Libm>(&d, v).map_err(|e| CliError::failure(format!("{e}")))?;
     let d32 = Drive::new::<Libm>(a as f32, b as f32, phi as f32);
     let d32m = Drive::new::<Micromath>(a as f32, b as f32, phi as f32);
     let v32 = v as f32;
@@ -496,4 +492,20 @@ fn render(path: &Path, all: &[Point]) -> CliResult {
         ],
     };
     render_figure(path, &f)
+}
+
+/// The CSV `status` of a refused fixed-step run: the refusal's kind.
+fn refusal_kind<T>(e: &model_core::fixed_step::FixedStepError<T>) -> &'static str {
+    use model_core::fixed_step::FixedStepError as E;
+    match e {
+        E::TooFewSteps { .. } => "TooFewSteps",
+        E::PrecisionLimit { .. } => "PrecisionLimit",
+        E::IllConditioned => "IllConditioned",
+        E::BadConfig => "BadConfig",
+        E::BadVelocity(_) => "BadVelocity",
+        E::ZeroVelocity => "ZeroVelocity",
+        E::BadStart => "BadStart",
+        E::BadDrive => "BadDrive",
+        E::NotConverged { .. } => "NotConverged",
+    }
 }

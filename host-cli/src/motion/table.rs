@@ -47,7 +47,7 @@ pub enum TableError {
 impl std::fmt::Display for TableError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            TableError::Exact(e) => write!(f, "exact solver failed while tabulating mu(v): {e:?}"),
+            TableError::Exact(e) => write!(f, "exact solver failed while tabulating mu(v): {e}"),
             TableError::TooManyNodes => write!(
                 f,
                 "mu(v) needs more than {MAX_NODES} table nodes per side for this --tol"

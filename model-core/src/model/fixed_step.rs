@@ -201,6 +201,48 @@ pub enum FixedStepError<T> {
     },
 }
 
+impl<T: Float> core::fmt::Display for FixedStepError<T> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            FixedStepError::TooFewSteps { min_steps } => {
+                write!(
+                    f,
+                    "too few steps per period for this drive (at least {min_steps})"
+                )
+            }
+            FixedStepError::PrecisionLimit { max_steps } => write!(
+                f,
+                "more steps per period than the float type can use (at most {max_steps})"
+            ),
+            FixedStepError::IllConditioned => f.write_str(
+                "ill-conditioned: the float type cannot resolve this drive at any step count",
+            ),
+            FixedStepError::BadConfig => f.write_str(
+                "bad configuration (tolerance not finite and > 0, or fewer than 3 periods)",
+            ),
+            FixedStepError::BadVelocity(e) => write!(f, "bad velocity: {e}"),
+            FixedStepError::ZeroVelocity => {
+                f.write_str("v0 = 0 has no unique steady state (use the static analysis)")
+            }
+            FixedStepError::BadStart => {
+                f.write_str("start state not finite or outside the friction band")
+            }
+            FixedStepError::BadDrive => f.write_str("invalid drive"),
+            FixedStepError::NotConverged {
+                periods,
+                last_mu_over_mu0,
+                ..
+            } => write!(
+                f,
+                "no steady state after {periods} periods (last period's μ/μ0 = {}, not a result)",
+                last_mu_over_mu0.to_f64()
+            ),
+        }
+    }
+}
+
+impl<T: Float> core::error::Error for FixedStepError<T> {}
+
 /// Runs the scheme for `scene` at sliding velocity `v0` (m/s).
 ///
 /// # Errors

@@ -87,6 +87,25 @@ pub enum ExactError {
     IllConditioned,
 }
 
+impl core::fmt::Display for ExactError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ExactError::BadVelocity(e) => write!(f, "bad velocity: {e}"),
+            ExactError::BadDrive => f.write_str(
+                "invalid drive (non-finite, Δu_z/u_z0 outside [0, 1) or a negative amplitude)",
+            ),
+            ExactError::Inconsistent => f.write_str(
+                "the exact solver's period did not close (internal check; a number would be wrong)",
+            ),
+            ExactError::IllConditioned => f.write_str(
+                "ill-conditioned: the float type cannot resolve this drive (k_xΔu_x/(μ0 k_z u_z0) too large)",
+            ),
+        }
+    }
+}
+
+impl core::error::Error for ExactError {}
+
 /// The verified precision constant of the exact solver: its error in `μ/μ₀`
 /// is at most this times `1 + b` (plus the backend's term, [`error_bound`]).
 ///
