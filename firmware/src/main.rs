@@ -20,6 +20,8 @@
 #![no_std]
 #![no_main]
 
+mod panic;
+
 use core::cell::RefCell;
 
 use cortex_m::interrupt::Mutex;
@@ -28,16 +30,17 @@ use defmt_rtt as _;
 use model_core::board::link::{self, Core, LinkIo, RxQueue, TxRing, RX_CAPACITY, TX_CAPACITY};
 use model_core::dds::SineTable;
 use model_core::device::{faults, Contact, Device, DeviceConfig, DriveSetting};
+use model_core::float::FastF32;
 use model_core::protocol::{Info, PROTOCOL_VERSION};
 use model_core::server::{DeviceAccess, Server};
-use panic_probe as _;
 use stm32f4::stm32f405::{self as pac, interrupt, Interrupt};
 
 /// Samples per DMA half-buffer (512 µs at 500 kS/s).
 const HALF: usize = 256;
 /// DDS/ADC sample rate: 12.5 samples per period at 40 kHz. The DDS refill costs
-/// 85 instructions per sample once settled (116 while ramping; measured under
-/// QEMU, see `src/bin/predict_cost.rs`), i.e. ≈ 25 % of the 168 MHz core here.
+/// 97 instructions per sample once settled (125 while ramping; measured under
+/// QEMU at `opt-level = "z"`, see `src/bin/predict_cost.rs`), i.e. ≈ 29 % of
+/// the 168 MHz core here.
 const FS_HZ: u32 = 500_000;
 /// TIM2 kernel clock: APB1 = 42 MHz, ×2 for timers when APB1 is divided (RM0090 §6.2).
 #[cfg(not(feature = "qemu"))]
@@ -178,9 +181,9 @@ fn main() -> ! {
         .afrl()
         .modify(|r, w| unsafe { w.bits((r.bits() & !(0xFF << 8)) | (7 << 8) | (7 << 12)) });
 
-    // The device: table built once with libm, then the logic of model-core.
+    // The device: table built once (FastF32, the solver's backend), then the logic of model-core.
     let table: &'static SineTable<TABLE_N> =
-        cortex_m::singleton!(: SineTable<TABLE_N> = SineTable::libm())
+        cortex_m::singleton!(: SineTable<TABLE_N> = SineTable::build::<FastF32>())
             .unwrap_or_else(|| defmt::panic!("table"));
     let cfg = config();
     let contact = Contact {

@@ -27,6 +27,7 @@
 //! with [`reasons::FEW_PERIODS`] set.
 
 use crate::board::dds::SineTable;
+use crate::model::float::{FastF32, Math};
 
 /// Linear ADC calibration: `force = gain · (count − offset)` (N per count, counts).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -355,12 +356,14 @@ impl Estimator {
         }
         // Lock-in: f ≈ A cos(θ + φ) ⇒ Σ f cos θ = (n/2) A cos φ, Σ f sin θ = −(n/2) A sin φ.
         // The DC offset in counts drops out over whole periods.
+        // The lock-in totals are f32, so is the result: the f32 backend
+        // (FastF32, a few ulps; the solver's too, one copy in the firmware).
         let h = |c: f32, sn: f32, gain: f32| {
-            let re = 2.0 * f64::from(c) / n * f64::from(gain);
-            let im = -2.0 * f64::from(sn) / n * f64::from(gain);
+            let re = (2.0 * f64::from(c) / n * f64::from(gain)) as f32;
+            let im = (-2.0 * f64::from(sn) / n * f64::from(gain)) as f32;
             Harmonic {
-                amplitude: libm::hypot(re, im) as f32,
-                phase: libm::atan2(im, re) as f32,
+                amplitude: FastF32::hypot(re, im),
+                phase: FastF32::atan2(im, re),
             }
         };
         let mu = fx / fz;
@@ -404,6 +407,7 @@ impl Estimator {
             return 0.0;
         }
         let b = f64::from(used);
-        libm::sqrt(b / (b - 1.0) * sum_sq) / libm::fabs(sum_z)
+        // Reported as f32: the root in f32 (FastF32, relative error a few ulps).
+        f64::from(FastF32::sqrt((b / (b - 1.0) * sum_sq) as f32)) / sum_z.abs()
     }
 }

@@ -140,7 +140,7 @@ pub fn classify_drive<T: Float, M: Math<T>>(
     let vmax = c.max(cb);
     if (c - cb).abs() > tol * (T::ONE + vmax) {
         // Different critical velocities: μ = ±1 beyond one and not the other.
-        asymmetry = asymmetry.max(T::ONE - mu_at(d, c.min(cb))?.abs());
+        asymmetry = asymmetry.max(T::ONE - mu_at::<T, M>(d, c.min(cb))?.abs());
     } else if vmax > T::ZERO {
         let n = opts.samples.max(1);
         for i in 1..=n {
@@ -168,11 +168,11 @@ pub fn classify_drive<T: Float, M: Math<T>>(
     })
 }
 
-fn mu_at<T: Float>(d: &Drive<T>, v: T) -> Result<T, ExactError> {
+fn mu_at<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<T, ExactError> {
     if v == T::ZERO {
         return Ok(T::ZERO);
     }
-    mu_over_mu0::<T, Libm>(d, v)
+    mu_over_mu0::<T, M>(d, v)
 }
 
 /// The paper's rule of thumb (§3.2 and §4), for comparison with [`classify`]:

@@ -3,9 +3,10 @@
 
 use super::config::MAX_VELOCITY_M_S;
 use super::{in_range, Device, DeviceError, DriveParam, Prediction};
+use crate::model::analytic::StaticFriction;
 use crate::model::exact::{self, Solution};
 use crate::model::float::FastF32;
-use crate::model::regime::{classify, ClassifyOptions, Regime};
+use crate::model::regime::{classify_drive, ClassifyOptions, Regime};
 use crate::model::scene::Scene;
 
 impl<const N: usize> Device<'_, N> {
@@ -59,12 +60,17 @@ pub fn predict(s: &Scene<f32>, v0: f32) -> Result<Prediction, DeviceError> {
     })
 }
 
-/// The regime of a scene (what [`Device::regime`] computes).
+/// The regime of a scene (what [`Device::regime`] computes), with the same
+/// f32 backend as [`predict`] ([`FastF32`]: one copy of the solver in flash).
 ///
 /// # Errors
 /// [`DeviceError::Model`].
 pub fn regime(s: &Scene<f32>) -> Result<Regime, DeviceError> {
-    classify(s, &ClassifyOptions::default())
-        .map(|c| c.regime)
-        .map_err(DeviceError::Model)
+    classify_drive::<f32, FastF32>(
+        &s.drive(),
+        StaticFriction::of_with::<FastF32>(s),
+        &ClassifyOptions::default(),
+    )
+    .map(|c| c.regime)
+    .map_err(DeviceError::Model)
 }

@@ -18,8 +18,39 @@ use crate::board::protocol::messages::{Frame, WireError, BODY_KINDS, ENDPOINTS, 
 /// Largest frame on the wire (COBS-encoded, with CRC and delimiter), bytes.
 pub const MAX_FRAME: usize = 256;
 
-/// The CRC of the frames (CRC-32/ISO-HDLC).
-pub const CRC: crc::Crc<u32> = crc::Crc::<u32>::new(&crc::CRC_32_ISO_HDLC);
+/// The CRC of the frames (CRC-32/ISO-HDLC), bitwise: no 1 KB lookup table in
+/// the firmware's flash, for ≈ 40 instructions per byte (≈ 60 µs for a
+/// [`MAX_FRAME`]-byte frame at 168 MHz, against 22 ms on the wire at 115 200 Bd).
+pub const CRC: crc::Crc<u32, crc::NoTable> =
+    crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
+
+/// A postcard flavor that feeds every byte to [`CRC`] and appends the CRC
+/// little-endian at the end (postcard's own `CrcModifier` takes only the
+/// table-driven digest).
+struct CrcAppend<'a, F> {
+    flavor: F,
+    digest: crc::Digest<'a, u32, crc::NoTable>,
+}
+
+impl<F: postcard::ser_flavors::Flavor> postcard::ser_flavors::Flavor for CrcAppend<'_, F> {
+    type Output = F::Output;
+
+    fn try_push(&mut self, data: u8) -> postcard::Result<()> {
+        self.digest.update(&[data]);
+        self.flavor.try_push(data)
+    }
+
+    fn try_extend(&mut self, data: &[u8]) -> postcard::Result<()> {
+        self.digest.update(data);
+        self.flavor.try_extend(data)
+    }
+
+    fn finalize(mut self) -> postcard::Result<Self::Output> {
+        let crc = self.digest.finalize();
+        self.flavor.try_extend(&crc.to_le_bytes())?;
+        self.flavor.finalize()
+    }
+}
 
 /// Why a frame could not be encoded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -44,11 +75,14 @@ impl core::error::Error for EncodeError {}
 /// # Errors
 /// [`EncodeError::TooLarge`] if it does not fit in `out` or in [`MAX_FRAME`].
 pub fn encode<'a>(frame: &Frame, out: &'a mut [u8]) -> Result<&'a mut [u8], EncodeError> {
-    use postcard::ser_flavors::{crc::CrcModifier, Cobs, Slice};
+    use postcard::ser_flavors::{Cobs, Slice};
     let n = out.len().min(MAX_FRAME);
     let cobs = Cobs::try_new(Slice::new(&mut out[..n])).map_err(|_| EncodeError::TooLarge)?;
-    postcard::serialize_with_flavor(frame, CrcModifier::new(cobs, CRC.digest()))
-        .map_err(|_| EncodeError::TooLarge)
+    let flavor = CrcAppend {
+        flavor: cobs,
+        digest: CRC.digest(),
+    };
+    postcard::serialize_with_flavor(frame, flavor).map_err(|_| EncodeError::TooLarge)
 }
 
 /// Decodes one frame from its bytes *without* the delimiter (decoded in place).
