@@ -405,7 +405,7 @@ fn ask(p: &mut dyn SerialPort, payload: &[u8]) -> Frame {
 
 /// `GetStatus` (index 11) with seq `seq`, written from the spec.
 fn raw_status(p: &mut dyn SerialPort, seq: u8) -> model_core::device::Status {
-    match ask(p, &[2, seq, 0, 11]).body {
+    match ask(p, &[3, seq, 0, 11]).body {
         Body::Response(Response::Status(st)) => st,
         other => panic!("{other:?}"),
     }
@@ -418,11 +418,11 @@ fn a_retried_measure_gets_the_same_answer_and_reset_ends_everything() {
     let mut p = raw_port(&s);
     let p = &mut *p;
     // Start (index 3); the ramps take ≈ 45 ms of device time.
-    assert_eq!(ask(p, &[2, 30, 0, 3]).body, Body::Response(Response::Ok));
+    assert_eq!(ask(p, &[3, 30, 0, 3]).body, Body::Response(Response::Ok));
     std::thread::sleep(Duration::from_millis(300));
-    // Measure{periods: 20000} with seq 40, written from the spec: version 02,
+    // Measure{periods: 20000} with seq 40, written from the spec: version 03,
     // seq 28 (40), Body::Request 00, Request::Measure 08, periods varint a0 9c 01.
-    let measure_40 = [2, 40, 0, 8, 0xa0, 0x9c, 0x01];
+    let measure_40 = [3, 40, 0, 8, 0xa0, 0x9c, 0x01];
     let f = ask(p, &measure_40);
     assert_eq!((f.seq, f.body), (40, Body::Response(Response::Ok)));
     // The retry (same seq) while it runs: the same answer, not Busy.
@@ -430,17 +430,17 @@ fn a_retried_measure_gets_the_same_answer_and_reset_ends_everything() {
     assert_eq!((f.seq, f.body), (40, Body::Response(Response::Ok)));
     assert!(raw_status(p, 43).measuring);
     // A new seq while it runs: Busy.
-    let f = ask(p, &[2, 41, 0, 8, 0xa0, 0x9c, 0x01]);
+    let f = ask(p, &[3, 41, 0, 8, 0xa0, 0x9c, 0x01]);
     assert_eq!((f.seq, err_of(&f)), (41, WireError::Busy));
     // Reset (index 13): ends the measurement and stops the drive.
-    let f = ask(p, &[2, 42, 0, 13]);
+    let f = ask(p, &[3, 42, 0, 13]);
     assert_eq!((f.seq, f.body), (42, Body::Response(Response::Ok)));
     let st = raw_status(p, 44);
     assert!(!st.measuring && !st.running, "{st:?}");
     // A measurement that finished: its retry starts nothing.
-    assert_eq!(ask(p, &[2, 45, 0, 3]).body, Body::Response(Response::Ok));
+    assert_eq!(ask(p, &[3, 45, 0, 3]).body, Body::Response(Response::Ok));
     std::thread::sleep(Duration::from_millis(300));
-    let measure_50 = [2, 50, 0, 8, 0xc8, 0x01]; // 200 periods = 10 ms
+    let measure_50 = [3, 50, 0, 8, 0xc8, 0x01]; // 200 periods = 10 ms
     assert_eq!(ask(p, &measure_50).body, Body::Response(Response::Ok));
     std::thread::sleep(Duration::from_millis(500));
     assert!(!raw_status(p, 51).measuring);
@@ -532,6 +532,7 @@ const STATUS_KEYS: &[&str] = &[
     "out_duz",
     "out_dux",
     "out_uz0",
+    "liftoff_allowed",
 ];
 
 fn sorted(k: &[&str]) -> Vec<String> {
@@ -592,8 +593,10 @@ fn json_is_flat_with_the_model_commands_keys_and_text_has_units() {
             "vc_forward",
             "vc_backward",
             "regime",
+            "model",
         ],
     );
+    assert_eq!(p["model"], "permanent");
     // v0 as the device received it (f32), in its shortest form.
     assert_eq!(p["v0"], Value::from(0.004));
     let host = common::host_mu_of_test_drive();
@@ -615,6 +618,7 @@ fn json_is_flat_with_the_model_commands_keys_and_text_has_units() {
             "vc_forward",
             "vc_backward",
             "regime",
+            "model",
         ],
     );
     assert!(p0["mu"].is_null() && p0["mu_0plus_over_mu0"].is_number());
@@ -826,11 +830,11 @@ fn the_virtual_device_survives_a_host_that_stops_reading() {
     ok_json(&s, &["start"]);
     std::thread::sleep(Duration::from_millis(300));
     let mut p = raw_port(&s);
-    // Stream{on: true, periods: 20} (index 10), from the spec: version 02, seq 60,
+    // Stream{on: true, periods: 20} (index 10), from the spec: version 03, seq 60,
     // Body::Request 00, Stream 0a, bool 01, varint 14. 20 periods = 1 ms of
     // device time: ~70-byte estimates fill the pty's few-kB buffer well within
     // the 3 s nobody reads here (the old device exited when a write timed out).
-    p.write_all(&common::raw_frame(&[2, 60, 0, 0x0a, 1, 0x14]))
+    p.write_all(&common::raw_frame(&[3, 60, 0, 0x0a, 1, 0x14]))
         .unwrap();
     std::thread::sleep(Duration::from_secs(3));
     assert!(
@@ -893,4 +897,116 @@ fn over_tcp_the_device_runs_between_connections_and_measures_as_over_a_pty() {
     assert!((mu - pred).abs() <= allowed, "{e}");
     let _ = child.kill();
     let _ = child.wait();
+}
+
+/// `drive set` with Δu_z = `amp_z` and otherwise [`DRIVE`].
+fn drive_with_amp_z(amp_z: &str) -> Vec<&str> {
+    let mut v = DRIVE.to_vec();
+    v[5] = amp_z;
+    v
+}
+
+#[test]
+fn liftoff_is_a_limit_the_user_lifts_on_purpose() {
+    use model_core::model::liftoff;
+    let s = sim();
+    ok_json(&s, DRIVE);
+    assert_eq!(ok_json(&s, &["status"])["liftoff_allowed"], false);
+    // Power-up: Δu_z = u_z0 = 4 µm is above (1 − 0.05)·u_z0 — refused, named,
+    // with the way to allow it; the drive is unchanged.
+    let before = ok_json(&s, &["drive", "get"]);
+    let lift = drive_with_amp_z("4e-6");
+    let o = dev(&s, &lift);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("--amp-z") && err.contains("--allow-liftoff"),
+        "{err}"
+    );
+    assert_eq!(ok_json(&s, &["drive", "get"]), before);
+    // Allowed on purpose: text and JSON of `config`, then the drive is accepted.
+    assert_eq!(
+        dev_text(&s, &["config", "--allow-liftoff"]),
+        "lift-off allowed  yes\n"
+    );
+    assert_eq!(
+        ok_json(&s, &["config", "--allow-liftoff"]),
+        serde_json::json!({"liftoff_allowed": true})
+    );
+    let d = ok_json(&s, &lift);
+    assert_eq!(d["duz"], 4e-6);
+    // The DAC still bounds Δu_z: the virtual board's normal transducer cannot
+    // retract past the surface (zero_code 0), so Δu_z ≤ u_z0.
+    let o = dev(&s, &drive_with_amp_z("4.5e-6"));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--amp-z"));
+    assert_eq!(ok_json(&s, &["drive", "get"]), d);
+    // a = 1: predict answers with the lift-off model. Reference: the
+    // fixed-step scheme with exact landing (liftoff::stepping, f64, 20 000
+    // steps per period) on the device's own f32 scene, rebuilt from `drive
+    // get` (f32 inputs; ω from the achieved frequency, φ the achieved phase).
+    let f32_of = |v: &Value| f64::from(v.as_f64().unwrap() as f32);
+    let omega = f64::from((std::f64::consts::TAU * d["freq_achieved"].as_f64().unwrap()) as f32);
+    let phi = f64::from(d["phi_achieved_deg"].as_f64().unwrap().to_radians() as f32);
+    let scene = model_core::Scene::new_with_contact(
+        model_core::SceneParams {
+            mu0: 0.3,
+            kz: 1e7,
+            kx: 1e7,
+            uz0: f32_of(&d["uz0"]),
+            duz: f32_of(&d["duz"]),
+            dux: f32_of(&d["dux"]),
+            omega,
+            phi,
+        },
+        model_core::scene::ContactMode::Intermittent,
+    )
+    .unwrap();
+    let drive = scene.drive();
+    assert_eq!(drive.a, 1.0);
+    // Tolerance: the stepping's stated bound + the f32 lift-off solver's
+    // stated bound with FastF32 (liftoff::error_bound), + 1e-6 for the f32
+    // rounding of μ0 = 0.3 and of the printed value (shortest f32 form).
+    let drive32 =
+        model_core::Drive::new::<model_core::Libm>(drive.a as f32, drive.b as f32, phi as f32);
+    let dev_bound = f64::from(liftoff::error_bound::<f32, model_core::FastF32>(&drive32));
+    for v0 in ["0.004", "-0.01", "0"] {
+        let p = ok_json(&s, &["predict", "--v0", v0]);
+        assert_eq!(p["model"], "liftoff", "{p}");
+        let v = v0.parse::<f64>().unwrap() / scene.velocity_scale();
+        let r = liftoff::stepping::mu_over_mu0::<f64, model_core::Libm>(&drive, v, 20_000).unwrap();
+        let got = p["mu_over_mu0"].as_f64().unwrap();
+        let tol = r.error_bound + dev_bound + 1e-6;
+        assert!(
+            (got - r.mu_over_mu0).abs() <= tol,
+            "v0 = {v0}: device {got} vs stepping {} (tol {tol:.1e})",
+            r.mu_over_mu0
+        );
+    }
+    // Continuous at rest: one μ at v0 = 0 (not the two one-sided limits).
+    let p0 = ok_json(&s, &["predict", "--v0", "0"]);
+    assert!(
+        p0["mu"].is_number() && p0.get("mu_0plus_over_mu0").is_none(),
+        "{p0}"
+    );
+    // Refusing again while the accepted drive lifts off: refused, unchanged.
+    let o = dev(&s, &["config", "--refuse-liftoff"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("lift"));
+    assert_eq!(ok_json(&s, &["status"])["liftoff_allowed"], true);
+    // With a drive within the limit the guard comes back.
+    ok_json(&s, DRIVE);
+    assert_eq!(
+        ok_json(&s, &["config", "--refuse-liftoff"]),
+        serde_json::json!({"liftoff_allowed": false})
+    );
+    assert_eq!(dev(&s, &lift).status.code(), Some(2));
+    // Exactly one of the two flags.
+    assert_eq!(dev(&s, &["config"]).status.code(), Some(2));
+    assert_eq!(
+        dev(&s, &["config", "--allow-liftoff", "--refuse-liftoff"])
+            .status
+            .code(),
+        Some(2)
+    );
 }

@@ -390,3 +390,164 @@ fn estimates_say_why_they_are_not_valid() {
     d.fault(faults::EXTERNAL);
     assert_eq!(d.measure(40), Err(DeviceError::Faulted(faults::EXTERNAL)));
 }
+
+/// A board whose normal transducer reaches 2.048 µm below the surface
+/// (`zero_code` 1024 of 2 nm/code), so that a drive may lift the contact off.
+fn cfg_with_retract() -> DeviceConfig {
+    let mut c = cfg();
+    c.dac_z.zero_code = 1024.0;
+    c
+}
+
+/// Δu_z = 1.5·u_z0 (a = 1.5): lifts off; within the DAC's reach (2 µm offset
+/// + 2.048 µm below the surface) and headroom ((4095 − 1024)·2 nm − 2 µm).
+fn liftoff_drive() -> DriveSetting {
+    DriveSetting {
+        amp_z_m: 3e-6,
+        offset_z_m: 2e-6,
+        ..drive()
+    }
+}
+
+#[test]
+fn liftoff_is_refused_until_allowed_and_refusals_change_nothing() {
+    let t = SineTable::<1024>::libm();
+    let mut d = Device::new(cfg_with_retract(), &t, CONTACT).unwrap();
+    d.set_drive(drive()).unwrap();
+    d.start().unwrap();
+    let mut buf = [0u32; 256];
+    for _ in 0..10 {
+        d.fill_dac(0, &mut buf);
+    }
+    let snapshot = |d: &Device<'_, 1024>| {
+        (
+            d.drive(),
+            d.applied(),
+            *d.dds().channels(),
+            d.dds().tuning_word(),
+            d.status(),
+        )
+    };
+    let before = snapshot(&d);
+    assert!(!before.4.liftoff_allowed, "power-up state: refuse");
+    // Default: refused with the limit (1 − 0.05)·2 µm = 1.9 µm, nothing changed.
+    match d.set_drive(liftoff_drive()) {
+        Err(DeviceError::LiftOff { amp_z_m, limit_m }) => {
+            assert_eq!(amp_z_m, 3e-6);
+            assert!((limit_m - 1.9e-6).abs() < 1e-12, "{limit_m}");
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(snapshot(&d), before);
+    // Allowed on purpose: accepted.
+    d.set_liftoff_allowed(true).unwrap();
+    assert!(d.status().liftoff_allowed);
+    d.set_drive(liftoff_drive()).unwrap();
+    assert_eq!(d.drive(), liftoff_drive());
+    let accepted = snapshot(&d);
+    // Beyond the DAC's reach below the surface (offset + 2.048 µm, f32): out of
+    // range with that limit, nothing changed.
+    match d.set_drive(DriveSetting {
+        amp_z_m: 4.1e-6,
+        ..liftoff_drive()
+    }) {
+        Err(DeviceError::OutOfRange {
+            param: DriveParam::AmpZ,
+            max,
+            ..
+        }) => assert!((max - 4.048e-6).abs() < 1e-12, "{max}"),
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(snapshot(&d), accepted);
+    // A zero offset still takes no normal amplitude.
+    assert!(matches!(
+        d.set_drive(DriveSetting {
+            offset_z_m: 0.0,
+            ..liftoff_drive()
+        }),
+        Err(DeviceError::LiftOff { .. })
+    ));
+    assert_eq!(snapshot(&d), accepted);
+    // Refusing again while the accepted drive is above the limit: refused,
+    // nothing changed (still allowed).
+    assert!(matches!(
+        d.set_liftoff_allowed(false),
+        Err(DeviceError::LiftOff { .. })
+    ));
+    assert_eq!(snapshot(&d), accepted);
+    // With a drive within the limit the guard comes back and holds again.
+    d.set_drive(drive()).unwrap();
+    d.set_liftoff_allowed(false).unwrap();
+    assert!(!d.status().liftoff_allowed);
+    assert!(matches!(
+        d.set_drive(liftoff_drive()),
+        Err(DeviceError::LiftOff { .. })
+    ));
+}
+
+#[test]
+fn with_liftoff_allowed_predict_uses_the_liftoff_model() {
+    use model_core::model::liftoff;
+    let t = SineTable::<1024>::libm();
+    let mut d = Device::new(cfg_with_retract(), &t, CONTACT).unwrap();
+    d.set_liftoff_allowed(true).unwrap();
+    // Within the limit the permanent-contact solver still answers.
+    d.set_drive(drive()).unwrap();
+    let p = d.predict(0.004).unwrap();
+    assert!(!p.liftoff);
+    d.set_drive(liftoff_drive()).unwrap();
+    // The independent reference: the fixed-step scheme with exact landing
+    // (liftoff::stepping, f64, N = 20 000 steps per period) on the very scene the
+    // device formed (its f32 parameters, widened exactly to f64).
+    let s32 = d.scene().unwrap();
+    let p32 = *s32.params();
+    let s64 = Scene::new_with_contact(
+        SceneParams {
+            mu0: f64::from(p32.mu0),
+            kz: f64::from(p32.kz),
+            kx: f64::from(p32.kx),
+            uz0: f64::from(p32.uz0),
+            duz: f64::from(p32.duz),
+            dux: f64::from(p32.dux),
+            omega: f64::from(p32.omega),
+            phi: f64::from(p32.phi),
+        },
+        model_core::scene::ContactMode::Intermittent,
+    )
+    .unwrap();
+    assert!((s64.drive().a - 1.5).abs() < 1e-6);
+    // Tolerance: the stepping's stated bound plus the f32 lift-off solver's
+    // stated bound with FastF32 (liftoff::error_bound: precision constant +
+    // the backend's error, times 1 + a + b).
+    let dev_bound = f64::from(liftoff::error_bound::<f32, model_core::FastF32>(
+        &s32.drive(),
+    ));
+    let scale = s64.velocity_scale();
+    for v0 in [-0.02f32, -0.003, 0.0, 0.002, 0.01] {
+        let p = d.predict(v0).unwrap();
+        assert!(p.liftoff, "v0 = {v0}");
+        let v = f64::from(v0) / scale;
+        let r = liftoff::stepping::mu_over_mu0::<f64, Libm>(&s64.drive(), v, 20_000).unwrap();
+        let tol = r.error_bound + dev_bound;
+        let got = f64::from(p.mu_over_mu0);
+        assert!(
+            (got - r.mu_over_mu0).abs() <= tol,
+            "v0 = {v0}: device {got} vs stepping {} (tol {tol:.2e})",
+            r.mu_over_mu0
+        );
+        // μ is continuous at rest with lift-off: one value on both sides.
+        assert_eq!(p.mu_0minus_over_mu0, p.mu_over_mu0);
+        assert!((f64::from(p.mu) - 0.3 * got).abs() <= 1e-7 * got.abs().max(1.0));
+    }
+    // Critical velocities: eq. L5 of the contact window, in m/s (f64 reference).
+    let (cf, cb) = liftoff::critical_velocities::<f64, Libm>(&s64.drive()).unwrap();
+    let p = d.predict(0.0).unwrap();
+    for (got, want) in [(p.vc.0, cf * scale), (p.vc.1, cb * scale)] {
+        // f32: a few ulps of the trig (FastF32 ≤ 3e-7) and the scaling.
+        assert!(
+            (f64::from(got) - want).abs() <= 1e-6 * want.abs().max(1e-9),
+            "{got} vs {want}"
+        );
+    }
+    assert!(d.regime().is_ok());
+}

@@ -98,6 +98,22 @@ pub enum DeviceCmd {
     Status,
     /// Clear latched faults
     ResetFaults,
+    /// Device settings: allow or refuse drives that lift the contact off
+    Config {
+        /// Allow Δu_z above the lift-off limit (1 − margin)·u_z0 on purpose:
+        /// the contact may lift off (intermittent contact) and `predict` uses
+        /// the lift-off model; the DAC range still bounds Δu_z
+        #[arg(
+            long,
+            conflicts_with = "refuse_liftoff",
+            required_unless_present = "refuse_liftoff"
+        )]
+        allow_liftoff: bool,
+        /// Refuse such drives again (the power-up state; refused itself
+        /// while the accepted drive is above the limit)
+        #[arg(long)]
+        refuse_liftoff: bool,
+    },
     /// End every stream and measurement and stop the drive (after a host
     /// crash); settings and latched faults are kept
     Reset,
@@ -281,7 +297,8 @@ fn wire_error(e: WireError) -> CliError {
             CliError::usage(format!("{}: refused by the device: allowed range [{min}, {max}]", name(param)))
         }
         WireError::LiftOffRefused { amp_z_m, limit_m } => CliError::usage(format!(
-            "--amp-z: refused by the device: {amp_z_m} m would lift the contact off (limit {limit_m} m)"
+            "--amp-z: refused by the device: {amp_z_m} m would lift the contact off (limit {limit_m} m); \
+             lower it, or allow lift-off on purpose with `fricctl device config --allow-liftoff`"
         )),
         WireError::BadScene => CliError::usage(
             "--offset-z: the device has no valid scene: it needs a contact (scene set) and a drive with a normal offset (drive set)"
@@ -474,6 +491,15 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             Response::Status(st) => out(t.json, &render::status(&st)),
             other => Err(unexpected(other)),
         },
+        DeviceCmd::Config { allow_liftoff, .. } => {
+            expect(c.call(Request::SetLiftOff {
+                allow: *allow_liftoff,
+            })?)?;
+            match expect(c.call(Request::GetStatus)?)? {
+                Response::Status(st) => out(t.json, &render::config(&st)),
+                other => Err(unexpected(other)),
+            }
+        }
         DeviceCmd::ResetFaults => out(
             t.json,
             &done(

@@ -190,7 +190,8 @@ pub fn done(command: &'static str, what: &'static str) -> Report {
 /// v0 = 0, `mu` and `mu_over_mu0` are null and the one-sided limits are given.
 pub fn prediction(v0: f64, p: &Prediction, regime: Regime) -> Report {
     let r = Report::default().row("v0", "v0", v0, "m/s");
-    let r = if v0 == 0.0 {
+    // With lift-off μ is continuous at rest: one value also at v0 = 0.
+    let r = if v0 == 0.0 && !p.liftoff {
         r.row("mu", "mu", Value::Null, "")
             .row("mu_over_mu0", "mu/mu0", Value::Null, "")
             .row("mu_0plus_over_mu0", "mu(0+)/mu0", f32v(p.mu_over_mu0), "")
@@ -207,6 +208,12 @@ pub fn prediction(v0: f64, p: &Prediction, regime: Regime) -> Report {
     r.row("vc_forward", "v_c forward", f32v(p.vc.0), "m/s")
         .row("vc_backward", "v_c backward", f32v(p.vc.1), "m/s")
         .row("regime", "regime", regime.name(), "")
+        .row(
+            "model",
+            "model",
+            if p.liftoff { "liftoff" } else { "permanent" },
+            "",
+        )
 }
 
 /// The names of the reason bits of an estimate.
@@ -277,6 +284,11 @@ pub fn estimate(e: &Estimate) -> Report {
         )
 }
 
+/// The device settings (`device config`), as read back from the status.
+pub fn config(s: &Status) -> Report {
+    Report::default().row("liftoff_allowed", "lift-off allowed", s.liftoff_allowed, "")
+}
+
 /// Status and latched faults.
 pub fn status(s: &Status) -> Report {
     Report::default()
@@ -288,6 +300,7 @@ pub fn status(s: &Status) -> Report {
         .row("out_duz", "output duz", f32v(s.out_amp_z_m), "m")
         .row("out_dux", "output dux", f32v(s.out_amp_x_m), "m")
         .row("out_uz0", "output uz0", f32v(s.out_offset_z_m), "m")
+        .row("liftoff_allowed", "lift-off allowed", s.liftoff_allowed, "")
 }
 
 #[cfg(test)]

@@ -55,6 +55,9 @@ pub struct SimState {
     pub contact: Contact,
     /// Started.
     pub running: bool,
+    /// Drives above the lift-off limit allowed (`device config --allow-liftoff`).
+    #[serde(default)]
+    pub liftoff_allowed: bool,
 }
 
 /// The device's power-up contact (and the plant's default): μ₀, k_z (N/m), k_x (N/m).
@@ -303,6 +306,7 @@ impl VirtualDevice {
             drive: self.dev.drive(),
             contact: self.dev.contact(),
             running: self.dev.status().running,
+            liftoff_allowed: self.dev.liftoff_allowed(),
         }
     }
 
@@ -310,6 +314,7 @@ impl VirtualDevice {
     /// device time). Invalid snapshots are ignored.
     pub fn restore(&mut self, st: &SimState) {
         let _ = self.dev.set_contact(st.contact);
+        let _ = self.dev.set_liftoff_allowed(st.liftoff_allowed);
         if self.dev.set_drive(st.drive).is_ok() && st.running && self.dev.start().is_ok() {
             let mut n = 0;
             while !self.dev.status().settled && n < 10_000 {

@@ -325,6 +325,10 @@ fn run<const N: usize, A: DeviceAccess<N>>(
             dev.with(|d| d.reset_faults());
             Response::Ok
         }
+        Request::SetLiftOff { allow } => {
+            dev.with(|d| d.set_liftoff_allowed(allow))?;
+            Response::Ok
+        }
         // Handled with the session state in `Server::handle`: never here.
         Request::Measure { .. } | Request::Stream { .. } | Request::Reset => {
             return Err(WireError::Internal)

@@ -16,12 +16,30 @@ struct Plan {
 }
 
 impl<const N: usize> Device<'_, N> {
+    /// The lift-off guard: `Δu_z ≤ (1 − margin)·u_z0` (f32, inclusive), and no
+    /// normal amplitude on a zero offset.
+    pub(super) fn check_liftoff(&self, d: &DriveSetting) -> Result<(), DeviceError> {
+        let limit = self.cfg.liftoff_limit_m(d.offset_z_m);
+        if d.amp_z_m > limit || (d.amp_z_m > 0.0 && d.offset_z_m == 0.0) {
+            return Err(DeviceError::LiftOff {
+                amp_z_m: d.amp_z_m,
+                limit_m: limit,
+            });
+        }
+        Ok(())
+    }
+
     /// DDS levels for a drive (validated, nothing applied). The checks, in
     /// order (the first failing one is reported): frequency; normal offset
     /// in `[0, max_offset_z_m]`; normal amplitude finite and ≥ 0, then
-    /// ≤ `(1 − margin)·offset` (lift-off, f32, inclusive), then
-    /// ≤ `max_offset_z_m − offset` (DAC headroom, f32, inclusive); tangential
-    /// amplitude in `[0, max_amp_x_m]`; phase in `[−MAX_PHASE_RAD, MAX_PHASE_RAD]`.
+    /// ≤ `(1 − margin)·offset` (lift-off, f32, inclusive; skipped while
+    /// lift-off is allowed, except that a zero offset takes no amplitude),
+    /// then ≤ `max_offset_z_m − offset` (DAC headroom above, f32, inclusive),
+    /// then ≤ `offset + zero_code·metres_per_code` (the DAC's reach below the
+    /// surface, f32, inclusive: with the driver board's `zero_code` 0 the
+    /// transducer cannot retract past the surface, so `Δu_z ≤ u_z0`, `a ≤ 1`);
+    /// tangential amplitude in `[0, max_amp_x_m]`; phase in
+    /// `[−MAX_PHASE_RAD, MAX_PHASE_RAD]`.
     fn plan(&self, d: &DriveSetting) -> Result<Plan, DeviceError> {
         let (fmin, fmax) = self.cfg.freq_range_hz;
         let freq_err = DeviceError::OutOfRange {
@@ -39,7 +57,15 @@ impl<const N: usize> Device<'_, N> {
             self.cfg.max_offset_z_m(),
             DriveParam::OffsetZ,
         )?;
-        let limit = self.cfg.liftoff_limit_m(off);
+        // DAC headroom above the offset and reach below the surface, in f32
+        // like the lift-off limit.
+        let headroom = (self.cfg.max_offset_z_m() - off).max(0.0);
+        let reach = off + z.zero_code * z.metres_per_code;
+        let limit = if self.allow_liftoff {
+            reach.min(headroom)
+        } else {
+            self.cfg.liftoff_limit_m(off)
+        };
         if !(d.amp_z_m.is_finite() && d.amp_z_m >= 0.0) {
             return Err(DeviceError::OutOfRange {
                 param: DriveParam::AmpZ,
@@ -47,19 +73,27 @@ impl<const N: usize> Device<'_, N> {
                 max: limit,
             });
         }
-        if d.amp_z_m > limit || (d.amp_z_m > 0.0 && off == 0.0) {
+        if !self.allow_liftoff {
+            self.check_liftoff(d)?;
+        } else if d.amp_z_m > 0.0 && off == 0.0 {
             return Err(DeviceError::LiftOff {
                 amp_z_m: d.amp_z_m,
-                limit_m: limit,
+                limit_m: 0.0,
             });
         }
-        // DAC headroom above the offset, computed in f32 like the limit above.
-        let headroom = (self.cfg.max_offset_z_m() - off).max(0.0);
         if d.amp_z_m > headroom {
             return Err(DeviceError::OutOfRange {
                 param: DriveParam::AmpZ,
                 min: 0.0,
                 max: headroom,
+            });
+        }
+        // Reach below the surface (only binding while lift-off is allowed).
+        if d.amp_z_m > reach {
+            return Err(DeviceError::OutOfRange {
+                param: DriveParam::AmpZ,
+                min: 0.0,
+                max: reach.min(headroom),
             });
         }
         let amp_x = in_range(d.amp_x_m, 0.0, self.cfg.max_amp_x_m(), DriveParam::AmpX)?;

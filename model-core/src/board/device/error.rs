@@ -7,6 +7,7 @@ use crate::board::dds::DdsError;
 use crate::board::estimator::EstimateError;
 use crate::board::protocol::messages::{DriveParam, WireError};
 use crate::model::exact::ExactError;
+use crate::model::liftoff::LiftOffError;
 use crate::model::scene::SceneError;
 
 /// A field of [`super::DeviceConfig`] that cannot work.
@@ -74,6 +75,8 @@ pub enum DeviceError {
     Scene(SceneError),
     /// The model solver failed.
     Model(ExactError),
+    /// The lift-off model failed (a lift-off drive, see `set_liftoff_allowed`).
+    LiftOffModel(LiftOffError),
     /// No finished measurement.
     Estimate(EstimateError),
     /// The configuration cannot work ([`super::Device::new`] only).
@@ -99,6 +102,7 @@ impl fmt::Display for DeviceError {
             }
             DeviceError::Scene(e) => write!(f, "not a valid scene: {e}"),
             DeviceError::Model(_) => f.write_str("the model solver failed"),
+            DeviceError::LiftOffModel(e) => write!(f, "the lift-off model failed: {e}"),
             DeviceError::Estimate(e) => write!(f, "{e}"),
             DeviceError::Config(e) => write!(f, "bad configuration: {e}"),
             DeviceError::Dds(e) => write!(f, "internal: the DDS refused a validated setting: {e}"),
@@ -126,7 +130,7 @@ impl From<DeviceError> for WireError {
             DeviceError::Busy => WireError::Busy,
             DeviceError::Faulted(b) => WireError::Faulted(b),
             DeviceError::Scene(_) => WireError::BadScene,
-            DeviceError::Model(_) => WireError::Model,
+            DeviceError::Model(_) | DeviceError::LiftOffModel(_) => WireError::Model,
             DeviceError::Estimate(EstimateError::NoNormalForce) => WireError::NoNormalForce,
             DeviceError::Estimate(_) => WireError::NotReady,
             DeviceError::Config(_) | DeviceError::Dds(_) => WireError::Internal,

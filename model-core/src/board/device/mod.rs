@@ -34,7 +34,7 @@ pub use crate::board::protocol::messages::{
 
 use crate::board::dds::{Achieved, Dds, Level, SineTable, Slew};
 use crate::board::estimator::Estimator;
-use crate::model::scene::{Scene, SceneParams};
+use crate::model::scene::{ContactMode, Scene, SceneParams};
 
 /// Latched fault bits.
 pub mod faults {
@@ -56,6 +56,8 @@ pub struct Device<'t, const N: usize> {
     drive: DriveSetting,
     applied: Applied,
     contact: Contact,
+    /// Drives above the lift-off limit are accepted (`SetLiftOff`).
+    allow_liftoff: bool,
     running: bool,
     faults: u32,
     rx_overflows: u32,
@@ -113,6 +115,7 @@ impl<'t, const N: usize> Device<'t, N> {
                 phase_rad: 0.0,
             },
             contact,
+            allow_liftoff: false,
             running: false,
             faults: 0,
             rx_overflows: 0,
@@ -189,6 +192,7 @@ impl<'t, const N: usize> Device<'t, N> {
             out_amp_z_m: ch[0].amp.abs() * z.metres_per_code,
             out_amp_x_m: ch[1].amp.abs() * x.metres_per_code,
             out_offset_z_m: (ch[0].dc - z.zero_code) * z.metres_per_code,
+            liftoff_allowed: self.allow_liftoff,
         }
     }
 
@@ -215,22 +219,54 @@ impl<'t, const N: usize> Device<'t, N> {
         Ok(())
     }
 
-    /// The scene of the contact with the accepted drive (f32).
+    /// Whether drives above the lift-off limit are accepted.
+    pub fn liftoff_allowed(&self) -> bool {
+        self.allow_liftoff
+    }
+
+    /// Allows drives whose normal amplitude exceeds the lift-off limit
+    /// [`DeviceConfig::liftoff_limit_m`] (the contact lifts off once per
+    /// period when `Δu_z ≥ u_z0`; [`Device::predict`] then uses the lift-off
+    /// model), or refuses them again (the power-up state). The DAC range
+    /// still bounds `Δu_z` (see `set_drive`).
+    ///
+    /// # Errors
+    /// [`DeviceError::LiftOff`] when refusing while the accepted drive is
+    /// above the limit (set a smaller `Δu_z` first); nothing changes on error.
+    pub fn set_liftoff_allowed(&mut self, allow: bool) -> Result<(), DeviceError> {
+        if !allow {
+            self.check_liftoff(&self.drive)?;
+        }
+        self.allow_liftoff = allow;
+        Ok(())
+    }
+
+    /// The scene of the contact with the accepted drive (f32): an
+    /// intermittent contact ([`ContactMode::Intermittent`]) while lift-off is
+    /// allowed, else a permanent one.
     ///
     /// # Errors
     /// [`DeviceError::Scene`] (e.g. zero offset).
     pub fn scene(&self) -> Result<Scene<f32>, DeviceError> {
         let d = &self.drive;
-        Scene::new(SceneParams {
-            mu0: self.contact.mu0,
-            kz: self.contact.kz,
-            kx: self.contact.kx,
-            uz0: d.offset_z_m,
-            duz: d.amp_z_m,
-            dux: d.amp_x_m,
-            omega: (core::f64::consts::TAU * self.applied.achieved.freq_hz) as f32,
-            phi: self.applied.phase_rad as f32,
-        })
+        let mode = if self.allow_liftoff {
+            ContactMode::Intermittent
+        } else {
+            ContactMode::Permanent
+        };
+        Scene::new_with_contact(
+            SceneParams {
+                mu0: self.contact.mu0,
+                kz: self.contact.kz,
+                kx: self.contact.kx,
+                uz0: d.offset_z_m,
+                duz: d.amp_z_m,
+                dux: d.amp_x_m,
+                omega: (core::f64::consts::TAU * self.applied.achieved.freq_hz) as f32,
+                phi: self.applied.phase_rad as f32,
+            },
+            mode,
+        )
         .map_err(DeviceError::Scene)
     }
 }

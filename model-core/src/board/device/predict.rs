@@ -1,11 +1,14 @@
 //! The model's prediction for the current drive: μ at a sliding velocity
-//! (exact solver, f32) and the regime (§3.2).
+//! (exact solver, f32) and the regime (§3.2). A drive that lifts the contact
+//! off (`a = Δu_z/u_z0 ≥ 1`, only accepted while lift-off is allowed) is
+//! answered by the lift-off model ([`crate::model::liftoff`], f32, FastF32).
 
 use super::config::MAX_VELOCITY_M_S;
 use super::{in_range, Device, DeviceError, DriveParam, Prediction};
 use crate::model::analytic::StaticFriction;
 use crate::model::exact::{self, Solution};
 use crate::model::float::FastF32;
+use crate::model::liftoff;
 use crate::model::regime::{classify_drive, ClassifyOptions, Regime};
 use crate::model::scene::Scene;
 
@@ -33,7 +36,7 @@ impl<const N: usize> Device<'_, N> {
 ///
 /// # Errors
 /// [`DeviceError::OutOfRange`] for a velocity that is not finite or beyond
-/// ±[`MAX_VELOCITY_M_S`], [`DeviceError::Model`].
+/// ±[`MAX_VELOCITY_M_S`], [`DeviceError::Model`], [`DeviceError::LiftOffModel`].
 pub fn predict(s: &Scene<f32>, v0: f32) -> Result<Prediction, DeviceError> {
     in_range(
         v0,
@@ -41,6 +44,20 @@ pub fn predict(s: &Scene<f32>, v0: f32) -> Result<Prediction, DeviceError> {
         MAX_VELOCITY_M_S,
         DriveParam::Velocity,
     )?;
+    if s.drive().a >= 1.0 {
+        // Intermittent contact: μ(0) is unique, the law continuous at rest.
+        let m = liftoff::solve_with::<f32, FastF32>(s, v0).map_err(DeviceError::LiftOffModel)?;
+        let (cf, cb) = liftoff::critical_velocities::<f32, FastF32>(&s.drive())
+            .map_err(DeviceError::LiftOffModel)?;
+        let scale = s.velocity_scale();
+        return Ok(Prediction {
+            mu_over_mu0: m,
+            mu: m * s.mu0(),
+            vc: (cf * scale, cb * scale),
+            mu_0minus_over_mu0: m,
+            liftoff: true,
+        });
+    }
     let vc = crate::model::analytic::CriticalVelocity::of_with::<FastF32>(s);
     let (m, m_minus) = match exact::solve_with::<f32, FastF32>(s, v0).map_err(DeviceError::Model)? {
         Solution::Sliding { mu_over_mu0 } | Solution::StickSlip { mu_over_mu0 } => {
@@ -57,15 +74,22 @@ pub fn predict(s: &Scene<f32>, v0: f32) -> Result<Prediction, DeviceError> {
         mu: m * s.mu0(),
         vc: (vc.forward, vc.backward),
         mu_0minus_over_mu0: m_minus,
+        liftoff: false,
     })
 }
 
-/// The regime of a scene (what [`Device::regime`] computes), with the same
+/// The regime of a scene (what [`Device::regime`] computes; for a lift-off
+/// drive [`liftoff::regime::classify`]), with the same
 /// f32 backend as [`predict`] ([`FastF32`]: one copy of the solver in flash).
 ///
 /// # Errors
 /// [`DeviceError::Model`].
 pub fn regime(s: &Scene<f32>) -> Result<Regime, DeviceError> {
+    if s.drive().a >= 1.0 {
+        return liftoff::regime::classify::<f32, FastF32>(&s.drive(), &ClassifyOptions::default())
+            .map(|c| c.regime)
+            .map_err(DeviceError::LiftOffModel);
+    }
     classify_drive::<f32, FastF32>(
         &s.drive(),
         StaticFriction::of_with::<FastF32>(s),

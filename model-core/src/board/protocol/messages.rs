@@ -15,7 +15,7 @@ use crate::model::regime::Regime;
 
 /// Protocol version; a frame with another version is answered with
 /// [`WireError::VersionMismatch`].
-pub const PROTOCOL_VERSION: u16 = 2;
+pub const PROTOCOL_VERSION: u16 = 3;
 
 /// The drive as commanded, physical units.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -101,8 +101,14 @@ pub struct Prediction {
     /// Forward and backward critical velocity, m/s.
     pub vc: (f32, f32),
     /// At v₀ = 0 exactly the other one-sided limit μ(0⁻)/μ₀ (μ is
-    /// discontinuous at rest); at any other v₀ equal to `mu_over_mu0`.
+    /// discontinuous at rest); at any other v₀ equal to `mu_over_mu0`. With
+    /// lift-off (`liftoff`) μ is continuous at rest: always `mu_over_mu0`.
     pub mu_0minus_over_mu0: f32,
+    /// (v3) The drive lifts the contact off (`Δu_z ≥ u_z0`, allowed by
+    /// [`Request::SetLiftOff`]) and the lift-off model answered
+    /// ([`crate::model::liftoff`]: μ over the contact window, its critical
+    /// velocities); `false`: the permanent-contact exact solver.
+    pub liftoff: bool,
 }
 
 /// Status snapshot.
@@ -129,6 +135,9 @@ pub struct Status {
     pub out_amp_x_m: f32,
     /// The normal offset produced now, m.
     pub out_offset_z_m: f32,
+    /// (v3) Drives that lift the contact off are allowed
+    /// ([`Request::SetLiftOff`]; `false` at power-up).
+    pub liftoff_allowed: bool,
 }
 
 /// What the device is (answer to [`Request::Hello`]).
@@ -206,6 +215,15 @@ pub enum Request {
     /// abort a running measurement, stop the drive (ramped), forget the
     /// `Measure` seq; settings, contact and latched faults are kept.
     Reset,
+    /// 14 (v3): allow drives with `Δu_z` above the lift-off limit
+    /// `(1 − liftoff_margin)·u_z0` (intermittent contact; `Predict` then uses
+    /// the lift-off model), or refuse them again (the power-up state).
+    /// Refusing while the accepted drive is above the limit is itself
+    /// refused with `LiftOffRefused` and changes nothing.
+    SetLiftOff {
+        /// Allow (`true`) or refuse (`false`).
+        allow: bool,
+    },
 }
 
 /// Which [`Response`] variant answers a request when it succeeds (any request
@@ -259,6 +277,7 @@ pub const ENDPOINTS: &[Endpoint] = &[
     ep(11, "GetStatus", Answer::Status),
     ep(12, "ResetFaults", Answer::Ok),
     ep(13, "Reset", Answer::Ok),
+    ep(14, "SetLiftOff", Answer::Ok),
 ];
 
 const fn ep(index: u32, request: &'static str, answer: Answer) -> Endpoint {
@@ -287,6 +306,7 @@ impl Request {
             Request::GetStatus => 11,
             Request::ResetFaults => 12,
             Request::Reset => 13,
+            Request::SetLiftOff { .. } => 14,
         }
     }
 
@@ -309,7 +329,8 @@ pub enum Response {
         /// What the DDS produces.
         applied: Applied,
     },
-    /// 2: done (`Start`, `Stop`, `SetContact`, `Measure`, `Stream`, `ResetFaults`, `Reset`).
+    /// 2: done (`Start`, `Stop`, `SetContact`, `Measure`, `Stream`, `ResetFaults`, `Reset`,
+    /// `SetLiftOff`).
     Ok,
     /// 3: to `GetContact`.
     Contact(Contact),
