@@ -2,12 +2,14 @@
 //! every invalid-input class (exit 2, one line naming the parameter), and the
 //! figures command producing valid SVG/PNG files.
 
-use assert_cmd::Command;
 use model_core::analytic::{CriticalVelocity, StaticFriction};
 use model_core::exact;
 use model_core::regime::{classify, ClassifyOptions};
 use model_core::{Groups, Libm, Scene};
-use serde_json::Value;
+
+mod common;
+
+use common::cli::{fricctl, json, run_ok};
 
 const PHYS: &[&str] = &[
     "--mu0",
@@ -31,25 +33,6 @@ const PHYS: &[&str] = &[
 /// The scene of the `PHYS` flags.
 fn phys_scene() -> Scene<f64> {
     integration_tests::physical_scene()
-}
-
-fn fricctl() -> Command {
-    Command::cargo_bin("fricctl").unwrap()
-}
-
-/// Runs fricctl and asserts it succeeded (its stderr in the failure message).
-fn run_ok(args: &[&str]) -> std::process::Output {
-    let out = fricctl().args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn json(args: &[&str]) -> Value {
-    serde_json::from_slice(&run_ok(args).stdout).unwrap()
 }
 
 fn close(a: f64, b: f64, tol: f64) -> bool {

@@ -4,64 +4,18 @@
 //! unknown message, version mismatch), and a device that does not answer.
 
 use std::io::{BufRead, BufReader, Write};
-use std::process::{Child, Command as StdCommand, Stdio};
+use std::process::{Command as StdCommand, Stdio};
 use std::time::{Duration, Instant};
 
 mod common;
+
+use common::sim::{dev, ok_json, sim, Sim};
 
 use assert_cmd::cargo::CommandCargoExt;
 use assert_cmd::Command;
 use model_core::protocol::{Body, Frame, Request, Response, WireError, PROTOCOL_VERSION};
 use serde_json::Value;
 use serialport::SerialPort;
-
-struct Sim {
-    child: Child,
-    path: String,
-}
-
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-fn sim() -> Sim {
-    let mut child = StdCommand::cargo_bin("fricctl")
-        .unwrap()
-        .args(["sim-device", "--pty", "--seconds", "120"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    let path = line.trim().to_string();
-    assert!(path.starts_with("/dev/"), "{path}");
-    Sim { child, path }
-}
-
-fn dev(s: &Sim, args: &[&str]) -> std::process::Output {
-    Command::cargo_bin("fricctl")
-        .unwrap()
-        .args(["device", "--port", &s.path, "--json"])
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn ok_json(s: &Sim, args: &[&str]) -> Value {
-    let o = dev(s, args);
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    serde_json::from_slice(&o.stdout).unwrap()
-}
 
 const DRIVE: &[&str] = &[
     "drive",
@@ -1009,4 +963,66 @@ fn liftoff_is_a_limit_the_user_lifts_on_purpose() {
             .code(),
         Some(2)
     );
+}
+
+#[test]
+fn ctrl_c_during_measure_aborts_the_measurement_on_the_device() {
+    let s = sim();
+    ok_json(&s, DRIVE);
+    ok_json(&s, &["start"]);
+    std::thread::sleep(Duration::from_millis(300));
+    // 200 000 periods at 20 kHz: a 10 s measurement (the sim runs in real time).
+    let mut child = StdCommand::cargo_bin("fricctl")
+        .unwrap()
+        .args(["device", "--port", &s.path, "--json"])
+        .args(["measure", "--periods", "200000"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Time for the Measure request to be sent and accepted (tens of ms).
+    std::thread::sleep(Duration::from_millis(1500));
+    assert!(child.try_wait().unwrap().is_none(), "measure ended early");
+    let k = StdCommand::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(k.success());
+    let t = Instant::now();
+    let st = loop {
+        if let Some(st) = child.try_wait().unwrap() {
+            break st;
+        }
+        assert!(
+            t.elapsed() < Duration::from_secs(5),
+            "measure ignored SIGINT"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let mut err = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
+    let mut out = String::new();
+    std::io::Read::read_to_string(&mut child.stdout.take().unwrap(), &mut out).unwrap();
+    // No estimate, exit 1, one line saying what happened on the device.
+    assert_eq!(st.code(), Some(1), "{err}");
+    assert!(out.is_empty(), "{out}");
+    assert!(
+        err.contains("interrupted: measurement aborted (device reset"),
+        "{err}"
+    );
+    // Well before the 10 s window would close: the device no longer measures,
+    // and the drive ramps down (Reset semantics); the setting is kept.
+    let status = ok_json(&s, &["status"]);
+    assert_eq!(status["measuring"], false, "{status}");
+    assert_eq!(status["running"], false, "{status}");
+    assert_eq!(ok_json(&s, &["drive", "get"])["duz"], 2e-6);
+    // A new measurement is accepted at once (not Busy); with the drive stopped
+    // its estimate is not valid (exit 1, naming not_running) …
+    let o = dev(&s, &["measure", "--periods", "200"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not_running"));
+    // … and after `start` the next measurement is accepted and valid (not Busy).
+    ok_json(&s, &["start"]);
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(ok_json(&s, &["measure", "--periods", "200"])["valid"], true);
 }

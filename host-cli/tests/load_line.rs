@@ -1,22 +1,11 @@
 //! `fricctl load-line` and `fricctl fit` from the command line: JSON keys, SI
 //! units against values converted by hand, refusals.
 
-use assert_cmd::Command;
 use serde_json::Value;
 
-fn fricctl() -> Command {
-    Command::cargo_bin("fricctl").unwrap()
-}
+mod common;
 
-fn json(args: &[&str]) -> Value {
-    let out = fricctl().args(args).arg("--json").output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
-}
+use common::cli::{fricctl, json};
 
 #[test]
 fn load_line_units_and_keys() {

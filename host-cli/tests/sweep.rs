@@ -7,64 +7,17 @@
 //! Δu_x = 0.3 µm, u_z0 = 4 µm, stage v0 = 4 mm/s (the sim's default), φ
 //! swept 0…180° in 7 points of 200 periods each (the sim runs in real time).
 
-use std::io::{BufRead, BufReader};
 use std::path::Path;
-use std::process::{Child, Command as StdCommand, Stdio};
+use std::process::{Command as StdCommand, Stdio};
 use std::time::{Duration, Instant};
 
 use assert_cmd::cargo::CommandCargoExt;
 use assert_cmd::Command;
 use serde_json::Value;
 
-struct Sim {
-    child: Child,
-    path: String,
-}
+mod common;
 
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-/// `sim-device --pty` with the plant flags `plant`.
-fn sim(plant: &[&str]) -> Sim {
-    let mut child = StdCommand::cargo_bin("fricctl")
-        .unwrap()
-        .args(["sim-device", "--pty", "--seconds", "300"])
-        .args(plant)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    let path = line.trim().to_string();
-    assert!(path.starts_with("/dev/"), "{path}");
-    Sim { child, path }
-}
-
-fn dev(s: &Sim, args: &[&str]) -> std::process::Output {
-    Command::cargo_bin("fricctl")
-        .unwrap()
-        .args(["device", "--port", &s.path, "--json"])
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn ok_json(s: &Sim, args: &[&str]) -> Value {
-    let o = dev(s, args);
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    serde_json::from_slice(&o.stdout).unwrap()
-}
+use common::sim::{dev, ok_json, sim_with, Sim};
 
 /// Sets the drive (f in Hz, φ = 40°) and starts it.
 fn drive_and_start(s: &Sim, freq: &str) {
@@ -151,7 +104,7 @@ const VALID: usize = 14;
 
 #[test]
 fn mu0_mismatch_is_fitted_applied_and_then_measure_agrees_with_predict() {
-    let s = sim(&["--plant-mu0", "0.24"]);
+    let s = sim_with(&["--plant-mu0", "0.24"], 300);
     drive_and_start(&s, FIT_FREQ);
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("sweep.csv");
@@ -216,7 +169,7 @@ fn mu0_mismatch_is_fitted_applied_and_then_measure_agrees_with_predict() {
 
 #[test]
 fn stiffness_ratio_mismatch_is_fitted() {
-    let s = sim(&["--plant-kx", "6e6"]);
+    let s = sim_with(&["--plant-kx", "6e6"], 300);
     drive_and_start(&s, FIT_FREQ);
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("sweep.csv");
@@ -236,7 +189,7 @@ fn stiffness_ratio_mismatch_is_fitted() {
 
 #[test]
 fn resume_after_a_kill_gives_the_rows_of_an_uninterrupted_sweep() {
-    let s = sim(&[]);
+    let s = sim_with(&[], 300);
     drive_and_start(&s, "20000");
     let dir = tempfile::tempdir().unwrap();
     let full = dir.path().join("full.csv");
@@ -390,7 +343,7 @@ fn a_lagging_plant_needs_settle_periods() {
     // Transducer amplitudes lag the DAC's with τ = 2000 drive periods
     // (100 ms: longer than the host's polling delays, so the unsettled
     // measurement falls well within τ of the step).
-    let s = sim(&["--plant-lag-periods", "2000"]);
+    let s = sim_with(&["--plant-lag-periods", "2000"], 300);
     drive_and_start(&s, "20000");
     let dir = tempfile::tempdir().unwrap();
     let step = |name: &str, settle: &str| -> (f64, f64) {

@@ -2,12 +2,15 @@
 //! (the fixed-step scheme at fine N, or a dense brute-force scan), the text
 //! layout, and every refusal (exit 2, one line naming the flag).
 
-use assert_cmd::Command;
 use integration_tests::fixed_warm;
 use model_core::exact;
 use model_core::regime::{classify, ClassifyOptions};
 use model_core::{Groups, Libm, Scene, SceneParams};
 use serde_json::Value;
+
+mod common;
+
+use common::cli::fricctl;
 
 /// The README's physical scene (`integration_tests::physical_scene`):
 /// μ0 = 0.3, kz = 2e6 N/m, kx = 1.5e6 N/m, uz0 = 5 µm, Δuz = 2 µm,
@@ -31,10 +34,6 @@ const PHYS: &[&str] = &[
     "50",
 ];
 
-fn fricctl() -> Command {
-    Command::cargo_bin("fricctl").unwrap()
-}
-
 fn run(args: &[&str]) -> std::process::Output {
     fricctl()
         .args(["tune"])
@@ -44,14 +43,9 @@ fn run(args: &[&str]) -> std::process::Output {
         .unwrap()
 }
 
+/// `fricctl tune ARGS PHYS --json`, asserted to succeed.
 fn json(args: &[&str]) -> Value {
-    let out = run(args);
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
+    common::cli::json(&[&["tune"], args, PHYS].concat())
 }
 
 /// Runs a refused command: exit 2, nothing on stdout, one stderr line starting

@@ -465,10 +465,26 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             periods,
             allow_invalid,
         } => {
+            // Ctrl-C (or SIGTERM, SIGHUP) while the device measures aborts the
+            // measurement on the device with `Reset` (the protocol's one request
+            // that ends a measurement): any stream ends too and the drive ramps
+            // down, settings kept (`start` resumes). Exit 1: no estimate.
+            let interrupted = watch::interrupt_flag();
             expect(c.call(Request::Measure { periods: *periods })?)?;
             // Wait for the window to close (the virtual device advances while we wait).
             let start = Instant::now();
             loop {
+                if interrupted.load(std::sync::atomic::Ordering::SeqCst) {
+                    return match c.call(Request::Reset).map(expect) {
+                        Ok(Ok(_)) => Err(CliError::failure(
+                            "interrupted: measurement aborted (device reset: drive stopping, settings kept)",
+                        )),
+                        Ok(Err(e)) | Err(e) => Err(CliError::failure(format!(
+                            "interrupted, but the measurement could not be aborted ({}); `fricctl device reset` ends it",
+                            e.msg
+                        ))),
+                    };
+                }
                 let _ = c.next_telemetry(Duration::from_millis(20))?;
                 if let Response::Status(s) = expect(c.call(Request::GetStatus)?)? {
                     if !s.measuring {

@@ -21,7 +21,7 @@ pub const CSV_HEADER: &str =
 
 /// A flag set by Ctrl-C (SIGINT), SIGTERM (`timeout`, `kill`) or SIGHUP (the
 /// terminal closed) once the handler is installed.
-fn interrupt_flag() -> Arc<AtomicBool> {
+pub(super) fn interrupt_flag() -> Arc<AtomicBool> {
     let flag = Arc::new(AtomicBool::new(false));
     let f = flag.clone();
     let _ = ctrlc::set_handler(move || f.store(true, Ordering::SeqCst));

@@ -1,5 +1,10 @@
-//! Raw-protocol helpers shared by the device tests (pty) and the QEMU test (TCP).
+//! Helpers shared by the integration tests of `fricctl`: running the binary
+//! ([`cli`]), the virtual device on a pty ([`sim`]) and the raw protocol of
+//! the device tests (pty) and the QEMU test (TCP) (this module).
 #![allow(dead_code)]
+
+pub mod cli;
+pub mod sim;
 
 use std::io::Read;
 use std::time::{Duration, Instant};

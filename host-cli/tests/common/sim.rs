@@ -1,0 +1,69 @@
+//! The virtual device served on a real pty by `fricctl sim-device --pty`, and
+//! `fricctl device --port PTY --json` against it.
+
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command as StdCommand, Stdio};
+
+use assert_cmd::cargo::CommandCargoExt;
+use serde_json::Value;
+
+use super::cli::fricctl;
+
+/// A running `sim-device --pty` (killed on drop).
+pub struct Sim {
+    /// The process.
+    pub child: Child,
+    /// The pty's path.
+    pub path: String,
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// `sim-device --pty --seconds 120` with the default plant.
+pub fn sim() -> Sim {
+    sim_with(&[], 120)
+}
+
+/// `sim-device --pty --seconds SECONDS` with the plant flags `plant`.
+pub fn sim_with(plant: &[&str], seconds: u32) -> Sim {
+    let mut child = StdCommand::cargo_bin("fricctl")
+        .unwrap()
+        .args(["sim-device", "--pty", "--seconds", &seconds.to_string()])
+        .args(plant)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    let path = line.trim().to_string();
+    assert!(path.starts_with("/dev/"), "{path}");
+    Sim { child, path }
+}
+
+/// `fricctl device --port PTY --json ARGS`.
+pub fn dev(s: &Sim, args: &[&str]) -> std::process::Output {
+    fricctl()
+        .args(["device", "--port", &s.path, "--json"])
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// [`dev`], asserted to succeed, its JSON parsed.
+pub fn ok_json(s: &Sim, args: &[&str]) -> Value {
+    let o = dev(s, args);
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    serde_json::from_slice(&o.stdout).unwrap()
+}
