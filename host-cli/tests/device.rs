@@ -1026,3 +1026,88 @@ fn ctrl_c_during_measure_aborts_the_measurement_on_the_device() {
     std::thread::sleep(Duration::from_millis(300));
     assert_eq!(ok_json(&s, &["measure", "--periods", "200"])["valid"], true);
 }
+
+#[test]
+fn estimates_track_a_drifting_mu0_of_the_plant() {
+    // The plant's μ0(t) = 0.3 + D·t (t = device time, s); the device's model
+    // keeps μ0 = 0.3 (it does not matter here: only measurements are compared).
+    const D: f64 = 0.05;
+    let s = common::sim::sim_with(&["--plant-mu0-drift", "0.05"], 120);
+    let launched = Instant::now();
+    // f = 1 kHz, u_z0 = 2 µm, Δu_z = 0.1 µm (a = 0.05), Δu_x = 0.015 µm, φ = 40°:
+    // with k_z = k_x, W0 = μ0·u_z0 ≥ 0.6 µm and the critical velocity
+    // ωW0·|a + b e^{iφ}| ≤ 2π·1 kHz·(μ0·2 µm)·0.075 ≤ 0.94 mm/s for μ0 ≤ 1,
+    // below the stage's 4 mm/s: the contact slides throughout, μ/μ0 = 1.
+    // f_z ≈ k_z u_z0 = 20 N (1000 counts), f_x = μ0 f_z ≤ 20 N: no ADC rail.
+    let d = ok_json(
+        &s,
+        &[
+            "drive",
+            "set",
+            "--freq",
+            "1000",
+            "--amp-z",
+            "1e-7",
+            "--amp-x",
+            "1.5e-8",
+            "--offset-z",
+            "2e-6",
+            "--phase-deg",
+            "40",
+        ],
+    );
+    let f = d["freq_achieved"].as_f64().unwrap();
+    ok_json(&s, &["start"]);
+    std::thread::sleep(Duration::from_millis(300));
+    let periods = 200.0;
+    let o = dev(&s, &["watch", "--periods", "200", "--count", "8"]);
+    let wall = launched.elapsed().as_secs_f64();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let est: Vec<Value> = String::from_utf8(o.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(est.len(), 8);
+    let mu: Vec<f64> = est.iter().map(|e| e["mu"].as_f64().unwrap()).collect();
+    // Sliding: the plant's f_x = μ0(t)·f_z sample by sample, so an estimate
+    // Σf_x/Σf_z is μ0 at the f_z-weighted mean time of its window: the
+    // window's middle up to a shift that is the same for every window (the
+    // same whole periods of f_z). Consecutive windows of T = 200/f are apart
+    // by T plus the gap before the next window opens at an accumulator wrap:
+    // g ∈ [0, 1/f + 2·HALF/f_s] (one period, plus up to two half-buffers of
+    // 512 samples before the stream restarts the estimator). So
+    // Δμ ∈ [D·T, D·(T + 1/f + 2·512/f_s)] ± n, with n = 6σ of the difference
+    // of two estimates' noise: σ = gain_x·σ_c/(f̄_z·√N), σ_c = √(1/3 + 1/12)
+    // counts (uniform ±1 count of noise, then rounding), gain_x = 0.01 N,
+    // N = 10⁵ samples (500 kS/s, 200 periods of 1 ms). The batch std_error
+    // is not used: within a window the drift itself scatters the batches.
+    let fs = 500_000.0;
+    let t = periods / f;
+    let n_samples = est[0]["samples"].as_f64().unwrap();
+    let fz = est[0]["fz_mean"].as_f64().unwrap();
+    let sigma = 0.01 * (1.0f64 / 3.0 + 1.0 / 12.0).sqrt() / (fz * n_samples.sqrt());
+    let n = 6.0 * 2f64.sqrt() * sigma;
+    let (lo, hi) = (D * t - n, D * (t + 1.0 / f + 2.0 * 512.0 / fs) + n);
+    for (k, e) in est.iter().enumerate() {
+        assert_eq!(e["valid"], true, "estimate {k}: {e}");
+        assert_eq!(e["dropped"], 0, "estimate {k}: {e}");
+    }
+    for (k, w) in mu.windows(2).enumerate() {
+        let step = w[1] - w[0];
+        assert!(
+            (lo..=hi).contains(&step),
+            "estimates {k}, {}: step {step:.6e} outside [{lo:.6e}, {hi:.6e}]",
+            k + 1
+        );
+    }
+    // Absolute: the first window's middle lies between device time T/2 and the
+    // wall time since launch (the virtual device never runs ahead of real time).
+    assert!(
+        mu[0] >= 0.3 + D * t / 2.0 - n && mu[0] <= 0.3 + D * wall + n,
+        "first estimate {} outside [{}, {}]",
+        mu[0],
+        0.3 + D * t / 2.0,
+        0.3 + D * wall
+    );
+}
