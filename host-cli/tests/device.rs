@@ -862,7 +862,6 @@ fn drive_with_amp_z(amp_z: &str) -> Vec<&str> {
 
 #[test]
 fn liftoff_is_a_limit_the_user_lifts_on_purpose() {
-    use model_core::model::liftoff;
     let s = sim();
     ok_json(&s, DRIVE);
     assert_eq!(ok_json(&s, &["status"])["liftoff_allowed"], false);
@@ -895,46 +894,16 @@ fn liftoff_is_a_limit_the_user_lifts_on_purpose() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--amp-z"));
     assert_eq!(ok_json(&s, &["drive", "get"]), d);
-    // a = 1: predict answers with the lift-off model. Reference: the
-    // fixed-step scheme with exact landing (liftoff::stepping, f64, 20 000
-    // steps per period) on the device's own f32 scene, rebuilt from `drive
-    // get` (f32 inputs; ω from the achieved frequency, φ the achieved phase).
-    let f32_of = |v: &Value| f64::from(v.as_f64().unwrap() as f32);
-    let omega = f64::from((std::f64::consts::TAU * d["freq_achieved"].as_f64().unwrap()) as f32);
-    let phi = f64::from(d["phi_achieved_deg"].as_f64().unwrap().to_radians() as f32);
-    let scene = model_core::Scene::new_with_contact(
-        model_core::SceneParams {
-            mu0: 0.3,
-            kz: 1e7,
-            kx: 1e7,
-            uz0: f32_of(&d["uz0"]),
-            duz: f32_of(&d["duz"]),
-            dux: f32_of(&d["dux"]),
-            omega,
-            phi,
-        },
-        model_core::scene::ContactMode::Intermittent,
-    )
-    .unwrap();
-    let drive = scene.drive();
-    assert_eq!(drive.a, 1.0);
-    // Tolerance: the stepping's stated bound + the f32 lift-off solver's
-    // stated bound with FastF32 (liftoff::error_bound), + 1e-6 for the f32
-    // rounding of μ0 = 0.3 and of the printed value (shortest f32 form).
-    let drive32 =
-        model_core::Drive::new::<model_core::Libm>(drive.a as f32, drive.b as f32, phi as f32);
-    let dev_bound = f64::from(liftoff::error_bound::<f32, model_core::FastF32>(&drive32));
+    // a = 1: predict answers with the lift-off model, against the fixed-step
+    // scheme with exact landing (common::liftoff, its derived tolerance).
     for v0 in ["0.004", "-0.01", "0"] {
         let p = ok_json(&s, &["predict", "--v0", v0]);
         assert_eq!(p["model"], "liftoff", "{p}");
-        let v = v0.parse::<f64>().unwrap() / scene.velocity_scale();
-        let r = liftoff::stepping::mu_over_mu0::<f64, model_core::Libm>(&drive, v, 20_000).unwrap();
+        let (want, tol) = common::liftoff::reference(&d, v0.parse().unwrap());
         let got = p["mu_over_mu0"].as_f64().unwrap();
-        let tol = r.error_bound + dev_bound + 1e-6;
         assert!(
-            (got - r.mu_over_mu0).abs() <= tol,
-            "v0 = {v0}: device {got} vs stepping {} (tol {tol:.1e})",
-            r.mu_over_mu0
+            (got - want).abs() <= tol,
+            "v0 = {v0}: device {got} vs stepping {want} (tol {tol:.1e})"
         );
     }
     // Continuous at rest: one μ at v0 = 0 (not the two one-sided limits).

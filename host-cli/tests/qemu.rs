@@ -21,7 +21,8 @@ use assert_cmd::Command;
 use integration_tests::wire;
 use model_core::board::link::RX_CAPACITY;
 use model_core::protocol::{
-    decode, Body, Deframed, Deframer, Frame, Request, Response, WireError, PROTOCOL_VERSION,
+    decode, Body, Deframed, Deframer, Frame, Request, Response, StreamEnd, Telemetry, WireError,
+    PROTOCOL_VERSION,
 };
 use serde_json::Value;
 
@@ -155,6 +156,41 @@ fn real_firmware_under_qemu() {
         (pred - host["mu"].as_f64().unwrap()).abs() <= 1e-5,
         "{pred} vs {host}"
     );
+    // Lift-off on purpose: allowed, Δu_z = u_z0 accepted, the lift-off model
+    // on the M4F against the f64 fixed-step reference (common::liftoff);
+    // refusing again is refused while that drive is set.
+    let o = dev(&q, &["config", "--allow-liftoff"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = dev(
+        &q,
+        &[
+            "drive",
+            "set",
+            "--freq",
+            "20000",
+            "--amp-z",
+            "4e-6",
+            "--amp-x",
+            "3e-7",
+            "--offset-z",
+            "4e-6",
+            "--phase-deg",
+            "40",
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let d: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let o = dev(&q, &["predict", "--v0", "0.004"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let p: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(p["model"], "liftoff", "{p}");
+    let (want, tol) = common::liftoff::reference(&d, 0.004);
+    let got = p["mu_over_mu0"].as_f64().unwrap();
+    assert!((got - want).abs() <= tol, "{got} vs {want} (tol {tol:.1e})");
+    assert_eq!(
+        dev(&q, &["config", "--refuse-liftoff"]).status.code(),
+        Some(2)
+    );
 
     // Garbage and a corrupted CRC on the raw link.
     let mut s = TcpStream::connect(("127.0.0.1", q.port)).unwrap();
@@ -180,6 +216,8 @@ struct RawLink {
     s: TcpStream,
     df: Deframer,
     got: VecDeque<Frame>,
+    /// Telemetry received so far, in order.
+    tele: Vec<Telemetry>,
 }
 
 impl RawLink {
@@ -190,6 +228,7 @@ impl RawLink {
             s,
             df: Deframer::default(),
             got: VecDeque::new(),
+            tele: Vec::new(),
         }
     }
 
@@ -224,8 +263,10 @@ impl RawLink {
             for &x in &b[..n] {
                 if let Deframed::Frame(f) = self.df.push(x, 0) {
                     let f = decode(f).expect("the firmware's frames decode");
-                    if matches!(f.body, Body::Response(_)) {
-                        self.got.push_back(f);
+                    match f.body {
+                        Body::Response(_) => self.got.push_back(f),
+                        Body::Telemetry(t) => self.tele.push(t),
+                        Body::Request(_) => panic!("a request from the device: {f:?}"),
                     }
                 }
             }
@@ -400,13 +441,89 @@ fn pipelined_requests_no_loss_or_counted_overflow() {
          {errors} error answers, rx_overflows +{dropped}",
         flood.len()
     );
+    // Every growth of the count is announced by RxOverflow(total) telemetry:
+    // the last one carries the total that GetStatus reports.
+    let announced = link.tele.iter().rev().find_map(|t| match t {
+        Telemetry::RxOverflow(n) => Some(*n),
+        _ => None,
+    });
     if dropped == 0 {
         assert_eq!(lost, 0, "requests lost without a counted overflow");
         assert_eq!(errors, 0);
+        assert_eq!(announced, None);
     } else {
+        assert_eq!(announced, Some(before + dropped), "{:?}", link.tele);
         assert!(
             lost <= 2 * dropped,
             "lost {lost} > 2 × {dropped} dropped bytes"
         );
     }
+}
+
+/// A request frame built by hand from docs/protocol.md: version, seq (< 128:
+/// one varint byte), Body::Request (0), the request's index and its fields.
+fn hand_request(seq: u8, index: u8, fields: &[u8]) -> Vec<u8> {
+    let mut p = vec![wire::VERSION as u8, seq, 0, index];
+    p.extend_from_slice(fields);
+    wire::frame(&p)
+}
+
+impl RawLink {
+    /// Sends a hand-built request and returns its response.
+    fn ask(&mut self, seq: u8, index: u8, fields: &[u8]) -> Response {
+        self.send(&hand_request(seq, index, fields));
+        let deadline = Instant::now() + Duration::from_secs(2);
+        while let Some(f) = self.next(deadline) {
+            if f.seq == u32::from(seq) {
+                let Body::Response(r) = f.body else {
+                    unreachable!()
+                };
+                return r;
+            }
+        }
+        panic!("request {index} (seq {seq}) not answered");
+    }
+
+    fn status(&mut self, seq: u8) -> model_core::device::Status {
+        match self.ask(seq, 11, &[]) {
+            Response::Status(s) => s,
+            other => panic!("{other:?}"),
+        }
+    }
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+fn reset_ends_the_stream_and_the_measurement_on_the_firmware() {
+    // Under QEMU the DMA is a stub: no ADC samples reach the estimator, so a
+    // measurement never closes by itself — only Reset (13) ends it.
+    let q = qemu();
+    let mut link = RawLink::connect(&q);
+    link.sync();
+    // Stream{on: true, periods: 100} (10: bool 01, varint 64) → Ok.
+    assert_eq!(link.ask(20, 10, &[1, 100]), Response::Ok);
+    assert!(link.status(21).measuring);
+    // A Measure (8, periods 100) while the stream runs: Busy.
+    assert_eq!(link.ask(22, 8, &[100]), Response::Error(WireError::Busy));
+    // Reset → Ok, then the telemetry StreamStopped(Reset).
+    assert_eq!(link.ask(23, 13, &[]), Response::Ok);
+    let st = link.status(24);
+    assert!(!st.measuring && !st.running, "{st:?}");
+    assert!(
+        link.tele
+            .contains(&Telemetry::StreamStopped(StreamEnd::Reset)),
+        "{:?}",
+        link.tele
+    );
+    // A Measure now runs (and would run forever here) …
+    assert_eq!(link.ask(25, 8, &[100]), Response::Ok);
+    assert!(link.status(26).measuring);
+    assert_eq!(link.ask(27, 9, &[]), Response::Error(WireError::NotReady));
+    // … until Reset aborts it: not measuring, no estimate, and a new Measure
+    // is accepted (not Busy).
+    assert_eq!(link.ask(28, 13, &[]), Response::Ok);
+    assert!(!link.status(29).measuring);
+    assert_eq!(link.ask(30, 9, &[]), Response::Error(WireError::NotReady));
+    assert_eq!(link.ask(31, 8, &[100]), Response::Ok);
+    assert_eq!(link.ask(32, 13, &[]), Response::Ok);
 }

@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 pub mod cli;
+pub mod liftoff;
 pub mod sim;
 
 use std::io::Read;
