@@ -976,7 +976,7 @@ fn ctrl_c_during_measure_aborts_the_measurement_on_the_device() {
     assert_eq!(st.code(), Some(1), "{err}");
     assert!(out.is_empty(), "{out}");
     assert!(
-        err.contains("interrupted: measurement aborted (device reset"),
+        err.contains("interrupted; measurement aborted (device reset"),
         "{err}"
     );
     // Well before the 10 s window would close: the device no longer measures,

@@ -470,20 +470,33 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             // that ends a measurement): any stream ends too and the drive ramps
             // down, settings kept (`start` resumes). Exit 1: no estimate.
             let interrupted = watch::interrupt_flag();
+            // The window lasts periods/f of device time: wait 4 times that
+            // plus 10 s (ramps, the window opening at a wrap, a virtual device
+            // that falls behind real time on a loaded machine), then give up.
+            let f = match expect(c.call(Request::GetDrive)?)? {
+                Response::Drive { applied, .. } => applied.achieved.freq_hz,
+                other => return Err(unexpected(other)),
+            };
+            let window_s = f64::from(*periods) / f.max(1.0);
+            let limit = Duration::from_secs_f64(4.0 * window_s + 10.0);
             expect(c.call(Request::Measure { periods: *periods })?)?;
             // Wait for the window to close (the virtual device advances while we wait).
             let start = Instant::now();
+            // Ends the measurement on the device (`Reset`) before reporting `why`.
+            let abort = |c: &mut Client, why: String| {
+                match c.call(Request::Reset).map(expect) {
+                Ok(Ok(_)) => CliError::failure(format!(
+                    "{why}; measurement aborted (device reset: drive stopping, settings kept)"
+                )),
+                Ok(Err(e)) | Err(e) => CliError::failure(format!(
+                    "{why}, but the measurement could not be aborted ({}); `fricctl device reset` ends it",
+                    e.msg
+                )),
+            }
+            };
             loop {
                 if interrupted.load(std::sync::atomic::Ordering::SeqCst) {
-                    return match c.call(Request::Reset).map(expect) {
-                        Ok(Ok(_)) => Err(CliError::failure(
-                            "interrupted: measurement aborted (device reset: drive stopping, settings kept)",
-                        )),
-                        Ok(Err(e)) | Err(e) => Err(CliError::failure(format!(
-                            "interrupted, but the measurement could not be aborted ({}); `fricctl device reset` ends it",
-                            e.msg
-                        ))),
-                    };
+                    return Err(abort(&mut c, "interrupted".to_string()));
                 }
                 let _ = c.next_telemetry(Duration::from_millis(20))?;
                 if let Response::Status(s) = expect(c.call(Request::GetStatus)?)? {
@@ -491,8 +504,15 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
                         break;
                     }
                 }
-                if start.elapsed() > Duration::from_secs(120) {
-                    return Err(CliError::failure("measurement did not finish within 120 s"));
+                if start.elapsed() > limit {
+                    return Err(abort(
+                        &mut c,
+                        format!(
+                            "no estimate within {:.0} s, though {periods} periods at {f:.3} Hz take \
+                             {window_s:.3} s (is the device sampling its ADC?)",
+                            limit.as_secs_f64()
+                        ),
+                    ));
                 }
             }
             let r = expect(c.call(Request::GetEstimate)?)?;
@@ -508,9 +528,17 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             other => Err(unexpected(other)),
         },
         DeviceCmd::Config { allow_liftoff, .. } => {
-            expect(c.call(Request::SetLiftOff {
+            match c.call(Request::SetLiftOff {
                 allow: *allow_liftoff,
-            })?)?;
+            })? {
+                Response::Error(WireError::LiftOffRefused { amp_z_m, limit_m }) => {
+                    return Err(CliError::usage(format!(
+                        "--refuse-liftoff: refused by the device: the accepted drive's Δu_z = {amp_z_m:e} m \
+                         is above the lift-off limit {limit_m:e} m; set a smaller --amp-z first"
+                    )))
+                }
+                r => expect(r)?,
+            };
             match expect(c.call(Request::GetStatus)?)? {
                 Response::Status(st) => out(t.json, &render::config(&st)),
                 other => Err(unexpected(other)),
