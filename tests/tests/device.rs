@@ -551,3 +551,64 @@ fn with_liftoff_allowed_predict_uses_the_liftoff_model() {
     }
     assert!(d.regime().is_ok());
 }
+
+#[test]
+fn the_prediction_follows_every_change_of_contact_drive_and_liftoff_setting() {
+    // The device forms its scene when one of them changes (not per Predict):
+    // each change must show in the next prediction. Reference: the f64 exact
+    // solver on the changed scene; 1e-5 as in prediction_in_f32_matches_the_f64_model.
+    let t = SineTable::<256>::libm();
+    let mut d = Device::new(cfg(), &t, CONTACT).unwrap();
+    let want = |mu0: f64, drive: &DriveSetting, a: &model_core::device::Applied| {
+        let s = Scene::new(SceneParams {
+            mu0,
+            kz: 1e7,
+            kx: 1e7,
+            uz0: f64::from(drive.offset_z_m),
+            duz: f64::from(drive.amp_z_m),
+            dux: f64::from(drive.amp_x_m),
+            omega: TAU * a.achieved.freq_hz,
+            phi: a.phase_rad,
+        })
+        .unwrap();
+        mu0 * exact::solve(&s, 0.004).unwrap().mu_over_mu0().unwrap()
+    };
+    // No drive yet (zero offset): no scene.
+    assert!(matches!(d.predict(0.004), Err(DeviceError::Scene(_))));
+    let a = d.set_drive(drive()).unwrap();
+    let got = f64::from(d.predict(0.004).unwrap().mu);
+    assert!((got - want(0.3, &drive(), &a)).abs() <= 1e-5);
+    d.set_contact(Contact {
+        mu0: 0.24,
+        ..CONTACT
+    })
+    .unwrap();
+    let got = f64::from(d.predict(0.004).unwrap().mu);
+    assert!((got - want(0.24, &drive(), &a)).abs() <= 1e-5, "{got}");
+    let other = DriveSetting {
+        amp_x_m: 0.5e-6,
+        phase_rad: 1.9,
+        ..drive()
+    };
+    let a = d.set_drive(other).unwrap();
+    let got = f64::from(d.predict(0.004).unwrap().mu);
+    assert!((got - want(0.24, &other, &a)).abs() <= 1e-5, "{got}");
+    // A refused change changes nothing, the prediction included.
+    let before = d.predict(0.004).unwrap();
+    assert!(d
+        .set_contact(Contact {
+            mu0: -1.0,
+            ..CONTACT
+        })
+        .is_err());
+    assert!(d
+        .set_drive(DriveSetting {
+            amp_z_m: 3.9e-6,
+            ..other
+        })
+        .is_err());
+    assert_eq!(d.predict(0.004).unwrap(), before);
+    // The lift-off setting: same drive, same (permanent-contact) prediction.
+    d.set_liftoff_allowed(true).unwrap();
+    assert_eq!(d.predict(0.004).unwrap(), before);
+}

@@ -167,6 +167,19 @@ fn main() -> ! {
         "regime classification: {} instructions",
         (t as f32 / per_insn) as u32
     );
+    // What the device does before each Predict: form the scene of its drive
+    // (validation, W0, the drive's sin/cos φ with libm).
+    let params = *scene.params();
+    let mut sc = None;
+    let t =
+        ticks(|| sc = Some(core::hint::black_box(Scene::<f32>::new(params)))).saturating_sub(empty);
+    if !matches!(sc, Some(Ok(_))) {
+        debug::exit(debug::EXIT_FAILURE);
+    }
+    hprintln!(
+        "scene construction (Scene::new, f32, as Device::scene before each Predict): {} instructions",
+        (t as f32 / per_insn) as u32
+    );
 
     // The same prediction with each backend.
     let mut means = [0u32; 2];

@@ -159,6 +159,7 @@ impl<const N: usize> Device<'_, N> {
                     .wrapping_sub(1 << 31),
             ),
         };
+        self.refresh_scene();
         self.ramp_generation = self.ramp_generation.wrapping_add(1);
         if self.running {
             self.dds.set_level(0, plan.levels[0])?;
