@@ -451,6 +451,7 @@ const INFO_KEYS: &[&str] = &[
     "periods_min",
     "periods_max",
     "byte_timeout_us",
+    "retract_z_m",
 ];
 const DRIVE_KEYS: &[&str] = &[
     "freq",

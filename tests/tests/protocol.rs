@@ -33,6 +33,7 @@ fn info() -> Info {
         max_velocity_m_s: 1e3,
         periods_range: (1, 1_000_000),
         byte_timeout_us: 100_000,
+        retract_z_m: 0.0,
     }
 }
 
@@ -548,6 +549,7 @@ fn hand_built_frames_get_the_spec_answers() {
         &[1],                   // periods_range.0
         &[0xc0, 0x84, 0x3d],    // periods_range.1 = 1 000 000
         &[0xa0, 0x8d, 0x06],    // byte_timeout_us = 100 000
+        &0f32.to_le_bytes(),    // retract_z_m = zero_code 0 · 2 nm (v3)
     ]);
     assert_eq!(ask(&mut s, &mut dev, &[V, 11, 0, 0]), info);
     // Inter-byte timeout: GetStatus seq 9 split 300 ms apart is dropped (the

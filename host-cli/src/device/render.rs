@@ -149,6 +149,7 @@ pub fn info(answered_by: &str, i: &Info) -> Report {
         .row("periods_min", "periods min", i.periods_range.0, "")
         .row("periods_max", "periods max", i.periods_range.1, "")
         .row("byte_timeout_us", "byte timeout", i.byte_timeout_us, "us")
+        .row("retract_z_m", "max retract", f32v(i.retract_z_m), "m")
 }
 
 fn board_name(b: &[u8]) -> String {

@@ -120,6 +120,12 @@ impl DeviceConfig {
         self.dac_x.codes_to_nearer_end() * self.dac_x.metres_per_code
     }
 
+    /// How far below the surface the normal transducer reaches, m:
+    /// `zero_code·metres_per_code` of the normal channel (computed in f32).
+    pub fn retract_z_m(&self) -> f32 {
+        self.dac_z.zero_code * self.dac_z.metres_per_code
+    }
+
     /// The lift-off limit of Δu_z at offset `offset_z_m`:
     /// `(1 − liftoff_margin)·offset_z_m`, computed in f32 (inclusive: Δu_z
     /// equal to it is accepted).
@@ -149,6 +155,7 @@ impl Info {
             max_velocity_m_s: MAX_VELOCITY_M_S,
             periods_range: PERIODS_RANGE,
             byte_timeout_us: BYTE_TIMEOUT_US,
+            retract_z_m: cfg.retract_z_m(),
         }
     }
 }

@@ -35,7 +35,7 @@ impl<const N: usize> Device<'_, N> {
     /// ≤ `(1 − margin)·offset` (lift-off, f32, inclusive; skipped while
     /// lift-off is allowed, except that a zero offset takes no amplitude),
     /// then ≤ `max_offset_z_m − offset` (DAC headroom above, f32, inclusive),
-    /// then ≤ `offset + zero_code·metres_per_code` (the DAC's reach below the
+    /// then ≤ `offset + retract_z_m` (`zero_code·metres_per_code`: the DAC's reach below the
     /// surface, f32, inclusive: with the driver board's `zero_code` 0 the
     /// transducer cannot retract past the surface, so `Δu_z ≤ u_z0`, `a ≤ 1`);
     /// tangential amplitude in `[0, max_amp_x_m]`; phase in
@@ -60,7 +60,7 @@ impl<const N: usize> Device<'_, N> {
         // DAC headroom above the offset and reach below the surface, in f32
         // like the lift-off limit.
         let headroom = (self.cfg.max_offset_z_m() - off).max(0.0);
-        let reach = off + z.zero_code * z.metres_per_code;
+        let reach = off + self.cfg.retract_z_m();
         let limit = if self.allow_liftoff {
             reach.min(headroom)
         } else {

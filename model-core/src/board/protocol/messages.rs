@@ -168,6 +168,10 @@ pub struct Info {
     pub periods_range: (u32, u32),
     /// A frame whose bytes arrive more than this apart is dropped, µs.
     pub byte_timeout_us: u32,
+    /// (v3) How far below the surface (u_z = 0) the normal transducer
+    /// reaches, m: a drive needs `amp_z_m ≤ offset_z_m + retract_z_m` (0 on
+    /// the driver board: `Δu_z ≤ u_z0`; binding once lift-off is allowed).
+    pub retract_z_m: f32,
 }
 
 /// Requests (host → device). [`ENDPOINTS`] names the response of each.
