@@ -128,7 +128,8 @@ pub(crate) fn signature<T: Float, M: Math<T>>(drive: &Drive<T>, d: T, v: T) -> O
         }
         let (_, arcs) = exact::steady_state::<T, M>(&scaled(drive, d), v / d).ok()?;
         let mut code = 0u32;
-        for arc in arcs.iter().filter(|x| x.end > x.start) {
+        let min = T::from_f64(liftoff::SIGNATURE_MIN_ARC);
+        for arc in arcs.iter().filter(|x| x.end - x.start > min) {
             let digit = liftoff::arc_digit(arc.kind);
             // Consecutive arcs of one kind (a stick split at the period start) are one.
             if code % 4 != digit {
