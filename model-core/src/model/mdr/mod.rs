@@ -491,7 +491,7 @@ fn curved<T: Float, M: Math<T>>(
 /// cut by at most `KINK_SAMPLES − 1` kinks each, and the sliding segment
 /// (17 ≤ 20, checked at compile time).
 const MAX_PIECES: usize = 20;
-const _: () = assert!(2 * KINK_SAMPLES as usize < MAX_PIECES);
+const _: () = assert!(2 * (KINK_SAMPLES as usize) < MAX_PIECES);
 
 /// Width (in units of π of the segment's `t`) to which a kink is bracketed:
 /// one left that close to an interval end costs the Kronrod rule about
