@@ -103,10 +103,12 @@
 //! tightest tolerance by at most 0.71 of the two bounds; against the brute force over springs all
 //! gaps are within the brute force's own error (≤ 10⁻⁶).
 //!
-//! **Cost.** Each spring is one exact solve (~0.4–0.7 µs); a sphere's μ at
-//! `tol = 10⁻⁶` takes 50–75 springs plus ~30 for the kink search, at
-//! `10⁻⁸` 90–140 plus the same (`fricctl bench methods`, `cargo bench -p
-//! model-core --bench mdr`). A tolerance below the per-spring solvers' part
+//! **Cost.** Each spring is one solve (~0.4–0.7 µs). A sphere's μ took
+//! 74–105 spring solves (kink search included) and 54–74 µs of CPU at
+//! `tol = 10⁻⁶`, 122–178 solves and 81–133 µs at `10⁻⁸` (three drives,
+//! 1000 velocities each, release, `cargo test -p integration-tests --release
+//! --test mdr cpu_time -- --ignored --nocapture`; the machine was loaded, so
+//! these are upper values). A tolerance below the per-spring solvers' part
 //! ([`solver_bound`], ~3–8·10⁻⁹ for a sphere in f64: the flat solvers'
 //! verified precision constant 10⁻⁹·(1 + a + b), far above their true
 //! rounding) is refused with [`MdrError::ToleranceTooTight`].
