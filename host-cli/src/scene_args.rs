@@ -5,6 +5,7 @@ use std::f64::consts::TAU;
 use std::path::PathBuf;
 
 use clap::Args;
+use model_core::scene::ContactMode;
 use model_core::{Groups, Scene, SceneParams};
 use serde::Deserialize;
 
@@ -28,7 +29,7 @@ pub struct SceneArgs {
     /// Mean indentation u_z0, m
     #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
     pub uz0: Option<f64>,
-    /// Normal oscillation amplitude Δu_z, m (< uz0)
+    /// Normal oscillation amplitude Δu_z, m (≥ uz0: the contact lifts off once per period, where the command supports it)
     #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
     pub duz: Option<f64>,
     /// Tangential oscillation amplitude Δu_x, m
@@ -46,7 +47,7 @@ pub struct SceneArgs {
     /// Phase φ, radians (instead of --phi-deg)
     #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
     pub phi_rad: Option<f64>,
-    /// Dimensionless: Δu_z/u_z0 (eq. 25); with the groups, μ0 = k_z = k_x = u_z0 = ω = 1 and --v0 is in units of ωW0 = ωμ0k_z u_z0/k_x
+    /// Dimensionless: Δu_z/u_z0 (eq. 25; ≥ 1: lift-off); with the groups, μ0 = k_z = k_x = u_z0 = ω = 1 and --v0 is in units of ωW0 = ωμ0k_z u_z0/k_x
     #[arg(
         long,
         allow_hyphen_values = true,
@@ -100,11 +101,19 @@ fn scene_err(e: model_core::SceneError) -> CliError {
 }
 
 impl SceneArgs {
-    /// Validates and builds the scene.
+    /// Validates and builds a permanent-contact scene (`Δu_z < u_z0`, the
+    /// paper's assumption): for commands whose analysis needs it.
     pub fn resolve(&self) -> CliResult<ResolvedScene> {
+        self.resolve_with(ContactMode::Permanent)
+    }
+
+    /// Validates and builds the scene; [`ContactMode::Intermittent`] accepts
+    /// `Δu_z ≥ u_z0` (the contact lifts off once per period,
+    /// `model_core::model::liftoff`).
+    pub fn resolve_with(&self, contact: ContactMode) -> CliResult<ResolvedScene> {
         let dimless = self.duz_rel.is_some() || self.dux_rel.is_some() || self.ratio.is_some();
         if dimless {
-            return self.resolve_dimensionless();
+            return self.resolve_dimensionless(contact);
         }
         let file = match &self.scene {
             Some(p) => {
@@ -155,16 +164,19 @@ impl SceneArgs {
             }
         };
         let phi = self.phi(file.phi_deg, file.phi_rad)?;
-        let scene = Scene::new(SceneParams {
-            mu0,
-            kz,
-            kx,
-            uz0,
-            duz,
-            dux,
-            omega,
-            phi,
-        })
+        let scene = Scene::new_with_contact(
+            SceneParams {
+                mu0,
+                kz,
+                kx,
+                uz0,
+                duz,
+                dux,
+                omega,
+                phi,
+            },
+            contact,
+        )
         .map_err(scene_err)?;
         Ok(ResolvedScene {
             scene,
@@ -193,7 +205,7 @@ impl SceneArgs {
         Ok(phi)
     }
 
-    fn resolve_dimensionless(&self) -> CliResult<ResolvedScene> {
+    fn resolve_dimensionless(&self, contact: ContactMode) -> CliResult<ResolvedScene> {
         let physical = [
             (self.scene.is_some(), "scene"),
             (self.mu0.is_some(), "mu0"),
@@ -225,19 +237,39 @@ impl SceneArgs {
                 dux_rel: b,
                 phi,
             },
-            (None, Some(r)) => Groups::from_ratio(a, r, phi).map_err(scene_err)?,
+            (None, Some(r)) => ratio_groups(a, r, phi, contact)?,
             (None, None) => {
                 return Err(CliError::usage(
                     "--dux-rel: missing (give --dux-rel or --ratio)",
                 ))
             }
         };
-        let scene = Scene::dimensionless(groups).map_err(scene_err)?;
+        let scene = Scene::dimensionless_with_contact(groups, contact).map_err(scene_err)?;
         Ok(ResolvedScene {
             scene,
             dimensionless: true,
         })
     }
+}
+
+/// The groups of eq. 26 (`b = ratio·a`) for a contact mode: `Groups::from_ratio`
+/// checks them for permanent contact, so with lift-off the product is formed
+/// here and checked by the scene.
+fn ratio_groups(a: f64, r: f64, phi: f64, contact: ContactMode) -> CliResult<Groups<f64>> {
+    if contact == ContactMode::Permanent || a < 1.0 {
+        return Groups::from_ratio(a, r, phi).map_err(scene_err);
+    }
+    if !r.is_finite() {
+        return Err(CliError::usage("--ratio: must be a finite number"));
+    }
+    if r < 0.0 {
+        return Err(CliError::usage("--ratio: must be >= 0"));
+    }
+    Ok(Groups {
+        duz_rel: a,
+        dux_rel: r * a,
+        phi,
+    })
 }
 
 fn finite(x: f64, name: &str) -> CliResult<f64> {
