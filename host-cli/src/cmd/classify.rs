@@ -4,12 +4,12 @@
 use std::io::Write;
 
 use clap::Args;
-use model_core::analytic::CriticalVelocity;
-use model_core::regime::{self, rule_of_thumb, ClassifyOptions};
+use model_core::regime::rule_of_thumb;
+use model_core::scene::ContactMode;
 use serde::Serialize;
 
 use crate::error::CliResult;
-use crate::eval::exact_failure;
+use crate::eval::{classify_scene, critical_velocity};
 use crate::output::{stdout_error, write_json};
 use crate::scene_args::SceneArgs;
 
@@ -30,8 +30,9 @@ struct ClassifyOut {
     mu_0plus_over_mu0: f64,
     mu_0minus_over_mu0: f64,
     static_exists: bool,
-    static_lo_over_w0: f64,
-    static_hi_over_w0: f64,
+    /// The static interval's ends over W0 (null with lift-off: no static interval).
+    static_lo_over_w0: Option<f64>,
+    static_hi_over_w0: Option<f64>,
     vc_forward: f64,
     vc_backward: f64,
     vc_forward_over_omega_w0: f64,
@@ -41,26 +42,30 @@ struct ClassifyOut {
     dux_rel: f64,
     ratio: Option<f64>,
     phi_deg: f64,
-    rule_of_thumb: &'static str,
-    rule_of_thumb_agrees: bool,
+    /// The paper's rule (permanent contact only; null with lift-off).
+    rule_of_thumb: Option<&'static str>,
+    rule_of_thumb_agrees: Option<bool>,
+    /// The contact lifts off once per period: μ(0±) are the unique μ(0),
+    /// v_c are the contact window's (eq. L5), classes by `liftoff::regime`.
+    lifts_off: bool,
 }
 
 impl ClassifyCmd {
     /// Runs the command.
     pub fn run(self, out: &mut impl Write) -> CliResult {
-        let rs = self.scene.resolve()?;
+        let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         let s = &rs.scene;
-        let c = regime::classify(s, &ClassifyOptions::default()).map_err(exact_failure)?;
-        let vc = CriticalVelocity::of(s);
+        let c = classify_scene(s)?;
+        let vc = critical_velocity(s)?;
         let g = s.groups();
-        let rot = rule_of_thumb(s);
+        let rot = (!s.lifts_off()).then(|| rule_of_thumb(s));
         let o = ClassifyOut {
             regime: c.regime.name(),
             mu_0plus_over_mu0: c.mu_0plus,
             mu_0minus_over_mu0: c.mu_0minus,
-            static_exists: c.statics.exists(),
-            static_lo_over_w0: c.statics.lo,
-            static_hi_over_w0: c.statics.hi,
+            static_exists: c.statics.is_some_and(|x| x.exists()),
+            static_lo_over_w0: c.statics.map(|x| x.lo),
+            static_hi_over_w0: c.statics.map(|x| x.hi),
             vc_forward: vc.forward,
             vc_backward: vc.backward,
             vc_forward_over_omega_w0: c.c_forward,
@@ -70,8 +75,9 @@ impl ClassifyCmd {
             dux_rel: g.dux_rel,
             ratio: s.ratio(),
             phi_deg: g.phi.to_degrees(),
-            rule_of_thumb: rot.name(),
-            rule_of_thumb_agrees: rot == c.regime,
+            rule_of_thumb: rot.map(|r| r.name()),
+            rule_of_thumb_agrees: rot.map(|r| r == c.regime),
+            lifts_off: s.lifts_off(),
         };
         if self.json {
             return write_json(out, &o);
@@ -82,23 +88,41 @@ impl ClassifyCmd {
 
 fn write_text(out: &mut impl Write, o: &ClassifyOut) -> std::io::Result<()> {
     writeln!(out, "regime                 {}", o.regime)?;
-    writeln!(out, "mu(0+)/mu0             {}", o.mu_0plus_over_mu0)?;
-    writeln!(out, "mu(0-)/mu0             {}", o.mu_0minus_over_mu0)?;
-    writeln!(out, "static equilibrium     {}", o.static_exists)?;
+    if o.lifts_off {
+        writeln!(
+            out,
+            "contact                lifts off once per period (duz/uz0 = {} >= 1)",
+            o.duz_rel
+        )?;
+        writeln!(
+            out,
+            "mu(0)/mu0              {} (unique at rest: the state resets at every landing)",
+            o.mu_0plus_over_mu0
+        )?;
+        writeln!(
+            out,
+            "static equilibrium     none (no static interval with lift-off)"
+        )?;
+    } else {
+        writeln!(out, "mu(0+)/mu0             {}", o.mu_0plus_over_mu0)?;
+        writeln!(out, "mu(0-)/mu0             {}", o.mu_0minus_over_mu0)?;
+        writeln!(out, "static equilibrium     {}", o.static_exists)?;
+    }
     writeln!(out, "asymmetry max|mu(v)+mu(-v)|/mu0  {}", o.asymmetry)?;
     writeln!(
         out,
         "v_c forward/backward   {} / {}",
         o.vc_forward, o.vc_backward
     )?;
-    writeln!(
-        out,
-        "paper's rule of thumb  {} ({})",
-        o.rule_of_thumb,
-        if o.rule_of_thumb_agrees {
-            "agrees"
-        } else {
-            "disagrees"
-        }
-    )
+    match (o.rule_of_thumb, o.rule_of_thumb_agrees) {
+        (Some(r), Some(agrees)) => writeln!(
+            out,
+            "paper's rule of thumb  {r} ({})",
+            if agrees { "agrees" } else { "disagrees" }
+        ),
+        _ => writeln!(
+            out,
+            "paper's rule of thumb  n/a (derived for permanent contact); v_c of the contact window (eq. L5)"
+        ),
+    }
 }

@@ -5,11 +5,11 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use model_core::regime::{classify, ClassifyOptions, Regime};
+use model_core::regime::Regime;
 use plotters::style::RGBColor;
 
 use crate::error::{CliError, CliResult};
-use crate::eval::{exact_failure, Method, MethodArgs};
+use crate::eval::{classify_scene, Method, MethodArgs};
 use crate::output::write_rows;
 use crate::plot::{render_heat, render_map, Heat, HeatMap, RegimeMap};
 use crate::sweep::{cell_scene, cells, centres, method_mix, mix_text, mu_cells, Cell};
@@ -17,7 +17,7 @@ use crate::sweep::{cell_scene, cells, centres, method_mix, mix_text, mu_cells, C
 /// Flags of `fricctl map`.
 #[derive(Args, Debug, Clone)]
 pub struct MapCmd {
-    /// Δu_z/u_z0 (fixed for the map)
+    /// Δu_z/u_z0 (fixed for the map; ≥ 1: the contact lifts off once per period)
     #[arg(long, allow_hyphen_values = true)]
     pub duz_rel: f64,
     /// Smallest amplitude ratio k_xΔu_x/(μ0 k_z Δu_z)
@@ -66,9 +66,9 @@ impl MapCmd {
                 )));
             }
         }
-        if !(0.0..1.0).contains(&a.duz_rel) || a.duz_rel == 0.0 {
+        if a.duz_rel <= 0.0 {
             return Err(CliError::usage(
-                "--duz-rel: must be in (0, 1) (the ratio needs Δu_z > 0; Δu_z < u_z0)",
+                "--duz-rel: must be > 0 (the ratio needs Δu_z > 0)",
             ));
         }
         if a.ratio_min < 0.0 {
@@ -126,7 +126,7 @@ impl MapCmd {
 }
 
 fn run_mu_map(a: &MapCmd, x: f64) -> CliResult {
-    if x == 0.0 {
+    if x == 0.0 && a.duz_rel < 1.0 {
         return Err(CliError::usage(
             "--v-rel: must be != 0 (at rest μ has two one-sided limits; the regime map shows them)",
         ));
@@ -226,7 +226,7 @@ pub fn active_lines(a: f64, ratios: &[f64], phis: &[f64]) -> CliResult<Vec<Vec<(
             let r = (rlo - hy) + (rhi - rlo + 2.0 * hy) * i as f64 / n as f64;
             let r = r.max(0.0);
             let s = cell_scene(a, r, phi)?;
-            let c = classify(&s, &ClassifyOptions::default()).map_err(exact_failure)?;
+            let c = classify_scene(&s)?;
             if c.regime == Regime::ActiveControl {
                 run.push((phi, r));
             } else if !run.is_empty() {
@@ -255,10 +255,15 @@ pub fn write_map(
 ) -> CliResult {
     let (plo, phi_hi) = (phis[0], *phis.last().unwrap_or(&phis[0]));
     let (rlo, rhi) = (ratios[0], *ratios.last().unwrap_or(&ratios[0]));
-    let mut lines = vec![(
-        "paper's rule: ratio = 1 (ratchet below, drive above)".to_string(),
-        vec![(plo, 1.0), (phi_hi, 1.0)],
-    )];
+    // The paper's rule was derived for permanent contact: not drawn with lift-off.
+    let mut lines = if a < 1.0 {
+        vec![(
+            "paper's rule: ratio = 1 (ratchet below, drive above)".to_string(),
+            vec![(plo, 1.0), (phi_hi, 1.0)],
+        )]
+    } else {
+        vec![(String::new(), Vec::new())]
+    };
     for v in [90.0, 270.0, -90.0, 450.0] {
         if v > plo && v < phi_hi {
             lines.push((String::new(), vec![(v, rlo), (v, rhi)]));
@@ -267,8 +272,17 @@ pub fn write_map(
     if lines.len() > 1 {
         lines[1].0 = "paper's rule: φ = π/2 symmetric".to_string();
     }
+    if a >= 1.0 {
+        // With lift-off φ = 90° is not force-free at rest (μ(0) ≠ 0 in
+        // general, `fricctl classify`): no paper line applies.
+        lines.clear();
+    }
     let m = RegimeMap {
-        title: format!("Regimes at Δu_z/u_z0 = {a} (exact classification)"),
+        title: if a < 1.0 {
+            format!("Regimes at Δu_z/u_z0 = {a} (exact classification)")
+        } else {
+            format!("Regimes at Δu_z/u_z0 = {a} (lifts off; exact lift-off classification)")
+        },
         x_label: "phase φ, degrees".to_string(),
         y_label: "k_xΔu_x / (μ0 k_z Δu_z)".to_string(),
         xs: phis.to_vec(),
