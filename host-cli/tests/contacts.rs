@@ -1,0 +1,381 @@
+//! `fricctl` with contacts the paper sets aside (issue 12): a flat punch that
+//! lifts off once per period (Δu_z ≥ u_z0).
+//!
+//! Reference numbers are independent of the solver under test: the lift-off
+//! fixed-step scheme (`liftoff::stepping`, landing exactly on the grid, order
+//! 2, stated bound `(1 + a + b)(10/N² + Nε + …)`) at fine N, brute-force
+//! maxima and integrals on fine grids, and the permanent-contact solver on
+//! the other side of a = 1.
+
+use assert_cmd::Command;
+use model_core::model::liftoff::stepping;
+use model_core::{Drive, Libm};
+use serde_json::Value;
+use std::f64::consts::{PI, TAU};
+
+fn fricctl() -> Command {
+    Command::cargo_bin("fricctl").unwrap()
+}
+
+fn run_ok(args: &[&str]) -> std::process::Output {
+    let out = fricctl().args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn json(args: &[&str]) -> Value {
+    serde_json::from_slice(&run_ok(args).stdout).unwrap()
+}
+
+fn text(args: &[&str]) -> String {
+    String::from_utf8(run_ok(args).stdout).unwrap()
+}
+
+/// Runs fricctl, expects exit status 2 and exactly the one stderr line `want`.
+fn refused(args: &[&str], want: &str) {
+    let out = fricctl().args(args).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert!(out.stdout.is_empty(), "{args:?}");
+    assert_eq!(err.trim_end(), format!("error: {want}"), "{args:?}");
+}
+
+fn f(v: &Value, k: &str) -> f64 {
+    v[k].as_f64()
+        .unwrap_or_else(|| panic!("{k} missing or not a number in {v}"))
+}
+
+/// Steps of the reference run: 2¹⁶ per period.
+const N_REF: u32 = 1 << 16;
+
+/// μ/μ0 of the lift-off stepping at `N_REF` and its stated bound.
+fn reference(a: f64, b: f64, phi_deg: f64, v: f64) -> (f64, f64) {
+    let d = Drive::new::<Libm>(a, b, phi_deg.to_radians());
+    let r = stepping::mu_over_mu0::<f64, Libm>(&d, v, N_REF).unwrap();
+    (r.mu_over_mu0, r.error_bound)
+}
+
+/// `max_{θ ∈ window} (a + b cos φ) sin θ + b sin φ cos θ` (eq. L5 written
+/// out: `c sin(θ + ψ) = Im((a + b e^{iφ}) e^{iθ})`) on a grid of 2·10⁶
+/// points over the contact window `[θ_c, 2π − θ_c]`, `cos θ_c = 1/a`. A grid
+/// misses the maximum of a sinusoid of amplitude ≤ a + b by at most
+/// `(a + b)·h²/8` (h < 3.2·10⁻⁶: < 1.3·10⁻¹²·(a + b)); the window's ends are
+/// grid points.
+fn brute_critical(a: f64, b: f64, phi: f64) -> f64 {
+    let tc = (1.0 / a).acos();
+    let n = 2_000_000;
+    let (re, im) = (a + b * phi.cos(), b * phi.sin());
+    (0..=n)
+        .map(|i| {
+            let t = tc + (TAU - 2.0 * tc) * i as f64 / n as f64;
+            re * t.sin() + im * t.cos()
+        })
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+/// `⟨(1 − a cos θ)⁺⟩` by the midpoint rule on 10⁶ cells (second order: the
+/// integrand is Lipschitz with kinks at ±θ_c, error ≤ a·h²·(…)/24 per cell
+/// away from the kinks and ≤ a·h² at the two kink cells: < 10⁻¹⁰ in all).
+fn brute_mean_band(a: f64) -> f64 {
+    let n = 1_000_000;
+    let h = TAU / n as f64;
+    (0..n)
+        .map(|i| (1.0 - a * ((i as f64 + 0.5) * h).cos()).max(0.0))
+        .sum::<f64>()
+        * h
+        / TAU
+}
+
+/// Lift-off scenes `(a, b, φ°)`: near a = 1, moderate, large amplitudes.
+const SCENES: [(f64, f64, f64); 4] = [
+    (1.5, 0.8, 30.0),
+    (2.0, 0.3, 200.0),
+    (1.0001, 1.2, 75.0),
+    (3.0, 2.0, 10.0),
+];
+
+fn dimless(a: f64, b: f64, phi: f64) -> Vec<String> {
+    vec![
+        "--duz-rel".into(),
+        a.to_string(),
+        "--dux-rel".into(),
+        b.to_string(),
+        "--phi-deg".into(),
+        phi.to_string(),
+    ]
+}
+
+fn with<'a>(head: &[&'a str], tail: &'a [String]) -> Vec<&'a str> {
+    let mut v = head.to_vec();
+    v.extend(tail.iter().map(String::as_str));
+    v
+}
+
+#[test]
+fn lift_off_mu_matches_the_fine_stepping_and_brute_critical_velocities() {
+    for (a, b, phi) in SCENES {
+        let s = dimless(a, b, phi);
+        // Critical velocities against the brute-force maximum over the window
+        // (backward: the mirrored drive φ + π). Tolerance: the grid's miss
+        // (< 1.3e-12 (a + b)) plus rounding of a few ulps of a + b.
+        let v = json(&with(&["mu", "--v0", "0", "--json"], &s));
+        assert_eq!(v["lifts_off"], true);
+        let (cf, cb) = (f(&v, "vc_forward"), f(&v, "vc_backward"));
+        let bf = brute_critical(a, b, phi.to_radians());
+        let bb = brute_critical(a, b, phi.to_radians() + PI);
+        let tol = 1e-11 * (a + b);
+        assert!((cf - bf).abs() <= tol, "{a} {b} {phi}: v_c+ {cf} vs {bf}");
+        assert!((cb - bb).abs() <= tol, "{a} {b} {phi}: v_c- {cb} vs {bb}");
+        for x in [0.0, 0.3, -0.3, 0.8, -0.95, 1.2] {
+            let vc = if x >= 0.0 { cf } else { cb };
+            let v0 = x * vc;
+            let v0s = v0.to_string();
+            let (want, ref_bound) = reference(a, b, phi, v0);
+            for method in ["auto", "exact"] {
+                let o = json(&with(
+                    &["mu", "--v0", &v0s, "--method", method, "--json"],
+                    &s,
+                ));
+                let got = f(&o, "mu_over_mu0");
+                let bound = f(&o, "error_bound_over_mu0");
+                // Beyond the window's critical velocity the contact slides:
+                // ±1 exactly, bound 0.
+                if x.abs() >= 1.0 {
+                    assert_eq!(got, x.signum(), "{a} {b} {phi} {x} {method}");
+                    assert_eq!(bound, 0.0);
+                    assert_eq!(o["method"], if method == "auto" { "sliding" } else { "exact" });
+                    continue;
+                }
+                assert_eq!(o["method"], "exact", "{a} {b} {phi} {x} {method}");
+                // The two stated bounds together (the reference's is its
+                // order-2 discretisation bound at N = 2^16).
+                assert!(
+                    (got - want).abs() <= bound + ref_bound,
+                    "{a} {b} {phi} x={x} {method}: {got} vs stepping {want} (bounds {bound:e} + {ref_bound:e})"
+                );
+                assert!(bound <= 1e-8, "{bound}");
+            }
+            // --method fixed: its own stated bound holds against the reference.
+            let o = json(&with(
+                &["mu", "--v0", &v0s, "--method", "fixed", "--steps-per-period", "2000", "--json"],
+                &s,
+            ));
+            assert_eq!(o["method"], "fixed");
+            assert_eq!(o["converged"], true);
+            assert_eq!(o["periods"], 1);
+            let (got, bound) = (f(&o, "mu_over_mu0"), f(&o, "error_bound_over_mu0"));
+            assert!(
+                (got - want).abs() <= bound + ref_bound,
+                "{a} {b} {phi} x={x} fixed: {got} vs {want} (bound {bound:e})"
+            );
+        }
+    }
+}
+
+#[test]
+fn lift_off_text_says_what_changes_meaning() {
+    // A physical scene with Δu_z = 2 u_z0: a = 2, W0 = μ0 k_z u_z0/k_x = 0.3 µm.
+    let args = [
+        "mu", "--mu0", "0.3", "--kz", "1e6", "--kx", "1e6", "--uz0", "1e-6", "--duz", "2e-6",
+        "--dux", "1e-7", "--freq", "1000", "--v0", "0",
+    ];
+    let t = text(&args);
+    let w = brute_mean_band(2.0);
+    // ⟨w⁺⟩ of eq. L4 against the midpoint rule (error < 1e-10).
+    let line = t
+        .lines()
+        .find(|l| l.starts_with("normal force mean kz<uz+> = "))
+        .unwrap_or_else(|| panic!("{t}"));
+    let shown: f64 = line["normal force mean kz<uz+> = ".len()..]
+        .split_whitespace()
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((shown - w).abs() < 1e-9, "{shown} vs {w}");
+    for want in [
+        "contact      lifts off once per period (duz/uz0 = 2 >= 1)",
+        "at rest      mu(0) is unique (the state resets at every landing; no static interval)",
+        "v_c          of the contact window (eq. L5), not eq. 8",
+    ] {
+        assert!(t.lines().any(|l| l == want), "missing {want:?} in\n{t}");
+    }
+    // μ at rest against the reference (b = k_xΔu_x/(μ0 k_z u_z0) = 1/3).
+    let mu_line = t.lines().find(|l| l.starts_with("mu/mu0")).unwrap();
+    let mu: f64 = mu_line.split_whitespace().nth(1).unwrap().parse().unwrap();
+    let (want, rb) = reference(2.0, 1.0 / 3.0, 0.0, 0.0);
+    assert!((mu - want).abs() <= rb + 1e-8, "{mu} vs {want}");
+
+    // The same scene from a file (Δu_z ≥ u_z0 accepted there too).
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("s.toml");
+    std::fs::write(
+        &p,
+        "mu0 = 0.3\nkz = 1e6\nkx = 1e6\nuz0 = 1e-6\nduz = 2e-6\ndux = 1e-7\nfreq = 1000\n",
+    )
+    .unwrap();
+    let ps = p.to_str().unwrap();
+    let v = json(&["mu", "--scene", ps, "--v0", "0", "--json"]);
+    assert_eq!(v["lifts_off"], true);
+    assert!((f(&v, "mu_over_mu0") - want).abs() <= rb + 1e-8);
+
+    // The fixed-step text states the scheme's order and bound.
+    let t = text(&[&args[..], &["--method", "fixed"]].concat());
+    assert!(
+        t.contains("scheme       lift-off stepping: one contact window from the landing (exact), order 2"),
+        "{t}"
+    );
+}
+
+#[test]
+fn lift_off_refusals_are_one_line() {
+    let s = dimless(1.5, 0.8, 30.0);
+    refused(
+        &with(&["mu", "--v0", "0.1", "--method", "approx"], &s),
+        "--method: approx (eqs. 21/24) assumes permanent contact; this scene lifts off (duz >= uz0): use auto, exact or fixed",
+    );
+    // min steps = ⌈√(10(1 + a + b)/0.1)⌉ = ⌈√330⌉ = 19 (liftoff::stepping).
+    refused(
+        &with(&["mu", "--v0", "0.1", "--method", "fixed", "--steps-per-period", "18"], &s),
+        "--steps-per-period: this lift-off drive needs at least 19 (fewer: the stepping's bound 10(1 + a + b)/N^2 would exceed 10 % of mu0)",
+    );
+    refused(
+        &with(&["mu", "--v0", "0.1", "--method", "exact", "--tol", "1e-3"], &s),
+        "--tol: only --method auto chooses by tolerance (the other methods report their bound)",
+    );
+    // The permanent-contact refusal still applies to commands that need it.
+    refused(
+        &["mu", "--duz-rel", "1.5", "--ratio", "-1", "--v0", "0"],
+        "--ratio: must be >= 0",
+    );
+}
+
+#[test]
+fn mu_is_continuous_across_a_equals_one() {
+    // For a = 1 ∓ ε the stretches of the permanent contact and of the
+    // lift-off model stay within 2ε of each other (the clamp to a band is
+    // 1-Lipschitz and the bands differ by ε·|cos θ| ≤ ε on each side of 1;
+    // liftoff module docs), ∫s/∫w then moves by ≤ 2ε plus the airborne arc's
+    // O(ε^{3/2}) in both ∫s and ⟨w⁺⟩; so |μ(1 − ε) − μ(1 + ε)| ≤ 4ε + ε^{3/2}·(1 + b)·10
+    // plus the two solvers' bounds.
+    let eps = 1e-6;
+    let mut worst = 0.0f64;
+    for (b, phi) in [(0.0, 0.0), (0.5, 30.0), (1.2, 120.0), (3.0, 250.0)] {
+        for v in [0.05, 0.4, -0.3, -1.1] {
+            let vs = v.to_string();
+            let below = json(&with(
+                &["mu", "--v0", &vs, "--json"],
+                &dimless(1.0 - eps, b, phi),
+            ));
+            let above = json(&with(
+                &["mu", "--v0", &vs, "--json"],
+                &dimless(1.0 + eps, b, phi),
+            ));
+            assert_eq!(below["lifts_off"], false);
+            assert_eq!(above["lifts_off"], true);
+            let d = (f(&below, "mu_over_mu0") - f(&above, "mu_over_mu0")).abs();
+            let tol = 4.0 * eps
+                + 10.0 * (1.0 + b) * eps.powf(1.5)
+                + f(&below, "error_bound_over_mu0")
+                + f(&above, "error_bound_over_mu0");
+            assert!(d <= tol, "b {b} φ {phi} v {v}: jump {d:e} > {tol:e}");
+            worst = worst.max(d);
+            // The critical velocities are continuous too: the window fills
+            // the period as a → 1⁺ and eq. L5 becomes eq. 8 (|Δ| ≤ (2 + b)·√(2ε)
+            // from the window's ends moving by θ_c ≈ √(2ε) plus Δa = 2ε).
+            for k in ["vc_forward", "vc_backward"] {
+                let dv = (f(&below, k) - f(&above, k)).abs();
+                assert!(dv <= (2.0 + b) * (2.0 * eps).sqrt(), "{k}: {dv:e}");
+            }
+        }
+    }
+    eprintln!("largest |mu(1-eps) - mu(1+eps)| = {worst:e} at eps = {eps:e}");
+}
+
+#[test]
+fn static_and_classify_with_lift_off() {
+    let s = dimless(1.5, 0.8, 30.0);
+    let (want, rb) = reference(1.5, 0.8, 30.0, 0.0);
+    let v = json(&with(&["static", "--json"], &s));
+    assert_eq!(v["lifts_off"], true);
+    assert_eq!(v["static_exists"], false);
+    let got = f(&v, "mu_at_rest_over_mu0");
+    assert!((got - want).abs() <= rb + f(&v, "error_bound_over_mu0"), "{got} vs {want}");
+    assert!((f(&v, "mean_normal_force_over_kz_uz0") - brute_mean_band(1.5)).abs() < 1e-9);
+    let t = text(&with(&["static"], &s));
+    assert!(
+        t.lines().any(|l| l
+            == "static equilibrium     none in the permanent-contact sense: the stretch resets at every landing"),
+        "{t}"
+    );
+    assert!(!t.contains("static interval"), "{t}");
+    assert!(!t.contains("paper eq. 18"), "{t}");
+
+    // μ(0) ≠ 0 beyond its bound: an actuator; μ(0±) are the unique μ(0).
+    let c = json(&with(&["classify", "--json"], &s));
+    assert_eq!(c["regime"], "actuator");
+    assert_eq!(c["lifts_off"], true);
+    assert_eq!(c["mu_0plus_over_mu0"], c["mu_0minus_over_mu0"]);
+    assert!((f(&c, "mu_0plus_over_mu0") - want).abs() <= rb + 1e-8);
+    assert!(c["rule_of_thumb"].is_null());
+    // Normal oscillation only (b = 0): the drive is its own mirror image, so
+    // μ(−v) = −μ(v) exactly and μ(0) = 0: active control.
+    let c = json(&with(&["classify", "--json"], &dimless(2.0, 0.0, 0.0)));
+    assert_eq!(c["regime"], "active_control");
+    assert!(f(&c, "mu_0plus_over_mu0").abs() <= 1e-9);
+}
+
+#[test]
+fn curve_and_map_across_lift_off() {
+    let dir = tempfile::tempdir().unwrap();
+    // A curve through v0 = 0: one row there (μ at rest is unique).
+    let csv = dir.path().join("c.csv");
+    let cs = csv.to_str().unwrap();
+    run_ok(&with(
+        &["curve", "--v-rel-min", "-0.5", "--v-rel-max", "0.5", "--points", "5", "--csv", cs],
+        &dimless(1.5, 0.8, 30.0),
+    ));
+    let body = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<&str> = body.lines().skip(1).collect();
+    assert_eq!(rows.len(), 5, "{body}");
+    for r in rows {
+        let c: Vec<&str> = r.split(',').collect();
+        let (v0, mu, bound): (f64, f64, f64) =
+            (c[0].parse().unwrap(), c[3].parse().unwrap(), c[5].parse().unwrap());
+        let (want, rb) = reference(1.5, 0.8, 30.0, v0);
+        assert!((mu - want).abs() <= bound + rb, "{r}: {want}");
+    }
+    // A μ map at a = 1.5, cells against the reference.
+    let png = dir.path().join("m.png");
+    let mcsv = dir.path().join("m.csv");
+    run_ok(&[
+        "map", "--duz-rel", "1.5", "--res", "3", "--v-rel", "0.5", "--plot",
+        png.to_str().unwrap(), "--csv", mcsv.to_str().unwrap(),
+    ]);
+    let body = std::fs::read_to_string(&mcsv).unwrap();
+    let head: Vec<&str> = body.lines().next().unwrap().split(',').collect();
+    let col = |k: &str| head.iter().position(|h| *h == k).unwrap();
+    let rows: Vec<&str> = body.lines().skip(1).collect();
+    assert_eq!(rows.len(), 9);
+    for r in rows {
+        let c: Vec<&str> = r.split(',').collect();
+        let g = |k: &str| c[col(k)].parse::<f64>().unwrap();
+        let (phi, ratio, v0) = (g("phi_deg"), g("ratio"), g("v0"));
+        let (want, rb) = reference(1.5, ratio * 1.5, phi, v0);
+        let mu = g("mu_over_mu0");
+        assert!(
+            (mu - want).abs() <= g("error_bound_over_mu0") + rb,
+            "{r}: {want}"
+        );
+    }
+    // A regime map at a = 1.5: written, every cell classified.
+    let out = run_ok(&[
+        "map", "--duz-rel", "1.5", "--res", "4", "--plot", png.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.starts_with("16 cells: "), "{err}");
+}
