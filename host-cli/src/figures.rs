@@ -1,5 +1,6 @@
-//! `fricctl figures`: the paper's Figs. 2–7 from the exact solver, and the
-//! regime map, as SVG and PNG.
+//! `fricctl figures`: the paper's Figs. 2–7 from the exact solver, the
+//! regime map, and the contacts the paper sets aside (issue 12: lift-off of
+//! the flat punch), as SVG and PNG.
 //!
 //! Every panel names its fixed parameters; the dimensionless groups are
 //! those of eqs. 25/26: `Δu_z/u_z0`, `k_xΔu_x/(μ0 k_z u_z0)` and the ratio
@@ -11,6 +12,7 @@ use std::path::Path;
 
 use model_core::analytic::approx::law;
 use model_core::exact;
+use model_core::model::liftoff;
 use model_core::regime::{classify, Classification, ClassifyOptions, Regime};
 use model_core::{Drive, Groups, Libm, Scene};
 
@@ -356,6 +358,71 @@ fn figs5_7(out: &Path) -> CliResult {
     Ok(())
 }
 
+/// μ/μ0 of a flat punch at dimensionless velocity `v` for any `a ≥ 0`: the
+/// permanent-contact exact solver below `a = 1`, the lift-off solver from it.
+fn mu_flat_any(a: f64, b: f64, phi: f64, v: f64) -> CliResult<f64> {
+    if a < 1.0 {
+        mu(&drive(a, b, phi)?, v)
+    } else {
+        let d = Drive::new::<Libm>(a, b, phi);
+        liftoff::mu_over_mu0::<f64, Libm>(&d, v).map_err(crate::eval::lift_off_failure)
+    }
+}
+
+/// Normal oscillation only: μ/μ0 against Δu_z/u_z0 from 0 to 3 at fixed
+/// velocities, through lift-off at Δu_z/u_z0 = 1.
+fn liftoff_normal(out: &Path) -> CliResult {
+    let xs = linspace(0.0, 3.0, 601);
+    let mut series = Vec::new();
+    for (i, v) in [0.1, 0.3, 0.6, 1.0, 1.5].into_iter().enumerate() {
+        let mut pts = Vec::with_capacity(xs.len());
+        for &a in &xs {
+            // a = 0, b = 0: no oscillation, plain Coulomb sliding.
+            let m = if a == 0.0 {
+                1.0
+            } else {
+                mu_flat_any(a, 0.0, 0.0, v)?
+            };
+            pts.push((a, m));
+        }
+        series.push(Series {
+            label: format!("v0 = {v} ωW0"),
+            points: pts,
+            mark: Mark::Line,
+            color: i,
+        });
+    }
+    series.push(Series {
+        label: "lift-off: Δu_z = u_z0".to_string(),
+        points: vec![(1.0, 0.0), (1.0, 1.05)],
+        mark: Mark::Dashed,
+        color: 6,
+    });
+    let panel = Panel {
+        title: "Normal oscillation only, across lift-off (flat punch)".to_string(),
+        x_label: "Δu_z / u_z0".to_string(),
+        y_label: MU_AXIS.to_string(),
+        x: (0.0, 3.0),
+        y: (0.0, 1.05),
+        series,
+    };
+    let extras = Extras {
+        notes: vec![
+            "Δu_x = 0 (φ has no effect)".to_string(),
+            "v0 in units of ωW0, W0 = μ0 k_z u_z0 / k_x".to_string(),
+            "Δu_z ≥ u_z0: μ = ⟨f_x⟩/⟨f_z⟩, ⟨f_z⟩ = k_z⟨u_z⁺⟩".to_string(),
+        ],
+        notes_at: Corner::UpperRight,
+        legend_at: Corner::LowerLeft,
+        ..Extras::default()
+    };
+    let caption = vec![
+        "Below Δu_z/u_z0 = 1: the exact solver (eq. 8: v_c = a ωW0, μ = μ0 above it);          from 1: the lift-off solver (model-core liftoff), continuous at 1."
+            .to_string(),
+    ];
+    save(out, "liftoff_normal", &one_panel(panel, extras, caption))
+}
+
 /// `fricctl figures --out DIR`.
 pub fn run(out: &Path, map_res: usize) -> CliResult {
     if !(2..=2000).contains(&map_res) {
@@ -379,6 +446,7 @@ pub fn run(out: &Path, map_res: usize) -> CliResult {
     )?;
     fig4(out)?;
     figs5_7(out)?;
+    liftoff_normal(out)?;
     // The regime map at Δu_z/u_z0 = 0.5.
     let ratios = centres(0.0, 3.0, map_res);
     let phis = centres(0.0, 360.0, map_res);
