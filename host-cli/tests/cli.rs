@@ -433,6 +433,7 @@ fn figures_are_written() {
         "fig5",
         "fig6",
         "fig7",
+        "liftoff_normal",
         "regime_map",
     ] {
         check_svg(&dir.path().join(format!("{name}.svg")));
