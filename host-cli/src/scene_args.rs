@@ -4,7 +4,8 @@
 use std::f64::consts::TAU;
 use std::path::PathBuf;
 
-use clap::Args;
+use clap::{Args, ValueEnum};
+use model_core::mdr::Profile;
 use model_core::scene::ContactMode;
 use model_core::{Groups, Scene, SceneParams};
 use serde::Deserialize;
@@ -14,7 +15,7 @@ use crate::error::{CliError, CliResult};
 /// Scene flags (see `fricctl --help`).
 #[derive(Args, Debug, Clone, Default)]
 pub struct SceneArgs {
-    /// Scene file (TOML) with keys mu0, kz, kx, uz0, duz, dux, freq (or omega), phi_deg (or phi_rad); flags override it
+    /// Scene file (TOML) with keys mu0, kz, kx, uz0, duz, dux, freq (or omega), phi_deg (or phi_rad), and optionally profile ("flat", "sphere", "cone", "power") and exponent; flags override it
     #[arg(long, value_name = "FILE", help_heading = "Scene")]
     pub scene: Option<PathBuf>,
     /// Local coefficient of friction μ0 (> 0)
@@ -68,6 +69,105 @@ pub struct SceneArgs {
         help_heading = "Scene (dimensionless, eq. 25/26)"
     )]
     pub ratio: Option<f64>,
+    #[command(flatten)]
+    pub contact: ProfileArgs,
+}
+
+/// The contact's shape (`--profile`, `--exponent`).
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ProfileKind {
+    /// Flat-ended punch: the paper's single spring
+    Flat,
+    /// Sphere (paraboloid, n = 2), through MDR
+    Sphere,
+    /// Cone (n = 1), through MDR
+    Cone,
+    /// Power law f = c·rⁿ with --exponent n, through MDR
+    Power,
+}
+
+/// `--profile` and `--exponent` (shared by the scene flags and `fricctl map`).
+#[derive(Args, Debug, Clone, Copy, Default)]
+pub struct ProfileArgs {
+    /// Contact profile (default flat). A curved profile is computed by the method of dimensionality reduction: uz0 is read as the mean indentation d0 and kz/kx as E*/G*
+    #[arg(long, value_enum, help_heading = "Contact")]
+    pub profile: Option<ProfileKind>,
+    /// Exponent n of --profile power (f = c·rⁿ, n > 0; refused with the other profiles)
+    #[arg(long, allow_hyphen_values = true, help_heading = "Contact")]
+    pub exponent: Option<f64>,
+}
+
+impl ProfileArgs {
+    /// The profile from the flags, falling back on a scene file's `profile`
+    /// and `exponent` keys (flags win).
+    pub fn resolve_with_file(
+        &self,
+        file_profile: Option<&str>,
+        file_exponent: Option<f64>,
+    ) -> CliResult<Profile<f64>> {
+        let from_file = match file_profile {
+            Some(name) => Some(ProfileKind::from_str(name, true).map_err(|_| {
+                CliError::usage(format!(
+                    "--scene: profile = \"{name}\" is not one of flat, sphere, cone, power"
+                ))
+            })?),
+            None => None,
+        };
+        let kind = self.profile.or(from_file).unwrap_or(ProfileKind::Flat);
+        // A flag exponent applies to the flag profile; the file's to the file's.
+        let exponent = if self.profile.is_some() {
+            self.exponent
+        } else {
+            self.exponent.or(file_exponent)
+        };
+        match (kind, exponent) {
+            (ProfileKind::Power, None) => Err(CliError::usage(
+                "--exponent: missing (--profile power needs --exponent n > 0)",
+            )),
+            (ProfileKind::Power, Some(n)) => {
+                if !(n.is_finite() && n > 0.0) {
+                    return Err(CliError::usage("--exponent: must be a finite number > 0"));
+                }
+                Ok(Profile::Power(n))
+            }
+            (k, Some(_)) => Err(CliError::usage(format!(
+                "--exponent: only with --profile power (the {} profile has {})",
+                k.name(),
+                match k {
+                    ProfileKind::Sphere => "n = 2",
+                    ProfileKind::Cone => "n = 1",
+                    _ => "no exponent",
+                }
+            ))),
+            (ProfileKind::Flat, None) => Ok(Profile::Flat),
+            (ProfileKind::Sphere, None) => Ok(Profile::Sphere),
+            (ProfileKind::Cone, None) => Ok(Profile::Cone),
+        }
+    }
+
+    /// The profile from the flags alone.
+    pub fn resolve(&self) -> CliResult<Profile<f64>> {
+        self.resolve_with_file(None, None)
+    }
+}
+
+impl ProfileKind {
+    fn name(self) -> &'static str {
+        match self {
+            ProfileKind::Flat => "flat",
+            ProfileKind::Sphere => "sphere",
+            ProfileKind::Cone => "cone",
+            ProfileKind::Power => "power",
+        }
+    }
+}
+
+/// What a profile prints: `flat`, `sphere (n = 2)`, `power (n = 3.5)`.
+pub fn profile_text(p: &Profile<f64>) -> String {
+    match p.exponent() {
+        None => p.name().to_string(),
+        Some(n) => format!("{} (n = {n})", p.name()),
+    }
 }
 
 /// The scene file's keys.
@@ -84,6 +184,8 @@ struct SceneFile {
     omega: Option<f64>,
     phi_deg: Option<f64>,
     phi_rad: Option<f64>,
+    profile: Option<String>,
+    exponent: Option<f64>,
 }
 
 /// A validated scene and how it was given.
@@ -94,6 +196,10 @@ pub struct ResolvedScene {
     /// Given by dimensionless groups: velocities are in units of ωW0 and must be
     /// given relative to v_c.
     pub dimensionless: bool,
+    /// The contact's shape (`--profile`; flat unless asked). With a curved
+    /// profile the scene's u_z0 is the mean indentation d0 and k_z/k_x is E*/G*
+    /// (`model_core::mdr`); `select::mu_within_profile` computes μ for it.
+    pub profile: Profile<f64>,
 }
 
 fn scene_err(e: model_core::SceneError) -> CliError {
@@ -101,10 +207,19 @@ fn scene_err(e: model_core::SceneError) -> CliError {
 }
 
 impl SceneArgs {
-    /// Validates and builds a permanent-contact scene (`Δu_z < u_z0`, the
-    /// paper's assumption): for commands whose analysis needs it.
+    /// Validates and builds a permanent-contact flat-punch scene
+    /// (`Δu_z < u_z0`, the paper's assumption): for commands whose analysis
+    /// needs it. A curved `--profile` is refused (one line naming it) rather
+    /// than ignored; commands that handle profiles call [`SceneArgs::resolve_with`].
     pub fn resolve(&self) -> CliResult<ResolvedScene> {
-        self.resolve_with(ContactMode::Permanent)
+        let rs = self.resolve_with(ContactMode::Permanent)?;
+        if rs.profile != Profile::Flat {
+            return Err(CliError::usage(format!(
+                "--profile: this command computes the flat punch only (got {})",
+                rs.profile.name()
+            )));
+        }
+        Ok(rs)
     }
 
     /// Validates and builds the scene; [`ContactMode::Intermittent`] accepts
@@ -178,9 +293,13 @@ impl SceneArgs {
             contact,
         )
         .map_err(scene_err)?;
+        let profile = self
+            .contact
+            .resolve_with_file(file.profile.as_deref(), file.exponent)?;
         Ok(ResolvedScene {
             scene,
             dimensionless: false,
+            profile,
         })
     }
 
@@ -248,6 +367,7 @@ impl SceneArgs {
         Ok(ResolvedScene {
             scene,
             dimensionless: true,
+            profile: self.contact.resolve()?,
         })
     }
 }

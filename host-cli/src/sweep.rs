@@ -10,7 +10,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::error::{CliError, CliResult};
-use crate::eval::{classify_scene, critical_velocity, from_rel, mu_at, v_rel, MethodArgs};
+use model_core::mdr::Profile;
+
+use crate::eval::{classify_scene_profile, critical_velocity, from_rel, mu_at, v_rel, MethodArgs};
 
 /// The `i`-th of `n` evenly spaced values from `a` to `b` inclusive (the last
 /// is `b` exactly).
@@ -217,6 +219,7 @@ pub fn cells(
     a: f64,
     ratios: &[f64],
     phis_deg: &[f64],
+    profile: &Profile<f64>,
     progress: bool,
 ) -> CliResult<(Vec<Cell>, Vec<u8>)> {
     let n = ratios.len() * phis_deg.len();
@@ -230,7 +233,7 @@ pub fn cells(
         .map(|i| {
             let (r, phi) = (ratios[i / phis_deg.len()], phis_deg[i % phis_deg.len()]);
             let s = cell_scene(a, r, phi)?;
-            let c = classify_scene(&s)
+            let c = classify_scene_profile(&s, profile)
                 .map_err(|e| e.with_context(&format!("ratio {r}, φ {phi}°")))?;
             pb.inc(1);
             let k = match c.regime {

@@ -9,7 +9,9 @@ use model_core::scene::ContactMode;
 use serde::Serialize;
 
 use crate::error::CliResult;
-use crate::eval::{classify_scene, critical_velocity};
+use crate::eval::{classify_scene_profile, critical_velocity};
+use crate::scene_args::profile_text;
+use model_core::mdr::Profile;
 use crate::output::{stdout_error, write_json};
 use crate::scene_args::SceneArgs;
 
@@ -48,6 +50,9 @@ struct ClassifyOut {
     /// The contact lifts off once per period: μ(0±) are the unique μ(0),
     /// v_c are the contact window's (eq. L5), classes by `liftoff::regime`.
     lifts_off: bool,
+    /// The contact profile (`flat`, `sphere`, `cone`, `power`) and its exponent (null for flat).
+    profile: &'static str,
+    exponent: Option<f64>,
 }
 
 impl ClassifyCmd {
@@ -55,10 +60,11 @@ impl ClassifyCmd {
     pub fn run(self, out: &mut impl Write) -> CliResult {
         let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         let s = &rs.scene;
-        let c = classify_scene(s)?;
+        let c = classify_scene_profile(s, &rs.profile)?;
         let vc = critical_velocity(s)?;
         let g = s.groups();
-        let rot = (!s.lifts_off()).then(|| rule_of_thumb(s));
+        let flat = rs.profile == Profile::Flat;
+        let rot = (!s.lifts_off() && flat).then(|| rule_of_thumb(s));
         let o = ClassifyOut {
             regime: c.regime.name(),
             mu_0plus_over_mu0: c.mu_0plus,
@@ -78,16 +84,25 @@ impl ClassifyCmd {
             rule_of_thumb: rot.map(|r| r.name()),
             rule_of_thumb_agrees: rot.map(|r| r == c.regime),
             lifts_off: s.lifts_off(),
+            profile: rs.profile.name(),
+            exponent: rs.profile.exponent(),
         };
         if self.json {
             return write_json(out, &o);
         }
-        write_text(out, &o).map_err(stdout_error)
+        write_text(out, &o, &rs.profile).map_err(stdout_error)
     }
 }
 
-fn write_text(out: &mut impl Write, o: &ClassifyOut) -> std::io::Result<()> {
+fn write_text(out: &mut impl Write, o: &ClassifyOut, p: &Profile<f64>) -> std::io::Result<()> {
     writeln!(out, "regime                 {}", o.regime)?;
+    if *p != Profile::Flat {
+        writeln!(
+            out,
+            "profile                {} (MDR quadrature; no static analysis for a curved profile)",
+            profile_text(p)
+        )?;
+    }
     if o.lifts_off {
         writeln!(
             out,
@@ -120,9 +135,13 @@ fn write_text(out: &mut impl Write, o: &ClassifyOut) -> std::io::Result<()> {
             "paper's rule of thumb  {r} ({})",
             if agrees { "agrees" } else { "disagrees" }
         ),
-        _ => writeln!(
+        _ if o.lifts_off => writeln!(
             out,
             "paper's rule of thumb  n/a (derived for permanent contact); v_c of the contact window (eq. L5)"
+        ),
+        _ => writeln!(
+            out,
+            "paper's rule of thumb  n/a (derived for the flat punch)"
         ),
     }
 }

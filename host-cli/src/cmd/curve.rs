@@ -76,8 +76,9 @@ impl CurveCmd {
     /// Runs the command: computes the rows chunk by chunk in parallel and
     /// writes each chunk's whole rows before computing the next, so memory
     /// stays bounded by a chunk whatever `--points` is.
-    pub fn run(self, out: &mut impl Write) -> CliResult {
+    pub fn run(mut self, out: &mut impl Write) -> CliResult {
         let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
+        self.how.profile = rs.profile;
         let n = self.points;
         if n > MAX_POINTS {
             return Err(CliError::usage(format!(
@@ -204,7 +205,8 @@ impl CurveCmd {
             let g = rs.scene.groups();
             let panel = Panel {
                 title: format!(
-                    "μ(v): Δu_z/u_z0 = {:.3}, k_xΔu_x/(μ0k_z u_z0) = {:.3}, φ = {:.1}°{}",
+                    "μ(v), {}: Δu_z/u_z0 = {:.3}, k_xΔu_x/(μ0k_z u_z0) = {:.3}, φ = {:.1}°{}",
+                    crate::scene_args::profile_text(&rs.profile),
                     g.duz_rel,
                     g.dux_rel,
                     g.phi.to_degrees(),

@@ -10,7 +10,8 @@ use crate::eval::{
     critical_velocity, from_rel, mean_normal_force_over_kz_uz0, mu_at, MethodArgs, MuOutcome,
 };
 use crate::output::{stdout_error, write_json};
-use crate::scene_args::{ResolvedScene, SceneArgs};
+use crate::scene_args::{profile_text, ResolvedScene, SceneArgs};
+use model_core::mdr::Profile;
 
 /// Flags of `fricctl mu`.
 #[derive(Args, Debug, Clone)]
@@ -37,9 +38,10 @@ pub struct MuCmd {
 
 impl MuCmd {
     /// Runs the command.
-    pub fn run(self, out: &mut impl Write) -> CliResult {
+    pub fn run(mut self, out: &mut impl Write) -> CliResult {
         self.how.validate()?;
         let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
+        self.how.profile = rs.profile;
         let v = self.velocity(&rs)?;
         let o = mu_at(&rs.scene, v, &self.how)?;
         if self.json {
@@ -96,10 +98,35 @@ fn write_text(out: &mut impl Write, o: &MuOutcome, rs: &ResolvedScene) -> std::i
     }
     writeln!(out, "v_c forward  {}", o.vc_forward)?;
     writeln!(out, "v_c backward {}", o.vc_backward)?;
-    if o.lifts_off {
+    if rs.profile != Profile::Flat {
+        write_profile_notes(out, rs)?;
+    } else if o.lifts_off {
         write_lift_off_notes(out, rs, o.method == "fixed")?;
     }
     Ok(())
+}
+
+/// What a curved profile changes (`model_core::mdr`).
+fn write_profile_notes(out: &mut impl Write, rs: &ResolvedScene) -> std::io::Result<()> {
+    let a = rs.scene.drive().a;
+    writeln!(
+        out,
+        "profile      {} through MDR: uz0 is the mean indentation d0, kz/kx is E*/G*",
+        profile_text(&rs.profile)
+    )?;
+    writeln!(
+        out,
+        "normal force mu = (sum of fx)/(sum of fz) over the springs (eq. M8); the rim springs lift off every period{}",
+        if a >= 1.0 {
+            ", and with duz >= d0 all of them (mu(0) is unique)"
+        } else {
+            ""
+        }
+    )?;
+    writeln!(
+        out,
+        "v_c          the flat punch's with the same drive (the central spring decides)"
+    )
 }
 
 /// What changes meaning when the contact lifts off (`model_core::model::liftoff`).

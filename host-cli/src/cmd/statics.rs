@@ -72,6 +72,12 @@ impl StaticCmd {
     pub fn run(self, out: &mut impl Write) -> CliResult {
         let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         let s = &rs.scene;
+        if rs.profile != model_core::mdr::Profile::Flat {
+            return Err(crate::error::CliError::usage(format!(
+                "--profile: the static analysis is for the flat punch; for a {} profile `fricctl mu --v0 0` gives mu(0+) and mu(0-)",
+                rs.profile.name()
+            )));
+        }
         if s.lifts_off() {
             return self.lift_off(s, out);
         }
