@@ -379,3 +379,156 @@ fn curve_and_map_across_lift_off() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.starts_with("16 cells: "), "{err}");
 }
+
+/// `∫s dθ` and `∫w⁺ dθ` over one period of one MDR spring with band offset
+/// `d` (`w = d − a cos θ`, `−a < d ≤ a`: it touches in the window
+/// `[θ_c, 2π − θ_c]`, `cos θ_c = d/a`, and lands with s = 0), by the plain
+/// fixed-step scheme of the paper (add the drive increment, clamp to ±w)
+/// started exactly at the landing with `n` steps per period and the
+/// trapezoid rule — written here from the model's statement (issue 12 §1/§2),
+/// independent of model-core. ∫w⁺ is closed form.
+fn spring_brute(d: f64, a: f64, b: f64, phi: f64, v: f64, n: usize) -> (f64, f64) {
+    let tc = (d / a).clamp(-1.0, 1.0).acos();
+    let (tl, tr) = (tc, TAU - tc);
+    let band = |t: f64| d - a * t.cos();
+    let ux = |t: f64| v * t + b * (t + phi).cos();
+    let h = TAU / n as f64;
+    let mut t = tl;
+    let mut s = 0.0f64;
+    let mut integral = 0.0;
+    while t < tr {
+        let t1 = (t + h).min(tr);
+        let w = band(t1).max(0.0);
+        let s1 = (s + ux(t1) - ux(t)).clamp(-w, w);
+        integral += 0.5 * (s + s1) * (t1 - t);
+        s = s1;
+        t = t1;
+    }
+    let wint = d * (tr - tl) + a * (tl.sin() - tr.sin());
+    (integral, wint)
+}
+
+/// μ/μ0 of a power-law profile `d(ξ) = 1 − ξⁿ` with `a ≥ 1` (every spring
+/// lifts off) over `m` springs: ξ = ξ_max(1 − cos t)/2, midpoint rule in t
+/// (smooth at the rim where ∫w⁺ ∝ (a + d)^{3/2}), ξ_max = (1 + a)^{1/n}.
+fn profile_brute(nexp: f64, a: f64, b: f64, phi: f64, v: f64, m: usize, n: usize) -> f64 {
+    let xi_max = (1.0 + a).powf(1.0 / nexp);
+    let (mut num, mut den) = (0.0, 0.0);
+    for j in 0..m {
+        let t = PI * (j as f64 + 0.5) / m as f64;
+        let xi = 0.5 * xi_max * (1.0 - t.cos());
+        let jac = 0.5 * xi_max * t.sin();
+        let (si, wi) = spring_brute(1.0 - xi.powf(nexp), a, b, phi, v, n);
+        num += si * jac;
+        den += wi * jac;
+    }
+    num / den
+}
+
+#[test]
+fn curved_profiles_with_lift_off_match_a_brute_force_over_springs() {
+    // a = 1.5: every spring lifts off, so each is one window from its
+    // landing (no transient). Tolerance: the CLI's bound plus the brute
+    // force's two errors, each estimated from the brute force itself: the
+    // time stepping (order 2 with the exact landing) by the change from N/2
+    // to N steps, the ξ-quadrature (midpoint rule, order 2) by the change
+    // from m/2 to m springs — for an order-2 method the error at the finer
+    // level is about a third of the change; the whole change is used.
+    let (a, b, phi_deg) = (1.5, 0.5, 45.0);
+    let phi = f64::to_radians(phi_deg);
+    let s = dimless(a, b, phi_deg);
+    for (profile, nexp) in [("sphere", 2.0), ("cone", 1.0)] {
+        for v in [0.0, 0.4, -0.6] {
+            let vs = v.to_string();
+            let o = json(&with(
+                &["mu", "--v0", &vs, "--profile", profile, "--json"],
+                &s,
+            ));
+            assert_eq!(o["profile"], profile);
+            assert_eq!(f(&o, "exponent"), nexp);
+            assert_eq!(o["method"], "mdr", "{o}");
+            let got = f(&o, "mu_over_mu0");
+            let fine = profile_brute(nexp, a, b, phi, v, 400, 4096);
+            let coarse = profile_brute(nexp, a, b, phi, v, 200, 4096);
+            let half_n = profile_brute(nexp, a, b, phi, v, 400, 2048);
+            let tol = f(&o, "error_bound_over_mu0") + (fine - coarse).abs() + (fine - half_n).abs();
+            assert!(
+                (got - fine).abs() <= tol,
+                "{profile} v {v}: {got} vs brute force {fine} (m/2: {coarse}), tol {tol:e}"
+            );
+            eprintln!("{profile} v = {v}: fricctl {got}, brute force {fine}, |Δ| = {:e}", (got - fine).abs());
+        }
+    }
+}
+
+#[test]
+fn profile_flags_and_refusals() {
+    let s = dimless(0.5, 0.8, 30.0);
+    // --profile flat is the flat punch exactly (same JSON as no flag).
+    let plain = json(&with(&["mu", "--v0", "0.2", "--json"], &s));
+    let flat = json(&with(&["mu", "--v0", "0.2", "--profile", "flat", "--json"], &s));
+    assert_eq!(plain, flat);
+    assert_eq!(plain["profile"], "flat");
+    assert!(plain["exponent"].is_null());
+    // A sphere given in SI units is the same scene as its groups (uz0 read
+    // as d0, kz/kx as E*/G*): μ/μ0 agrees to the two bounds.
+    // W0 = 0.3·1e6·1e-6/1e6 = 3e-7 m; a = 0.5, b = 0.8 → dux = 2.4e-7 m;
+    // ω = 2π·1000, v0 = 0.2 ωW0.
+    let w = TAU * 1000.0 * 3e-7;
+    let si = json(&[
+        "mu", "--mu0", "0.3", "--kz", "1e6", "--kx", "1e6", "--uz0", "1e-6", "--duz", "0.5e-6",
+        "--dux", "2.4e-7", "--freq", "1000", "--phi-deg", "30", "--v0", &(0.2 * w).to_string(),
+        "--profile", "sphere", "--json",
+    ]);
+    let gr = json(&with(&["mu", "--v0", "0.2", "--profile", "sphere", "--json"], &s));
+    let tol = f(&si, "error_bound_over_mu0") + f(&gr, "error_bound_over_mu0");
+    assert!((f(&si, "mu_over_mu0") - f(&gr, "mu_over_mu0")).abs() <= tol);
+    // The scene file carries the profile too.
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("s.toml");
+    std::fs::write(
+        &p,
+        "mu0 = 0.3\nkz = 1e6\nkx = 1e6\nuz0 = 1e-6\nduz = 0.5e-6\ndux = 2.4e-7\nfreq = 1000\nphi_deg = 30\nprofile = \"sphere\"\n",
+    )
+    .unwrap();
+    let file = json(&["mu", "--scene", p.to_str().unwrap(), "--v0", &(0.2 * w).to_string(), "--json"]);
+    assert_eq!(file["profile"], "sphere");
+    assert_eq!(file["mu_over_mu0"], si["mu_over_mu0"]);
+
+    let v = ["mu", "--v0", "0.2"];
+    refused(
+        &with(&[&v[..], &["--profile", "power"]].concat(), &s),
+        "--exponent: missing (--profile power needs --exponent n > 0)",
+    );
+    refused(
+        &with(&[&v[..], &["--profile", "sphere", "--exponent", "2"]].concat(), &s),
+        "--exponent: only with --profile power (the sphere profile has n = 2)",
+    );
+    refused(
+        &with(&[&v[..], &["--exponent", "3"]].concat(), &s),
+        "--exponent: only with --profile power (the flat profile has no exponent)",
+    );
+    refused(
+        &with(&[&v[..], &["--profile", "power", "--exponent", "0"]].concat(), &s),
+        "--exponent: must be a finite number > 0",
+    );
+    refused(
+        &with(&[&v[..], &["--profile", "sphere", "--method", "fixed"]].concat(), &s),
+        "--profile: --method fixed is for the flat punch; a sphere profile is computed by the MDR quadrature (--method auto or exact)",
+    );
+    refused(
+        &with(&[&v[..], &["--profile", "cone", "--method", "approx"]].concat(), &s),
+        "--profile: --method approx is for the flat punch; a cone profile is computed by the MDR quadrature (--method auto or exact)",
+    );
+    refused(
+        &with(&["static", "--profile", "sphere"], &s),
+        "--profile: the static analysis is for the flat punch; for a sphere profile `fricctl mu --v0 0` gives mu(0+) and mu(0-)",
+    );
+    let mut file_bad = std::fs::read_to_string(&p).unwrap();
+    file_bad = file_bad.replace("sphere", "cube");
+    std::fs::write(&p, file_bad).unwrap();
+    refused(
+        &["mu", "--scene", p.to_str().unwrap(), "--v0", "0"],
+        "--scene: profile = \"cube\" is not one of flat, sphere, cone, power",
+    );
+}
