@@ -107,3 +107,42 @@ fn scratch_sphere() {
         println!("a={a} b={b} phi={phi} v={v}: {r:?} in {el:?}; brute {bf1} {bf2}");
     }
 }
+
+#[test]
+fn scratch_shape() {
+    let (a, b, phi, v) = (0.5, 1.0, 0.3, 0.2);
+    let n = 2.0;
+    let xi_max = (1.0f64 + a).sqrt();
+    let m = 2000;
+    let mut prev = [0.0; 3];
+    for i in 0..=m {
+        let xi = xi_max * f64::from(i) / f64::from(m);
+        let (s, w) = brute_spring(1.0 - xi.powf(n), a, b, phi, v, 20000);
+        let f = w - s;
+        let d2 = f - 2.0 * prev[1] + prev[0];
+        if i > 2 && (d2.abs() > 3e-6) {
+            println!("xi={xi:.4} d={:.4} f={f:.6} d2={d2:.2e}", 1.0 - xi * xi);
+        }
+        prev = [prev[1], f, 0.0];
+    }
+}
+
+#[test]
+fn scratch_timing() {
+    use model_core::exact;
+    let d = Drive::new::<Libm>(0.5 / 0.8, 1.0 / 0.8, 0.3);
+    let t = std::time::Instant::now();
+    let mut acc = 0.0;
+    for i in 0..10000 {
+        acc += exact::mu_over_mu0::<f64, Libm>(&d, 0.2 / 0.8 + 1e-6 * f64::from(i % 7)).unwrap();
+    }
+    println!("exact solve: {:?} per call ({acc})", t.elapsed() / 10000);
+    for &(a, b, phi, v) in &[(0.5, 1.0, 0.3, 0.2), (1.5, 0.7, 2.0, 0.1)] {
+        let d = Drive::new::<Libm>(a, b, phi);
+        for tol in [1e-5, 1e-6, 1e-7, 1e-8] {
+            let t = std::time::Instant::now();
+            let r = mdr::mu_over_mu0::<f64, Libm>(&d, &Profile::Sphere, v, tol).unwrap();
+            println!("a={a} tol={tol:e}: {:.12} bound {:.2e} evals {} {:?} kinks {}", r.mu_over_mu0, r.bound, r.evaluations, t.elapsed(), mdr::DEBUG_KINKS.swap(0, std::sync::atomic::Ordering::Relaxed));
+        }
+    }
+}

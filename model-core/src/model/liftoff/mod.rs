@@ -400,6 +400,43 @@ pub fn window_arcs<T: Float, M: Math<T>>(
     Ok((sign * m, arcs))
 }
 
+/// The sequence of arc kinds of the window of the band `w = d − a cos θ`
+/// (as [`banded_stretch_integral`]), in the forward convention of `V ≥ 0`,
+/// encoded base 4 (stick 1, forward slip 2, backward slip 3; zero-length arcs
+/// skipped): where it changes with `d`, the spring's `⟨s⟩` may have a kink
+/// ([`crate::model::mdr`] splits its quadrature there).
+pub(crate) fn banded_signature<T: Float, M: Math<T>>(d: &Drive<T>, offset: T, v: T) -> u32 {
+    let (drive, v) = if v >= T::ZERO {
+        (*d, v)
+    } else {
+        (d.mirrored(), -v)
+    };
+    let window = Window::of::<M>(offset, drive.a);
+    if v >= forward_critical::<T, M>(&drive, &window) {
+        return 2;
+    }
+    let mut code = 0u32;
+    let mut push = |arc: Arc<T>| {
+        let digit = arc_digit(arc.kind);
+        if code % 4 != digit {
+            code = code.wrapping_mul(4).wrapping_add(digit);
+        }
+    };
+    match ContactWindow::new::<M>(&drive, offset, v, window).mean_stretch::<M>(Some(&mut push)) {
+        Ok(_) => code,
+        Err(_) => u32::MAX,
+    }
+}
+
+/// Base-4 digit of an arc kind (for signatures).
+pub(crate) fn arc_digit(kind: ArcKind) -> u32 {
+    match kind {
+        ArcKind::Stick => 1,
+        ArcKind::SlipForward => 2,
+        ArcKind::SlipBackward => 3,
+    }
+}
+
 /// Where an arc ends and what follows.
 enum Event<T> {
     /// Forward slip from `.0` to `.1`.

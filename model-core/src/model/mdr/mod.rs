@@ -408,15 +408,24 @@ fn curved<T: Float, M: Math<T>>(
         let s = spring::<T, M>(d, dd, v, limit)?;
         Ok([(s.band - s.stretch) * jac, s.band * jac, s.unresolved * jac])
     };
-    let mut ends: heapless::Vec<T, 6> = heapless::Vec::new();
+    // Interval ends in u = jπ + t: each used segment, split where the
+    // springs' arc structure changes (module docs, "kinks").
+    let mut ends: heapless::Vec<T, MAX_ENDS> = heapless::Vec::new();
     for (j, &(l, r)) in segments.iter().enumerate() {
-        if r > l && !(j == sliding_segment && closed.is_some()) {
-            let _ = ends.push(T::PI * T::from_u32(j as u32));
-            let _ = ends.push(T::PI * T::from_u32(j as u32 + 1));
+        if !(r > l) || (j == sliding_segment && closed.is_some()) {
+            continue;
         }
+        let base = T::PI * T::from_u32(j as u32);
+        if ends.last() != Some(&base) {
+            let _ = ends.push(base);
+        }
+        if j != sliding_segment && limit == Limit::Moving {
+            kinks::<T, M>(d, v, l, r, &offset, |t| {
+                let _ = ends.push(base + t);
+            });
+        }
+        let _ = ends.push(base + T::PI);
     }
-    // Pairs of ends → consecutive intervals (gaps between used segments are
-    // skipped by integrating each segment's [jπ, (j+1)π]).
     let safety = T::from_f64(SAFETY);
     let eps_s = (precision_constant::<T>() + T::from_f64(M::MAX_REL_ERROR)) * (T::ONE + a + d.b);
     let floor = T::from_f64(64.0) * T::EPSILON;
@@ -429,7 +438,7 @@ fn curved<T: Float, M: Math<T>>(
         let e_den = if closed.is_some() { T::ZERO } else { e[1] };
         (safety * (e[0] + ratio * e_den) + eps_s * xi_star + val[2]) / den + floor
     };
-    let out = integrate_segments::<T, M, _>(integrand, &ends, tol, &bound_of)?;
+    let out = quadrature::integrate(integrand, &ends, tol, bound_of)?;
     let den = closed.unwrap_or(out.value[1]);
     let bound = bound_of(out.error, out.value);
     if !out.converged || !(bound <= tol) {
@@ -448,22 +457,55 @@ fn curved<T: Float, M: Math<T>>(
     })
 }
 
-/// [`quadrature::integrate`] over the segments `[ends[2i], ends[2i+1]]`.
-fn integrate_segments<T: Float, M: Math<T>, F>(
-    f: F,
-    ends: &[T],
-    tol: T,
-    bound_of: &impl Fn([T; 3], [T; 3]) -> T,
-) -> Result<quadrature::Outcome<T, 3>, MdrError>
-where
-    F: FnMut(T) -> Result<[T; 3], MdrError>,
-{
-    // Segments are adjacent in u (jπ), so merge into one list of ends.
-    let mut merged: heapless::Vec<T, 4> = heapless::Vec::new();
-    for &e in ends {
-        if merged.last() != Some(&e) {
-            let _ = merged.push(e);
+/// Most interval ends of the quadrature's first partition.
+const MAX_ENDS: usize = 24;
+
+/// Width (in units of π of the segment's `t`) to which a kink is bracketed:
+/// one left that close to an interval end costs the Kronrod rule about
+/// `|Δf'|·(10⁻⁵ π h)²`, which the adaptive bisection then resolves.
+const KINK_RESOLUTION: f64 = 1e-5;
+
+/// Points sampled per segment for changes of the arc structure.
+const KINK_SAMPLES: u32 = 8;
+
+/// The kinks of the springs' `⟨s⟩` inside `[l, r]` (ξ), reported as `t` of the
+/// segment's map `ξ = l + (r − l)(1 − cos t)/2`, in increasing order: the arc
+/// structure ([`spring::signature`]) is sampled at [`KINK_SAMPLES`] interior
+/// points equally spaced in `t`, and each change between neighbours is
+/// bisected in `t` to [`KINK_RESOLUTION`]`·π`. Changes that cancel between
+/// two samples are left to the adaptive bisection.
+fn kinks<T: Float, M: Math<T>>(
+    d: &Drive<T>,
+    v: T,
+    l: T,
+    r: T,
+    offset: &impl Fn(T) -> T,
+    mut found: impl FnMut(T),
+) {
+    let half = (r - l) * T::HALF;
+    let sig = |t: T| {
+        let (_, cos_t) = M::sin_cos(t);
+        spring::signature::<T, M>(d, offset(l + half * (T::ONE - cos_t)), v)
+    };
+    let step = T::PI / T::from_u32(KINK_SAMPLES + 1);
+    let mut t_prev = step;
+    let mut s_prev = sig(t_prev);
+    for i in 2..=KINK_SAMPLES {
+        let t = step * T::from_u32(i);
+        let s = sig(t);
+        if s != s_prev && s.is_some() && s_prev.is_some() {
+            let (mut lo, mut hi) = (t_prev, t);
+            while hi - lo > T::from_f64(KINK_RESOLUTION) * T::PI {
+                let mid = (lo + hi) * T::HALF;
+                if sig(mid) == s_prev {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            found((lo + hi) * T::HALF);
         }
+        t_prev = t;
+        s_prev = s;
     }
-    quadrature::integrate(f, &merged, tol, |e, v| bound_of(e, v))
 }

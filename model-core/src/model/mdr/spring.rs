@@ -112,3 +112,30 @@ pub(crate) fn forward_critical<T: Float, M: Math<T>>(drive: &Drive<T>, d: T) -> 
         liftoff::forward_critical::<T, M>(drive, &window)
     }
 }
+
+/// The arc structure of the spring at offset `d` (forward convention,
+/// `V > 0` for permanent springs), as a base-4 code: a change between two
+/// offsets brackets a possible kink of `⟨s⟩(d)`. `None` where it is not
+/// available (`V = 0` for permanent springs, or no contact).
+pub(crate) fn signature<T: Float, M: Math<T>>(drive: &Drive<T>, d: T, v: T) -> Option<u32> {
+    let a = drive.a;
+    if d <= -a {
+        return None;
+    }
+    if d > a {
+        if v == T::ZERO {
+            return None;
+        }
+        let (_, arcs) = exact::steady_state::<T, M>(&scaled(drive, d), v / d).ok()?;
+        let mut code = 0u32;
+        for arc in arcs.iter().filter(|x| x.end > x.start) {
+            let digit = liftoff::arc_digit(arc.kind);
+            // Consecutive arcs of one kind (a stick split at the period start) are one.
+            if code % 4 != digit {
+                code = code.wrapping_mul(4).wrapping_add(digit);
+            }
+        }
+        return Some(code);
+    }
+    Some(liftoff::banded_signature::<T, M>(drive, d, v))
+}
