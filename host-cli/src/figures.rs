@@ -433,7 +433,11 @@ fn profile_curve(
     vs: &[f64],
 ) -> CliResult<(Vec<(f64, f64)>, f64)> {
     use model_core::select::{mu_within_profile, Value};
-    let tol = crate::eval::profile_tol(s, p).max(exact::error_bound::<f64, Libm>(&s.drive()));
+    // The largest of the three methods' own bounds: each answers within it.
+    let d = s.drive();
+    let tol = crate::eval::profile_tol(s, p)
+        .max(exact::error_bound::<f64, Libm>(&d))
+        .max(liftoff::error_bound::<f64, Libm>(&d));
     let mut pts = Vec::with_capacity(vs.len() + 1);
     let mut worst = 0.0f64;
     for &v in vs {
@@ -465,7 +469,7 @@ fn profile_curve(
 /// drive, without lift-off of the centre (a = 0.5) and with it (a = 1.5).
 fn profiles(out: &Path) -> CliResult {
     use model_core::mdr::Profile;
-    let (b, phi) = (0.5, PI / 4.0);
+    let (b, phi) = (0.8, 0.0);
     let mut panels = Vec::new();
     let mut worst = 0.0f64;
     for a in [0.5, 1.5] {
@@ -516,7 +520,7 @@ fn profiles(out: &Path) -> CliResult {
         let extras = Extras {
             notes: vec![
                 format!("Δu_z/u_z0 = {a}, {B_NAME} = {b}"),
-                "φ = 45°".to_string(),
+                "φ = 0°".to_string(),
             ],
             notes_at: Corner::LowerRight,
             legend_at: Corner::UpperLeft,
