@@ -31,7 +31,9 @@ struct ClassifyOut {
     regime: &'static str,
     mu_0plus_over_mu0: f64,
     mu_0minus_over_mu0: f64,
-    static_exists: bool,
+    /// Whether a static equilibrium exists (false with lift-off; null for a
+    /// curved profile: no static analysis there).
+    static_exists: Option<bool>,
     /// The static interval's ends over W0 (null with lift-off: no static interval).
     static_lo_over_w0: Option<f64>,
     static_hi_over_w0: Option<f64>,
@@ -69,7 +71,11 @@ impl ClassifyCmd {
             regime: c.regime.name(),
             mu_0plus_over_mu0: c.mu_0plus,
             mu_0minus_over_mu0: c.mu_0minus,
-            static_exists: c.statics.is_some_and(|x| x.exists()),
+            static_exists: match (c.statics, flat) {
+                (Some(st), _) => Some(st.exists()),
+                (None, true) => Some(false),
+                (None, false) => None,
+            },
             static_lo_over_w0: c.statics.map(|x| x.lo),
             static_hi_over_w0: c.statics.map(|x| x.hi),
             vc_forward: vc.forward,
@@ -121,7 +127,10 @@ fn write_text(out: &mut impl Write, o: &ClassifyOut, p: &Profile<f64>) -> std::i
     } else {
         writeln!(out, "mu(0+)/mu0             {}", o.mu_0plus_over_mu0)?;
         writeln!(out, "mu(0-)/mu0             {}", o.mu_0minus_over_mu0)?;
-        writeln!(out, "static equilibrium     {}", o.static_exists)?;
+        match o.static_exists {
+            Some(x) => writeln!(out, "static equilibrium     {x}")?,
+            None => writeln!(out, "static equilibrium     n/a (curved profile)")?,
+        }
     }
     writeln!(out, "asymmetry max|mu(v)+mu(-v)|/mu0  {}", o.asymmetry)?;
     writeln!(
