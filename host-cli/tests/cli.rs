@@ -434,6 +434,7 @@ fn figures_are_written() {
         "fig6",
         "fig7",
         "liftoff_normal",
+        "profiles",
         "regime_map",
     ] {
         check_svg(&dir.path().join(format!("{name}.svg")));
