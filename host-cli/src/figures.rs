@@ -578,7 +578,16 @@ pub fn run(out: &Path, map_res: usize) -> CliResult {
     let (cs, class) = cells(0.5, &ratios, &phis, &model_core::mdr::Profile::Flat, true)?;
     for ext in ["svg", "png"] {
         let p = out.join(format!("regime_map.{ext}"));
-        write_map(0.5, &model_core::mdr::Profile::Flat, &ratios, &phis, &cs, class.clone(), &p, None)?;
+        write_map(
+            0.5,
+            &model_core::mdr::Profile::Flat,
+            &ratios,
+            &phis,
+            &cs,
+            class.clone(),
+            &p,
+            None,
+        )?;
     }
     Ok(())
 }

@@ -139,7 +139,7 @@ pub fn mix_text(mix: &[(&'static str, usize)], sep: &str) -> String {
 pub fn cell_scene(a: f64, r: f64, phi_deg: f64) -> CliResult<Scene<f64>> {
     Scene::dimensionless_with_contact(
         Groups {
-        duz_rel: a,
+            duz_rel: a,
             dux_rel: r * a,
             phi: phi_deg.to_radians(),
         },

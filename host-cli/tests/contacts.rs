@@ -147,7 +147,10 @@ fn lift_off_mu_matches_the_fine_stepping_and_brute_critical_velocities() {
                 if x.abs() >= 1.0 {
                     assert_eq!(got, x.signum(), "{a} {b} {phi} {x} {method}");
                     assert_eq!(bound, 0.0);
-                    assert_eq!(o["method"], if method == "auto" { "sliding" } else { "exact" });
+                    assert_eq!(
+                        o["method"],
+                        if method == "auto" { "sliding" } else { "exact" }
+                    );
                     continue;
                 }
                 assert_eq!(o["method"], "exact", "{a} {b} {phi} {x} {method}");
@@ -161,7 +164,16 @@ fn lift_off_mu_matches_the_fine_stepping_and_brute_critical_velocities() {
             }
             // --method fixed: its own stated bound holds against the reference.
             let o = json(&with(
-                &["mu", "--v0", &v0s, "--method", "fixed", "--steps-per-period", "2000", "--json"],
+                &[
+                    "mu",
+                    "--v0",
+                    &v0s,
+                    "--method",
+                    "fixed",
+                    "--steps-per-period",
+                    "2000",
+                    "--json",
+                ],
                 &s,
             ));
             assert_eq!(o["method"], "fixed");
@@ -226,7 +238,9 @@ fn lift_off_text_says_what_changes_meaning() {
     // The fixed-step text states the scheme's order and bound.
     let t = text(&[&args[..], &["--method", "fixed"]].concat());
     assert!(
-        t.contains("scheme       lift-off stepping: one contact window from the landing (exact), order 2"),
+        t.contains(
+            "scheme       lift-off stepping: one contact window from the landing (exact), order 2"
+        ),
         "{t}"
     );
 }
@@ -244,7 +258,10 @@ fn lift_off_refusals_are_one_line() {
         "--steps-per-period: this lift-off drive needs at least 19 (fewer: the stepping's bound 10(1 + a + b)/N^2 would exceed 10 % of mu0)",
     );
     refused(
-        &with(&["mu", "--v0", "0.1", "--method", "exact", "--tol", "1e-3"], &s),
+        &with(
+            &["mu", "--v0", "0.1", "--method", "exact", "--tol", "1e-3"],
+            &s,
+        ),
         "--tol: only --method auto chooses by tolerance (the other methods report their bound)",
     );
     // The permanent-contact refusal still applies to commands that need it.
@@ -304,7 +321,10 @@ fn static_and_classify_with_lift_off() {
     assert_eq!(v["lifts_off"], true);
     assert_eq!(v["static_exists"], false);
     let got = f(&v, "mu_at_rest_over_mu0");
-    assert!((got - want).abs() <= rb + f(&v, "error_bound_over_mu0"), "{got} vs {want}");
+    assert!(
+        (got - want).abs() <= rb + f(&v, "error_bound_over_mu0"),
+        "{got} vs {want}"
+    );
     assert!((f(&v, "mean_normal_force_over_kz_uz0") - brute_mean_band(1.5)).abs() < 1e-9);
     let t = text(&with(&["static"], &s));
     assert!(
@@ -336,7 +356,17 @@ fn curve_and_map_across_lift_off() {
     let csv = dir.path().join("c.csv");
     let cs = csv.to_str().unwrap();
     run_ok(&with(
-        &["curve", "--v-rel-min", "-0.5", "--v-rel-max", "0.5", "--points", "5", "--csv", cs],
+        &[
+            "curve",
+            "--v-rel-min",
+            "-0.5",
+            "--v-rel-max",
+            "0.5",
+            "--points",
+            "5",
+            "--csv",
+            cs,
+        ],
         &dimless(1.5, 0.8, 30.0),
     ));
     let body = std::fs::read_to_string(&csv).unwrap();
@@ -344,8 +374,11 @@ fn curve_and_map_across_lift_off() {
     assert_eq!(rows.len(), 5, "{body}");
     for r in rows {
         let c: Vec<&str> = r.split(',').collect();
-        let (v0, mu, bound): (f64, f64, f64) =
-            (c[0].parse().unwrap(), c[3].parse().unwrap(), c[5].parse().unwrap());
+        let (v0, mu, bound): (f64, f64, f64) = (
+            c[0].parse().unwrap(),
+            c[3].parse().unwrap(),
+            c[5].parse().unwrap(),
+        );
         let (want, rb) = reference(1.5, 0.8, 30.0, v0);
         assert!((mu - want).abs() <= bound + rb, "{r}: {want}");
     }
@@ -353,8 +386,17 @@ fn curve_and_map_across_lift_off() {
     let png = dir.path().join("m.png");
     let mcsv = dir.path().join("m.csv");
     run_ok(&[
-        "map", "--duz-rel", "1.5", "--res", "3", "--v-rel", "0.5", "--plot",
-        png.to_str().unwrap(), "--csv", mcsv.to_str().unwrap(),
+        "map",
+        "--duz-rel",
+        "1.5",
+        "--res",
+        "3",
+        "--v-rel",
+        "0.5",
+        "--plot",
+        png.to_str().unwrap(),
+        "--csv",
+        mcsv.to_str().unwrap(),
     ]);
     let body = std::fs::read_to_string(&mcsv).unwrap();
     let head: Vec<&str> = body.lines().next().unwrap().split(',').collect();
@@ -374,7 +416,13 @@ fn curve_and_map_across_lift_off() {
     }
     // A regime map at a = 1.5: written, every cell classified.
     let out = run_ok(&[
-        "map", "--duz-rel", "1.5", "--res", "4", "--plot", png.to_str().unwrap(),
+        "map",
+        "--duz-rel",
+        "1.5",
+        "--res",
+        "4",
+        "--plot",
+        png.to_str().unwrap(),
     ]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.starts_with("16 cells: "), "{err}");
@@ -456,7 +504,10 @@ fn curved_profiles_with_lift_off_match_a_brute_force_over_springs() {
                 (got - fine).abs() <= tol,
                 "{profile} v {v}: {got} vs brute force {fine} (m/2: {coarse}), tol {tol:e}"
             );
-            eprintln!("{profile} v = {v}: fricctl {got}, brute force {fine}, |Δ| = {:e}", (got - fine).abs());
+            eprintln!(
+                "{profile} v = {v}: fricctl {got}, brute force {fine}, |Δ| = {:e}",
+                (got - fine).abs()
+            );
         }
     }
 }
@@ -466,7 +517,10 @@ fn profile_flags_and_refusals() {
     let s = dimless(0.5, 0.8, 30.0);
     // --profile flat is the flat punch exactly (same JSON as no flag).
     let plain = json(&with(&["mu", "--v0", "0.2", "--json"], &s));
-    let flat = json(&with(&["mu", "--v0", "0.2", "--profile", "flat", "--json"], &s));
+    let flat = json(&with(
+        &["mu", "--v0", "0.2", "--profile", "flat", "--json"],
+        &s,
+    ));
     assert_eq!(plain, flat);
     assert_eq!(plain["profile"], "flat");
     assert!(plain["exponent"].is_null());
@@ -476,11 +530,33 @@ fn profile_flags_and_refusals() {
     // ω = 2π·1000, v0 = 0.2 ωW0.
     let w = TAU * 1000.0 * 3e-7;
     let si = json(&[
-        "mu", "--mu0", "0.3", "--kz", "1e6", "--kx", "1e6", "--uz0", "1e-6", "--duz", "0.5e-6",
-        "--dux", "2.4e-7", "--freq", "1000", "--phi-deg", "30", "--v0", &(0.2 * w).to_string(),
-        "--profile", "sphere", "--json",
+        "mu",
+        "--mu0",
+        "0.3",
+        "--kz",
+        "1e6",
+        "--kx",
+        "1e6",
+        "--uz0",
+        "1e-6",
+        "--duz",
+        "0.5e-6",
+        "--dux",
+        "2.4e-7",
+        "--freq",
+        "1000",
+        "--phi-deg",
+        "30",
+        "--v0",
+        &(0.2 * w).to_string(),
+        "--profile",
+        "sphere",
+        "--json",
     ]);
-    let gr = json(&with(&["mu", "--v0", "0.2", "--profile", "sphere", "--json"], &s));
+    let gr = json(&with(
+        &["mu", "--v0", "0.2", "--profile", "sphere", "--json"],
+        &s,
+    ));
     let tol = f(&si, "error_bound_over_mu0") + f(&gr, "error_bound_over_mu0");
     assert!((f(&si, "mu_over_mu0") - f(&gr, "mu_over_mu0")).abs() <= tol);
     // The scene file carries the profile too.
@@ -491,7 +567,14 @@ fn profile_flags_and_refusals() {
         "mu0 = 0.3\nkz = 1e6\nkx = 1e6\nuz0 = 1e-6\nduz = 0.5e-6\ndux = 2.4e-7\nfreq = 1000\nphi_deg = 30\nprofile = \"sphere\"\n",
     )
     .unwrap();
-    let file = json(&["mu", "--scene", p.to_str().unwrap(), "--v0", &(0.2 * w).to_string(), "--json"]);
+    let file = json(&[
+        "mu",
+        "--scene",
+        p.to_str().unwrap(),
+        "--v0",
+        &(0.2 * w).to_string(),
+        "--json",
+    ]);
     assert_eq!(file["profile"], "sphere");
     assert_eq!(file["mu_over_mu0"], si["mu_over_mu0"]);
 
@@ -501,7 +584,10 @@ fn profile_flags_and_refusals() {
         "--exponent: missing (--profile power needs --exponent n > 0)",
     );
     refused(
-        &with(&[&v[..], &["--profile", "sphere", "--exponent", "2"]].concat(), &s),
+        &with(
+            &[&v[..], &["--profile", "sphere", "--exponent", "2"]].concat(),
+            &s,
+        ),
         "--exponent: only with --profile power (the sphere profile has n = 2)",
     );
     refused(
@@ -509,7 +595,10 @@ fn profile_flags_and_refusals() {
         "--exponent: only with --profile power (the flat profile has no exponent)",
     );
     refused(
-        &with(&[&v[..], &["--profile", "power", "--exponent", "0"]].concat(), &s),
+        &with(
+            &[&v[..], &["--profile", "power", "--exponent", "0"]].concat(),
+            &s,
+        ),
         "--exponent: must be a finite number > 0",
     );
     refused(
@@ -530,5 +619,64 @@ fn profile_flags_and_refusals() {
     refused(
         &["mu", "--scene", p.to_str().unwrap(), "--v0", "0"],
         "--scene: profile = \"cube\" is not one of flat, sphere, cone, power",
+    );
+}
+
+#[test]
+fn classify_and_curve_with_a_profile() {
+    // Normal oscillation only (b = 0): the drive is its own mirror image, so
+    // μ(−v) = −μ(v) for every profile and μ(0−) = −μ(0+) exactly (the
+    // quadrature mirrors spring by spring): active control.
+    let c = json(&[
+        "classify",
+        "--duz-rel",
+        "0.5",
+        "--dux-rel",
+        "0",
+        "--profile",
+        "sphere",
+        "--json",
+    ]);
+    assert_eq!(c["regime"], "active_control", "{c}");
+    assert_eq!(c["profile"], "sphere");
+    assert!(c["static_exists"].is_null());
+    assert!(c["rule_of_thumb"].is_null());
+    let (p, m) = (f(&c, "mu_0plus_over_mu0"), f(&c, "mu_0minus_over_mu0"));
+    assert!(p > 0.0 && (p + m).abs() <= 1e-9, "{p} {m}");
+    assert!(f(&c, "asymmetry") <= 1e-9);
+    // A curve through v0 = 0 with a < 1: two rows there, μ(0−) then μ(0+).
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("c.csv");
+    run_ok(&[
+        "curve",
+        "--duz-rel",
+        "0.5",
+        "--dux-rel",
+        "0",
+        "--profile",
+        "cone",
+        "--v-rel-min",
+        "-0.5",
+        "--v-rel-max",
+        "0.5",
+        "--points",
+        "3",
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    let body = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<Vec<&str>> = body
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(rows.len(), 4, "{body}");
+    assert_eq!((rows[1][0], rows[2][0]), ("0.0", "0.0"), "{body}");
+    assert!(rows.iter().all(|r| r[4] == "mdr"), "{body}");
+    let mu = |i: usize| rows[i][3].parse::<f64>().unwrap();
+    // Odd law (b = 0): the rows mirror each other.
+    assert!(
+        (mu(0) + mu(3)).abs() <= 1e-8 && (mu(1) + mu(2)).abs() <= 1e-8,
+        "{body}"
     );
 }

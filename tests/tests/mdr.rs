@@ -142,7 +142,14 @@ fn scratch_timing() {
         for tol in [1e-5, 1e-6, 1e-7, 1e-8] {
             let t = std::time::Instant::now();
             let r = mdr::mu_over_mu0::<f64, Libm>(&d, &Profile::Sphere, v, tol).unwrap();
-            println!("a={a} tol={tol:e}: {:.12} bound {:.2e} evals {} {:?} kinks {}", r.mu_over_mu0, r.bound, r.evaluations, t.elapsed(), mdr::DEBUG_KINKS.swap(0, std::sync::atomic::Ordering::Relaxed));
+            println!(
+                "a={a} tol={tol:e}: {:.12} bound {:.2e} evals {} {:?} kinks {}",
+                r.mu_over_mu0,
+                r.bound,
+                r.evaluations,
+                t.elapsed(),
+                mdr::DEBUG_KINKS.swap(0, std::sync::atomic::Ordering::Relaxed)
+            );
         }
     }
 }

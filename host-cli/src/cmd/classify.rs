@@ -10,10 +10,10 @@ use serde::Serialize;
 
 use crate::error::CliResult;
 use crate::eval::{classify_scene_profile, critical_velocity};
-use crate::scene_args::profile_text;
-use model_core::mdr::Profile;
 use crate::output::{stdout_error, write_json};
+use crate::scene_args::profile_text;
 use crate::scene_args::SceneArgs;
+use model_core::mdr::Profile;
 
 /// Flags of `fricctl classify`.
 #[derive(Args, Debug, Clone)]

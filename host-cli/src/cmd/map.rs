@@ -10,11 +10,11 @@ use plotters::style::RGBColor;
 
 use crate::error::{CliError, CliResult};
 use crate::eval::{classify_scene_profile, Method, MethodArgs};
-use crate::scene_args::{profile_text, ProfileArgs};
-use model_core::mdr::Profile;
 use crate::output::write_rows;
 use crate::plot::{render_heat, render_map, Heat, HeatMap, RegimeMap};
+use crate::scene_args::{profile_text, ProfileArgs};
 use crate::sweep::{cell_scene, cells, centres, method_mix, mix_text, mu_cells, Cell};
+use model_core::mdr::Profile;
 
 /// Flags of `fricctl map`.
 #[derive(Args, Debug, Clone)]

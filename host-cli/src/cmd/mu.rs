@@ -130,7 +130,11 @@ fn write_profile_notes(out: &mut impl Write, rs: &ResolvedScene) -> std::io::Res
 }
 
 /// What changes meaning when the contact lifts off (`model_core::model::liftoff`).
-fn write_lift_off_notes(out: &mut impl Write, rs: &ResolvedScene, fixed: bool) -> std::io::Result<()> {
+fn write_lift_off_notes(
+    out: &mut impl Write,
+    rs: &ResolvedScene,
+    fixed: bool,
+) -> std::io::Result<()> {
     let a = rs.scene.drive().a;
     let w = mean_normal_force_over_kz_uz0(&rs.scene);
     writeln!(

@@ -164,7 +164,11 @@ fn write_lift_off_text(
         "tangential force at rest  mu(0)*<fz> = {} N",
         o.mu_at_rest_over_mu0 * s.mu0() * o.mean_normal_force_over_kz_uz0 * p.kz * p.uz0
     )?;
-    writeln!(out, "v_c forward            {} (contact window, eq. L5)", o.vc_forward)?;
+    writeln!(
+        out,
+        "v_c forward            {} (contact window, eq. L5)",
+        o.vc_forward
+    )?;
     writeln!(out, "v_c backward           {}", o.vc_backward)
 }
 
