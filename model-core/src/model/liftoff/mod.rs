@@ -418,7 +418,7 @@ pub(crate) fn banded_signature<T: Float, M: Math<T>>(d: &Drive<T>, offset: T, v:
     let mut code = 0u32;
     let mut push = |arc: Arc<T>| {
         let digit = arc_digit(arc.kind);
-        if code % 4 != digit {
+        if arc.end - arc.start > T::from_f64(SIGNATURE_MIN_ARC) && code % 4 != digit {
             code = code.wrapping_mul(4).wrapping_add(digit);
         }
     };
@@ -427,6 +427,10 @@ pub(crate) fn banded_signature<T: Float, M: Math<T>>(d: &Drive<T>, offset: T, v:
         Err(_) => u32::MAX,
     }
 }
+
+/// Arcs shorter than this (rad) are left out of signatures: a landing's
+/// stick of zero length comes and goes with rounding.
+pub(crate) const SIGNATURE_MIN_ARC: f64 = 1e-9;
 
 /// Base-4 digit of an arc kind (for signatures).
 pub(crate) fn arc_digit(kind: ArcKind) -> u32 {
@@ -693,10 +697,15 @@ impl<T: Float> ContactWindow<T> {
 
     /// `∫s / ∫w`, checked against `|μ/μ₀| ≤ 1` (exact), allowing rounding
     /// and the backend's stated error (part of the bound), and clamped to ±1.
+    /// The rounding of both integrals is absolute, `~ε·scale·Δθ`; for a short
+    /// window (`d → −a`) `∫w ~ Δθ³` is far smaller, so the allowance is
+    /// relative to it.
     fn checked_mean<M: Math<T>>(&self, total: T) -> Result<T, LiftOffError> {
-        let mu = total / self.window.band_integral(self.d, self.a);
-        let slack =
-            T::from_f64(1e3) * T::EPSILON + T::from_f64(M::MAX_REL_ERROR) * self.rounding_scale;
+        let band = self.window.band_integral(self.d, self.a);
+        let mu = total / band;
+        let length = self.window.lift_off.at - self.window.landing.at;
+        let slack = T::from_f64(1e3) * T::EPSILON * (T::ONE + self.rounding_scale * length / band)
+            + T::from_f64(M::MAX_REL_ERROR) * self.rounding_scale;
         if !mu.is_finite() || mu.abs() > T::ONE + slack {
             return Err(LiftOffError::Inconsistent);
         }

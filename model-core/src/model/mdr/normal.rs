@@ -93,7 +93,7 @@ fn elliptic_ke<T: Float, M: Math<T>>(k2: T) -> (T, T) {
     let mut pow = T::HALF;
     for _ in 0..40 {
         let c = (a - b) * T::HALF;
-        pow = pow * T::TWO;
+        pow *= T::TWO;
         sum += pow * c * c;
         let an = (a + b) * T::HALF;
         b = M::sqrt(a * b);

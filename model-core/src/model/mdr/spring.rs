@@ -127,14 +127,26 @@ pub(crate) fn signature<T: Float, M: Math<T>>(drive: &Drive<T>, d: T, v: T) -> O
             return None;
         }
         let (_, arcs) = exact::steady_state::<T, M>(&scaled(drive, d), v / d).ok()?;
-        let mut code = 0u32;
-        for arc in arcs.iter().filter(|x| x.end > x.start) {
+        // The period is a cycle: merge neighbours of one kind (also across the
+        // period's start) and take the smallest rotation, so that an event
+        // crossing the phase where the period is cut changes nothing.
+        let min = T::from_f64(liftoff::SIGNATURE_MIN_ARC);
+        let mut digits = [0u32; exact::MAX_ARCS];
+        let mut len = 0;
+        for arc in arcs.iter().filter(|x| x.end - x.start > min) {
             let digit = liftoff::arc_digit(arc.kind);
-            // Consecutive arcs of one kind (a stick split at the period start) are one.
-            if code % 4 != digit {
-                code = code.wrapping_mul(4).wrapping_add(digit);
+            if len == 0 || digits[len - 1] != digit {
+                digits[len] = digit;
+                len += 1;
             }
         }
+        while len > 1 && digits[0] == digits[len - 1] {
+            len -= 1;
+        }
+        let code = (0..len.max(1))
+            .map(|r| (0..len).fold(0u32, |c, i| c * 4 + digits[(r + i) % len]))
+            .min()
+            .unwrap_or(0);
         return Some(code);
     }
     Some(liftoff::banded_signature::<T, M>(drive, d, v))
