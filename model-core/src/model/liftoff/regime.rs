@@ -7,9 +7,11 @@
 //! `μ(0⁺) = μ(0⁻) = μ(0)`: the scene is an actuator iff `|μ(0)| > tol`
 //! (with μ(v) non-decreasing in v, as for the permanent contact, the sign of
 //! μ(0) decides the sign of μ(v)·v near rest). A force-free rest needs
-//! `μ(0) = 0`, which a symmetric drive gives (e.g. `b = 0`, or `φ = ±π/2`
-//! where the law is odd); an asymmetric drive with lift-off is generically an
-//! actuator. There is no static interval.
+//! `μ(0) = 0`, which a symmetric drive gives (e.g. `b = 0`, where the law is
+//! odd). `φ = ±π/2` is *not* symmetric here: the landing breaks the time
+//! reversal, and at `a = 1.5, b = 0.8, φ = 90°` the exact solver and the
+//! stepping both give `μ(0)/μ₀ = 0.30312` (an actuator). An asymmetric drive
+//! with lift-off is generically an actuator. There is no static interval.
 
 use super::{critical_velocities, mu_over_mu0, LiftOffError};
 use crate::model::float::{Float, Math};
