@@ -50,7 +50,7 @@ struct Body<'a> {
 impl Body<'_> {
     #[inline]
     fn g(&self, t: f64, x: f64) -> f64 {
-        self.p.applied(t) - self.p.kappa * x
+        self.p.applied(t) - self.p.kappa * x / self.p.normal
     }
 
     /// The law on side `dir` (stage values past 0 are clamped to 0).
@@ -66,7 +66,7 @@ impl Body<'_> {
     /// `(dX/dT, dV/dT)` while moving on side `dir`.
     #[inline]
     fn rhs(&self, t: f64, x: f64, v: f64, dir: i8) -> (f64, f64) {
-        let beta = self.p.mass * self.p.nu;
+        let beta = self.p.mass * self.p.nu / self.p.normal;
         (v / self.p.nu, (self.g(t, x) - self.mu(v, dir)) / beta)
     }
 
