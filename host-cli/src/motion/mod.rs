@@ -96,6 +96,20 @@ pub struct Run {
     pub trajectory: Vec<Sample>,
 }
 
+/// How far the last load period's mean may still be from the periodic
+/// regime, from the last two period-to-period changes `change` and `prev`
+/// (same units): a body relaxing geometrically with ratio `ρ = change/prev`
+/// (its response time against the load period) is still `change·ρ/(1 − ρ)`
+/// away, so the change plus that tail, `change/(1 − ρ)`, is returned. `ρ` is
+/// capped at 0.99: a sequence that does not contract yet counts 100 changes.
+pub fn remaining(change: f64, prev: f64) -> f64 {
+    if !(prev.is_finite() && prev > 0.0) {
+        return change;
+    }
+    let rho = (change / prev).clamp(0.0, 0.99);
+    change / (1.0 - rho)
+}
+
 /// Samples kept per load period of the trajectory.
 pub const SAMPLES_PER_PERIOD: usize = 400;
 /// Load periods kept in the trajectory (the last ones).

@@ -16,7 +16,8 @@
 //! `max(64, 2·min_steps_per_period)` (`fixed_step`'s, or with lift-off
 //! `liftoff::stepping`'s) and double (up to 1024)
 //! until two runs agree on the mean velocity within the tolerance; their
-//! difference plus the last period-to-period change is the numerical error.
+//! difference plus the last period-to-period change (with the tail of a
+//! geometric relaxation, [`super::remaining`]) is the numerical error.
 //! When ω/Ω is not a whole number the state is only quasi-periodic in the
 //! load period; the drift is then the average over the last 10 load periods,
 //! accepted when it agrees with the average of the 10 before.
@@ -86,6 +87,7 @@ fn run_n(
     let limit = s.periods.unwrap_or(s.max_periods);
     let mut step_no: u64 = 0;
     let (mut mean, mut prev_mean, mut change) = (0.0, f64::NAN, f64::INFINITY);
+    let mut prev_change = f64::INFINITY;
     let mut stick_fraction = 0.0;
     let (mut periods, mut periodic) = (0, false);
     let mut last_block_stuck = false;
@@ -159,7 +161,10 @@ fn run_n(
             0.0
         };
         if k > 1 {
-            change = (mean - prev_mean).abs();
+            let now = (mean - prev_mean).abs();
+            // The change plus the tail of a geometric relaxation.
+            change = super::remaining(now, prev_change);
+            prev_change = now;
         }
         prev_mean = mean;
         means.push(mean);
