@@ -181,6 +181,7 @@ pub fn mu_at(scene: &Scene<f64>, v0: f64, m: &MethodArgs) -> CliResult<MuOutcome
                     "--tol: {tol:e} is tighter than any method guarantees for this scene (the exact solver's bound is {best:e})"
                 )),
                 SelectError::Exact(e) => exact_failure(e),
+                SelectError::Mdr(e) => CliError::usage(e.to_string()),
             })?;
             out.error_bound_over_mu0 = Some(a.bound);
             match a.value {
@@ -189,6 +190,10 @@ pub fn mu_at(scene: &Scene<f64>, v0: f64, m: &MethodArgs) -> CliResult<MuOutcome
                     mu_0plus,
                     mu_0minus,
                     ..
+                }
+                | Value::Limits {
+                    mu_0plus,
+                    mu_0minus,
                 } => {
                     out.method = a.method.name();
                     out.mu_0plus_over_mu0 = Some(mu_0plus);

@@ -37,7 +37,7 @@ pub mod model;
 
 // The public paths used by the firmware and the host (`model_core::scene`, …).
 pub use board::{dds, device, estimator, protocol, server};
-pub use model::{analytic, exact, fixed_step, float, regime, scene, select};
+pub use model::{analytic, exact, fixed_step, float, mdr, regime, scene, select};
 
 pub use float::{FastF32, Float, Libm, Math, Micromath};
 pub use scene::{Drive, Groups, Param, Scene, SceneError, SceneParams};

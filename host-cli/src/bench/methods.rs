@@ -6,7 +6,9 @@
 //! `--method fixed`; time is wall-clock for the whole command body (rayon on
 //! all cores), the minimum over repeats, and is reported per point. The
 //! fixed-step runs use fewer points (they are ~10⁴× slower) and are compared
-//! per point.
+//! per point. A last case times curved profiles ([`profile_case`]): the
+//! flat punch against a sphere and a cone through the MDR quadrature
+//! (`select::mu_within_profile`) at two tolerances, on fewer points.
 
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -47,6 +49,9 @@ pub struct MethodsArgs {
     /// Repeats (the minimum is kept)
     #[arg(long, default_value_t = 5)]
     pub repeats: usize,
+    /// Velocities per curve for the curved-profile (MDR) runs
+    #[arg(long, default_value_t = 2_000)]
+    pub mdr_points: usize,
 }
 
 /// One timed configuration.
@@ -138,6 +143,67 @@ fn curve_case(
     Ok(())
 }
 
+/// Times μ over a velocity curve for the flat punch and curved profiles
+/// (`select::mu_within_profile`, rayon over the points as the curve command).
+fn profile_case(a: &MethodsArgs, out: &mut Vec<Timing>) -> CliResult {
+    use model_core::mdr::Profile;
+    use model_core::select;
+    use model_core::Libm;
+    use rayon::prelude::*;
+    let g = Groups {
+        duz_rel: 0.5,
+        dux_rel: 0.25,
+        phi: 1.0,
+    };
+    let s = Scene::dimensionless(g).map_err(|e| CliError::failure(e.to_string()))?;
+    let vc = CriticalVelocity::of(&s);
+    let vs: Vec<f64> = linspace(-1.5, 1.5, a.mdr_points)
+        .into_iter()
+        .map(|x| from_rel(&vc, x, "v-rel"))
+        .collect::<CliResult<_>>()?;
+    let flat_tol = model_core::exact::error_bound::<f64, Libm>(&s.drive());
+    let configs: [(&str, Profile<f64>, f64); 5] = [
+        ("flat auto (default tol)", Profile::Flat, flat_tol),
+        ("sphere mdr --tol 1e-6", Profile::Sphere, 1e-6),
+        ("sphere mdr --tol 1e-8", Profile::Sphere, 1e-8),
+        ("cone mdr --tol 1e-6", Profile::Cone, 1e-6),
+        ("cone mdr --tol 1e-8", Profile::Cone, 1e-8),
+    ];
+    for (label, p, tol) in configs {
+        let (t, methods) = best_of(a.repeats, || {
+            vs.par_iter()
+                .map(|&v| {
+                    select::mu_within_profile::<f64, Libm>(&s, &p, v, tol)
+                        .map(|ans| ans.method.name())
+                        .map_err(|e| {
+                            let why = match e {
+                                select::SelectError::BadTolerance => {
+                                    "tol: must be a finite number > 0".to_string()
+                                }
+                                select::SelectError::ToleranceTooTight { best } => {
+                                    format!(
+                                        "tol: tighter than any method guarantees (best {best:e})"
+                                    )
+                                }
+                                select::SelectError::Exact(e) => e.to_string(),
+                                select::SelectError::Mdr(e) => e.to_string(),
+                            };
+                            CliError::failure(format!("{label} at v0 = {v:e} m/s: {why}"))
+                        })
+                })
+                .collect::<CliResult<Vec<_>>>()
+        })?;
+        out.push(Timing {
+            case: "curve, profiles (Δu_z/u_z0 = 0.5, k_xΔu_x/(μ0 k_z u_z0) = 0.25, φ = 1 rad = 57.3°; u_z0 read as the mean indentation), v/v_c in [-1.5, 1.5]",
+            method: label.to_string(),
+            points: vs.len(),
+            total_s: t,
+            mix: mix_text(&method_mix(methods), " + "),
+        });
+    }
+    Ok(())
+}
+
 /// Times the μ map's body (Δu_z/u_z0 = 0.5, v0 = 0.5·v_c).
 fn map_case(a: &MethodsArgs, out: &mut Vec<Timing>) -> CliResult {
     for (label, how, fixed) in configs(a) {
@@ -174,6 +240,11 @@ pub fn run(a: &MethodsArgs) -> CliResult {
             "--points: at most 10000000 (and --fixed-points at most 100000)",
         ));
     }
+    if a.mdr_points < 2 || a.mdr_points % 2 == 1 || a.mdr_points > 1_000_000 {
+        return Err(CliError::usage(
+            "--mdr-points: must be even, >= 2 and at most 1000000",
+        ));
+    }
     if a.repeats == 0 || a.repeats > 1000 {
         return Err(CliError::usage("--repeats: must be between 1 and 1000"));
     }
@@ -205,6 +276,8 @@ pub fn run(a: &MethodsArgs) -> CliResult {
     )?;
     eprintln!("timing maps …");
     map_case(a, &mut out)?;
+    eprintln!("timing curved profiles (MDR) …");
+    profile_case(a, &mut out)?;
     let mut csv = String::from("case,method,points,total_s,per_point_s,ratio_to_first,mix\n");
     let mut last_case = "";
     let mut first = 0.0;
@@ -279,6 +352,8 @@ fn method_color(method: &str) -> usize {
         0
     } else if method == "exact" {
         1
+    } else if method.contains("mdr") {
+        4
     } else {
         8
     }

@@ -9,6 +9,7 @@
 //! * [`fixed_step`] — the paper's explicit scheme (§3, eq. 20);
 //! * [`exact`] — the exact event-driven steady-state solver;
 //! * [`liftoff`] — intermittent contact (`Δu_z ≥ u_z0`): exact and fixed-step solvers;
+//! * [`mdr`] — curved profiles (sphere, cone, power law) through the method of dimensionality reduction;
 //! * [`regime`] — active control / dynamic ratchet / actuator (§3.2);
 //! * [`select`] — the cheapest method whose error bound meets a tolerance;
 //! * [`load_line`] — the contact as an actuator: stall forces, no-load
@@ -27,6 +28,7 @@ pub mod float;
 pub mod inverse;
 pub mod liftoff;
 pub mod load_line;
+pub mod mdr;
 pub mod regime;
 pub(crate) mod root;
 pub mod scene;

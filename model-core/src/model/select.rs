@@ -20,6 +20,14 @@
 //! [`Value::Mu`] (μ at rest is unique with lift-off). The approximations and
 //! the static analysis assume permanent contact and are not used.
 //!
+//! A curved profile ([`mu_within_profile`]) is answered by the MDR quadrature
+//! ([`crate::model::mdr`], [`Method::Mdr`]) or, beyond the critical
+//! velocities (the flat punch's, for every profile), by [`Method::Sliding`];
+//! [`Profile::Flat`] is exactly [`mu_within`] (the single spring, with the
+//! lift-off branch only for `a ≥ 1`). At `v₀ = 0` with `a < 1` a curved
+//! profile gives [`Value::Limits`] (μ(0±) without the flat punch's static
+//! analysis, which does not apply to it).
+//!
 //! The fixed-step integrator is never chosen: it is slower than the exact
 //! solver at every accuracy (`fricctl bench work-precision`) and is used only
 //! when asked for.
@@ -30,6 +38,7 @@ use crate::model::analytic::static_friction::StaticFriction;
 use crate::model::exact::{self, ExactError};
 use crate::model::float::{Float, Math};
 use crate::model::liftoff::{self, LiftOffError};
+use crate::model::mdr::{self, MdrError, Profile};
 use crate::model::scene::Scene;
 
 /// Which computation answered.
@@ -44,11 +53,13 @@ pub enum Method {
     Approx(ApproxKind),
     /// The exact steady-state solver.
     Exact,
+    /// The MDR quadrature over the springs of a curved profile.
+    Mdr,
 }
 
 impl Method {
     /// The name used in reports: `sliding`, `static`, `approx_eq21`,
-    /// `approx_eq24`, `exact`.
+    /// `approx_eq24`, `exact`, `mdr`.
     pub const fn name(self) -> &'static str {
         match self {
             Method::Sliding => "sliding",
@@ -56,6 +67,7 @@ impl Method {
             Method::Approx(ApproxKind::NormalEq21) => "approx_eq21",
             Method::Approx(ApproxKind::TangentialEq24) => "approx_eq24",
             Method::Exact => "exact",
+            Method::Mdr => "mdr",
         }
     }
 }
@@ -74,6 +86,14 @@ pub enum Value<T> {
         mu_0minus: T,
         /// The static analysis.
         statics: StaticFriction<T>,
+    },
+    /// At rest, a curved profile with `a < 1`: the one-sided limits
+    /// `μ(0±)/μ₀` of the velocity law (no static analysis).
+    Limits {
+        /// `lim μ/μ₀` for `v₀ → 0⁺`.
+        mu_0plus: T,
+        /// `lim μ/μ₀` for `v₀ → 0⁻`.
+        mu_0minus: T,
     },
 }
 
@@ -103,6 +123,70 @@ pub enum SelectError<T> {
     },
     /// The exact solver failed (bad velocity, ill-conditioned drive, …).
     Exact(ExactError),
+    /// The MDR of a curved profile failed (bad exponent, quadrature not
+    /// converged, …).
+    Mdr(MdrError),
+}
+
+/// μ of a scene whose contact has the shape `profile` (the scene's `u_z0`
+/// read as the mean indentation `d₀`, `k_z/k_x` as `E*/G*`), by the cheapest
+/// method within `tol` (module docs). [`Profile::Flat`] gives exactly
+/// [`mu_within`].
+///
+/// # Errors
+/// See [`SelectError`]; [`SelectError::Mdr`] for a bad exponent and the
+/// quadrature's refusals.
+pub fn mu_within_profile<T: Float, M: Math<T>>(
+    scene: &Scene<T>,
+    profile: &Profile<T>,
+    v0: T,
+    tol: T,
+) -> Result<Answer<T>, SelectError<T>> {
+    profile.validate().map_err(SelectError::Mdr)?;
+    if *profile == Profile::Flat {
+        return mu_within::<T, M>(scene, v0, tol);
+    }
+    if !(tol.is_finite() && tol > T::ZERO) {
+        return Err(SelectError::BadTolerance);
+    }
+    let v = scene
+        .dimensionless_velocity(v0)
+        .map_err(|e| SelectError::Exact(ExactError::BadVelocity(e)))?;
+    let d = scene.drive();
+    let as_select = |e: MdrError| match e {
+        MdrError::ToleranceTooTight { best } => SelectError::ToleranceTooTight {
+            best: T::from_f64(best),
+        },
+        MdrError::BadTolerance => SelectError::BadTolerance,
+        e => SelectError::Mdr(e),
+    };
+    let (c_forward, c_backward) =
+        mdr::critical_velocities::<T, M>(&d, profile).map_err(as_select)?;
+    if (v > T::ZERO && v >= c_forward) || (v < T::ZERO && -v >= c_backward) {
+        let s = if v > T::ZERO { T::ONE } else { -T::ONE };
+        return Ok(Answer {
+            value: Value::Mu(s),
+            method: Method::Sliding,
+            bound: T::ZERO,
+        });
+    }
+    if v == T::ZERO && d.a < T::ONE {
+        let (plus, minus) = mdr::limits_at_zero::<T, M>(&d, profile, tol).map_err(as_select)?;
+        return Ok(Answer {
+            value: Value::Limits {
+                mu_0plus: plus.mu_over_mu0,
+                mu_0minus: minus.mu_over_mu0,
+            },
+            method: Method::Mdr,
+            bound: plus.bound.max(minus.bound),
+        });
+    }
+    let r = mdr::mu_over_mu0::<T, M>(&d, profile, v, tol).map_err(as_select)?;
+    Ok(Answer {
+        value: Value::Mu(r.mu_over_mu0),
+        method: Method::Mdr,
+        bound: r.bound,
+    })
 }
 
 /// μ at `v0` (m/s) by the cheapest method whose bound is within `tol`

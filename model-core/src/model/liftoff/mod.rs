@@ -188,7 +188,7 @@ pub fn error_bound<T: Float, M: Math<T>>(d: &Drive<T>) -> T {
 /// `⟨w⁺⟩ = (π − θ_c + √(a² − 1))/π` (eq. L4): the mean normal force in units
 /// of `k_z u_z0`, for `a ≥ 1` (1 at `a = 1`).
 pub fn mean_band<T: Float, M: Math<T>>(a: T) -> T {
-    Window::of::<M>(a).band_integral(a) / T::TAU
+    Window::of::<M>(T::ONE, a).band_integral(T::ONE, a) / T::TAU
 }
 
 /// Checks a drive for the lift-off solvers.
@@ -223,10 +223,14 @@ pub(crate) struct Window<T> {
 }
 
 impl<T: Float> Window<T> {
-    pub(crate) fn of<M: Math<T>>(a: T) -> Self {
-        let root = M::sqrt(((a - T::ONE) * (a + T::ONE)).max(T::ZERO));
-        let theta_c = M::atan2(root, T::ONE);
-        let (sin_c, cos_c) = (root / a, T::ONE / a);
+    /// The window of the band `w = d − a cos θ` (`|d| ≤ a`, `a > 0`):
+    /// `cos θ_c = d/a`, `θ_c = atan2(√(a² − d²), d)` — eq. L1 for `d = 1`;
+    /// shorter than π for `d < 0` (a spring of a curved profile beyond the
+    /// mean contact radius, [`crate::model::mdr`]).
+    pub(crate) fn of<M: Math<T>>(d: T, a: T) -> Self {
+        let root = M::sqrt(((a - d) * (a + d)).max(T::ZERO));
+        let theta_c = M::atan2(root, d);
+        let (sin_c, cos_c) = (root / a, d / a);
         Window {
             landing: Phase {
                 at: theta_c,
@@ -241,9 +245,9 @@ impl<T: Float> Window<T> {
         }
     }
 
-    /// `∫ w dθ` over the window (eq. L4).
-    pub(crate) fn band_integral(&self, a: T) -> T {
-        (self.lift_off.at - self.landing.at) - a * (self.lift_off.sin - self.landing.sin)
+    /// `∫ w dθ` over the window of `w = d − a cos θ` (eq. L4 for `d = 1`).
+    pub(crate) fn band_integral(&self, d: T, a: T) -> T {
+        d * (self.lift_off.at - self.landing.at) - a * (self.lift_off.sin - self.landing.sin)
     }
 }
 
@@ -260,15 +264,15 @@ pub fn critical_velocities<T: Float, M: Math<T>>(d: &Drive<T>) -> Result<(T, T),
     if d.a < T::ONE {
         return Err(LiftOffError::NoLiftOff);
     }
-    let window = Window::of::<M>(d.a);
+    let window = Window::of::<M>(T::ONE, d.a);
     Ok((
         forward_critical::<T, M>(d, &window),
         forward_critical::<T, M>(&d.mirrored(), &window),
     ))
 }
 
-/// `V_c⁺` of eq. L5.
-fn forward_critical<T: Float, M: Math<T>>(d: &Drive<T>, window: &Window<T>) -> T {
+/// `V_c⁺` of eq. L5 (any window: the band offset enters only through it).
+pub(crate) fn forward_critical<T: Float, M: Math<T>>(d: &Drive<T>, window: &Window<T>) -> T {
     let (re, im) = (d.a + d.bc, d.bs);
     let c = M::hypot(re, im);
     // c sin(θ + ψ) = re sin θ + im cos θ; its peak is at θ* = π/2 − ψ.
@@ -316,11 +320,38 @@ pub fn mu_over_mu0<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<T, LiftOf
     } else {
         (d.mirrored(), -v, -T::ONE)
     };
-    let window = Window::of::<M>(drive.a);
+    let window = Window::of::<M>(T::ONE, drive.a);
     if v >= forward_critical::<T, M>(&drive, &window) {
         return Ok(sign);
     }
-    Ok(sign * ContactWindow::new::<M>(&drive, v, window).mean_stretch::<M>(None)?)
+    Ok(sign * ContactWindow::new::<M>(&drive, T::ONE, v, window).mean_stretch::<M>(None)?)
+}
+
+/// `∫ s dθ` over the contact window of the band `w = d − a cos θ`,
+/// `|d| < a` (the same walk as [`mu_over_mu0`], which is the case `d = 1`;
+/// a spring of a curved profile, [`crate::model::mdr`]), with `∫ w dθ` over
+/// the window. `V` any finite value; the drive is not checked (the caller
+/// validated it) except through the walk's internal checks.
+///
+/// # Errors
+/// [`LiftOffError::Inconsistent`].
+pub(crate) fn banded_stretch_integral<T: Float, M: Math<T>>(
+    d: &Drive<T>,
+    offset: T,
+    v: T,
+) -> Result<(T, T), LiftOffError> {
+    let (drive, v, sign) = if v >= T::ZERO {
+        (*d, v, T::ONE)
+    } else {
+        (d.mirrored(), -v, -T::ONE)
+    };
+    let window = Window::of::<M>(offset, drive.a);
+    let band = window.band_integral(offset, drive.a);
+    if v >= forward_critical::<T, M>(&drive, &window) {
+        return Ok((sign * band, band));
+    }
+    let mu = ContactWindow::new::<M>(&drive, offset, v, window).mean_stretch::<M>(None)?;
+    Ok((sign * mu * band, band))
 }
 
 /// The contact window as a list of arcs (absolute drive phases θ = ωt in
@@ -339,7 +370,7 @@ pub fn window_arcs<T: Float, M: Math<T>>(
     } else {
         (d.mirrored(), -v, -T::ONE)
     };
-    let window = Window::of::<M>(drive.a);
+    let window = Window::of::<M>(T::ONE, drive.a);
     let mut arcs: Vec<Arc<T>, MAX_ARCS> = Vec::new();
     if v >= forward_critical::<T, M>(&drive, &window) {
         let kind = if sign > T::ZERO {
@@ -364,8 +395,50 @@ pub fn window_arcs<T: Float, M: Math<T>>(
         };
         let _ = arcs.push(Arc { kind, ..arc });
     };
-    let m = ContactWindow::new::<M>(&drive, v, window).mean_stretch::<M>(Some(&mut push))?;
+    let m =
+        ContactWindow::new::<M>(&drive, T::ONE, v, window).mean_stretch::<M>(Some(&mut push))?;
     Ok((sign * m, arcs))
+}
+
+/// The sequence of arc kinds of the window of the band `w = d − a cos θ`
+/// (as [`banded_stretch_integral`]), in the forward convention of `V ≥ 0`,
+/// encoded base 4 (stick 1, forward slip 2, backward slip 3; zero-length arcs
+/// skipped): where it changes with `d`, the spring's `⟨s⟩` may have a kink
+/// ([`crate::model::mdr`] splits its quadrature there).
+pub(crate) fn banded_signature<T: Float, M: Math<T>>(d: &Drive<T>, offset: T, v: T) -> u32 {
+    let (drive, v) = if v >= T::ZERO {
+        (*d, v)
+    } else {
+        (d.mirrored(), -v)
+    };
+    let window = Window::of::<M>(offset, drive.a);
+    if v >= forward_critical::<T, M>(&drive, &window) {
+        return 2;
+    }
+    let mut code = 0u32;
+    let mut push = |arc: Arc<T>| {
+        let digit = arc_digit(arc.kind);
+        if arc.end - arc.start > T::from_f64(SIGNATURE_MIN_ARC) && code % 4 != digit {
+            code = code.wrapping_mul(4).wrapping_add(digit);
+        }
+    };
+    match ContactWindow::new::<M>(&drive, offset, v, window).mean_stretch::<M>(Some(&mut push)) {
+        Ok(_) => code,
+        Err(_) => u32::MAX,
+    }
+}
+
+/// Arcs shorter than this (rad) are left out of signatures: a landing's
+/// stick of zero length comes and goes with rounding.
+pub(crate) const SIGNATURE_MIN_ARC: f64 = 1e-9;
+
+/// Base-4 digit of an arc kind (for signatures).
+pub(crate) fn arc_digit(kind: ArcKind) -> u32 {
+    match kind {
+        ArcKind::Stick => 1,
+        ArcKind::SlipForward => 2,
+        ArcKind::SlipBackward => 3,
+    }
 }
 
 /// Where an arc ends and what follows.
@@ -378,6 +451,8 @@ enum Event<T> {
 
 /// One contact window in the forward convention (`V ≥ 0`), absolute phases.
 struct ContactWindow<T> {
+    /// Band offset `d` of `w = d − a cos θ` (1 for the flat punch).
+    d: T,
     a: T,
     bc: T,
     bs: T,
@@ -409,7 +484,7 @@ fn clip_arcs<T: Float>(start: T, length: T, lo: T, hi: T) -> ([(T, T); 2], usize
 }
 
 impl<T: Float> ContactWindow<T> {
-    fn new<M: Math<T>>(d: &Drive<T>, v: T, window: Window<T>) -> Self {
+    fn new<M: Math<T>>(d: &Drive<T>, offset: T, v: T, window: Window<T>) -> Self {
         let (a, bc, bs) = (d.a, d.bc, d.bs);
         let (lo, hi) = (window.landing.at, window.lift_off.at);
         // h⁺ increases on θ + ψ ∈ [π − α, 2π + α] (mod 2π), α = asin(V/c).
@@ -427,6 +502,7 @@ impl<T: Float> ContactWindow<T> {
             ([(T::ZERO, T::ZERO); 2], 0)
         };
         ContactWindow {
+            d: offset,
             a,
             bc,
             bs,
@@ -443,9 +519,9 @@ impl<T: Float> ContactWindow<T> {
         Phase { at, sin, cos }
     }
 
-    /// `w = 1 − a cos θ`.
+    /// `w = d − a cos θ`.
     fn band(&self, x: &Phase<T>) -> T {
-        T::ONE - self.a * x.cos
+        self.d - self.a * x.cos
     }
 
     /// `X = b cos(θ + φ)`.
@@ -455,7 +531,7 @@ impl<T: Float> ContactWindow<T> {
 
     /// `∫ w dθ` over `[x0, x1]`.
     fn band_integral(&self, x0: &Phase<T>, x1: &Phase<T>) -> T {
-        (x1.at - x0.at) - self.a * (x1.sin - x0.sin)
+        self.d * (x1.at - x0.at) - self.a * (x1.sin - x0.sin)
     }
 
     /// `∫ s dθ` over a stick arc `[x0, x1]`, `s = k + Vθ + X`.
@@ -469,7 +545,7 @@ impl<T: Float> ContactWindow<T> {
     fn above_upper_band(&self, k: T, x: &Phase<T>) -> (T, T) {
         let (p, q) = (self.bc + self.a, self.bs);
         (
-            k - T::ONE + self.v * x.at + p * x.cos - q * x.sin,
+            k - self.d + self.v * x.at + p * x.cos - q * x.sin,
             self.v - p * x.sin - q * x.cos,
         )
     }
@@ -478,7 +554,7 @@ impl<T: Float> ContactWindow<T> {
     fn above_lower_band(&self, k: T, x: &Phase<T>) -> (T, T) {
         let (p, q) = (self.bc - self.a, self.bs);
         (
-            k + T::ONE + self.v * x.at + p * x.cos - q * x.sin,
+            k + self.d + self.v * x.at + p * x.cos - q * x.sin,
             self.v - p * x.sin - q * x.cos,
         )
     }
@@ -621,10 +697,15 @@ impl<T: Float> ContactWindow<T> {
 
     /// `∫s / ∫w`, checked against `|μ/μ₀| ≤ 1` (exact), allowing rounding
     /// and the backend's stated error (part of the bound), and clamped to ±1.
+    /// The rounding of both integrals is absolute, `~ε·scale·Δθ`; for a short
+    /// window (`d → −a`) `∫w ~ Δθ³` is far smaller, so the allowance is
+    /// relative to it.
     fn checked_mean<M: Math<T>>(&self, total: T) -> Result<T, LiftOffError> {
-        let mu = total / self.window.band_integral(self.a);
-        let slack =
-            T::from_f64(1e3) * T::EPSILON + T::from_f64(M::MAX_REL_ERROR) * self.rounding_scale;
+        let band = self.window.band_integral(self.d, self.a);
+        let mu = total / band;
+        let length = self.window.lift_off.at - self.window.landing.at;
+        let slack = T::from_f64(1e3) * T::EPSILON * (T::ONE + self.rounding_scale * length / band)
+            + T::from_f64(M::MAX_REL_ERROR) * self.rounding_scale;
         if !mu.is_finite() || mu.abs() > T::ONE + slack {
             return Err(LiftOffError::Inconsistent);
         }

@@ -99,7 +99,7 @@ pub fn mu_over_mu0<T: Float, M: Math<T>>(
     if n > max_steps {
         return Err(LiftOffError::PrecisionLimit { max_steps });
     }
-    let window = Window::of::<M>(d.a);
+    let window = Window::of::<M>(T::ONE, d.a);
     let (a, bc, bs) = (d.a, d.bc, d.bs);
     let delta = T::TAU / T::from_u32(n);
     let (sin_step, cos_step) = M::sin_cos(delta);
@@ -145,7 +145,7 @@ pub fn mu_over_mu0<T: Float, M: Math<T>>(
         &mut stretch,
     );
     integral += last * T::HALF * (s_whole + stretch);
-    let mu = integral / window.band_integral(a);
+    let mu = integral / window.band_integral(T::ONE, a);
     Ok(SteppedOutcome {
         mu_over_mu0: mu.max(-T::ONE).min(T::ONE),
         steps: whole + 1,

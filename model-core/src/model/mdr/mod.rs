@@ -1,0 +1,532 @@
+//! Curved profiles through the method of dimensionality reduction (MDR).
+//!
+//! # Model
+//!
+//! A rigid axisymmetric indenter `f(r) = c·rⁿ` on an elastic half-space maps
+//! to a 1D foundation of independent springs (Popov & Heß 2015) with the
+//! profile `g(x) = κₙ c |x|ⁿ`, `κₙ = √π Γ(n/2 + 1)/Γ(n/2 + 1/2)`
+//! ([`kappa`]: `κ₁ = π/2`, `κ₂ = 2`, so a sphere `f = r²/(2R)` gives
+//! `g = x²/R`), normal and tangential stiffness per length `E*`, `G*`. Each
+//! spring is the paper's single spring with its own mean indentation
+//! `d₀ − g(x)` and the common `Δu_z`, `u_x` (eqs. 1, 2). The mean contact
+//! radius is `a₀ = (d₀/(κₙ c))^{1/n}` ([`mean_contact_radius`]; Hertz
+//! `a₀ = √(R d₀)`), and with `ξ = |x|/a₀` (κₙ and c are absorbed here):
+//!
+//! ```text
+//! d(ξ) = 1 − ξⁿ                          band offset, units of d₀          (M1)
+//! w(ξ, θ) = d(ξ) − a cos θ              the spring's friction band        (M2)
+//! ```
+//!
+//! in the dimensionless variables of [`crate::model::scene`] with `u_z0`
+//! read as the mean indentation `d₀` and `k_z/k_x` as `E*/G*`
+//! (`W₀ = μ₀ (E*/G*) d₀`, `a = Δu_z/d₀`, `b = Δu_x/W₀`, `V = v₀/(ωW₀)`); the
+//! same dimensionless groups as the flat punch hold. A spring
+//!
+//! * with `d > a` touches all the time: it is *exactly* the flat punch
+//!   scaled by `d` — `s/d` lives in the band `1 − (a/d) cos θ` with the drive
+//!   `(V/d)θ + (b/d) cos(θ + φ)`, so `⟨s⟩ = d · μ_flat(a/d, b/d, V/d)` (M3),
+//!   solved by [`crate::model::exact`] (μ(0⁺) at `V = 0`);
+//! * with `|d| ≤ a` touches while `w > 0`, i.e. in the window
+//!   `θ ∈ [θ_c, 2π − θ_c]`, `cos θ_c = d/a` — shorter than π for `d < 0` —
+//!   and its state resets at every landing: the lift-off walk of
+//!   [`crate::model::liftoff`] with band offset `d` (one implementation);
+//! * with `d ≤ −a` never touches.
+//!
+//! The friction coefficient is the ratio of the mean forces,
+//!
+//! ```text
+//! μ/μ₀ = ∫₀^{ξ_max} ⟨s⟩ dξ / ∫₀^{ξ_max} ⟨w⁺⟩ dξ,   ξ_max = (1 + a)^{1/n}       (M8)
+//! ```
+//!
+//! with the denominator `D` of [`normal`] (closed form for the cone and for
+//! the sphere at `a ≤ 1`, eqs. M6, M7; integrated with the numerator otherwise).
+//!
+//! # Critical velocities ([`critical_velocities`])
+//!
+//! `μ/μ₀ = 1` iff every spring slides forward through all its contact. For
+//! `d > a` that is `V ≥ c` (eq. 8, independent of `d` after scaling); for
+//! `|d| ≤ a` it is `V ≥ V_c⁺(d)`, eq. L5 on the window of `d`. The windows
+//! are nested (they shrink as `d` falls), so `V_c⁺(d)` is nondecreasing in
+//! `d` and the central spring (`d = 1`) decides: **the critical velocities
+//! of every profile equal the flat punch's** (eq. 8 for `a < 1`, eq. L5 for
+//! `a ≥ 1`). Below them the outer springs already slide: `ξ*` with
+//! `V_c⁺(d(ξ*)) = V` (bisection on the closed-form L5) splits the quadrature.
+//!
+//! # At rest
+//!
+//! With `a < 1` the central springs (`ξ < (1 − a)^{1/n}`) never lift off and
+//! have no unique state at `V = 0`: [`limits_at_zero`] gives μ(0⁺) and μ(0⁻)
+//! (each permanent spring at its own one-sided limit, the intermittent ones
+//! unique), and [`mu_over_mu0`] refuses `V = 0` with [`MdrError::AtRest`].
+//! With `a ≥ 1` every spring lifts off and μ(0) is unique.
+//! Mirror symmetry `μ(V, φ) = −μ(−V, φ + π)` holds spring by spring;
+//! `V < 0` is computed through it.
+//!
+//! # Quadrature and its error bound
+//!
+//! `μ/μ₀ = 1 − I/D` with `I = ∫ (⟨w⁺⟩ − ⟨s⟩) dξ`, which vanishes beyond
+//! `ξ*`. The ξ-range is split at `ξ_a = (1 − a)^{1/n}` (lift-off onset,
+//! `a < 1`), at `ξ*` and at `ξ_max`; on each piece `ξ = l + (r − l)(1 − cos t)/2`,
+//! `t ∈ [0, π]`, which turns the square-root behaviour at the onset and at the
+//! rim (`θ_c ∝ √(a − d)`, `⟨w⁺⟩ ∝ (a + d)^{3/2}`) into smooth functions of `t`.
+//! [`quadrature`] (adaptive Gauss–Kronrod 7/15) bisects until
+//!
+//! ```text
+//! bound = [2·E_quad + ε_s ξ* + U]/D + 64 ε  ≤ tol
+//! ```
+//!
+//! where `E_quad` is the sum of the `|K₁₅ − G₇|` estimates (of `I`, and of
+//! `D` times `I/D` when `D` is not closed form) with a safety factor 2,
+//! `ε_s = (precision_constant + M::MAX_REL_ERROR)(1 + a + b)` the per-spring
+//! solver error (the flat solvers' bounds, [`crate::model::exact::error_bound`],
+//! [`crate::model::liftoff::error_bound`], in absolute units of `W₀`), and `U`
+//! the band of springs a solver could not resolve (counted as `|⟨s⟩| ≤ ⟨w⁺⟩`:
+//! slivers of contact at the rim below `64ε(1 + a + b)`, and permanent springs
+//! whose scaled drive `b/d > 10⁷` the exact solver refuses).
+//! `E_quad` is an **estimate**, not a proof (see [`quadrature`]).
+//!
+//! **Kinks.** Inside the pieces `⟨s⟩(ξ)` has kinks — slope jumps where the
+//! springs' arc structure changes (e.g. a backward slip that appears with a
+//! finite length when a stick trajectory first reaches the lower band near the
+//! end of a backward-slip piece). They are found, not bounded: the arc
+//! sequence of a spring (stick / forward / backward, arcs shorter than
+//! 10⁻⁹ rad ignored, the permanent spring's period taken as a cycle) is
+//! sampled at 8 interior points of each piece, and every change between
+//! neighbours is bisected to `10⁻⁵π` in `t` and made an interval end. Two
+//! changes that cancel between samples, and changes the sequence does not
+//! show, are left to the adaptive bisection and to the estimate. Measured
+//! (`tests/mdr.rs`): over 40 random scenes and four profiles the answer at
+//! `tol = 10⁻⁶` differs from the answer at the tightest tolerance by at most
+//! 0.14 of the two bounds; against the brute force over springs all
+//! gaps are within the brute force's own error (≤ 10⁻⁶).
+//!
+//! **Cost.** Each spring is one exact solve (~0.4–0.7 µs); a sphere's μ at
+//! `tol = 10⁻⁶` takes 50–75 springs plus ~30 for the kink search, at
+//! `10⁻⁸` 90–140 plus the same (`fricctl bench methods`, `cargo bench -p
+//! model-core --bench mdr`). A tolerance below the per-spring solvers' part
+//! ([`solver_bound`], ~3–8·10⁻⁹ for a sphere in f64: the flat solvers'
+//! verified precision constant 10⁻⁹·(1 + a + b), far above their true
+//! rounding) is refused with [`MdrError::ToleranceTooTight`].
+
+pub mod normal;
+pub mod profile;
+pub mod quadrature;
+pub(crate) mod spring;
+
+pub use profile::{kappa, mean_contact_radius, Profile};
+
+use crate::model::exact::{self, precision_constant};
+use crate::model::float::{Float, Math};
+use crate::model::liftoff;
+use crate::model::scene::{ContactMode, Drive};
+use spring::{forward_critical, spring, Limit};
+
+/// Safety factor on the Gauss–Kronrod estimate in the bound.
+pub const SAFETY: f64 = 2.0;
+
+/// Why the MDR gave no number.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MdrError {
+    /// The exponent of [`Profile::Power`] is NaN, infinite or ≤ 0.
+    BadExponent,
+    /// A drive no validated scene produces (non-finite, `a < 0`, `b < 0`).
+    BadDrive,
+    /// The velocity is NaN or infinite.
+    BadVelocity,
+    /// The tolerance is NaN, infinite or ≤ 0.
+    BadTolerance,
+    /// The float type cannot resolve this drive (precision part of the
+    /// bound above 1 % of μ₀).
+    IllConditioned,
+    /// The tolerance is below what the per-spring solvers guarantee.
+    ToleranceTooTight {
+        /// The smallest bound available, units of μ₀.
+        best: f64,
+    },
+    /// The adaptive quadrature ran out of intervals before meeting the
+    /// tolerance.
+    NotConverged {
+        /// The bound reached, units of μ₀.
+        reached: f64,
+    },
+    /// `V = 0` with springs in permanent contact (`a < 1`): no unique μ;
+    /// [`limits_at_zero`] gives μ(0±).
+    AtRest,
+    /// A spring's event walk failed its internal check.
+    Inconsistent,
+}
+
+impl core::fmt::Display for MdrError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            MdrError::BadExponent => f.write_str("exponent: must be a finite number > 0"),
+            MdrError::BadDrive => f.write_str(
+                "drive: not one a valid scene produces (finite, duz-rel >= 0, dux-rel >= 0)",
+            ),
+            MdrError::BadVelocity => f.write_str("v0: must be a finite number"),
+            MdrError::BadTolerance => f.write_str("tol: must be a finite number > 0"),
+            MdrError::IllConditioned => f.write_str(
+                "duz-rel/dux-rel: too large for this number type to resolve mu (error bound > 1 % of mu0)",
+            ),
+            MdrError::ToleranceTooTight { best } => write!(
+                f,
+                "tol: tighter than the per-spring solvers guarantee for this scene (best {best:e})"
+            ),
+            MdrError::NotConverged { reached } => write!(
+                f,
+                "tol: the profile quadrature stopped at a bound of {reached:e} (interval limit)"
+            ),
+            MdrError::AtRest => f.write_str(
+                "v0: 0 has no unique mu while the central springs stay in contact (duz < uz0); use the limits mu(0+), mu(0-)",
+            ),
+            MdrError::Inconsistent => {
+                f.write_str("mdr: a spring's solver failed its internal check (a number would be wrong)")
+            }
+        }
+    }
+}
+
+impl core::error::Error for MdrError {}
+
+/// μ/μ₀ of a profile with its bound.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct MdrResult<T> {
+    /// `μ/μ₀` (eq. M8).
+    pub mu_over_mu0: T,
+    /// Error bound, units of μ₀ (≤ the tolerance asked for; module docs
+    /// say what it covers).
+    pub bound: T,
+    /// Springs evaluated (integrand evaluations of the quadrature).
+    pub evaluations: u32,
+}
+
+fn check<T: Float>(d: &Drive<T>, p: &Profile<T>) -> Result<(), MdrError> {
+    p.validate()?;
+    if !d.is_valid_with_contact(ContactMode::Intermittent) {
+        return Err(MdrError::BadDrive);
+    }
+    if precision_constant::<T>() * (T::ONE + d.a + d.b) > T::from_f64(exact::ILL_CONDITIONED_AT) {
+        return Err(MdrError::IllConditioned);
+    }
+    Ok(())
+}
+
+/// Dimensionless critical velocities `(V_c⁺, V_c⁻)` of a profile: those of
+/// the flat punch with the same drive (module docs), eq. 8 for `a < 1`,
+/// eq. L5 for `a ≥ 1`. Multiply by `ωW₀` for m/s.
+///
+/// # Errors
+/// [`MdrError::BadExponent`], [`MdrError::BadDrive`].
+pub fn critical_velocities<T: Float, M: Math<T>>(
+    d: &Drive<T>,
+    p: &Profile<T>,
+) -> Result<(T, T), MdrError> {
+    p.validate()?;
+    if !d.is_valid_with_contact(ContactMode::Intermittent) {
+        return Err(MdrError::BadDrive);
+    }
+    Ok((
+        forward_critical::<T, M>(d, T::ONE),
+        forward_critical::<T, M>(&d.mirrored(), T::ONE),
+    ))
+}
+
+/// The per-spring solver part of the bound of a curved profile, units of
+/// μ₀, before the quadrature: `ε_s ξ_max / D_min` with `D ≥ n/(n + 1)`
+/// (Jensen: `⟨(1 − a cos θ)₊^p⟩ ≥ ⟨1 − a cos θ⟩^p = 1`, eq. M5), or the closed
+/// form `D`. The smallest tolerance [`mu_over_mu0`] can meet is above it.
+pub fn solver_bound<T: Float, M: Math<T>>(d: &Drive<T>, n: T) -> T {
+    let eps_s = (precision_constant::<T>() + T::from_f64(M::MAX_REL_ERROR)) * (T::ONE + d.a + d.b);
+    let xi_max = Profile::root(n, T::ONE + d.a);
+    let dmin = normal::closed_form::<T, M>(n, d.a).unwrap_or(n / (n + T::ONE));
+    eps_s * xi_max / dmin + T::from_f64(64.0) * T::EPSILON
+}
+
+/// `μ/μ₀` of a profile at dimensionless velocity `v` (units of `ωW₀`,
+/// `W₀ = μ₀ (E*/G*) d₀`) with a bound `≤ tol` (units of μ₀). [`Profile::Flat`]
+/// is the single spring ([`crate::model::exact`], or [`crate::model::liftoff`]
+/// for `a ≥ 1`).
+///
+/// # Errors
+/// [`MdrError::BadExponent`], [`MdrError::BadDrive`], [`MdrError::BadVelocity`],
+/// [`MdrError::BadTolerance`], [`MdrError::IllConditioned`],
+/// [`MdrError::ToleranceTooTight`], [`MdrError::NotConverged`],
+/// [`MdrError::AtRest`] (`v = 0`, `a < 1`), [`MdrError::Inconsistent`].
+pub fn mu_over_mu0<T: Float, M: Math<T>>(
+    d: &Drive<T>,
+    p: &Profile<T>,
+    v: T,
+    tol: T,
+) -> Result<MdrResult<T>, MdrError> {
+    check(d, p)?;
+    if !v.is_finite() {
+        return Err(MdrError::BadVelocity);
+    }
+    if !(tol.is_finite() && tol > T::ZERO) {
+        return Err(MdrError::BadTolerance);
+    }
+    if v == T::ZERO && d.a < T::ONE {
+        return Err(MdrError::AtRest);
+    }
+    let Some(n) = p.exponent() else {
+        return flat::<T, M>(d, v, tol);
+    };
+    if v >= T::ZERO {
+        curved::<T, M>(d, n, v, Limit::Moving, tol)
+    } else {
+        curved::<T, M>(&d.mirrored(), n, -v, Limit::Moving, tol).map(|r| MdrResult {
+            mu_over_mu0: -r.mu_over_mu0,
+            ..r
+        })
+    }
+}
+
+/// The one-sided limits `(μ(0⁺), μ(0⁻))/μ₀` of a profile's velocity law
+/// (equal for `a ≥ 1`, where μ(0) is unique), each with its bound.
+///
+/// # Errors
+/// As [`mu_over_mu0`] except [`MdrError::AtRest`] and [`MdrError::BadVelocity`].
+pub fn limits_at_zero<T: Float, M: Math<T>>(
+    d: &Drive<T>,
+    p: &Profile<T>,
+    tol: T,
+) -> Result<(MdrResult<T>, MdrResult<T>), MdrError> {
+    check(d, p)?;
+    if !(tol.is_finite() && tol > T::ZERO) {
+        return Err(MdrError::BadTolerance);
+    }
+    if d.a >= T::ONE {
+        let r = mu_over_mu0::<T, M>(d, p, T::ZERO, tol)?;
+        return Ok((r, r));
+    }
+    let Some(n) = p.exponent() else {
+        let bound = exact::error_bound::<T, M>(d);
+        if bound > tol {
+            return Err(MdrError::ToleranceTooTight {
+                best: bound.to_f64(),
+            });
+        }
+        let (plus, minus) = exact::limits_at_zero::<T, M>(d).map_err(|_| MdrError::Inconsistent)?;
+        let r = |m| MdrResult {
+            mu_over_mu0: m,
+            bound,
+            evaluations: 1,
+        };
+        return Ok((r(plus), r(minus)));
+    };
+    let plus = curved::<T, M>(d, n, T::ZERO, Limit::Plus, tol)?;
+    let minus = curved::<T, M>(&d.mirrored(), n, T::ZERO, Limit::Plus, tol)?;
+    Ok((
+        plus,
+        MdrResult {
+            mu_over_mu0: -minus.mu_over_mu0,
+            ..minus
+        },
+    ))
+}
+
+/// The flat punch (no quadrature).
+fn flat<T: Float, M: Math<T>>(d: &Drive<T>, v: T, tol: T) -> Result<MdrResult<T>, MdrError> {
+    let (m, bound) = if d.a >= T::ONE {
+        let m = liftoff::mu_over_mu0::<T, M>(d, v).map_err(|e| match e {
+            liftoff::LiftOffError::IllConditioned => MdrError::IllConditioned,
+            _ => MdrError::Inconsistent,
+        })?;
+        (m, liftoff::error_bound::<T, M>(d))
+    } else {
+        let m = exact::mu_over_mu0::<T, M>(d, v).map_err(|e| match e {
+            exact::ExactError::IllConditioned => MdrError::IllConditioned,
+            _ => MdrError::Inconsistent,
+        })?;
+        (m, exact::error_bound::<T, M>(d))
+    };
+    if m.abs() == T::ONE {
+        // Continuous sliding: exact.
+        return Ok(MdrResult {
+            mu_over_mu0: m,
+            bound: T::ZERO,
+            evaluations: 1,
+        });
+    }
+    if bound > tol {
+        return Err(MdrError::ToleranceTooTight {
+            best: bound.to_f64(),
+        });
+    }
+    Ok(MdrResult {
+        mu_over_mu0: m,
+        bound,
+        evaluations: 1,
+    })
+}
+
+/// A curved profile in the forward convention (`v ≥ 0`).
+fn curved<T: Float, M: Math<T>>(
+    d: &Drive<T>,
+    n: T,
+    v: T,
+    limit: Limit,
+    tol: T,
+) -> Result<MdrResult<T>, MdrError> {
+    let a = d.a;
+    if v >= forward_critical::<T, M>(d, T::ONE) {
+        return Ok(MdrResult {
+            mu_over_mu0: T::ONE,
+            bound: T::ZERO,
+            evaluations: 0,
+        });
+    }
+    let solver = solver_bound::<T, M>(d, n);
+    if solver >= tol {
+        return Err(MdrError::ToleranceTooTight {
+            best: solver.to_f64() * 1.01,
+        });
+    }
+    let xi_a = if a < T::ONE {
+        Profile::root(n, T::ONE - a)
+    } else {
+        T::ZERO
+    };
+    let xi_max = Profile::root(n, T::ONE + a);
+    let offset = |xi: T| T::ONE - Profile::power(n, xi);
+    // ξ*: V_c⁺(d(ξ)) > v on [0, ξ*), ≤ v beyond (monotone, module docs).
+    let (mut lo, mut hi) = (xi_a, xi_max);
+    if forward_critical::<T, M>(d, offset(hi)) > v {
+        lo = hi;
+    }
+    while hi - lo > T::from_f64(4.0) * T::EPSILON * xi_max {
+        let mid = (lo + hi) * T::HALF;
+        if !(mid > lo && mid < hi) {
+            break;
+        }
+        if forward_critical::<T, M>(d, offset(mid)) > v {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let xi_star = hi;
+    let segments = [(T::ZERO, xi_a), (xi_a, xi_star), (xi_star, xi_max)];
+    let closed = normal::closed_form::<T, M>(n, a);
+    let sliding_segment = 2usize;
+    let integrand = |u: T| -> Result<[T; 3], MdrError> {
+        let j = ((u / T::PI).to_f64() as usize).min(2);
+        let (l, r) = segments[j];
+        let t = u - T::PI * T::from_u32(j as u32);
+        let (sin_t, cos_t) = M::sin_cos(t);
+        let half = (r - l) * T::HALF;
+        let xi = l + half * (T::ONE - cos_t);
+        let jac = half * sin_t;
+        let dd = offset(xi);
+        if j == sliding_segment {
+            if closed.is_some() {
+                return Ok([T::ZERO; 3]);
+            }
+            return Ok([T::ZERO, normal::mean_band::<T, M>(dd, a) * jac, T::ZERO]);
+        }
+        let s = spring::<T, M>(d, dd, v, limit)?;
+        Ok([(s.band - s.stretch) * jac, s.band * jac, s.unresolved * jac])
+    };
+    // Interval ends in u = jπ + t: each used segment, split where the
+    // springs' arc structure changes (module docs, "kinks").
+    let mut ends: heapless::Vec<T, MAX_ENDS> = heapless::Vec::new();
+    for (j, &(l, r)) in segments.iter().enumerate() {
+        if r <= l || (j == sliding_segment && closed.is_some()) {
+            continue;
+        }
+        let base = T::PI * T::from_u32(j as u32);
+        if ends.last() != Some(&base) {
+            let _ = ends.push(base);
+        }
+        if j != sliding_segment && limit == Limit::Moving {
+            kinks::<T, M>(d, v, l, r, &offset, |t| {
+                let _ = ends.push(base + t);
+            });
+        }
+        let _ = ends.push(base + T::PI);
+    }
+    let safety = T::from_f64(SAFETY);
+    let eps_s = (precision_constant::<T>() + T::from_f64(M::MAX_REL_ERROR)) * (T::ONE + a + d.b);
+    let floor = T::from_f64(64.0) * T::EPSILON;
+    let bound_of = |e: [T; 3], val: [T; 3]| {
+        let den = closed.unwrap_or(val[1]);
+        if den.is_nan() || den <= T::ZERO {
+            return T::MAX;
+        }
+        let ratio = (val[0] / den).abs();
+        let e_den = if closed.is_some() { T::ZERO } else { e[1] };
+        (safety * (e[0] + ratio * e_den) + eps_s * xi_star + val[2]) / den + floor
+    };
+    let out = quadrature::integrate(integrand, &ends, tol, bound_of)?;
+    let den = closed.unwrap_or(out.value[1]);
+    let bound = bound_of(out.error, out.value);
+    if !out.converged || bound.is_nan() || bound > tol {
+        return Err(MdrError::NotConverged {
+            reached: bound.to_f64(),
+        });
+    }
+    let mu = T::ONE - out.value[0] / den;
+    if !mu.is_finite() || mu.abs() > T::ONE + tol {
+        return Err(MdrError::Inconsistent);
+    }
+    Ok(MdrResult {
+        mu_over_mu0: mu.max(-T::ONE).min(T::ONE),
+        bound,
+        evaluations: out.evaluations,
+    })
+}
+
+/// Most interval ends of the quadrature's first partition.
+const MAX_ENDS: usize = 24;
+
+/// Width (in units of π of the segment's `t`) to which a kink is bracketed:
+/// one left that close to an interval end costs the Kronrod rule about
+/// `|Δf'|·(10⁻⁵ π h)²`, which the adaptive bisection then resolves.
+const KINK_RESOLUTION: f64 = 1e-5;
+
+/// Points sampled per segment for changes of the arc structure.
+const KINK_SAMPLES: u32 = 8;
+
+/// The kinks of the springs' `⟨s⟩` inside `[l, r]` (ξ), reported as `t` of the
+/// segment's map `ξ = l + (r − l)(1 − cos t)/2`, in increasing order: the arc
+/// structure ([`spring::signature`]) is sampled at [`KINK_SAMPLES`] interior
+/// points equally spaced in `t`, and each change between neighbours is
+/// bisected in `t` to [`KINK_RESOLUTION`]`·π`. Changes that cancel between
+/// two samples are left to the adaptive bisection.
+fn kinks<T: Float, M: Math<T>>(
+    d: &Drive<T>,
+    v: T,
+    l: T,
+    r: T,
+    offset: &impl Fn(T) -> T,
+    mut found: impl FnMut(T),
+) {
+    let half = (r - l) * T::HALF;
+    let sig = |t: T| {
+        let (_, cos_t) = M::sin_cos(t);
+        spring::signature::<T, M>(d, offset(l + half * (T::ONE - cos_t)), v)
+    };
+    let step = T::PI / T::from_u32(KINK_SAMPLES + 1);
+    let mut t_prev = step;
+    let mut s_prev = sig(t_prev);
+    for i in 2..=KINK_SAMPLES {
+        let t = step * T::from_u32(i);
+        let s = sig(t);
+        if s != s_prev && s.is_some() && s_prev.is_some() {
+            let (mut lo, mut hi) = (t_prev, t);
+            while hi - lo > T::from_f64(KINK_RESOLUTION) * T::PI {
+                let mid = (lo + hi) * T::HALF;
+                if sig(mid) == s_prev {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            found((lo + hi) * T::HALF);
+        }
+        t_prev = t;
+        s_prev = s;
+    }
+}

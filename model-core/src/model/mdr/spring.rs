@@ -1,0 +1,153 @@
+//! One spring of the MDR foundation: its mean stretch `⟨s⟩` and mean band
+//! `⟨w⁺⟩` at band offset `d` (eqs. M2, M3 of [`super`]).
+
+use super::normal::mean_band;
+use super::MdrError;
+use crate::model::exact::{self, ExactError};
+use crate::model::float::{Float, Math};
+use crate::model::liftoff::{self, LiftOffError, Window};
+use crate::model::scene::Drive;
+
+/// Which one-sided limit at `V = 0` a permanent spring takes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Limit {
+    /// `V ≠ 0`: the unique steady state.
+    Moving,
+    /// `V → 0⁺`.
+    Plus,
+}
+
+/// What one spring contributes, units of `W₀` (stretch) and `d₀` (band).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Spring<T> {
+    /// `⟨s⟩` over a period.
+    pub(crate) stretch: T,
+    /// `⟨w⁺⟩` over a period (eq. M4).
+    pub(crate) band: T,
+    /// `⟨w⁺⟩` if the spring's solver refused the drive as ill-conditioned
+    /// (its `⟨s⟩`, bounded by `±⟨w⁺⟩`, is then taken as 0), else 0.
+    pub(crate) unresolved: T,
+}
+
+/// The permanent-contact spring's drive scaled by `1/d` (`d > a`): the flat
+/// punch with `(a/d, b/d)` at velocity `V/d` (eq. M3).
+fn scaled<T: Float>(drive: &Drive<T>, d: T) -> Drive<T> {
+    Drive {
+        a: drive.a / d,
+        b: drive.b / d,
+        bc: drive.bc / d,
+        bs: drive.bs / d,
+    }
+}
+
+/// The spring at band offset `d`, forward convention `V ≥ 0` (the caller
+/// mirrors). `limit` selects μ(0⁺) for permanent springs at `V = 0`.
+pub(crate) fn spring<T: Float, M: Math<T>>(
+    drive: &Drive<T>,
+    d: T,
+    v: T,
+    limit: Limit,
+) -> Result<Spring<T>, MdrError> {
+    let a = drive.a;
+    if d <= -a {
+        return Ok(Spring {
+            stretch: T::ZERO,
+            band: T::ZERO,
+            unresolved: T::ZERO,
+        });
+    }
+    if d > a {
+        // Permanent contact: d·μ_flat(a/d, b/d, V/d).
+        let s = scaled(drive, d);
+        let m = match limit {
+            Limit::Moving => exact::mu_over_mu0::<T, M>(&s, v / d),
+            Limit::Plus => exact::limits_at_zero::<T, M>(&s).map(|l| l.0),
+        };
+        return match m {
+            Ok(m) => Ok(Spring {
+                stretch: d * m,
+                band: d,
+                unresolved: T::ZERO,
+            }),
+            Err(ExactError::IllConditioned) => Ok(Spring {
+                stretch: T::ZERO,
+                band: d,
+                unresolved: d,
+            }),
+            Err(_) => Err(MdrError::Inconsistent),
+        };
+    }
+    // |d| ≤ a: intermittent contact, one window of w = d − a cos θ.
+    let band = mean_band::<T, M>(d, a);
+    // A sliver of contact at the rim (window ≲ ε^{1/3}): the walk cannot
+    // resolve ⟨s⟩/⟨w⁺⟩ there; |⟨s⟩| ≤ ⟨w⁺⟩ is counted in the bound instead.
+    let floor = T::from_f64(64.0) * T::EPSILON * (T::ONE + a + drive.b);
+    if band <= floor {
+        return Ok(Spring {
+            stretch: T::ZERO,
+            band,
+            unresolved: band,
+        });
+    }
+    let (s, _) = liftoff::banded_stretch_integral::<T, M>(drive, d, v).map_err(|e| match e {
+        LiftOffError::IllConditioned => MdrError::IllConditioned,
+        _ => MdrError::Inconsistent,
+    })?;
+    Ok(Spring {
+        stretch: s / T::TAU,
+        band,
+        unresolved: T::ZERO,
+    })
+}
+
+/// `V_c⁺(d)`: the smallest `V` at which the spring at offset `d`
+/// slides forward through all its contact (eq. L5 on its window for
+/// `|d| < a`; `c` of eq. 8 for `d > a`). Nondecreasing in `d`: the windows
+/// are nested.
+pub(crate) fn forward_critical<T: Float, M: Math<T>>(drive: &Drive<T>, d: T) -> T {
+    if d > drive.a {
+        drive.c_forward::<M>()
+    } else {
+        let window = Window::of::<M>(d.max(-drive.a), drive.a);
+        liftoff::forward_critical::<T, M>(drive, &window)
+    }
+}
+
+/// The arc structure of the spring at offset `d` (forward convention,
+/// `V > 0` for permanent springs), as a base-4 code: a change between two
+/// offsets brackets a possible kink of `⟨s⟩(d)`. `None` where it is not
+/// available (`V = 0` for permanent springs, or no contact).
+pub(crate) fn signature<T: Float, M: Math<T>>(drive: &Drive<T>, d: T, v: T) -> Option<u32> {
+    let a = drive.a;
+    if d <= -a {
+        return None;
+    }
+    if d > a {
+        if v == T::ZERO {
+            return None;
+        }
+        let (_, arcs) = exact::steady_state::<T, M>(&scaled(drive, d), v / d).ok()?;
+        // The period is a cycle: merge neighbours of one kind (also across the
+        // period's start) and take the smallest rotation, so that an event
+        // crossing the phase where the period is cut changes nothing.
+        let min = T::from_f64(liftoff::SIGNATURE_MIN_ARC);
+        let mut digits = [0u32; exact::MAX_ARCS];
+        let mut len = 0;
+        for arc in arcs.iter().filter(|x| x.end - x.start > min) {
+            let digit = liftoff::arc_digit(arc.kind);
+            if len == 0 || digits[len - 1] != digit {
+                digits[len] = digit;
+                len += 1;
+            }
+        }
+        while len > 1 && digits[0] == digits[len - 1] {
+            len -= 1;
+        }
+        let code = (0..len.max(1))
+            .map(|r| (0..len).fold(0u32, |c, i| c * 4 + digits[(r + i) % len]))
+            .min()
+            .unwrap_or(0);
+        return Some(code);
+    }
+    Some(liftoff::banded_signature::<T, M>(drive, d, v))
+}

@@ -1,0 +1,573 @@
+//! Curved profiles through the MDR (`model::mdr`) against independent
+//! computations: a brute force over many springs written here (each spring
+//! by a fine fixed-step run of the paper's stick-trial-and-clamp scheme, the
+//! intermittent ones with exact landing and lift-off, the permanent ones run
+//! to their periodic state; midpoint rule over the springs), the flat punch
+//! as `n → ∞`, dimensionless invariance, mirror symmetry, f32 against f64,
+//! and every refusal.
+
+use std::f64::consts::{PI, TAU};
+
+use model_core::mdr::{self, MdrError, MdrResult, Profile};
+use model_core::scene::ContactMode;
+use model_core::select::{self, Method, SelectError, Value};
+use model_core::{exact, Drive, Libm, Scene, SceneParams};
+
+/// One spring by brute force: `(⟨s⟩, ⟨w⁺⟩)` over a period for the band
+/// `w = d − a cos θ` and the drive `u_x = Vθ + b cos(θ + φ)`, `n` steps per
+/// period, trapezoid means.
+fn brute_spring(d: f64, a: f64, b: f64, phi: f64, v: f64, n: u32) -> (f64, f64) {
+    let h = TAU / f64::from(n);
+    let ux = |t: f64| v * t + b * (t + phi).cos();
+    if d <= -a {
+        return (0.0, 0.0);
+    }
+    if d > a {
+        // Permanent contact: periods from s = 0 until the period mean settles.
+        let w = |t: f64| d - a * t.cos();
+        let mut s: f64 = 0.0;
+        let mut last = f64::NAN;
+        for _ in 0..200 {
+            let mut int_s = 0.0;
+            for i in 0..n {
+                let (t0, t1) = (f64::from(i) * h, f64::from(i + 1) * h);
+                let s1 = (s + ux(t1) - ux(t0)).clamp(-w(t1), w(t1));
+                int_s += 0.5 * h * (s + s1);
+                s = s1;
+            }
+            let mean = int_s / TAU;
+            if (mean - last).abs() < 1e-14 {
+                return (mean, d);
+            }
+            last = mean;
+        }
+        return (last, d);
+    }
+    // Intermittent: one window from landing (s = 0) to lift-off.
+    let tc = (d / a).acos();
+    let (t0, t1) = (tc, TAU - tc);
+    let w = |t: f64| (d - a * t.cos()).max(0.0);
+    let mut t = t0;
+    let mut s: f64 = 0.0;
+    let (mut int_s, mut int_w) = (0.0, 0.0);
+    let mut w_prev = 0.0;
+    while t < t1 {
+        let t_next = (t + h).min(t1);
+        let w_next = if t_next == t1 { 0.0 } else { w(t_next) };
+        let s_next = (s + ux(t_next) - ux(t)).clamp(-w_next, w_next);
+        int_s += 0.5 * (t_next - t) * (s + s_next);
+        int_w += 0.5 * (t_next - t) * (w_prev + w_next);
+        s = s_next;
+        w_prev = w_next;
+        t = t_next;
+    }
+    (int_s / TAU, int_w / TAU)
+}
+
+/// Brute-force μ/μ₀ of the profile `d = 1 − ξⁿ`: `springs` springs per
+/// piece `[0, ξ_a]`, `[ξ_a, ξ_max]` (ξ_a = (1 − a)^{1/n}, the lift-off onset,
+/// a geometric fact), placed by the midpoint rule in `t` with
+/// `ξ = l + (r − l)(1 − cos t)/2`, `n_steps` per period for each spring.
+fn brute_mu(n: f64, a: f64, b: f64, phi: f64, v: f64, springs: u32, n_steps: u32) -> f64 {
+    let xi_a = if a < 1.0 {
+        (1.0 - a).powf(1.0 / n)
+    } else {
+        0.0
+    };
+    let xi_max = (1.0 + a).powf(1.0 / n);
+    let (mut num, mut den) = (0.0, 0.0);
+    for (l, r) in [(0.0, xi_a), (xi_a, xi_max)] {
+        if r <= l {
+            continue;
+        }
+        let ht = PI / f64::from(springs);
+        for i in 0..springs {
+            let t = (f64::from(i) + 0.5) * ht;
+            let xi = l + 0.5 * (r - l) * (1.0 - t.cos());
+            let jac = 0.5 * (r - l) * t.sin() * ht;
+            let (s, w) = brute_spring(1.0 - xi.powf(n), a, b, phi, v, n_steps);
+            num += s * jac;
+            den += w * jac;
+        }
+    }
+    num / den
+}
+
+/// The MDR in f64 at a tolerance, unwrapped.
+fn mdr64(p: Profile<f64>, a: f64, b: f64, phi: f64, v: f64, tol: f64) -> MdrResult<f64> {
+    let d = Drive::new::<Libm>(a, b, phi);
+    mdr::mu_over_mu0::<f64, Libm>(&d, &p, v, tol)
+        .unwrap_or_else(|e| panic!("a={a} b={b} phi={phi} v={v}: {e}"))
+}
+
+/// Scenes `(a, b, φ, V)`: a permanent core with an intermittent rim
+/// (`a < 1`), all springs lifting off (`a ≥ 1`), both signs of `V`, ratchet
+/// and actuator phases.
+const SCENES: [(f64, f64, f64, f64); 6] = [
+    (0.5, 1.0, 0.3, 0.2),
+    (0.2, 2.0, 0.0, -0.5),
+    (0.8, 0.4, 2.5, -0.1),
+    (1.5, 0.7, 2.0, 0.1),
+    (1.0, 1.0, -1.0, 0.3),
+    (2.5, 0.3, 1.0, -0.05),
+];
+
+/// The brute force with its error estimate: `(B(8M, N), allowance)`.
+///
+/// Over the springs the midpoint rule converges like `h²` but with an
+/// erratic constant: a kink of `⟨s⟩(ξ)` (slope jump `Δ`) inside a cell of
+/// width `h` costs up to `Δh²/8`, depending on where in the cell it falls
+/// (printed changes on the fifth scene: 2.6e-5, 5.4e-7, 1.8e-6 for
+/// M = 60 → 120 → 240 → 480). So no Richardson step is taken: the error of
+/// `B(8M)` is taken as the larger of the last two changes (true whenever the
+/// error at least halves per doubling over two doublings), plus twice the
+/// time-step change `|B(M, N) − B(M, 2N)|` (second order in N: the change is
+/// 3/4 of the error at N and 3× the error at 2N; N = 3000 for all M).
+fn brute_with_error(n: f64, a: f64, b: f64, phi: f64, v: f64) -> (f64, f64) {
+    const M: u32 = 60;
+    const N: u32 = 3000;
+    let b_m = brute_mu(n, a, b, phi, v, M, N);
+    let b_m_2n = brute_mu(n, a, b, phi, v, M, 2 * N);
+    let b_2m = brute_mu(n, a, b, phi, v, 2 * M, N);
+    let b_4m = brute_mu(n, a, b, phi, v, 4 * M, N);
+    let b_8m = brute_mu(n, a, b, phi, v, 8 * M, N);
+    let springs = (b_2m - b_4m).abs().max((b_4m - b_8m).abs());
+    (b_8m, springs + 2.0 * (b_m - b_m_2n).abs())
+}
+
+/// A tolerance the MDR can meet on this drive: `10⁻⁸`, or twice the
+/// per-spring solvers' part of the bound where that is larger.
+fn tol_for(n: f64, a: f64, b: f64, phi: f64) -> f64 {
+    let d = Drive::new::<Libm>(a, b, phi);
+    (2.0 * mdr::solver_bound::<f64, Libm>(&d, n)).max(1e-8)
+}
+
+/// A sphere's μ against the brute force over many springs
+/// ([`brute_with_error`]): the gap must be within the brute force's error
+/// estimate plus the MDR's bound.
+#[test]
+fn sphere_matches_brute_force_over_springs() {
+    for &(a, b, phi, v) in &SCENES {
+        let r = mdr64(Profile::Sphere, a, b, phi, v, tol_for(2.0, a, b, phi));
+        let (bf, err) = brute_with_error(2.0, a, b, phi, v);
+        let gap = (r.mu_over_mu0 - bf).abs();
+        let allowed = err + r.bound;
+        println!(
+            "sphere a={a} b={b} phi={phi} V={v}: mdr {:.10} (bound {:.1e}, {} springs), brute {bf:.10} (±{err:.1e}), gap {gap:.2e}",
+            r.mu_over_mu0, r.bound, r.evaluations
+        );
+        assert!(
+            gap <= allowed,
+            "a={a} b={b} phi={phi} V={v}: gap {gap:e} > {allowed:e}"
+        );
+        // The brute force resolves the scene.
+        assert!(err < 1e-4, "brute force not converged: ±{err}");
+    }
+}
+
+/// The cone and non-integer power laws against the same brute force.
+#[test]
+fn cone_and_power_match_brute_force() {
+    for (p, n) in [
+        (Profile::Cone, 1.0),
+        (Profile::Power(3.5), 3.5),
+        (Profile::Power(0.6), 0.6),
+    ] {
+        for &(a, b, phi, v) in &SCENES[..4] {
+            let r = mdr64(p, a, b, phi, v, tol_for(n, a, b, phi));
+            let (bf, err) = brute_with_error(n, a, b, phi, v);
+            let gap = (r.mu_over_mu0 - bf).abs();
+            println!(
+                "n={n} a={a} V={v}: mdr {:.10} brute {bf:.10} (±{err:.1e}) gap {gap:.2e}",
+                r.mu_over_mu0
+            );
+            assert!(
+                gap <= err + r.bound,
+                "n={n} a={a} b={b} V={v}: gap {gap:e} > {err:e}"
+            );
+            assert!(err < 1e-4, "brute force not converged: ±{err}");
+        }
+    }
+}
+
+/// The quadrature's error estimate over random scenes (sphere, cone,
+/// power 0.6 and 3.5): the answer at `tol = 10⁻⁶` against the one at the
+/// tightest tolerance the drive allows must differ by at most the two
+/// bounds. A check of the *estimate* (module docs of `model::mdr`: it is
+/// not a proof); every miss is counted and printed, and none is allowed.
+#[test]
+fn bound_estimate_holds_against_a_tighter_run() {
+    let mut rng = integration_tests::Rng::new(12);
+    let mut misses = 0;
+    let mut worst: f64 = 0.0;
+    for i in 0..40 {
+        let a = if i % 2 == 0 {
+            rng.range(0.05, 0.95)
+        } else {
+            rng.range(1.0, 3.0)
+        };
+        let b = 10f64.powf(rng.range(-1.0, 0.7));
+        let phi = rng.range(-PI, PI);
+        let d = Drive::new::<Libm>(a, b, phi);
+        let (cf, cb) = mdr::critical_velocities::<f64, Libm>(&d, &Profile::Sphere).unwrap();
+        let v = rng.range(-cb, cf);
+        let (p, n) = [
+            (Profile::Sphere, 2.0),
+            (Profile::Cone, 1.0),
+            (Profile::Power(0.6), 0.6),
+            (Profile::Power(3.5), 3.5),
+        ][i % 4];
+        let loose = mdr64(p, a, b, phi, v, 1e-6);
+        let tight = mdr64(p, a, b, phi, v, tol_for(n, a, b, phi));
+        let gap = (loose.mu_over_mu0 - tight.mu_over_mu0).abs();
+        worst = worst.max(gap / (loose.bound + tight.bound));
+        if gap > loose.bound + tight.bound {
+            misses += 1;
+            println!(
+                "miss: n={n} a={a} b={b} phi={phi} V={v}: gap {gap:e}, bounds {:e} {:e}",
+                loose.bound, tight.bound
+            );
+        }
+    }
+    println!("worst gap/bounds {worst:.3}, misses {misses}");
+    assert_eq!(misses, 0);
+}
+
+/// The numerically integrated denominator against the closed forms (eqs.
+/// M6, M7): `Power(1 + 10⁻⁹)` integrates `D`, the cone uses the closed form;
+/// the profiles differ by `O(10⁻⁹)` in every spring, so μ differs by at most
+/// the two bounds plus `10⁻⁸` (a generous multiple of that change).
+#[test]
+fn numeric_denominator_matches_closed_form() {
+    for &(a, b, phi, v) in &SCENES {
+        let cone = mdr64(Profile::Cone, a, b, phi, v, 1e-7);
+        let near = mdr64(Profile::Power(1.0 + 1e-9), a, b, phi, v, 1e-7);
+        let gap = (cone.mu_over_mu0 - near.mu_over_mu0).abs();
+        assert!(
+            gap <= cone.bound + near.bound + 1e-8,
+            "a={a}: {} vs {}",
+            cone.mu_over_mu0,
+            near.mu_over_mu0
+        );
+    }
+}
+
+/// `n → ∞` approaches the flat punch. Bound derived here: a spring with
+/// `d > a` differs from the flat punch's only by its band, by `1 − d = ξⁿ`
+/// everywhere, and the stick/clamp map is non-expansive, so
+/// `|⟨s_d⟩ − d·μ_flat|`… more simply `|⟨s_d⟩ − ⟨s_1⟩| ≤ ξⁿ`; the springs
+/// beyond `ξ_a` carry `|⟨s⟩| ≤ ⟨w⁺⟩ ≤ 1 + a` over a width
+/// `Δ = (1 + a)^{1/n} − (1 − a)^{1/n}`. With `N = ∫⟨s⟩`, `D = ∫⟨w⁺⟩`:
+/// `|N − μ_f| ≤ E = 1/(n+1) + (1 − ξ_a) + (1 + a)Δ`, `|D − 1|` the same, so
+/// `|μ_n − μ_f| ≤ 2E/(1 − E)`.
+#[test]
+fn large_exponent_approaches_flat_punch() {
+    for &(a, b, phi, v) in &SCENES[..3] {
+        let d = Drive::new::<Libm>(a, b, phi);
+        let flat = exact::mu_over_mu0::<f64, Libm>(&d, v).unwrap();
+        let mut last = f64::INFINITY;
+        for n in [20.0, 100.0, 500.0] {
+            let r = mdr64(Profile::Power(n), a, b, phi, v, 1e-7);
+            let xi_a = (1.0 - a).powf(1.0 / n);
+            let width = (1.0 + a).powf(1.0 / n) - xi_a;
+            let e = 1.0 / (n + 1.0) + (1.0 - xi_a) + (1.0 + a) * width;
+            let allowed = 2.0 * e / (1.0 - e) + r.bound;
+            let gap = (r.mu_over_mu0 - flat).abs();
+            println!(
+                "n={n} a={a}: {} flat {flat} gap {gap:.2e} allowed {allowed:.2e}",
+                r.mu_over_mu0
+            );
+            assert!(gap <= allowed, "n={n}: gap {gap} > {allowed}");
+            assert!(gap < last, "n={n}: not approaching the flat punch");
+            last = gap;
+        }
+    }
+}
+
+/// Mirror symmetry `μ(V, φ) = −μ(−V, φ + π)`, spring by spring, so to the two
+/// bounds (the drive of `φ + π` is built with its own `sin`/`cos`).
+#[test]
+fn mirror_symmetry() {
+    for &(a, b, phi, v) in &SCENES {
+        for p in [Profile::Sphere, Profile::Cone, Profile::Power(0.7)] {
+            let r = mdr64(p, a, b, phi, v, 1e-7);
+            let m = mdr64(p, a, b, phi + PI, -v, 1e-7);
+            let gap = (r.mu_over_mu0 + m.mu_over_mu0).abs();
+            assert!(
+                gap <= r.bound + m.bound,
+                "{} a={a} V={v}: {gap:e}",
+                p.name()
+            );
+        }
+    }
+}
+
+/// The answer depends on the dimensionless groups only: two physical scenes
+/// with the same `a`, `b`, φ and `v₀/(ωW₀)` but different μ₀, stiffnesses,
+/// indentation and frequency give the same μ to the two bounds (plus the
+/// rounding of the groups, 1e-14).
+#[test]
+fn dimensionless_invariance() {
+    let base = SceneParams {
+        mu0: 0.3,
+        kz: 2e6,
+        kx: 1.5e6,
+        uz0: 5e-6,
+        duz: 2.5e-6,
+        dux: 0.7e-6,
+        omega: TAU * 40e3,
+        phi: 0.9,
+    };
+    // Scale lengths by 3, μ₀ by 0.5, k_z/k_x by 4 (so W₀ = μ₀ (k_z/k_x) u_z0
+    // is scaled by 6, Δu_x must scale by 6 too), ω by 0.1.
+    let other = SceneParams {
+        mu0: 0.15,
+        kz: 8e6,
+        kx: 1.5e6,
+        uz0: 15e-6,
+        duz: 7.5e-6,
+        dux: 4.2e-6,
+        omega: TAU * 4e3,
+        phi: 0.9,
+    };
+    let s1 = Scene::new(base).unwrap();
+    let s2 = Scene::new(other).unwrap();
+    for v_rel in [-0.4, 0.1, 0.3] {
+        let v1 = v_rel * s1.velocity_scale();
+        let v2 = v_rel * s2.velocity_scale();
+        for p in [Profile::Sphere, Profile::Cone] {
+            let a1 = select::mu_within_profile::<f64, Libm>(&s1, &p, v1, 1e-7).unwrap();
+            let a2 = select::mu_within_profile::<f64, Libm>(&s2, &p, v2, 1e-7).unwrap();
+            let (Value::Mu(m1), Value::Mu(m2)) = (a1.value, a2.value) else {
+                panic!("moving contact gave no μ");
+            };
+            assert!(
+                (m1 - m2).abs() <= a1.bound + a2.bound + 1e-14,
+                "{m1} vs {m2}"
+            );
+        }
+    }
+}
+
+/// f32 against f64 on the same inputs: within the f32 bound plus the f64 one.
+#[test]
+fn f32_matches_f64() {
+    for &(a, b, phi, v) in &SCENES {
+        let r64 = mdr64(Profile::Sphere, a, b, phi, v, 1e-7);
+        let d32 = Drive::new::<Libm>(a as f32, b as f32, phi as f32);
+        let r32 = mdr::mu_over_mu0::<f32, Libm>(&d32, &Profile::Sphere, v as f32, 1e-3).unwrap();
+        let gap = (f64::from(r32.mu_over_mu0) - r64.mu_over_mu0).abs();
+        println!(
+            "f32 a={a} V={v}: gap {gap:.2e}, f32 bound {:.1e}",
+            r32.bound
+        );
+        assert!(
+            gap <= f64::from(r32.bound) + r64.bound,
+            "a={a} V={v}: {gap:e}"
+        );
+    }
+}
+
+/// Beyond the critical velocity (the flat punch's, for every profile) every
+/// spring slides: the brute force gives 1 (its clamp keeps `s = w` exactly),
+/// the MDR 1 with bound 0; just below it the brute force is below 1.
+#[test]
+fn critical_velocity_is_the_flat_punchs() {
+    for &(a, b, phi, _) in &SCENES {
+        let d = Drive::new::<Libm>(a, b, phi);
+        let (cf, cb) = mdr::critical_velocities::<f64, Libm>(&d, &Profile::Sphere).unwrap();
+        if a < 1.0 {
+            assert_eq!(cf, d.c_forward::<Libm>());
+            assert_eq!(cb, d.c_backward::<Libm>());
+        }
+        for (v, sign) in [(1.001 * cf, 1.0), (-1.001 * cb, -1.0)] {
+            let r = mdr64(Profile::Sphere, a, b, phi, v, 1e-7);
+            assert_eq!((r.mu_over_mu0, r.bound), (sign, 0.0));
+            let bf = brute_mu(2.0, a, b, phi, v, 40, 2000);
+            assert!((bf - sign).abs() < 1e-12, "a={a}: brute {bf} at {v}");
+        }
+        if cf > 0.0 {
+            let bf = brute_mu(2.0, a, b, phi, 0.9 * cf, 40, 2000);
+            assert!(bf < 1.0 - 1e-6, "a={a}: brute {bf} at 0.9 v_c");
+        }
+    }
+}
+
+/// At rest: with `a ≥ 1` μ(0) is unique and the limits agree; with `a < 1`
+/// [`mdr::mu_over_mu0`] refuses and the limits bracket the law near 0:
+/// μ(±V) for `V = 10⁻⁶` is within `10⁻⁴` of μ(0±) (the springs' laws are
+/// Lipschitz in V away from their critical velocities, measured slope ≲ 10).
+#[test]
+fn limits_at_rest() {
+    for &(a, b, phi, _) in &SCENES {
+        let d = Drive::new::<Libm>(a, b, phi);
+        let (plus, minus) = mdr::limits_at_zero::<f64, Libm>(&d, &Profile::Sphere, 1e-7).unwrap();
+        if a >= 1.0 {
+            assert_eq!(plus.mu_over_mu0, minus.mu_over_mu0);
+            let r = mdr64(Profile::Sphere, a, b, phi, 0.0, 1e-7);
+            assert_eq!(r.mu_over_mu0, plus.mu_over_mu0);
+        } else {
+            assert_eq!(
+                mdr::mu_over_mu0::<f64, Libm>(&d, &Profile::Sphere, 0.0, 1e-8),
+                Err(MdrError::AtRest)
+            );
+        }
+        let up = mdr64(Profile::Sphere, a, b, phi, 1e-6, 1e-7).mu_over_mu0;
+        let down = mdr64(Profile::Sphere, a, b, phi, -1e-6, 1e-7).mu_over_mu0;
+        println!(
+            "a={a}: μ(0+) {} μ(1e-6) {up}; μ(0-) {} μ(-1e-6) {down}",
+            plus.mu_over_mu0, minus.mu_over_mu0
+        );
+        assert!((up - plus.mu_over_mu0).abs() < 1e-4, "a={a}");
+        assert!((down - minus.mu_over_mu0).abs() < 1e-4, "a={a}");
+    }
+}
+
+/// `select::mu_within_profile`: the flat profile is exactly `mu_within`; a
+/// curved one answers with the MDR, or sliding beyond v_c, or the limits at
+/// rest for `a < 1`.
+#[test]
+fn select_uses_the_cheapest_model() {
+    let s = integration_tests::scene(0.5, 1.0, 0.3);
+    let vs = s.velocity_scale();
+    for v in [-0.3 * vs, 0.1 * vs, 0.0, 3.0 * vs] {
+        for tol in [1e-2, 1e-6] {
+            assert_eq!(
+                select::mu_within_profile::<f64, Libm>(&s, &Profile::Flat, v, tol),
+                select::mu_within::<f64, Libm>(&s, v, tol)
+            );
+        }
+    }
+    let ans = select::mu_within_profile::<f64, Libm>(&s, &Profile::Sphere, 0.1 * vs, 1e-6).unwrap();
+    assert_eq!(ans.method, Method::Mdr);
+    assert_eq!(ans.method.name(), "mdr");
+    assert!(ans.bound <= 1e-6);
+    let ans = select::mu_within_profile::<f64, Libm>(&s, &Profile::Sphere, 3.0 * vs, 1e-6).unwrap();
+    assert_eq!(
+        (ans.method, ans.value, ans.bound),
+        (Method::Sliding, Value::Mu(1.0), 0.0)
+    );
+    let ans = select::mu_within_profile::<f64, Libm>(&s, &Profile::Sphere, 0.0, 1e-6).unwrap();
+    assert!(matches!(ans.value, Value::Limits { .. }), "{ans:?}");
+    // Lift-off scene: the flat profile takes the lift-off branch (method
+    // "exact"), a sphere the MDR; at rest μ is unique.
+    let lift = Scene::dimensionless_with_contact(
+        model_core::Groups {
+            duz_rel: 1.5,
+            dux_rel: 0.7,
+            phi: 2.0,
+        },
+        ContactMode::Intermittent,
+    )
+    .unwrap();
+    let flat = select::mu_within_profile::<f64, Libm>(&lift, &Profile::Flat, 0.0, 1e-6).unwrap();
+    assert_eq!(flat.method, Method::Exact);
+    let sph = select::mu_within_profile::<f64, Libm>(&lift, &Profile::Sphere, 0.0, 1e-6).unwrap();
+    assert_eq!(sph.method, Method::Mdr);
+    assert!(matches!(sph.value, Value::Mu(_)));
+}
+
+/// Every refusal, with a one-line message naming the parameter.
+#[test]
+fn refusals() {
+    let d = Drive::new::<Libm>(0.5, 1.0, 0.3);
+    let mu = |p: Profile<f64>, d: &Drive<f64>, v: f64, tol: f64| {
+        mdr::mu_over_mu0::<f64, Libm>(d, &p, v, tol)
+    };
+    for n in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        assert_eq!(
+            mu(Profile::Power(n), &d, 0.1, 1e-6),
+            Err(MdrError::BadExponent),
+            "n={n}"
+        );
+        assert_eq!(Profile::Power(n).validate(), Err(MdrError::BadExponent));
+        assert_eq!(
+            mdr::critical_velocities::<f64, Libm>(&d, &Profile::Power(n)),
+            Err(MdrError::BadExponent)
+        );
+    }
+    for tol in [0.0, -1e-6, f64::NAN, f64::INFINITY] {
+        assert_eq!(
+            mu(Profile::Sphere, &d, 0.1, tol),
+            Err(MdrError::BadTolerance),
+            "tol={tol}"
+        );
+    }
+    for v in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        assert_eq!(mu(Profile::Sphere, &d, v, 1e-6), Err(MdrError::BadVelocity));
+    }
+    assert_eq!(mu(Profile::Sphere, &d, 0.0, 1e-6), Err(MdrError::AtRest));
+    let mut bad = d;
+    bad.a = f64::NAN;
+    assert_eq!(
+        mu(Profile::Sphere, &bad, 0.1, 1e-6),
+        Err(MdrError::BadDrive)
+    );
+    bad = d;
+    bad.b = -1.0;
+    assert_eq!(
+        mu(Profile::Sphere, &bad, 0.1, 1e-6),
+        Err(MdrError::BadDrive)
+    );
+    let huge = Drive::new::<Libm>(0.5, 1e8, 0.3);
+    assert_eq!(
+        mu(Profile::Sphere, &huge, 0.1, 1e-2),
+        Err(MdrError::IllConditioned)
+    );
+    assert!(matches!(
+        mu(Profile::Sphere, &d, 0.1, 1e-12),
+        Err(MdrError::ToleranceTooTight { .. })
+    ));
+    let s = integration_tests::scene(0.5, 1.0, 0.3);
+    assert!(matches!(
+        select::mu_within_profile::<f64, Libm>(&s, &Profile::Power(-2.0), 0.0, 1e-6),
+        Err(SelectError::Mdr(MdrError::BadExponent))
+    ));
+    assert!(matches!(
+        select::mu_within_profile::<f64, Libm>(&s, &Profile::Sphere, 1e-3, 1e-13),
+        Err(SelectError::ToleranceTooTight { .. })
+    ));
+    for e in [
+        MdrError::BadExponent,
+        MdrError::BadDrive,
+        MdrError::BadVelocity,
+        MdrError::BadTolerance,
+        MdrError::IllConditioned,
+        MdrError::ToleranceTooTight { best: 1e-9 },
+        MdrError::NotConverged { reached: 1e-5 },
+        MdrError::AtRest,
+        MdrError::Inconsistent,
+    ] {
+        let m = e.to_string();
+        assert!(
+            !m.is_empty() && !m.contains('\n') && !m.contains("Mdr"),
+            "{m}"
+        );
+    }
+}
+
+/// Profile names and exponents of the contract; κₙ against its known values.
+#[test]
+fn profile_names_and_kappa() {
+    assert_eq!(Profile::<f64>::Flat.exponent(), None);
+    assert_eq!(Profile::<f64>::Sphere.exponent(), Some(2.0));
+    assert_eq!(Profile::<f64>::Cone.exponent(), Some(1.0));
+    assert_eq!(Profile::Power(3.0).exponent(), Some(3.0));
+    let names: Vec<_> = [
+        Profile::Flat,
+        Profile::Sphere,
+        Profile::Cone,
+        Profile::Power(3.0),
+    ]
+    .iter()
+    .map(|p| p.name())
+    .collect();
+    assert_eq!(names, ["flat", "sphere", "cone", "power"]);
+    // κ₁ = π/2, κ₂ = 2 (Popov & Heß), κ₃ = 4/3·... : √π Γ(5/2)/Γ(2) = 3π/4.
+    assert!((mdr::kappa(1.0) - PI / 2.0).abs() < 1e-14);
+    assert!((mdr::kappa(2.0) - 2.0).abs() < 1e-14);
+    assert!((mdr::kappa(3.0) - 3.0 * PI / 4.0).abs() < 1e-14);
+    // Hertz: a₀ = √(R d₀) for f = r²/(2R).
+    let (r, d0) = (0.01, 1e-6);
+    assert!((mdr::mean_contact_radius(2.0, 1.0 / (2.0 * r), d0) - (r * d0).sqrt()).abs() < 1e-18);
+}
