@@ -8,6 +8,9 @@ use model_core::analytic::approx::{approx_mu_over_mu0, ApproxError, MAX_ERROR_OV
 use model_core::analytic::{ApproxKind, CriticalVelocity};
 use model_core::exact::{self, ExactError, Solution};
 use model_core::fixed_step::{self, FixedStepConfig, FixedStepError, Start};
+use model_core::mdr::{self, MdrError, Profile};
+use model_core::model::liftoff::{self, stepping, LiftOffError};
+use model_core::regime::{self, ClassifyOptions, Regime};
 use model_core::select::{self, SelectError, Value};
 use model_core::{Libm, Scene};
 use serde::Serialize;
@@ -66,6 +69,89 @@ pub struct MuOutcome {
     /// Fixed-step, not converged: μ/μ0 of the last period (not a steady-state value).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub last_mu_over_mu0: Option<f64>,
+    /// Whether the contact lifts off once per period (Δu_z ≥ u_z0): μ is then
+    /// normalised by the mean normal force k_z⟨u_z⁺⟩, μ at v0 = 0 is unique
+    /// and v_c is the contact window's (eq. L5), not eq. 8.
+    pub lifts_off: bool,
+    /// The contact profile: `flat`, `sphere`, `cone`, `power`.
+    pub profile: &'static str,
+    /// Its exponent n (null for flat; 2 for a sphere, 1 for a cone).
+    pub exponent: Option<f64>,
+}
+
+/// Critical velocities of a scene, m/s (units of ωW0 for a dimensionless
+/// scene): eq. 8 for a permanent contact, the contact window's (eq. L5 of
+/// `model_core::model::liftoff`) for one that lifts off.
+pub fn critical_velocity(scene: &Scene<f64>) -> CliResult<CriticalVelocity<f64>> {
+    if !scene.lifts_off() {
+        return Ok(CriticalVelocity::of(scene));
+    }
+    let (c, cb) =
+        liftoff::critical_velocities::<f64, Libm>(&scene.drive()).map_err(lift_off_failure)?;
+    let unit = scene.velocity_scale();
+    Ok(CriticalVelocity {
+        forward: c * unit,
+        backward: cb * unit,
+    })
+}
+
+/// `⟨u_z⁺⟩/u_z0`, the mean normal force in units of `k_z u_z0` (eq. L4):
+/// 1 for a permanent contact, `(π − θ_c + √(a² − 1))/π` with lift-off.
+pub fn mean_normal_force_over_kz_uz0(scene: &Scene<f64>) -> f64 {
+    if scene.lifts_off() {
+        liftoff::mean_band::<f64, Libm>(scene.drive().a)
+    } else {
+        1.0
+    }
+}
+
+/// A regime classification for either contact (the numbers `classify` and
+/// the regime map show); μ as μ/μ0, velocities in units of ωW0.
+#[derive(Debug, Clone, Copy)]
+pub struct Classified {
+    /// The class.
+    pub regime: Regime,
+    /// μ(0⁺)/μ0 (with lift-off: μ(0)/μ0, unique).
+    pub mu_0plus: f64,
+    /// μ(0⁻)/μ0 (with lift-off: μ(0)/μ0, unique).
+    pub mu_0minus: f64,
+    /// The forward critical velocity over ωW0 (eq. 8, or eq. L5 with lift-off).
+    pub c_forward: f64,
+    /// The backward critical velocity over ωW0.
+    pub c_backward: f64,
+    /// max |μ(v) + μ(−v)|/μ0 over the sampled velocities.
+    pub asymmetry: f64,
+    /// The permanent contact's static analysis (None with lift-off: there is
+    /// no static interval, the force at rest is unique).
+    pub statics: Option<model_core::analytic::StaticFriction<f64>>,
+}
+
+/// Classifies a scene: `regime::classify` for a permanent contact,
+/// `liftoff::regime::classify` for one that lifts off.
+pub fn classify_scene(s: &Scene<f64>) -> CliResult<Classified> {
+    if s.lifts_off() {
+        let c = liftoff::regime::classify::<f64, Libm>(&s.drive(), &ClassifyOptions::default())
+            .map_err(lift_off_failure)?;
+        return Ok(Classified {
+            regime: c.regime,
+            mu_0plus: c.mu_at_rest,
+            mu_0minus: c.mu_at_rest,
+            c_forward: c.c_forward,
+            c_backward: c.c_backward,
+            asymmetry: c.asymmetry,
+            statics: None,
+        });
+    }
+    let c = regime::classify(s, &ClassifyOptions::default()).map_err(exact_failure)?;
+    Ok(Classified {
+        regime: c.regime,
+        mu_0plus: c.mu_0plus,
+        mu_0minus: c.mu_0minus,
+        c_forward: c.c_forward,
+        c_backward: c.c_backward,
+        asymmetry: c.asymmetry,
+        statics: Some(c.statics),
+    })
 }
 
 /// `v0/v_c` in the direction of motion, `None` when that `v_c` is 0.
@@ -105,10 +191,19 @@ pub struct MethodArgs {
     /// Steps per period for --method fixed
     #[arg(long, default_value_t = 10_000, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 1>)]
     pub steps_per_period: u32,
-    /// Error tolerance of --method auto, in units of μ0: the cheapest method whose guaranteed bound is within it answers (default: the exact solver's bound)
+    /// Error tolerance of --method auto, in units of μ0: the cheapest method whose guaranteed bound is within it answers (default: the exact solver's bound; 1e-9 for a curved --profile)
     #[arg(long, value_name = "TOL")]
     pub tol: Option<f64>,
+    /// The contact's shape (set from `--profile` by the command, not a flag
+    /// of its own): a curved profile goes to the MDR quadrature.
+    #[arg(skip = Profile::Flat)]
+    pub profile: Profile<f64>,
 }
+
+/// Default tolerance of the MDR quadrature for a curved profile, units of μ0
+/// (the target for a sphere), raised to twice the per-spring solvers'
+/// part of the bound where that is larger.
+pub const PROFILE_TOL: f64 = 1e-9;
 
 impl Default for MethodArgs {
     fn default() -> Self {
@@ -116,6 +211,7 @@ impl Default for MethodArgs {
             method: Method::Auto,
             steps_per_period: 10_000,
             tol: None,
+            profile: Profile::Flat,
         }
     }
 }
@@ -148,9 +244,10 @@ pub fn mu_at(scene: &Scene<f64>, v0: f64, m: &MethodArgs) -> CliResult<MuOutcome
     if !v0.is_finite() {
         return Err(CliError::usage("--v0: must be a finite number"));
     }
-    let vc = CriticalVelocity::of(scene);
+    let vc = critical_velocity(scene)?;
     let mu0 = scene.mu0();
     let d = scene.drive();
+    let lifts_off = scene.lifts_off();
     let mut out = MuOutcome {
         v0,
         v_rel: v_rel(&vc, v0),
@@ -166,15 +263,32 @@ pub fn mu_at(scene: &Scene<f64>, v0: f64, m: &MethodArgs) -> CliResult<MuOutcome
         periods: None,
         converged: None,
         last_mu_over_mu0: None,
+        lifts_off,
+        profile: m.profile.name(),
+        exponent: m.profile.exponent(),
     };
     let set = |out: &mut MuOutcome, m: f64, method: &'static str| {
         out.mu_over_mu0 = Some(m);
         out.mu = Some(m * mu0);
         out.method = method;
     };
+    if m.profile != Profile::Flat {
+        profile_at(scene, v0, m, &mut out)?;
+        return Ok(out);
+    }
+    if lifts_off && method != Method::Auto {
+        lift_off_at(scene, v0, m, &mut out)?;
+        return Ok(out);
+    }
     match method {
         Method::Auto => {
-            let tol = m.tol.unwrap_or_else(|| exact::error_bound::<f64, Libm>(&d));
+            let tol = m.tol.unwrap_or_else(|| {
+                if lifts_off {
+                    liftoff::error_bound::<f64, Libm>(&d)
+                } else {
+                    exact::error_bound::<f64, Libm>(&d)
+                }
+            });
             let a = select::mu_within::<f64, Libm>(scene, v0, tol).map_err(|e| match e {
                 SelectError::BadTolerance => CliError::usage("--tol: must be a finite number > 0"),
                 SelectError::ToleranceTooTight { best } => CliError::usage(format!(
@@ -302,6 +416,206 @@ pub fn mu_at(scene: &Scene<f64>, v0: f64, m: &MethodArgs) -> CliResult<MuOutcome
         },
     }
     Ok(out)
+}
+
+/// [`mu_at`] for a scene that lifts off, `--method exact|fixed|approx`:
+/// the lift-off solver, the lift-off stepping, or a refusal.
+fn lift_off_at(scene: &Scene<f64>, v0: f64, m: &MethodArgs, out: &mut MuOutcome) -> CliResult {
+    let d = scene.drive();
+    let v = scene
+        .dimensionless_velocity(v0)
+        .map_err(|e| CliError::usage(format!("--{e}")))?;
+    let set = |out: &mut MuOutcome, x: f64, method: &'static str, bound: f64| {
+        out.mu_over_mu0 = Some(x);
+        out.mu = Some(x * scene.mu0());
+        out.method = method;
+        out.error_bound_over_mu0 = Some(bound);
+    };
+    match m.method {
+        Method::Auto | Method::Exact => {
+            let (c, cb) =
+                liftoff::critical_velocities::<f64, Libm>(&d).map_err(lift_off_failure)?;
+            if v >= c || -v >= cb {
+                // Continuous sliding through the whole window: ±1 exactly.
+                set(out, if v >= c { 1.0 } else { -1.0 }, "exact", 0.0);
+            } else {
+                let x = liftoff::mu_over_mu0::<f64, Libm>(&d, v).map_err(lift_off_failure)?;
+                set(out, x, "exact", liftoff::error_bound::<f64, Libm>(&d));
+            }
+        }
+        Method::Fixed => {
+            let r = stepping::mu_over_mu0::<f64, Libm>(&d, v, m.steps_per_period)
+                .map_err(lift_off_failure)?;
+            set(out, r.mu_over_mu0, "fixed", r.error_bound);
+            out.steps_per_period = Some(m.steps_per_period);
+            // One contact window is the exact steady state (the state resets
+            // at every landing): one period, nothing to converge.
+            out.periods = Some(1);
+            out.converged = Some(true);
+        }
+        Method::Approx => {
+            return Err(CliError::usage(
+                "--method: approx (eqs. 21/24) assumes permanent contact; this scene lifts off (duz >= uz0): use auto, exact or fixed",
+            ))
+        }
+    }
+    Ok(())
+}
+
+/// The tolerance of the MDR quadrature when none is given: [`PROFILE_TOL`],
+/// or twice the per-spring solvers' part of its bound where that is larger.
+pub fn profile_tol(scene: &Scene<f64>, p: &Profile<f64>) -> f64 {
+    match p.exponent() {
+        Some(n) => PROFILE_TOL.max(2.0 * mdr::solver_bound::<f64, Libm>(&scene.drive(), n)),
+        None => PROFILE_TOL,
+    }
+}
+
+/// [`mu_at`] for a curved profile: the MDR quadrature (`--method auto` by
+/// `select::mu_within_profile`, `--method exact` the same quadrature); the
+/// fixed-step scheme and the approximations are for the flat punch.
+fn profile_at(scene: &Scene<f64>, v0: f64, m: &MethodArgs, out: &mut MuOutcome) -> CliResult {
+    let p = &m.profile;
+    let tol = match (m.method, m.tol) {
+        (Method::Auto, Some(t)) => t,
+        (Method::Auto | Method::Exact, _) => profile_tol(scene, p),
+        (Method::Fixed | Method::Approx, _) => {
+            return Err(CliError::usage(format!(
+                "--profile: --method {} is for the flat punch; a {} profile is computed by the MDR quadrature (--method auto or exact)",
+                if m.method == Method::Fixed { "fixed" } else { "approx" },
+                p.name()
+            )))
+        }
+    };
+    let a = select::mu_within_profile::<f64, Libm>(scene, p, v0, tol)
+        .map_err(|e| profile_failure(e, tol, p))?;
+    out.error_bound_over_mu0 = Some(a.bound);
+    out.method = a.method.name();
+    match a.value {
+        Value::Mu(x) => {
+            out.mu_over_mu0 = Some(x);
+            out.mu = Some(x * scene.mu0());
+        }
+        Value::AtRest {
+            mu_0plus,
+            mu_0minus,
+            ..
+        }
+        | Value::Limits {
+            mu_0plus,
+            mu_0minus,
+        } => {
+            out.mu_0plus_over_mu0 = Some(mu_0plus);
+            out.mu_0minus_over_mu0 = Some(mu_0minus);
+        }
+    }
+    Ok(())
+}
+
+/// The one-line message for a failure of `select::mu_within_profile`.
+pub fn profile_failure(e: SelectError<f64>, tol: f64, p: &Profile<f64>) -> CliError {
+    match e {
+        SelectError::BadTolerance => CliError::usage("--tol: must be a finite number > 0"),
+        SelectError::ToleranceTooTight { best } => CliError::usage(format!(
+            "--tol: {tol:e} is tighter than the {} profile's computation can guarantee for this scene (best {best:e})",
+            p.name()
+        )),
+        SelectError::Exact(e) => exact_failure(e),
+        SelectError::Mdr(e) => mdr_failure(e),
+    }
+}
+
+/// The one-line message for an MDR failure.
+pub fn mdr_failure(e: MdrError) -> CliError {
+    match e {
+        MdrError::BadExponent
+        | MdrError::BadVelocity
+        | MdrError::BadTolerance
+        | MdrError::ToleranceTooTight { .. }
+        | MdrError::AtRest => CliError::usage(format!("--{e}")),
+        MdrError::NotConverged { .. } | MdrError::IllConditioned => {
+            CliError::failure(format!("--{e}"))
+        }
+        MdrError::BadDrive | MdrError::Inconsistent => CliError::failure(e.to_string()),
+    }
+}
+
+/// Classifies a scene with a contact profile: [`classify_scene`] for the
+/// flat punch; for a curved profile the same definitions as
+/// `model_core::regime` from the MDR quadrature: μ(0±) (one μ(0) for
+/// `a ≥ 1`), critical velocities (the flat punch's, `mdr::critical_velocities`),
+/// asymmetry max |μ(v) + μ(−v)| over 64 velocities in (0, max v_c). The
+/// "zero" tolerance is the larger of 1e-9 and four times the quadrature's
+/// largest bound, so a quadrature error cannot flip a class.
+pub fn classify_scene_profile(s: &Scene<f64>, p: &Profile<f64>) -> CliResult<Classified> {
+    if *p == Profile::Flat {
+        return classify_scene(s);
+    }
+    let d = s.drive();
+    let tol = profile_tol(s, p);
+    let mut worst = 0.0f64;
+    let mut limits_bound = 0.0f64;
+    let mut mu = |v: f64| -> CliResult<f64> {
+        let r = mdr::mu_over_mu0::<f64, Libm>(&d, p, v, tol).map_err(mdr_failure)?;
+        worst = worst.max(r.bound);
+        Ok(r.mu_over_mu0)
+    };
+    let (c, cb) = mdr::critical_velocities::<f64, Libm>(&d, p).map_err(mdr_failure)?;
+    let (plus, minus) = if d.a >= 1.0 {
+        let m0 = mu(0.0)?;
+        (m0, m0)
+    } else {
+        let (pl, mi) = mdr::limits_at_zero::<f64, Libm>(&d, p, tol).map_err(mdr_failure)?;
+        limits_bound = pl.bound.max(mi.bound);
+        (pl.mu_over_mu0, mi.mu_over_mu0)
+    };
+    let mut asymmetry = (plus + minus).abs();
+    let vmax = c.max(cb);
+    let samples = ClassifyOptions::<f64>::default().samples.max(1);
+    if vmax > 0.0 {
+        for i in 1..=samples {
+            let v = vmax * f64::from(i) / f64::from(samples + 1);
+            let f = if v >= c { 1.0 } else { mu(v)? };
+            let b = if v >= cb { -1.0 } else { mu(-v)? };
+            asymmetry = asymmetry.max((f + b).abs());
+        }
+    }
+    let zero = ClassifyOptions::<f64>::default()
+        .tol
+        .max(4.0 * worst.max(limits_bound));
+    let regime = if plus < -zero || minus > zero {
+        Regime::Actuator
+    } else if asymmetry <= zero {
+        Regime::ActiveControl
+    } else {
+        Regime::DynamicRatchet
+    };
+    Ok(Classified {
+        regime,
+        mu_0plus: plus,
+        mu_0minus: minus,
+        c_forward: c,
+        c_backward: cb,
+        asymmetry,
+        statics: None,
+    })
+}
+
+/// The one-line message for a lift-off solver failure.
+pub fn lift_off_failure(e: LiftOffError) -> CliError {
+    match e {
+        LiftOffError::BadVelocity(s) => CliError::usage(format!("--{s}")),
+        LiftOffError::TooFewSteps { min_steps } => CliError::usage(format!(
+            "--steps-per-period: this lift-off drive needs at least {min_steps} (fewer: the stepping's bound 10(1 + a + b)/N^2 would exceed 10 % of mu0)"
+        )),
+        LiftOffError::PrecisionLimit { max_steps } => CliError::usage(format!(
+            "--steps-per-period: at most {max_steps} (beyond it rounding grows faster than the discretisation error shrinks)"
+        )),
+        LiftOffError::IllConditioned => CliError::failure(
+            "the lift-off solver cannot resolve this drive in f64 (dux-rel or duz-rel too large): its error bound would exceed 1 % of mu0",
+        ),
+        other => CliError::failure(format!("lift-off solver failed: {other}")),
+    }
 }
 
 /// The one-line message for an exact-solver failure.

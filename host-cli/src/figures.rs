@@ -1,5 +1,6 @@
-//! `fricctl figures`: the paper's Figs. 2–7 from the exact solver, and the
-//! regime map, as SVG and PNG.
+//! `fricctl figures`: the paper's Figs. 2–7 from the exact solver, the
+//! regime map, and the contacts the paper sets aside (issue 12: lift-off of
+//! the flat punch), as SVG and PNG.
 //!
 //! Every panel names its fixed parameters; the dimensionless groups are
 //! those of eqs. 25/26: `Δu_z/u_z0`, `k_xΔu_x/(μ0 k_z u_z0)` and the ratio
@@ -11,6 +12,7 @@ use std::path::Path;
 
 use model_core::analytic::approx::law;
 use model_core::exact;
+use model_core::model::liftoff;
 use model_core::regime::{classify, Classification, ClassifyOptions, Regime};
 use model_core::{Drive, Groups, Libm, Scene};
 
@@ -356,6 +358,195 @@ fn figs5_7(out: &Path) -> CliResult {
     Ok(())
 }
 
+/// μ/μ0 of a flat punch at dimensionless velocity `v` for any `a ≥ 0`: the
+/// permanent-contact exact solver below `a = 1`, the lift-off solver from it.
+fn mu_flat_any(a: f64, b: f64, phi: f64, v: f64) -> CliResult<f64> {
+    if a < 1.0 {
+        mu(&drive(a, b, phi)?, v)
+    } else {
+        let d = Drive::new::<Libm>(a, b, phi);
+        liftoff::mu_over_mu0::<f64, Libm>(&d, v).map_err(crate::eval::lift_off_failure)
+    }
+}
+
+/// Normal oscillation only: μ/μ0 against Δu_z/u_z0 from 0 to 3 at fixed
+/// velocities, through lift-off at Δu_z/u_z0 = 1.
+fn liftoff_normal(out: &Path) -> CliResult {
+    let xs = linspace(0.0, 3.0, 601);
+    let mut series = Vec::new();
+    for (i, v) in [0.1, 0.3, 0.6, 1.0, 1.5].into_iter().enumerate() {
+        let mut pts = Vec::with_capacity(xs.len());
+        for &a in &xs {
+            // a = 0, b = 0: no oscillation, plain Coulomb sliding.
+            let m = if a == 0.0 {
+                1.0
+            } else {
+                mu_flat_any(a, 0.0, 0.0, v)?
+            };
+            pts.push((a, m));
+        }
+        series.push(Series {
+            label: format!("v0 = {v} ωW0"),
+            points: pts,
+            mark: Mark::Line,
+            color: i,
+        });
+    }
+    series.push(Series {
+        label: "lift-off: Δu_z = u_z0".to_string(),
+        points: vec![(1.0, 0.0), (1.0, 1.05)],
+        mark: Mark::Dashed,
+        color: 6,
+    });
+    let panel = Panel {
+        title: "Normal oscillation only, across lift-off (flat punch)".to_string(),
+        x_label: "Δu_z / u_z0".to_string(),
+        y_label: MU_AXIS.to_string(),
+        x: (0.0, 3.0),
+        y: (0.0, 1.05),
+        series,
+    };
+    let extras = Extras {
+        notes: vec![
+            "Δu_x = 0 (φ has no effect)".to_string(),
+            "v0 in units of ωW0, W0 = μ0 k_z u_z0 / k_x".to_string(),
+            "Δu_z ≥ u_z0: μ = ⟨f_x⟩/⟨f_z⟩, ⟨f_z⟩ = k_z⟨u_z⁺⟩".to_string(),
+        ],
+        notes_at: Corner::UpperRight,
+        legend_at: Corner::LowerLeft,
+        ..Extras::default()
+    };
+    let caption = vec![
+        "Below Δu_z/u_z0 = 1: the exact solver (eq. 8: v_c = a ωW0, μ = μ0 above it);          from 1: the lift-off solver (model-core liftoff), continuous at 1."
+            .to_string(),
+    ];
+    save(out, "liftoff_normal", &one_panel(panel, extras, caption))
+}
+
+/// μ/μ0 against v0/(ωW0) for a contact profile by `select::mu_within_profile`
+/// (the exact or lift-off solver for the flat punch, the MDR quadrature for
+/// a curved one); both one-sided limits at v0 = 0 when they differ. Returns
+/// the points and the largest error bound.
+fn profile_curve(
+    s: &Scene<f64>,
+    p: &model_core::mdr::Profile<f64>,
+    vs: &[f64],
+) -> CliResult<(Vec<(f64, f64)>, f64)> {
+    use model_core::select::{mu_within_profile, Value};
+    // The largest of the three methods' own bounds: each answers within it.
+    let d = s.drive();
+    let tol = crate::eval::profile_tol(s, p)
+        .max(exact::error_bound::<f64, Libm>(&d))
+        .max(liftoff::error_bound::<f64, Libm>(&d));
+    let mut pts = Vec::with_capacity(vs.len() + 1);
+    let mut worst = 0.0f64;
+    for &v in vs {
+        let a = mu_within_profile::<f64, Libm>(s, p, v, tol).map_err(|e| {
+            crate::eval::profile_failure(e, tol, p)
+                .with_context(&format!("figure of the {} profile, v0 = {v} ωW0", p.name()))
+        })?;
+        worst = worst.max(a.bound);
+        match a.value {
+            Value::Mu(m) => pts.push((v, m)),
+            Value::AtRest {
+                mu_0plus,
+                mu_0minus,
+                ..
+            }
+            | Value::Limits {
+                mu_0plus,
+                mu_0minus,
+            } => {
+                pts.push((v, mu_0minus));
+                pts.push((v, mu_0plus));
+            }
+        }
+    }
+    Ok((pts, worst))
+}
+
+/// μ(v) of a flat punch, a sphere and a cone with the same dimensionless
+/// drive, without lift-off of the centre (a = 0.5) and with it (a = 1.5).
+fn profiles(out: &Path) -> CliResult {
+    use model_core::mdr::Profile;
+    let (b, phi) = (0.5, 0.0);
+    let mut panels = Vec::new();
+    let mut worst = 0.0f64;
+    for a in [0.5, 1.5] {
+        let s = Scene::dimensionless_with_contact(
+            Groups {
+                duz_rel: a,
+                dux_rel: b,
+                phi,
+            },
+            model_core::scene::ContactMode::Intermittent,
+        )
+        .map_err(|e| CliError::failure(format!("figure scene: {e}")))?;
+        let vmax = 1.25 * (a + b);
+        let vs = linspace(-vmax, vmax, 401);
+        let mut series = Vec::new();
+        for (i, (p, label)) in [
+            (Profile::Flat, "flat punch (single spring)"),
+            (Profile::Sphere, "sphere (MDR, n = 2)"),
+            (Profile::Cone, "cone (MDR, n = 1)"),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let (pts, w) = profile_curve(&s, &p, &vs)?;
+            worst = worst.max(w);
+            series.push(Series {
+                label: label.to_string(),
+                points: pts,
+                mark: Mark::Line,
+                color: i,
+            });
+        }
+        let panel = Panel {
+            title: format!(
+                "Δu_z/u_z0 = {a}{}",
+                if a >= 1.0 {
+                    ": the centre lifts off too"
+                } else {
+                    ": only the rim lifts off"
+                }
+            ),
+            x_label: "v0 / (ωW0),  W0 = μ0 (E*/G*) d0  (flat: μ0 k_z u_z0 / k_x)".to_string(),
+            y_label: MU_AXIS.to_string(),
+            x: (-vmax, vmax),
+            y: (-1.1, 1.1),
+            series,
+        };
+        let extras = Extras {
+            notes: vec![
+                format!("Δu_z/u_z0 = {a}, {B_NAME} = {b}"),
+                "φ = 0°".to_string(),
+            ],
+            notes_at: Corner::LowerRight,
+            legend_at: Corner::UpperLeft,
+            ..Extras::default()
+        };
+        panels.push((panel, extras));
+    }
+    let f = Figure {
+        panels,
+        rows: 1,
+        cols: 2,
+        size: (1800, 700),
+        legend: Vec::new(),
+        caption: vec![
+            "Curved profiles through MDR (model-core mdr): u_z0 read as the mean indentation d0, \
+             k_z/k_x as E*/G*; μ = ΣF_x/ΣF_z over the springs."
+                .to_string(),
+            format!(
+                "Same a, b, φ for all three; the critical velocities are the flat punch's. \
+                 Largest error bound on the figure: {worst:.1e} μ0 (select::mu_within_profile)."
+            ),
+        ],
+    };
+    save(out, "profiles", &f)
+}
+
 /// `fricctl figures --out DIR`.
 pub fn run(out: &Path, map_res: usize) -> CliResult {
     if !(2..=2000).contains(&map_res) {
@@ -379,13 +570,24 @@ pub fn run(out: &Path, map_res: usize) -> CliResult {
     )?;
     fig4(out)?;
     figs5_7(out)?;
+    liftoff_normal(out)?;
+    profiles(out)?;
     // The regime map at Δu_z/u_z0 = 0.5.
     let ratios = centres(0.0, 3.0, map_res);
     let phis = centres(0.0, 360.0, map_res);
-    let (cs, class) = cells(0.5, &ratios, &phis, true)?;
+    let (cs, class) = cells(0.5, &ratios, &phis, &model_core::mdr::Profile::Flat, true)?;
     for ext in ["svg", "png"] {
         let p = out.join(format!("regime_map.{ext}"));
-        write_map(0.5, &ratios, &phis, &cs, class.clone(), &p, None)?;
+        write_map(
+            0.5,
+            &model_core::mdr::Profile::Flat,
+            &ratios,
+            &phis,
+            &cs,
+            class.clone(),
+            &p,
+            None,
+        )?;
     }
     Ok(())
 }

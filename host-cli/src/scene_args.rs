@@ -4,7 +4,9 @@
 use std::f64::consts::TAU;
 use std::path::PathBuf;
 
-use clap::Args;
+use clap::{Args, ValueEnum};
+use model_core::mdr::Profile;
+use model_core::scene::ContactMode;
 use model_core::{Groups, Scene, SceneParams};
 use serde::Deserialize;
 
@@ -13,7 +15,7 @@ use crate::error::{CliError, CliResult};
 /// Scene flags (see `fricctl --help`).
 #[derive(Args, Debug, Clone, Default)]
 pub struct SceneArgs {
-    /// Scene file (TOML) with keys mu0, kz, kx, uz0, duz, dux, freq (or omega), phi_deg (or phi_rad); flags override it
+    /// Scene file (TOML) with keys mu0, kz, kx, uz0, duz, dux, freq (or omega), phi_deg (or phi_rad), and optionally profile ("flat", "sphere", "cone", "power") and exponent; flags override it
     #[arg(long, value_name = "FILE", help_heading = "Scene")]
     pub scene: Option<PathBuf>,
     /// Local coefficient of friction μ0 (> 0)
@@ -28,7 +30,7 @@ pub struct SceneArgs {
     /// Mean indentation u_z0, m
     #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
     pub uz0: Option<f64>,
-    /// Normal oscillation amplitude Δu_z, m (< uz0)
+    /// Normal oscillation amplitude Δu_z, m (≥ uz0: the contact lifts off once per period, where the command supports it)
     #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
     pub duz: Option<f64>,
     /// Tangential oscillation amplitude Δu_x, m
@@ -46,7 +48,7 @@ pub struct SceneArgs {
     /// Phase φ, radians (instead of --phi-deg)
     #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
     pub phi_rad: Option<f64>,
-    /// Dimensionless: Δu_z/u_z0 (eq. 25); with the groups, μ0 = k_z = k_x = u_z0 = ω = 1 and --v0 is in units of ωW0 = ωμ0k_z u_z0/k_x
+    /// Dimensionless: Δu_z/u_z0 (eq. 25; ≥ 1: lift-off); with the groups, μ0 = k_z = k_x = u_z0 = ω = 1 and --v0 is in units of ωW0 = ωμ0k_z u_z0/k_x
     #[arg(
         long,
         allow_hyphen_values = true,
@@ -67,6 +69,105 @@ pub struct SceneArgs {
         help_heading = "Scene (dimensionless, eq. 25/26)"
     )]
     pub ratio: Option<f64>,
+    #[command(flatten)]
+    pub contact: ProfileArgs,
+}
+
+/// The contact's shape (`--profile`, `--exponent`).
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ProfileKind {
+    /// Flat-ended punch: the paper's single spring
+    Flat,
+    /// Sphere (paraboloid, n = 2), through MDR
+    Sphere,
+    /// Cone (n = 1), through MDR
+    Cone,
+    /// Power law f = c·rⁿ with --exponent n, through MDR
+    Power,
+}
+
+/// `--profile` and `--exponent` (shared by the scene flags and `fricctl map`).
+#[derive(Args, Debug, Clone, Copy, Default)]
+pub struct ProfileArgs {
+    /// Contact profile (default flat). A curved profile is computed by the method of dimensionality reduction: uz0 is read as the mean indentation d0 and kz/kx as E*/G*
+    #[arg(long, value_enum, help_heading = "Contact")]
+    pub profile: Option<ProfileKind>,
+    /// Exponent n of --profile power (f = c·rⁿ, n > 0; refused with the other profiles)
+    #[arg(long, allow_hyphen_values = true, help_heading = "Contact")]
+    pub exponent: Option<f64>,
+}
+
+impl ProfileArgs {
+    /// The profile from the flags, falling back on a scene file's `profile`
+    /// and `exponent` keys (flags win).
+    pub fn resolve_with_file(
+        &self,
+        file_profile: Option<&str>,
+        file_exponent: Option<f64>,
+    ) -> CliResult<Profile<f64>> {
+        let from_file = match file_profile {
+            Some(name) => Some(ProfileKind::from_str(name, true).map_err(|_| {
+                CliError::usage(format!(
+                    "--scene: profile = \"{name}\" is not one of flat, sphere, cone, power"
+                ))
+            })?),
+            None => None,
+        };
+        let kind = self.profile.or(from_file).unwrap_or(ProfileKind::Flat);
+        // A flag exponent applies to the flag profile; the file's to the file's.
+        let exponent = if self.profile.is_some() {
+            self.exponent
+        } else {
+            self.exponent.or(file_exponent)
+        };
+        match (kind, exponent) {
+            (ProfileKind::Power, None) => Err(CliError::usage(
+                "--exponent: missing (--profile power needs --exponent n > 0)",
+            )),
+            (ProfileKind::Power, Some(n)) => {
+                if !(n.is_finite() && n > 0.0) {
+                    return Err(CliError::usage("--exponent: must be a finite number > 0"));
+                }
+                Ok(Profile::Power(n))
+            }
+            (k, Some(_)) => Err(CliError::usage(format!(
+                "--exponent: only with --profile power (the {} profile has {})",
+                k.name(),
+                match k {
+                    ProfileKind::Sphere => "n = 2",
+                    ProfileKind::Cone => "n = 1",
+                    _ => "no exponent",
+                }
+            ))),
+            (ProfileKind::Flat, None) => Ok(Profile::Flat),
+            (ProfileKind::Sphere, None) => Ok(Profile::Sphere),
+            (ProfileKind::Cone, None) => Ok(Profile::Cone),
+        }
+    }
+
+    /// The profile from the flags alone.
+    pub fn resolve(&self) -> CliResult<Profile<f64>> {
+        self.resolve_with_file(None, None)
+    }
+}
+
+impl ProfileKind {
+    fn name(self) -> &'static str {
+        match self {
+            ProfileKind::Flat => "flat",
+            ProfileKind::Sphere => "sphere",
+            ProfileKind::Cone => "cone",
+            ProfileKind::Power => "power",
+        }
+    }
+}
+
+/// What a profile prints: `flat`, `sphere (n = 2)`, `power (n = 3.5)`.
+pub fn profile_text(p: &Profile<f64>) -> String {
+    match p.exponent() {
+        None => p.name().to_string(),
+        Some(n) => format!("{} (n = {n})", p.name()),
+    }
 }
 
 /// The scene file's keys.
@@ -83,6 +184,8 @@ struct SceneFile {
     omega: Option<f64>,
     phi_deg: Option<f64>,
     phi_rad: Option<f64>,
+    profile: Option<String>,
+    exponent: Option<f64>,
 }
 
 /// A validated scene and how it was given.
@@ -93,6 +196,10 @@ pub struct ResolvedScene {
     /// Given by dimensionless groups: velocities are in units of ωW0 and must be
     /// given relative to v_c.
     pub dimensionless: bool,
+    /// The contact's shape (`--profile`; flat unless asked). With a curved
+    /// profile the scene's u_z0 is the mean indentation d0 and k_z/k_x is E*/G*
+    /// (`model_core::mdr`); `select::mu_within_profile` computes μ for it.
+    pub profile: Profile<f64>,
 }
 
 fn scene_err(e: model_core::SceneError) -> CliError {
@@ -100,11 +207,28 @@ fn scene_err(e: model_core::SceneError) -> CliError {
 }
 
 impl SceneArgs {
-    /// Validates and builds the scene.
+    /// Validates and builds a permanent-contact flat-punch scene
+    /// (`Δu_z < u_z0`, the paper's assumption): for commands whose analysis
+    /// needs it. A curved `--profile` is refused (one line naming it) rather
+    /// than ignored; commands that handle profiles call [`SceneArgs::resolve_with`].
     pub fn resolve(&self) -> CliResult<ResolvedScene> {
+        let rs = self.resolve_with(ContactMode::Permanent)?;
+        if rs.profile != Profile::Flat {
+            return Err(CliError::usage(format!(
+                "--profile: this command computes the flat punch only (got {})",
+                rs.profile.name()
+            )));
+        }
+        Ok(rs)
+    }
+
+    /// Validates and builds the scene; [`ContactMode::Intermittent`] accepts
+    /// `Δu_z ≥ u_z0` (the contact lifts off once per period,
+    /// `model_core::model::liftoff`).
+    pub fn resolve_with(&self, contact: ContactMode) -> CliResult<ResolvedScene> {
         let dimless = self.duz_rel.is_some() || self.dux_rel.is_some() || self.ratio.is_some();
         if dimless {
-            return self.resolve_dimensionless();
+            return self.resolve_dimensionless(contact);
         }
         let file = match &self.scene {
             Some(p) => {
@@ -155,20 +279,27 @@ impl SceneArgs {
             }
         };
         let phi = self.phi(file.phi_deg, file.phi_rad)?;
-        let scene = Scene::new(SceneParams {
-            mu0,
-            kz,
-            kx,
-            uz0,
-            duz,
-            dux,
-            omega,
-            phi,
-        })
+        let scene = Scene::new_with_contact(
+            SceneParams {
+                mu0,
+                kz,
+                kx,
+                uz0,
+                duz,
+                dux,
+                omega,
+                phi,
+            },
+            contact,
+        )
         .map_err(scene_err)?;
+        let profile = self
+            .contact
+            .resolve_with_file(file.profile.as_deref(), file.exponent)?;
         Ok(ResolvedScene {
             scene,
             dimensionless: false,
+            profile,
         })
     }
 
@@ -193,7 +324,7 @@ impl SceneArgs {
         Ok(phi)
     }
 
-    fn resolve_dimensionless(&self) -> CliResult<ResolvedScene> {
+    fn resolve_dimensionless(&self, contact: ContactMode) -> CliResult<ResolvedScene> {
         let physical = [
             (self.scene.is_some(), "scene"),
             (self.mu0.is_some(), "mu0"),
@@ -225,19 +356,40 @@ impl SceneArgs {
                 dux_rel: b,
                 phi,
             },
-            (None, Some(r)) => Groups::from_ratio(a, r, phi).map_err(scene_err)?,
+            (None, Some(r)) => ratio_groups(a, r, phi, contact)?,
             (None, None) => {
                 return Err(CliError::usage(
                     "--dux-rel: missing (give --dux-rel or --ratio)",
                 ))
             }
         };
-        let scene = Scene::dimensionless(groups).map_err(scene_err)?;
+        let scene = Scene::dimensionless_with_contact(groups, contact).map_err(scene_err)?;
         Ok(ResolvedScene {
             scene,
             dimensionless: true,
+            profile: self.contact.resolve()?,
         })
     }
+}
+
+/// The groups of eq. 26 (`b = ratio·a`) for a contact mode: `Groups::from_ratio`
+/// checks them for permanent contact, so with lift-off the product is formed
+/// here and checked by the scene.
+fn ratio_groups(a: f64, r: f64, phi: f64, contact: ContactMode) -> CliResult<Groups<f64>> {
+    if contact == ContactMode::Permanent || a < 1.0 {
+        return Groups::from_ratio(a, r, phi).map_err(scene_err);
+    }
+    if !r.is_finite() {
+        return Err(CliError::usage("--ratio: must be a finite number"));
+    }
+    if r < 0.0 {
+        return Err(CliError::usage("--ratio: must be >= 0"));
+    }
+    Ok(Groups {
+        duz_rel: a,
+        dux_rel: r * a,
+        phi,
+    })
 }
 
 fn finite(x: f64, name: &str) -> CliResult<f64> {

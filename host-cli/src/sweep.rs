@@ -3,14 +3,16 @@
 //! which method answered where.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use model_core::analytic::CriticalVelocity;
-use model_core::regime::{classify, ClassifyOptions, Regime};
+use model_core::regime::Regime;
+use model_core::scene::ContactMode;
 use model_core::{Groups, Scene};
 use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::error::{CliError, CliResult};
-use crate::eval::{exact_failure, from_rel, mu_at, v_rel, MethodArgs};
+use model_core::mdr::Profile;
+
+use crate::eval::{classify_scene_profile, critical_velocity, from_rel, mu_at, v_rel, MethodArgs};
 
 /// The `i`-th of `n` evenly spaced values from `a` to `b` inclusive (the last
 /// is `b` exactly).
@@ -54,7 +56,7 @@ pub struct Row {
 /// Rows of μ(v) for the velocities (two rows, μ(0⁻) then μ(0⁺), at v0 = 0),
 /// computed in parallel.
 pub fn curve_rows(scene: &Scene<f64>, vs: &[f64], how: &MethodArgs) -> CliResult<Vec<Row>> {
-    let vc = CriticalVelocity::of(scene);
+    let vc = critical_velocity(scene)?;
     let mu0 = scene.mu0();
     let rows: Vec<CliResult<Vec<Row>>> = vs
         .par_iter()
@@ -132,14 +134,17 @@ pub fn mix_text(mix: &[(&'static str, usize)], sep: &str) -> String {
     MethodMix(mix.to_vec()).text(sep)
 }
 
-/// The dimensionless scene of a map cell: `Δu_z/u_z0 = a`, amplitude ratio
-/// `r` (eq. 26), phase in degrees.
+/// The dimensionless scene of a map cell: `Δu_z/u_z0 = a` (`a ≥ 1`: the
+/// contact lifts off), amplitude ratio `r` (eq. 26), phase in degrees.
 pub fn cell_scene(a: f64, r: f64, phi_deg: f64) -> CliResult<Scene<f64>> {
-    Scene::dimensionless(Groups {
-        duz_rel: a,
-        dux_rel: r * a,
-        phi: phi_deg.to_radians(),
-    })
+    Scene::dimensionless_with_contact(
+        Groups {
+            duz_rel: a,
+            dux_rel: r * a,
+            phi: phi_deg.to_radians(),
+        },
+        ContactMode::Intermittent,
+    )
     .map_err(|e| CliError::usage(format!("--{e}")))
 }
 
@@ -175,7 +180,7 @@ pub fn mu_cells(
         .map(|i| {
             let (r, phi) = (ratios[i / phis_deg.len()], phis_deg[i % phis_deg.len()]);
             let s = cell_scene(a, r, phi)?;
-            let vc = CriticalVelocity::of(&s);
+            let vc = critical_velocity(&s)?;
             let v = from_rel(&vc, x, "v-rel")?;
             let o =
                 mu_at(&s, v, how).map_err(|e| e.with_context(&format!("ratio {r}, φ {phi}°")))?;
@@ -214,6 +219,7 @@ pub fn cells(
     a: f64,
     ratios: &[f64],
     phis_deg: &[f64],
+    profile: &Profile<f64>,
     progress: bool,
 ) -> CliResult<(Vec<Cell>, Vec<u8>)> {
     let n = ratios.len() * phis_deg.len();
@@ -227,8 +233,8 @@ pub fn cells(
         .map(|i| {
             let (r, phi) = (ratios[i / phis_deg.len()], phis_deg[i % phis_deg.len()]);
             let s = cell_scene(a, r, phi)?;
-            let c = classify(&s, &ClassifyOptions::default())
-                .map_err(|e| exact_failure(e).with_context(&format!("ratio {r}, φ {phi}°")))?;
+            let c = classify_scene_profile(&s, profile)
+                .map_err(|e| e.with_context(&format!("ratio {r}, φ {phi}°")))?;
             pb.inc(1);
             let k = match c.regime {
                 Regime::ActiveControl => 0,

@@ -95,6 +95,7 @@ fn configs(a: &MethodsArgs) -> Vec<(String, MethodArgs, bool)> {
         method,
         steps_per_period: a.steps_per_period,
         tol,
+        ..MethodArgs::default()
     };
     vec![
         (

@@ -12,7 +12,9 @@
 //! The planes: fixed-step (f64, f32) over velocity `v0/v_c → 0` × steps per
 //! period; the exact solver over `Δu_z/u_z0 → 1` × `v0 → v_c`, over the
 //! tangential amplitude `b` (huge and tiny) × `v0 → 0`, and over extreme SI
-//! magnitudes (`u_z0` × `k_z` at `k_x` = 1 GPa/m).
+//! magnitudes (`u_z0` × `k_z` at `k_x` = 1 GPa/m); and `select::mu_within`
+//! (auto) across lift-off, `Δu_z/u_z0` from 0.5 to 2 × `v0/v_c` (the
+//! permanent-contact solver below 1, the lift-off solver from 1).
 
 use std::fmt::Write as _;
 
@@ -20,6 +22,9 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use model_core::exact::{self, ExactError};
 use model_core::fixed_step::{self, FixedStepConfig, FixedStepError, Start};
+use model_core::model::liftoff::{self, stepping};
+use model_core::scene::ContactMode;
+use model_core::select::{self, SelectError, Value};
 use model_core::{Drive, Float, Groups, Libm, Scene, SceneError, SceneParams};
 use plotters::style::RGBColor;
 use rayon::prelude::*;
@@ -279,6 +284,117 @@ pub fn lift_off_cell<T: Float>(x: f64, y: f64, budget: u64) -> Outcome {
     exact_cell::<T>(&d64, v, budget)
 }
 
+/// Cell of the plane across lift-off: x = Δu_z/u_z0 (0.5 … 2), y = v0/v_c of
+/// the direction of motion (eq. 8 below a = 1, the contact window's eq. L5
+/// from 1), b = 0.6, φ = 1; `select::mu_within` in `T` at the bound of the
+/// solver it uses. f32 is judged against f64; f64 against the fixed-step
+/// scheme (below 1: N, 2N from a warm start as [`fixed_reference`]; from 1:
+/// the lift-off stepping from the exact landing at N = 2¹⁵ with its stated
+/// order-2 bound), code shared with neither solver.
+pub fn across_lift_off_cell<T: Float>(x: f64, y: f64, budget: u64) -> Outcome {
+    let (a, b, phi) = (x, 0.6, 1.0);
+    let d64 = Drive::new::<Libm>(a, b, phi);
+    let (cf, cb) = if a < 1.0 {
+        (d64.c_forward::<Libm>(), d64.c_backward::<Libm>())
+    } else {
+        match liftoff::critical_velocities::<f64, Libm>(&d64) {
+            Ok(c) => c,
+            Err(_) => return Outcome::NoReference,
+        }
+    };
+    let v = if y >= 0.0 { y * cf } else { y * cb };
+    let s = match Scene::dimensionless_with_contact(
+        Groups {
+            duz_rel: T::from_f64(a),
+            dux_rel: T::from_f64(b),
+            phi: T::from_f64(phi),
+        },
+        ContactMode::Intermittent,
+    ) {
+        Ok(s) => s,
+        Err(e) => return Outcome::Failure(scene_failure(&e)),
+    };
+    let d = s.drive();
+    let tol = if s.lifts_off() {
+        liftoff::error_bound::<T, Libm>(&d)
+    } else {
+        exact::error_bound::<T, Libm>(&d)
+    };
+    let (got, bound) = match select::mu_within::<T, Libm>(&s, T::from_f64(v), tol) {
+        Ok(select::Answer {
+            value: Value::Mu(m),
+            bound,
+            ..
+        }) => (m.to_f64(), bound.to_f64()),
+        Ok(_) => return Outcome::NoReference,
+        Err(SelectError::Exact(e)) => return Outcome::Failure(exact_failure(&e)),
+        Err(SelectError::ToleranceTooTight { .. }) => return Outcome::Failure("ill-conditioned"),
+        Err(_) => return Outcome::Failure("refused input"),
+    };
+    if T::EPSILON.to_f64() > 1e-10 {
+        // f32 against the f64 answer and its bound.
+        let tol64 = if a >= 1.0 {
+            liftoff::error_bound::<f64, Libm>(&d64)
+        } else {
+            exact::error_bound::<f64, Libm>(&d64)
+        };
+        let Ok(s64) = Scene::dimensionless_with_contact(
+            Groups {
+                duz_rel: a,
+                dux_rel: b,
+                phi,
+            },
+            ContactMode::Intermittent,
+        ) else {
+            return Outcome::NoReference;
+        };
+        return match select::mu_within::<f64, Libm>(&s64, v, tol64) {
+            Ok(select::Answer {
+                value: Value::Mu(r),
+                bound: rb,
+                ..
+            }) => Outcome::Value {
+                error: (got - r).abs(),
+                allowed: bound + rb,
+            },
+            _ => Outcome::NoReference,
+        };
+    }
+    if a >= 1.0 {
+        return match stepping::mu_over_mu0::<f64, Libm>(&d64, v, 1 << 15) {
+            Ok(r) => Outcome::Value {
+                error: (got - r.mu_over_mu0).abs(),
+                allowed: bound + r.error_bound,
+            },
+            Err(_) => Outcome::NoReference,
+        };
+    }
+    if got.abs() == 1.0 {
+        // Continuous sliding beyond v_c: exact (bound 0); the fixed-step
+        // reference from rest would only slide too.
+        return Outcome::Value {
+            error: 0.0,
+            allowed: 0.0,
+        };
+    }
+    match fixed_reference(&d64, v, budget) {
+        Some((rich, m2, b2)) => {
+            if (got - m2).abs() > bound + b2 {
+                Outcome::Value {
+                    error: (got - m2).abs(),
+                    allowed: bound + b2,
+                }
+            } else {
+                Outcome::Value {
+                    error: (got - rich).abs(),
+                    allowed: f64::INFINITY,
+                }
+            }
+        }
+        None => Outcome::NoReference,
+    }
+}
+
 /// Cell of the ratio plane: x = log10 b, y = log10(v0/v_c), a = 0.5, φ = 1.
 pub fn ratio_cell<T: Float>(x: f64, y: f64, budget: u64) -> Outcome {
     let d64 = Drive::new::<Libm>(A, 10f64.powf(x), 1.0);
@@ -454,6 +570,36 @@ pub fn run(a: &StabilityArgs) -> CliResult {
             ..lift("f32, against f64")
         },
         |x, y| lift_off_cell::<f32>(x, y, budget),
+    )?
+    .1;
+    let across = |t: &str| Plane {
+        name: "",
+        title: format!(
+            "Auto (select::mu_within, {t}) across lift-off: b = 0.6, φ = 1 rad (57.3°)"
+        ),
+        x_label: "Δu_z/u_z0 (≥ 1: the contact lifts off)",
+        y_label: "v0/v_c (v_c of the direction; the contact window's from 1)",
+        x: (0.5, 2.0),
+        y: (-1.1, 1.1),
+        log_x: false,
+        log_y: false,
+    };
+    silent += map(
+        a,
+        &Plane {
+            name: "across_lift_off_f64",
+            ..across("f64, against fixed-step")
+        },
+        |x, y| across_lift_off_cell::<f64>(x, y, budget),
+    )?
+    .1;
+    silent += map(
+        a,
+        &Plane {
+            name: "across_lift_off_f32",
+            ..across("f32, against f64")
+        },
+        |x, y| across_lift_off_cell::<f32>(x, y, budget),
     )?
     .1;
     let ratio = |t: &str| Plane {

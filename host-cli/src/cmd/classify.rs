@@ -4,14 +4,16 @@
 use std::io::Write;
 
 use clap::Args;
-use model_core::analytic::CriticalVelocity;
-use model_core::regime::{self, rule_of_thumb, ClassifyOptions};
+use model_core::regime::rule_of_thumb;
+use model_core::scene::ContactMode;
 use serde::Serialize;
 
 use crate::error::CliResult;
-use crate::eval::exact_failure;
+use crate::eval::{classify_scene_profile, critical_velocity};
 use crate::output::{stdout_error, write_json};
+use crate::scene_args::profile_text;
 use crate::scene_args::SceneArgs;
+use model_core::mdr::Profile;
 
 /// Flags of `fricctl classify`.
 #[derive(Args, Debug, Clone)]
@@ -29,9 +31,12 @@ struct ClassifyOut {
     regime: &'static str,
     mu_0plus_over_mu0: f64,
     mu_0minus_over_mu0: f64,
-    static_exists: bool,
-    static_lo_over_w0: f64,
-    static_hi_over_w0: f64,
+    /// Whether a static equilibrium exists (false with lift-off; null for a
+    /// curved profile: no static analysis there).
+    static_exists: Option<bool>,
+    /// The static interval's ends over W0 (null with lift-off: no static interval).
+    static_lo_over_w0: Option<f64>,
+    static_hi_over_w0: Option<f64>,
     vc_forward: f64,
     vc_backward: f64,
     vc_forward_over_omega_w0: f64,
@@ -41,26 +46,38 @@ struct ClassifyOut {
     dux_rel: f64,
     ratio: Option<f64>,
     phi_deg: f64,
-    rule_of_thumb: &'static str,
-    rule_of_thumb_agrees: bool,
+    /// The paper's rule (permanent contact only; null with lift-off).
+    rule_of_thumb: Option<&'static str>,
+    rule_of_thumb_agrees: Option<bool>,
+    /// The contact lifts off once per period: μ(0±) are the unique μ(0),
+    /// v_c are the contact window's (eq. L5), classes by `liftoff::regime`.
+    lifts_off: bool,
+    /// The contact profile (`flat`, `sphere`, `cone`, `power`) and its exponent (null for flat).
+    profile: &'static str,
+    exponent: Option<f64>,
 }
 
 impl ClassifyCmd {
     /// Runs the command.
     pub fn run(self, out: &mut impl Write) -> CliResult {
-        let rs = self.scene.resolve()?;
+        let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         let s = &rs.scene;
-        let c = regime::classify(s, &ClassifyOptions::default()).map_err(exact_failure)?;
-        let vc = CriticalVelocity::of(s);
+        let c = classify_scene_profile(s, &rs.profile)?;
+        let vc = critical_velocity(s)?;
         let g = s.groups();
-        let rot = rule_of_thumb(s);
+        let flat = rs.profile == Profile::Flat;
+        let rot = (!s.lifts_off() && flat).then(|| rule_of_thumb(s));
         let o = ClassifyOut {
             regime: c.regime.name(),
             mu_0plus_over_mu0: c.mu_0plus,
             mu_0minus_over_mu0: c.mu_0minus,
-            static_exists: c.statics.exists(),
-            static_lo_over_w0: c.statics.lo,
-            static_hi_over_w0: c.statics.hi,
+            static_exists: match (c.statics, flat) {
+                (Some(st), _) => Some(st.exists()),
+                (None, true) => Some(false),
+                (None, false) => None,
+            },
+            static_lo_over_w0: c.statics.map(|x| x.lo),
+            static_hi_over_w0: c.statics.map(|x| x.hi),
             vc_forward: vc.forward,
             vc_backward: vc.backward,
             vc_forward_over_omega_w0: c.c_forward,
@@ -70,35 +87,70 @@ impl ClassifyCmd {
             dux_rel: g.dux_rel,
             ratio: s.ratio(),
             phi_deg: g.phi.to_degrees(),
-            rule_of_thumb: rot.name(),
-            rule_of_thumb_agrees: rot == c.regime,
+            rule_of_thumb: rot.map(|r| r.name()),
+            rule_of_thumb_agrees: rot.map(|r| r == c.regime),
+            lifts_off: s.lifts_off(),
+            profile: rs.profile.name(),
+            exponent: rs.profile.exponent(),
         };
         if self.json {
             return write_json(out, &o);
         }
-        write_text(out, &o).map_err(stdout_error)
+        write_text(out, &o, &rs.profile).map_err(stdout_error)
     }
 }
 
-fn write_text(out: &mut impl Write, o: &ClassifyOut) -> std::io::Result<()> {
+fn write_text(out: &mut impl Write, o: &ClassifyOut, p: &Profile<f64>) -> std::io::Result<()> {
     writeln!(out, "regime                 {}", o.regime)?;
-    writeln!(out, "mu(0+)/mu0             {}", o.mu_0plus_over_mu0)?;
-    writeln!(out, "mu(0-)/mu0             {}", o.mu_0minus_over_mu0)?;
-    writeln!(out, "static equilibrium     {}", o.static_exists)?;
+    if *p != Profile::Flat {
+        writeln!(
+            out,
+            "profile                {} (MDR quadrature; no static analysis for a curved profile)",
+            profile_text(p)
+        )?;
+    }
+    if o.lifts_off {
+        writeln!(
+            out,
+            "contact                lifts off once per period (duz/uz0 = {} >= 1)",
+            o.duz_rel
+        )?;
+        writeln!(
+            out,
+            "mu(0)/mu0              {} (unique at rest: the state resets at every landing)",
+            o.mu_0plus_over_mu0
+        )?;
+        writeln!(
+            out,
+            "static equilibrium     none (no static interval with lift-off)"
+        )?;
+    } else {
+        writeln!(out, "mu(0+)/mu0             {}", o.mu_0plus_over_mu0)?;
+        writeln!(out, "mu(0-)/mu0             {}", o.mu_0minus_over_mu0)?;
+        match o.static_exists {
+            Some(x) => writeln!(out, "static equilibrium     {x}")?,
+            None => writeln!(out, "static equilibrium     n/a (curved profile)")?,
+        }
+    }
     writeln!(out, "asymmetry max|mu(v)+mu(-v)|/mu0  {}", o.asymmetry)?;
     writeln!(
         out,
         "v_c forward/backward   {} / {}",
         o.vc_forward, o.vc_backward
     )?;
-    writeln!(
-        out,
-        "paper's rule of thumb  {} ({})",
-        o.rule_of_thumb,
-        if o.rule_of_thumb_agrees {
-            "agrees"
-        } else {
-            "disagrees"
-        }
-    )
+    match (o.rule_of_thumb, o.rule_of_thumb_agrees) {
+        (Some(r), Some(agrees)) => writeln!(
+            out,
+            "paper's rule of thumb  {r} ({})",
+            if agrees { "agrees" } else { "disagrees" }
+        ),
+        _ if o.lifts_off => writeln!(
+            out,
+            "paper's rule of thumb  n/a (derived for permanent contact); v_c of the contact window (eq. L5)"
+        ),
+        _ => writeln!(
+            out,
+            "paper's rule of thumb  n/a (derived for the flat punch)"
+        ),
+    }
 }

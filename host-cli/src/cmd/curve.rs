@@ -6,11 +6,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use clap::Args;
-use model_core::analytic::CriticalVelocity;
+use model_core::scene::ContactMode;
 
 use crate::args::count;
 use crate::error::{CliError, CliResult};
-use crate::eval::{from_rel, MethodArgs};
+use crate::eval::{critical_velocity, from_rel, MethodArgs};
 use crate::output::{csv_bytes, stdout_error, AtomicFile};
 use crate::plot::{render_panels, Mark, Panel, Series};
 use crate::sweep::{curve_rows, linspace_at, progress_bar, MethodMix};
@@ -76,8 +76,9 @@ impl CurveCmd {
     /// Runs the command: computes the rows chunk by chunk in parallel and
     /// writes each chunk's whole rows before computing the next, so memory
     /// stays bounded by a chunk whatever `--points` is.
-    pub fn run(self, out: &mut impl Write) -> CliResult {
-        let rs = self.scene.resolve()?;
+    pub fn run(mut self, out: &mut impl Write) -> CliResult {
+        let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
+        self.how.profile = rs.profile;
         let n = self.points;
         if n > MAX_POINTS {
             return Err(CliError::usage(format!(
@@ -87,7 +88,7 @@ impl CurveCmd {
         if let Some(p) = &self.plot {
             crate::plot::ext(p)?;
         }
-        let vc = CriticalVelocity::of(&rs.scene);
+        let vc = critical_velocity(&rs.scene)?;
         let axis = match (
             self.v_min.zip(self.v_max),
             self.v_rel_min.zip(self.v_rel_max),
@@ -204,10 +205,16 @@ impl CurveCmd {
             let g = rs.scene.groups();
             let panel = Panel {
                 title: format!(
-                    "μ(v): Δu_z/u_z0 = {:.3}, k_xΔu_x/(μ0k_z u_z0) = {:.3}, φ = {:.1}°",
+                    "μ(v), {}: Δu_z/u_z0 = {:.3}, k_xΔu_x/(μ0k_z u_z0) = {:.3}, φ = {:.1}°{}",
+                    crate::scene_args::profile_text(&rs.profile),
                     g.duz_rel,
                     g.dux_rel,
-                    g.phi.to_degrees()
+                    g.phi.to_degrees(),
+                    if rs.scene.lifts_off() {
+                        " (lifts off: μ = ⟨f_x⟩/⟨f_z⟩)"
+                    } else {
+                        ""
+                    }
                 ),
                 x_label,
                 y_label: "μ / μ0".to_string(),

@@ -5,19 +5,21 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use clap::Args;
-use model_core::regime::{classify, ClassifyOptions, Regime};
+use model_core::regime::Regime;
 use plotters::style::RGBColor;
 
 use crate::error::{CliError, CliResult};
-use crate::eval::{exact_failure, Method, MethodArgs};
+use crate::eval::{classify_scene_profile, Method, MethodArgs};
 use crate::output::write_rows;
 use crate::plot::{render_heat, render_map, Heat, HeatMap, RegimeMap};
+use crate::scene_args::{profile_text, ProfileArgs};
 use crate::sweep::{cell_scene, cells, centres, method_mix, mix_text, mu_cells, Cell};
+use model_core::mdr::Profile;
 
 /// Flags of `fricctl map`.
 #[derive(Args, Debug, Clone)]
 pub struct MapCmd {
-    /// Δu_z/u_z0 (fixed for the map)
+    /// Δu_z/u_z0 (fixed for the map; ≥ 1: the contact lifts off once per period)
     #[arg(long, allow_hyphen_values = true)]
     pub duz_rel: f64,
     /// Smallest amplitude ratio k_xΔu_x/(μ0 k_z Δu_z)
@@ -47,11 +49,15 @@ pub struct MapCmd {
     /// How μ is computed per cell (with --v-rel)
     #[command(flatten)]
     pub how: MethodArgs,
+    /// The contact's shape
+    #[command(flatten)]
+    pub contact: ProfileArgs,
 }
 
 impl MapCmd {
     /// Runs the command (the map goes to files; `out` is unused).
-    pub fn run(self, _out: &mut impl Write) -> CliResult {
+    pub fn run(mut self, _out: &mut impl Write) -> CliResult {
+        self.how.profile = self.contact.resolve()?;
         let a = &self;
         for (v, name) in [
             (a.duz_rel, "duz-rel"),
@@ -66,9 +72,9 @@ impl MapCmd {
                 )));
             }
         }
-        if !(0.0..1.0).contains(&a.duz_rel) || a.duz_rel == 0.0 {
+        if a.duz_rel <= 0.0 {
             return Err(CliError::usage(
-                "--duz-rel: must be in (0, 1) (the ratio needs Δu_z > 0; Δu_z < u_z0)",
+                "--duz-rel: must be > 0 (the ratio needs Δu_z > 0)",
             ));
         }
         if a.ratio_min < 0.0 {
@@ -102,7 +108,7 @@ impl MapCmd {
         }
         let ratios = centres(a.ratio_min, a.ratio_max, a.res);
         let phis = centres(a.phi_min_deg, a.phi_max_deg, a.res);
-        let (cells, class) = cells(a.duz_rel, &ratios, &phis, true)?;
+        let (cells, class) = cells(a.duz_rel, &ratios, &phis, &a.how.profile, true)?;
         let counts = [0u8, 1, 2].map(|k| class.iter().filter(|&&c| c == k).count());
         eprintln!(
             "{} cells: {} active control, {} dynamic ratchet, {} actuator",
@@ -113,6 +119,7 @@ impl MapCmd {
         );
         write_map(
             a.duz_rel,
+            &a.how.profile,
             &ratios,
             &phis,
             &cells,
@@ -126,7 +133,12 @@ impl MapCmd {
 }
 
 fn run_mu_map(a: &MapCmd, x: f64) -> CliResult {
-    if x == 0.0 {
+    if x == 0.0 && a.duz_rel < 1.0 {
+        if a.how.profile != Profile::Flat {
+            return Err(CliError::usage(
+                "--v-rel: must be != 0 (at rest μ has two one-sided limits while duz-rel < 1; `fricctl mu --v0 0` gives them)",
+            ));
+        }
         return Err(CliError::usage(
             "--v-rel: must be != 0 (at rest μ has two one-sided limits; the regime map shows them)",
         ));
@@ -159,8 +171,9 @@ fn run_mu_map(a: &MapCmd, x: f64) -> CliResult {
         });
     let m = HeatMap {
         title: format!(
-            "μ/μ0 at v0 = {x}·v_c, Δu_z/u_z0 = {} ({mix_text})",
-            a.duz_rel
+            "μ/μ0 at v0 = {x}·v_c, Δu_z/u_z0 = {}, {} ({mix_text})",
+            a.duz_rel,
+            profile_text(&a.how.profile)
         ),
         x_label: "phase φ, degrees".to_string(),
         y_label: "k_xΔu_x / (μ0 k_z Δu_z)".to_string(),
@@ -198,7 +211,12 @@ pub const CLASSES: [(&str, RGBColor); 3] = [
 
 /// The exact active-control set inside the map: the lines φ = 90°, 270° (mod
 /// 360°) where the law is symmetric, and ratio = 0 (normal oscillation only).
-pub fn active_lines(a: f64, ratios: &[f64], phis: &[f64]) -> CliResult<Vec<Vec<(f64, f64)>>> {
+pub fn active_lines(
+    a: f64,
+    profile: &Profile<f64>,
+    ratios: &[f64],
+    phis: &[f64],
+) -> CliResult<Vec<Vec<(f64, f64)>>> {
     let (plo, phi_hi) = (phis[0], *phis.last().unwrap_or(&phis[0]));
     let (rlo, rhi) = (ratios[0], *ratios.last().unwrap_or(&ratios[0]));
     let hx = if phis.len() > 1 {
@@ -226,7 +244,7 @@ pub fn active_lines(a: f64, ratios: &[f64], phis: &[f64]) -> CliResult<Vec<Vec<(
             let r = (rlo - hy) + (rhi - rlo + 2.0 * hy) * i as f64 / n as f64;
             let r = r.max(0.0);
             let s = cell_scene(a, r, phi)?;
-            let c = classify(&s, &ClassifyOptions::default()).map_err(exact_failure)?;
+            let c = classify_scene_profile(&s, profile)?;
             if c.regime == Regime::ActiveControl {
                 run.push((phi, r));
             } else if !run.is_empty() {
@@ -244,8 +262,10 @@ pub fn active_lines(a: f64, ratios: &[f64], phis: &[f64]) -> CliResult<Vec<Vec<(
 }
 
 /// Renders a map (plot and optional CSV).
+#[allow(clippy::too_many_arguments)]
 pub fn write_map(
     a: f64,
+    profile: &Profile<f64>,
     ratios: &[f64],
     phis: &[f64],
     cells: &[Cell],
@@ -255,10 +275,15 @@ pub fn write_map(
 ) -> CliResult {
     let (plo, phi_hi) = (phis[0], *phis.last().unwrap_or(&phis[0]));
     let (rlo, rhi) = (ratios[0], *ratios.last().unwrap_or(&ratios[0]));
-    let mut lines = vec![(
-        "paper's rule: ratio = 1 (ratchet below, drive above)".to_string(),
-        vec![(plo, 1.0), (phi_hi, 1.0)],
-    )];
+    // The paper's rule was derived for permanent contact: not drawn with lift-off.
+    let mut lines = if a < 1.0 {
+        vec![(
+            "paper's rule: ratio = 1 (ratchet below, drive above)".to_string(),
+            vec![(plo, 1.0), (phi_hi, 1.0)],
+        )]
+    } else {
+        vec![(String::new(), Vec::new())]
+    };
     for v in [90.0, 270.0, -90.0, 450.0] {
         if v > plo && v < phi_hi {
             lines.push((String::new(), vec![(v, rlo), (v, rhi)]));
@@ -267,8 +292,22 @@ pub fn write_map(
     if lines.len() > 1 {
         lines[1].0 = "paper's rule: φ = π/2 symmetric".to_string();
     }
+    if a >= 1.0 || *profile != Profile::Flat {
+        // With lift-off or a curved profile φ = 90° is not force-free at rest (μ(0) ≠ 0 in
+        // general, `fricctl classify`): no paper line applies.
+        lines.clear();
+    }
     let m = RegimeMap {
-        title: format!("Regimes at Δu_z/u_z0 = {a} (exact classification)"),
+        title: if *profile != Profile::Flat {
+            format!(
+                "Regimes at Δu_z/u_z0 = {a}, {} (MDR quadrature)",
+                profile_text(profile)
+            )
+        } else if a < 1.0 {
+            format!("Regimes at Δu_z/u_z0 = {a} (exact classification)")
+        } else {
+            format!("Regimes at Δu_z/u_z0 = {a} (lifts off; exact lift-off classification)")
+        },
         x_label: "phase φ, degrees".to_string(),
         y_label: "k_xΔu_x / (μ0 k_z Δu_z)".to_string(),
         xs: phis.to_vec(),
@@ -276,7 +315,7 @@ pub fn write_map(
         class,
         classes: CLASSES,
         lines,
-        class0_lines: active_lines(a, ratios, phis)?,
+        class0_lines: active_lines(a, profile, ratios, phis)?,
     };
     render_map(plot, &m, (1100, 760))?;
     eprintln!("wrote {}", plot.display());

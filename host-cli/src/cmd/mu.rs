@@ -3,12 +3,15 @@
 use std::io::Write;
 
 use clap::Args;
-use model_core::analytic::CriticalVelocity;
+use model_core::scene::ContactMode;
 
 use crate::error::{CliError, CliResult};
-use crate::eval::{from_rel, mu_at, MethodArgs, MuOutcome};
+use crate::eval::{
+    critical_velocity, from_rel, mean_normal_force_over_kz_uz0, mu_at, MethodArgs, MuOutcome,
+};
 use crate::output::{stdout_error, write_json};
-use crate::scene_args::{ResolvedScene, SceneArgs};
+use crate::scene_args::{profile_text, ResolvedScene, SceneArgs};
+use model_core::mdr::Profile;
 
 /// Flags of `fricctl mu`.
 #[derive(Args, Debug, Clone)]
@@ -35,15 +38,16 @@ pub struct MuCmd {
 
 impl MuCmd {
     /// Runs the command.
-    pub fn run(self, out: &mut impl Write) -> CliResult {
+    pub fn run(mut self, out: &mut impl Write) -> CliResult {
         self.how.validate()?;
-        let rs = self.scene.resolve()?;
+        let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
+        self.how.profile = rs.profile;
         let v = self.velocity(&rs)?;
         let o = mu_at(&rs.scene, v, &self.how)?;
         if self.json {
             write_json(out, &o)?;
         } else {
-            write_text(out, &o).map_err(stdout_error)?;
+            write_text(out, &o, &rs).map_err(stdout_error)?;
         }
         if o.converged == Some(false) {
             return Err(CliError::failure(format!(
@@ -63,13 +67,13 @@ impl MuCmd {
                 }
                 Ok(v)
             }
-            (None, Some(x)) => from_rel(&CriticalVelocity::of(&rs.scene), x, "v-rel"),
+            (None, Some(x)) => from_rel(&critical_velocity(&rs.scene)?, x, "v-rel"),
             _ => Err(CliError::usage("--v0: give either --v0 or --v-rel")),
         }
     }
 }
 
-fn write_text(out: &mut impl Write, o: &MuOutcome) -> std::io::Result<()> {
+fn write_text(out: &mut impl Write, o: &MuOutcome, rs: &ResolvedScene) -> std::io::Result<()> {
     writeln!(out, "v0           {}", o.v0)?;
     match o.v_rel {
         Some(x) => writeln!(out, "v0/v_c       {x}")?,
@@ -93,5 +97,67 @@ fn write_text(out: &mut impl Write, o: &MuOutcome) -> std::io::Result<()> {
         writeln!(out, "converged    {}", o.converged.unwrap_or(false))?;
     }
     writeln!(out, "v_c forward  {}", o.vc_forward)?;
-    writeln!(out, "v_c backward {}", o.vc_backward)
+    writeln!(out, "v_c backward {}", o.vc_backward)?;
+    if rs.profile != Profile::Flat {
+        write_profile_notes(out, rs)?;
+    } else if o.lifts_off {
+        write_lift_off_notes(out, rs, o.method == "fixed")?;
+    }
+    Ok(())
+}
+
+/// What a curved profile changes (`model_core::mdr`).
+fn write_profile_notes(out: &mut impl Write, rs: &ResolvedScene) -> std::io::Result<()> {
+    let a = rs.scene.drive().a;
+    writeln!(
+        out,
+        "profile      {} through MDR: uz0 is the mean indentation d0, kz/kx is E*/G*",
+        profile_text(&rs.profile)
+    )?;
+    writeln!(
+        out,
+        "normal force mu = (sum of fx)/(sum of fz) over the springs (eq. M8); the rim springs lift off every period{}",
+        if a >= 1.0 {
+            ", and with duz >= d0 all of them (mu(0) is unique)"
+        } else {
+            ""
+        }
+    )?;
+    writeln!(
+        out,
+        "v_c          the flat punch's with the same drive (the central spring decides)"
+    )
+}
+
+/// What changes meaning when the contact lifts off (`model_core::model::liftoff`).
+fn write_lift_off_notes(
+    out: &mut impl Write,
+    rs: &ResolvedScene,
+    fixed: bool,
+) -> std::io::Result<()> {
+    let a = rs.scene.drive().a;
+    let w = mean_normal_force_over_kz_uz0(&rs.scene);
+    writeln!(
+        out,
+        "contact      lifts off once per period (duz/uz0 = {a} >= 1)"
+    )?;
+    writeln!(
+        out,
+        "normal force mean kz<uz+> = {w} kz uz0: mu = <fx>/<fz> is normalised by it, not by kz uz0"
+    )?;
+    writeln!(
+        out,
+        "at rest      mu(0) is unique (the state resets at every landing; no static interval)"
+    )?;
+    writeln!(
+        out,
+        "v_c          of the contact window (eq. L5), not eq. 8"
+    )?;
+    if fixed {
+        writeln!(
+            out,
+            "scheme       lift-off stepping: one contact window from the landing (exact), order 2; bound (1 + a + b)(10/N^2 + N eps)"
+        )?;
+    }
+    Ok(())
 }

@@ -5,11 +5,13 @@ use std::io::Write;
 
 use clap::Args;
 use model_core::analytic::{CriticalVelocity, StaticFriction};
-use model_core::{exact, Libm};
+use model_core::model::liftoff;
+use model_core::scene::ContactMode;
+use model_core::{exact, Libm, Scene};
 use serde::Serialize;
 
 use crate::error::CliResult;
-use crate::eval::exact_failure;
+use crate::eval::{exact_failure, lift_off_failure, mean_normal_force_over_kz_uz0};
 use crate::output::{stdout_error, write_json};
 use crate::scene_args::SceneArgs;
 
@@ -42,13 +44,43 @@ struct StaticOut {
     mu_0plus_over_mu0: f64,
     mu_0minus_over_mu0: f64,
     w0_m: f64,
+    lifts_off: bool,
+}
+
+/// The JSON document of `fricctl static` for a contact that lifts off: no
+/// static interval exists; the force at rest is unique.
+#[derive(Serialize)]
+struct LiftOffStaticOut {
+    /// Always true here.
+    lifts_off: bool,
+    /// Always false: the state resets at every landing.
+    static_exists: bool,
+    /// μ(0)/μ0, the unique force at rest over μ0⟨f_z⟩.
+    mu_at_rest_over_mu0: f64,
+    /// Its bound, units of μ0 (the lift-off solver's).
+    error_bound_over_mu0: f64,
+    /// ⟨f_z⟩/(k_z u_z0) = ⟨u_z⁺⟩/u_z0 (eq. L4).
+    mean_normal_force_over_kz_uz0: f64,
+    /// The contact window's critical velocities (eq. L5), m/s.
+    vc_forward: f64,
+    vc_backward: f64,
+    w0_m: f64,
 }
 
 impl StaticCmd {
     /// Runs the command.
     pub fn run(self, out: &mut impl Write) -> CliResult {
-        let rs = self.scene.resolve()?;
+        let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         let s = &rs.scene;
+        if rs.profile != model_core::mdr::Profile::Flat {
+            return Err(crate::error::CliError::usage(format!(
+                "--profile: the static analysis is for the flat punch; for a {} profile `fricctl mu --v0 0` gives mu(0+) and mu(0-)",
+                rs.profile.name()
+            )));
+        }
+        if s.lifts_off() {
+            return self.lift_off(s, out);
+        }
         let vc = CriticalVelocity::of(s);
         let st = StaticFriction::of(s);
         let (p, m) = exact::limits_at_zero::<f64, Libm>(&s.drive()).map_err(exact_failure)?;
@@ -68,12 +100,76 @@ impl StaticCmd {
             mu_0plus_over_mu0: p,
             mu_0minus_over_mu0: m,
             w0_m: s.w0(),
+            lifts_off: false,
         };
         if self.json {
             return write_json(out, &o);
         }
         write_text(out, &o, iv, &st).map_err(stdout_error)
     }
+
+    /// With lift-off "static friction" has no permanent-contact meaning: the
+    /// stretch resets at every landing, so a body held at rest feels one
+    /// force, μ(0)·⟨f_z⟩, whatever its history (`model_core::model::liftoff`).
+    fn lift_off(&self, s: &Scene<f64>, out: &mut impl Write) -> CliResult {
+        let d = s.drive();
+        let mu = liftoff::mu_over_mu0::<f64, Libm>(&d, 0.0).map_err(lift_off_failure)?;
+        let (c, cb) = liftoff::critical_velocities::<f64, Libm>(&d).map_err(lift_off_failure)?;
+        let unit = s.velocity_scale();
+        let o = LiftOffStaticOut {
+            lifts_off: true,
+            static_exists: false,
+            mu_at_rest_over_mu0: mu,
+            error_bound_over_mu0: liftoff::error_bound::<f64, Libm>(&d),
+            mean_normal_force_over_kz_uz0: mean_normal_force_over_kz_uz0(s),
+            vc_forward: c * unit,
+            vc_backward: cb * unit,
+            w0_m: s.w0(),
+        };
+        if self.json {
+            return write_json(out, &o);
+        }
+        write_lift_off_text(out, &o, s).map_err(stdout_error)
+    }
+}
+
+fn write_lift_off_text(
+    out: &mut impl Write,
+    o: &LiftOffStaticOut,
+    s: &Scene<f64>,
+) -> std::io::Result<()> {
+    let p = s.params();
+    writeln!(
+        out,
+        "contact                lifts off once per period (duz/uz0 = {} >= 1)",
+        s.drive().a
+    )?;
+    writeln!(
+        out,
+        "static equilibrium     none in the permanent-contact sense: the stretch resets at every landing"
+    )?;
+    writeln!(
+        out,
+        "force at rest          unique: mu(0)/mu0 = {} (error bound {:e} mu0)",
+        o.mu_at_rest_over_mu0, o.error_bound_over_mu0
+    )?;
+    writeln!(
+        out,
+        "mean normal force      kz<uz+> = {} kz uz0 = {} N",
+        o.mean_normal_force_over_kz_uz0,
+        o.mean_normal_force_over_kz_uz0 * p.kz * p.uz0
+    )?;
+    writeln!(
+        out,
+        "tangential force at rest  mu(0)*<fz> = {} N",
+        o.mu_at_rest_over_mu0 * s.mu0() * o.mean_normal_force_over_kz_uz0 * p.kz * p.uz0
+    )?;
+    writeln!(
+        out,
+        "v_c forward            {} (contact window, eq. L5)",
+        o.vc_forward
+    )?;
+    writeln!(out, "v_c backward           {}", o.vc_backward)
 }
 
 fn write_text(
