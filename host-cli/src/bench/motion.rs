@@ -124,7 +124,7 @@ fn compare(c: &Case, inv_nu: f64, mass: f64, tick: &mut dyn FnMut()) -> Point {
         nu: 1.0 / inv_nu,
         mass,
         kappa: 0.0,
-        normal: c.law.mean_normal(),
+        normal: c.law.mean_normal().unwrap_or(1.0),
     };
     let tol = 0.1 * TOL * c.v_ref();
     let t0 = Instant::now();
@@ -399,7 +399,10 @@ fn error_cost_figure(rows: &[(&str, String, Point)], inv: &[f64], responses: &[f
     // (b) over the body's response time at ω/Ω = 10³.
     let mut sb = Vec::new();
     let mut floor_b = Vec::new();
-    for (c, k, m) in [("flat", 0usize, Marker::Circle), ("lift-off", 3, Marker::Triangle)] {
+    for (c, k, m) in [
+        ("flat", 0usize, Marker::Circle),
+        ("lift-off", 3, Marker::Triangle),
+    ] {
         let pts = pick(c, "mass");
         sb.push(series(
             format!("|H − R|/|R|, {c}"),
@@ -409,7 +412,9 @@ fn error_cost_figure(rows: &[(&str, String, Point)], inv: &[f64], responses: &[f
         ));
         sb.push(series(
             format!("E_h/|R|, {c}"),
-            pts.iter().map(|p| (p.response, p.e_h / p.r.abs())).collect(),
+            pts.iter()
+                .map(|p| (p.response, p.e_h / p.r.abs()))
+                .collect(),
             Mark::Dashed,
             k,
         ));
@@ -516,8 +521,14 @@ fn drift_map(a: &MotionArgs) -> CliResult {
     let lr = centres(-1.0, 1.0, n);
     let pb = progress_bar((n * n) as u64, "drift map {bar:40} {pos}/{len} cells");
     let classes = vec![
-        ("law not monotone".to_string(), plotters::style::RGBColor(200, 200, 200)),
-        ("solver failed".to_string(), plotters::style::RGBColor(120, 0, 0)),
+        (
+            "law not monotone".to_string(),
+            plotters::style::RGBColor(200, 200, 200),
+        ),
+        (
+            "solver failed".to_string(),
+            plotters::style::RGBColor(120, 0, 0),
+        ),
     ];
     let mut cells = Vec::with_capacity(n * n);
     let mut csv = String::from("phi_deg,ratio,mean_velocity,stick_fraction,outcome\n");

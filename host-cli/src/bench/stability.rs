@@ -574,9 +574,7 @@ pub fn run(a: &StabilityArgs) -> CliResult {
     .1;
     let across = |t: &str| Plane {
         name: "",
-        title: format!(
-            "Auto (select::mu_within, {t}) across lift-off: b = 0.6, φ = 1 rad (57.3°)"
-        ),
+        title: format!("Auto (select::mu_within, {t}) across lift-off: b = 0.6, φ = 1 rad (57.3°)"),
         x_label: "Δu_z/u_z0 (≥ 1: the contact lifts off)",
         y_label: "v0/v_c (v_c of the direction; the contact window's from 1)",
         x: (0.5, 2.0),

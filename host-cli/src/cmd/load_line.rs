@@ -17,6 +17,7 @@ use clap::Args;
 use model_core::model::load_line::{
     self, best_forward, load_line_of, maximise_forward, powers, Objective, OperatingPoint,
 };
+use model_core::scene::ContactMode;
 use model_core::Libm;
 use serde::Serialize;
 
@@ -89,12 +90,22 @@ impl LoadLineCmd {
         if self.points > 100_000 {
             return Err(CliError::usage("--points: at most 100000"));
         }
-        let rs = self.scene.resolve()?;
+        let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         let s = &rs.scene;
         let d = s.drive();
         let p = s.params();
-        let law = Law::of(s);
-        let fz = p.kz * p.uz0 * law.mean_normal();
+        let law = Law::with_profile(s, rs.profile);
+        let normal = match law.mean_normal() {
+            Some(n) => n,
+            None if rs.dimensionless => 1.0,
+            None => {
+                return Err(CliError::usage(format!(
+                    "--profile: the {} profile's mean normal force in newtons is not derived here; give the scene by its groups (--duz-rel, --ratio) for a load line in units of μ0·F̄z",
+                    law.name()
+                )))
+            }
+        };
+        let fz = p.kz * p.uz0 * normal;
         let force_scale = s.mu0() * fz;
         let vs = s.velocity_scale();
         let ps = force_scale * vs;
@@ -287,8 +298,10 @@ impl LoadLineCmd {
 
 /// The aligned text summary.
 fn write_text(out: &mut impl Write, o: &LoadLineOut) -> std::io::Result<()> {
+    // Dimensionless: the second column is in μ0·k_z·u_z0 (= μ0·F̄z in
+    // permanent contact; with lift-off F̄z = k_z·u_z0·⟨w⁺⟩).
     let (fu, vu, pu) = if o.dimensionless {
-        ("μ0·F̄z", "ωW0", "μ0·F̄z·ωW0")
+        ("μ0·kz·uz0", "ωW0", "μ0·kz·uz0·ωW0")
     } else {
         ("N", "m/s", "W")
     };

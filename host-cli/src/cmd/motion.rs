@@ -24,6 +24,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::{Args, ValueEnum};
+use model_core::scene::ContactMode;
 use serde::Serialize;
 
 use crate::error::{CliError, CliResult};
@@ -159,7 +160,7 @@ fn finite(x: f64, flag: &str) -> CliResult<f64> {
 impl MotionCmd {
     /// Runs the command.
     pub fn run(self, out: &mut impl Write) -> CliResult {
-        let rs = self.scene.resolve()?;
+        let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         let scene = rs.scene;
         let prm = *scene.params();
         let mass = finite(self.mass, "mass")?;
@@ -200,14 +201,38 @@ impl MotionCmd {
                 Some(n as u32)
             }
         };
-        let law_fn = Law::of(&scene);
+        let law_fn = Law::with_profile(&scene, rs.profile);
+        // A curved profile's mean normal force (in units of k_z u_z0) is not
+        // derived: only what needs no force scale is computed for it.
+        let normal = match law_fn.mean_normal() {
+            Some(n) => n,
+            None => {
+                let name = law_fn.name();
+                if !rs.dimensionless {
+                    return Err(CliError::usage(format!(
+                        "--profile: the {name} profile's mean normal force in newtons is not derived here; give the scene by its groups (--duz-rel, --ratio)"
+                    )));
+                }
+                if self.mass != 0.0 {
+                    return Err(CliError::usage(format!(
+                        "--mass: a body with mass on the {name} profile needs its mean normal force in units of k_z·u_z0, not derived here; use --mass 0"
+                    )));
+                }
+                if self.spring != 0.0 {
+                    return Err(CliError::usage(format!(
+                        "--spring: a spring on the {name} profile needs its mean normal force in units of k_z·u_z0, not derived here"
+                    )));
+                }
+                1.0
+            }
+        };
         let p = Problem {
             f0,
             f,
             nu: big_omega / prm.omega,
             mass: mass * prm.omega * prm.omega / prm.kx,
             kappa: spring / prm.kx,
-            normal: law_fn.mean_normal(),
+            normal,
         };
         if !p.mass.is_finite() || (mass > 0.0 && p.mass < f64::MIN_POSITIVE) {
             return Err(CliError::usage("--mass: out of range for this scene"));

@@ -8,16 +8,23 @@
 //! | flat punch, permanent contact (`a < 1`) | exact solver (or eq. 21/24 when their bound fits) | the static band `[μ(0⁻), μ(0⁺)]` (`Value::AtRest`) | eq. 8 | `k_z u_z0` |
 //! | flat punch with lift-off (`a ≥ 1`) | lift-off window solver | unique: `μ(0⁺) = μ(0⁻) = μ(0)` | eq. L5 | `k_z u_z0⟨w⁺⟩` (eq. L4) |
 //!
-//! Curved profiles (MDR) join through `select::mu_within_profile` once
-//! model-core provides it; the rest of the slow dynamics needs nothing else
-//! from a contact model except where stated ([`Law::resolvable`],
-//! [`Law::has_powers`]).
+//! | curved profile (sphere, cone, power; MDR) | MDR quadrature | `[μ(0⁻), μ(0⁺)]` (`Value::Limits`; unique for `a ≥ 1`) | the flat punch's (`mdr::critical_velocities`) | not derived here |
+//!
+//! All of them are asked through one function, [`select::mu_within_profile`]
+//! (the flat profile is exactly [`select::mu_within`]). The rest of the slow
+//! dynamics needs nothing else from a contact model except where stated:
+//! [`Law::resolvable`] (no resolved model of a curved profile),
+//! [`Law::has_powers`] (input power only for the flat punch in permanent
+//! contact) and [`Law::mean_normal`] (the mean normal force in units of
+//! `k_z u_z0`, unknown for a curved profile: a body with mass or a spring,
+//! whose units need it, is refused there).
 //!
 //! Every value carries the bound `select` guarantees for it (units μ₀). The
 //! tolerance asked of `select` is the caller's; when no method of the contact
 //! meets it, the smallest available bound is taken instead (and reported
 //! through the bound).
 
+use model_core::mdr::{self, Profile};
 use model_core::model::liftoff;
 use model_core::select::{self, SelectError, Value};
 use model_core::{Libm, Scene};
@@ -54,17 +61,35 @@ pub struct LawValue {
 #[derive(Debug, Clone, Copy)]
 pub struct Law {
     scene: Scene<f64>,
+    profile: Profile<f64>,
 }
 
 impl Law {
-    /// The law of `scene` (its contact mode decides the model).
+    /// The law of the flat punch on `scene` (its contact mode decides
+    /// permanent contact or lift-off).
     pub fn of(scene: &Scene<f64>) -> Self {
-        Law { scene: *scene }
+        Law::with_profile(scene, Profile::Flat)
     }
 
-    /// The contact model's name, as printed: `flat` or `lift-off`.
+    /// The law of `profile` on `scene`.
+    pub fn with_profile(scene: &Scene<f64>, profile: Profile<f64>) -> Self {
+        Law {
+            scene: *scene,
+            profile,
+        }
+    }
+
+    /// Whether the contact is the flat punch (the single spring).
+    pub fn is_flat(&self) -> bool {
+        self.profile == Profile::Flat
+    }
+
+    /// The contact model's name, as printed: `flat`, `lift-off`, or the
+    /// profile's (`sphere`, `cone`, `power`).
     pub fn name(&self) -> &'static str {
-        if self.scene.lifts_off() {
+        if !self.is_flat() {
+            self.profile.name()
+        } else if self.scene.lifts_off() {
             "lift-off"
         } else {
             "flat"
@@ -89,7 +114,10 @@ impl Law {
     /// [`LawError`] when the contact model refuses the drive.
     pub fn critical(&self) -> Result<(f64, f64), LawError> {
         let d = self.scene.drive();
-        if self.scene.lifts_off() {
+        if !self.is_flat() {
+            mdr::critical_velocities::<f64, Libm>(&d, &self.profile)
+                .map_err(|e| self.err(e.to_string()))
+        } else if self.scene.lifts_off() {
             liftoff::critical_velocities::<f64, Libm>(&d).map_err(|e| self.err(e.to_string()))
         } else {
             Ok((d.c_forward::<Libm>(), d.c_backward::<Libm>()))
@@ -99,28 +127,38 @@ impl Law {
     /// The mean normal force `F̄z` in units of `k_z u_z0` (1 for permanent
     /// contact, `⟨w⁺⟩` of eq. L4 with lift-off): friction and applied forces
     /// are in units of `μ₀F̄z`, the contact's spring force in `μ₀k_z u_z0`.
-    pub fn mean_normal(&self) -> f64 {
-        if self.scene.lifts_off() {
-            liftoff::mean_band::<f64, Libm>(self.scene.drive().a)
+    /// `None` for a curved profile (not derived here).
+    pub fn mean_normal(&self) -> Option<f64> {
+        if !self.is_flat() {
+            None
+        } else if self.scene.lifts_off() {
+            Some(liftoff::mean_band::<f64, Libm>(self.scene.drive().a))
         } else {
-            1.0
+            Some(1.0)
         }
     }
 
     /// Whether the resolved (ultrasonic-scale) model exists for this contact:
-    /// the spring punch does (permanent or intermittent contact).
+    /// the flat punch's single spring does (permanent or intermittent
+    /// contact); a curved profile's bed of springs does not (yet).
     ///
     /// # Errors
     /// One line naming the contact when it does not.
     pub fn resolvable(&self) -> Result<(), LawError> {
-        Ok(())
+        if self.is_flat() {
+            Ok(())
+        } else {
+            Err(self.err(
+                "no resolved (ultrasonic-scale) model: it integrates the flat punch's single spring only",
+            ))
+        }
     }
 
     /// Whether the transducers' input power (and so the efficiency) is
     /// derived for this contact: only for the flat punch in permanent
     /// contact (`model::load_line::powers`, closed form on the exact arcs).
     pub fn has_powers(&self) -> bool {
-        !self.scene.lifts_off()
+        self.is_flat() && !self.scene.lifts_off()
     }
 
     /// μ/μ₀ at dimensionless velocity `v` (units ωW₀; 0 gives both one-sided
@@ -133,7 +171,7 @@ impl Law {
         let v0 = v * self.scene.velocity_scale();
         let mut tol = tol;
         for _ in 0..2 {
-            match select::mu_within::<f64, Libm>(&self.scene, v0, tol) {
+            match select::mu_within_profile::<f64, Libm>(&self.scene, &self.profile, v0, tol) {
                 Ok(a) => {
                     return Ok(match a.value {
                         Value::Mu(m) => LawValue {
@@ -145,6 +183,10 @@ impl Law {
                             mu_0plus,
                             mu_0minus,
                             ..
+                        }
+                        | Value::Limits {
+                            mu_0plus,
+                            mu_0minus,
                         } => LawValue {
                             upper: mu_0plus,
                             lower: mu_0minus,
@@ -157,6 +199,7 @@ impl Law {
                     return Err(self.err(format!("bad tolerance {tol:e}")))
                 }
                 Err(SelectError::Exact(e)) => return Err(self.err(e.to_string())),
+                Err(SelectError::Mdr(e)) => return Err(self.err(e.to_string())),
             }
         }
         Err(self.err("no solver meets its own bound"))
@@ -191,7 +234,7 @@ mod tests {
         let z = flat.at(0.0, 1e-8).unwrap();
         let (p, q) = exact::limits_at_zero::<f64, Libm>(&d).unwrap();
         assert_eq!((z.upper, z.lower), (p, q));
-        assert_eq!(flat.mean_normal(), 1.0);
+        assert_eq!(flat.mean_normal(), Some(1.0));
         // Lift-off (a = 1.5): μ at rest is unique and is the window solver's.
         let g = Groups {
             duz_rel: 1.5,
@@ -208,6 +251,17 @@ mod tests {
         let (m, b) = lo.mu(-0.2, 1e-8).unwrap();
         let w = liftoff::mu_over_mu0::<f64, Libm>(&d, -0.2).unwrap();
         assert!((m - w).abs() <= b + 1e-15);
-        assert!(lo.mean_normal() > 1.0);
+        assert!(lo.mean_normal().unwrap() > 1.0);
+        // A sphere: the MDR's answer, limits at rest, no resolved model.
+        let g = Groups::from_ratio(0.5, 2.0, 0.7).unwrap();
+        let sp = Law::with_profile(&Scene::dimensionless(g).unwrap(), Profile::Sphere);
+        assert_eq!(sp.name(), "sphere");
+        let (m, b) = sp.mu(0.1, 1e-6).unwrap();
+        let d = sp.scene().drive();
+        let r = mdr::mu_over_mu0::<f64, Libm>(&d, &Profile::Sphere, 0.1, 1e-6).unwrap();
+        assert!((m - r.mu_over_mu0).abs() <= b + r.bound);
+        let z = sp.at(0.0, 1e-6).unwrap();
+        assert!(z.lower <= z.upper);
+        assert!(sp.resolvable().is_err() && !sp.has_powers() && sp.mean_normal().is_none());
     }
 }
