@@ -600,3 +600,169 @@ fn bad_input_names_the_flag() {
         assert!(err.contains(flag), "{extra:?}: {err}");
     }
 }
+
+/// Lift-off (Δu_z/u_z0 = 1.5): both models run through the same law
+/// interface. μ at rest is unique (the band is a point), and it is the
+/// lift-off window solver's μ(0) within its bound; the homogenised body is
+/// therefore never stuck (the band has measure zero: stick fraction 0); the
+/// two models agree within the derived estimate plus both numerical errors.
+#[test]
+fn lift_off_scene_in_both_models() {
+    use model_core::model::liftoff;
+    let scene = scene_args(1.5, 0.5, 34.4);
+    let run = |m: &str| {
+        motion(
+            &scene,
+            &[
+                "--mass",
+                "1000",
+                "--force-amp-rel",
+                "0.5",
+                "--force-omega",
+                "1e-3",
+                "--method",
+                m,
+                "--tol",
+                "5e-2",
+            ],
+        )
+    };
+    let h = run("homogenised");
+    let r = run("resolved");
+    assert_eq!(h["contact"], "lift-off");
+    assert_eq!(num(&h, "mu_0plus_over_mu0"), num(&h, "mu_0minus_over_mu0"));
+    let d = model_core::Drive::new::<Libm>(1.5, 0.75, 34.4f64.to_radians());
+    let want = liftoff::mu_over_mu0::<f64, Libm>(&d, 0.0).unwrap();
+    assert!(
+        (num(&h, "mu_0plus_over_mu0") - want).abs()
+            <= liftoff::error_bound::<f64, Libm>(&d) + 1e-15
+    );
+    assert_eq!(num(&h, "stick_fraction"), 0.0);
+    let diff = (num(&h, "mean_velocity") - num(&r, "mean_velocity")).abs();
+    let bound = num(&h, "error_estimate") + num(&r, "numerical_error");
+    assert!(diff <= bound, "|H − R| = {diff:e} > {bound:e}");
+    assert!(num(&h, "fz_mean_over_kz_uz0") > 1.0);
+}
+
+/// A curved profile (sphere) through the same interface: the massless drift
+/// against a quadrature of the MDR law's inverse written here (bisection on
+/// `mdr::mu_over_mu0` at 10⁻⁸, 10-point Gauss–Legendre on 10 cells of each
+/// moving arc; its own error, checked by halving the cells, is below 1e-6),
+/// within the command's stated numerical error plus that. What needs the
+/// profile's mean normal force (a mass, a spring, SI units) and the resolved
+/// model are refused with one line naming the flag and the profile.
+#[test]
+fn sphere_massless_drift_and_refusals() {
+    use model_core::mdr::{self, Profile};
+    let (a, ratio, phi, f) = (0.5f64, 2.0f64, 40.0f64, 0.5f64);
+    let d = Scene::dimensionless(Groups::from_ratio(a, ratio, phi.to_radians()).unwrap())
+        .unwrap()
+        .drive();
+    let p = Profile::Sphere;
+    let mu = |v: f64| {
+        mdr::mu_over_mu0::<f64, Libm>(&d, &p, v, 1e-8)
+            .unwrap()
+            .mu_over_mu0
+    };
+    let (plus, minus) = mdr::limits_at_zero::<f64, Libm>(&d, &p, 1e-8).unwrap();
+    let (hi, lo) = (plus.mu_over_mu0, minus.mu_over_mu0);
+    let (cf, cb) = mdr::critical_velocities::<f64, Libm>(&d, &p).unwrap();
+    let inverse = |g: f64| {
+        let (mut x, mut y) = if g > hi { (0.0, cf) } else { (-cb, 0.0) };
+        for _ in 0..50 {
+            let m = 0.5 * (x + y);
+            let v = if m == 0.0 {
+                if g > hi {
+                    hi
+                } else {
+                    lo
+                }
+            } else {
+                mu(m)
+            };
+            if v < g {
+                x = m;
+            } else {
+                y = m;
+            }
+        }
+        0.5 * (x + y)
+    };
+    let gl = [
+        (0.148_874_338_981_631_2, 0.295_524_224_714_752_9),
+        (0.433_395_394_129_247_2, 0.269_266_719_309_996_4),
+        (0.679_409_568_299_024_4, 0.219_086_362_515_982_04),
+        (0.865_063_366_688_984_5, 0.149_451_349_150_580_6),
+        (0.973_906_528_517_171_7, 0.066_671_344_308_688_14),
+    ];
+    let mut total = 0.0;
+    let mut arc = |t0: f64, t1: f64| {
+        let cells = 10;
+        for c in 0..cells {
+            let (u, w) = (
+                t0 + (t1 - t0) * c as f64 / cells as f64,
+                t0 + (t1 - t0) * (c + 1) as f64 / cells as f64,
+            );
+            for &(x, wt) in &gl {
+                for s in [-x, x] {
+                    let t = 0.5 * (u + w) + 0.5 * (w - u) * s;
+                    total += 0.5 * (w - u) * wt * inverse(f * t.sin());
+                }
+            }
+        }
+    };
+    if hi / f < 1.0 {
+        let s = (hi / f).max(-1.0).asin();
+        arc(s, PI - s);
+    }
+    if -lo / f < 1.0 {
+        let s = (-lo / f).max(-1.0).asin();
+        arc(PI + s, TAU - s);
+    }
+    let want = total / TAU;
+    let args = |extra: &[&str]| {
+        let mut v = scene_args(a, ratio, phi);
+        v.extend(["--profile", "sphere"].iter().map(|s| s.to_string()));
+        v.extend(extra.iter().map(|s| s.to_string()));
+        v
+    };
+    let o = motion(
+        &args(&[]),
+        &[
+            "--mass",
+            "0",
+            "--force-amp-rel",
+            "0.5",
+            "--force-omega",
+            "1e-5",
+            "--tol",
+            "1e-3",
+        ],
+    );
+    assert_eq!(o["contact"], "sphere");
+    let got = num(&o, "mean_velocity");
+    let bound = num(&o, "numerical_error") + 1e-6;
+    eprintln!("sphere: motion {got} quadrature {want}");
+    assert!(
+        (got - want).abs() <= bound,
+        "sphere drift {got} vs quadrature {want} (bound {bound:e})"
+    );
+    for (extra, flag) in [
+        (vec!["--mass", "1"], "--mass"),
+        (vec!["--mass", "0", "--spring", "1"], "--spring"),
+    ] {
+        let mut e = vec!["--force-amp-rel", "0.5", "--force-omega", "1e-3"];
+        e.extend(extra);
+        let out = Command::cargo_bin("fricctl")
+            .unwrap()
+            .arg("motion")
+            .args(args(&[]))
+            .args(&e)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{e:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains(flag) && err.contains("sphere"), "{err}");
+    }
+}
