@@ -174,7 +174,7 @@ mod tests {
             nu,
             mass: 1.0 / nu,
             kappa: 0.0,
-            normal: law.mean_normal(),
+            normal: law.mean_normal().unwrap(),
         };
         let tol = 1e-5;
         let h = homogenised::run(
