@@ -7,7 +7,11 @@
 //!   crossing, located by bisection on the step length to 1e-14 of a step.
 //!   At rest the body stays while `μ(0⁻) ≤ g ≤ μ(0⁺)` (the static band,
 //!   `exact::limits_at_zero`); leaving the band is located by bisection on
-//!   `g(T)` too, and the body starts on the side of the violated edge.
+//!   `g(T)` too, and the body starts on the side of the violated edge. An
+//!   actuator has `μ(0⁺) < μ(0⁻)`: no force holds it, and a body at rest
+//!   with `μ(0⁺) < g < μ(0⁻)` could start either way; it starts forward
+//!   (`g > μ(0⁺)` is tested first; the massless inverse takes the same
+//!   branch). With lift-off `μ(0⁺) = μ(0⁻)`: the body is never stuck.
 //! * `M = 0`: `V = μ⁻¹(g)` ([`MuTable::inverse`]) and RK4 on `dX/dT = V/ν`
 //!   (Simpson's rule when `K = 0`).
 //!

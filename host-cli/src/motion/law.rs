@@ -261,7 +261,9 @@ mod tests {
         let r = mdr::mu_over_mu0::<f64, Libm>(&d, &Profile::Sphere, 0.1, 1e-6).unwrap();
         assert!((m - r.mu_over_mu0).abs() <= b + r.bound);
         let z = sp.at(0.0, 1e-6).unwrap();
-        assert!(z.lower <= z.upper);
+        let (p, q) = mdr::limits_at_zero::<f64, Libm>(&d, &Profile::Sphere, 1e-6).unwrap();
+        assert!((z.upper - p.mu_over_mu0).abs() <= z.bound + p.bound);
+        assert!((z.lower - q.mu_over_mu0).abs() <= z.bound + q.bound);
         assert!(sp.resolvable().is_err() && !sp.has_powers() && sp.mean_normal().is_none());
     }
 }
