@@ -469,7 +469,7 @@ fn profile_curve(
 /// drive, without lift-off of the centre (a = 0.5) and with it (a = 1.5).
 fn profiles(out: &Path) -> CliResult {
     use model_core::mdr::Profile;
-    let (b, phi) = (0.5, 0.0);
+    let (b, phi) = (0.8, PI / 6.0);
     let mut panels = Vec::new();
     let mut worst = 0.0f64;
     for a in [0.5, 1.5] {
@@ -520,7 +520,7 @@ fn profiles(out: &Path) -> CliResult {
         let extras = Extras {
             notes: vec![
                 format!("Δu_z/u_z0 = {a}, {B_NAME} = {b}"),
-                "φ = 0°".to_string(),
+                "φ = 30°".to_string(),
             ],
             notes_at: Corner::LowerRight,
             legend_at: Corner::UpperLeft,

@@ -680,3 +680,47 @@ fn classify_and_curve_with_a_profile() {
         "{body}"
     );
 }
+
+#[test]
+fn profile_mu_map_cells_match_the_brute_force() {
+    // map --profile cone --v-rel 0.5 at a = 1.5: each cell against the brute
+    // force over springs, tolerance as in the test above.
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("m.png");
+    let csv = dir.path().join("m.csv");
+    run_ok(&[
+        "map",
+        "--duz-rel",
+        "1.5",
+        "--res",
+        "2",
+        "--v-rel",
+        "0.5",
+        "--profile",
+        "cone",
+        "--plot",
+        png.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    let body = std::fs::read_to_string(&csv).unwrap();
+    let head: Vec<&str> = body.lines().next().unwrap().split(',').collect();
+    let col = |k: &str| head.iter().position(|h| *h == k).unwrap();
+    let rows: Vec<&str> = body.lines().skip(1).collect();
+    assert_eq!(rows.len(), 4);
+    for r in rows {
+        let c: Vec<&str> = r.split(',').collect();
+        let g = |k: &str| c[col(k)].parse::<f64>().unwrap();
+        assert_eq!(c[col("method")], "mdr", "{r}");
+        let (phi, b, v) = (g("phi_deg").to_radians(), g("ratio") * 1.5, g("v0"));
+        let fine = profile_brute(1.0, 1.5, b, phi, v, 400, 4096);
+        let coarse = profile_brute(1.0, 1.5, b, phi, v, 200, 4096);
+        let half_n = profile_brute(1.0, 1.5, b, phi, v, 400, 2048);
+        let tol = g("error_bound_over_mu0") + (fine - coarse).abs() + (fine - half_n).abs();
+        let mu = g("mu_over_mu0");
+        assert!(
+            (mu - fine).abs() <= tol,
+            "{r}: brute force {fine}, tol {tol:e}"
+        );
+    }
+}

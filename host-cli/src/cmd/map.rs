@@ -238,7 +238,9 @@ pub fn active_lines(
             continue;
         }
         // Fine sampling along the line; keep runs classified as active control.
-        let n = 400;
+        // A curved profile classifies through the quadrature (128 integrals
+        // per point): fewer samples along the line.
+        let n = if *profile == Profile::Flat { 400 } else { 60 };
         let mut run: Vec<(f64, f64)> = Vec::new();
         for i in 0..=n {
             let r = (rlo - hy) + (rhi - rlo + 2.0 * hy) * i as f64 / n as f64;

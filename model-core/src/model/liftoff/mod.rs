@@ -430,7 +430,7 @@ pub(crate) fn banded_signature<T: Float, M: Math<T>>(d: &Drive<T>, offset: T, v:
 
 /// Arcs shorter than this (rad) are left out of signatures: a landing's
 /// stick of zero length comes and goes with rounding.
-pub(crate) const SIGNATURE_MIN_ARC: f64 = 1e-9;
+pub(crate) const SIGNATURE_MIN_ARC: f64 = 1e-6;
 
 /// Base-4 digit of an arc kind (for signatures).
 pub(crate) fn arc_digit(kind: ArcKind) -> u32 {

@@ -90,20 +90,25 @@
 //! finite length when a stick trajectory first reaches the lower band near the
 //! end of a backward-slip piece). They are found, not bounded: the arc
 //! sequence of a spring (stick / forward / backward, arcs shorter than
-//! 10⁻⁹ rad ignored, the permanent spring's period taken as a cycle) is
-//! sampled at 8 interior points of each piece, and every change between
-//! neighbours is bisected to `10⁻⁵π` in `t` and made an interval end. Two
+//! 10⁻⁶ rad ignored — at `V = 0` rounding makes and unmakes such slivers —
+//! the permanent spring's period taken as a cycle) is sampled at 8 interior
+//! points of each segment, every change between neighbours is bisected to
+//! `10⁻⁵π` in `t`, and the segment is cut there into pieces, each with its own
+//! `1 − cos t` map (a slip that sets in tangentially makes `⟨s⟩` behave like
+//! `(ξ − ξ_k)^{3/2}` past the kink, smooth in that piece's `t`). Two
 //! changes that cancel between samples, and changes the sequence does not
 //! show, are left to the adaptive bisection and to the estimate. Measured
-//! (`tests/mdr.rs`): over 40 random scenes and four profiles the answer at
-//! `tol = 10⁻⁶` differs from the answer at the tightest tolerance by at most
-//! 0.14 of the two bounds; against the brute force over springs all
+//! (`tests/mdr.rs`): over 40 random scenes and four profiles the answers at
+//! `tol = 10⁻⁶` (at V and the limits μ(0±)) differ from those at the
+//! tightest tolerance by at most 0.71 of the two bounds; against the brute force over springs all
 //! gaps are within the brute force's own error (≤ 10⁻⁶).
 //!
-//! **Cost.** Each spring is one exact solve (~0.4–0.7 µs); a sphere's μ at
-//! `tol = 10⁻⁶` takes 50–75 springs plus ~30 for the kink search, at
-//! `10⁻⁸` 90–140 plus the same (`fricctl bench methods`, `cargo bench -p
-//! model-core --bench mdr`). A tolerance below the per-spring solvers' part
+//! **Cost.** Each spring is one solve (~0.4–0.7 µs). A sphere's μ took
+//! 74–105 spring solves (kink search included) and 54–74 µs of CPU at
+//! `tol = 10⁻⁶`, 122–178 solves and 81–133 µs at `10⁻⁸` (three drives,
+//! 1000 velocities each, release, `cargo test -p integration-tests --release
+//! --test mdr cpu_time -- --ignored --nocapture`; the machine was loaded, so
+//! these are upper values). A tolerance below the per-spring solvers' part
 //! ([`solver_bound`], ~3–8·10⁻⁹ for a sphere in f64: the flat solvers'
 //! verified precision constant 10⁻⁹·(1 + a + b), far above their true
 //! rounding) is refused with [`MdrError::ToleranceTooTight`].
@@ -198,7 +203,8 @@ pub struct MdrResult<T> {
     /// Error bound, units of μ₀ (≤ the tolerance asked for; module docs
     /// say what it covers).
     pub bound: T,
-    /// Springs evaluated (integrand evaluations of the quadrature).
+    /// Springs solved: the quadrature's integrand evaluations plus the
+    /// kink search's (module docs).
     pub evaluations: u32,
 }
 
@@ -411,41 +417,46 @@ fn curved<T: Float, M: Math<T>>(
     let segments = [(T::ZERO, xi_a), (xi_a, xi_star), (xi_star, xi_max)];
     let closed = normal::closed_form::<T, M>(n, a);
     let sliding_segment = 2usize;
+    // Pieces in ξ: each used segment, split where the springs' arc structure
+    // changes (module docs, "kinks"); piece k is integrated over
+    // u ∈ [kπ, (k+1)π] with its own map ξ = l + (r − l)(1 − cos t)/2, so that
+    // a square-root onset at a kink is as smooth in t as one at a segment end.
+    let mut pieces: heapless::Vec<(T, T, bool), MAX_PIECES> = heapless::Vec::new();
+    let mut searched = 0u32;
+    for (j, &(l, r)) in segments.iter().enumerate() {
+        if r <= l || (j == sliding_segment && closed.is_some()) {
+            continue;
+        }
+        let sliding = j == sliding_segment;
+        let mut left = l;
+        if !sliding {
+            searched += kinks::<T, M>(d, v, l, r, &offset, |xi| {
+                if xi > left && xi < r {
+                    let _ = pieces.push((left, xi, false));
+                    left = xi;
+                }
+            });
+        }
+        let _ = pieces.push((left, r, sliding));
+    }
     let integrand = |u: T| -> Result<[T; 3], MdrError> {
-        let j = ((u / T::PI).to_f64() as usize).min(2);
-        let (l, r) = segments[j];
-        let t = u - T::PI * T::from_u32(j as u32);
+        let k = ((u / T::PI).to_f64() as usize).min(pieces.len() - 1);
+        let (l, r, sliding) = pieces[k];
+        let t = u - T::PI * T::from_u32(k as u32);
         let (sin_t, cos_t) = M::sin_cos(t);
         let half = (r - l) * T::HALF;
         let xi = l + half * (T::ONE - cos_t);
         let jac = half * sin_t;
         let dd = offset(xi);
-        if j == sliding_segment {
-            if closed.is_some() {
-                return Ok([T::ZERO; 3]);
-            }
+        if sliding {
             return Ok([T::ZERO, normal::mean_band::<T, M>(dd, a) * jac, T::ZERO]);
         }
         let s = spring::<T, M>(d, dd, v, limit)?;
         Ok([(s.band - s.stretch) * jac, s.band * jac, s.unresolved * jac])
     };
-    // Interval ends in u = jπ + t: each used segment, split where the
-    // springs' arc structure changes (module docs, "kinks").
-    let mut ends: heapless::Vec<T, MAX_ENDS> = heapless::Vec::new();
-    for (j, &(l, r)) in segments.iter().enumerate() {
-        if r <= l || (j == sliding_segment && closed.is_some()) {
-            continue;
-        }
-        let base = T::PI * T::from_u32(j as u32);
-        if ends.last() != Some(&base) {
-            let _ = ends.push(base);
-        }
-        if j != sliding_segment && limit == Limit::Moving {
-            kinks::<T, M>(d, v, l, r, &offset, |t| {
-                let _ = ends.push(base + t);
-            });
-        }
-        let _ = ends.push(base + T::PI);
+    let mut ends: heapless::Vec<T, { MAX_PIECES + 1 }> = heapless::Vec::new();
+    for k in 0..=pieces.len() {
+        let _ = ends.push(T::PI * T::from_u32(k as u32));
     }
     let safety = T::from_f64(SAFETY);
     let eps_s = (precision_constant::<T>() + T::from_f64(M::MAX_REL_ERROR)) * (T::ONE + a + d.b);
@@ -474,12 +485,15 @@ fn curved<T: Float, M: Math<T>>(
     Ok(MdrResult {
         mu_over_mu0: mu.max(-T::ONE).min(T::ONE),
         bound,
-        evaluations: out.evaluations,
+        evaluations: out.evaluations + searched,
     })
 }
 
-/// Most interval ends of the quadrature's first partition.
-const MAX_ENDS: usize = 24;
+/// Most pieces of the quadrature's first partition: two searched segments
+/// cut by at most `KINK_SAMPLES − 1` kinks each, and the sliding segment
+/// (17 ≤ 20, checked at compile time).
+const MAX_PIECES: usize = 20;
+const _: () = assert!(2 * (KINK_SAMPLES as usize) < MAX_PIECES);
 
 /// Width (in units of π of the segment's `t`) to which a kink is bracketed:
 /// one left that close to an interval end costs the Kronrod rule about
@@ -489,12 +503,13 @@ const KINK_RESOLUTION: f64 = 1e-5;
 /// Points sampled per segment for changes of the arc structure.
 const KINK_SAMPLES: u32 = 8;
 
-/// The kinks of the springs' `⟨s⟩` inside `[l, r]` (ξ), reported as `t` of the
-/// segment's map `ξ = l + (r − l)(1 − cos t)/2`, in increasing order: the arc
+/// The kinks of the springs' `⟨s⟩` inside `[l, r]` (ξ), in increasing order,
+/// searched in `t` of the segment's map `ξ = l + (r − l)(1 − cos t)/2`: the arc
 /// structure ([`spring::signature`]) is sampled at [`KINK_SAMPLES`] interior
 /// points equally spaced in `t`, and each change between neighbours is
 /// bisected in `t` to [`KINK_RESOLUTION`]`·π`. Changes that cancel between
-/// two samples are left to the adaptive bisection.
+/// two samples are left to the adaptive bisection. Returns the number of
+/// springs solved.
 fn kinks<T: Float, M: Math<T>>(
     d: &Drive<T>,
     v: T,
@@ -502,9 +517,11 @@ fn kinks<T: Float, M: Math<T>>(
     r: T,
     offset: &impl Fn(T) -> T,
     mut found: impl FnMut(T),
-) {
+) -> u32 {
     let half = (r - l) * T::HALF;
+    let calls = core::cell::Cell::new(0u32);
     let sig = |t: T| {
+        calls.set(calls.get() + 1);
         let (_, cos_t) = M::sin_cos(t);
         spring::signature::<T, M>(d, offset(l + half * (T::ONE - cos_t)), v)
     };
@@ -524,9 +541,11 @@ fn kinks<T: Float, M: Math<T>>(
                     hi = mid;
                 }
             }
-            found((lo + hi) * T::HALF);
+            let (_, cos_t) = M::sin_cos((lo + hi) * T::HALF);
+            found(l + half * (T::ONE - cos_t));
         }
         t_prev = t;
         s_prev = s;
     }
+    calls.get()
 }

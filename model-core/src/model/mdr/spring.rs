@@ -113,20 +113,38 @@ pub(crate) fn forward_critical<T: Float, M: Math<T>>(drive: &Drive<T>, d: T) -> 
     }
 }
 
-/// The arc structure of the spring at offset `d` (forward convention,
-/// `V > 0` for permanent springs), as a base-4 code: a change between two
-/// offsets brackets a possible kink of `⟨s⟩(d)`. `None` where it is not
-/// available (`V = 0` for permanent springs, or no contact).
+/// The arc structure of the spring at offset `d` (forward convention; a
+/// permanent spring at `V = 0` takes its μ(0⁺) period), as a base-4 code: a
+/// change between two offsets brackets a possible kink of `⟨s⟩(d)`. `None`
+/// where it is not available (no contact, or a solver refused).
 pub(crate) fn signature<T: Float, M: Math<T>>(drive: &Drive<T>, d: T, v: T) -> Option<u32> {
     let a = drive.a;
     if d <= -a {
         return None;
     }
     if d > a {
-        if v == T::ZERO {
-            return None;
-        }
-        let (_, arcs) = exact::steady_state::<T, M>(&scaled(drive, d), v / d).ok()?;
+        let s = scaled(drive, d);
+        let arcs = if v == T::ZERO {
+            // The V → 0⁺ period of `exact::limits_at_zero`.
+            let c = s.c_forward::<M>();
+            if c == T::ZERO {
+                return Some(2);
+            }
+            let problem = exact::Forward {
+                drive: s,
+                v: T::ZERO,
+                c,
+                sign: T::ONE,
+            };
+            let mut arcs: heapless::Vec<exact::Arc<T>, { exact::MAX_ARCS }> = heapless::Vec::new();
+            let mut push = |arc: exact::Arc<T>| {
+                let _ = arcs.push(arc);
+            };
+            exact::period::mean_stretch::<T, M>(&problem, Some(&mut push)).ok()?;
+            arcs
+        } else {
+            exact::steady_state::<T, M>(&s, v / d).ok()?.1
+        };
         // The period is a cycle: merge neighbours of one kind (also across the
         // period's start) and take the smallest rotation, so that an event
         // crossing the phase where the period is cut changes nothing.
