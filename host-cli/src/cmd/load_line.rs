@@ -74,7 +74,7 @@ struct LoadLineOut {
     velocity_at_max_efficiency: Option<f64>,
     /// Contact model: flat | lift-off.
     contact: &'static str,
-    /// Mean normal force F̄z (N; kz·uz0 in permanent contact, kz·uz0·⟨w⁺⟩ with lift-off; in units of kz·uz0 for a dimensionless scene).
+    /// Mean normal force F̄z (N; kz·uz0 in permanent contact, kz·uz0·⟨w⁺⟩ with lift-off; in units of kz·uz0 for a dimensionless scene, whose forces and powers are in units of μ0·F̄z and μ0·F̄z·ωW0).
     fz_mean: f64,
     /// Velocity unit ωW0 (m/s; 1 for a dimensionless scene).
     velocity_scale: f64,
@@ -106,7 +106,8 @@ impl LoadLineCmd {
             }
         };
         let fz = p.kz * p.uz0 * normal;
-        let force_scale = s.mu0() * fz;
+        // Dimensionless scenes report forces in units of μ0·F̄z (F̄z = 1 unit).
+        let force_scale = if rs.dimensionless { 1.0 } else { s.mu0() * fz };
         let vs = s.velocity_scale();
         let ps = force_scale * vs;
         let fail = |e: LawError| CliError::failure(e.to_string());
@@ -267,7 +268,7 @@ impl LoadLineCmd {
                     series: vec![series("P_out, to the body", pout, Mark::Line, 1)],
                 },
             ];
-            return render_panels(path, &panels, 1, 2, (1200, 600));
+            return render_panels(path, &panels, 1, 2, (1700, 650));
         }
         let panels = [
             line_panel,
@@ -298,10 +299,8 @@ impl LoadLineCmd {
 
 /// The aligned text summary.
 fn write_text(out: &mut impl Write, o: &LoadLineOut) -> std::io::Result<()> {
-    // Dimensionless: the second column is in μ0·k_z·u_z0 (= μ0·F̄z in
-    // permanent contact; with lift-off F̄z = k_z·u_z0·⟨w⁺⟩).
     let (fu, vu, pu) = if o.dimensionless {
-        ("μ0·kz·uz0", "ωW0", "μ0·kz·uz0·ωW0")
+        ("μ0·F̄z", "ωW0", "μ0·F̄z·ωW0")
     } else {
         ("N", "m/s", "W")
     };
