@@ -169,3 +169,110 @@ fn fit_reads_a_sweep_file_and_refuses_bad_ones() {
     let saved: Value = serde_json::from_slice(&std::fs::read(&fit_out).unwrap()).unwrap();
     assert_eq!(saved["kx"], f["kx"]);
 }
+
+/// Every contact model through the one law: lift-off (μ at rest unique, so
+/// one stall force is −μ(0) or μ(0) of the window solver, within its bound)
+/// and a sphere (stall force −μ(0⁺) of the MDR, no-load velocity a root of
+/// its law: |μ(v_nl)| within the MDR's bound plus the law's slope (≤ 5 per
+/// ωW₀ here, checked by a difference quotient) times the root's bracket
+/// 8ε·v_c). Neither has a derived input power: efficiency is null and
+/// stderr names the contact in one line.
+#[test]
+fn load_line_of_every_contact() {
+    use model_core::mdr::{self, Profile};
+    use model_core::model::liftoff;
+    use model_core::{Drive, Libm};
+    // Lift-off, a = 1.5, b = 0.75, φ = 200°.
+    let out = fricctl()
+        .args([
+            "load-line",
+            "--duz-rel",
+            "1.5",
+            "--ratio",
+            "0.5",
+            "--phi-deg",
+            "200",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.lines().count(), 1);
+    assert!(err.contains("lift-off"), "{err}");
+    let o: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(o["max_efficiency"].is_null());
+    assert_eq!(o["contact"], "lift-off");
+    let d = Drive::new::<Libm>(1.5, 0.75, 200f64.to_radians());
+    let m0 = liftoff::mu_over_mu0::<f64, Libm>(&d, 0.0).unwrap();
+    let bound = liftoff::error_bound::<f64, Libm>(&d);
+    let fwd = o["stall_force_over_mu0_fz"].as_f64().unwrap();
+    let bwd = o["stall_force_backward_over_mu0_fz"].as_f64().unwrap();
+    assert!((fwd - (-m0).max(0.0)).abs() <= bound && (bwd - m0.max(0.0)).abs() <= bound);
+    assert!(fwd == 0.0 || bwd == 0.0, "unique μ(0): one side only");
+    // Sphere, Fig. 6 scene at φ = 40°.
+    let o = json(&[
+        "load-line",
+        "--duz-rel",
+        "0.5",
+        "--ratio",
+        "2",
+        "--phi-deg",
+        "40",
+        "--profile",
+        "sphere",
+    ]);
+    assert_eq!(o["contact"], "sphere");
+    assert!(o["max_efficiency"].is_null());
+    let d = Drive::new::<Libm>(0.5, 1.0, 40f64.to_radians());
+    let p = Profile::Sphere;
+    let (plus, _) = mdr::limits_at_zero::<f64, Libm>(&d, &p, 1e-8).unwrap();
+    let stall = o["stall_force_over_mu0_fz"].as_f64().unwrap();
+    assert!(
+        (stall + plus.mu_over_mu0).abs() <= 2.0 * plus.bound.max(1e-9),
+        "{stall}"
+    );
+    let v = o["no_load_velocity"].as_f64().unwrap();
+    let mu = |x: f64| {
+        mdr::mu_over_mu0::<f64, Libm>(&d, &p, x, 1e-8)
+            .unwrap()
+            .mu_over_mu0
+    };
+    let slope = (mu(v + 1e-6) - mu(v - 1e-6)) / 2e-6;
+    assert!(slope.abs() <= 5.0, "slope {slope}");
+    let at = mdr::mu_over_mu0::<f64, Libm>(&d, &p, v, 1e-8).unwrap();
+    let (cf, _) = mdr::critical_velocities::<f64, Libm>(&d, &p).unwrap();
+    assert!(
+        at.mu_over_mu0.abs() <= 2.0 * at.bound + 5.0 * 8.0 * f64::EPSILON * cf,
+        "μ(v_nl) = {:e}",
+        at.mu_over_mu0
+    );
+    // SI scenes with a curved profile are refused (their F̄z is not derived).
+    let out = fricctl()
+        .args([
+            "load-line",
+            "--mu0",
+            "0.3",
+            "--kz",
+            "2e6",
+            "--kx",
+            "1.5e6",
+            "--uz0",
+            "5e-6",
+            "--duz",
+            "2.5e-6",
+            "--dux",
+            "2e-6",
+            "--freq",
+            "40e3",
+            "--phi-deg",
+            "30",
+            "--profile",
+            "sphere",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--profile") && err.contains("sphere"), "{err}");
+}

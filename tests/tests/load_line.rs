@@ -225,3 +225,57 @@ fn best_operating_points_beat_a_dense_scan() {
         }
     }
 }
+
+/// The load line of any contact model (`load_line_of`) on the lift-off
+/// solver (a ≥ 1): μ at rest is unique, so exactly one stall force is
+/// positive (the other side's band edge is the same value with the opposite
+/// sign convention) and the no-load velocity is a root of the lift-off law.
+/// Tolerance: the root finder brackets to 8ε·c, so |μ(v_nl)| is within the
+/// solver's bound (`liftoff::error_bound`) plus the law's slope (≤ 10 per ωW₀
+/// on these scenes, checked by a difference quotient) times 8ε·c.
+/// The flat law through the same function reproduces `load_line` exactly.
+#[test]
+fn load_line_of_any_contact() {
+    use model_core::model::liftoff;
+    use model_core::model::load_line::load_line_of;
+    use model_core::Drive;
+    let mut checked = 0;
+    for &(a, b, phi) in &[(1.5, 0.75, 0.6), (2.0, 1.0, 2.5), (1.2, 3.0, 4.0)] {
+        let d = Drive::new::<Libm>(a, b, phi);
+        let mu = |v: f64| liftoff::mu_over_mu0::<f64, Libm>(&d, v);
+        let m0 = mu(0.0).unwrap();
+        let (cf, cb) = liftoff::critical_velocities::<f64, Libm>(&d).unwrap();
+        let line = load_line_of(m0, m0, cf, cb, mu).unwrap();
+        assert!(
+            (line.stall_forward > 0.0) != (line.stall_backward > 0.0) || m0 == 0.0,
+            "a={a}: both stall forces positive with a unique μ(0) = {m0}"
+        );
+        assert_eq!(line.stall_forward, (-m0).max(0.0));
+        assert_eq!(line.stall_backward, m0.max(0.0));
+        let bound = liftoff::error_bound::<f64, Libm>(&d);
+        for (v, c) in [(line.no_load_forward, cf), (-line.no_load_backward, cb)] {
+            if v == 0.0 {
+                continue;
+            }
+            let slope = (mu(v + 1e-7).unwrap() - mu(v - 1e-7).unwrap()) / 2e-7;
+            assert!(slope.abs() <= 10.0, "slope {slope}");
+            let r = mu(v).unwrap();
+            assert!(
+                r.abs() <= bound + 10.0 * 8.0 * f64::EPSILON * c,
+                "a={a}: μ({v}) = {r:e}"
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked >= 3, "only {checked} no-load roots checked");
+    // The flat law through the same function gives the flat load line.
+    for (a, ratio, phi_deg) in scenes() {
+        let d = Drive::new::<Libm>(a, a * ratio, phi_deg.to_radians());
+        let (p, m) = exact::limits_at_zero::<f64, Libm>(&d).unwrap();
+        let any = load_line_of(p, m, d.c_forward::<Libm>(), d.c_backward::<Libm>(), |v| {
+            exact::mu_over_mu0::<f64, Libm>(&d, v)
+        })
+        .unwrap();
+        assert_eq!(any, load_line::<f64, Libm>(&d).unwrap());
+    }
+}

@@ -4,7 +4,9 @@
 //! * [`methods`] — `--method auto` against always-exact and always-fixed-step
 //!   on the curve and map commands;
 //! * [`stability`] — maps of where each method stops being trustworthy;
-//! * [`dac`] — the DAC waveform path: spectral purity against time per sample.
+//! * [`dac`] — the DAC waveform path: spectral purity against time per sample;
+//! * [`motion`] — the slow dynamics: homogenised against resolved over scale
+//!   separation and mass, the drift map, the Fig. 6 load lines.
 
 use std::time::Instant;
 
@@ -14,6 +16,7 @@ use crate::error::CliResult;
 
 pub mod dac;
 pub mod methods;
+pub mod motion;
 pub mod stability;
 pub mod work_precision;
 
@@ -28,6 +31,8 @@ pub enum BenchCmd {
     Stability(stability::StabilityArgs),
     /// DAC waveform path: SFDR and worst error (LSB) against ns per sample (CSV + SVG + PNG)
     Dac(dac::DacArgs),
+    /// Slow dynamics: homogenised vs resolved error against cost, drift map, Fig. 6 load lines (CSV + PNG)
+    Motion(motion::MotionArgs),
 }
 
 /// Runs a bench.
@@ -37,6 +42,7 @@ pub fn run(cmd: &BenchCmd) -> CliResult {
         BenchCmd::Methods(a) => methods::run(a),
         BenchCmd::Stability(a) => stability::run(a),
         BenchCmd::Dac(a) => dac::run(a),
+        BenchCmd::Motion(a) => motion::run(a),
     }
 }
 

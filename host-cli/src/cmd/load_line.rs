@@ -2,18 +2,29 @@
 //! no-load velocities, the force–velocity line, powers and efficiency
 //! (model-core [`model_core::model::load_line`], whose doc states the sign
 //! conventions and the power balance).
+//!
+//! μ(v) comes through [`crate::motion::law::Law`], the one interface for
+//! every contact model: stall forces, no-load velocities and the output
+//! power `−μ(v)F̄z·v` exist for all of them. The transducers' input power and
+//! so the efficiency are derived for the flat punch in permanent contact only
+//! ([`load_line::powers`]); for another contact they are refused with one
+//! line naming it (JSON `null`), not approximated.
 
 use std::io::Write;
 use std::path::PathBuf;
 
 use clap::Args;
-use model_core::model::load_line::{self, best_forward, powers, Objective, OperatingPoint};
+use model_core::model::load_line::{
+    self, best_forward, load_line_of, maximise_forward, powers, Objective, OperatingPoint,
+};
+use model_core::scene::ContactMode;
 use model_core::Libm;
 use serde::Serialize;
 
 use crate::args::count;
 use crate::error::{CliError, CliResult};
 use crate::eval::exact_failure;
+use crate::motion::law::{Law, LawError};
 use crate::output::{stdout_error, write_json};
 use crate::plot::{render_panels, Mark, Panel, Series};
 use crate::scene_args::SceneArgs;
@@ -56,11 +67,14 @@ struct LoadLineOut {
     velocity_at_max_power: f64,
     /// Load force there (units μ0·F̄z).
     force_at_max_power_over_mu0_fz: f64,
-    /// Largest forward efficiency P_out/P_in.
-    max_efficiency: f64,
-    /// Velocity of the maximum efficiency point.
-    velocity_at_max_efficiency: f64,
-    /// Mean normal force F̄z = kz·uz0 (N; 1 for a dimensionless scene).
+    /// Largest forward efficiency P_out/P_in (null where the contact model
+    /// has no derived input power).
+    max_efficiency: Option<f64>,
+    /// Velocity of the maximum efficiency point (null as max_efficiency).
+    velocity_at_max_efficiency: Option<f64>,
+    /// Contact model: flat | lift-off.
+    contact: &'static str,
+    /// Mean normal force F̄z (N; kz·uz0 in permanent contact, kz·uz0·⟨w⁺⟩ with lift-off; in units of kz·uz0 for a dimensionless scene, whose forces and powers are in units of μ0·F̄z and μ0·F̄z·ωW0).
     fz_mean: f64,
     /// Velocity unit ωW0 (m/s; 1 for a dimensionless scene).
     velocity_scale: f64,
@@ -76,24 +90,61 @@ impl LoadLineCmd {
         if self.points > 100_000 {
             return Err(CliError::usage("--points: at most 100000"));
         }
-        let rs = self.scene.resolve()?;
+        let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         let s = &rs.scene;
         let d = s.drive();
         let p = s.params();
-        let fz = p.kz * p.uz0;
-        let force_scale = s.mu0() * fz;
+        let law = Law::with_profile(s, rs.profile);
+        let normal = match law.mean_normal() {
+            Some(n) => n,
+            None if rs.dimensionless => 1.0,
+            None => {
+                return Err(CliError::usage(format!(
+                    "--profile: the {} profile's mean normal force in newtons is not derived here; give the scene by its groups (--duz-rel, --ratio) for a load line in units of μ0·F̄z",
+                    law.name()
+                )))
+            }
+        };
+        let fz = p.kz * p.uz0 * normal;
+        // Dimensionless scenes report forces in units of μ0·F̄z (F̄z = 1 unit).
+        let force_scale = if rs.dimensionless { 1.0 } else { s.mu0() * fz };
         let vs = s.velocity_scale();
         let ps = force_scale * vs;
-        let line = load_line::load_line::<f64, Libm>(&d).map_err(exact_failure)?;
-        let best_p =
-            best_forward::<f64, Libm>(&d, &line, Objective::Power).map_err(exact_failure)?;
-        let best_e =
-            best_forward::<f64, Libm>(&d, &line, Objective::Efficiency).map_err(exact_failure)?;
-        let get = |b: &Option<OperatingPoint<f64>>| {
-            b.map_or((0.0, 0.0, 0.0), |o| (o.v, o.force, o.powers.output))
+        let fail = |e: LawError| CliError::failure(e.to_string());
+        // The solver's own tolerance: its best bound (the law retries with it).
+        let tol = 1e-12;
+        let zero = law.at(0.0, tol).map_err(fail)?;
+        let (cf, cb) = law.critical().map_err(fail)?;
+        let line = load_line_of(zero.upper, zero.lower, cf, cb, |v| {
+            law.mu(v, tol).map(|m| m.0)
+        })
+        .map_err(fail)?;
+        let (vp, fp, pp, eff) = if law.has_powers() {
+            let best_p =
+                best_forward::<f64, Libm>(&d, &line, Objective::Power).map_err(exact_failure)?;
+            let best_e = best_forward::<f64, Libm>(&d, &line, Objective::Efficiency)
+                .map_err(exact_failure)?;
+            let get = |b: &Option<OperatingPoint<f64>>| {
+                b.map_or((0.0, 0.0, 0.0), |o| (o.v, o.force, o.powers.output))
+            };
+            let (vp, fp, pp) = get(&best_p);
+            let eff = best_e.map_or((0.0, 0.0), |o| (o.powers.efficiency(), o.v));
+            (vp, fp, pp, Some(eff))
+        } else if line.no_load_forward > 0.0 {
+            // Output power −μ(V)·V needs only the law.
+            let vp = maximise_forward(line.no_load_forward, |v| law.mu(v, tol).map(|m| -m.0 * v))
+                .map_err(fail)?;
+            let mu = law.mu(vp, tol).map_err(fail)?.0;
+            (vp, -mu, -mu * vp, None)
+        } else {
+            (0.0, 0.0, 0.0, None)
         };
-        let (vp, fp, pp) = get(&best_p);
-        let (ve, _, _) = get(&best_e);
+        if eff.is_none() {
+            eprintln!(
+                "load-line: input power and efficiency not computed for the {} contact (derived for the flat punch in permanent contact only)",
+                law.name()
+            );
+        }
         let o = LoadLineOut {
             stall_force_over_mu0_fz: line.stall_forward,
             stall_force: line.stall_forward * force_scale,
@@ -104,15 +155,16 @@ impl LoadLineCmd {
             max_power: pp * ps,
             velocity_at_max_power: vp * vs,
             force_at_max_power_over_mu0_fz: fp,
-            max_efficiency: best_e.map_or(0.0, |o| o.powers.efficiency()),
-            velocity_at_max_efficiency: ve * vs,
+            max_efficiency: eff.map(|e| e.0),
+            velocity_at_max_efficiency: eff.map(|e| e.1 * vs),
+            contact: law.name(),
             fz_mean: fz,
             velocity_scale: vs,
             power_scale: ps,
             dimensionless: rs.dimensionless,
         };
         if let Some(path) = &self.plot {
-            self.plot_line(path, &d, &line, &o)?;
+            self.plot_line(path, &law, &line, &o)?;
             eprintln!("wrote {}", path.display());
         }
         if self.json {
@@ -124,7 +176,7 @@ impl LoadLineCmd {
     fn plot_line(
         &self,
         path: &std::path::Path,
-        d: &model_core::Drive<f64>,
+        law: &Law,
         line: &load_line::LoadLine<f64>,
         o: &LoadLineOut,
     ) -> CliResult {
@@ -134,6 +186,7 @@ impl LoadLineCmd {
             ));
         }
         let n = self.points;
+        let d = &law.scene().drive();
         let g = model_core::Groups {
             duz_rel: d.a,
             dux_rel: d.b,
@@ -158,13 +211,22 @@ impl LoadLineCmd {
             (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for i in 1..n {
             let v = line.no_load_forward * i as f64 / n as f64;
-            let pw = powers::<f64, Libm>(d, v).map_err(exact_failure)?;
             let x = v * o.velocity_scale;
-            force.push((x, -pw.mu_over_mu0));
-            pin.push((x, pw.input * o.power_scale));
-            pout.push((x, pw.output * o.power_scale));
-            pf.push((x, pw.friction * o.power_scale));
-            eta.push((x, pw.efficiency()));
+            if law.has_powers() {
+                let pw = powers::<f64, Libm>(d, v).map_err(exact_failure)?;
+                force.push((x, -pw.mu_over_mu0));
+                pin.push((x, pw.input * o.power_scale));
+                pout.push((x, pw.output * o.power_scale));
+                pf.push((x, pw.friction * o.power_scale));
+                eta.push((x, pw.efficiency()));
+            } else {
+                let mu = law
+                    .mu(v, 1e-12)
+                    .map_err(|e| CliError::failure(e.to_string()))?
+                    .0;
+                force.push((x, -mu));
+                pout.push((x, -mu * v * o.power_scale));
+            }
         }
         force.insert(0, (0.0, line.stall_forward));
         force.push((o.no_load_velocity, 0.0));
@@ -172,6 +234,7 @@ impl LoadLineCmd {
         let pmax = pin
             .iter()
             .chain(pf.iter())
+            .chain(pout.iter())
             .map(|p| p.1)
             .fold(0.0f64, f64::max)
             * 1.1;
@@ -182,15 +245,33 @@ impl LoadLineCmd {
             mark,
             color,
         };
+        let line_panel = Panel {
+            title: format!("load line, {} contact ({scene})", law.name()),
+            x_label: vunit.into(),
+            y_label: "load −μ/μ0 (units μ0·F̄z)".into(),
+            x: (0.0, xmax),
+            y: (0.0, line.stall_forward * 1.1),
+            series: vec![series("−μ(v)/μ0", force, Mark::Line, 0)],
+        };
+        if !law.has_powers() {
+            let panels = [
+                line_panel,
+                Panel {
+                    title: format!(
+                        "output power −μ(v)F̄z·v (input power: not derived for the {} contact)",
+                        law.name()
+                    ),
+                    x_label: vunit.into(),
+                    y_label: punit.into(),
+                    x: (0.0, xmax),
+                    y: (0.0, pmax.max(1e-300)),
+                    series: vec![series("P_out, to the body", pout, Mark::Line, 1)],
+                },
+            ];
+            return render_panels(path, &panels, 1, 2, (1700, 650));
+        }
         let panels = [
-            Panel {
-                title: format!("load line ({scene})"),
-                x_label: vunit.into(),
-                y_label: "load −μ/μ0 (units μ0·F̄z)".into(),
-                x: (0.0, xmax),
-                y: (0.0, line.stall_forward * 1.1),
-                series: vec![series("−μ(v)/μ0", force, Mark::Line, 0)],
-            },
+            line_panel,
             Panel {
                 title: "powers: P_in = P_out + P_friction (normal transducer: 0)".into(),
                 x_label: vunit.into(),
@@ -249,11 +330,16 @@ fn write_text(out: &mut impl Write, o: &LoadLineOut) -> std::io::Result<()> {
             "max power (forward)     {:.6e} {pu} at v0 = {:.6e} {vu}, load {:.6} μ0·F̄z",
             o.max_power, o.velocity_at_max_power, o.force_at_max_power_over_mu0_fz
         )?;
-        writeln!(
-            out,
-            "max efficiency          {:.6} at v0 = {:.6e} {vu}",
-            o.max_efficiency, o.velocity_at_max_efficiency
-        )?;
+        match (o.max_efficiency, o.velocity_at_max_efficiency) {
+            (Some(e), Some(v)) => {
+                writeln!(out, "max efficiency          {e:.6} at v0 = {v:.6e} {vu}")?
+            }
+            _ => writeln!(
+                out,
+                "max efficiency          not computed ({} contact: no derived input power)",
+                o.contact
+            )?,
+        }
     } else {
         writeln!(
             out,

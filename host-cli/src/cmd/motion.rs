@@ -1,21 +1,22 @@
 //! `fricctl motion`: a body of mass M driven by a slow force over the
 //! vibrated contact (issue 14 §2; the physics in [`crate::motion`]).
 //!
+//! # Contact models
+//! The law μ(v) comes from [`crate::motion::law::Law`], one interface for
+//! every contact model-core offers (flat punch, lift-off; curved profiles
+//! once they exist): forces are in units of `μ₀F̄z` with `F̄z` the contact's
+//! mean normal force.
+//!
 //! # Method choice (`--method auto`)
 //! The homogenised model replaces the contact by its steady-state law. Its
-//! error (units ωW₀, estimated, not proven) is
-//! `E_h = C_H·(ν·v_ref + 2π·(1 + |f0| + |f|)/m̃)`: the first term is the scale
-//! separation `ν = Ω/ω` (the contact's state lags the law by a few ultrasonic
-//! periods while the load moves on), the second the body's velocity change
-//! within one ultrasonic period (force at most `1 + |f0| + |f|` in μ₀F̄z over
-//! the reduced mass `m̃ = Mω²/k_x`), i.e. the ultrasonic period against the
-//! body's response time. `v_ref = max(v_c, v_c')/(ωW₀)` is the larger
-//! critical velocity (eq. 8). `C_H` = [`C_H`] is calibrated on resolved runs
-//! (see [`C_H`]).
-//! With `M = 0` only the first term applies. `auto` takes the homogenised
-//! model when `E_h` plus its numerical error is within `--tol·v_ref`, the
-//! resolved one otherwise (`M = 0` is always homogenised: a massless body
-//! has no resolved dynamics).
+//! error `E_h = π²KS/(2n̄)` (units ωW₀) is derived in
+//! [`crate::motion::estimate`]: `K` bounds the body's acceleration in
+//! ultrasonic units (its ripple within a period against its response time
+//! for `M > 0`; the scale separation `ν·max|dV/dT|` for `M = 0`), `S` is the
+//! law's mean inverse slope. The homogenised model always runs first (it is
+//! cheap and gives `K`); `auto` keeps it when `E_h` plus its numerical error
+//! is within `--tol·v_ref`, and runs the resolved one otherwise (`M = 0` is
+//! always homogenised: a massless body has no resolved dynamics).
 
 use std::f64::consts::TAU;
 use std::io::Write;
@@ -23,25 +24,18 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::{Args, ValueEnum};
+use model_core::scene::ContactMode;
 use serde::Serialize;
 
 use crate::error::{CliError, CliResult};
+use crate::motion::estimate;
+use crate::motion::law::Law;
 use crate::motion::table::MuTable;
 use crate::motion::{homogenised, resolved, Problem, Run};
 use crate::output::{stdout_error, write_json, write_rows};
 use crate::plot::{render_panels, Mark, Panel, Series};
 use crate::scene_args::SceneArgs;
 use crate::sweep::progress_bar;
-
-/// Calibration constant of the homogenisation error estimate (module docs),
-/// from resolved runs on the paper's Fig. 7 scene (φ = 0, f = 0.5, f0 = 0):
-/// over `m̃ν ∈ {1, 10}` and ν from 3·10⁻⁴ to 10⁻² the measured |homogenised −
-/// resolved| was at most 0.44 of the bracket `ν·v_ref + 2π(1 + |f0| + |f|)/m̃`,
-/// so `C_H = 1` (≈ 2× margin). At `m̃ν = 10` the error is not monotone in ν
-/// (7.3e-4 at ν = 10⁻³, 1.7e-4 at 3·10⁻⁴, 3.7e-6 at 10⁻⁵, drift 7.3e-3): the
-/// resolved body rings on the contact's tangential stiffness while stuck
-/// (period `2π√(M/k_x)`), which the homogenised model, sticking rigidly, lacks.
-pub const C_H: f64 = 1.0;
 
 /// Most load periods when running until the periodic regime.
 const MAX_PERIODS: u32 = 2000;
@@ -101,6 +95,8 @@ pub struct MotionCmd {
 #[derive(Serialize, Debug)]
 struct Outcome {
     method: &'static str,
+    /// Contact model: flat | lift-off.
+    contact: &'static str,
     /// Drift over the last load period, m/s.
     mean_velocity: f64,
     /// Estimated error of mean_velocity, m/s (model + numerics).
@@ -124,6 +120,8 @@ struct Outcome {
     response_time: f64,
     /// Mω²/k_x.
     mass_rel: f64,
+    /// Mean normal force F̄z in units of kz·uz0 (1: permanent contact).
+    fz_mean_over_kz_uz0: f64,
     mu_0plus_over_mu0: f64,
     mu_0minus_over_mu0: f64,
     /// Nodes of the μ(v) table.
@@ -162,7 +160,7 @@ fn finite(x: f64, flag: &str) -> CliResult<f64> {
 impl MotionCmd {
     /// Runs the command.
     pub fn run(self, out: &mut impl Write) -> CliResult {
-        let rs = self.scene.resolve()?;
+        let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         let scene = rs.scene;
         let prm = *scene.params();
         let mass = finite(self.mass, "mass")?;
@@ -203,12 +201,38 @@ impl MotionCmd {
                 Some(n as u32)
             }
         };
+        let law_fn = Law::with_profile(&scene, rs.profile);
+        // A curved profile's mean normal force (in units of k_z u_z0) is not
+        // derived: only what needs no force scale is computed for it.
+        let normal = match law_fn.mean_normal() {
+            Some(n) => n,
+            None => {
+                let name = law_fn.name();
+                if !rs.dimensionless {
+                    return Err(CliError::usage(format!(
+                        "--profile: the {name} profile's mean normal force in newtons is not derived here; give the scene by its groups (--duz-rel, --ratio)"
+                    )));
+                }
+                if self.mass != 0.0 {
+                    return Err(CliError::usage(format!(
+                        "--mass: a body with mass on the {name} profile needs its mean normal force in units of k_z·u_z0, not derived here; use --mass 0"
+                    )));
+                }
+                if self.spring != 0.0 {
+                    return Err(CliError::usage(format!(
+                        "--spring: a spring on the {name} profile needs its mean normal force in units of k_z·u_z0, not derived here"
+                    )));
+                }
+                1.0
+            }
+        };
         let p = Problem {
             f0,
             f,
             nu: big_omega / prm.omega,
             mass: mass * prm.omega * prm.omega / prm.kx,
             kappa: spring / prm.kx,
+            normal,
         };
         if !p.mass.is_finite() || (mass > 0.0 && p.mass < f64::MIN_POSITIVE) {
             return Err(CliError::usage("--mass: out of range for this scene"));
@@ -231,48 +255,51 @@ impl MotionCmd {
             }
             (m, _) => m,
         };
+        if method == MotionMethod::Resolved {
+            law_fn
+                .resolvable()
+                .map_err(|e| CliError::usage(format!("--method: {e}")))?;
+        }
         let d = scene.drive();
         let vs = scene.velocity_scale();
         let started = Instant::now();
-        let law = MuTable::new(&d, (0.02 * tol).max(1e-9))
+        let law = MuTable::new(&law_fn, (0.02 * tol).max(1e-9))
             .map_err(|e| CliError::failure(e.to_string()))?;
         let c = law.c_forward.max(law.c_backward);
         let v_ref = if c > 0.0 { c } else { 1.0 };
         let tol_v = tol * v_ref;
         // Velocity error of the table: its force error over the mean slope of each side.
-        let inv_slope = [
-            law.c_forward / (1.0 - law.mu_0plus).max(1e-12),
-            law.c_backward / (1.0 + law.mu_0minus).max(1e-12),
-        ]
-        .into_iter()
-        .fold(0.0, f64::max);
-        let e_table = law.interpolation_error * inv_slope;
-        let e_h = if mass == 0.0 {
-            C_H * p.nu * v_ref
-        } else {
-            C_H * (p.nu * v_ref + TAU * (1.0 + f0.abs() + f.abs()) / p.mass)
-        };
-        let use_h = match method {
-            MotionMethod::Homogenised => true,
-            MotionMethod::Resolved => false,
-            MotionMethod::Auto => mass == 0.0 || e_h + e_table <= tol_v,
-        };
+        let e_table = law.interpolation_error * estimate::inverse_slope(&law);
         let total = periods.unwrap_or(MAX_PERIODS);
         let pb = progress_bar(
             u64::from(total),
             "motion {bar:40} {pos} load periods (of at most {len} per run)",
         );
         let tick = || pb.inc(1);
+        // The homogenised run always comes first: cheap, and it gives the
+        // body's acceleration bound K of the estimate.
+        let hs = homogenised::Settings {
+            tol: 0.1 * tol_v,
+            periods,
+            max_periods: MAX_PERIODS,
+        };
+        let h_run = homogenised::run(&p, &law, &hs, &mut || {
+            tick();
+        });
+        let e_h = estimate::homogenisation_error(&p, d.a, &law, &h_run);
+        let use_h = match method {
+            MotionMethod::Homogenised => true,
+            MotionMethod::Resolved => false,
+            MotionMethod::Auto => {
+                mass == 0.0
+                    || e_h + e_table + h_run.numerical_error <= tol_v
+                    || law_fn.resolvable().is_err()
+            }
+        };
         let run: Run = if use_h {
-            let s = homogenised::Settings {
-                tol: 0.1 * tol_v,
-                periods,
-                max_periods: MAX_PERIODS,
-            };
-            homogenised::run(&p, &law, &s, &mut || {
-                tick();
-            })
+            h_run
         } else {
+            pb.set_position(0);
             let s = resolved::Settings {
                 tol: 0.1 * tol_v,
                 periods,
@@ -289,6 +316,7 @@ impl MotionCmd {
         let slope = law.max_slope();
         let o = Outcome {
             method: if use_h { "homogenised" } else { "resolved" },
+            contact: law_fn.name(),
             mean_velocity: run.mean_velocity * vs,
             error_estimate: error * vs,
             v_ref: v_ref * vs,
@@ -302,18 +330,19 @@ impl MotionCmd {
             steps: run.steps,
             scale_separation: 1.0 / p.nu,
             response_time: if slope > 0.0 {
-                p.mass / slope / prm.omega
+                p.mass / (p.normal * slope) / prm.omega
             } else {
                 f64::INFINITY
             },
             mass_rel: p.mass,
+            fz_mean_over_kz_uz0: p.normal,
             mu_0plus_over_mu0: law.mu_0plus,
             mu_0minus_over_mu0: law.mu_0minus,
             table_nodes: law.nodes(),
             table_error_over_mu0: law.interpolation_error,
             wall_time: wall,
         };
-        let fz = prm.mu0 * prm.kz * prm.uz0;
+        let fz = prm.mu0 * prm.kz * prm.uz0 * p.normal;
         if let Some(path) = &self.csv {
             let rows: Vec<Row> = run
                 .trajectory
@@ -376,6 +405,7 @@ fn write_text(out: &mut impl Write, o: &Outcome, dimless: bool) -> std::io::Resu
         ("m/s", "s")
     };
     writeln!(out, "method                 {}", o.method)?;
+    writeln!(out, "contact                {}", o.contact)?;
     writeln!(out, "mean velocity          {:.6e} {v}", o.mean_velocity)?;
     writeln!(out, "error estimate         {:.3e} {v}", o.error_estimate)?;
     writeln!(

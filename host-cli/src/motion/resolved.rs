@@ -4,17 +4,20 @@
 //!
 //! Per step `h` (in `τ = ωt`), symplectic Euler for the body and the paper's
 //! scheme (§3) for the contact:
-//! `V ← V + h(g − s)/m̃`, `X ← X + hV`, then the stick trial
-//! `s ← s + ΔX + Δ(b cos(τ + φ))` and the clamp `|s| ≤ 1 − a cos τ` (the
-//! contact point slips so that `|f_x| = μ₀f_z`). The body's velocity enters the
+//! `V ← V + h(n̄g − s)/m̃`, `X ← X + hV`, then the stick trial
+//! `s ← s + ΔX + Δ(b cos(τ + φ))` and the clamp `|s| ≤ max(0, 1 − a cos τ)`
+//! (the contact point slips so that `|f_x| = μ₀f_z`; in the air, lift-off,
+//! the massless spring relaxes to `s = 0` and lands with it). The body's velocity enters the
 //! contact as its sliding velocity through `ΔX`. The run starts at rest with
 //! the contact point at the origin (`s = b cos φ`, clamped), like the paper's.
 //!
 //! `(cos τ, sin τ)` and `sin T` advance by rotation and are recomputed
 //! exactly every 1024 steps. Steps per ultrasonic period start at
-//! `max(64, 2·fixed_step::min_steps_per_period)` and double (up to 1024)
+//! `max(64, 2·min_steps_per_period)` (`fixed_step`'s, or with lift-off
+//! `liftoff::stepping`'s) and double (up to 1024)
 //! until two runs agree on the mean velocity within the tolerance; their
-//! difference plus the last period-to-period change is the numerical error.
+//! difference plus the last period-to-period change (with the tail of a
+//! geometric relaxation, [`super::remaining`]) is the numerical error.
 //! When ω/Ω is not a whole number the state is only quasi-periodic in the
 //! load period; the drift is then the average over the last 10 load periods,
 //! accepted when it agrees with the average of the 10 before.
@@ -44,9 +47,12 @@ const MAX_STEPS: u64 = 1024;
 
 /// The first step count per ultrasonic period.
 pub fn start_steps(d: &Drive<f64>) -> u64 {
-    u64::from(fixed_step::min_steps_per_period(d))
-        .saturating_mul(2)
-        .max(64)
+    let min = if d.a >= 1.0 {
+        model_core::model::liftoff::stepping::min_steps_per_period(d)
+    } else {
+        fixed_step::min_steps_per_period(d)
+    };
+    u64::from(min).saturating_mul(2).max(64)
 }
 
 /// The cost of a run in steps per load period at `n` steps per ultrasonic period.
@@ -72,13 +78,16 @@ fn run_n(
     let (sh, ch) = h.sin_cos();
     let (snh, cnh) = (p.nu * h).sin_cos();
     let (mut x, mut v) = (0.0f64, 0.0f64);
-    let mut s_ = bc.clamp(-(1.0 - a), 1.0 - a);
+    let w0 = (1.0 - a).max(0.0);
+    let mut s_ = bc.clamp(-w0, w0);
+    let normal = p.normal;
     let (mut c, mut sn) = (1.0f64, 0.0f64); // cos τ, sin τ
     let (mut cl, mut sl) = (1.0f64, 0.0f64); // cos T, sin T
     let mut drive = bc;
     let limit = s.periods.unwrap_or(s.max_periods);
     let mut step_no: u64 = 0;
     let (mut mean, mut prev_mean, mut change) = (0.0, f64::NAN, f64::INFINITY);
+    let mut prev_change = f64::INFINITY;
     let mut stick_fraction = 0.0;
     let (mut periods, mut periodic) = (0, false);
     let mut last_block_stuck = false;
@@ -94,7 +103,7 @@ fn run_n(
         let mut sample_x = x;
         for i in 0..per_load {
             // Body: symplectic Euler with the spring force of the step start.
-            let g = p.f0 + p.f * sl - p.kappa * x;
+            let g = normal * (p.f0 + p.f * sl) - p.kappa * x;
             v += h * (g - s_) * inv_m;
             let dx = h * v;
             x += dx;
@@ -109,7 +118,8 @@ fn run_n(
             }
             // Contact: stick trial and clamp.
             let dn = bc * c - bs * sn;
-            let w = 1.0 - a * c;
+            // In the air (lift-off) the band is empty: s = 0.
+            let w = (1.0 - a * c).max(0.0);
             let trial = s_ + dx + (dn - drive);
             drive = dn;
             if trial > w {
@@ -151,7 +161,10 @@ fn run_n(
             0.0
         };
         if k > 1 {
-            change = (mean - prev_mean).abs();
+            let now = (mean - prev_mean).abs();
+            // The change plus the tail of a geometric relaxation.
+            change = super::remaining(now, prev_change);
+            prev_change = now;
         }
         prev_mean = mean;
         means.push(mean);

@@ -5,7 +5,8 @@
 //! Nodes lie on `[−c', c]` (`c`, `c'` the forward and backward critical
 //! velocities in units of ωW₀, eq. 8); outside it the law is `±1` exactly
 //! (continuous sliding). `V = 0` carries two values, `μ(0⁺)` and `μ(0⁻)`
-//! (`exact::limits_at_zero`), the ends of the static band. Between nodes the
+//! (the static band; with lift-off both are the unique μ(0)). Every value
+//! comes from [`Law`] (one μ(v) for every contact model). Between nodes the
 //! law is interpolated linearly.
 //!
 //! **Refinement and error estimate.** Each side starts from 64 uniform cells
@@ -14,13 +15,12 @@
 //! law the chord's largest error on a cell is at its midpoint up to a relative
 //! `O(h)` term, so the largest midpoint deviation of the accepted cells — the
 //! reported [`MuTable::interpolation_error`] — estimates the interpolation
-//! error; the solver's own bound ([`exact::error_bound`], 1e-9·(1 + b) μ₀) is
-//! added. Cells are not split below `1e-9·c` (the law's kinks at `V = 0⁺`
+//! error; the largest bound the solver guaranteed for a node (e.g. the exact
+//! solver's 1e-9·(1 + b) μ₀) is added. Cells are not split below `1e-9·c` (the law's kinks at `V = 0⁺`
 //! and at `c` are then resolved to that width; their deviation still counts
 //! in the estimate).
 
-use model_core::exact::{self, ExactError};
-use model_core::{Drive, Libm};
+use super::law::{Law, LawError};
 
 /// Cells per side before refinement.
 const START_CELLS: usize = 64;
@@ -32,8 +32,8 @@ const MAX_NODES: usize = 200_000;
 /// Why a table could not be built.
 #[derive(Debug, Clone, PartialEq)]
 pub enum TableError {
-    /// The exact solver failed.
-    Exact(ExactError),
+    /// The contact's solver failed.
+    Law(LawError),
     /// The tolerance needs more than [`MAX_NODES`] nodes per side.
     TooManyNodes,
     /// The tabulated law decreases somewhere by more than the solver's error:
@@ -47,7 +47,7 @@ pub enum TableError {
 impl std::fmt::Display for TableError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            TableError::Exact(e) => write!(f, "exact solver failed while tabulating mu(v): {e}"),
+            TableError::Law(e) => write!(f, "tabulating {e}"),
             TableError::TooManyNodes => write!(
                 f,
                 "mu(v) needs more than {MAX_NODES} table nodes per side for this --tol"
@@ -75,7 +75,7 @@ impl Side {
         c: f64,
         at0: f64,
         tol: f64,
-        f: &impl Fn(f64) -> Result<f64, ExactError>,
+        f: &impl Fn(f64) -> Result<f64, LawError>,
     ) -> Result<(Side, f64), TableError> {
         if c <= 0.0 {
             return Ok((
@@ -100,13 +100,13 @@ impl Side {
             let f_hi = if i + 1 == START_CELLS {
                 1.0
             } else {
-                f(hi).map_err(TableError::Exact)?
+                f(hi).map_err(TableError::Law)?
             };
             let mut stack = vec![(hi, f_hi)];
             let (mut a, mut fa) = (lo, f_lo);
             while let Some(&(b, fb)) = stack.last() {
                 let m = 0.5 * (a + b);
-                let fm = f(m).map_err(TableError::Exact)?;
+                let fm = f(m).map_err(TableError::Law)?;
                 let dev = (fm - 0.5 * (fa + fb)).abs();
                 if dev > tol && b - a > 2.0 * min_cell {
                     stack.push((m, fm));
@@ -201,20 +201,25 @@ pub struct MuTable {
 }
 
 impl MuTable {
-    /// Tabulates the law of `d` to interpolation tolerance `tol` (units μ₀).
+    /// Tabulates `law` to interpolation tolerance `tol` (units μ₀); the
+    /// solver is asked for `tol` too.
     ///
     /// # Errors
     /// [`TableError`].
-    pub fn new(d: &Drive<f64>, tol: f64) -> Result<Self, TableError> {
-        let (plus, minus) = exact::limits_at_zero::<f64, Libm>(d).map_err(TableError::Exact)?;
-        let solver = exact::error_bound::<f64, Libm>(d);
-        let c = d.c_forward::<Libm>();
-        let cb = d.c_backward::<Libm>();
-        let m = d.mirrored();
-        let (mut fwd, e1) = Side::build(c, plus, tol, &|x| exact::mu_over_mu0::<f64, Libm>(d, x))?;
-        // μ(−x; d) = −μ(x; mirrored d), so the mirrored law is tabulated on (0, c'].
-        let (mut bwd, e2) =
-            Side::build(cb, -minus, tol, &|x| exact::mu_over_mu0::<f64, Libm>(&m, x))?;
+    pub fn new(law: &Law, tol: f64) -> Result<Self, TableError> {
+        let zero = law.at(0.0, tol).map_err(TableError::Law)?;
+        let (plus, minus) = (zero.upper, zero.lower);
+        let (c, cb) = law.critical().map_err(TableError::Law)?;
+        let solver = std::cell::Cell::new(zero.bound);
+        let eval = |x: f64| {
+            let (m, b) = law.mu(x, tol)?;
+            solver.set(solver.get().max(b));
+            Ok(m)
+        };
+        let (mut fwd, e1) = Side::build(c, plus, tol, &eval)?;
+        // The backward side is stored mirrored: bwd(x) = −μ(−x), on (0, c'].
+        let (mut bwd, e2) = Side::build(cb, -minus, tol, &|x| eval(-x).map(|m| -m))?;
+        let solver = solver.get();
         fwd.monotone(2.0 * solver, 1.0)?;
         bwd.monotone(2.0 * solver, -1.0)?;
         Ok(MuTable {
@@ -264,7 +269,7 @@ impl MuTable {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use model_core::Groups;
+    use model_core::{exact, Groups, Libm};
 
     /// The table reproduces the exact solver at 2 000 off-node velocities to
     /// within its stated interpolation error (the estimate is the midpoint
@@ -273,7 +278,8 @@ mod tests {
     fn table_within_its_error_estimate() {
         let g = Groups::from_ratio(0.5, 2.0, 0.7).unwrap();
         let d = model_core::Scene::dimensionless(g).unwrap().drive();
-        let t = MuTable::new(&d, 1e-6).unwrap();
+        let law = Law::of(&model_core::Scene::dimensionless(g).unwrap());
+        let t = MuTable::new(&law, 1e-6).unwrap();
         let (c, cb) = (t.c_forward, t.c_backward);
         let mut worst = 0.0f64;
         for i in 1..2000 {

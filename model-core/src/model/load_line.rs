@@ -147,21 +147,41 @@ pub struct LoadLine<T> {
     pub no_load_backward: T,
 }
 
-/// Stall forces and no-load velocities.
+/// Stall forces and no-load velocities of the flat punch in permanent
+/// contact ([`load_line_of`] with the exact solver).
 ///
 /// # Errors
 /// As [`exact::limits_at_zero`] and [`exact::mu_over_mu0`].
 pub fn load_line<T: Float, M: Math<T>>(d: &Drive<T>) -> Result<LoadLine<T>, ExactError> {
     let (plus, minus) = exact::limits_at_zero::<T, M>(d)?;
-    let forward = if plus < T::ZERO {
-        no_load::<T, M>(d, plus)?
+    load_line_of(plus, minus, d.c_forward::<M>(), d.c_backward::<M>(), |v| {
+        exact::mu_over_mu0::<T, M>(d, v)
+    })
+}
+
+/// Stall forces and no-load velocities of any law `μ(V)/μ₀` (every contact
+/// model: `mu` is its solver at `V ≠ 0`): `μ(0⁺) = plus`, `μ(0⁻) = minus`
+/// (equal where μ at rest is unique, e.g. with lift-off), `μ = ±1` beyond the
+/// critical velocities `c_forward`, `−c_backward`. The no-load velocities are
+/// the roots of `mu` in `(0, c)` and `(−c', 0)`, bracketed by the signs at
+/// the ends (unique where the law increases).
+///
+/// # Errors
+/// Those of `mu`.
+pub fn load_line_of<T: Float, E>(
+    plus: T,
+    minus: T,
+    c_forward: T,
+    c_backward: T,
+    mut mu: impl FnMut(T) -> Result<T, E>,
+) -> Result<LoadLine<T>, E> {
+    let forward = if plus < T::ZERO && c_forward > T::ZERO {
+        root(T::ZERO, c_forward, plus, T::ONE, &mut mu)?
     } else {
         T::ZERO
     };
-    let m = d.mirrored();
-    let backward = if minus > T::ZERO {
-        // μ(−V; d) = −μ(V; mirrored d): the backward root is the mirrored forward one.
-        no_load::<T, M>(&m, -minus)?
+    let backward = if minus > T::ZERO && c_backward > T::ZERO {
+        -root(-c_backward, T::ZERO, -T::ONE, minus, &mut mu)?
     } else {
         T::ZERO
     };
@@ -173,15 +193,19 @@ pub fn load_line<T: Float, M: Math<T>>(d: &Drive<T>) -> Result<LoadLine<T>, Exac
     })
 }
 
-/// The root of μ(V) on `(0, c)` given `μ(0⁺) = mu_plus < 0`: Illinois
-/// regula falsi on the bracket `[0, c]` (μ(c) = 1), to a bracket width of
-/// 8ε·c or 200 iterations. Its error adds the solver's error over the slope.
-fn no_load<T: Float, M: Math<T>>(d: &Drive<T>, mu_plus: T) -> Result<T, ExactError> {
-    let c = d.c_forward::<M>();
-    let (mut lo, mut hi) = (T::ZERO, c);
-    let (mut flo, mut fhi) = (mu_plus, T::ONE);
+/// The root of `f` in `(lo, hi)` given `f(lo) = flo < 0 < f(hi) = fhi`:
+/// Illinois regula falsi to a bracket width of 8ε·|hi − lo| or 200
+/// iterations. Its error adds the solver's error over the slope.
+fn root<T: Float, E>(
+    lo: T,
+    hi: T,
+    flo: T,
+    fhi: T,
+    f: &mut impl FnMut(T) -> Result<T, E>,
+) -> Result<T, E> {
+    let (mut lo, mut hi, mut flo, mut fhi) = (lo, hi, flo, fhi);
     let mut side = 0i8;
-    let width = T::from_f64(8.0) * T::EPSILON * c;
+    let width = T::from_f64(8.0) * T::EPSILON * (hi - lo);
     for _ in 0..200 {
         if hi - lo <= width {
             break;
@@ -190,7 +214,7 @@ fn no_load<T: Float, M: Math<T>>(d: &Drive<T>, mu_plus: T) -> Result<T, ExactErr
         if !(x > lo && x < hi) {
             x = (lo + hi) * T::HALF;
         }
-        let fx = exact::mu_over_mu0::<T, M>(d, x)?;
+        let fx = f(x)?;
         if fx == T::ZERO {
             return Ok(x);
         }
@@ -236,9 +260,8 @@ pub enum Objective {
 }
 
 /// The forward operating point (0 < V < no-load velocity) that maximises
-/// `objective`, or `None` when the contact does not push forward. A scan of
-/// 64 points locates the best cell, golden-section search refines it to a
-/// velocity width of 1e-9·V_nl (the objective is smooth inside the cell).
+/// `objective`, or `None` when the contact does not push forward
+/// ([`maximise_forward`] on [`powers`]; flat punch in permanent contact).
 ///
 /// # Errors
 /// As [`powers`].
@@ -251,19 +274,37 @@ pub fn best_forward<T: Float, M: Math<T>>(
     if vnl <= T::ZERO {
         return Ok(None);
     }
-    let value = |v: T| -> Result<(T, Powers<T>), ExactError> {
+    let v = maximise_forward(vnl, |v| {
         let p = powers::<T, M>(d, v)?;
-        let f = match objective {
+        Ok(match objective {
             Objective::Power => p.output,
             Objective::Efficiency => p.efficiency(),
-        };
-        Ok((f, p))
-    };
+        })
+    })?;
+    let p = powers::<T, M>(d, v)?;
+    Ok(Some(OperatingPoint {
+        v,
+        force: -p.mu_over_mu0,
+        powers: p,
+    }))
+}
+
+/// The velocity in `(0, vnl)` maximising `value` (any contact model; e.g.
+/// the output power `−μ(V)V` needs only the law): a scan of 64 points
+/// locates the best cell, golden-section search refines it to a velocity
+/// width of 1e-9·vnl (the objective is smooth inside the cell).
+///
+/// # Errors
+/// Those of `value`.
+pub fn maximise_forward<T: Float, E>(
+    vnl: T,
+    mut value: impl FnMut(T) -> Result<T, E>,
+) -> Result<T, E> {
     const SCAN: usize = 64;
     let step = vnl / T::from_f64(SCAN as f64);
-    let mut best = (0usize, -T::ONE);
+    let mut best = (0usize, -T::MAX);
     for i in 1..SCAN {
-        let (f, _) = value(step * T::from_f64(i as f64))?;
+        let f = value(step * T::from_f64(i as f64))?;
         if f > best.1 {
             best = (i, f);
         }
@@ -276,8 +317,8 @@ pub fn best_forward<T: Float, M: Math<T>>(
     let g = T::from_f64(0.618_033_988_749_894_9);
     let mut x1 = hi - g * (hi - lo);
     let mut x2 = lo + g * (hi - lo);
-    let mut f1 = value(x1)?.0;
-    let mut f2 = value(x2)?.0;
+    let mut f1 = value(x1)?;
+    let mut f2 = value(x2)?;
     let tol = T::from_f64(1e-9) * vnl;
     for _ in 0..200 {
         if hi - lo <= tol {
@@ -288,20 +329,14 @@ pub fn best_forward<T: Float, M: Math<T>>(
             x1 = x2;
             f1 = f2;
             x2 = lo + g * (hi - lo);
-            f2 = value(x2)?.0;
+            f2 = value(x2)?;
         } else {
             hi = x2;
             x2 = x1;
             f2 = f1;
             x1 = hi - g * (hi - lo);
-            f1 = value(x1)?.0;
+            f1 = value(x1)?;
         }
     }
-    let v = (lo + hi) * T::HALF;
-    let (_, p) = value(v)?;
-    Ok(Some(OperatingPoint {
-        v,
-        force: -p.mu_over_mu0,
-        powers: p,
-    }))
+    Ok((lo + hi) * T::HALF)
 }

@@ -1,0 +1,86 @@
+//! The homogenised model's error, derived (issue 14 §4; replaces the
+//! calibrated constant `C_H = 1` of earlier versions).
+//!
+//! The homogenised body feels `μ(V)·F̄z`, the mean spring force of the
+//! contact driven at the *constant* velocity `V`. The resolved body feels the
+//! spring force of the contact driven by its actual position `X(τ)`. The
+//! difference, per ultrasonic period, is bounded in three steps (units:
+//! `τ = ωt`, lengths `W₀`, forces `μ₀k_z u_z0 = k_x W₀`):
+//!
+//! 1. **Memory of one period.** A slip sets the stretch to `±w`, erasing the
+//!    past: when the contact slips in every ultrasonic period, the spring
+//!    force over a period depends only on the drive since the last slip, at
+//!    most `L = 2π` back. With lift-off the state resets at every landing
+//!    (eq. L1–L5), so this holds exactly.
+//! 2. **Lipschitz.** The contact point is the output of a play operator with
+//!    the band `w(τ)` of the input `u = X + b cos(τ + φ)`; it preserves order
+//!    and commutes with adding a constant, so two inputs within `δ` (sup
+//!    norm) give contact points within `δ` and stretches `s = u − x_c` within
+//!    `2δ`.
+//! 3. **Curvature.** Over a window of length `L` the body's position differs
+//!    from its best straight line `X̄ + Vτ` (the drive the law is evaluated
+//!    for) by at most `K L²/16` (the Chebyshev minimax line of a function with
+//!    `|X''| ≤ K`). With `L = 2π` the mean spring force over the window is
+//!    within `2·K·4π²/16 = π²K/2` of `μ(V)·F̄z`.
+//!
+//! `K = sup|d²X/dτ²|`: for a body of mass `m̃ = Mω²/k_x`, `m̃X'' = n̄g − s`
+//! with `|s| ≤ 1 + a` and `|g| ≤ G = |f0| + |f| + κ max|X|/n̄`, so
+//! `K ≤ (n̄G + 1 + a)/m̃` — the ultrasonic ripple of the body against its
+//! response time, and the slow acceleration with it. For the massless body
+//! `X' = V(T)` follows the law's inverse, `K = ν max|dV/dT|` (the scale
+//! separation), taken from the trajectory.
+//!
+//! A force error `δF` (units `μ₀F̄z`, i.e. `π²K/(2n̄)`) moves the quasi-static
+//! velocity by `δF·dV/dμ`; the estimate uses the law's mean inverse slope on
+//! each side, `S = max(c/(1 − μ(0⁺)), c'/(1 + μ(0⁻)))` (units ωW₀ per μ₀),
+//! so
+//!
+//! ```text
+//! E_h = π² K S / (2 n̄)       (units ωW₀)
+//! ```
+//!
+//! Steps 1–3 are bounds; the last conversion is an estimate (the local slope
+//! varies along the law), and step 1 fails where the contact sticks through
+//! whole periods while the body is stuck: the resolved body then rings on the
+//! tangential stiffness (period `2π√(M/k_x)`), which the rigidly sticking
+//! homogenised body lacks. `tests/motion.rs` checks `|H − R| ≤ E_h` on a
+//! sweep and counts the outcomes.
+
+use std::f64::consts::PI;
+
+use super::table::MuTable;
+use super::{Problem, Run};
+
+/// `S`: the law's largest mean inverse slope (units ωW₀ per μ₀; module docs).
+pub fn inverse_slope(law: &MuTable) -> f64 {
+    [
+        law.c_forward / (1.0 - law.mu_0plus).max(1e-12),
+        law.c_backward / (1.0 + law.mu_0minus).max(1e-12),
+    ]
+    .into_iter()
+    .fold(0.0, f64::max)
+}
+
+/// `K = sup|d²X/dτ²|` (units W₀ per unit τ², module docs); `a = Δu_z/u_z0`.
+/// `run` is a homogenised run (its trajectory gives max|X| with a spring and
+/// max|dV/dT| for the massless body).
+pub fn curvature(p: &Problem, a: f64, run: &Run) -> f64 {
+    if p.mass > 0.0 {
+        let x_max = run.trajectory.iter().map(|s| s.x.abs()).fold(0.0, f64::max);
+        let g = p.f0.abs() + p.f.abs() + p.kappa * x_max / p.normal;
+        (p.normal * g + 1.0 + a) / p.mass
+    } else {
+        let dv_dt = run
+            .trajectory
+            .windows(2)
+            .filter(|w| w[1].t > w[0].t)
+            .map(|w| ((w[1].v - w[0].v) / (w[1].t - w[0].t)).abs())
+            .fold(0.0, f64::max);
+        p.nu * dv_dt
+    }
+}
+
+/// `E_h = π²KS/(2n̄)` (units ωW₀, module docs).
+pub fn homogenisation_error(p: &Problem, a: f64, law: &MuTable, run: &Run) -> f64 {
+    PI * PI * curvature(p, a, run) * inverse_slope(law) / (2.0 * p.normal)
+}
