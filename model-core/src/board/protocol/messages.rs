@@ -515,7 +515,7 @@ mod tests {
     use super::*;
 
     /// One request of every variant, in variant order.
-    fn every_request() -> [Request; 14] {
+    fn every_request() -> [Request; 15] {
         let drive = DriveSetting {
             freq_hz: 1e4,
             amp_z_m: 0.0,
@@ -545,6 +545,7 @@ mod tests {
             Request::GetStatus,
             Request::ResetFaults,
             Request::Reset,
+            Request::SetLiftOff { allow: false },
         ]
     }
 
