@@ -8,6 +8,8 @@
 //! * `measure` — the DAC refill and ADC intake bookkeeping (which drive phase
 //!   each ADC sample belongs to) and the friction measurement;
 //! * `predict` — the model's prediction for the current drive;
+//! * `closed_loop` — the closed loop's timing (which samples each update
+//!   uses, when its command reaches the DAC);
 //! * [`error`] — why a command was refused.
 //!
 //! The wire types the device answers with ([`DriveSetting`], [`Contact`],
@@ -17,12 +19,14 @@
 //! Every setter validates its whole input before touching anything: a
 //! refused command leaves the running state exactly as it was.
 
+mod closed_loop;
 pub mod config;
 mod drive;
 pub mod error;
 mod measure;
 mod predict;
 
+pub use closed_loop::MIN_GAIN;
 pub use config::{DacCal, DeviceConfig, MAX_PHASE_RAD, MAX_VELOCITY_M_S, PERIODS_RANGE};
 pub use error::{ConfigError, DeviceError};
 pub use measure::check_periods;
@@ -67,6 +71,12 @@ pub struct Device<'t, const N: usize> {
     /// +1 per command that sets new DDS targets (accepted `set_drive`,
     /// `start`, `stop`, `fault`).
     ramp_generation: u32,
+    /// The closed loop (`None` until first switched on).
+    control: Option<closed_loop::Loop>,
+    /// DAC fills since power-up (the number of the next fill).
+    fills: u32,
+    /// ADC blocks since power-up (the number of the next block).
+    adc_blocks: u32,
 }
 
 /// `x` if finite and in `[min, max]`, else [`DeviceError::OutOfRange`].
@@ -120,6 +130,9 @@ impl<'t, const N: usize> Device<'t, N> {
             half: [(0, 0); 2],
             half_conditions: [0; 2],
             ramp_generation: 0,
+            control: None,
+            fills: 0,
+            adc_blocks: 0,
         };
         check_contact(&contact)?;
         d.applied.achieved = d
