@@ -4,14 +4,29 @@
 //! **Timing.** DAC fill `n` (the `n`-th call of `fill_dac` since power-up)
 //! is the output that ADC block `n` (the `n`-th call of `adc_block`) samples
 //! — on the board the two DMA buffers of one timer, in the virtual device
-//! the same order. A command is applied at the next fill after its update
-//! (a DDS level change, ramped at the slew rate, without a new ramp
-//! generation); the next estimate opens at the first drive period of ADC
-//! block ≥ that fill, so no estimate mixes samples of two commands' fills.
-//! One update per estimate of `periods` drive periods; the estimator is the
-//! loop's while it runs (`Measure`, `Stream` and `SetDrive` answer `Busy`).
+//! the same order. A command is applied at the next fill after its update (a
+//! DDS level change, ramped at the slew rate, without a new ramp
+//! generation), and the command in force at each fill is recorded. Every
+//! ADC block (from the first fill with the loop on) gets one estimate over
+//! its *last* `periods` drive periods (the slew ramp and the plant's
+//! transient have the rest of the block to pass; all of the block and more
+//! if they do not fit), and one update when it closes.
+//!
+//! **Dead time.** On the board block `n` is handled after fill `n + 2` (the
+//! DAC's refill of the same boundary runs first), so a command computed from
+//! block `n` reaches the output at fill `n + 3`; in the virtual device (by
+//! default) at fill `n + 1`. An estimate is used only if its block's fill
+//! had the latest command (`u_n = u_latest`, "fresh"); estimates of blocks
+//! still running an older command are dropped, so no update acts on an
+//! error its predecessor already corrected. The update interval is
+//! therefore one half-buffer in the virtual device and three on the board.
+//! (A Smith predictor `μ̂ + s·(u_latest − u_n)` was tried instead: with the
+//! plant's gain about half the model's it over-corrected and settled slower.)
+//! The estimator is the loop's while it runs (`Measure`, `Stream` and
+//! `SetDrive` answer `Busy`).
 
 use super::config::MAX_VELOCITY_M_S;
+use super::measure::FILL_RING;
 use super::{Device, DeviceError, DriveParam};
 use crate::board::control::{self, Controller, Gains, Plan};
 use crate::board::dds::Level;
@@ -31,12 +46,16 @@ pub(super) struct Loop {
     on: bool,
     /// A command to apply at the next fill.
     pending: Option<f32>,
-    /// Fill number of the last applied command.
-    applied_fill: u32,
-    /// The next estimate waits for ADC block `applied_fill`.
-    waiting: bool,
-    /// Samples since the last applied command.
+    /// The first fill made with the loop on (estimates start at its block).
+    first_fill: u32,
+    /// The command in force at the last fills, by fill number modulo
+    /// [`FILL_RING`] (eq. C5).
+    at_fill: [f32; FILL_RING],
+    /// Samples since the last update.
     samples_since: u32,
+    /// Samples between the last two updates (the retarget's rate-limit
+    /// interval: one update's worth of travel).
+    interval: u32,
     last: ControlUpdate,
 }
 
@@ -165,15 +184,11 @@ impl<const N: usize> Device<'_, N> {
         let fs = self.cfg.sample_rate_hz as f32;
         match self.control.as_mut().filter(|l| l.on) {
             Some(l) => {
-                let out = l.ctl.retarget(plan, gains, l.samples_since as f32 / fs);
+                let dt = l.interval.max(l.samples_since) as f32 / fs;
+                let out = l.ctl.retarget(plan, gains, dt);
                 l.setting = s;
                 l.pending = Some(out.command_m);
                 l.last.target_mu = plan.target_mu;
-                // The running estimate saw the old setpoint's command: the next
-                // one opens with the new command's fill.
-                l.applied_fill = self.fills;
-                l.waiting = true;
-                self.est.abort();
             }
             None => {
                 let ctl = Controller::new(plan, gains, self.drive.amp_z_m);
@@ -189,9 +204,10 @@ impl<const N: usize> Device<'_, N> {
                     setting: s,
                     on: true,
                     pending: Some(out.command_m),
-                    applied_fill: self.fills,
-                    waiting: true,
+                    first_fill: self.fills,
+                    at_fill: [out.command_m; FILL_RING],
                     samples_since: 0,
+                    interval: 0,
                     last,
                 });
             }
@@ -233,53 +249,66 @@ impl<const N: usize> Device<'_, N> {
     }
 
     /// At fill `fill`: applies a pending command to the normal channel's
-    /// DDS level (ramped) and the drive setting.
+    /// DDS level (ramped) and the drive setting, and records the command in
+    /// force.
     pub(super) fn control_fill(&mut self, fill: u32) {
-        let Some(l) = self.control.as_mut().filter(|l| l.on) else {
+        if !self.control_on() {
             return;
-        };
+        }
         if !self.running {
             self.control_off();
             return;
         }
+        let (z, off) = (self.cfg.dac_z, self.drive.offset_z_m);
+        let Some(l) = self.control.as_mut() else {
+            return;
+        };
         if let Some(u) = l.pending.take() {
-            let z = self.cfg.dac_z;
             let lz = Level {
                 amp: u / z.metres_per_code,
-                dc: z.zero_code + self.drive.offset_z_m / z.metres_per_code,
+                dc: z.zero_code + off / z.metres_per_code,
             };
             // Inside [0, lift-off limit] by (C3): the DDS accepts it.
             if self.dds.set_level(0, lz).is_ok() {
                 self.drive.amp_z_m = u;
             }
-            l.applied_fill = fill;
-            l.waiting = true;
-            l.samples_since = 0;
         }
+        l.at_fill[fill as usize % FILL_RING] = self.drive.amp_z_m;
     }
 
-    /// Before ADC block `block` is pushed: opens the loop's estimate if the
-    /// block is the output of the last applied command's fill or later.
-    pub(super) fn control_block_start(&mut self, block: u32) {
-        let Some(l) = self.control.as_mut().filter(|l| l.on) else {
-            return;
-        };
-        if l.waiting && (block.wrapping_sub(l.applied_fill) as i32) >= 0 && !self.est.busy() {
-            l.waiting = false;
+    /// Before ADC block `block` of `len` samples is pushed: where the loop's
+    /// estimate of this block starts (the sample index): as late as lets its
+    /// `periods` (+ 1 for the wait for a period start) close inside the
+    /// block, or at index 0 if they do not fit. None before the loop's first
+    /// fill or while the last estimate is still open.
+    pub(super) fn control_block_start(&mut self, block: u32, len: usize) -> Option<usize> {
+        let tw = self.dds.tuning_word();
+        let l = self.control.as_ref().filter(|l| l.on)?;
+        if (block.wrapping_sub(l.first_fill) as i32) < 0 || self.est.busy() {
+            return None;
+        }
+        // Samples of periods + 1 drive periods, rounded up (tw > 0 while running).
+        let need = (u64::from(l.setting.periods) + 1) * (1u64 << 32) / u64::from(tw.max(1)) + 2;
+        Some(len.saturating_sub(usize::try_from(need).unwrap_or(usize::MAX)))
+    }
+
+    /// Opens the loop's estimate (at the index [`Device::control_block_start`] gave).
+    pub(super) fn control_open(&mut self) {
+        if let Some(l) = self.control.as_ref().filter(|l| l.on) {
             let _ = self.est.start(l.setting.periods);
         }
     }
 
-    /// After ADC block of `samples` samples: counts them and, if the loop's
-    /// estimate closed, runs one update (the command is applied at the next fill).
-    pub(super) fn control_block_end(&mut self, samples: usize, closed: bool) {
+    /// After ADC block `block` of `samples` samples: counts them and, if the
+    /// loop's estimate closed in it and the block ran the latest command,
+    /// runs one update (eqs. C1–C4; the command is applied at the next fill).
+    pub(super) fn control_block_end(&mut self, block: u32, samples: usize, closed: bool) {
         let fs = self.cfg.sample_rate_hz as f32;
-        let next_fill = self.fills;
         let Some(l) = self.control.as_mut().filter(|l| l.on) else {
             return;
         };
         l.samples_since = l.samples_since.saturating_add(samples as u32);
-        if !closed || l.waiting {
+        if !closed {
             return;
         }
         let Ok(e) = self.est.estimate() else {
@@ -287,15 +316,19 @@ impl<const N: usize> Device<'_, N> {
         };
         let unusable = reasons::SATURATED | reasons::FAULT | reasons::NOT_RUNNING;
         let held = e.reasons & unusable != 0 || !e.mu.is_finite();
+        let latest = l.ctl.output().command_m;
+        if l.at_fill[block as usize % FILL_RING] != latest || l.pending.is_some() {
+            // A block of an older command (dead time): not used.
+            return;
+        }
         let out = if held {
             l.ctl.output()
         } else {
             l.ctl.update(e.mu, l.samples_since as f32 / fs)
         };
+        l.interval = l.samples_since;
+        l.samples_since = 0;
         l.pending = Some(out.command_m);
-        // The next estimate waits for the fill that applies this command.
-        l.applied_fill = next_fill;
-        l.waiting = true;
         l.last = ControlUpdate {
             update: l.last.update.wrapping_add(1),
             target_mu: l.ctl.plan().target_mu,

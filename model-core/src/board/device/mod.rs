@@ -64,10 +64,11 @@ pub struct Device<'t, const N: usize> {
     faults: u32,
     rx_overflows: u32,
     est: Estimator,
-    /// Accumulator and tuning word at the start of each DAC half-buffer.
-    half: [(u32, u32); 2],
-    /// Estimate reasons that held while each DAC half-buffer was filled.
-    half_conditions: [u32; 2],
+    /// Accumulator and tuning word at the start of the last fills (by fill
+    /// number modulo `measure::FILL_RING`).
+    half: [(u32, u32); measure::FILL_RING],
+    /// Estimate reasons that held while those fills were made.
+    half_conditions: [u32; measure::FILL_RING],
     /// +1 per command that sets new DDS targets (accepted `set_drive`,
     /// `start`, `stop`, `fault`).
     ramp_generation: u32,
@@ -127,8 +128,8 @@ impl<'t, const N: usize> Device<'t, N> {
             faults: 0,
             rx_overflows: 0,
             est,
-            half: [(0, 0); 2],
-            half_conditions: [0; 2],
+            half: [(0, 0); measure::FILL_RING],
+            half_conditions: [0; measure::FILL_RING],
             ramp_generation: 0,
             control: None,
             fills: 0,
