@@ -577,7 +577,7 @@ fn chart(
         x_label: "device time, ms".into(),
         y_label: "μ".into(),
         x,
-        y: (0.06, 0.16),
+        y: (0.04, 0.17),
         series: vec![
             Series {
                 label: "μ* setpoint".into(),
@@ -589,13 +589,13 @@ fn chart(
                 label: "±2 % band".into(),
                 points: band(0.02),
                 mark: Mark::Dashed,
-                color: 7,
+                color: 2,
             },
             Series {
                 label: String::new(),
                 points: band(-0.02),
                 mark: Mark::Dashed,
-                color: 7,
+                color: 2,
             },
             Series {
                 label: format!("μ estimate ({} periods/update)", o.periods),
@@ -606,11 +606,11 @@ fn chart(
         ],
     };
     let p2 = Panel {
-        title: "Command".into(),
+        title: "Commanded normal amplitude (the loop's output)".into(),
         x_label: "device time, ms".into(),
         y_label: "Δu_z, µm".into(),
         x,
-        y: (0.0, 4.0),
+        y: (0.0, 5.5),
         series: vec![
             Series {
                 label: "commanded Δu_z".into(),
@@ -622,7 +622,7 @@ fn chart(
                 label: "model feedforward".into(),
                 points: ff,
                 mark: Mark::Dashed,
-                color: 2,
+                color: 4,
             },
             Series {
                 label: "lift-off limit (1 − 0.05)·u_z0".into(),
@@ -661,7 +661,7 @@ fn chart(
             (
                 p2,
                 Extras {
-                    legend_at: Corner::LowerRight,
+                    legend_at: Corner::UpperRight,
                     ..Extras::default()
                 },
             ),
@@ -671,9 +671,11 @@ fn chart(
         size: (1200, 900),
         legend: Vec::new(),
         caption: vec![format!(
-            "fricctl device control-bench --plot FILE: settling to 2 % after the setpoint step {} periods ({} ms)",
+            "fricctl device control-bench --fill-lead {}: settling to 2 % after the setpoint step {} periods ({} ms); DAC fills {} half-buffers of 256 samples ahead",
+            o.fill_lead,
             opt(o.events[1].settle_periods, 0),
-            opt(o.events[1].settle_ms, 3)
+            opt(o.events[1].settle_ms, 3),
+            o.fill_lead
         )],
     };
     render_figure(path, &fig)
