@@ -108,6 +108,15 @@ fn roundtrip_every_request() {
         Request::GetStatus,
         Request::ResetFaults,
         Request::Reset,
+        Request::SetControl(model_core::protocol::ControlSetting {
+            on: true,
+            target_mu: 0.1,
+            v0_m_s: 0.004,
+            gain: 0.7,
+            periods: 4,
+            rate_m_per_s: 1e-3,
+        }),
+        Request::GetControl,
     ];
     assert_eq!(
         reqs.len() as u32,
@@ -281,7 +290,7 @@ fn docs_protocol_examples() {
     let mut out = [0u8; MAX_FRAME];
     let req = encode(
         &Frame {
-            version: 2,
+            version: 3,
             seq: 5,
             body: Body::Request(Request::GetStatus),
         },
@@ -290,7 +299,7 @@ fn docs_protocol_examples() {
     .unwrap();
     assert_eq!(
         req,
-        &[0x03, 0x02, 0x05, 0x06, 0x0b, 0xf4, 0x0c, 0x54, 0x1a, 0x00]
+        &[0x03, 0x03, 0x05, 0x06, 0x0b, 0x91, 0x6b, 0xe8, 0xa2, 0x00]
     );
     let status = model_core::device::Status {
         running: true,
@@ -305,7 +314,7 @@ fn docs_protocol_examples() {
     let mut out = [0u8; MAX_FRAME];
     let resp = encode(
         &Frame {
-            version: 2,
+            version: 3,
             seq: 5,
             body: Body::Response(Response::Status(status)),
         },
@@ -315,8 +324,8 @@ fn docs_protocol_examples() {
     assert_eq!(
         resp,
         &[
-            0x07, 0x02, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x01, 0x11, 0xbd, 0x37, 0x06, 0x36,
-            0xb0, 0x0f, 0xa1, 0x34, 0xbd, 0x37, 0x86, 0x36, 0x29, 0x08, 0x3f, 0x0f, 0x00
+            0x07, 0x03, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x01, 0x11, 0xbd, 0x37, 0x06, 0x36,
+            0xb0, 0x0f, 0xa1, 0x34, 0xbd, 0x37, 0x86, 0x36, 0xb7, 0x8b, 0xe5, 0x90, 0x00
         ]
     );
 }
@@ -490,7 +499,7 @@ fn polled(s: &mut Server, dev: &mut Device<'_, 256>) -> Vec<Vec<u8>> {
 
 /// A `SetDrive` payload: `DriveSetting` is f64 freq, f32 amp_z, amp_x, offset_z, phase.
 fn set_drive_payload(seq: u8, freq: f64, amp_z: f32, amp_x: f32, off: f32, phase: f32) -> Vec<u8> {
-    let mut p = vec![2, seq, 0, 2];
+    let mut p = vec![3, seq, 0, 2];
     p.extend(freq.to_le_bytes());
     for x in [amp_z, amp_x, off, phase] {
         p.extend(x.to_le_bytes());
@@ -509,27 +518,27 @@ fn hand_built_frames_get_the_spec_answers() {
     let mut dev = test_device(&t);
     let mut s = Server::new(Info::for_config(&cfg(), "virtual", [0, 1, 0]));
     // A version-1 Hello: Error(VersionMismatch{device: 2}) with its seq.
-    assert_eq!(ask(&mut s, &mut dev, &[1, 5, 0, 0]), [2, 5, 1, 7, 3, 2]);
-    // Unknown request index 14: Error(UnknownMessage) with its seq.
-    assert_eq!(ask(&mut s, &mut dev, &[2, 10, 0, 14]), [2, 10, 1, 7, 2]);
+    assert_eq!(ask(&mut s, &mut dev, &[1, 5, 0, 0]), [3, 5, 1, 7, 3, 3]);
+    // Unknown request index 16: Error(UnknownMessage) with its seq.
+    assert_eq!(ask(&mut s, &mut dev, &[3, 10, 0, 16]), [3, 10, 1, 7, 2]);
     // Bad CRC on GetStatus seq 7: Error(BadCrc) echoing seq 7.
-    let mut w = wire(&[2, 7, 0, 11]);
+    let mut w = wire(&[3, 7, 0, 11]);
     let k = w.len() - 2; // a CRC byte (non-zero after the change below)
     w[k] = if w[k] == 0x55 { 0x56 } else { 0x55 };
-    assert_eq!(exchange(&mut s, &mut dev, &w, 0), vec![vec![2, 7, 1, 7, 1]]);
+    assert_eq!(exchange(&mut s, &mut dev, &w, 0), vec![vec![3, 7, 1, 7, 1]]);
     // Oversize (300 filler bytes) with seq 8: Error(Oversize) echoing seq 8.
-    let big = cat(&[&[2, 8, 0, 11], &[0x55; 300]]);
+    let big = cat(&[&[3, 8, 0, 11], &[0x55; 300]]);
     assert_eq!(
         exchange(&mut s, &mut dev, &wire(&big), 0),
-        vec![vec![2, 8, 1, 7, 4]]
+        vec![vec![3, 8, 1, 7, 4]]
     );
     // Hello: Info with every limit, field by field from the Structures table.
     let mut board = [0u8; 16];
     board[..7].copy_from_slice(b"virtual");
     let info = cat(&[
-        &[2, 11, 1, 0], // version, seq, Response, Info
+        &[3, 11, 1, 0], // version, seq, Response, Info
         &[0, 1, 0],     // firmware
-        &[2],           // protocol
+        &[3],           // protocol
         &board,
         &1e6f64.to_le_bytes(),
         &1e3f64.to_le_bytes(),
@@ -544,10 +553,10 @@ fn hand_built_frames_get_the_spec_answers() {
         &[0xc0, 0x84, 0x3d],    // periods_range.1 = 1 000 000
         &[0xa0, 0x8d, 0x06],    // byte_timeout_us = 100 000
     ]);
-    assert_eq!(ask(&mut s, &mut dev, &[2, 11, 0, 0]), info);
+    assert_eq!(ask(&mut s, &mut dev, &[3, 11, 0, 0]), info);
     // Inter-byte timeout: GetStatus seq 9 split 300 ms apart is dropped (the
     // tail is answered with an error, never with a Status) ...
-    let w = wire(&[2, 9, 0, 11]);
+    let w = wire(&[3, 9, 0, 11]);
     assert!(exchange(&mut s, &mut dev, &w[..3], 0).is_empty());
     let r = exchange(&mut s, &mut dev, &w[3..], 300_000);
     assert_eq!(r.len(), 1);
@@ -555,7 +564,7 @@ fn hand_built_frames_get_the_spec_answers() {
     // ... and 50 ms apart it is answered.
     assert!(exchange(&mut s, &mut dev, &w[..3], 1_000_000).is_empty());
     let r = exchange(&mut s, &mut dev, &w[3..], 1_050_000);
-    assert_eq!(&r[0][..4], [2, 9, 1, 6]);
+    assert_eq!(&r[0][..4], [3, 9, 1, 6]);
 }
 
 #[test]
@@ -563,7 +572,7 @@ fn drive_limits_are_inclusive_checked_in_order_and_reported_with_their_values() 
     let t = SineTable::<256>::libm();
     let mut dev = test_device(&t);
     let mut s = Server::new(info());
-    let drive_ok = |r: &[u8], seq: u8| assert_eq!(&r[..4], [2, seq, 1, 1], "{r:02x?}");
+    let drive_ok = |r: &[u8], seq: u8| assert_eq!(&r[..4], [3, seq, 1, 1], "{r:02x?}");
     // Lift-off limit L = (1 − 0.05)·4 µm in f32: accepted at L, refused just above.
     let lim = (1.0f32 - 0.05f32) * 4e-6f32;
     drive_ok(
@@ -581,7 +590,7 @@ fn drive_limits_are_inclusive_checked_in_order_and_reported_with_their_values() 
             &mut dev,
             &set_drive_payload(2, 2e4, above, 0.0, 4e-6, 0.0)
         ),
-        cat(&[&[2, 2, 1, 7, 6], &above.to_le_bytes(), &lim.to_le_bytes()])
+        cat(&[&[3, 2, 1, 7, 6], &above.to_le_bytes(), &lim.to_le_bytes()])
     );
     // DAC headroom: offset 8 µm leaves H = 4095·2 nm − 8 µm (f32) for Δu_z.
     let h = 4095.0f32 * 2e-9f32 - 8e-6f32;
@@ -599,7 +608,7 @@ fn drive_limits_are_inclusive_checked_in_order_and_reported_with_their_values() 
             &mut dev,
             &set_drive_payload(4, 2e4, 0.5e-6, 0.0, 8e-6, 0.0)
         ),
-        cat(&[&[2, 4, 1, 7, 5, 1], &0f32.to_le_bytes(), &h.to_le_bytes()])
+        cat(&[&[3, 4, 1, 7, 5, 1], &0f32.to_le_bytes(), &h.to_le_bytes()])
     );
     // Several bad values: the first check in the table's order (frequency) wins.
     assert_eq!(
@@ -609,7 +618,7 @@ fn drive_limits_are_inclusive_checked_in_order_and_reported_with_their_values() 
             &set_drive_payload(5, 5e6, -1.0, 1.0, -1.0, 1e9)
         ),
         cat(&[
-            &[2, 5, 1, 7, 5, 0],
+            &[3, 5, 1, 7, 5, 0],
             &1e3f32.to_le_bytes(),
             &1e5f32.to_le_bytes()
         ])
@@ -622,7 +631,7 @@ fn drive_limits_are_inclusive_checked_in_order_and_reported_with_their_values() 
             &set_drive_payload(6, 2e4, -1.0, 1.0, -1.0, 1e9)
         ),
         cat(&[
-            &[2, 6, 1, 7, 5, 3],
+            &[3, 6, 1, 7, 5, 3],
             &0f32.to_le_bytes(),
             &(4095.0f32 * 2e-9f32).to_le_bytes()
         ])
@@ -643,7 +652,7 @@ fn drive_limits_are_inclusive_checked_in_order_and_reported_with_their_values() 
             &set_drive_payload(8, 2e4, 0.0, 0.0, 4e-6, 1000.001)
         ),
         cat(&[
-            &[2, 8, 1, 7, 5, 4],
+            &[3, 8, 1, 7, 5, 4],
             &(-1000f32).to_le_bytes(),
             &1000f32.to_le_bytes()
         ])
@@ -653,18 +662,18 @@ fn drive_limits_are_inclusive_checked_in_order_and_reported_with_their_values() 
         ask(
             &mut s,
             &mut dev,
-            &cat(&[&[2, 9, 0, 7], &1001f32.to_le_bytes()])
+            &cat(&[&[3, 9, 0, 7], &1001f32.to_le_bytes()])
         ),
         cat(&[
-            &[2, 9, 1, 7, 5, 6],
+            &[3, 9, 1, 7, 5, 6],
             &(-1000f32).to_le_bytes(),
             &1000f32.to_le_bytes()
         ])
     );
     assert_eq!(
-        ask(&mut s, &mut dev, &[2, 10, 0, 8, 0]),
+        ask(&mut s, &mut dev, &[3, 10, 0, 8, 0]),
         cat(&[
-            &[2, 10, 1, 7, 5, 5],
+            &[3, 10, 1, 7, 5, 5],
             &1f32.to_le_bytes(),
             &1e6f32.to_le_bytes()
         ])
@@ -688,15 +697,15 @@ fn predict_at_rest_returns_both_one_sided_limits() {
         &mut dev,
         &set_drive_payload(1, 4e4, 1e-6, 2e-7, 3e-6, 0.5),
     );
-    assert_eq!(&r[..4], [2, 1, 1, 1]);
+    assert_eq!(&r[..4], [3, 1, 1, 1]);
     let a = dev.applied();
     // Predict{v0: 0} → Prediction: mu_over_mu0, mu, vc.0, vc.1, mu_0minus_over_mu0, regime.
     let p = ask(
         &mut s,
         &mut dev,
-        &cat(&[&[2, 2, 0, 7], &0f32.to_le_bytes()]),
+        &cat(&[&[3, 2, 0, 7], &0f32.to_le_bytes()]),
     );
-    assert_eq!(&p[..4], [2, 2, 1, 4]);
+    assert_eq!(&p[..4], [3, 2, 1, 4]);
     assert_eq!(p.len(), 4 + 5 * 4 + 1);
     let (plus, mu, minus) = (f32_at(&p, 4), f32_at(&p, 8), f32_at(&p, 20));
     let s64 = model_core::Scene::new(model_core::SceneParams {
@@ -735,7 +744,7 @@ fn predict_at_rest_returns_both_one_sided_limits() {
     let p = ask(
         &mut s,
         &mut dev,
-        &cat(&[&[2, 3, 0, 7], &0.01f32.to_le_bytes()]),
+        &cat(&[&[3, 3, 0, 7], &0.01f32.to_le_bytes()]),
     );
     assert_eq!(f32_at(&p, 4), f32_at(&p, 20));
 }
@@ -771,17 +780,17 @@ fn measure_is_idempotent_per_seq_and_reset_ends_every_session() {
             g.phase_rad,
         ),
     );
-    assert_eq!(&r[..4], [2, 1, 1, 1]);
-    assert_eq!(ask(&mut s, &mut dev, &[2, 2, 0, 3]), [2, 2, 1, 2]); // Start → Ok
+    assert_eq!(&r[..4], [3, 1, 1, 1]);
+    assert_eq!(ask(&mut s, &mut dev, &[3, 2, 0, 3]), [3, 2, 1, 2]); // Start → Ok
                                                                     // Measure{100} seq 20 → Ok; its retry → Ok (not Busy); seq 21 → Busy (7).
-    let m20 = [2, 20, 0, 8, 100];
-    assert_eq!(ask(&mut s, &mut dev, &m20), [2, 20, 1, 2]);
-    assert_eq!(ask(&mut s, &mut dev, &m20), [2, 20, 1, 2]);
-    assert_eq!(ask(&mut s, &mut dev, &[2, 21, 0, 8, 100]), [2, 21, 1, 7, 7]);
+    let m20 = [3, 20, 0, 8, 100];
+    assert_eq!(ask(&mut s, &mut dev, &m20), [3, 20, 1, 2]);
+    assert_eq!(ask(&mut s, &mut dev, &m20), [3, 20, 1, 2]);
+    assert_eq!(ask(&mut s, &mut dev, &[3, 21, 0, 8, 100]), [3, 21, 1, 7, 7]);
     // Stream on while a Measure runs: Busy.
     assert_eq!(
-        ask(&mut s, &mut dev, &[2, 22, 0, 10, 1, 50]),
-        [2, 22, 1, 7, 7]
+        ask(&mut s, &mut dev, &[3, 22, 0, 10, 1, 50]),
+        [3, 22, 1, 7, 7]
     );
     // Let it finish; the retry of seq 20 then starts nothing.
     run_loop(&mut dev, &mut s, 200);
@@ -791,12 +800,12 @@ fn measure_is_idempotent_per_seq_and_reset_ends_every_session() {
         dev.status(),
         dev.estimate()
     );
-    let e = ask(&mut s, &mut dev, &[2, 23, 0, 9]);
-    assert_eq!(&e[..4], [2, 23, 1, 5]);
-    assert_eq!(ask(&mut s, &mut dev, &m20), [2, 20, 1, 2]);
+    let e = ask(&mut s, &mut dev, &[3, 23, 0, 9]);
+    assert_eq!(&e[..4], [3, 23, 1, 5]);
+    assert_eq!(ask(&mut s, &mut dev, &m20), [3, 20, 1, 2]);
     assert!(!dev.status().measuring);
     assert_eq!(
-        ask(&mut s, &mut dev, &[2, 24, 0, 9]),
+        ask(&mut s, &mut dev, &[3, 24, 0, 9]),
         e[..1]
             .iter()
             .chain(&[24])
@@ -806,35 +815,35 @@ fn measure_is_idempotent_per_seq_and_reset_ends_every_session() {
         "the same estimate, not a new one"
     );
     // A new measurement, then Reset (13): it ends, the drive stops (ramped).
-    assert_eq!(ask(&mut s, &mut dev, &[2, 25, 0, 8, 100]), [2, 25, 1, 2]);
+    assert_eq!(ask(&mut s, &mut dev, &[3, 25, 0, 8, 100]), [3, 25, 1, 2]);
     assert!(dev.status().measuring);
-    assert_eq!(ask(&mut s, &mut dev, &[2, 26, 0, 13]), [2, 26, 1, 2]);
+    assert_eq!(ask(&mut s, &mut dev, &[3, 26, 0, 13]), [3, 26, 1, 2]);
     let st = dev.status();
     assert!(!st.measuring && !st.running, "{st:?}");
-    assert_eq!(ask(&mut s, &mut dev, &[2, 27, 0, 9]), [2, 27, 1, 7, 11]); // NotReady
+    assert_eq!(ask(&mut s, &mut dev, &[3, 27, 0, 9]), [3, 27, 1, 7, 11]); // NotReady
                                                                           // A stream: on (periods 40), estimates as telemetry, then off → Ok and
                                                                           // StreamStopped(Requested) = telemetry 2, variant 3, StreamEnd 0.
-    assert_eq!(ask(&mut s, &mut dev, &[2, 3, 0, 3]), [2, 3, 1, 2]);
-    assert_eq!(ask(&mut s, &mut dev, &[2, 28, 0, 10, 1, 40]), [2, 28, 1, 2]);
+    assert_eq!(ask(&mut s, &mut dev, &[3, 3, 0, 3]), [3, 3, 1, 2]);
+    assert_eq!(ask(&mut s, &mut dev, &[3, 28, 0, 10, 1, 40]), [3, 28, 1, 2]);
     let tele = run_loop(&mut dev, &mut s, 200);
     let estimates = tele.iter().filter(|p| p[2..4] == [2, 0]).count();
     assert!(estimates >= 2, "{tele:02x?}");
-    let r = exchange(&mut s, &mut dev, &wire(&[2, 29, 0, 10, 0, 40]), 0);
+    let r = exchange(&mut s, &mut dev, &wire(&[3, 29, 0, 10, 0, 40]), 0);
     assert_eq!(r.len(), 2, "{r:02x?}");
-    assert_eq!(r[0], [2, 29, 1, 2]);
+    assert_eq!(r[0], [3, 29, 1, 2]);
     assert_eq!(r[1][2..], [2, 3, 0]);
     assert!(
         !dev.status().measuring,
         "the stream's measurement is aborted"
     );
     // Reset ends a stream with StreamStopped(Reset).
-    assert_eq!(ask(&mut s, &mut dev, &[2, 30, 0, 10, 1, 40]), [2, 30, 1, 2]);
+    assert_eq!(ask(&mut s, &mut dev, &[3, 30, 0, 10, 1, 40]), [3, 30, 1, 2]);
     polled(&mut s, &mut dev);
-    let r = exchange(&mut s, &mut dev, &wire(&[2, 31, 0, 13]), 0);
-    assert_eq!(r[0], [2, 31, 1, 2]);
+    let r = exchange(&mut s, &mut dev, &wire(&[3, 31, 0, 13]), 0);
+    assert_eq!(r[0], [3, 31, 1, 2]);
     assert_eq!(r[1][2..], [2, 3, 1]);
     // A fault ends a stream: Fault(8) then StreamStopped(Refused(Faulted(8))).
-    assert_eq!(ask(&mut s, &mut dev, &[2, 32, 0, 10, 1, 40]), [2, 32, 1, 2]);
+    assert_eq!(ask(&mut s, &mut dev, &[3, 32, 0, 10, 1, 40]), [3, 32, 1, 2]);
     dev.fault(model_core::device::faults::EXTERNAL);
     let tele = polled(&mut s, &mut dev);
     let kinds: Vec<&[u8]> = tele.iter().map(|p| &p[2..]).collect();
@@ -842,10 +851,10 @@ fn measure_is_idempotent_per_seq_and_reset_ends_every_session() {
     assert!(kinds.contains(&&[2u8, 3, 2, 8, 8][..]), "{tele:02x?}");
     // A latched fault refuses Measure like Start: Faulted(8).
     assert_eq!(
-        ask(&mut s, &mut dev, &[2, 33, 0, 8, 100]),
-        [2, 33, 1, 7, 8, 8]
+        ask(&mut s, &mut dev, &[3, 33, 0, 8, 100]),
+        [3, 33, 1, 7, 8, 8]
     );
-    assert_eq!(ask(&mut s, &mut dev, &[2, 34, 0, 3]), [2, 34, 1, 7, 8, 8]);
+    assert_eq!(ask(&mut s, &mut dev, &[3, 34, 0, 3]), [3, 34, 1, 7, 8, 8]);
 }
 
 #[test]
@@ -871,26 +880,26 @@ fn ramp_done_follows_every_start_and_stop_and_status_shows_the_output() {
     assert_eq!(ramp_dones(&run_loop(&mut dev, &mut s, 100)), 1);
     for (seq, req) in [(2u8, 3u8), (3, 4), (4, 3), (5, 4)] {
         // Start (3) / Stop (4): exactly one RampDone each, after the ramps.
-        assert_eq!(ask(&mut s, &mut dev, &[2, seq, 0, req]), [2, seq, 1, 2]);
+        assert_eq!(ask(&mut s, &mut dev, &[3, seq, 0, req]), [3, seq, 1, 2]);
         assert_eq!(ramp_dones(&polled(&mut s, &mut dev)), 0, "not settled yet");
         assert_eq!(ramp_dones(&run_loop(&mut dev, &mut s, 100)), 1);
     }
     // After Stop: GetDrive reports the setting, Status the output (amplitudes 0,
     // offset kept). Status: running, settled, faults, measuring, rx_overflows,
     // out_amp_z_m, out_amp_x_m, out_offset_z_m.
-    let d = ask(&mut s, &mut dev, &[2, 6, 0, 1]);
+    let d = ask(&mut s, &mut dev, &[3, 6, 0, 1]);
     assert_eq!(f32_at(&d, 4 + 8), g.amp_z_m);
-    let st = ask(&mut s, &mut dev, &[2, 7, 0, 11]);
-    assert_eq!(&st[..9], [2, 7, 1, 6, 0, 1, 0, 0, 0]);
+    let st = ask(&mut s, &mut dev, &[3, 7, 0, 11]);
+    assert_eq!(&st[..9], [3, 7, 1, 6, 0, 1, 0, 0, 0]);
     assert_eq!(f32_at(&st, 9), 0.0);
     assert_eq!(f32_at(&st, 13), 0.0);
     // The offset kept, to f32 rounding of metres → codes → metres (2 ulp).
     assert!((f32_at(&st, 17) - g.offset_z_m).abs() <= 2.0 * f32::EPSILON * g.offset_z_m);
     // Running and settled: the output equals the setting (to f32 rounding of
     // the metres → codes → metres round trip: 2 ulp).
-    ask(&mut s, &mut dev, &[2, 8, 0, 3]);
+    ask(&mut s, &mut dev, &[3, 8, 0, 3]);
     run_loop(&mut dev, &mut s, 100);
-    let st = ask(&mut s, &mut dev, &[2, 9, 0, 11]);
+    let st = ask(&mut s, &mut dev, &[3, 9, 0, 11]);
     assert_eq!(&st[4..6], [1, 1]);
     assert!((f32_at(&st, 9) - g.amp_z_m).abs() <= 2.0 * f32::EPSILON * g.amp_z_m);
     assert!((f32_at(&st, 13) - g.amp_x_m).abs() <= 2.0 * f32::EPSILON * g.amp_x_m);
