@@ -107,7 +107,10 @@ fn settles_within_the_derived_bound_with_20_percent_mismatch() {
         let u_star = 0.5 * (a + b);
         let (rlo, rhi) = rho_range(mu0_plant, u_start, u_star, f64::from(p.slope_per_m));
         let k = f64::from(kappa);
-        assert!(rlo > 0.0 && k * rhi <= 1.0, "monotone regime: ρ in [{rlo}, {rhi}]");
+        assert!(
+            rlo > 0.0 && k * rhi <= 1.0,
+            "monotone regime: ρ in [{rlo}, {rhi}]"
+        );
         let q = 1.0 - k * rlo;
         let e0 = (mus[0] - target).abs();
         // Updates until q^k·e0 ≤ 2 % of the target; +1 for the dead time (the
@@ -130,7 +133,11 @@ fn settles_within_the_derived_bound_with_20_percent_mismatch() {
         }
         // Steady state: the f32 command's resolution (ulp of 2 µm ≈ 2.3e-13 m)
         // times |s_p| ≲ 1e5 /m: below 1e-6 after 40 updates (q^40 ≈ 0).
-        assert!((mus[39] - target).abs() < 1e-6, "steady error {}", mus[39] - target);
+        assert!(
+            (mus[39] - target).abs() < 1e-6,
+            "steady error {}",
+            mus[39] - target
+        );
         assert!(us.iter().all(|&u| (0.0..=LIMIT).contains(&u)));
     }
 }

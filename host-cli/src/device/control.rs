@@ -75,9 +75,9 @@ impl ControlArgs {
         let target = self.target_mu.ok_or_else(|| {
             CliError::usage("--target-mu: missing (or `device control off|status`)")
         })?;
-        let v0 = self
-            .v0
-            .ok_or_else(|| CliError::usage("--v0: missing (the setpoint holds at a sliding velocity)"))?;
+        let v0 = self.v0.ok_or_else(|| {
+            CliError::usage("--v0: missing (the setpoint holds at a sliding velocity)")
+        })?;
         if !target.is_finite() {
             return Err(CliError::usage("--target-mu: must be a finite number"));
         }
@@ -390,17 +390,17 @@ pub fn bench(a: &BenchArgs, json: bool) -> CliResult {
     let mut events = Vec::new();
     for k in 0..3 {
         let (t0, t1) = (t_events[k], if k < 2 { t_events[k + 1] } else { t_end });
-        let seg: Vec<&(f64, ControlUpdate)> = b
-            .log
-            .iter()
-            .filter(|(t, _)| *t > t0 && *t <= t1)
-            .collect();
+        let seg: Vec<&(f64, ControlUpdate)> =
+            b.log.iter().filter(|(t, _)| *t > t0 && *t <= t1).collect();
         let target = f64::from(targets[k]);
         let err = |u: &ControlUpdate| f64::from(u.measured_mu) - target;
         // The first update after which all stay within 2 %.
         let mut settle = None;
         for (i, _) in seg.iter().enumerate() {
-            if seg[i..].iter().all(|(_, u)| err(u).abs() <= 0.02 * target.abs()) {
+            if seg[i..]
+                .iter()
+                .all(|(_, u)| err(u).abs() <= 0.02 * target.abs())
+            {
                 settle = Some(i);
                 break;
             }
@@ -464,7 +464,11 @@ pub fn bench(a: &BenchArgs, json: bool) -> CliResult {
     }
     let mut w = std::io::stdout().lock();
     let r = if json {
-        writeln!(w, "{}", serde_json::to_string_pretty(&o).unwrap_or_default())
+        writeln!(
+            w,
+            "{}",
+            serde_json::to_string_pretty(&o).unwrap_or_default()
+        )
     } else {
         write_text(&mut w, &o)
     };

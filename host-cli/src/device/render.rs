@@ -321,7 +321,12 @@ pub fn control(s: &ControlState) -> Report {
         .row("gain", "gain kappa", f32v(c.gain), "")
         .row("periods", "periods per update", c.periods, "")
         .row("rate", "rate limit", f32v(c.rate_m_per_s), "m/s")
-        .row("duz_feedforward", "feedforward duz", f32v(s.feedforward_m), "m")
+        .row(
+            "duz_feedforward",
+            "feedforward duz",
+            f32v(s.feedforward_m),
+            "m",
+        )
         .row("slope_per_m", "model dmu/dduz", f32v(s.slope_per_m), "1/m")
         .row("duz_limit", "lift-off limit", f32v(s.limit_m), "m")
         .row("update", "updates", u.update, "")

@@ -260,10 +260,11 @@ fn control_loop(t: &Target, c: &mut Client, count: Option<u64>, stop: &AtomicBoo
             Some((_, Telemetry::Control(u))) => {
                 idle = Instant::now();
                 n += 1;
-                let shown = if t.json {
-                    writeln!(out, "{}", render::control_update(&u).json())
-                } else {
-                    writeln!(
+                let shown =
+                    if t.json {
+                        writeln!(out, "{}", render::control_update(&u).json())
+                    } else {
+                        writeln!(
                         out,
                         "#{:<6} setpoint {:>9.6}  measured {:>9.6} ± {:<9.2e} duz {:>11.4e} m{}{}",
                         u.update,
@@ -274,7 +275,7 @@ fn control_loop(t: &Target, c: &mut Client, count: Option<u64>, stop: &AtomicBoo
                         if u.saturated { "  limited" } else { "" },
                         if u.held { "  HELD (estimate not usable)" } else { "" }
                     )
-                };
+                    };
                 if shown.and_then(|()| out.flush()).is_err() {
                     return Ok(());
                 }

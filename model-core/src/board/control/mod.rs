@@ -5,7 +5,7 @@
 //! # The control law (units: μ dimensionless, Δu_z in m, time in s)
 //!
 //! **Feedforward** (computed once per setpoint, [`plan`]): the device's f32
-//! model (the exact law, [`crate::model::inverse`] with [`FastF32`]) gives the
+//! model (the exact law with [`FastF32`], scan and bisection) gives the
 //! amplitude `u_ff` with `μ_model(u_ff; v₀) = μ*`, the solution nearest the
 //! present amplitude, and the model's local gain
 //!
@@ -40,13 +40,11 @@
 
 use core::fmt;
 
-use crate::model::exact::ExactError;
+use crate::model::exact::{self, ExactError, Solution};
 use crate::model::float::FastF32;
-use crate::model::inverse::{self, InverseError, Knob, Problem};
-use crate::model::scene::Scene;
+use crate::model::scene::{Scene, SceneParams};
 
-/// Scan points of the feedforward's inverse search (f32; 23 cells over the
-/// lift-off range).
+/// Scan points of the feedforward's search (23 cells over the lift-off range).
 pub const SCAN_POINTS: usize = 24;
 
 /// Smallest `|∂(μ/μ₀)/∂(Δu_z/u_z0)|` the trim uses (a target at an extremum
@@ -106,7 +104,13 @@ pub struct Plan {
 
 /// The feedforward and the gain for target μ* at velocity `v0` (m/s) on the
 /// device's model `scene` (its Δu_z is ignored), searching Δu_z in
-/// `[0, limit_m]` and taking the solution nearest `near_m`.
+/// `[0, limit_m]`: the exact law (f32, [`FastF32`]) on a scan of
+/// [`SCAN_POINTS`] amplitudes, then bisection to the f32 resolution in the
+/// scan cell that straddles μ* nearest `near_m` (the law is taken to be
+/// monotone inside one cell, 1/23 of the range). The reachable range
+/// reported when no cell straddles μ* is the least and greatest scanned μ.
+/// (A compact search rather than [`crate::model::inverse`]: the firmware's
+/// flash budget.)
 ///
 /// # Errors
 /// [`ControlError`].
@@ -118,54 +122,77 @@ pub fn plan(
     limit_m: f32,
 ) -> Result<Plan, ControlError> {
     let mu0 = scene.mu0();
-    let uz0 = scene.params().uz0;
+    let base = *scene.params();
     if !(target_mu.is_finite() && target_mu.abs() < mu0) {
         return Err(ControlError::BadTarget);
     }
     if !(v0.is_finite() && v0 != 0.0) {
         return Err(ControlError::BadVelocity);
     }
-    if !(uz0 > 0.0 && limit_m > 0.0) {
+    if !(base.uz0 > 0.0 && limit_m > 0.0) {
         return Err(ControlError::NoOffset);
     }
-    // Strictly below lift-off for the search (a < 1).
-    let hi = (limit_m / uz0).min(1.0 - f32::EPSILON);
-    let p = Problem::new::<FastF32>(scene.groups(), Knob::Duz, 0.0, hi).map_err(|e| match e {
-        InverseError::Exact(x) => ControlError::Model(x),
-        _ => ControlError::NoOffset,
-    })?;
-    let v = scene
-        .dimensionless_velocity(v0)
-        .map_err(|_| ControlError::BadVelocity)?;
-    let mut scan = [0.0f32; SCAN_POINTS];
-    let out =
-        inverse::solve_target::<f32, FastF32>(&p, v, target_mu / mu0, &mut scan).map_err(|e| {
-            match e {
-                InverseError::OutOfReach { min, max } => ControlError::OutOfReach {
-                    min: min * mu0,
-                    max: max * mu0,
-                },
-                InverseError::BadVelocity => ControlError::BadVelocity,
-                InverseError::BadTarget => ControlError::BadTarget,
-                InverseError::Exact(x) => ControlError::Model(x),
-                _ => ControlError::NoOffset,
+    // Strictly below lift-off (a < 1).
+    let hi = limit_m.min(base.uz0 * (1.0 - f32::EPSILON));
+    let mu = |duz: f32| -> Result<f32, ControlError> {
+        let s = Scene::new(SceneParams { duz, ..base }).map_err(|_| ControlError::NoOffset)?;
+        let m = match exact::solve_with::<f32, FastF32>(&s, v0).map_err(ControlError::Model)? {
+            Solution::Sliding { mu_over_mu0 } | Solution::StickSlip { mu_over_mu0 } => mu_over_mu0,
+            Solution::AtRest { mu_0plus, .. } => mu_0plus,
+        };
+        Ok(m * mu0)
+    };
+    let n = SCAN_POINTS;
+    let x_at = |j: usize| hi * j as f32 / (n - 1) as f32;
+    let (mut lo_mu, mut hi_mu) = (f32::MAX, f32::MIN);
+    let mut best: Option<(f32, f32, f32, f32)> = None; // (xl, gl, xr, gr) nearest near_m
+    let mut prev = (0.0f32, 0.0f32);
+    for j in 0..n {
+        let x = x_at(j);
+        let g = mu(x)? - target_mu;
+        lo_mu = lo_mu.min(g + target_mu);
+        hi_mu = hi_mu.max(g + target_mu);
+        if j > 0 && (prev.1 <= 0.0) != (g <= 0.0) {
+            let mid = 0.5 * (prev.0 + x);
+            let nearer =
+                best.is_none_or(|b| (mid - near_m).abs() < (0.5 * (b.0 + b.2) - near_m).abs());
+            if nearer {
+                best = Some((prev.0, prev.1, x, g));
             }
-        })?;
-    let x = out
-        .nearest(Knob::Duz, near_m / uz0)
-        .map_or(out.min.x, |s| s.x);
+        }
+        prev = (x, g);
+    }
+    let Some((mut xl, gl, mut xr, _)) = best else {
+        return Err(ControlError::OutOfReach {
+            min: lo_mu,
+            max: hi_mu,
+        });
+    };
+    let left_low = gl <= 0.0;
+    for _ in 0..40 {
+        let m = 0.5 * (xl + xr);
+        if m <= xl || m >= xr {
+            break;
+        }
+        if (mu(m)? - target_mu <= 0.0) == left_low {
+            xl = m;
+        } else {
+            xr = m;
+        }
+    }
+    let x = 0.5 * (xl + xr);
     // Central difference over 2 % of the range (one-sided at the ends).
     let h = 0.01 * hi;
-    let (xl, xr) = ((x - h).max(0.0), (x + h).min(hi));
-    let f = |y: f32| p.mu_at::<FastF32>(y, v).map_err(ControlError::Model);
-    let mut s_rel = (f(xr)? - f(xl)?) / (xr - xl);
-    if !s_rel.is_finite() || s_rel.abs() < S_MIN_REL {
-        s_rel = if s_rel < 0.0 { -S_MIN_REL } else { S_MIN_REL };
+    let (a, b) = ((x - h).max(0.0), (x + h).min(hi));
+    let mut s = (mu(b)? - mu(a)?) / (b - a);
+    let s_min = S_MIN_REL * mu0 / base.uz0;
+    if !s.is_finite() || s.abs() < s_min {
+        s = if s < 0.0 { -s_min } else { s_min };
     }
     Ok(Plan {
         target_mu,
-        feedforward_m: x * uz0,
-        slope_per_m: s_rel * mu0 / uz0,
+        feedforward_m: x,
+        slope_per_m: s,
         limit_m,
     })
 }
