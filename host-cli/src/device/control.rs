@@ -313,7 +313,7 @@ pub fn bench(a: &BenchArgs, json: bool) -> CliResult {
             return Err(CliError::usage(format!("--{n}: must be a finite number")));
         }
     }
-    if !(a.mu0_ratio > 0.0) {
+    if a.mu0_ratio <= 0.0 {
         return Err(CliError::usage("--mu0-ratio: must be > 0"));
     }
     if a.lag_periods < 0.0 || a.noise < 0.0 {

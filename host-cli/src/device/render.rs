@@ -290,25 +290,6 @@ pub fn status(s: &Status) -> Report {
         .row("out_uz0", "output uz0", f32v(s.out_offset_z_m), "m")
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn text_is_aligned_with_units_and_json_is_flat() {
-        let r = contact(&Contact {
-            mu0: 0.3,
-            kz: 1e7,
-            kx: 2.5e6,
-        });
-        assert_eq!(r.text(), "mu0  0.3\nkz   10000000 N/m\nkx   2500000 N/m\n");
-        assert_eq!(
-            r.json(),
-            serde_json::json!({"mu0": 0.3, "kz": 1e7, "kx": 2.5e6})
-        );
-    }
-}
-
 /// The closed loop's state (`device control`): the setting, the model's
 /// plan and the last update.
 pub fn control(s: &ControlState) -> Report {
@@ -349,4 +330,23 @@ pub fn control_update(u: &ControlUpdate) -> Report {
         .row("duz_trim", "integral trim", f32v(u.integral_m), "m")
         .row("saturated", "limited", u.saturated, "")
         .row("held", "held", u.held, "")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn text_is_aligned_with_units_and_json_is_flat() {
+        let r = contact(&Contact {
+            mu0: 0.3,
+            kz: 1e7,
+            kx: 2.5e6,
+        });
+        assert_eq!(r.text(), "mu0  0.3\nkz   10000000 N/m\nkx   2500000 N/m\n");
+        assert_eq!(
+            r.json(),
+            serde_json::json!({"mu0": 0.3, "kz": 1e7, "kx": 2.5e6})
+        );
+    }
 }

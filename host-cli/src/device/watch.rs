@@ -251,7 +251,7 @@ fn control_loop(t: &Target, c: &mut Client, count: Option<u64>, stop: &AtomicBoo
     let mut out = std::io::stdout().lock();
     let mut n = 0u64;
     let mut idle = Instant::now();
-    while !count.is_some_and(|k| n >= k) {
+    while count.is_none_or(|k| n < k) {
         if stop.load(Ordering::SeqCst) {
             eprintln!("interrupted");
             return Ok(());

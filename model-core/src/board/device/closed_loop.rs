@@ -215,13 +215,27 @@ impl<const N: usize> Device<'_, N> {
         Ok(())
     }
 
-    /// Switches the loop off (the last command stays applied); aborts its
-    /// estimate. Nothing if it is off.
+    /// Switches the loop off: the last command stays (a command not yet
+    /// applied is applied now; stopped, it becomes the setting's Δu_z);
+    /// aborts the loop's estimate. Nothing if it is off.
     pub fn control_off(&mut self) {
+        let (z, off) = (self.cfg.dac_z, self.drive.offset_z_m);
         if let Some(l) = self.control.as_mut().filter(|l| l.on) {
             l.on = false;
             l.setting.on = false;
-            l.pending = None;
+            // The last command (reported in `last.amp_z_m`) is the one held:
+            // one not yet applied is applied now (ramped, while running).
+            if let Some(u) = l.pending.take() {
+                let lz = Level {
+                    amp: u / z.metres_per_code,
+                    dc: z.zero_code + off / z.metres_per_code,
+                };
+                if self.running && self.dds.set_level(0, lz).is_ok() {
+                    self.drive.amp_z_m = u;
+                } else if !self.running {
+                    self.drive.amp_z_m = u;
+                }
+            }
             self.est.abort();
         }
     }
