@@ -230,9 +230,8 @@ impl<const N: usize> Device<'_, N> {
                     amp: u / z.metres_per_code,
                     dc: z.zero_code + off / z.metres_per_code,
                 };
-                if self.running && self.dds.set_level(0, lz).is_ok() {
-                    self.drive.amp_z_m = u;
-                } else if !self.running {
+                // Stopped, it only becomes the setting (applied at `Start`).
+                if !self.running || self.dds.set_level(0, lz).is_ok() {
                     self.drive.amp_z_m = u;
                 }
             }
