@@ -157,4 +157,31 @@ fn closed_loop_over_a_pty() {
     let e: Value = serde_json::from_slice(&o.stdout).unwrap();
     // Held at the last command, μ stays at the setpoint (2 %).
     assert!((num(&e, "mu") - 0.1).abs() <= 0.002, "{e}");
+    // `device tune` (fricctl tune's f64 solver on the device's contact and
+    // drive, then SetDrive): the device's model then predicts the target. The
+    // bound: the f32 prediction's worst error 5.5e-7·μ0 (README, f32
+    // vectors) plus the f32 rounding of Δu_z (ulp 2.3e-13 m × |∂μ/∂Δu_z| ≈
+    // 7e4 /m): 2e-7; 1e-6 is used.
+    let t = ok_json(
+        &s,
+        &[
+            "tune",
+            "--v0",
+            "0.004",
+            "--target-mu",
+            "0.1",
+            "--adjust",
+            "duz",
+        ],
+    );
+    let p = ok_json(&s, &["predict", "--v0", "0.004"]);
+    assert!((num(&p, "mu") - 0.1).abs() < 1e-6, "{p}");
+    // The loop's f32 feedforward (scan and bisection) is the same amplitude as
+    // the f64 inverse search: the f32 law's error 5.5e-7·μ0 over the slope
+    // 7.2e4 /m is 2.3e-12 m; 1e-10 m is used.
+    assert!(
+        (num(&t, "duz") - ff).abs() < 1e-10,
+        "tune {} ff {ff}",
+        num(&t, "duz")
+    );
 }

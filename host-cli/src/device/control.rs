@@ -684,3 +684,122 @@ fn chart(
     };
     render_figure(path, &fig)
 }
+
+/// Flags of `fricctl device tune`: those of `fricctl tune` without the scene
+/// (the device's contact and drive are the scene).
+#[derive(Args, Debug, Clone)]
+pub struct DeviceTuneArgs {
+    /// `fricctl tune` flags: --v0 V (--target-mu X | --target-mu-rel T |
+    /// --maximize OBJECTIVE) --adjust duz|dux|phase [--max-duz M] [--max-dux M]
+    #[arg(trailing_var_arg = true, allow_hyphen_values = true, num_args = 1..)]
+    pub tune: Vec<String>,
+}
+
+/// `fricctl tune` parsed from an argument list.
+#[derive(clap::Parser, Debug)]
+#[command(name = "device tune", no_binary_name = true)]
+struct TuneOnly {
+    #[command(flatten)]
+    tune: crate::cmd::tune::TuneCmd,
+}
+
+/// `fricctl device tune …`: `fricctl tune`'s solver on the device's contact
+/// and drive (its lift-off margin too), then `SetDrive` with the result.
+pub fn tune(c: &mut Client, a: &DeviceTuneArgs, json: bool) -> CliResult {
+    let contact = match expect(c.call(Request::GetContact)?)? {
+        Response::Contact(k) => k,
+        other => return Err(unexpected(other)),
+    };
+    let (drive, applied) = match expect(c.call(Request::GetDrive)?)? {
+        Response::Drive { setting, applied } => (setting, applied),
+        other => return Err(unexpected(other)),
+    };
+    let margin = match expect(c.call(Request::Hello)?)? {
+        Response::Info(i) => i.liftoff_margin,
+        other => return Err(unexpected(other)),
+    };
+    let s = |x: f64| x.to_string();
+    let mut argv: Vec<String> = vec![
+        "--mu0".into(),
+        s(render::f32v(contact.mu0)),
+        "--kz".into(),
+        s(render::f32v(contact.kz)),
+        "--kx".into(),
+        s(render::f32v(contact.kx)),
+        "--uz0".into(),
+        s(render::f32v(drive.offset_z_m)),
+        "--duz".into(),
+        s(render::f32v(drive.amp_z_m)),
+        "--dux".into(),
+        s(render::f32v(drive.amp_x_m)),
+        "--freq".into(),
+        s(applied.achieved.freq_hz),
+        "--phi-deg".into(),
+        s(applied.phase_rad.to_degrees()),
+        "--liftoff-margin".into(),
+        s(render::f32v(margin)),
+        "--json".into(),
+    ];
+    argv.extend(a.tune.iter().cloned());
+    let parsed = <TuneOnly as clap::Parser>::try_parse_from(&argv).map_err(|e| {
+        CliError::usage(
+            e.to_string()
+                .lines()
+                .next()
+                .unwrap_or("bad tune flags")
+                .to_string(),
+        )
+    })?;
+    let mut buf = Vec::new();
+    parsed.tune.run(&mut buf)?;
+    let v: serde_json::Value =
+        serde_json::from_slice(&buf).map_err(|e| CliError::failure(format!("tune result: {e}")))?;
+    let get = |k: &str| {
+        v[k].as_f64()
+            .ok_or_else(|| CliError::failure(format!("tune result without {k}")))
+    };
+    let d = DriveSetting {
+        freq_hz: drive.freq_hz,
+        amp_z_m: get("duz")? as f32,
+        amp_x_m: get("dux")? as f32,
+        offset_z_m: drive.offset_z_m,
+        phase_rad: get("phi_deg")?.to_radians() as f32,
+    };
+    let r = match expect(c.call(Request::SetDrive(d))?)? {
+        Response::Drive { setting, applied } => render::drive(&setting, &applied),
+        other => return Err(unexpected(other)),
+    };
+    let mut w = std::io::stdout().lock();
+    let shown = if json {
+        let mut o = r.json();
+        if let (Some(m), Some(t)) = (o.as_object_mut(), v.as_object()) {
+            for k in [
+                "adjust",
+                "v0",
+                "target_mu",
+                "mu",
+                "mu_over_mu0",
+                "residual_over_mu0",
+                "error_bound_over_mu0",
+                "objective",
+                "value",
+            ] {
+                if let Some(x) = t.get(k) {
+                    m.insert(k.to_string(), x.clone());
+                }
+            }
+        }
+        writeln!(w, "{o}")
+    } else {
+        let mu = v["mu"]
+            .as_f64()
+            .map_or(String::new(), |m| format!(", model mu = {m}"));
+        writeln!(
+            w,
+            "tuned {} on the device's model{mu}; drive set:",
+            v["adjust"].as_str().unwrap_or("?")
+        )
+        .and_then(|()| r.print(false, &mut w))
+    };
+    shown.map_err(crate::output::stdout_error)
+}

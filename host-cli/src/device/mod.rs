@@ -126,6 +126,8 @@ pub enum DeviceCmd {
     Control(control::ControlArgs),
     /// The closed loop on the mismatched virtual plant (in process): step response, steady state, velocity step; numbers and a chart
     ControlBench(control::BenchArgs),
+    /// `fricctl tune` on the device's contact and drive, then set the drive to the result (e.g. `device tune --v0 0.004 --target-mu 0.1 --adjust duz`)
+    Tune(control::DeviceTuneArgs),
 }
 
 /// `drive get|set`.
@@ -527,6 +529,7 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             None => unreachable!("checked above"),
         },
         DeviceCmd::ControlBench(_) => unreachable!("handled above"),
+        DeviceCmd::Tune(a) => control::tune(&mut c, a, t.json),
     }
 }
 
