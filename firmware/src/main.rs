@@ -17,6 +17,11 @@
 //!   DMA2 Stream0/Channel0 moves ADC_CDR (ADC2 << 16 | ADC1, DMA mode 2) into a
 //!   buffer of the same length, whose halves go to the estimator with the drive
 //!   phase of each sample.
+//! * Closed loop (`model_core::control`, protocol `SetControl`): the device
+//!   runs one update per finished estimate inside `adc_block` (the ADC
+//!   interrupt; a few hundred instructions, no model call) and applies the
+//!   command at the next DAC refill. The feedforward's model search runs in
+//!   the main loop on a snapshot (`Server`), with interrupts enabled.
 #![no_std]
 #![no_main]
 

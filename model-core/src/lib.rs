@@ -36,7 +36,7 @@ pub mod board;
 pub mod model;
 
 // The public paths used by the firmware and the host (`model_core::scene`, …).
-pub use board::{dds, device, estimator, protocol, server};
+pub use board::{control, dds, device, estimator, protocol, server};
 pub use model::{analytic, exact, fixed_step, float, mdr, regime, scene, select};
 
 pub use float::{FastF32, Float, Libm, Math, Micromath};

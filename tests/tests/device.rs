@@ -233,6 +233,8 @@ fn closed_loop_measurement_agrees_with_prediction() {
     // Settle the DAC ramps first (the phase ramp takes ≈ 22 700 samples).
     while !d.status().settled {
         d.fill_dac(0, &mut buf);
+        // ADC block n is the output of fill n (as on the board): keep them in step.
+        d.adc_block(0, &[]);
     }
     let acc = d.dds().accumulator();
     let tw = d.dds().tuning_word();
@@ -370,6 +372,8 @@ fn estimates_say_why_they_are_not_valid() {
     let mut buf = vec![0u32; 500];
     while !d.status().settled {
         d.fill_dac(0, &mut buf);
+        // ADC block n is the output of fill n (as on the board): keep them in step.
+        d.adc_block(0, &[]);
     }
     // Drive stopped and settled: the window runs on a silent DAC.
     let e = measure_constant(&mut d, 40);

@@ -113,6 +113,15 @@ fn roundtrip_every_request() {
         Request::ResetFaults,
         Request::Reset,
         Request::SetLiftOff { allow: true },
+        Request::SetControl(model_core::protocol::ControlSetting {
+            on: true,
+            target_mu: 0.1,
+            v0_m_s: 0.004,
+            gain: 0.7,
+            periods: 4,
+            rate_m_per_s: 1e-3,
+        }),
+        Request::GetControl,
     ];
     assert_eq!(
         reqs.len() as u32,

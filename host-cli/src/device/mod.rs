@@ -2,6 +2,7 @@
 //! `fricctl sim-device` (serve the virtual device on a pty or TCP).
 
 pub mod client;
+pub mod control;
 pub mod link;
 pub mod render;
 pub mod serve;
@@ -137,6 +138,12 @@ pub enum DeviceCmd {
     Ports,
     /// Sweep one drive parameter: per point set the drive, settle, measure, predict; one CSV row each
     Sweep(sweep::SweepArgs),
+    /// The closed loop: hold μ at --target-mu at sliding velocity --v0 by adjusting Δu_z; `off`; `status`
+    Control(control::ControlArgs),
+    /// The closed loop on the mismatched virtual plant (in process): step response, steady state, velocity step; numbers and a chart
+    ControlBench(control::BenchArgs),
+    /// `fricctl tune` on the device's contact and drive, then set the drive to the result (e.g. `device tune --v0 0.004 --target-mu 0.1 --adjust duz`)
+    Tune(control::DeviceTuneArgs),
 }
 
 /// `drive get|set`.
@@ -291,6 +298,9 @@ fn wire_error(e: WireError) -> CliError {
         DriveParam::Phase => "--phase-deg",
         DriveParam::Periods => "--periods",
         DriveParam::Velocity => "--v0",
+        DriveParam::TargetMu => "--target-mu",
+        DriveParam::Gain => "--gain",
+        DriveParam::Rate => "--rate",
     };
     match e {
         WireError::OutOfRange { param, min, max } => {
@@ -304,11 +314,20 @@ fn wire_error(e: WireError) -> CliError {
             "--offset-z: the device has no valid scene: it needs a contact (scene set) and a drive with a normal offset (drive set)"
                 .to_string(),
         ),
+        WireError::OutOfReach { min, max } => CliError::usage(format!(
+            "--target-mu: out of reach of the device's model by adjusting Δu_z up to the lift-off limit: reachable mu {min} … {max}"
+        )),
+        WireError::NotRunning => CliError::usage(
+            "the drive is not running: `fricctl device start` first".to_string(),
+        ),
+        WireError::Busy => CliError::failure(
+            "device busy: a measurement, stream or the closed loop is running (`device control off` ends the loop)".to_string(),
+        ),
         other => CliError::failure(format!("device error: {other}")),
     }
 }
 
-fn expect(r: Response) -> CliResult<Response> {
+pub(crate) fn expect(r: Response) -> CliResult<Response> {
     match r {
         Response::Error(e) => Err(wire_error(e)),
         other => Ok(other),
@@ -316,7 +335,7 @@ fn expect(r: Response) -> CliResult<Response> {
 }
 
 /// Prints a report (text or `--json`) to stdout.
-fn out(json: bool, r: &Report) -> CliResult {
+pub(crate) fn out(json: bool, r: &Report) -> CliResult {
     r.print(json, &mut std::io::stdout().lock())
         .map_err(crate::output::stdout_error)
 }
@@ -375,6 +394,13 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
     if let DeviceCmd::Sweep(a) = cmd {
         a.check()?;
     }
+    if let DeviceCmd::ControlBench(a) = cmd {
+        return control::bench(a, t.json);
+    }
+    let control_req = match cmd {
+        DeviceCmd::Control(a) => Some(a.request()?),
+        _ => None,
+    };
     let mut c = open(t)?;
     if !t.json {
         eprintln!("talking to {}", c.describe());
@@ -568,6 +594,12 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
         } => watch::watch(t, c, *periods, *count, csv.as_deref(), *allow_invalid),
         DeviceCmd::Ports => unreachable!("handled above"),
         DeviceCmd::Sweep(a) => sweep::run(&mut c, a, t.json),
+        DeviceCmd::Control(_) => match control_req {
+            Some(req) => control::run(&mut c, req, t.json),
+            None => unreachable!("checked above"),
+        },
+        DeviceCmd::ControlBench(_) => unreachable!("handled above"),
+        DeviceCmd::Tune(a) => control::tune(&mut c, a, t.json),
     }
 }
 
@@ -584,7 +616,7 @@ pub(crate) fn check_valid(e: &model_core::estimator::Estimate, allow_invalid: bo
     )))
 }
 
-fn unexpected(r: Response) -> CliError {
+pub(crate) fn unexpected(r: Response) -> CliError {
     use model_core::protocol::Answer;
     let what = match r.answer() {
         Some(Answer::Info) => "Info",
@@ -594,6 +626,7 @@ fn unexpected(r: Response) -> CliError {
         Some(Answer::Prediction) => "Prediction",
         Some(Answer::Estimate) => "Estimate",
         Some(Answer::Status) => "Status",
+        Some(Answer::Control) => "Control",
         None => "an error",
     };
     CliError::failure(format!("unexpected answer from the device: {what}"))

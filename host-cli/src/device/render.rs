@@ -9,7 +9,7 @@ use std::io::Write;
 
 use model_core::device::{Contact, DriveSetting, Status};
 use model_core::estimator::Estimate;
-use model_core::protocol::{Applied, Info, Prediction};
+use model_core::protocol::{Applied, ControlState, ControlUpdate, Info, Prediction};
 use model_core::regime::Regime;
 use serde_json::{Map, Value};
 
@@ -302,6 +302,48 @@ pub fn status(s: &Status) -> Report {
         .row("out_dux", "output dux", f32v(s.out_amp_x_m), "m")
         .row("out_uz0", "output uz0", f32v(s.out_offset_z_m), "m")
         .row("liftoff_allowed", "lift-off allowed", s.liftoff_allowed, "")
+}
+
+/// The closed loop's state (`device control`): the setting, the model's
+/// plan and the last update.
+pub fn control(s: &ControlState) -> Report {
+    let c = &s.setting;
+    let u = &s.last;
+    Report::default()
+        .row("on", "loop on", c.on, "")
+        .row("target_mu", "setpoint mu*", f32v(c.target_mu), "")
+        .row("v0", "at v0", f32v(c.v0_m_s), "m/s")
+        .row("gain", "gain kappa", f32v(c.gain), "")
+        .row("periods", "periods per update", c.periods, "")
+        .row("rate", "rate limit", f32v(c.rate_m_per_s), "m/s")
+        .row(
+            "duz_feedforward",
+            "feedforward duz",
+            f32v(s.feedforward_m),
+            "m",
+        )
+        .row("slope_per_m", "model dmu/dduz", f32v(s.slope_per_m), "1/m")
+        .row("duz_limit", "lift-off limit", f32v(s.limit_m), "m")
+        .row("update", "updates", u.update, "")
+        .row("measured_mu", "measured mu", f32v(u.measured_mu), "")
+        .row("std_error", "std error", f32v(u.std_error), "")
+        .row("duz", "commanded duz", f32v(u.amp_z_m), "m")
+        .row("duz_trim", "integral trim", f32v(u.integral_m), "m")
+        .row("saturated", "limited", u.saturated, "")
+        .row("held", "held", u.held, "")
+}
+
+/// One closed-loop update (`device watch` while the loop runs).
+pub fn control_update(u: &ControlUpdate) -> Report {
+    Report::default()
+        .row("update", "update", u.update, "")
+        .row("target_mu", "setpoint mu*", f32v(u.target_mu), "")
+        .row("measured_mu", "measured mu", f32v(u.measured_mu), "")
+        .row("std_error", "std error", f32v(u.std_error), "")
+        .row("duz", "commanded duz", f32v(u.amp_z_m), "m")
+        .row("duz_trim", "integral trim", f32v(u.integral_m), "m")
+        .row("saturated", "limited", u.saturated, "")
+        .row("held", "held", u.held, "")
 }
 
 #[cfg(test)]

@@ -30,8 +30,8 @@ use model_core::server::Server;
 
 /// Table size of the virtual device (as the firmware).
 pub const TABLE_N: usize = 1024;
-/// Samples per half-buffer (as the firmware).
-pub const HALF: usize = 512;
+/// Samples per half-buffer (as the firmware: 256, 512 µs at 500 kS/s).
+pub const HALF: usize = 256;
 /// Sub-steps of the plant per ADC sample.
 const SUB: usize = 32;
 
@@ -248,6 +248,22 @@ pub struct VirtualDevice {
     opts: PlantOptions,
     /// Samples produced since the device was made.
     samples: u64,
+    /// Fills made ahead of the half-buffer being simulated (0: fill, then
+    /// simulate it; the board: 2, see [`VirtualDevice::set_fill_lead`]).
+    fill_lead: usize,
+    /// Filled half-buffers not yet simulated: (levels before, levels after,
+    /// accumulator and tuning word at the fill, half index).
+    filled: std::collections::VecDeque<Filled>,
+}
+
+/// A filled half-buffer waiting to be simulated.
+#[derive(Clone, Copy)]
+struct Filled {
+    before: [model_core::dds::Channel; 2],
+    after: [model_core::dds::Channel; 2],
+    acc0: u32,
+    tw: u32,
+    half: usize,
 }
 
 struct Plant {
@@ -288,6 +304,8 @@ impl VirtualDevice {
             rng: 0x9E37_79B9_7F4A_7C15,
             opts,
             samples: 0,
+            fill_lead: 0,
+            filled: std::collections::VecDeque::new(),
         };
         let _ = v.dev.set_drive(DriveSetting {
             freq_hz: 40_000.0,
@@ -372,6 +390,15 @@ impl VirtualDevice {
         out
     }
 
+    /// How many half-buffers the DAC fills run ahead of the output: 0 (the
+    /// default) fills each half just before it is output; the board's
+    /// firmware fills a half while the other is output and handles the ADC
+    /// block after the DAC refill of the same boundary, so a command computed
+    /// from ADC block `n` first reaches the output in half `n + 3`: lead 2.
+    pub fn set_fill_lead(&mut self, halves: usize) {
+        self.fill_lead = halves;
+    }
+
     /// Samples per second.
     pub fn sample_rate(&self) -> f64 {
         self.dev.config().sample_rate_hz
@@ -385,23 +412,55 @@ impl VirtualDevice {
         (2.0 * u - 1.0) * self.opts.noise_counts
     }
 
+    /// Makes DAC fills until `fill_lead + 1` halves wait to be simulated.
+    fn fill_ahead(&mut self) {
+        while self.filled.len() <= self.fill_lead {
+            let before = *self.dev.dds().channels();
+            let acc0 = self.dev.dds().accumulator();
+            let tw = self.dev.dds().tuning_word();
+            let half = self.half;
+            let mut buf = std::mem::take(&mut self.dac);
+            self.dev.fill_dac(half, &mut buf);
+            self.dac = buf;
+            self.filled.push_back(Filled {
+                before,
+                after: *self.dev.dds().channels(),
+                acc0,
+                tw,
+                half,
+            });
+            self.half ^= 1;
+        }
+    }
+
     fn step_half(&mut self) {
         let cfg = *self.dev.config();
-        // Drive levels now (metres) from the DDS channel states.
-        let ch = *self.dev.dds().channels();
-        let acc0 = self.dev.dds().accumulator();
-        let tw = self.dev.dds().tuning_word();
-        let half = self.half;
-        let mut buf = std::mem::take(&mut self.dac);
-        self.dev.fill_dac(half, &mut buf);
-        self.dac = buf;
+        self.fill_ahead();
+        let Some(Filled {
+            before: ch,
+            after: end,
+            acc0,
+            tw,
+            half,
+        }) = self.filled.pop_front()
+        else {
+            return;
+        };
         let (mz, mx) = (
             f64::from(cfg.dac_z.metres_per_code),
             f64::from(cfg.dac_x.metres_per_code),
         );
         let uz0 = (f64::from(ch[0].dc) - f64::from(cfg.dac_z.zero_code)) * mz;
-        let duz_dac = f64::from(ch[0].amp) * mz;
-        let dux_dac = f64::from(ch[1].amp) * mx;
+        // The DDS ramps its levels during the fill (at the slew rate): the
+        // transducers' drive moves linearly from the levels before the fill to
+        // those after it across the half-buffer.
+        let (duz_a, dux_a) = (f64::from(ch[0].amp) * mz, f64::from(ch[1].amp) * mx);
+        let (duz_b, dux_b) = (f64::from(end[0].amp) * mz, f64::from(end[1].amp) * mx);
+        let dac_at = |i: usize| {
+            let w = i as f64 / HALF as f64;
+            (duz_a + (duz_b - duz_a) * w, dux_a + (dux_b - dux_a) * w)
+        };
+        let (duz_dac, dux_dac) = dac_at(0);
         // ch1 = dc + amp·sin(θ + p1), ch2 = zero + amp·sin(θ + p2): u_z = u_z0 + Δu_z sin(θ + p1),
         // u_x = Δu_x sin(θ + p2) (the device sets p1 = −π/2, p2 = φ + π/2).
         let (p1, p2) = (phase_rad(ch[0].phase), phase_rad(ch[1].phase));
@@ -454,13 +513,13 @@ impl VirtualDevice {
             }
             th += dtheta;
             // The transducers move towards the DAC's amplitudes for the next sample.
+            let (duz_dac, dux_dac) = dac_at(i + 1);
             self.plant.amp = (
                 duz_dac + (duz - duz_dac) * keep,
                 dux_dac + (dux - dux_dac) * keep,
             );
         }
         self.dev.adc_block(half, &samples);
-        self.half ^= 1;
         self.samples += HALF as u64;
     }
 }

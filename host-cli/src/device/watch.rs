@@ -1,6 +1,8 @@
 //! `fricctl device watch`: streamed estimates until `--count`, Ctrl-C, a
 //! closed stdout or an invalid estimate — and on every one of those exits the
 //! stream is stopped on the device, so that the next `measure` is not `Busy`.
+//! While the closed loop runs it shows the loop's updates instead (setpoint,
+//! measured μ, commanded Δu_z).
 
 use std::io::{IsTerminal, Write};
 use std::path::Path;
@@ -63,6 +65,12 @@ pub fn watch(
         None => None,
     };
     let mut c = c;
+    // While the closed loop runs the estimator is the loop's: show its updates.
+    if let model_core::protocol::Response::Control(st) = expect(c.call(Request::GetControl)?)? {
+        if st.setting.on {
+            return control_loop(t, &mut c, count, &stop);
+        }
+    }
     expect(c.call(Request::Stream { on: true, periods })?)?;
     let end = stream_loop(t, &mut c, periods, count, &mut file, allow_invalid, &stop);
     // Stop the stream on every exit path (a failed stop is said, not hidden).
@@ -234,4 +242,54 @@ fn reconnect(t: &Target, periods: u32, stop: &AtomicBool) -> CliResult<Client> {
         }
         std::thread::sleep(Duration::from_secs(1));
     }
+}
+
+/// `watch` while the closed loop runs: one line (or JSON object) per
+/// `Control` telemetry frame — setpoint, measured μ, commanded Δu_z — until
+/// `--count`, Ctrl-C or a closed stdout. Nothing to stop on the device.
+fn control_loop(t: &Target, c: &mut Client, count: Option<u64>, stop: &AtomicBool) -> CliResult {
+    let mut out = std::io::stdout().lock();
+    let mut n = 0u64;
+    let mut idle = Instant::now();
+    while count.is_none_or(|k| n < k) {
+        if stop.load(Ordering::SeqCst) {
+            eprintln!("interrupted");
+            return Ok(());
+        }
+        match c.next_telemetry(Duration::from_millis(200))? {
+            Some((_, Telemetry::Control(u))) => {
+                idle = Instant::now();
+                n += 1;
+                let shown =
+                    if t.json {
+                        writeln!(out, "{}", render::control_update(&u).json())
+                    } else {
+                        writeln!(
+                        out,
+                        "#{:<6} setpoint {:>9.6}  measured {:>9.6} ± {:<9.2e} duz {:>11.4e} m{}{}",
+                        u.update,
+                        u.target_mu,
+                        u.measured_mu,
+                        u.std_error,
+                        u.amp_z_m,
+                        if u.saturated { "  limited" } else { "" },
+                        if u.held { "  HELD (estimate not usable)" } else { "" }
+                    )
+                    };
+                if shown.and_then(|()| out.flush()).is_err() {
+                    return Ok(());
+                }
+            }
+            Some(_) => {}
+            None => {
+                if idle.elapsed() > Duration::from_secs(10) {
+                    return Err(CliError::failure(format!(
+                        "no closed-loop update from {} for 10 s (loop off?)",
+                        c.describe()
+                    )));
+                }
+            }
+        }
+    }
+    Ok(())
 }

@@ -1,6 +1,8 @@
 //! **The board**: the driver board's logic, free of hardware types, so that
 //! the firmware and the host's virtual device run the very same code.
 //!
+//! * [`control`] — the closed loop: μ held at a setpoint by Δu_z (feedforward
+//!   from the f32 inverse model, integral trim, anti-windup, rate limit, lift-off guard);
 //! * [`dds`] — the two phase-locked DAC waveforms (direct digital synthesis);
 //! * [`estimator`] — μ from sampled forces (eq. 20) with lock-in harmonics;
 //! * [`device`] — drive settings in physical units, the lift-off guard,
@@ -17,6 +19,7 @@
 //! **Dependencies.** The board uses [`crate::model`] (scene, solvers, regimes)
 //! and nothing uses the board from inside the model.
 
+pub mod control;
 pub mod dds;
 pub mod device;
 pub mod estimator;

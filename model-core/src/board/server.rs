@@ -10,12 +10,19 @@
 //! stream of estimates ends on `Stream{on: false}`, on `Reset`, or when its
 //! next measurement is refused, and every end is announced by one
 //! `StreamStopped` telemetry frame. `Reset` ends every session a crashed host
-//! may have left behind.
+//! may have left behind (and switches the closed loop off, by stopping the
+//! drive).
+//!
+//! **Closed loop.** `SetControl` is checked and planned here (the model's
+//! inverse search runs on a snapshot, with the device released); the loop
+//! itself runs in the device on every finished estimate, and each poll sends
+//! the latest update as `Control` telemetry.
 
+use crate::board::control;
 use crate::board::device::{self, Device};
 use crate::board::protocol::{
-    decode, encode, Body, Deframed, Deframer, Frame, Info, Request, Response, StreamEnd, Telemetry,
-    WireError, MAX_FRAME, PROTOCOL_VERSION,
+    decode, encode, Body, ControlSetting, Deframed, Deframer, Frame, Info, Request, Response,
+    StreamEnd, Telemetry, WireError, MAX_FRAME, PROTOCOL_VERSION,
 };
 
 /// Access to the device for the server: on the host a plain `&mut Device`;
@@ -62,6 +69,8 @@ pub struct Server {
     last_faults: u32,
     /// `Status::rx_overflows` when last reported.
     reported_overflows: u32,
+    /// The closed loop's update count last sent as telemetry.
+    reported_update: u32,
 }
 
 impl Server {
@@ -76,6 +85,7 @@ impl Server {
             reported_ramp: 0,
             last_faults: 0,
             reported_overflows: 0,
+            reported_update: 0,
         }
     }
 
@@ -143,6 +153,13 @@ impl Server {
             self.telemetry(Telemetry::RxOverflow(status.rx_overflows), &mut send);
         }
         self.poll_stream(dev, &mut send);
+        // The latest closed-loop update, once (a gap in `update` shows the
+        // updates that fell between two polls).
+        let last = dev.with(|d| d.control_on().then(|| d.control_state().last));
+        if let Some(u) = last.filter(|u| u.update != self.reported_update) {
+            self.reported_update = u.update;
+            self.telemetry(Telemetry::Control(u), &mut send);
+        }
         if let Some(end) = self.stream.ended.take() {
             self.telemetry(Telemetry::StreamStopped(end), &mut send);
         }
@@ -216,6 +233,7 @@ impl Server {
                 });
                 Ok(Response::Ok)
             }
+            Request::SetControl(s) => self.set_control(dev, s),
             other => run(&self.info, dev, other),
         };
         res.unwrap_or_else(Response::Error)
@@ -259,6 +277,33 @@ impl Server {
         answer
     }
 
+    /// `SetControl`: checked, planned on a snapshot of the scene with the
+    /// device released (the inverse search is slow), then installed.
+    fn set_control<const N: usize, A: DeviceAccess<N>>(
+        &mut self,
+        dev: &mut A,
+        s: ControlSetting,
+    ) -> Result<Response, WireError> {
+        let busy = self.stream.periods.is_some();
+        let plan = if s.on {
+            let (scene, now, limit) = dev.with(|d| {
+                d.check_control(&s, busy)?;
+                d.control_plan_inputs()
+            })?;
+            let p = control::plan(&scene, s.target_mu, s.v0_m_s, now, limit)
+                .map_err(device::DeviceError::Control)?;
+            Some(p)
+        } else {
+            None
+        };
+        if s.on && !dev.with(|d| d.control_on()) {
+            // A fresh loop: its first update is a new count.
+            self.reported_update = 0;
+        }
+        dev.with(|d| d.set_control(s, plan))?;
+        Ok(Response::Control(dev.with(|d| d.control_state())))
+    }
+
     /// `Stream`: on (replacing the periods of a running stream) or off.
     fn set_stream<const N: usize, A: DeviceAccess<N>>(
         &mut self,
@@ -268,7 +313,8 @@ impl Server {
     ) -> Result<Response, WireError> {
         if on {
             device::check_periods(periods)?;
-            if self.stream.periods.is_none() && dev.with(|d| d.status().measuring) {
+            if self.stream.periods.is_none() && dev.with(|d| d.status().measuring || d.control_on())
+            {
                 // A host measurement runs: it would be stolen by the stream.
                 return Err(WireError::Busy);
             }
@@ -329,10 +375,12 @@ fn run<const N: usize, A: DeviceAccess<N>>(
             dev.with(|d| d.set_liftoff_allowed(allow))?;
             Response::Ok
         }
+        Request::GetControl => Response::Control(dev.with(|d| d.control_state())),
         // Handled with the session state in `Server::handle`: never here.
-        Request::Measure { .. } | Request::Stream { .. } | Request::Reset => {
-            return Err(WireError::Internal)
-        }
+        Request::Measure { .. }
+        | Request::Stream { .. }
+        | Request::Reset
+        | Request::SetControl(_) => return Err(WireError::Internal),
     })
 }
 

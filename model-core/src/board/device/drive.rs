@@ -140,10 +140,15 @@ impl<const N: usize> Device<'_, N> {
     /// # Errors
     /// [`DeviceError::Faulted`] while running with a latched fault, then
     /// [`DeviceError::OutOfRange`], [`DeviceError::LiftOff`] in the order of
-    /// `plan`; nothing changes on error.
+    /// `plan`, then [`DeviceError::Busy`] while the closed loop runs (switch
+    /// it off first); nothing changes on error.
     pub fn set_drive(&mut self, d: DriveSetting) -> Result<Applied, DeviceError> {
         if self.faults != 0 && self.running {
             return Err(DeviceError::Faulted(self.faults));
+        }
+        if self.control_on() {
+            self.plan(&d)?;
+            return Err(DeviceError::Busy);
         }
         let plan = self.plan(&d)?;
         // The plan validated everything the DDS checks: none of these fail.
@@ -190,6 +195,7 @@ impl<const N: usize> Device<'_, N> {
 
     /// Stops the drive: amplitudes ramp to zero, the normal offset stays.
     pub fn stop(&mut self) {
+        self.control_off();
         self.dds.ramp_down();
         self.running = false;
         self.ramp_generation = self.ramp_generation.wrapping_add(1);
@@ -198,6 +204,7 @@ impl<const N: usize> Device<'_, N> {
     /// Latches a fault and enters the safe state: amplitudes and offsets ramp
     /// to zero displacement.
     pub fn fault(&mut self, bits: u32) {
+        self.control_off();
         self.faults |= bits;
         self.running = false;
         self.ramp_generation = self.ramp_generation.wrapping_add(1);

@@ -3,6 +3,7 @@
 
 use core::fmt;
 
+use crate::board::control::ControlError;
 use crate::board::dds::DdsError;
 use crate::board::estimator::EstimateError;
 use crate::board::protocol::messages::{DriveParam, WireError};
@@ -84,6 +85,10 @@ pub enum DeviceError {
     /// The DDS refused a setting the device had validated (an internal
     /// inconsistency, never expected).
     Dds(DdsError),
+    /// The drive is not running (the closed loop needs it).
+    NotRunning,
+    /// The closed loop has no plan for the setpoint.
+    Control(ControlError),
 }
 
 impl fmt::Display for DeviceError {
@@ -106,6 +111,8 @@ impl fmt::Display for DeviceError {
             DeviceError::Estimate(e) => write!(f, "{e}"),
             DeviceError::Config(e) => write!(f, "bad configuration: {e}"),
             DeviceError::Dds(e) => write!(f, "internal: the DDS refused a validated setting: {e}"),
+            DeviceError::NotRunning => f.write_str("the drive is not running (start it first)"),
+            DeviceError::Control(e) => write!(f, "closed loop: {e}"),
         }
     }
 }
@@ -134,6 +141,20 @@ impl From<DeviceError> for WireError {
             DeviceError::Estimate(EstimateError::NoNormalForce) => WireError::NoNormalForce,
             DeviceError::Estimate(_) => WireError::NotReady,
             DeviceError::Config(_) | DeviceError::Dds(_) => WireError::Internal,
+            DeviceError::NotRunning => WireError::NotRunning,
+            DeviceError::Control(c) => match c {
+                ControlError::OutOfReach { min, max } => WireError::OutOfReach { min, max },
+                // The device checks the target against ±μ₀ first (an
+                // OutOfRange with the limits): never reached.
+                ControlError::BadTarget => WireError::Internal,
+                ControlError::BadVelocity => WireError::OutOfRange {
+                    param: DriveParam::Velocity,
+                    min: -super::MAX_VELOCITY_M_S,
+                    max: super::MAX_VELOCITY_M_S,
+                },
+                ControlError::NoOffset => WireError::BadScene,
+                ControlError::Model(_) => WireError::Model,
+            },
         }
     }
 }

@@ -8,6 +8,8 @@
 //! * `measure` — the DAC refill and ADC intake bookkeeping (which drive phase
 //!   each ADC sample belongs to) and the friction measurement;
 //! * `predict` — the model's prediction for the current drive;
+//! * `closed_loop` — the closed loop's timing (which samples each update
+//!   uses, when its command reaches the DAC);
 //! * [`error`] — why a command was refused.
 //!
 //! The wire types the device answers with ([`DriveSetting`], [`Contact`],
@@ -17,12 +19,14 @@
 //! Every setter validates its whole input before touching anything: a
 //! refused command leaves the running state exactly as it was.
 
+mod closed_loop;
 pub mod config;
 mod drive;
 pub mod error;
 mod measure;
 mod predict;
 
+pub use closed_loop::MIN_GAIN;
 pub use config::{DacCal, DeviceConfig, MAX_PHASE_RAD, MAX_VELOCITY_M_S, PERIODS_RANGE};
 pub use error::{ConfigError, DeviceError};
 pub use measure::check_periods;
@@ -66,13 +70,20 @@ pub struct Device<'t, const N: usize> {
     faults: u32,
     rx_overflows: u32,
     est: Estimator,
-    /// Accumulator and tuning word at the start of each DAC half-buffer.
-    half: [(u32, u32); 2],
-    /// Estimate reasons that held while each DAC half-buffer was filled.
-    half_conditions: [u32; 2],
+    /// Accumulator and tuning word at the start of the last fills (by fill
+    /// number modulo `measure::FILL_RING`).
+    half: [(u32, u32); measure::FILL_RING],
+    /// Estimate reasons that held while those fills were made.
+    half_conditions: [u32; measure::FILL_RING],
     /// +1 per command that sets new DDS targets (accepted `set_drive`,
     /// `start`, `stop`, `fault`).
     ramp_generation: u32,
+    /// The closed loop (`None` until first switched on).
+    control: Option<closed_loop::Loop>,
+    /// DAC fills since power-up (the number of the next fill).
+    fills: u32,
+    /// ADC blocks since power-up (the number of the next block).
+    adc_blocks: u32,
 }
 
 /// `x` if finite and in `[min, max]`, else [`DeviceError::OutOfRange`].
@@ -125,9 +136,12 @@ impl<'t, const N: usize> Device<'t, N> {
             faults: 0,
             rx_overflows: 0,
             est,
-            half: [(0, 0); 2],
-            half_conditions: [0; 2],
+            half: [(0, 0); measure::FILL_RING],
+            half_conditions: [0; measure::FILL_RING],
             ramp_generation: 0,
+            control: None,
+            fills: 0,
+            adc_blocks: 0,
         };
         check_contact(&contact)?;
         d.applied.achieved = d

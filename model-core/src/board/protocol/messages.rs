@@ -61,8 +61,14 @@ pub enum DriveParam {
     Phase,
     /// 5: measurement (or stream) periods.
     Periods,
-    /// 6: velocity of a prediction.
+    /// 6: velocity of a prediction (or of the closed loop).
     Velocity,
+    /// 7: the closed loop's target μ.
+    TargetMu,
+    /// 8: the closed loop's gain κ.
+    Gain,
+    /// 9: the closed loop's rate limit.
+    Rate,
 }
 
 impl DriveParam {
@@ -76,6 +82,9 @@ impl DriveParam {
             DriveParam::Phase => "phase_rad",
             DriveParam::Periods => "periods",
             DriveParam::Velocity => "v0",
+            DriveParam::TargetMu => "target_mu",
+            DriveParam::Gain => "gain",
+            DriveParam::Rate => "rate_m_per_s",
         }
     }
 }
@@ -228,6 +237,72 @@ pub enum Request {
         /// Allow (`true`) or refuse (`false`).
         allow: bool,
     },
+    /// 15 (v3): switch the closed loop on (or change its setpoint) or off
+    /// ([`ControlSetting`]); answered with the loop's state.
+    SetControl(ControlSetting),
+    /// 16 (v3): the closed loop's state.
+    GetControl,
+}
+
+/// The closed loop as commanded ([`crate::board::control`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ControlSetting {
+    /// On (a new setpoint if already on) or off (the last command stays).
+    pub on: bool,
+    /// Setpoint μ*, `|μ*| < μ₀` of the device's contact.
+    pub target_mu: f32,
+    /// Sliding velocity v₀ the setpoint holds at, m/s (≠ 0, ≤ `max_velocity_m_s`).
+    pub v0_m_s: f32,
+    /// κ, the fraction of the error removed per update, in `[0.01, 1]`.
+    pub gain: f32,
+    /// Drive periods per estimate (one update each), in `1..=CONTROL_MAX_PERIODS`.
+    pub periods: u32,
+    /// Rate limit of the commanded Δu_z, m/s, in `(0, slew]` (the DDS slew).
+    pub rate_m_per_s: f32,
+}
+
+/// Most drive periods per closed-loop update.
+pub const CONTROL_MAX_PERIODS: u32 = 10_000;
+
+/// One closed-loop update (also the telemetry sent per update).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ControlUpdate {
+    /// Updates since the loop was switched on (0: none yet).
+    pub update: u32,
+    /// Setpoint μ*.
+    pub target_mu: f32,
+    /// The estimate the update used (eq. 20).
+    pub measured_mu: f32,
+    /// Its standard error.
+    pub std_error: f32,
+    /// The commanded Δu_z, m.
+    pub amp_z_m: f32,
+    /// The integral trim `I`, m.
+    pub integral_m: f32,
+    /// The rate limit or the lift-off / zero bound changed the command.
+    pub saturated: bool,
+    /// The estimate was not usable (saturated ADC, fault, drive stopped):
+    /// the command was held.
+    pub held: bool,
+}
+
+/// The closed loop's state (answer to `SetControl` and `GetControl`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ControlState {
+    /// The last accepted setting (`on` is false once the loop is off,
+    /// including after `Stop`, `Reset` or a fault).
+    pub setting: ControlSetting,
+    /// The model's feedforward Δu_z for the setpoint, m.
+    pub feedforward_m: f32,
+    /// The model's gain ∂μ/∂Δu_z there, 1/m.
+    pub slope_per_m: f32,
+    /// The command's bound (lift-off limit at the offset), m.
+    pub limit_m: f32,
+    /// The last update.
+    pub last: ControlUpdate,
 }
 
 /// Which [`Response`] variant answers a request when it succeeds (any request
@@ -249,6 +324,8 @@ pub enum Answer {
     Estimate,
     /// [`Response::Status`].
     Status,
+    /// [`Response::Control`].
+    Control,
 }
 
 /// One row of the request → response table.
@@ -282,6 +359,8 @@ pub const ENDPOINTS: &[Endpoint] = &[
     ep(12, "ResetFaults", Answer::Ok),
     ep(13, "Reset", Answer::Ok),
     ep(14, "SetLiftOff", Answer::Ok),
+    ep(15, "SetControl", Answer::Control),
+    ep(16, "GetControl", Answer::Control),
 ];
 
 const fn ep(index: u32, request: &'static str, answer: Answer) -> Endpoint {
@@ -311,6 +390,8 @@ impl Request {
             Request::ResetFaults => 12,
             Request::Reset => 13,
             Request::SetLiftOff { .. } => 14,
+            Request::SetControl(_) => 15,
+            Request::GetControl => 16,
         }
     }
 
@@ -351,6 +432,8 @@ pub enum Response {
     Status(Status),
     /// 7: the request failed.
     Error(WireError),
+    /// 8: to `SetControl` / `GetControl`.
+    Control(ControlState),
 }
 
 impl Response {
@@ -364,6 +447,7 @@ impl Response {
             Response::Prediction { .. } => Answer::Prediction,
             Response::Estimate(_) => Answer::Estimate,
             Response::Status(_) => Answer::Status,
+            Response::Control(_) => Answer::Control,
             Response::Error(_) => return None,
         })
     }
@@ -385,6 +469,9 @@ pub enum Telemetry {
     /// the new total of [`Status::rx_overflows`] (sent once per poll in
     /// which it grew).
     RxOverflow(u32),
+    /// 5: a closed-loop update (at most one per poll: `update` counts them,
+    /// so a gap shows updates not sent).
+    Control(ControlUpdate),
 }
 
 /// Why a stream of estimates ended.
@@ -474,6 +561,16 @@ pub enum WireError {
     NoNormalForce,
     /// 13: an internal inconsistency of the device (never expected; report it).
     Internal,
+    /// 14: the drive is not running (the closed loop needs it).
+    NotRunning,
+    /// 15: the closed loop's target is out of the model's reach over
+    /// Δu_z in `[0, lift-off limit]`: the reachable μ.
+    OutOfReach {
+        /// Least reachable μ.
+        min: f32,
+        /// Greatest reachable μ.
+        max: f32,
+    },
 }
 
 impl fmt::Display for WireError {
@@ -504,6 +601,11 @@ impl fmt::Display for WireError {
             WireError::NotReady => f.write_str("no finished measurement"),
             WireError::NoNormalForce => f.write_str("the measurement has no normal force"),
             WireError::Internal => f.write_str("internal device error"),
+            WireError::NotRunning => f.write_str("the drive is not running (start it first)"),
+            WireError::OutOfReach { min, max } => write!(
+                f,
+                "target_mu out of the model's reach: mu from {min} to {max} over amp_z_m in [0, lift-off limit]"
+            ),
         }
     }
 }
@@ -515,7 +617,7 @@ mod tests {
     use super::*;
 
     /// One request of every variant, in variant order.
-    fn every_request() -> [Request; 15] {
+    fn every_request() -> [Request; 17] {
         let drive = DriveSetting {
             freq_hz: 1e4,
             amp_z_m: 0.0,
@@ -546,6 +648,15 @@ mod tests {
             Request::ResetFaults,
             Request::Reset,
             Request::SetLiftOff { allow: false },
+            Request::SetControl(ControlSetting {
+                on: false,
+                target_mu: 0.1,
+                v0_m_s: 0.004,
+                gain: 0.5,
+                periods: 8,
+                rate_m_per_s: 1e-3,
+            }),
+            Request::GetControl,
         ]
     }
 

@@ -1,0 +1,805 @@
+//! `fricctl device control …` (the board's closed loop: on with a setpoint,
+//! `off`, `status`) and `fricctl device control-bench` (the loop on the
+//! mismatched virtual plant: step response, steady state, velocity step,
+//! drift; numbers and a chart).
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use clap::Args;
+use model_core::device::DriveSetting;
+use model_core::protocol::{
+    decode, encode, Body, ControlSetting, ControlState, ControlUpdate, Deframed, Deframer, Frame,
+    Request, Response, Telemetry, MAX_FRAME, PROTOCOL_VERSION,
+};
+use serde::Serialize;
+
+use super::client::Client;
+use super::render;
+use super::sim::{PlantOptions, VirtualDevice, HALF};
+use super::{expect, out, unexpected};
+use crate::error::{CliError, CliResult};
+use crate::plot::{render_figure, Corner, Extras, Figure, Mark, Panel, Series};
+
+/// Default κ (fraction of the error removed per update).
+pub const DEFAULT_GAIN: f64 = 0.7;
+/// Default drive periods per update.
+pub const DEFAULT_PERIODS: u32 = 4;
+/// Default rate limit of the commanded Δu_z, m/s (the driver board's slew).
+pub const DEFAULT_RATE: f64 = 1e-3;
+
+/// Flags of `fricctl device control`.
+#[derive(Args, Debug, Clone)]
+pub struct ControlArgs {
+    /// `off` (the last command stays applied) or `status`; without it the loop
+    /// is switched on (or retargeted) with --target-mu and --v0
+    #[arg(value_parser = ["off", "status"])]
+    pub action: Option<String>,
+    /// Setpoint μ* (|μ*| < μ0 of the device's contact)
+    #[arg(long, allow_hyphen_values = true, value_name = "X")]
+    pub target_mu: Option<f64>,
+    /// Sliding velocity v0 the setpoint holds at, m/s (≠ 0)
+    #[arg(long, allow_hyphen_values = true, value_name = "V")]
+    pub v0: Option<f64>,
+    /// κ: fraction of the error removed per update, in [0.01, 1]
+    #[arg(long, default_value_t = DEFAULT_GAIN, allow_hyphen_values = true)]
+    pub gain: f64,
+    /// Drive periods per estimate (one update each), 1 … 10 000
+    #[arg(long, default_value_t = DEFAULT_PERIODS, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 1>)]
+    pub periods: u32,
+    /// Rate limit of the commanded Δu_z, m/s (at most the board's slew, 1e-3)
+    #[arg(long, default_value_t = DEFAULT_RATE, allow_hyphen_values = true)]
+    pub rate: f64,
+}
+
+impl ControlArgs {
+    /// The request, checked before connecting (each bad flag named).
+    ///
+    /// # Errors
+    /// One line naming the flag.
+    pub fn request(&self) -> CliResult<Request> {
+        match self.action.as_deref() {
+            Some("status") => return Ok(Request::GetControl),
+            Some(_) => {
+                return Ok(Request::SetControl(ControlSetting {
+                    on: false,
+                    target_mu: 0.0,
+                    v0_m_s: 0.0,
+                    gain: self.gain as f32,
+                    periods: self.periods,
+                    rate_m_per_s: self.rate as f32,
+                }))
+            }
+            None => {}
+        }
+        let target = self.target_mu.ok_or_else(|| {
+            CliError::usage("--target-mu: missing (or `device control off|status`)")
+        })?;
+        let v0 = self.v0.ok_or_else(|| {
+            CliError::usage("--v0: missing (the setpoint holds at a sliding velocity)")
+        })?;
+        if !target.is_finite() {
+            return Err(CliError::usage("--target-mu: must be a finite number"));
+        }
+        if !(v0.is_finite() && v0 != 0.0) {
+            return Err(CliError::usage("--v0: must be a finite number != 0"));
+        }
+        if !(self.gain.is_finite() && (0.01..=1.0).contains(&self.gain)) {
+            return Err(CliError::usage(format!(
+                "--gain: must be in [0.01, 1] (got {})",
+                self.gain
+            )));
+        }
+        if !(self.rate.is_finite() && self.rate > 0.0) {
+            return Err(CliError::usage(format!(
+                "--rate: must be > 0 m/s (got {})",
+                self.rate
+            )));
+        }
+        Ok(Request::SetControl(ControlSetting {
+            on: true,
+            target_mu: target as f32,
+            v0_m_s: v0 as f32,
+            gain: self.gain as f32,
+            periods: self.periods,
+            rate_m_per_s: self.rate as f32,
+        }))
+    }
+}
+
+/// `fricctl device control …` on a connected device.
+pub fn run(c: &mut Client, req: Request, json: bool) -> CliResult {
+    match expect(c.call(req)?)? {
+        Response::Control(s) => out(json, &render::control(&s)),
+        other => Err(unexpected(other)),
+    }
+}
+
+/// Flags of `fricctl device control-bench`.
+#[derive(Args, Debug, Clone)]
+pub struct BenchArgs {
+    /// Chart of the run (PNG or SVG)
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<PathBuf>,
+    /// True μ0 of the plant relative to the device's model μ0 = 0.3 (0.8: 20 % lower)
+    #[arg(long, default_value_t = 0.8, allow_hyphen_values = true)]
+    pub mu0_ratio: f64,
+    /// Transducer amplitude lag of the plant, drive periods
+    #[arg(long, default_value_t = 2.0, allow_hyphen_values = true)]
+    pub lag_periods: f64,
+    /// Drift of the plant's μ0, per second of device time
+    #[arg(long, default_value_t = -0.5, allow_hyphen_values = true)]
+    pub drift: f64,
+    /// ADC noise, ± counts
+    #[arg(long, default_value_t = 2.0, allow_hyphen_values = true)]
+    pub noise: f64,
+    /// κ of the loop
+    #[arg(long, default_value_t = DEFAULT_GAIN, allow_hyphen_values = true)]
+    pub gain: f64,
+    /// Drive periods per update
+    #[arg(long, default_value_t = DEFAULT_PERIODS, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 1>)]
+    pub periods: u32,
+    /// Half-buffers the DAC fills run ahead of the output: 2 as on the board
+    /// (a command reaches the output 2 half-buffers after the next), 0 for
+    /// the fastest possible pipeline
+    #[arg(long, default_value_t = 2, value_parser = crate::args::count::<usize, 0>)]
+    pub fill_lead: usize,
+}
+
+/// The bench's fixed drive and schedule (device time).
+pub mod scenario {
+    /// Drive frequency, Hz.
+    pub const FREQ_HZ: f64 = 40_000.0;
+    /// Normal offset u_z0, m.
+    pub const OFFSET_Z_M: f32 = 4e-6;
+    /// Δu_x, m.
+    pub const AMP_X_M: f32 = 0.3e-6;
+    /// Open-loop Δu_z before the loop, m.
+    pub const AMP_Z0_M: f32 = 2e-6;
+    /// φ, degrees.
+    pub const PHASE_DEG: f32 = 40.0;
+    /// Stage velocity before the velocity step (and the loop's v0), m/s.
+    pub const V0: f64 = 0.004;
+    /// Stage velocity after the step, m/s.
+    pub const V1: f64 = 0.006;
+    /// Setpoint at switch-on, then after the setpoint step.
+    pub const TARGETS: (f32, f32) = (0.10, 0.13);
+    /// Loop on, setpoint step, velocity step, end: ms after the drive has settled.
+    pub const EVENTS_MS: [f64; 4] = [0.0, 15.0, 30.0, 45.0];
+    /// Duration of the velocity ramp, ms.
+    pub const V_RAMP_MS: f64 = 0.1;
+}
+
+/// One event's response.
+#[derive(Serialize, Debug, Clone)]
+pub struct Response2 {
+    /// `switch_on`, `setpoint_step` or `velocity_step`.
+    pub event: &'static str,
+    /// Setpoint after the event.
+    pub target_mu: f64,
+    /// The model's feedforward Δu_z for it, m.
+    pub duz_feedforward: f64,
+    /// The model's gain ∂μ/∂Δu_z there, 1/m.
+    pub slope_per_m: f64,
+    /// Updates from the event to the first one after which every estimate
+    /// stays within 2 % of the setpoint (until the next event); None: never.
+    pub settle_updates: Option<u32>,
+    /// The same as device time, drive periods (to the end of the half-buffer
+    /// in which that update ran).
+    pub settle_periods: Option<f64>,
+    /// The same, ms.
+    pub settle_ms: Option<f64>,
+    /// Largest excursion past the setpoint in the direction of the step,
+    /// relative to the step (setpoint step only), %.
+    pub overshoot_pct: Option<f64>,
+    /// Mean of μ̂ − μ* over the last half of the segment.
+    pub steady_error: f64,
+    /// RMS of μ̂ − μ* over the last half of the segment.
+    pub steady_rms: f64,
+    /// Largest |μ̂ − μ*| after the event, relative to μ*, %.
+    pub peak_error_pct: f64,
+}
+
+/// The bench's result (`--json`).
+#[derive(Serialize, Debug)]
+pub struct BenchOut {
+    /// Plant μ0 / model μ0.
+    pub mu0_ratio: f64,
+    /// Plant lag, periods.
+    pub lag_periods: f64,
+    /// μ0 drift, 1/s.
+    pub drift_per_s: f64,
+    /// ADC noise, counts.
+    pub noise_counts: f64,
+    /// κ.
+    pub gain: f64,
+    /// Periods per update.
+    pub periods: u32,
+    /// Samples per half-buffer of the virtual device.
+    pub half_buffer_samples: usize,
+    /// Half-buffers the DAC fills run ahead of the output.
+    pub fill_lead: usize,
+    /// Updates run.
+    pub updates: u32,
+    /// Largest commanded Δu_z, m.
+    pub max_duz: f64,
+    /// The lift-off limit, m.
+    pub liftoff_limit: f64,
+    /// Commands above the limit (must be 0).
+    pub commands_above_limit: u32,
+    /// Updates with the rate limit or a bound active.
+    pub saturated_updates: u32,
+    /// Per event.
+    pub events: Vec<Response2>,
+    /// The chart, if any.
+    pub plot: Option<String>,
+}
+
+/// An in-process virtual device with a request/telemetry helper.
+struct Bench {
+    dev: VirtualDevice,
+    seq: u32,
+    samples: u64,
+    /// (device time s, update).
+    log: Vec<(f64, ControlUpdate)>,
+    deframer: Deframer,
+}
+
+impl Bench {
+    fn call(&mut self, req: Request) -> CliResult<Response> {
+        self.seq += 1;
+        let f = Frame {
+            version: PROTOCOL_VERSION,
+            seq: self.seq,
+            body: Body::Request(req),
+        };
+        let mut buf = [0u8; MAX_FRAME];
+        let bytes = encode(&f, &mut buf)
+            .map_err(|_| CliError::failure("request too large"))?
+            .to_vec();
+        let reply = self.dev.receive(&bytes);
+        let mut answer = None;
+        for fr in self.frames(&reply) {
+            if let Body::Response(r) = fr.body {
+                answer = Some(r);
+            }
+        }
+        answer.ok_or_else(|| CliError::failure("the virtual device did not answer"))
+    }
+
+    fn frames(&mut self, bytes: &[u8]) -> Vec<Frame> {
+        let mut v = Vec::new();
+        for &b in bytes {
+            if let Deframed::Frame(f) = self.deframer.push(b, 0) {
+                if let Ok(fr) = decode(f) {
+                    v.push(fr);
+                }
+            }
+        }
+        v
+    }
+
+    fn t(&self) -> f64 {
+        self.samples as f64 / self.dev.sample_rate()
+    }
+
+    /// Runs `ms` of device time, logging the loop's updates.
+    fn run_ms(&mut self, ms: f64) {
+        let halves = (ms * 1e-3 * self.dev.sample_rate() / HALF as f64).ceil() as usize;
+        for _ in 0..halves {
+            let tel = self.dev.advance(HALF);
+            self.samples += HALF as u64;
+            let t = self.t();
+            for fr in self.frames(&tel) {
+                if let Body::Telemetry(Telemetry::Control(u)) = fr.body {
+                    self.log.push((t, u));
+                }
+            }
+        }
+    }
+}
+
+/// `fricctl device control-bench`.
+pub fn bench(a: &BenchArgs, json: bool) -> CliResult {
+    use scenario::*;
+    for (x, n) in [
+        (a.mu0_ratio, "mu0-ratio"),
+        (a.lag_periods, "lag-periods"),
+        (a.drift, "drift"),
+        (a.noise, "noise"),
+        (a.gain, "gain"),
+    ] {
+        if !x.is_finite() {
+            return Err(CliError::usage(format!("--{n}: must be a finite number")));
+        }
+    }
+    if a.mu0_ratio <= 0.0 {
+        return Err(CliError::usage("--mu0-ratio: must be > 0"));
+    }
+    if a.lag_periods < 0.0 || a.noise < 0.0 {
+        return Err(CliError::usage(
+            "--lag-periods: --lag-periods and --noise must be >= 0",
+        ));
+    }
+    if let Some(p) = &a.plot {
+        crate::plot::ext(p)?;
+    }
+    let model_mu0 = super::sim::DEFAULT_CONTACT.0;
+    // Settle 20 ms, then the events; the velocity step is at its time after settling.
+    let settle_s = 0.02;
+    let t_v = settle_s + EVENTS_MS[2] * 1e-3;
+    let opts = PlantOptions {
+        v0: V0,
+        noise_counts: a.noise,
+        offset_counts: 0.0,
+        mu0: model_mu0 * a.mu0_ratio,
+        kz: super::sim::DEFAULT_CONTACT.1,
+        kx: super::sim::DEFAULT_CONTACT.2,
+        lag_periods: a.lag_periods,
+        mu0_drift: a.drift,
+        v0_profile: Some(vec![(t_v, V0), (t_v + V_RAMP_MS * 1e-3, V1)]),
+    };
+    let mut b = Bench {
+        dev: VirtualDevice::new(opts),
+        seq: 0,
+        samples: 0,
+        log: Vec::new(),
+        deframer: Deframer::default(),
+    };
+    b.dev.set_fill_lead(a.fill_lead);
+    let drive = DriveSetting {
+        freq_hz: FREQ_HZ,
+        amp_z_m: AMP_Z0_M,
+        amp_x_m: AMP_X_M,
+        offset_z_m: OFFSET_Z_M,
+        phase_rad: PHASE_DEG.to_radians(),
+    };
+    expect(b.call(Request::SetDrive(drive))?)?;
+    expect(b.call(Request::Start)?)?;
+    b.run_ms(settle_s * 1e3);
+    let setting = |target: f32| ControlSetting {
+        on: true,
+        target_mu: target,
+        v0_m_s: V0 as f32,
+        gain: a.gain as f32,
+        periods: a.periods,
+        rate_m_per_s: DEFAULT_RATE as f32,
+    };
+    let mut t_events = Vec::new();
+    let mut states = Vec::new();
+    for (i, target) in [TARGETS.0, TARGETS.1].into_iter().enumerate() {
+        t_events.push(b.t());
+        match expect(b.call(Request::SetControl(setting(target)))?)? {
+            Response::Control(s) => states.push(s),
+            other => return Err(unexpected(other)),
+        }
+        b.run_ms(EVENTS_MS[i + 1] - EVENTS_MS[i]);
+    }
+    // The velocity step happens in the plant at t_v (device time).
+    t_events.push(t_v);
+    b.run_ms((t_v + (EVENTS_MS[3] - EVENTS_MS[2]) * 1e-3 - b.t()) * 1e3);
+    let t_end = b.t();
+    expect(b.call(Request::SetControl(ControlSetting {
+        on: false,
+        ..setting(TARGETS.1)
+    }))?)?;
+    let limit = f64::from(states[0].limit_m);
+    let period_s = 1.0 / FREQ_HZ;
+    let names = ["switch_on", "setpoint_step", "velocity_step"];
+    let targets = [TARGETS.0, TARGETS.1, TARGETS.1];
+    let mut events = Vec::new();
+    for k in 0..3 {
+        let (t0, t1) = (t_events[k], if k < 2 { t_events[k + 1] } else { t_end });
+        let seg: Vec<&(f64, ControlUpdate)> =
+            b.log.iter().filter(|(t, _)| *t > t0 && *t <= t1).collect();
+        let target = f64::from(targets[k]);
+        let err = |u: &ControlUpdate| f64::from(u.measured_mu) - target;
+        // The first update after which all stay within 2 %.
+        let mut settle = None;
+        for (i, _) in seg.iter().enumerate() {
+            if seg[i..]
+                .iter()
+                .all(|(_, u)| err(u).abs() <= 0.02 * target.abs())
+            {
+                settle = Some(i);
+                break;
+            }
+        }
+        let tail = &seg[seg.len() / 2..];
+        let n = tail.len().max(1) as f64;
+        let mean = tail.iter().map(|(_, u)| err(u)).sum::<f64>() / n;
+        let rms = (tail.iter().map(|(_, u)| err(u).powi(2)).sum::<f64>() / n).sqrt();
+        let overshoot = (k == 1).then(|| {
+            let step = target - f64::from(targets[0]);
+            let worst = seg
+                .iter()
+                .map(|(_, u)| err(u) * step.signum())
+                .fold(0.0f64, f64::max);
+            100.0 * worst / step.abs()
+        });
+        let peak = seg.iter().map(|(_, u)| err(u).abs()).fold(0.0f64, f64::max);
+        let settle_s = settle.map(|i| seg[i].0 - t0);
+        events.push(Response2 {
+            event: names[k],
+            target_mu: target,
+            duz_feedforward: f64::from(states[k.min(1)].feedforward_m),
+            slope_per_m: f64::from(states[k.min(1)].slope_per_m),
+            settle_updates: settle.map(|i| i as u32 + 1),
+            settle_periods: settle_s.map(|s| s / period_s),
+            settle_ms: settle_s.map(|s| s * 1e3),
+            overshoot_pct: overshoot,
+            steady_error: mean,
+            steady_rms: rms,
+            peak_error_pct: 100.0 * peak / target.abs(),
+        });
+    }
+    let max_duz = b
+        .log
+        .iter()
+        .map(|(_, u)| f64::from(u.amp_z_m))
+        .fold(0.0, f64::max);
+    let o = BenchOut {
+        mu0_ratio: a.mu0_ratio,
+        lag_periods: a.lag_periods,
+        drift_per_s: a.drift,
+        noise_counts: a.noise,
+        gain: a.gain,
+        periods: a.periods,
+        half_buffer_samples: HALF,
+        fill_lead: a.fill_lead,
+        updates: b.log.last().map_or(0, |(_, u)| u.update),
+        max_duz,
+        liftoff_limit: limit,
+        commands_above_limit: b
+            .log
+            .iter()
+            .filter(|(_, u)| f64::from(u.amp_z_m) > limit)
+            .count() as u32,
+        saturated_updates: b.log.iter().filter(|(_, u)| u.saturated).count() as u32,
+        events,
+        plot: a.plot.as_ref().map(|p| p.display().to_string()),
+    };
+    if let Some(p) = &a.plot {
+        chart(p, &b.log, &t_events, t_end, &states, &o, model_mu0)?;
+    }
+    let mut w = std::io::stdout().lock();
+    let r = if json {
+        writeln!(
+            w,
+            "{}",
+            serde_json::to_string_pretty(&o).unwrap_or_default()
+        )
+    } else {
+        write_text(&mut w, &o)
+    };
+    r.map_err(crate::output::stdout_error)?;
+    let bad = o.commands_above_limit > 0 || o.events.iter().any(|e| e.settle_updates.is_none());
+    if bad {
+        return Err(CliError::failure(
+            "the loop did not settle within 2 % after every event, or a command exceeded the lift-off limit",
+        ));
+    }
+    Ok(())
+}
+
+fn opt(x: Option<f64>, prec: usize) -> String {
+    x.map_or("never".to_string(), |v| format!("{v:.prec$}"))
+}
+
+fn write_text(w: &mut impl Write, o: &BenchOut) -> std::io::Result<()> {
+    writeln!(
+        w,
+        "plant: mu0 = {} x model, lag {} periods, drift {} /s, noise ±{} counts; loop: gain {}, {} periods/update, {} samples/half-buffer, fills {} half-buffers ahead",
+        o.mu0_ratio, o.lag_periods, o.drift_per_s, o.noise_counts, o.gain, o.periods, o.half_buffer_samples, o.fill_lead
+    )?;
+    writeln!(
+        w,
+        "{:<14} {:>8} {:>8} {:>9} {:>9} {:>10} {:>11} {:>10} {:>10}",
+        "event", "target", "updates", "periods", "ms", "overshoot", "steady err", "rms", "peak err"
+    )?;
+    for e in &o.events {
+        writeln!(
+            w,
+            "{:<14} {:>8.4} {:>8} {:>9} {:>9} {:>9} {:>11.2e} {:>10.2e} {:>9.1}%",
+            e.event,
+            e.target_mu,
+            e.settle_updates.map_or("never".into(), |u| u.to_string()),
+            opt(e.settle_periods, 1),
+            opt(e.settle_ms, 3),
+            e.overshoot_pct.map_or("-".into(), |x| format!("{x:.1}%")),
+            e.steady_error,
+            e.steady_rms,
+            e.peak_error_pct
+        )?;
+    }
+    writeln!(
+        w,
+        "max duz {:.4e} m of lift-off limit {:.4e} m ({} commands above it); {} of {} updates rate- or bound-limited",
+        o.max_duz, o.liftoff_limit, o.commands_above_limit, o.saturated_updates, o.updates
+    )?;
+    writeln!(
+        w,
+        "settling: to within 2 % of the setpoint, every later estimate too; time to the end of the half-buffer of that update (40 kHz: 1 period = 25 µs)"
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn chart(
+    path: &std::path::Path,
+    log: &[(f64, ControlUpdate)],
+    t_events: &[f64],
+    t_end: f64,
+    states: &[ControlState],
+    o: &BenchOut,
+    model_mu0: f64,
+) -> CliResult {
+    use scenario::*;
+    let t0 = t_events[0] - 0.002;
+    let ms = |t: f64| (t - t0) * 1e3;
+    let x = (0.0, ms(t_end));
+    let meas: Vec<(f64, f64)> = log
+        .iter()
+        .map(|(t, u)| (ms(*t), f64::from(u.measured_mu)))
+        .collect();
+    let setp: Vec<(f64, f64)> = {
+        let mut v = vec![(ms(t_events[0]), f64::from(TARGETS.0))];
+        v.push((ms(t_events[1]), f64::from(TARGETS.0)));
+        v.push((ms(t_events[1]), f64::from(TARGETS.1)));
+        v.push((ms(t_end), f64::from(TARGETS.1)));
+        v
+    };
+    let band = |s: f64| -> Vec<(f64, f64)> {
+        vec![
+            (ms(t_events[0]), f64::from(TARGETS.0) * (1.0 + s)),
+            (ms(t_events[1]), f64::from(TARGETS.0) * (1.0 + s)),
+            (ms(t_events[1]), f64::NAN),
+            (ms(t_events[1]), f64::from(TARGETS.1) * (1.0 + s)),
+            (ms(t_end), f64::from(TARGETS.1) * (1.0 + s)),
+        ]
+    };
+    let cmd: Vec<(f64, f64)> = log
+        .iter()
+        .map(|(t, u)| (ms(*t), f64::from(u.amp_z_m) * 1e6))
+        .collect();
+    let ff: Vec<(f64, f64)> = vec![
+        (ms(t_events[0]), f64::from(states[0].feedforward_m) * 1e6),
+        (ms(t_events[1]), f64::from(states[0].feedforward_m) * 1e6),
+        (ms(t_events[1]), f64::from(states[1].feedforward_m) * 1e6),
+        (ms(t_end), f64::from(states[1].feedforward_m) * 1e6),
+    ];
+    let lim = vec![(x.0, o.liftoff_limit * 1e6), (x.1, o.liftoff_limit * 1e6)];
+    let events_note = format!(
+        "events: loop on at {:.1} ms, setpoint step at {:.1} ms, v0 {}→{} mm/s at {:.1} ms",
+        ms(t_events[0]),
+        ms(t_events[1]),
+        V0 * 1e3,
+        V1 * 1e3,
+        ms(t_events[2])
+    );
+    let p1 = Panel {
+        title: "Closed loop on the mismatched virtual plant: μ".into(),
+        x_label: "device time, ms".into(),
+        y_label: "μ".into(),
+        x,
+        y: (0.04, 0.17),
+        series: vec![
+            Series {
+                label: "μ* setpoint".into(),
+                points: setp,
+                mark: Mark::Line,
+                color: 1,
+            },
+            Series {
+                label: "±2 % band".into(),
+                points: band(0.02),
+                mark: Mark::Dashed,
+                color: 2,
+            },
+            Series {
+                label: String::new(),
+                points: band(-0.02),
+                mark: Mark::Dashed,
+                color: 2,
+            },
+            Series {
+                label: format!("μ estimate ({} periods/update)", o.periods),
+                points: meas,
+                mark: Mark::LineMarkers(crate::plot::Marker::Circle),
+                color: 0,
+            },
+        ],
+    };
+    let p2 = Panel {
+        title: "Commanded normal amplitude (the loop's output)".into(),
+        x_label: "device time, ms".into(),
+        y_label: "Δu_z, µm".into(),
+        x,
+        y: (0.0, 5.5),
+        series: vec![
+            Series {
+                label: "commanded Δu_z".into(),
+                points: cmd,
+                mark: Mark::LineMarkers(crate::plot::Marker::Circle),
+                color: 0,
+            },
+            Series {
+                label: "model feedforward".into(),
+                points: ff,
+                mark: Mark::Dashed,
+                color: 4,
+            },
+            Series {
+                label: "lift-off limit (1 − 0.05)·u_z0".into(),
+                points: lim,
+                mark: Mark::Line,
+                color: 3,
+            },
+        ],
+    };
+    let notes = vec![
+        format!(
+            "plant μ0 = {:.3} (model {model_mu0}), lag {} periods, drift {} /s, ADC noise ±{} counts",
+            model_mu0 * o.mu0_ratio,
+            o.lag_periods,
+            o.drift_per_s,
+            o.noise_counts
+        ),
+        format!(
+            "drive 40 kHz, u_z0 = 4 µm, Δu_x = 0.3 µm, φ = 40°, k_z = k_x = 1e7 N/m; loop v0 = {} mm/s, κ = {}",
+            V0 * 1e3,
+            o.gain
+        ),
+        events_note,
+    ];
+    let fig = Figure {
+        panels: vec![
+            (
+                p1,
+                Extras {
+                    notes: notes.clone(),
+                    notes_at: Corner::UpperLeft,
+                    legend_at: Corner::LowerRight,
+                    ..Extras::default()
+                },
+            ),
+            (
+                p2,
+                Extras {
+                    legend_at: Corner::UpperRight,
+                    ..Extras::default()
+                },
+            ),
+        ],
+        rows: 2,
+        cols: 1,
+        size: (1200, 900),
+        legend: Vec::new(),
+        caption: vec![format!(
+            "fricctl device control-bench --fill-lead {}: settling to 2 % after the setpoint step {} periods ({} ms); DAC fills {} half-buffers of 256 samples ahead",
+            o.fill_lead,
+            opt(o.events[1].settle_periods, 0),
+            opt(o.events[1].settle_ms, 3),
+            o.fill_lead
+        )],
+    };
+    render_figure(path, &fig)
+}
+
+/// Flags of `fricctl device tune`: those of `fricctl tune` without the scene
+/// (the device's contact and drive are the scene).
+#[derive(Args, Debug, Clone)]
+pub struct DeviceTuneArgs {
+    /// `fricctl tune` flags: --v0 V (--target-mu X | --target-mu-rel T |
+    /// --maximize OBJECTIVE) --adjust duz|dux|phase [--max-duz M] [--max-dux M]
+    #[arg(trailing_var_arg = true, allow_hyphen_values = true, num_args = 1..)]
+    pub tune: Vec<String>,
+}
+
+/// `fricctl tune` parsed from an argument list.
+#[derive(clap::Parser, Debug)]
+#[command(name = "device tune", no_binary_name = true)]
+struct TuneOnly {
+    #[command(flatten)]
+    tune: crate::cmd::tune::TuneCmd,
+}
+
+/// `fricctl device tune …`: `fricctl tune`'s solver on the device's contact
+/// and drive (its lift-off margin too), then `SetDrive` with the result.
+pub fn tune(c: &mut Client, a: &DeviceTuneArgs, json: bool) -> CliResult {
+    let contact = match expect(c.call(Request::GetContact)?)? {
+        Response::Contact(k) => k,
+        other => return Err(unexpected(other)),
+    };
+    let (drive, applied) = match expect(c.call(Request::GetDrive)?)? {
+        Response::Drive { setting, applied } => (setting, applied),
+        other => return Err(unexpected(other)),
+    };
+    let margin = match expect(c.call(Request::Hello)?)? {
+        Response::Info(i) => i.liftoff_margin,
+        other => return Err(unexpected(other)),
+    };
+    let s = |x: f64| x.to_string();
+    let mut argv: Vec<String> = vec![
+        "--mu0".into(),
+        s(render::f32v(contact.mu0)),
+        "--kz".into(),
+        s(render::f32v(contact.kz)),
+        "--kx".into(),
+        s(render::f32v(contact.kx)),
+        "--uz0".into(),
+        s(render::f32v(drive.offset_z_m)),
+        "--duz".into(),
+        s(render::f32v(drive.amp_z_m)),
+        "--dux".into(),
+        s(render::f32v(drive.amp_x_m)),
+        "--freq".into(),
+        s(applied.achieved.freq_hz),
+        "--phi-deg".into(),
+        s(applied.phase_rad.to_degrees()),
+        "--liftoff-margin".into(),
+        s(render::f32v(margin)),
+        "--json".into(),
+    ];
+    argv.extend(a.tune.iter().cloned());
+    let parsed = <TuneOnly as clap::Parser>::try_parse_from(&argv).map_err(|e| {
+        CliError::usage(
+            e.to_string()
+                .lines()
+                .next()
+                .unwrap_or("bad tune flags")
+                .to_string(),
+        )
+    })?;
+    let mut buf = Vec::new();
+    parsed.tune.run(&mut buf)?;
+    let v: serde_json::Value =
+        serde_json::from_slice(&buf).map_err(|e| CliError::failure(format!("tune result: {e}")))?;
+    let get = |k: &str| {
+        v[k].as_f64()
+            .ok_or_else(|| CliError::failure(format!("tune result without {k}")))
+    };
+    let d = DriveSetting {
+        freq_hz: drive.freq_hz,
+        amp_z_m: get("duz")? as f32,
+        amp_x_m: get("dux")? as f32,
+        offset_z_m: drive.offset_z_m,
+        phase_rad: get("phi_deg")?.to_radians() as f32,
+    };
+    let r = match expect(c.call(Request::SetDrive(d))?)? {
+        Response::Drive { setting, applied } => render::drive(&setting, &applied),
+        other => return Err(unexpected(other)),
+    };
+    let mut w = std::io::stdout().lock();
+    let shown = if json {
+        let mut o = r.json();
+        if let (Some(m), Some(t)) = (o.as_object_mut(), v.as_object()) {
+            for k in [
+                "adjust",
+                "v0",
+                "target_mu",
+                "mu",
+                "mu_over_mu0",
+                "residual_over_mu0",
+                "error_bound_over_mu0",
+                "objective",
+                "value",
+            ] {
+                if let Some(x) = t.get(k) {
+                    m.insert(k.to_string(), x.clone());
+                }
+            }
+        }
+        writeln!(w, "{o}")
+    } else {
+        let mu = v["mu"]
+            .as_f64()
+            .map_or(String::new(), |m| format!(", model mu = {m}"));
+        writeln!(
+            w,
+            "tuned {} on the device's model{mu}; drive set:",
+            v["adjust"].as_str().unwrap_or("?")
+        )
+        .and_then(|()| r.print(false, &mut w))
+    };
+    shown.map_err(crate::output::stdout_error)
+}

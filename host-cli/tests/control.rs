@@ -1,0 +1,187 @@
+//! The closed loop's messages over a real pty: `fricctl device control …`,
+//! `watch` while the loop runs, refusals that leave the running loop as it
+//! was, `Busy` for `measure`, and `control off` holding the last command —
+//! against `fricctl sim-device --pty` with a plant whose μ0 is 20 % below the
+//! device's model (0.24 against 0.3).
+
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command as StdCommand, Stdio};
+use std::time::Duration;
+
+use assert_cmd::cargo::CommandCargoExt;
+use assert_cmd::Command;
+use serde_json::Value;
+
+struct Sim {
+    child: Child,
+    path: String,
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn sim() -> Sim {
+    let mut child = StdCommand::cargo_bin("fricctl")
+        .unwrap()
+        .args([
+            "sim-device",
+            "--pty",
+            "--seconds",
+            "120",
+            "--plant-mu0",
+            "0.24",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    let path = line.trim().to_string();
+    assert!(path.starts_with("/dev/"), "{path}");
+    Sim { child, path }
+}
+
+fn dev(s: &Sim, args: &[&str]) -> std::process::Output {
+    Command::cargo_bin("fricctl")
+        .unwrap()
+        .args(["device", "--port", &s.path, "--json"])
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn ok_json(s: &Sim, args: &[&str]) -> Value {
+    let o = dev(s, args);
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+fn num(v: &Value, k: &str) -> f64 {
+    v[k].as_f64().unwrap_or_else(|| panic!("{k} in {v}"))
+}
+
+#[test]
+fn closed_loop_over_a_pty() {
+    let s = sim();
+    // Refused before the drive runs: NotRunning, exit 2, one line.
+    let o = dev(&s, &["control", "--target-mu", "0.1", "--v0", "0.004"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("not running"), "{err}");
+    ok_json(
+        &s,
+        &[
+            "drive",
+            "set",
+            "--freq",
+            "40000",
+            "--amp-z",
+            "2e-6",
+            "--amp-x",
+            "3e-7",
+            "--offset-z",
+            "4e-6",
+            "--phase-deg",
+            "40",
+        ],
+    );
+    ok_json(&s, &["start"]);
+    std::thread::sleep(Duration::from_millis(300));
+    let st = ok_json(&s, &["control", "--target-mu", "0.1", "--v0", "0.004"]);
+    assert_eq!(st["on"], true);
+    // f32 0.1 printed as its shortest decimal form.
+    assert_eq!(num(&st, "target_mu"), 0.1);
+    // The lift-off limit (1 − 0.05)·4 µm (computed in f32: within 1e-12 m),
+    // and the feedforward inside it.
+    let limit = num(&st, "duz_limit");
+    assert!((limit - 3.8e-6).abs() < 1e-12, "{limit}");
+    let ff = num(&st, "duz_feedforward");
+    assert!(ff > 0.0 && ff <= limit, "{ff}");
+    // A refused retarget (|μ*| ≥ μ0 = 0.3) names the flag and the limits and
+    // leaves the running loop as it was.
+    let o = dev(&s, &["control", "--target-mu", "0.5", "--v0", "0.004"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--target-mu") && err.contains("0.3"), "{err}");
+    // While the loop runs the estimator is the loop's: measure is Busy (exit 1).
+    let o = dev(&s, &["measure", "--periods", "100"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("busy"));
+    // Settled after a second of device time (the virtual device runs in real
+    // time; one update per 512 µs): within 2 % of the setpoint (the issue's
+    // criterion; the estimate's own scatter at ±1 count ADC noise is ~1e-4).
+    std::thread::sleep(Duration::from_millis(1000));
+    let st = ok_json(&s, &["control", "status"]);
+    assert_eq!(st["on"], true);
+    // f32 0.1 printed as its shortest decimal form.
+    assert_eq!(num(&st, "target_mu"), 0.1);
+    assert!(num(&st, "update") > 20.0, "{st}");
+    let mu = num(&st, "measured_mu");
+    assert!((mu - 0.1).abs() <= 0.002, "measured {mu}");
+    let duz = num(&st, "duz");
+    assert!(duz > 0.0 && duz <= limit);
+    // The model's μ0 is 20 % high: the trim moved the command off the feedforward.
+    assert!((duz - ff).abs() > 1e-8, "duz {duz} ff {ff}");
+    // watch shows the loop's updates (flat JSON, one object per update).
+    let o = dev(&s, &["watch", "--count", "3"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let lines: Vec<Value> = String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 3);
+    for l in &lines {
+        assert_eq!(num(l, "target_mu"), 0.1);
+        assert!((num(l, "measured_mu") - 0.1).abs() <= 0.002, "{l}");
+        assert!(num(l, "duz") <= limit);
+    }
+    // Off: the last command stays as the drive's Δu_z; measure works again.
+    let st = ok_json(&s, &["control", "off"]);
+    assert_eq!(st["on"], false);
+    let last = num(&st, "duz");
+    let d = ok_json(&s, &["drive", "get"]);
+    assert_eq!(num(&d, "duz"), last, "{d}");
+    let o = dev(&s, &["measure", "--periods", "200"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let e: Value = serde_json::from_slice(&o.stdout).unwrap();
+    // Held at the last command, μ stays at the setpoint (2 %).
+    assert!((num(&e, "mu") - 0.1).abs() <= 0.002, "{e}");
+    // `device tune` (fricctl tune's f64 solver on the device's contact and
+    // drive, then SetDrive): the device's model then predicts the target. The
+    // bound: the f32 prediction's worst error 5.5e-7·μ0 (README, f32
+    // vectors) plus the f32 rounding of Δu_z (ulp 2.3e-13 m × |∂μ/∂Δu_z| ≈
+    // 7e4 /m): 2e-7; 1e-6 is used.
+    let t = ok_json(
+        &s,
+        &[
+            "tune",
+            "--v0",
+            "0.004",
+            "--target-mu",
+            "0.1",
+            "--adjust",
+            "duz",
+        ],
+    );
+    let p = ok_json(&s, &["predict", "--v0", "0.004"]);
+    assert!((num(&p, "mu") - 0.1).abs() < 1e-6, "{p}");
+    // The loop's f32 feedforward (scan and bisection) is the same amplitude as
+    // the f64 inverse search: the f32 law's error 5.5e-7·μ0 over the slope
+    // 7.2e4 /m is 2.3e-12 m; 1e-10 m is used.
+    assert!(
+        (num(&t, "duz") - ff).abs() < 1e-10,
+        "tune {} ff {ff}",
+        num(&t, "duz")
+    );
+}

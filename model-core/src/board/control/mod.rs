@@ -1,0 +1,316 @@
+//! The closed loop: μ held at a setpoint μ* at a stated sliding velocity v₀
+//! by adjusting the normal amplitude Δu_z, run on every finished
+//! period-synchronous estimate (eq. 20, [`crate::board::estimator`]).
+//!
+//! # The control law (units: μ dimensionless, Δu_z in m, time in s)
+//!
+//! **Feedforward** (computed once per setpoint, [`plan`]): the device's f32
+//! model (the exact law with [`FastF32`], scan and bisection) gives the
+//! amplitude `u_ff` with `μ_model(u_ff; v₀) = μ*`, the solution nearest the
+//! present amplitude, and the model's local gain
+//!
+//! `s = ∂μ_model/∂Δu_z |_{u_ff}`  (1/m, central difference over 2 % of the range),
+//!
+//! with `|s|` kept ≥ `S_MIN_REL · μ₀/u_z0` so that a target at an extremum of
+//! the law does not make the trim gain `1/s` unbounded.
+//!
+//! **Integral trim** (every update `k`, [`Controller::update`]): with the
+//! measured `μ̂_k` and the error `e_k = μ* − μ̂_k`,
+//!
+//! `I⁺ = I_k + κ·e_k/s`,  `v_k = u_ff + I⁺`                          (C1)
+//!
+//! `u_k = clamp(v_k, u_{k−1} − r·Δt_k, u_{k−1} + r·Δt_k)`  (rate limit r, m/s)   (C2)
+//!
+//! `u_k ← clamp(u_k, 0, u_max)`,  `u_max` = the lift-off limit `(1 − margin)·u_z0` (C3)
+//!
+//! `I_{k+1} = u_k − u_ff` if (C3) clamped (back-calculation: the trim never
+//! holds more than the bound), `I_k` if only (C2) limited (conditional
+//! integration: no error is integrated while the command ramps), else `I⁺`. (C4)
+//!
+//! κ ∈ (0, 1] is the fraction of the error removed per update if the model's
+//! gain were the plant's; a plant gain `s_p = ρ·s` gives the error recursion
+//! `e_{k+1} = (1 − κρ)·e_k` (stable for `0 < κρ < 2`, monotone for `κρ ≤ 1`).
+//! A μ₀ mismatch of 20 % is ρ ≈ 0.8…1.25.
+//!
+//! **Switching.** On: `I₀ = u_now − u_ff`, so the first command is the
+//! present amplitude (bumpless). A new setpoint keeps `I` (the learned
+//! mismatch) and moves to `u_ff' + I` at the rate limit. Off: the last
+//! command stays applied ([`crate::board::device`] keeps it as the drive's
+//! Δu_z). The guard (C3) is a hard constraint: no command exceeds `u_max`.
+
+use core::fmt;
+
+use crate::model::exact::{self, ExactError, Solution};
+use crate::model::float::FastF32;
+use crate::model::scene::{Scene, SceneParams};
+
+/// Scan points of the feedforward's search (23 cells over the lift-off range).
+pub const SCAN_POINTS: usize = 24;
+
+/// Smallest `|∂(μ/μ₀)/∂(Δu_z/u_z0)|` the trim uses (a target at an extremum
+/// of the law gets this gain instead of an unbounded one).
+pub const S_MIN_REL: f32 = 0.05;
+
+/// Why a setpoint has no plan.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ControlError {
+    /// The target is not finite or `|μ*| ≥ μ₀`.
+    BadTarget,
+    /// v₀ is zero or not finite (μ is not unique at rest).
+    BadVelocity,
+    /// The drive has no normal offset (no lift-off range to search).
+    NoOffset,
+    /// The model cannot reach μ* with Δu_z in `[0, u_max]`: the reachable μ.
+    OutOfReach {
+        /// Least μ.
+        min: f32,
+        /// Greatest μ.
+        max: f32,
+    },
+    /// The exact solver failed.
+    Model(ExactError),
+}
+
+impl fmt::Display for ControlError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            ControlError::BadTarget => f.write_str("the target mu must be finite with |mu| < mu0"),
+            ControlError::BadVelocity => f.write_str("v0 must be finite and != 0"),
+            ControlError::NoOffset => f.write_str("the drive has no normal offset"),
+            ControlError::OutOfReach { min, max } => {
+                write!(f, "out of reach of the model: mu from {min} to {max}")
+            }
+            ControlError::Model(_) => f.write_str("the model failed"),
+        }
+    }
+}
+
+impl core::error::Error for ControlError {}
+
+/// What the controller needs from a setpoint (all from the device's model).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Plan {
+    /// μ*.
+    pub target_mu: f32,
+    /// Feedforward amplitude `u_ff`, m.
+    pub feedforward_m: f32,
+    /// Model gain `s = ∂μ/∂Δu_z` at `u_ff`, 1/m (never 0).
+    pub slope_per_m: f32,
+    /// The bound `u_max` of the command (lift-off limit), m.
+    pub limit_m: f32,
+}
+
+/// The feedforward and the gain for target μ* at velocity `v0` (m/s) on the
+/// device's model `scene` (its Δu_z is ignored), searching Δu_z in
+/// `[0, limit_m]`: the exact law (f32, [`FastF32`]) on a scan of
+/// [`SCAN_POINTS`] amplitudes, then bisection to the f32 resolution in the
+/// scan cell that straddles μ* nearest `near_m` (the law is taken to be
+/// monotone inside one cell, 1/23 of the range). The reachable range
+/// reported when no cell straddles μ* is the least and greatest scanned μ.
+/// (A compact search rather than [`crate::model::inverse`]: the firmware's
+/// flash budget.)
+///
+/// # Errors
+/// [`ControlError`].
+pub fn plan(
+    scene: &Scene<f32>,
+    target_mu: f32,
+    v0: f32,
+    near_m: f32,
+    limit_m: f32,
+) -> Result<Plan, ControlError> {
+    let mu0 = scene.mu0();
+    let base = *scene.params();
+    if !(target_mu.is_finite() && target_mu.abs() < mu0) {
+        return Err(ControlError::BadTarget);
+    }
+    if !(v0.is_finite() && v0 != 0.0) {
+        return Err(ControlError::BadVelocity);
+    }
+    if !(base.uz0 > 0.0 && limit_m > 0.0) {
+        return Err(ControlError::NoOffset);
+    }
+    // Strictly below lift-off (a < 1).
+    let hi = limit_m.min(base.uz0 * (1.0 - f32::EPSILON));
+    let mu = |duz: f32| -> Result<f32, ControlError> {
+        let s = Scene::new(SceneParams { duz, ..base }).map_err(|_| ControlError::NoOffset)?;
+        let m = match exact::solve_with::<f32, FastF32>(&s, v0).map_err(ControlError::Model)? {
+            Solution::Sliding { mu_over_mu0 } | Solution::StickSlip { mu_over_mu0 } => mu_over_mu0,
+            Solution::AtRest { mu_0plus, .. } => mu_0plus,
+        };
+        Ok(m * mu0)
+    };
+    let n = SCAN_POINTS;
+    let x_at = |j: usize| hi * j as f32 / (n - 1) as f32;
+    let (mut lo_mu, mut hi_mu) = (f32::MAX, f32::MIN);
+    let mut best: Option<(f32, f32, f32, f32)> = None; // (xl, gl, xr, gr) nearest near_m
+    let mut prev = (0.0f32, 0.0f32);
+    for j in 0..n {
+        let x = x_at(j);
+        let g = mu(x)? - target_mu;
+        lo_mu = lo_mu.min(g + target_mu);
+        hi_mu = hi_mu.max(g + target_mu);
+        if j > 0 && (prev.1 <= 0.0) != (g <= 0.0) {
+            let mid = 0.5 * (prev.0 + x);
+            let nearer =
+                best.is_none_or(|b| (mid - near_m).abs() < (0.5 * (b.0 + b.2) - near_m).abs());
+            if nearer {
+                best = Some((prev.0, prev.1, x, g));
+            }
+        }
+        prev = (x, g);
+    }
+    let Some((mut xl, gl, mut xr, _)) = best else {
+        return Err(ControlError::OutOfReach {
+            min: lo_mu,
+            max: hi_mu,
+        });
+    };
+    let left_low = gl <= 0.0;
+    for _ in 0..40 {
+        let m = 0.5 * (xl + xr);
+        if m <= xl || m >= xr {
+            break;
+        }
+        if (mu(m)? - target_mu <= 0.0) == left_low {
+            xl = m;
+        } else {
+            xr = m;
+        }
+    }
+    let x = 0.5 * (xl + xr);
+    // Central difference over 2 % of the range (one-sided at the ends).
+    let h = 0.01 * hi;
+    let (a, b) = ((x - h).max(0.0), (x + h).min(hi));
+    let mut s = (mu(b)? - mu(a)?) / (b - a);
+    let s_min = S_MIN_REL * mu0 / base.uz0;
+    if !s.is_finite() || s.abs() < s_min {
+        s = if s < 0.0 { -s_min } else { s_min };
+    }
+    Ok(Plan {
+        target_mu,
+        feedforward_m: x,
+        slope_per_m: s,
+        limit_m,
+    })
+}
+
+/// The controller's tuning.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Gains {
+    /// κ: fraction of the error removed per update (eq. C1), in (0, 1].
+    pub kappa: f32,
+    /// Rate limit r of the command, m/s (eq. C2), > 0.
+    pub rate_m_per_s: f32,
+}
+
+/// The outcome of one update.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Output {
+    /// The command `u_k`, m (in `[0, limit_m]`).
+    pub command_m: f32,
+    /// The trim `I_{k+1}`, m.
+    pub integral_m: f32,
+    /// (C2) or (C3) changed the command.
+    pub saturated: bool,
+}
+
+/// The loop's state (eqs. C1–C4).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Controller {
+    plan: Plan,
+    gains: Gains,
+    integral_m: f32,
+    command_m: f32,
+    saturated: bool,
+}
+
+impl Controller {
+    /// A controller switched on with the amplitude `now_m` applied: its
+    /// command is `now_m` clamped into `[0, limit_m]` (bumpless), its trim
+    /// `I₀ = u_now − u_ff`.
+    pub fn new(plan: Plan, gains: Gains, now_m: f32) -> Self {
+        let u = clamp(now_m, 0.0, plan.limit_m);
+        Controller {
+            plan,
+            gains,
+            integral_m: u - plan.feedforward_m,
+            command_m: u,
+            saturated: u != now_m,
+        }
+    }
+
+    /// The plan.
+    pub fn plan(&self) -> &Plan {
+        &self.plan
+    }
+
+    /// The gains.
+    pub fn gains(&self) -> &Gains {
+        &self.gains
+    }
+
+    /// The last output.
+    pub fn output(&self) -> Output {
+        Output {
+            command_m: self.command_m,
+            integral_m: self.integral_m,
+            saturated: self.saturated,
+        }
+    }
+
+    /// A new setpoint (and gains): the trim is kept; the command moves towards
+    /// `u_ff' + I` by at most `r·dt_s` now (eqs. C2–C4 with `e = 0`).
+    pub fn retarget(&mut self, plan: Plan, gains: Gains, dt_s: f32) -> Output {
+        self.plan = plan;
+        self.gains = gains;
+        self.step(self.integral_m, dt_s)
+    }
+
+    /// One update with the measured μ̂ (eqs. C1–C4); `dt_s` is the time since
+    /// the last command was applied, s.
+    pub fn update(&mut self, measured_mu: f32, dt_s: f32) -> Output {
+        let e = self.plan.target_mu - measured_mu;
+        let di = self.gains.kappa * e / self.plan.slope_per_m;
+        if !di.is_finite() {
+            // A non-finite estimate: hold.
+            return self.output();
+        }
+        self.step(self.integral_m + di, dt_s)
+    }
+
+    /// Eqs. C1 (with the trim `i`), C2, C3, C4.
+    fn step(&mut self, i: f32, dt_s: f32) -> Output {
+        let v = self.plan.feedforward_m + i;
+        let step = (self.gains.rate_m_per_s * dt_s).max(0.0);
+        let ramped = clamp(v, self.command_m - step, self.command_m + step);
+        let u = clamp(ramped, 0.0, self.plan.limit_m);
+        self.integral_m = if u != ramped {
+            u - self.plan.feedforward_m
+        } else if ramped != v {
+            self.integral_m
+        } else {
+            i
+        };
+        self.command_m = u;
+        self.saturated = u != v;
+        self.output()
+    }
+}
+
+/// `x` clamped into `[lo, hi]` (`lo` if `hi < lo`; NaN gives `lo`).
+fn clamp(x: f32, lo: f32, hi: f32) -> f32 {
+    let y = if x > lo { x } else { lo };
+    if y < hi {
+        y
+    } else if hi > lo {
+        hi
+    } else {
+        lo
+    }
+}

@@ -1,0 +1,356 @@
+//! The closed loop inside the device ([`crate::board::control`]): which
+//! samples each update's estimate covers and when its command reaches the DAC.
+//!
+//! **Timing.** DAC fill `n` (the `n`-th call of `fill_dac` since power-up)
+//! is the output that ADC block `n` (the `n`-th call of `adc_block`) samples
+//! — on the board the two DMA buffers of one timer, in the virtual device
+//! the same order. A command is applied at the next fill after its update (a
+//! DDS level change, ramped at the slew rate, without a new ramp
+//! generation), and the command in force at each fill is recorded. Every
+//! ADC block (from the first fill with the loop on) gets one estimate over
+//! its *last* `periods` drive periods (the slew ramp and the plant's
+//! transient have the rest of the block to pass; all of the block and more
+//! if they do not fit), and one update when it closes.
+//!
+//! **Dead time.** On the board block `n` is handled after fill `n + 2` (the
+//! DAC's refill of the same boundary runs first), so a command computed from
+//! block `n` reaches the output at fill `n + 3`; in the virtual device (by
+//! default) at fill `n + 1`. An estimate is used only if its block's fill
+//! had the latest command (`u_n = u_latest`, "fresh"); estimates of blocks
+//! still running an older command are dropped, so no update acts on an
+//! error its predecessor already corrected. The update interval is
+//! therefore one half-buffer in the virtual device and three on the board.
+//! (A Smith predictor `μ̂ + s·(u_latest − u_n)` was tried instead: with the
+//! plant's gain about half the model's it over-corrected and settled slower.)
+//! The estimator is the loop's while it runs (`Measure`, `Stream` and
+//! `SetDrive` answer `Busy`).
+
+use super::config::MAX_VELOCITY_M_S;
+use super::measure::FILL_RING;
+use super::{Device, DeviceError, DriveParam};
+use crate::board::control::{self, Controller, Gains, Plan};
+use crate::board::dds::Level;
+use crate::board::estimator::reasons;
+use crate::board::protocol::messages::{
+    ControlSetting, ControlState, ControlUpdate, CONTROL_MAX_PERIODS,
+};
+
+/// Smallest κ accepted.
+pub const MIN_GAIN: f32 = 0.01;
+
+/// The loop's state in the device.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Loop {
+    ctl: Controller,
+    setting: ControlSetting,
+    on: bool,
+    /// A command to apply at the next fill.
+    pending: Option<f32>,
+    /// The first fill made with the loop on (estimates start at its block).
+    first_fill: u32,
+    /// The command in force at the last fills, by fill number modulo
+    /// [`FILL_RING`] (eq. C5).
+    at_fill: [f32; FILL_RING],
+    /// Samples since the last update.
+    samples_since: u32,
+    /// Samples between the last two updates (the retarget's rate-limit
+    /// interval: one update's worth of travel).
+    interval: u32,
+    last: ControlUpdate,
+}
+
+/// The state reported when the loop never ran.
+fn idle_state() -> ControlState {
+    ControlState {
+        setting: ControlSetting {
+            on: false,
+            target_mu: 0.0,
+            v0_m_s: 0.0,
+            gain: 0.0,
+            periods: 0,
+            rate_m_per_s: 0.0,
+        },
+        feedforward_m: 0.0,
+        slope_per_m: 0.0,
+        limit_m: 0.0,
+        last: ControlUpdate {
+            update: 0,
+            target_mu: 0.0,
+            measured_mu: 0.0,
+            std_error: 0.0,
+            amp_z_m: 0.0,
+            integral_m: 0.0,
+            saturated: false,
+            held: false,
+        },
+    }
+}
+
+impl<const N: usize> Device<'_, N> {
+    /// Checks a closed-loop setting, in this order: a latched fault; the
+    /// target within `±μ₀` (exclusive) of the device's contact; v₀ finite,
+    /// ≠ 0, within `±MAX_VELOCITY_M_S`; κ in `[MIN_GAIN, 1]`; periods in
+    /// `1..=CONTROL_MAX_PERIODS`; rate in `(0, slew_m_per_s]`; the drive
+    /// running; no host measurement or stream running (`busy`). Nothing is
+    /// checked for `on: false`.
+    ///
+    /// # Errors
+    /// [`DeviceError::Faulted`], [`DeviceError::OutOfRange`],
+    /// [`DeviceError::NotRunning`], [`DeviceError::Busy`].
+    pub fn check_control(&self, s: &ControlSetting, busy: bool) -> Result<(), DeviceError> {
+        if !s.on {
+            return Ok(());
+        }
+        if self.faults != 0 {
+            return Err(DeviceError::Faulted(self.faults));
+        }
+        let mu0 = self.contact.mu0;
+        let out = |param, min, max| DeviceError::OutOfRange { param, min, max };
+        if !(s.target_mu.is_finite() && s.target_mu.abs() < mu0) {
+            return Err(out(DriveParam::TargetMu, -mu0, mu0));
+        }
+        if !(s.v0_m_s.is_finite() && s.v0_m_s != 0.0 && s.v0_m_s.abs() <= MAX_VELOCITY_M_S) {
+            return Err(out(
+                DriveParam::Velocity,
+                -MAX_VELOCITY_M_S,
+                MAX_VELOCITY_M_S,
+            ));
+        }
+        if !(s.gain.is_finite() && (MIN_GAIN..=1.0).contains(&s.gain)) {
+            return Err(out(DriveParam::Gain, MIN_GAIN, 1.0));
+        }
+        if !(1..=CONTROL_MAX_PERIODS).contains(&s.periods) {
+            return Err(out(DriveParam::Periods, 1.0, CONTROL_MAX_PERIODS as f32));
+        }
+        let slew = self.cfg.slew_m_per_s;
+        if !(s.rate_m_per_s.is_finite() && s.rate_m_per_s > 0.0 && s.rate_m_per_s <= slew) {
+            return Err(out(DriveParam::Rate, 0.0, slew));
+        }
+        if !self.running {
+            return Err(DeviceError::NotRunning);
+        }
+        let loop_measures = self.control.is_some_and(|l| l.on);
+        if busy || (self.est.busy() && !loop_measures) {
+            return Err(DeviceError::Busy);
+        }
+        Ok(())
+    }
+
+    /// The plan of an accepted setting: the model's feedforward and gain
+    /// (slow: the inverse search, see [`control::plan`]; the server runs it
+    /// on a scene snapshot outside the device's critical section).
+    ///
+    /// # Errors
+    /// [`DeviceError::Scene`], [`DeviceError::Control`].
+    pub fn control_plan_inputs(
+        &self,
+    ) -> Result<(crate::model::scene::Scene<f32>, f32, f32), DeviceError> {
+        let scene = self.scene()?;
+        let limit = self
+            .cfg
+            .liftoff_limit_m(self.drive.offset_z_m)
+            .min(self.cfg.max_offset_z_m() - self.drive.offset_z_m);
+        let now = self
+            .control
+            .filter(|l| l.on)
+            .map_or(self.drive.amp_z_m, |l| l.ctl.output().command_m);
+        Ok((scene, now, limit))
+    }
+
+    /// Switches the loop on with `plan` (or retargets a running loop), after
+    /// [`Device::check_control`] accepted `s`; or off for `s.on == false`
+    /// (the last command stays as the drive's Δu_z).
+    ///
+    /// # Errors
+    /// As [`Device::check_control`] (judged again: the device may have
+    /// changed since).
+    pub fn set_control(
+        &mut self,
+        s: ControlSetting,
+        plan: Option<Plan>,
+    ) -> Result<(), DeviceError> {
+        if !s.on {
+            self.control_off();
+            return Ok(());
+        }
+        self.check_control(&s, false)?;
+        let Some(plan) = plan else {
+            return Err(DeviceError::Control(control::ControlError::NoOffset));
+        };
+        let gains = Gains {
+            kappa: s.gain,
+            rate_m_per_s: s.rate_m_per_s,
+        };
+        let fs = self.cfg.sample_rate_hz as f32;
+        match self.control.as_mut().filter(|l| l.on) {
+            Some(l) => {
+                let dt = l.interval.max(l.samples_since) as f32 / fs;
+                let out = l.ctl.retarget(plan, gains, dt);
+                l.setting = s;
+                l.pending = Some(out.command_m);
+                l.last.target_mu = plan.target_mu;
+            }
+            None => {
+                let ctl = Controller::new(plan, gains, self.drive.amp_z_m);
+                let out = ctl.output();
+                let mut last = idle_state().last;
+                last.target_mu = plan.target_mu;
+                last.amp_z_m = out.command_m;
+                last.integral_m = out.integral_m;
+                // The loop owns the estimator from now on.
+                self.est.abort();
+                self.control = Some(Loop {
+                    ctl,
+                    setting: s,
+                    on: true,
+                    pending: Some(out.command_m),
+                    first_fill: self.fills,
+                    at_fill: [out.command_m; FILL_RING],
+                    samples_since: 0,
+                    interval: 0,
+                    last,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Switches the loop off: the last command stays (a command not yet
+    /// applied is applied now; stopped, it becomes the setting's Δu_z);
+    /// aborts the loop's estimate. Nothing if it is off.
+    pub fn control_off(&mut self) {
+        let (z, off) = (self.cfg.dac_z, self.drive.offset_z_m);
+        if let Some(l) = self.control.as_mut().filter(|l| l.on) {
+            l.on = false;
+            l.setting.on = false;
+            // The last command (reported in `last.amp_z_m`) is the one held:
+            // one not yet applied is applied now (ramped, while running).
+            if let Some(u) = l.pending.take() {
+                let lz = Level {
+                    amp: u / z.metres_per_code,
+                    dc: z.zero_code + off / z.metres_per_code,
+                };
+                // Stopped, it only becomes the setting (applied at `Start`).
+                if !self.running || self.dds.set_level(0, lz).is_ok() {
+                    self.drive.amp_z_m = u;
+                }
+            }
+            self.est.abort();
+        }
+    }
+
+    /// The loop runs.
+    pub fn control_on(&self) -> bool {
+        self.control.is_some_and(|l| l.on)
+    }
+
+    /// The loop's state.
+    pub fn control_state(&self) -> ControlState {
+        match &self.control {
+            None => idle_state(),
+            Some(l) => {
+                let p = l.ctl.plan();
+                ControlState {
+                    setting: l.setting,
+                    feedforward_m: p.feedforward_m,
+                    slope_per_m: p.slope_per_m,
+                    limit_m: p.limit_m,
+                    last: l.last,
+                }
+            }
+        }
+    }
+
+    /// At fill `fill`: applies a pending command to the normal channel's
+    /// DDS level (ramped) and the drive setting, and records the command in
+    /// force.
+    pub(super) fn control_fill(&mut self, fill: u32) {
+        if !self.control_on() {
+            return;
+        }
+        if !self.running {
+            self.control_off();
+            return;
+        }
+        let (z, off) = (self.cfg.dac_z, self.drive.offset_z_m);
+        let Some(l) = self.control.as_mut() else {
+            return;
+        };
+        if let Some(u) = l.pending.take() {
+            let lz = Level {
+                amp: u / z.metres_per_code,
+                dc: z.zero_code + off / z.metres_per_code,
+            };
+            // Inside [0, lift-off limit] by (C3): the DDS accepts it.
+            if self.dds.set_level(0, lz).is_ok() {
+                self.drive.amp_z_m = u;
+            }
+        }
+        l.at_fill[fill as usize % FILL_RING] = self.drive.amp_z_m;
+    }
+
+    /// Before ADC block `block` of `len` samples is pushed: where the loop's
+    /// estimate of this block starts (the sample index): as late as lets its
+    /// `periods` (+ 1 for the wait for a period start) close inside the
+    /// block, or at index 0 if they do not fit. None before the loop's first
+    /// fill or while the last estimate is still open.
+    pub(super) fn control_block_start(&mut self, block: u32, len: usize) -> Option<usize> {
+        let tw = self.dds.tuning_word();
+        let l = self.control.as_ref().filter(|l| l.on)?;
+        if (block.wrapping_sub(l.first_fill) as i32) < 0 || self.est.busy() {
+            return None;
+        }
+        // Samples of periods + 1 drive periods, rounded up (tw > 0 while running).
+        let need = (u64::from(l.setting.periods) + 1) * (1u64 << 32) / u64::from(tw.max(1)) + 2;
+        Some(len.saturating_sub(usize::try_from(need).unwrap_or(usize::MAX)))
+    }
+
+    /// Opens the loop's estimate (at the index [`Device::control_block_start`] gave).
+    pub(super) fn control_open(&mut self) {
+        if let Some(l) = self.control.as_ref().filter(|l| l.on) {
+            let _ = self.est.start(l.setting.periods);
+        }
+    }
+
+    /// After ADC block `block` of `samples` samples: counts them and, if the
+    /// loop's estimate closed in it and the block ran the latest command,
+    /// runs one update (eqs. C1–C4; the command is applied at the next fill).
+    pub(super) fn control_block_end(&mut self, block: u32, samples: usize, closed: bool) {
+        let fs = self.cfg.sample_rate_hz as f32;
+        let Some(l) = self.control.as_mut().filter(|l| l.on) else {
+            return;
+        };
+        l.samples_since = l.samples_since.saturating_add(samples as u32);
+        if !closed {
+            return;
+        }
+        let Ok(e) = self.est.estimate() else {
+            return;
+        };
+        let unusable = reasons::SATURATED | reasons::FAULT | reasons::NOT_RUNNING;
+        let held = e.reasons & unusable != 0 || !e.mu.is_finite();
+        let latest = l.ctl.output().command_m;
+        if l.at_fill[block as usize % FILL_RING] != latest || l.pending.is_some() {
+            // A block of an older command (dead time): not used.
+            return;
+        }
+        let out = if held {
+            l.ctl.output()
+        } else {
+            l.ctl.update(e.mu, l.samples_since as f32 / fs)
+        };
+        l.interval = l.samples_since;
+        l.samples_since = 0;
+        l.pending = Some(out.command_m);
+        l.last = ControlUpdate {
+            update: l.last.update.wrapping_add(1),
+            target_mu: l.ctl.plan().target_mu,
+            measured_mu: e.mu,
+            std_error: e.std_error,
+            amp_z_m: out.command_m,
+            integral_m: out.integral_m,
+            saturated: out.saturated,
+            held,
+        };
+    }
+}

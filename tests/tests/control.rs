@@ -1,0 +1,229 @@
+//! The closed loop (`model_core::control`) on a plant that is not its model:
+//! the exact law with the true μ₀ 20 % off the model's, sampled once per
+//! update with a one-update dead time (the update at `k` sees the command of
+//! update `k − 1`), as the device runs it.
+//!
+//! **The bound the settling is checked against.** With the command
+//! `u_{k+1} = u_k + κ·e_k/s` (eq. C1, no rate or bound active) and the plant
+//! `μ_k = μ_p(u_k)`, the mean value theorem gives exactly
+//! `e_{k+1} = (1 − κ·ρ(ξ_k))·e_k` with `ρ = s_p(ξ)/s`, the plant's slope at some
+//! `ξ_k` between `u_k` and `u_{k+1}` over the model's `s`. If `0 < κρ ≤ 1` on
+//! the interval between the start and the solution the iterates stay in it
+//! and `|e_k| ≤ q^k·|e_0|`, `q = max(1 − κρ)` over it. `ρ` is bounded here by
+//! the plant's finite differences on a fine grid of that interval
+//! (independent of the controller), widened by 5 % for the grid.
+
+use model_core::control::{self, Controller, Gains, Plan};
+use model_core::exact;
+use model_core::{Libm, Scene, SceneParams};
+
+/// The bench's drive: 40 kHz, u_z0 = 4 µm, Δu_x = 0.3 µm, φ = 40°, k = 10⁷ N/m.
+fn scene<T: model_core::Float>(mu0: f64, duz: f64) -> Scene<T> {
+    let f = T::from_f64;
+    Scene::new(SceneParams {
+        mu0: f(mu0),
+        kz: f(1e7),
+        kx: f(1e7),
+        uz0: f(4e-6),
+        duz: f(duz),
+        dux: f(0.3e-6),
+        omega: f(std::f64::consts::TAU * 40e3),
+        phi: f(40f64.to_radians()),
+    })
+    .expect("valid scene")
+}
+
+const V0: f64 = 0.004;
+const MODEL_MU0: f64 = 0.3;
+const LIMIT: f64 = 0.95 * 4e-6;
+
+/// The plant's μ at Δu_z = `u` (exact law, f64).
+fn plant(mu0: f64, u: f64) -> f64 {
+    let s = scene::<f64>(mu0, u);
+    let v = s.dimensionless_velocity(V0).unwrap();
+    mu0 * exact::mu_over_mu0::<f64, Libm>(&s.drive(), v).unwrap()
+}
+
+fn plan(target: f64, near: f64) -> Plan {
+    control::plan(
+        &scene::<f32>(MODEL_MU0, 0.0),
+        target as f32,
+        V0 as f32,
+        near as f32,
+        LIMIT as f32,
+    )
+    .expect("reachable")
+}
+
+/// Runs `n` updates from command `u0`; returns (commands, measured μ).
+fn run(ctl: &mut Controller, mu0: f64, n: usize, dt: f32) -> (Vec<f64>, Vec<f64>) {
+    let (mut us, mut mus) = (Vec::new(), Vec::new());
+    let mut u = f64::from(ctl.output().command_m);
+    for _ in 0..n {
+        let mu = plant(mu0, u);
+        u = f64::from(ctl.update(mu as f32, dt).command_m);
+        us.push(u);
+        mus.push(mu);
+    }
+    (us, mus)
+}
+
+/// Bounds of ρ = s_p/s on [a, b] from 200 finite differences, widened 5 %.
+fn rho_range(mu0: f64, a: f64, b: f64, s: f64) -> (f64, f64) {
+    let (lo, hi) = (a.min(b), a.max(b));
+    let n = 200;
+    let (mut rmin, mut rmax) = (f64::MAX, f64::MIN);
+    for i in 0..n {
+        let x0 = lo + (hi - lo) * i as f64 / n as f64;
+        let x1 = lo + (hi - lo) * (i + 1) as f64 / n as f64;
+        let r = (plant(mu0, x1) - plant(mu0, x0)) / (x1 - x0) / s;
+        rmin = rmin.min(r);
+        rmax = rmax.max(r);
+    }
+    (rmin / 1.05, rmax * 1.05)
+}
+
+#[test]
+fn settles_within_the_derived_bound_with_20_percent_mismatch() {
+    for (mu0_plant, target, u_start) in [(0.24, 0.10, 2.0e-6), (0.36, 0.13, 1.0e-6)] {
+        let p = plan(target, u_start);
+        let kappa = 0.7f32;
+        let gains = Gains {
+            kappa,
+            rate_m_per_s: 1.0, // no rate limit in this test
+        };
+        let mut ctl = Controller::new(p, gains, u_start as f32);
+        let (us, mus) = run(&mut ctl, mu0_plant, 40, 1e-3);
+        // The plant's solution, by bisection on the monotone law (independent of the loop).
+        let (mut a, mut b) = (0.0, LIMIT);
+        for _ in 0..60 {
+            let m = 0.5 * (a + b);
+            if plant(mu0_plant, m) > target {
+                a = m;
+            } else {
+                b = m;
+            }
+        }
+        let u_star = 0.5 * (a + b);
+        let (rlo, rhi) = rho_range(mu0_plant, u_start, u_star, f64::from(p.slope_per_m));
+        let k = f64::from(kappa);
+        assert!(
+            rlo > 0.0 && k * rhi <= 1.0,
+            "monotone regime: ρ in [{rlo}, {rhi}]"
+        );
+        let q = 1.0 - k * rlo;
+        let e0 = (mus[0] - target).abs();
+        // Updates until q^k·e0 ≤ 2 % of the target; +1 for the dead time (the
+        // first measurement is of the starting command), +1 for f32 rounding.
+        let bound = ((0.02 * target / e0).ln() / q.ln()).ceil() as usize + 2;
+        let settled = mus
+            .iter()
+            .position(|m| (m - target).abs() <= 0.02 * target)
+            .expect("settles");
+        assert!(
+            settled <= bound,
+            "mu0 {mu0_plant}: settled after {settled} updates, bound {bound} (ρ in [{rlo:.3}, {rhi:.3}])"
+        );
+        // And it stays: monotone contraction, no overshoot past the target
+        // (κρ ≤ 1 ⇒ every error has the sign of the first), up to the f32
+        // resolution of the command (1e-13 m · |s_p| ≪ 1e-6).
+        let sign = (mus[0] - target).signum();
+        for m in &mus {
+            assert!((m - target) * sign >= -1e-6, "overshoot: {m} vs {target}");
+        }
+        // Steady state: the f32 command's resolution (ulp of 2 µm ≈ 2.3e-13 m)
+        // times |s_p| ≲ 1e5 /m: below 1e-6 after 40 updates (q^40 ≈ 0).
+        assert!(
+            (mus[39] - target).abs() < 1e-6,
+            "steady error {}",
+            mus[39] - target
+        );
+        assert!(us.iter().all(|&u| (0.0..=LIMIT).contains(&u)));
+    }
+}
+
+#[test]
+fn never_commands_above_the_liftoff_limit_and_does_not_wind_up() {
+    // A plant with μ0 20 % above the model reaches only μ = −0.0308 at the
+    // lift-off limit (the model −0.0343; `fricctl mu … --duz 3.8e-6`): the
+    // target −0.033 needs more Δu_z than allowed, the command saturates.
+    let (mu0_plant, target) = (0.36, -0.033);
+    let reach = plant(mu0_plant, LIMIT);
+    assert!(reach > target, "unreachable for the plant: {reach}");
+    let p = plan(target, 3e-6);
+    let gains = Gains {
+        kappa: 0.7,
+        rate_m_per_s: 1.0,
+    };
+    let mut ctl = Controller::new(p, gains, 3e-6);
+    let (us, _) = run(&mut ctl, mu0_plant, 50, 1e-3);
+    let limit = f64::from(p.limit_m);
+    for u in &us {
+        assert!(*u <= limit, "command {u} above the limit {limit}");
+    }
+    let o = ctl.output();
+    assert_eq!(f64::from(o.command_m), limit, "held at the limit");
+    assert!(o.saturated);
+    // Back-calculation: the trim holds exactly the bound, nothing beyond
+    // (C4), however long the saturation lasted.
+    assert_eq!(o.integral_m, p.limit_m - p.feedforward_m);
+    // Recovery: a reachable target afterwards settles as fast as from a fresh
+    // start at the limit (no wound-up trim to unwind first).
+    let p2 = plan(0.10, 3e-6);
+    ctl.retarget(p2, gains, 1.0);
+    let mut fresh = Controller::new(p2, gains, 0.0);
+    fresh.retarget(p2, gains, 1.0); // same trim-free start: command = u_ff
+    let (_, a) = run(&mut ctl, mu0_plant, 30, 1e-3);
+    let (_, b) = run(&mut fresh, mu0_plant, 30, 1e-3);
+    let within = |m: &[f64]| m.iter().position(|x| (x - 0.10).abs() <= 0.002).unwrap();
+    assert!(
+        within(&a) <= within(&b) + 1,
+        "after saturation {} updates, fresh {}",
+        within(&a),
+        within(&b)
+    );
+}
+
+#[test]
+fn rate_limit_bounds_every_step() {
+    let p = plan(0.13, 2e-6);
+    let (rate, dt) = (1e-3f32, 0.512e-3f32);
+    let gains = Gains {
+        kappa: 0.7,
+        rate_m_per_s: rate,
+    };
+    let mut ctl = Controller::new(p, gains, 3.0e-6);
+    let mut prev = 3.0e-6f64;
+    for _ in 0..20 {
+        let u = f64::from(ctl.output().command_m);
+        let mu = plant(0.24, u);
+        let out = ctl.update(mu as f32, dt);
+        let step = (f64::from(out.command_m) - prev).abs();
+        // r·dt = 5.12e-7 m, plus the f32 rounding of the clamp (ulp(3e-6) ≈ 4e-13).
+        assert!(step <= f64::from(rate * dt) + 1e-12, "step {step}");
+        prev = f64::from(out.command_m);
+    }
+}
+
+#[test]
+fn switching_is_bumpless() {
+    let p = plan(0.10, 2e-6);
+    let gains = Gains {
+        kappa: 0.7,
+        rate_m_per_s: 1e-3,
+    };
+    // On: the first command is exactly the amplitude applied now.
+    for now in [0.0f32, 1.234e-6, 2e-6, 3.7e-6] {
+        let ctl = Controller::new(p, gains, now);
+        assert_eq!(ctl.output().command_m, now);
+        assert_eq!(ctl.output().integral_m, now - p.feedforward_m);
+    }
+    // A setpoint change keeps the learned trim: the command moves to u_ff' + I.
+    let mut ctl = Controller::new(p, gains, 2e-6);
+    let _ = run(&mut ctl, 0.24, 30, 0.5e-3);
+    let trim = ctl.output().integral_m;
+    let p2 = plan(0.12, 1.2e-6);
+    let out = ctl.retarget(p2, gains, 1.0);
+    assert_eq!(out.integral_m, trim);
+    assert_eq!(out.command_m, p2.feedforward_m + trim);
+}
