@@ -527,3 +527,104 @@ fn reset_ends_the_stream_and_the_measurement_on_the_firmware() {
     assert_eq!(link.ask(31, 8, &[100]), Response::Ok);
     assert_eq!(link.ask(32, 13, &[]), Response::Ok);
 }
+
+/// The fields of a `ControlSetting` by hand (docs/protocol.md, Structures):
+/// `on: bool`, `target_mu: f32`, `v0_m_s: f32`, `gain: f32`, `periods`
+/// (varint, < 128 here), `rate_m_per_s: f32`.
+fn control_fields(on: bool, target_mu: f32) -> Vec<u8> {
+    let mut f = vec![u8::from(on)];
+    f.extend(target_mu.to_le_bytes());
+    f.extend(0.004f32.to_le_bytes()); // v0 = 4 mm/s
+    f.extend(0.7f32.to_le_bytes()); // κ
+    f.push(4); // periods
+    f.extend(1e-3f32.to_le_bytes()); // rate = the board's slew
+    f
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+fn closed_loop_messages_on_the_firmware() {
+    use model_core::select;
+    use model_core::{Libm, Scene, SceneParams};
+    let q = qemu();
+    let mut link = RawLink::connect(&q);
+    link.sync();
+    // GetControl (16) at power-up: off, no update.
+    let Response::Control(st) = link.ask(40, 16, &[]) else {
+        panic!("GetControl: not a Control response")
+    };
+    assert!(!st.setting.on && st.last.update == 0, "{st:?}");
+    // SetDrive (2): 40 kHz, Δu_z 1 µm, Δu_x 0.3 µm, u_z0 4 µm, φ 0.7 rad.
+    let mut drive = 40e3f64.to_le_bytes().to_vec();
+    for x in [1e-6f32, 0.3e-6, 4e-6, 0.7] {
+        drive.extend(x.to_le_bytes());
+    }
+    let Response::Drive { applied, .. } = link.ask(41, 2, &drive) else {
+        panic!("SetDrive refused")
+    };
+    // SetControl on (15) with the drive stopped: NotRunning; nothing changes.
+    assert_eq!(
+        link.ask(42, 15, &control_fields(true, 0.1)),
+        Response::Error(WireError::NotRunning)
+    );
+    assert_eq!(link.ask(43, 3, &[]), Response::Ok); // Start
+                                                    // The target: μ of the device's contact (μ0 0.3, k 1e7 N/m) at Δu_z = 1.5 µm
+                                                    // and v0 = 4 mm/s by the host's f64 law, with the phase and frequency the
+                                                    // DDS produces. The firmware's f32 search must find a Δu_z whose f64 μ is
+                                                    // that target within the f32 solver's stated bound (FastF32, ≤ 1e-5 μ0
+                                                    // by the f32_vectors check) plus the bisection's f32 resolution on Δu_z
+                                                    // (2⁻²³·Δu_z·|∂μ/∂Δu_z|), both far below 1e-4·μ0 used here.
+    let mu_at = |duz: f64| {
+        let scene = Scene::new(SceneParams {
+            mu0: f64::from(0.3f32),
+            kz: 1e7,
+            kx: 1e7,
+            uz0: f64::from(4e-6f32),
+            duz,
+            dux: f64::from(0.3e-6f32),
+            omega: std::f64::consts::TAU * applied.achieved.freq_hz,
+            phi: applied.phase_rad,
+        })
+        .unwrap();
+        match select::mu_within::<f64, Libm>(&scene, f64::from(0.004f32), 1e-8)
+            .unwrap()
+            .value
+        {
+            select::Value::Mu(m) => m * 0.3,
+            other => panic!("{other:?}"),
+        }
+    };
+    let target = mu_at(1.5e-6) as f32;
+    let Response::Control(st) = link.ask(44, 15, &control_fields(true, target)) else {
+        panic!("SetControl on refused")
+    };
+    assert!(st.setting.on && st.setting.target_mu == target, "{st:?}");
+    let ff = f64::from(st.feedforward_m);
+    assert!(
+        (0.0..=f64::from(st.limit_m)).contains(&ff),
+        "feedforward {ff} outside [0, {}]",
+        st.limit_m
+    );
+    // The lift-off limit (1 − 0.05)·u_z0 (docs/protocol.md, check 4).
+    assert!(
+        (f64::from(st.limit_m) - 0.95 * 4e-6).abs() < 1e-12,
+        "{st:?}"
+    );
+    let got = mu_at(ff);
+    assert!(
+        (got - f64::from(target)).abs() <= 1e-4 * 0.3,
+        "μ(feedforward {ff:e} m) = {got} against the target {target}"
+    );
+    // Under QEMU no ADC block arrives: the loop is on but has not updated.
+    let Response::Control(st) = link.ask(45, 16, &[]) else {
+        panic!("GetControl")
+    };
+    assert!(st.setting.on && st.last.update == 0, "{st:?}");
+    // While the loop runs a Measure (8) is Busy; SetControl off → off.
+    assert_eq!(link.ask(46, 8, &[4]), Response::Error(WireError::Busy));
+    let Response::Control(st) = link.ask(47, 15, &control_fields(false, 0.0)) else {
+        panic!("SetControl off")
+    };
+    assert!(!st.setting.on, "{st:?}");
+    assert_eq!(link.ask(48, 4, &[]), Response::Ok); // Stop
+}
