@@ -7,29 +7,14 @@
 //! maxima and integrals on fine grids, and the permanent-contact solver on
 //! the other side of a = 1.
 
-use assert_cmd::Command;
 use model_core::model::liftoff::stepping;
 use model_core::{Drive, Libm};
 use serde_json::Value;
 use std::f64::consts::{PI, TAU};
 
-fn fricctl() -> Command {
-    Command::cargo_bin("fricctl").unwrap()
-}
+mod common;
 
-fn run_ok(args: &[&str]) -> std::process::Output {
-    let out = fricctl().args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn json(args: &[&str]) -> Value {
-    serde_json::from_slice(&run_ok(args).stdout).unwrap()
-}
+use common::cli::{fricctl, json, run_ok};
 
 fn text(args: &[&str]) -> String {
     String::from_utf8(run_ok(args).stdout).unwrap()

@@ -10,27 +10,13 @@ use std::time::{Duration, Instant};
 mod common;
 
 use common::sim::{dev, ok_json, sim, Sim};
+use common::{drive_set, DRIVE};
 
 use assert_cmd::cargo::CommandCargoExt;
 use assert_cmd::Command;
 use model_core::protocol::{Body, Frame, Request, Response, WireError, PROTOCOL_VERSION};
 use serde_json::Value;
 use serialport::SerialPort;
-
-const DRIVE: &[&str] = &[
-    "drive",
-    "set",
-    "--freq",
-    "20000",
-    "--amp-z",
-    "2e-6",
-    "--amp-x",
-    "3e-7",
-    "--offset-z",
-    "4e-6",
-    "--phase-deg",
-    "40",
-];
 
 /// How far the virtual device's measured μ may be from its prediction (both
 /// absolute μ) for [`DRIVE`] at the sim's stage velocity 4 mm/s, with the
@@ -129,40 +115,12 @@ fn refused_commands_leave_the_drive_unchanged() {
     ok_json(&s, DRIVE);
     let before = ok_json(&s, &["drive", "get"]);
     // Lift-off: Δu_z above (1 − 0.05)·u_z0.
-    let o = dev(
-        &s,
-        &[
-            "drive",
-            "set",
-            "--freq",
-            "20000",
-            "--amp-z",
-            "3.9e-6",
-            "--amp-x",
-            "3e-7",
-            "--offset-z",
-            "4e-6",
-        ],
-    );
+    let o = dev(&s, &drive_set("20000", "3.9e-6", "3e-7", "4e-6", None));
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--amp-z") && err.contains("lift"), "{err}");
     // Out of range frequency: named, with the limits.
-    let o = dev(
-        &s,
-        &[
-            "drive",
-            "set",
-            "--freq",
-            "5e6",
-            "--amp-z",
-            "1e-6",
-            "--amp-x",
-            "3e-7",
-            "--offset-z",
-            "4e-6",
-        ],
-    );
+    let o = dev(&s, &drive_set("5e6", "1e-6", "3e-7", "4e-6", None));
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--freq") && err.contains("100000"), "{err}");
@@ -1009,23 +967,7 @@ fn estimates_track_a_drifting_mu0_of_the_plant() {
     // ωW0·|a + b e^{iφ}| ≤ 2π·1 kHz·(μ0·2 µm)·0.075 ≤ 0.94 mm/s for μ0 ≤ 1,
     // below the stage's 4 mm/s: the contact slides throughout, μ/μ0 = 1.
     // f_z ≈ k_z u_z0 = 20 N (1000 counts), f_x = μ0 f_z ≤ 20 N: no ADC rail.
-    let d = ok_json(
-        &s,
-        &[
-            "drive",
-            "set",
-            "--freq",
-            "1000",
-            "--amp-z",
-            "1e-7",
-            "--amp-x",
-            "1.5e-8",
-            "--offset-z",
-            "2e-6",
-            "--phase-deg",
-            "40",
-        ],
-    );
+    let d = ok_json(&s, &drive_set("1000", "1e-7", "1.5e-8", "2e-6", Some("40")));
     let f = d["freq_achieved"].as_f64().unwrap();
     ok_json(&s, &["start"]);
     std::thread::sleep(Duration::from_millis(300));

@@ -7,6 +7,29 @@ mod common;
 
 use common::cli::{fricctl, json};
 
+/// The SI scene of these tests at φ = `phi_deg`: μ0 = 0.3, kz = 2e6 N/m,
+/// kx = 1.5e6 N/m, uz0 = 5 µm, Δuz = 2.5 µm (a = 0.5), Δux = 2 µm, 40 kHz.
+fn si_scene(phi_deg: &str) -> [&str; 16] {
+    [
+        "--mu0",
+        "0.3",
+        "--kz",
+        "2e6",
+        "--kx",
+        "1.5e6",
+        "--uz0",
+        "5e-6",
+        "--duz",
+        "2.5e-6",
+        "--dux",
+        "2e-6",
+        "--freq",
+        "40e3",
+        "--phi-deg",
+        phi_deg,
+    ]
+}
+
 #[test]
 fn load_line_units_and_keys() {
     // Fig. 6's scene at φ = 0 (a = 0.5, ratio 2): it pushes forward.
@@ -36,25 +59,7 @@ fn load_line_units_and_keys() {
     assert_eq!(d["stall_force_backward_over_mu0_fz"].as_f64(), Some(0.0));
     // SI: the same groups with μ0 = 0.3, kz = 2e6, kx = 1.5e6, uz0 = 5 µm,
     // Δuz = 2.5 µm (a = 0.5) and Δux = ratio·μ0 kz Δuz/kx = 2 µm, 40 kHz.
-    let si = json(&[
-        "load-line",
-        "--mu0",
-        "0.3",
-        "--kz",
-        "2e6",
-        "--kx",
-        "1.5e6",
-        "--uz0",
-        "5e-6",
-        "--duz",
-        "2.5e-6",
-        "--dux",
-        "2e-6",
-        "--freq",
-        "40e3",
-        "--phi-deg",
-        "0",
-    ]);
+    let si = json(&[&["load-line"][..], &si_scene("0")].concat());
     let fz = 2e6 * 5e-6; // N
     let w0 = 0.3 * 2e6 * 5e-6 / 1.5e6; // m
     let omega = std::f64::consts::TAU * 40e3;
@@ -249,27 +254,9 @@ fn load_line_of_every_contact() {
     );
     // SI scenes with a curved profile are refused (their F̄z is not derived).
     let out = fricctl()
-        .args([
-            "load-line",
-            "--mu0",
-            "0.3",
-            "--kz",
-            "2e6",
-            "--kx",
-            "1.5e6",
-            "--uz0",
-            "5e-6",
-            "--duz",
-            "2.5e-6",
-            "--dux",
-            "2e-6",
-            "--freq",
-            "40e3",
-            "--phi-deg",
-            "30",
-            "--profile",
-            "sphere",
-        ])
+        .arg("load-line")
+        .args(si_scene("30"))
+        .args(["--profile", "sphere"])
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(2));

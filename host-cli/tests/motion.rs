@@ -278,6 +278,16 @@ fn converge(scene: &[String], f0: f64, f: f64, inv_nus: &[f64], tol: &str) -> (f
     (rate, band)
 }
 
+/// [`converge`] on Fig. 7's ratchet scene at φ = 0 with the force
+/// `f0 + f sin Ωt`, asserting the fitted rate is 1 within the derived band.
+fn assert_first_order(f0: f64, f: f64, inv_nus: &[f64], tol: &str) {
+    let (rate, band) = converge(&fig7(0.0), f0, f, inv_nus, tol);
+    assert!(
+        (rate - 1.0).abs() <= band,
+        "fitted rate {rate} (expected 1 ± {band})"
+    );
+}
+
 /// Homogenised and resolved converge at first order as ω/Ω grows at a fixed
 /// body response in load periods (m̃ν = 1), on a scene where the body slides
 /// forward all the time (Fig. 7 ratchet, force 0.6 + 0.2 sin Ωt > μ(0⁺) =
@@ -286,17 +296,7 @@ fn converge(scene: &[String], f0: f64, f: f64, inv_nus: &[f64], tol: &str) -> (f
 /// in [`converge`].
 #[test]
 fn homogenised_and_resolved_converge_at_first_order() {
-    let (rate, band) = converge(
-        &fig7(0.0),
-        0.6,
-        0.2,
-        &[10.0, 20.0, 50.0, 100.0, 200.0, 500.0],
-        "1e-5",
-    );
-    assert!(
-        (rate - 1.0).abs() <= band,
-        "fitted rate {rate} (expected 1 ± {band})"
-    );
+    assert_first_order(0.6, 0.2, &[10.0, 20.0, 50.0, 100.0, 200.0, 500.0], "1e-5");
 }
 
 /// The same with stick–slip of the body (force 0.5 sin Ωt crosses the
@@ -306,16 +306,11 @@ fn homogenised_and_resolved_converge_at_first_order() {
 /// fit's residuals; the estimate covers every point.
 #[test]
 fn stick_slip_converges_at_first_order() {
-    let (rate, band) = converge(
-        &fig7(0.0),
+    assert_first_order(
         0.0,
         0.5,
         &[10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0],
         "1e-4",
-    );
-    assert!(
-        (rate - 1.0).abs() <= band,
-        "fitted rate {rate} (expected 1 ± {band})"
     );
 }
 
