@@ -411,6 +411,34 @@ const INFO_KEYS: &[&str] = &[
     "byte_timeout_us",
     "retract_z_m",
 ];
+
+/// Sends `signal` (`kill SIGNAL PID`) to `child` and waits for it to end,
+/// failing if it takes longer than `limit_s` seconds ("`what` ignored …").
+fn signal_and_wait(
+    child: &mut std::process::Child,
+    signal: &str,
+    limit_s: u64,
+    what: &str,
+) -> std::process::ExitStatus {
+    let k = StdCommand::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(k.success());
+    let t = Instant::now();
+    loop {
+        if let Some(st) = child.try_wait().unwrap() {
+            break st;
+        }
+        assert!(
+            t.elapsed() < Duration::from_secs(limit_s),
+            "{what} ignored SIG{}",
+            &signal[1..]
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
 const DRIVE_KEYS: &[&str] = &[
     "freq",
     "duz",
@@ -647,22 +675,7 @@ fn watch_stops_its_stream_on_count_ctrl_c_sigterm_and_a_closed_stdout() {
     let mut first = String::new();
     out.read_line(&mut first).unwrap();
     assert!(first.starts_with('#') && first.contains("mu"), "{first}");
-    let k = StdCommand::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(k.success());
-    let t = Instant::now();
-    let st = loop {
-        if let Some(st) = child.try_wait().unwrap() {
-            break st;
-        }
-        assert!(
-            t.elapsed() < Duration::from_secs(10),
-            "watch ignored SIGINT"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    };
+    let st = signal_and_wait(&mut child, "-INT", 10, "watch");
     let mut err = String::new();
     std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
     assert!(st.success(), "{st:?}: {err}");
@@ -696,19 +709,7 @@ fn watch_stops_its_stream_on_count_ctrl_c_sigterm_and_a_closed_stdout() {
     let mut out = BufReader::new(child.stdout.take().unwrap());
     let mut first = String::new();
     out.read_line(&mut first).unwrap();
-    let k = StdCommand::new("kill")
-        .args(["-TERM", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(k.success());
-    let t = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        assert!(
-            t.elapsed() < Duration::from_secs(10),
-            "watch ignored SIGTERM"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    signal_and_wait(&mut child, "-TERM", 10, "watch");
     drop(out);
     assert_eq!(stream_status(&s)["measuring"], false);
 
@@ -911,22 +912,7 @@ fn ctrl_c_during_measure_aborts_the_measurement_on_the_device() {
     // Time for the Measure request to be sent and accepted (tens of ms).
     std::thread::sleep(Duration::from_millis(1500));
     assert!(child.try_wait().unwrap().is_none(), "measure ended early");
-    let k = StdCommand::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(k.success());
-    let t = Instant::now();
-    let st = loop {
-        if let Some(st) = child.try_wait().unwrap() {
-            break st;
-        }
-        assert!(
-            t.elapsed() < Duration::from_secs(5),
-            "measure ignored SIGINT"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    };
+    let st = signal_and_wait(&mut child, "-INT", 5, "measure");
     let mut err = String::new();
     std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
     let mut out = String::new();

@@ -5,7 +5,7 @@ use serde_json::Value;
 
 mod common;
 
-use common::cli::{fricctl, json};
+use common::cli::{fricctl, json, PHYS};
 
 /// The SI scene of these tests at φ = `phi_deg`: μ0 = 0.3, kz = 2e6 N/m,
 /// kx = 1.5e6 N/m, uz0 = 5 µm, Δuz = 2.5 µm (a = 0.5), Δux = 2 µm, 40 kHz.
@@ -129,29 +129,16 @@ fn fit_reads_a_sweep_file_and_refuses_bad_ones() {
         "param,value,freq_hz,amp_z,amp_x,offset_z,phi_deg,v0,model_mu0,model_kz,model_kx,measured_mu,std_error,predicted_mu,valid,reasons\n",
     );
     for phi in [0.0, 60.0, 120.0, 180.0] {
-        let m = json(&[
-            "mu",
-            "--mu0",
-            "0.3",
-            "--kz",
-            "2e6",
-            "--kx",
-            "1.5e6",
-            "--uz0",
-            "5e-6",
-            "--duz",
-            "2e-6",
-            "--dux",
-            "0.7e-6",
-            "--freq",
-            "40e3",
-            "--phi-deg",
-            &format!("{phi}"),
-            "--v0",
-            "0.01",
-            "--method",
-            "exact",
-        ]);
+        // PHYS (φ its last flag) at this φ.
+        let phi_flag = format!("{phi}");
+        let m = json(
+            &[
+                &["mu"][..],
+                &PHYS[..PHYS.len() - 2],
+                &["--phi-deg", &phi_flag, "--v0", "0.01", "--method", "exact"],
+            ]
+            .concat(),
+        );
         let mu = m["mu"].as_f64().unwrap();
         csv += &format!(
             "phase-deg,{phi},40000,2e-6,0.7e-6,5e-6,{phi},0.01,0.3,2e6,1.5e6,{mu},0.001,{mu},true,\n"
