@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 mod common;
 
-use common::sim::{dev, ok_json, sim, Sim};
+use common::sim::{dev, ok_json, sim, spawn, Sim};
 use common::{drive_set, DRIVE};
 
 use assert_cmd::cargo::CommandCargoExt;
@@ -767,22 +767,12 @@ fn the_virtual_device_survives_a_host_that_stops_reading() {
 
 #[test]
 fn over_tcp_the_device_runs_between_connections_and_measures_as_over_a_pty() {
-    let mut child = StdCommand::cargo_bin("fricctl")
-        .unwrap()
-        .args(["sim-device", "--tcp", "127.0.0.1:0", "--seconds", "60"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    let addr = line.trim().to_string();
+    // Killed on drop.
+    let tcp = spawn(&["--tcp", "127.0.0.1:0", "--seconds", "60"]);
     let run = |args: &[&str]| {
         let o = Command::cargo_bin("fricctl")
             .unwrap()
-            .args(["device", "--tcp", &addr, "--json"])
+            .args(["device", "--tcp", &tcp.path, "--json"])
             .args(args)
             .output()
             .unwrap();
@@ -809,8 +799,6 @@ fn over_tcp_the_device_runs_between_connections_and_measures_as_over_a_pty() {
     );
     assert_eq!(e["valid"], true, "{e}");
     assert!((mu - pred).abs() <= allowed, "{e}");
-    let _ = child.kill();
-    let _ = child.wait();
 }
 
 /// `drive set` with Δu_z = `amp_z` and otherwise [`DRIVE`].
