@@ -14,7 +14,7 @@ use std::f64::consts::{PI, TAU};
 
 mod common;
 
-use common::cli::{fricctl, json, run_ok};
+use common::cli::{csv_rows, fricctl, json, run_ok};
 
 fn text(args: &[&str]) -> String {
     String::from_utf8(run_ok(args).stdout).unwrap()
@@ -383,14 +383,10 @@ fn curve_and_map_across_lift_off() {
         "--csv",
         mcsv.to_str().unwrap(),
     ]);
-    let body = std::fs::read_to_string(&mcsv).unwrap();
-    let head: Vec<&str> = body.lines().next().unwrap().split(',').collect();
-    let col = |k: &str| head.iter().position(|h| *h == k).unwrap();
-    let rows: Vec<&str> = body.lines().skip(1).collect();
+    let rows = csv_rows(&mcsv);
     assert_eq!(rows.len(), 9);
     for r in rows {
-        let c: Vec<&str> = r.split(',').collect();
-        let g = |k: &str| c[col(k)].parse::<f64>().unwrap();
+        let g = |k: &str| r.num(k);
         let (phi, ratio, v0) = (g("phi_deg"), g("ratio"), g("v0"));
         let (want, rb) = reference(1.5, ratio * 1.5, phi, v0);
         let mu = g("mu_over_mu0");
@@ -688,15 +684,11 @@ fn profile_mu_map_cells_match_the_brute_force() {
         "--csv",
         csv.to_str().unwrap(),
     ]);
-    let body = std::fs::read_to_string(&csv).unwrap();
-    let head: Vec<&str> = body.lines().next().unwrap().split(',').collect();
-    let col = |k: &str| head.iter().position(|h| *h == k).unwrap();
-    let rows: Vec<&str> = body.lines().skip(1).collect();
+    let rows = csv_rows(&csv);
     assert_eq!(rows.len(), 4);
     for r in rows {
-        let c: Vec<&str> = r.split(',').collect();
-        let g = |k: &str| c[col(k)].parse::<f64>().unwrap();
-        assert_eq!(c[col("method")], "mdr", "{r}");
+        let g = |k: &str| r.num(k);
+        assert_eq!(r.get("method"), "mdr", "{r}");
         let (phi, b, v) = (g("phi_deg").to_radians(), g("ratio") * 1.5, g("v0"));
         let fine = profile_brute(1.0, 1.5, b, phi, v, 400, 4096);
         let coarse = profile_brute(1.0, 1.5, b, phi, v, 200, 4096);

@@ -52,3 +52,49 @@ pub fn json(args: &[&str]) -> Value {
     };
     serde_json::from_slice(&out.stdout).unwrap()
 }
+
+/// One data line of a CSV file `fricctl` wrote, its cells found by the
+/// header's column names (shown as the line itself).
+pub struct CsvRow {
+    line: String,
+    header: std::rc::Rc<Vec<String>>,
+}
+
+impl CsvRow {
+    /// The cell in column `k` (panics if there is none).
+    pub fn get(&self, k: &str) -> &str {
+        let col = self.header.iter().position(|h| h == k).unwrap();
+        self.line.split(',').nth(col).unwrap()
+    }
+
+    /// The cell in column `k` as a number.
+    pub fn num(&self, k: &str) -> f64 {
+        self.get(k).parse().unwrap()
+    }
+}
+
+impl std::fmt::Display for CsvRow {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.line)
+    }
+}
+
+/// The data lines (after the header) of the CSV file at `path`.
+pub fn csv_rows(path: &std::path::Path) -> Vec<CsvRow> {
+    let body = std::fs::read_to_string(path).unwrap();
+    let mut lines = body.lines();
+    let header = std::rc::Rc::new(
+        lines
+            .next()
+            .unwrap()
+            .split(',')
+            .map(String::from)
+            .collect::<Vec<_>>(),
+    );
+    lines
+        .map(|l| CsvRow {
+            line: l.to_string(),
+            header: header.clone(),
+        })
+        .collect()
+}
