@@ -7,41 +7,44 @@ mod common;
 
 use common::cli::{fricctl, json, PHYS};
 
-/// The SI scene of these tests at φ = `phi_deg`: μ0 = 0.3, kz = 2e6 N/m,
-/// kx = 1.5e6 N/m, uz0 = 5 µm, Δuz = 2.5 µm (a = 0.5), Δux = 2 µm, 40 kHz.
-fn si_scene(phi_deg: &str) -> [&str; 16] {
+/// `load-line` on the dimensionless scene a = `duz_rel`, b/a = `ratio`,
+/// φ = `phi_deg` (degrees).
+fn dimensionless<'a>(duz_rel: &'a str, ratio: &'a str, phi_deg: &'a str) -> [&'a str; 7] {
     [
-        "--mu0",
-        "0.3",
-        "--kz",
-        "2e6",
-        "--kx",
-        "1.5e6",
-        "--uz0",
-        "5e-6",
-        "--duz",
-        "2.5e-6",
-        "--dux",
-        "2e-6",
-        "--freq",
-        "40e3",
+        "load-line",
+        "--duz-rel",
+        duz_rel,
+        "--ratio",
+        ratio,
         "--phi-deg",
         phi_deg,
     ]
 }
 
+/// The SI scene of these tests at φ = `phi_deg`: [`PHYS`] (μ0 = 0.3,
+/// kz = 2e6 N/m, kx = 1.5e6 N/m, uz0 = 5 µm, 40 kHz) with Δuz = 2.5 µm
+/// (a = 0.5) and Δux = 2 µm.
+fn si_scene(phi_deg: &str) -> Vec<&str> {
+    [
+        &PHYS[..8],
+        &[
+            "--duz",
+            "2.5e-6",
+            "--dux",
+            "2e-6",
+            "--freq",
+            "40e3",
+            "--phi-deg",
+            phi_deg,
+        ],
+    ]
+    .concat()
+}
+
 #[test]
 fn load_line_units_and_keys() {
     // Fig. 6's scene at φ = 0 (a = 0.5, ratio 2): it pushes forward.
-    let d = json(&[
-        "load-line",
-        "--duz-rel",
-        "0.5",
-        "--ratio",
-        "2",
-        "--phi-deg",
-        "0",
-    ]);
+    let d = json(&dimensionless("0.5", "2", "0"));
     for key in [
         "stall_force_over_mu0_fz",
         "no_load_velocity",
@@ -78,15 +81,7 @@ fn load_line_units_and_keys() {
 #[test]
 fn load_line_plot_refused_when_nothing_pushes() {
     let out = fricctl()
-        .args([
-            "load-line",
-            "--duz-rel",
-            "0.5",
-            "--ratio",
-            "0.5",
-            "--phi-deg",
-            "90",
-        ])
+        .args(dimensionless("0.5", "0.5", "90"))
         .args(["--plot", "/tmp/never-written.png"])
         .output()
         .unwrap();
@@ -176,16 +171,8 @@ fn load_line_of_every_contact() {
     use model_core::{Drive, Libm};
     // Lift-off, a = 1.5, b = 0.75, φ = 200°.
     let out = fricctl()
-        .args([
-            "load-line",
-            "--duz-rel",
-            "1.5",
-            "--ratio",
-            "0.5",
-            "--phi-deg",
-            "200",
-            "--json",
-        ])
+        .args(dimensionless("1.5", "0.5", "200"))
+        .arg("--json")
         .output()
         .unwrap();
     assert!(out.status.success());
@@ -203,17 +190,13 @@ fn load_line_of_every_contact() {
     assert!((fwd - (-m0).max(0.0)).abs() <= bound && (bwd - m0.max(0.0)).abs() <= bound);
     assert!(fwd == 0.0 || bwd == 0.0, "unique μ(0): one side only");
     // Sphere, Fig. 6 scene at φ = 40°.
-    let o = json(&[
-        "load-line",
-        "--duz-rel",
-        "0.5",
-        "--ratio",
-        "2",
-        "--phi-deg",
-        "40",
-        "--profile",
-        "sphere",
-    ]);
+    let o = json(
+        &[
+            &dimensionless("0.5", "2", "40")[..],
+            &["--profile", "sphere"],
+        ]
+        .concat(),
+    );
     assert_eq!(o["contact"], "sphere");
     assert!(o["max_efficiency"].is_null());
     let d = Drive::new::<Libm>(0.5, 1.0, 40f64.to_radians());
