@@ -23,20 +23,7 @@ use common::sim::{dev, ok_json, sim_with, Sim};
 fn drive_and_start(s: &Sim, freq: &str) {
     ok_json(
         s,
-        &[
-            "drive",
-            "set",
-            "--freq",
-            freq,
-            "--amp-z",
-            "2e-6",
-            "--amp-x",
-            "3e-7",
-            "--offset-z",
-            "4e-6",
-            "--phase-deg",
-            "40",
-        ],
+        &common::drive_set(freq, "2e-6", "3e-7", "4e-6", Some("40")),
     );
     ok_json(s, &["start"]);
 }
