@@ -559,37 +559,36 @@ fn profile_flags_and_refusals() {
     assert_eq!(file["profile"], "sphere");
     assert_eq!(file["mu_over_mu0"], si["mu_over_mu0"]);
 
+    // `mu --v0 0.2` on the scene with each refused profile flag combination.
     let v = ["mu", "--v0", "0.2"];
-    refused(
-        &with(&[&v[..], &["--profile", "power"]].concat(), &s),
-        "--exponent: missing (--profile power needs --exponent n > 0)",
-    );
-    refused(
-        &with(
-            &[&v[..], &["--profile", "sphere", "--exponent", "2"]].concat(),
-            &s,
+    for (extra, want) in [
+        (
+            &["--profile", "power"][..],
+            "--exponent: missing (--profile power needs --exponent n > 0)",
         ),
-        "--exponent: only with --profile power (the sphere profile has n = 2)",
-    );
-    refused(
-        &with(&[&v[..], &["--exponent", "3"]].concat(), &s),
-        "--exponent: only with --profile power (the flat profile has no exponent)",
-    );
-    refused(
-        &with(
-            &[&v[..], &["--profile", "power", "--exponent", "0"]].concat(),
-            &s,
+        (
+            &["--profile", "sphere", "--exponent", "2"][..],
+            "--exponent: only with --profile power (the sphere profile has n = 2)",
         ),
-        "--exponent: must be a finite number > 0",
-    );
-    refused(
-        &with(&[&v[..], &["--profile", "sphere", "--method", "fixed"]].concat(), &s),
-        "--profile: --method fixed is for the flat punch; a sphere profile is computed by the MDR quadrature (--method auto or exact)",
-    );
-    refused(
-        &with(&[&v[..], &["--profile", "cone", "--method", "approx"]].concat(), &s),
-        "--profile: --method approx is for the flat punch; a cone profile is computed by the MDR quadrature (--method auto or exact)",
-    );
+        (
+            &["--exponent", "3"][..],
+            "--exponent: only with --profile power (the flat profile has no exponent)",
+        ),
+        (
+            &["--profile", "power", "--exponent", "0"][..],
+            "--exponent: must be a finite number > 0",
+        ),
+        (
+            &["--profile", "sphere", "--method", "fixed"][..],
+            "--profile: --method fixed is for the flat punch; a sphere profile is computed by the MDR quadrature (--method auto or exact)",
+        ),
+        (
+            &["--profile", "cone", "--method", "approx"][..],
+            "--profile: --method approx is for the flat punch; a cone profile is computed by the MDR quadrature (--method auto or exact)",
+        ),
+    ] {
+        refused(&with(&[&v[..], extra].concat(), &s), want);
+    }
     refused(
         &with(&["static", "--profile", "sphere"], &s),
         "--profile: the static analysis is for the flat punch; for a sphere profile `fricctl mu --v0 0` gives mu(0+) and mu(0-)",
