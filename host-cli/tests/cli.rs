@@ -9,26 +9,7 @@ use model_core::{Groups, Libm, Scene};
 
 mod common;
 
-use common::cli::{fricctl, json, run_ok};
-
-const PHYS: &[&str] = &[
-    "--mu0",
-    "0.3",
-    "--kz",
-    "2e6",
-    "--kx",
-    "1.5e6",
-    "--uz0",
-    "5e-6",
-    "--duz",
-    "2e-6",
-    "--dux",
-    "0.7e-6",
-    "--freq",
-    "40e3",
-    "--phi-deg",
-    "50",
-];
+use common::cli::{fricctl, json, run_ok, PHYS};
 
 /// The scene of the `PHYS` flags.
 fn phys_scene() -> Scene<f64> {

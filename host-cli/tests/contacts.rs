@@ -7,29 +7,14 @@
 //! maxima and integrals on fine grids, and the permanent-contact solver on
 //! the other side of a = 1.
 
-use assert_cmd::Command;
 use model_core::model::liftoff::stepping;
 use model_core::{Drive, Libm};
 use serde_json::Value;
 use std::f64::consts::{PI, TAU};
 
-fn fricctl() -> Command {
-    Command::cargo_bin("fricctl").unwrap()
-}
+mod common;
 
-fn run_ok(args: &[&str]) -> std::process::Output {
-    let out = fricctl().args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn json(args: &[&str]) -> Value {
-    serde_json::from_slice(&run_ok(args).stdout).unwrap()
-}
+use common::cli::{csv_rows, fricctl, json, run_ok};
 
 fn text(args: &[&str]) -> String {
     String::from_utf8(run_ok(args).stdout).unwrap()
@@ -398,14 +383,10 @@ fn curve_and_map_across_lift_off() {
         "--csv",
         mcsv.to_str().unwrap(),
     ]);
-    let body = std::fs::read_to_string(&mcsv).unwrap();
-    let head: Vec<&str> = body.lines().next().unwrap().split(',').collect();
-    let col = |k: &str| head.iter().position(|h| *h == k).unwrap();
-    let rows: Vec<&str> = body.lines().skip(1).collect();
+    let rows = csv_rows(&mcsv);
     assert_eq!(rows.len(), 9);
     for r in rows {
-        let c: Vec<&str> = r.split(',').collect();
-        let g = |k: &str| c[col(k)].parse::<f64>().unwrap();
+        let g = |k: &str| r.num(k);
         let (phi, ratio, v0) = (g("phi_deg"), g("ratio"), g("v0"));
         let (want, rb) = reference(1.5, ratio * 1.5, phi, v0);
         let mu = g("mu_over_mu0");
@@ -578,37 +559,36 @@ fn profile_flags_and_refusals() {
     assert_eq!(file["profile"], "sphere");
     assert_eq!(file["mu_over_mu0"], si["mu_over_mu0"]);
 
+    // `mu --v0 0.2` on the scene with each refused profile flag combination.
     let v = ["mu", "--v0", "0.2"];
-    refused(
-        &with(&[&v[..], &["--profile", "power"]].concat(), &s),
-        "--exponent: missing (--profile power needs --exponent n > 0)",
-    );
-    refused(
-        &with(
-            &[&v[..], &["--profile", "sphere", "--exponent", "2"]].concat(),
-            &s,
+    for (extra, want) in [
+        (
+            &["--profile", "power"][..],
+            "--exponent: missing (--profile power needs --exponent n > 0)",
         ),
-        "--exponent: only with --profile power (the sphere profile has n = 2)",
-    );
-    refused(
-        &with(&[&v[..], &["--exponent", "3"]].concat(), &s),
-        "--exponent: only with --profile power (the flat profile has no exponent)",
-    );
-    refused(
-        &with(
-            &[&v[..], &["--profile", "power", "--exponent", "0"]].concat(),
-            &s,
+        (
+            &["--profile", "sphere", "--exponent", "2"][..],
+            "--exponent: only with --profile power (the sphere profile has n = 2)",
         ),
-        "--exponent: must be a finite number > 0",
-    );
-    refused(
-        &with(&[&v[..], &["--profile", "sphere", "--method", "fixed"]].concat(), &s),
-        "--profile: --method fixed is for the flat punch; a sphere profile is computed by the MDR quadrature (--method auto or exact)",
-    );
-    refused(
-        &with(&[&v[..], &["--profile", "cone", "--method", "approx"]].concat(), &s),
-        "--profile: --method approx is for the flat punch; a cone profile is computed by the MDR quadrature (--method auto or exact)",
-    );
+        (
+            &["--exponent", "3"][..],
+            "--exponent: only with --profile power (the flat profile has no exponent)",
+        ),
+        (
+            &["--profile", "power", "--exponent", "0"][..],
+            "--exponent: must be a finite number > 0",
+        ),
+        (
+            &["--profile", "sphere", "--method", "fixed"][..],
+            "--profile: --method fixed is for the flat punch; a sphere profile is computed by the MDR quadrature (--method auto or exact)",
+        ),
+        (
+            &["--profile", "cone", "--method", "approx"][..],
+            "--profile: --method approx is for the flat punch; a cone profile is computed by the MDR quadrature (--method auto or exact)",
+        ),
+    ] {
+        refused(&with(&[&v[..], extra].concat(), &s), want);
+    }
     refused(
         &with(&["static", "--profile", "sphere"], &s),
         "--profile: the static analysis is for the flat punch; for a sphere profile `fricctl mu --v0 0` gives mu(0+) and mu(0-)",
@@ -703,15 +683,11 @@ fn profile_mu_map_cells_match_the_brute_force() {
         "--csv",
         csv.to_str().unwrap(),
     ]);
-    let body = std::fs::read_to_string(&csv).unwrap();
-    let head: Vec<&str> = body.lines().next().unwrap().split(',').collect();
-    let col = |k: &str| head.iter().position(|h| *h == k).unwrap();
-    let rows: Vec<&str> = body.lines().skip(1).collect();
+    let rows = csv_rows(&csv);
     assert_eq!(rows.len(), 4);
     for r in rows {
-        let c: Vec<&str> = r.split(',').collect();
-        let g = |k: &str| c[col(k)].parse::<f64>().unwrap();
-        assert_eq!(c[col("method")], "mdr", "{r}");
+        let g = |k: &str| r.num(k);
+        assert_eq!(r.get("method"), "mdr", "{r}");
         let (phi, b, v) = (g("phi_deg").to_radians(), g("ratio") * 1.5, g("v0"));
         let fine = profile_brute(1.0, 1.5, b, phi, v, 400, 4096);
         let coarse = profile_brute(1.0, 1.5, b, phi, v, 200, 4096);

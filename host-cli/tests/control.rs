@@ -4,67 +4,18 @@
 //! against `fricctl sim-device --pty` with a plant whose μ0 is 20 % below the
 //! device's model (0.24 against 0.3).
 
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Command as StdCommand, Stdio};
 use std::time::Duration;
 
-use assert_cmd::cargo::CommandCargoExt;
-use assert_cmd::Command;
 use serde_json::Value;
 
-struct Sim {
-    child: Child,
-    path: String,
-}
+mod common;
 
-impl Drop for Sim {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+use common::drive_set;
+use common::sim::{dev, ok_json, sim_with, Sim};
 
+/// `sim-device --pty` whose plant's μ0 is 0.24 (the device's model: 0.3).
 fn sim() -> Sim {
-    let mut child = StdCommand::cargo_bin("fricctl")
-        .unwrap()
-        .args([
-            "sim-device",
-            "--pty",
-            "--seconds",
-            "120",
-            "--plant-mu0",
-            "0.24",
-        ])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    let path = line.trim().to_string();
-    assert!(path.starts_with("/dev/"), "{path}");
-    Sim { child, path }
-}
-
-fn dev(s: &Sim, args: &[&str]) -> std::process::Output {
-    Command::cargo_bin("fricctl")
-        .unwrap()
-        .args(["device", "--port", &s.path, "--json"])
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn ok_json(s: &Sim, args: &[&str]) -> Value {
-    let o = dev(s, args);
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    serde_json::from_slice(&o.stdout).unwrap()
+    sim_with(&["--plant-mu0", "0.24"], 120)
 }
 
 fn num(v: &Value, k: &str) -> f64 {
@@ -79,23 +30,7 @@ fn closed_loop_over_a_pty() {
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("not running"), "{err}");
-    ok_json(
-        &s,
-        &[
-            "drive",
-            "set",
-            "--freq",
-            "40000",
-            "--amp-z",
-            "2e-6",
-            "--amp-x",
-            "3e-7",
-            "--offset-z",
-            "4e-6",
-            "--phase-deg",
-            "40",
-        ],
-    );
+    ok_json(&s, &drive_set("40000", "2e-6", "3e-7", "4e-6", Some("40")));
     ok_json(&s, &["start"]);
     std::thread::sleep(Duration::from_millis(300));
     let st = ok_json(&s, &["control", "--target-mu", "0.1", "--v0", "0.004"]);

@@ -9,28 +9,14 @@ use std::time::{Duration, Instant};
 
 mod common;
 
-use common::sim::{dev, ok_json, sim, Sim};
+use common::sim::{dev, ok_json, sim, spawn, Sim};
+use common::{drive_set, DRIVE};
 
 use assert_cmd::cargo::CommandCargoExt;
 use assert_cmd::Command;
 use model_core::protocol::{Body, Frame, Request, Response, WireError, PROTOCOL_VERSION};
 use serde_json::Value;
 use serialport::SerialPort;
-
-const DRIVE: &[&str] = &[
-    "drive",
-    "set",
-    "--freq",
-    "20000",
-    "--amp-z",
-    "2e-6",
-    "--amp-x",
-    "3e-7",
-    "--offset-z",
-    "4e-6",
-    "--phase-deg",
-    "40",
-];
 
 /// How far the virtual device's measured μ may be from its prediction (both
 /// absolute μ) for [`DRIVE`] at the sim's stage velocity 4 mm/s, with the
@@ -129,40 +115,12 @@ fn refused_commands_leave_the_drive_unchanged() {
     ok_json(&s, DRIVE);
     let before = ok_json(&s, &["drive", "get"]);
     // Lift-off: Δu_z above (1 − 0.05)·u_z0.
-    let o = dev(
-        &s,
-        &[
-            "drive",
-            "set",
-            "--freq",
-            "20000",
-            "--amp-z",
-            "3.9e-6",
-            "--amp-x",
-            "3e-7",
-            "--offset-z",
-            "4e-6",
-        ],
-    );
+    let o = dev(&s, &drive_set("20000", "3.9e-6", "3e-7", "4e-6", None));
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--amp-z") && err.contains("lift"), "{err}");
     // Out of range frequency: named, with the limits.
-    let o = dev(
-        &s,
-        &[
-            "drive",
-            "set",
-            "--freq",
-            "5e6",
-            "--amp-z",
-            "1e-6",
-            "--amp-x",
-            "3e-7",
-            "--offset-z",
-            "4e-6",
-        ],
-    );
+    let o = dev(&s, &drive_set("5e6", "1e-6", "3e-7", "4e-6", None));
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--freq") && err.contains("100000"), "{err}");
@@ -453,6 +411,34 @@ const INFO_KEYS: &[&str] = &[
     "byte_timeout_us",
     "retract_z_m",
 ];
+
+/// Sends `signal` (`kill SIGNAL PID`) to `child` and waits for it to end,
+/// failing if it takes longer than `limit_s` seconds ("`what` ignored …").
+fn signal_and_wait(
+    child: &mut std::process::Child,
+    signal: &str,
+    limit_s: u64,
+    what: &str,
+) -> std::process::ExitStatus {
+    let k = StdCommand::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(k.success());
+    let t = Instant::now();
+    loop {
+        if let Some(st) = child.try_wait().unwrap() {
+            break st;
+        }
+        assert!(
+            t.elapsed() < Duration::from_secs(limit_s),
+            "{what} ignored SIG{}",
+            &signal[1..]
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
 const DRIVE_KEYS: &[&str] = &[
     "freq",
     "duz",
@@ -689,22 +675,7 @@ fn watch_stops_its_stream_on_count_ctrl_c_sigterm_and_a_closed_stdout() {
     let mut first = String::new();
     out.read_line(&mut first).unwrap();
     assert!(first.starts_with('#') && first.contains("mu"), "{first}");
-    let k = StdCommand::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(k.success());
-    let t = Instant::now();
-    let st = loop {
-        if let Some(st) = child.try_wait().unwrap() {
-            break st;
-        }
-        assert!(
-            t.elapsed() < Duration::from_secs(10),
-            "watch ignored SIGINT"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    };
+    let st = signal_and_wait(&mut child, "-INT", 10, "watch");
     let mut err = String::new();
     std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
     assert!(st.success(), "{st:?}: {err}");
@@ -738,19 +709,7 @@ fn watch_stops_its_stream_on_count_ctrl_c_sigterm_and_a_closed_stdout() {
     let mut out = BufReader::new(child.stdout.take().unwrap());
     let mut first = String::new();
     out.read_line(&mut first).unwrap();
-    let k = StdCommand::new("kill")
-        .args(["-TERM", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(k.success());
-    let t = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        assert!(
-            t.elapsed() < Duration::from_secs(10),
-            "watch ignored SIGTERM"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    signal_and_wait(&mut child, "-TERM", 10, "watch");
     drop(out);
     assert_eq!(stream_status(&s)["measuring"], false);
 
@@ -808,22 +767,12 @@ fn the_virtual_device_survives_a_host_that_stops_reading() {
 
 #[test]
 fn over_tcp_the_device_runs_between_connections_and_measures_as_over_a_pty() {
-    let mut child = StdCommand::cargo_bin("fricctl")
-        .unwrap()
-        .args(["sim-device", "--tcp", "127.0.0.1:0", "--seconds", "60"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    let addr = line.trim().to_string();
+    // Killed on drop.
+    let tcp = spawn(&["--tcp", "127.0.0.1:0", "--seconds", "60"]);
     let run = |args: &[&str]| {
         let o = Command::cargo_bin("fricctl")
             .unwrap()
-            .args(["device", "--tcp", &addr, "--json"])
+            .args(["device", "--tcp", &tcp.path, "--json"])
             .args(args)
             .output()
             .unwrap();
@@ -850,8 +799,6 @@ fn over_tcp_the_device_runs_between_connections_and_measures_as_over_a_pty() {
     );
     assert_eq!(e["valid"], true, "{e}");
     assert!((mu - pred).abs() <= allowed, "{e}");
-    let _ = child.kill();
-    let _ = child.wait();
 }
 
 /// `drive set` with Δu_z = `amp_z` and otherwise [`DRIVE`].
@@ -953,22 +900,7 @@ fn ctrl_c_during_measure_aborts_the_measurement_on_the_device() {
     // Time for the Measure request to be sent and accepted (tens of ms).
     std::thread::sleep(Duration::from_millis(1500));
     assert!(child.try_wait().unwrap().is_none(), "measure ended early");
-    let k = StdCommand::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(k.success());
-    let t = Instant::now();
-    let st = loop {
-        if let Some(st) = child.try_wait().unwrap() {
-            break st;
-        }
-        assert!(
-            t.elapsed() < Duration::from_secs(5),
-            "measure ignored SIGINT"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    };
+    let st = signal_and_wait(&mut child, "-INT", 5, "measure");
     let mut err = String::new();
     std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
     let mut out = String::new();
@@ -1009,23 +941,7 @@ fn estimates_track_a_drifting_mu0_of_the_plant() {
     // ωW0·|a + b e^{iφ}| ≤ 2π·1 kHz·(μ0·2 µm)·0.075 ≤ 0.94 mm/s for μ0 ≤ 1,
     // below the stage's 4 mm/s: the contact slides throughout, μ/μ0 = 1.
     // f_z ≈ k_z u_z0 = 20 N (1000 counts), f_x = μ0 f_z ≤ 20 N: no ADC rail.
-    let d = ok_json(
-        &s,
-        &[
-            "drive",
-            "set",
-            "--freq",
-            "1000",
-            "--amp-z",
-            "1e-7",
-            "--amp-x",
-            "1.5e-8",
-            "--offset-z",
-            "2e-6",
-            "--phase-deg",
-            "40",
-        ],
-    );
+    let d = ok_json(&s, &drive_set("1000", "1e-7", "1.5e-8", "2e-6", Some("40")));
     let f = d["freq_achieved"].as_f64().unwrap();
     ok_json(&s, &["start"]);
     std::thread::sleep(Duration::from_millis(300));

@@ -5,20 +5,46 @@ use serde_json::Value;
 
 mod common;
 
-use common::cli::{fricctl, json};
+use common::cli::{fricctl, json, PHYS};
+
+/// `load-line` on the dimensionless scene a = `duz_rel`, b/a = `ratio`,
+/// φ = `phi_deg` (degrees).
+fn dimensionless<'a>(duz_rel: &'a str, ratio: &'a str, phi_deg: &'a str) -> [&'a str; 7] {
+    [
+        "load-line",
+        "--duz-rel",
+        duz_rel,
+        "--ratio",
+        ratio,
+        "--phi-deg",
+        phi_deg,
+    ]
+}
+
+/// The SI scene of these tests at φ = `phi_deg`: [`PHYS`] (μ0 = 0.3,
+/// kz = 2e6 N/m, kx = 1.5e6 N/m, uz0 = 5 µm, 40 kHz) with Δuz = 2.5 µm
+/// (a = 0.5) and Δux = 2 µm.
+fn si_scene(phi_deg: &str) -> Vec<&str> {
+    [
+        &PHYS[..8],
+        &[
+            "--duz",
+            "2.5e-6",
+            "--dux",
+            "2e-6",
+            "--freq",
+            "40e3",
+            "--phi-deg",
+            phi_deg,
+        ],
+    ]
+    .concat()
+}
 
 #[test]
 fn load_line_units_and_keys() {
     // Fig. 6's scene at φ = 0 (a = 0.5, ratio 2): it pushes forward.
-    let d = json(&[
-        "load-line",
-        "--duz-rel",
-        "0.5",
-        "--ratio",
-        "2",
-        "--phi-deg",
-        "0",
-    ]);
+    let d = json(&dimensionless("0.5", "2", "0"));
     for key in [
         "stall_force_over_mu0_fz",
         "no_load_velocity",
@@ -36,25 +62,7 @@ fn load_line_units_and_keys() {
     assert_eq!(d["stall_force_backward_over_mu0_fz"].as_f64(), Some(0.0));
     // SI: the same groups with μ0 = 0.3, kz = 2e6, kx = 1.5e6, uz0 = 5 µm,
     // Δuz = 2.5 µm (a = 0.5) and Δux = ratio·μ0 kz Δuz/kx = 2 µm, 40 kHz.
-    let si = json(&[
-        "load-line",
-        "--mu0",
-        "0.3",
-        "--kz",
-        "2e6",
-        "--kx",
-        "1.5e6",
-        "--uz0",
-        "5e-6",
-        "--duz",
-        "2.5e-6",
-        "--dux",
-        "2e-6",
-        "--freq",
-        "40e3",
-        "--phi-deg",
-        "0",
-    ]);
+    let si = json(&[&["load-line"][..], &si_scene("0")].concat());
     let fz = 2e6 * 5e-6; // N
     let w0 = 0.3 * 2e6 * 5e-6 / 1.5e6; // m
     let omega = std::f64::consts::TAU * 40e3;
@@ -73,15 +81,7 @@ fn load_line_units_and_keys() {
 #[test]
 fn load_line_plot_refused_when_nothing_pushes() {
     let out = fricctl()
-        .args([
-            "load-line",
-            "--duz-rel",
-            "0.5",
-            "--ratio",
-            "0.5",
-            "--phi-deg",
-            "90",
-        ])
+        .args(dimensionless("0.5", "0.5", "90"))
         .args(["--plot", "/tmp/never-written.png"])
         .output()
         .unwrap();
@@ -124,29 +124,16 @@ fn fit_reads_a_sweep_file_and_refuses_bad_ones() {
         "param,value,freq_hz,amp_z,amp_x,offset_z,phi_deg,v0,model_mu0,model_kz,model_kx,measured_mu,std_error,predicted_mu,valid,reasons\n",
     );
     for phi in [0.0, 60.0, 120.0, 180.0] {
-        let m = json(&[
-            "mu",
-            "--mu0",
-            "0.3",
-            "--kz",
-            "2e6",
-            "--kx",
-            "1.5e6",
-            "--uz0",
-            "5e-6",
-            "--duz",
-            "2e-6",
-            "--dux",
-            "0.7e-6",
-            "--freq",
-            "40e3",
-            "--phi-deg",
-            &format!("{phi}"),
-            "--v0",
-            "0.01",
-            "--method",
-            "exact",
-        ]);
+        // PHYS (φ its last flag) at this φ.
+        let phi_flag = format!("{phi}");
+        let m = json(
+            &[
+                &["mu"][..],
+                &PHYS[..PHYS.len() - 2],
+                &["--phi-deg", &phi_flag, "--v0", "0.01", "--method", "exact"],
+            ]
+            .concat(),
+        );
         let mu = m["mu"].as_f64().unwrap();
         csv += &format!(
             "phase-deg,{phi},40000,2e-6,0.7e-6,5e-6,{phi},0.01,0.3,2e6,1.5e6,{mu},0.001,{mu},true,\n"
@@ -184,16 +171,8 @@ fn load_line_of_every_contact() {
     use model_core::{Drive, Libm};
     // Lift-off, a = 1.5, b = 0.75, φ = 200°.
     let out = fricctl()
-        .args([
-            "load-line",
-            "--duz-rel",
-            "1.5",
-            "--ratio",
-            "0.5",
-            "--phi-deg",
-            "200",
-            "--json",
-        ])
+        .args(dimensionless("1.5", "0.5", "200"))
+        .arg("--json")
         .output()
         .unwrap();
     assert!(out.status.success());
@@ -211,17 +190,13 @@ fn load_line_of_every_contact() {
     assert!((fwd - (-m0).max(0.0)).abs() <= bound && (bwd - m0.max(0.0)).abs() <= bound);
     assert!(fwd == 0.0 || bwd == 0.0, "unique μ(0): one side only");
     // Sphere, Fig. 6 scene at φ = 40°.
-    let o = json(&[
-        "load-line",
-        "--duz-rel",
-        "0.5",
-        "--ratio",
-        "2",
-        "--phi-deg",
-        "40",
-        "--profile",
-        "sphere",
-    ]);
+    let o = json(
+        &[
+            &dimensionless("0.5", "2", "40")[..],
+            &["--profile", "sphere"],
+        ]
+        .concat(),
+    );
     assert_eq!(o["contact"], "sphere");
     assert!(o["max_efficiency"].is_null());
     let d = Drive::new::<Libm>(0.5, 1.0, 40f64.to_radians());
@@ -249,27 +224,9 @@ fn load_line_of_every_contact() {
     );
     // SI scenes with a curved profile are refused (their F̄z is not derived).
     let out = fricctl()
-        .args([
-            "load-line",
-            "--mu0",
-            "0.3",
-            "--kz",
-            "2e6",
-            "--kx",
-            "1.5e6",
-            "--uz0",
-            "5e-6",
-            "--duz",
-            "2.5e-6",
-            "--dux",
-            "2e-6",
-            "--freq",
-            "40e3",
-            "--phi-deg",
-            "30",
-            "--profile",
-            "sphere",
-        ])
+        .arg("load-line")
+        .args(si_scene("30"))
+        .args(["--profile", "sphere"])
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(2));

@@ -78,29 +78,82 @@ fn inverse_exact(d: &model_core::Drive<f64>, g: f64, hi: f64, lo: f64) -> f64 {
     if g <= hi && g >= lo {
         return 0.0;
     }
-    let (mut a, mut b) = if g > hi {
-        (0.0, d.c_forward::<Libm>())
-    } else {
-        (-d.c_backward::<Libm>(), 0.0)
-    };
-    for _ in 0..80 {
+    bisect(
+        |m| exact::mu_over_mu0::<f64, Libm>(d, m).unwrap(),
+        g,
+        (hi, lo),
+        (d.c_forward::<Libm>(), d.c_backward::<Libm>()),
+        80,
+    )
+}
+
+/// The velocity where the law `mu` (μ/μ₀ of V) equals `g`, by `iters`
+/// halvings of [0, cf] if g > hi = μ(0⁺), else of [−cb, 0]; at V = 0 the law
+/// is read as `hi` or `lo` = μ(0⁻) on the side searched.
+fn bisect(
+    mu: impl Fn(f64) -> f64,
+    g: f64,
+    (hi, lo): (f64, f64),
+    (cf, cb): (f64, f64),
+    iters: u32,
+) -> f64 {
+    let (mut a, mut b) = if g > hi { (0.0, cf) } else { (-cb, 0.0) };
+    for _ in 0..iters {
         let m = 0.5 * (a + b);
-        let mu = if m == 0.0 {
+        let v = if m == 0.0 {
             if g > hi {
                 hi
             } else {
                 lo
             }
         } else {
-            exact::mu_over_mu0::<f64, Libm>(d, m).unwrap()
+            mu(m)
         };
-        if mu < g {
+        if v < g {
             a = m;
         } else {
             b = m;
         }
     }
     0.5 * (a + b)
+}
+
+/// Mean over a load period of `inverse(f0 + f sin T)` (μ⁻¹, zero inside the
+/// static band [lo, hi]): the moving sets {g > hi} and {g < lo} in closed
+/// form (arcsine), Gauss–Legendre `nodes` ((x, w) on [−1, 1]) on `cells`
+/// equal cells of each.
+fn mean_over_load_period(
+    inverse: impl Fn(f64) -> f64,
+    f0: f64,
+    f: f64,
+    (hi, lo): (f64, f64),
+    nodes: &[(f64, f64)],
+    cells: usize,
+) -> f64 {
+    let mut total = 0.0;
+    let mut integrate = |t0: f64, t1: f64| {
+        for c in 0..cells {
+            let (a, b) = (
+                t0 + (t1 - t0) * c as f64 / cells as f64,
+                t0 + (t1 - t0) * (c + 1) as f64 / cells as f64,
+            );
+            for &(x, w) in nodes {
+                let t = 0.5 * (a + b) + 0.5 * (b - a) * x;
+                total += 0.5 * (b - a) * w * inverse(f0 + f * t.sin());
+            }
+        }
+    };
+    let up = (hi - f0) / f;
+    if up < 1.0 {
+        let s = up.max(-1.0).asin();
+        integrate(s, PI - s);
+    }
+    let down = (f0 - lo) / f;
+    if down < 1.0 {
+        let s = down.max(-1.0).asin();
+        integrate(PI + s, TAU - s);
+    }
+    total / TAU
 }
 
 /// Mean of V(T) = μ⁻¹(f0 + f sin T) over a load period: the moving sets
@@ -130,31 +183,7 @@ fn quasi_static_drift(d: &model_core::Drive<f64>, f0: f64, f: f64) -> f64 {
         }
     }
     assert_eq!(nodes.len(), n);
-    let mut total = 0.0;
-    let mut integrate = |t0: f64, t1: f64| {
-        let cells = 40;
-        for c in 0..cells {
-            let (a, b) = (
-                t0 + (t1 - t0) * c as f64 / cells as f64,
-                t0 + (t1 - t0) * (c + 1) as f64 / cells as f64,
-            );
-            for &(x, w) in &nodes {
-                let t = 0.5 * (a + b) + 0.5 * (b - a) * x;
-                total += 0.5 * (b - a) * w * inverse_exact(d, f0 + f * t.sin(), hi, lo);
-            }
-        }
-    };
-    let up = (hi - f0) / f;
-    if up < 1.0 {
-        let s = up.max(-1.0).asin();
-        integrate(s, PI - s);
-    }
-    let down = (f0 - lo) / f;
-    if down < 1.0 {
-        let s = down.max(-1.0).asin();
-        integrate(PI + s, TAU - s);
-    }
-    total / TAU
+    mean_over_load_period(|g| inverse_exact(d, g, hi, lo), f0, f, (hi, lo), &nodes, 40)
 }
 
 /// Quasi-static drift (`--mass 0`) against the quadrature of μ⁻¹ over a load
@@ -278,6 +307,16 @@ fn converge(scene: &[String], f0: f64, f: f64, inv_nus: &[f64], tol: &str) -> (f
     (rate, band)
 }
 
+/// [`converge`] on Fig. 7's ratchet scene at φ = 0 with the force
+/// `f0 + f sin Ωt`, asserting the fitted rate is 1 within the derived band.
+fn assert_first_order(f0: f64, f: f64, inv_nus: &[f64], tol: &str) {
+    let (rate, band) = converge(&fig7(0.0), f0, f, inv_nus, tol);
+    assert!(
+        (rate - 1.0).abs() <= band,
+        "fitted rate {rate} (expected 1 ± {band})"
+    );
+}
+
 /// Homogenised and resolved converge at first order as ω/Ω grows at a fixed
 /// body response in load periods (m̃ν = 1), on a scene where the body slides
 /// forward all the time (Fig. 7 ratchet, force 0.6 + 0.2 sin Ωt > μ(0⁺) =
@@ -286,17 +325,7 @@ fn converge(scene: &[String], f0: f64, f: f64, inv_nus: &[f64], tol: &str) -> (f
 /// in [`converge`].
 #[test]
 fn homogenised_and_resolved_converge_at_first_order() {
-    let (rate, band) = converge(
-        &fig7(0.0),
-        0.6,
-        0.2,
-        &[10.0, 20.0, 50.0, 100.0, 200.0, 500.0],
-        "1e-5",
-    );
-    assert!(
-        (rate - 1.0).abs() <= band,
-        "fitted rate {rate} (expected 1 ± {band})"
-    );
+    assert_first_order(0.6, 0.2, &[10.0, 20.0, 50.0, 100.0, 200.0, 500.0], "1e-5");
 }
 
 /// The same with stick–slip of the body (force 0.5 sin Ωt crosses the
@@ -306,16 +335,11 @@ fn homogenised_and_resolved_converge_at_first_order() {
 /// fit's residuals; the estimate covers every point.
 #[test]
 fn stick_slip_converges_at_first_order() {
-    let (rate, band) = converge(
-        &fig7(0.0),
+    assert_first_order(
         0.0,
         0.5,
         &[10.0, 20.0, 50.0, 100.0, 200.0, 500.0, 1000.0],
         "1e-4",
-    );
-    assert!(
-        (rate - 1.0).abs() <= band,
-        "fitted rate {rate} (expected 1 ± {band})"
     );
 }
 
@@ -667,27 +691,7 @@ fn sphere_massless_drift_and_refusals() {
     let (plus, minus) = mdr::limits_at_zero::<f64, Libm>(&d, &p, 1e-8).unwrap();
     let (hi, lo) = (plus.mu_over_mu0, minus.mu_over_mu0);
     let (cf, cb) = mdr::critical_velocities::<f64, Libm>(&d, &p).unwrap();
-    let inverse = |g: f64| {
-        let (mut x, mut y) = if g > hi { (0.0, cf) } else { (-cb, 0.0) };
-        for _ in 0..50 {
-            let m = 0.5 * (x + y);
-            let v = if m == 0.0 {
-                if g > hi {
-                    hi
-                } else {
-                    lo
-                }
-            } else {
-                mu(m)
-            };
-            if v < g {
-                x = m;
-            } else {
-                y = m;
-            }
-        }
-        0.5 * (x + y)
-    };
+    let inverse = |g: f64| bisect(mu, g, (hi, lo), (cf, cb), 50);
     let gl = [
         (0.148_874_338_981_631_2, 0.295_524_224_714_752_9),
         (0.433_395_394_129_247_2, 0.269_266_719_309_996_4),
@@ -695,31 +699,9 @@ fn sphere_massless_drift_and_refusals() {
         (0.865_063_366_688_984_5, 0.149_451_349_150_580_6),
         (0.973_906_528_517_171_7, 0.066_671_344_308_688_14),
     ];
-    let mut total = 0.0;
-    let mut arc = |t0: f64, t1: f64| {
-        let cells = 10;
-        for c in 0..cells {
-            let (u, w) = (
-                t0 + (t1 - t0) * c as f64 / cells as f64,
-                t0 + (t1 - t0) * (c + 1) as f64 / cells as f64,
-            );
-            for &(x, wt) in &gl {
-                for s in [-x, x] {
-                    let t = 0.5 * (u + w) + 0.5 * (w - u) * s;
-                    total += 0.5 * (w - u) * wt * inverse(f * t.sin());
-                }
-            }
-        }
-    };
-    if hi / f < 1.0 {
-        let s = (hi / f).max(-1.0).asin();
-        arc(s, PI - s);
-    }
-    if -lo / f < 1.0 {
-        let s = (-lo / f).max(-1.0).asin();
-        arc(PI + s, TAU - s);
-    }
-    let want = total / TAU;
+    // The 10-point rule: ±x for each (x, w) above, −x first.
+    let nodes: Vec<(f64, f64)> = gl.iter().flat_map(|&(x, w)| [(-x, w), (x, w)]).collect();
+    let want = mean_over_load_period(inverse, 0.0, f, (hi, lo), &nodes, 10);
     let args = |extra: &[&str]| {
         let mut v = scene_args(a, ratio, phi);
         v.extend(["--profile", "sphere"].iter().map(|s| s.to_string()));

@@ -17,6 +17,8 @@ use std::time::{Duration, Instant};
 
 mod common;
 
+use common::{drive_set, DRIVE};
+
 use assert_cmd::Command;
 use integration_tests::wire;
 use model_core::board::link::RX_CAPACITY;
@@ -108,41 +110,11 @@ fn real_firmware_under_qemu() {
     let info: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(info["board"], "STM32F405");
     assert_eq!(info["protocol"], PROTOCOL_VERSION);
-    let o = dev(
-        &q,
-        &[
-            "drive",
-            "set",
-            "--freq",
-            "20000",
-            "--amp-z",
-            "2e-6",
-            "--amp-x",
-            "3e-7",
-            "--offset-z",
-            "4e-6",
-            "--phase-deg",
-            "40",
-        ],
-    );
+    let o = dev(&q, DRIVE);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let before = dev(&q, &["drive", "get"]).stdout;
     // Lift-off refused, nothing changed.
-    let o = dev(
-        &q,
-        &[
-            "drive",
-            "set",
-            "--freq",
-            "20000",
-            "--amp-z",
-            "3.9e-6",
-            "--amp-x",
-            "3e-7",
-            "--offset-z",
-            "4e-6",
-        ],
-    );
+    let o = dev(&q, &drive_set("20000", "3.9e-6", "3e-7", "4e-6", None));
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("lift"));
     assert_eq!(dev(&q, &["drive", "get"]).stdout, before);
@@ -161,23 +133,7 @@ fn real_firmware_under_qemu() {
     // refusing again is refused while that drive is set.
     let o = dev(&q, &["config", "--allow-liftoff"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let o = dev(
-        &q,
-        &[
-            "drive",
-            "set",
-            "--freq",
-            "20000",
-            "--amp-z",
-            "4e-6",
-            "--amp-x",
-            "3e-7",
-            "--offset-z",
-            "4e-6",
-            "--phase-deg",
-            "40",
-        ],
-    );
+    let o = dev(&q, &drive_set("20000", "4e-6", "3e-7", "4e-6", Some("40")));
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let d: Value = serde_json::from_slice(&o.stdout).unwrap();
     let o = dev(&q, &["predict", "--v0", "0.004"]);

@@ -23,20 +23,7 @@ use common::sim::{dev, ok_json, sim_with, Sim};
 fn drive_and_start(s: &Sim, freq: &str) {
     ok_json(
         s,
-        &[
-            "drive",
-            "set",
-            "--freq",
-            freq,
-            "--amp-z",
-            "2e-6",
-            "--amp-x",
-            "3e-7",
-            "--offset-z",
-            "4e-6",
-            "--phase-deg",
-            "40",
-        ],
+        &common::drive_set(freq, "2e-6", "3e-7", "4e-6", Some("40")),
     );
     ok_json(s, &["start"]);
 }
@@ -421,20 +408,7 @@ fn a_velocity_profile_step_acts_like_the_new_constant_velocity() {
             assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
             o.stdout
         };
-        run(&[
-            "drive",
-            "set",
-            "--freq",
-            "20000",
-            "--amp-z",
-            "2e-6",
-            "--amp-x",
-            "3e-7",
-            "--offset-z",
-            "4e-6",
-            "--phase-deg",
-            "40",
-        ]);
+        run(common::DRIVE);
         run(&["start"]);
         let m: Value = serde_json::from_slice(&run(&["measure", "--periods", "300"])).unwrap();
         (m["mu"].as_f64().unwrap(), m["std_error"].as_f64().unwrap())

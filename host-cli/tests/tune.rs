@@ -10,29 +10,7 @@ use serde_json::Value;
 
 mod common;
 
-use common::cli::fricctl;
-
-/// The README's physical scene (`integration_tests::physical_scene`):
-/// μ0 = 0.3, kz = 2e6 N/m, kx = 1.5e6 N/m, uz0 = 5 µm, Δuz = 2 µm,
-/// Δux = 0.7 µm, 40 kHz, φ = 50°; W0 = μ0 kz uz0/kx = 2 µm.
-const PHYS: &[&str] = &[
-    "--mu0",
-    "0.3",
-    "--kz",
-    "2e6",
-    "--kx",
-    "1.5e6",
-    "--uz0",
-    "5e-6",
-    "--duz",
-    "2e-6",
-    "--dux",
-    "0.7e-6",
-    "--freq",
-    "40e3",
-    "--phi-deg",
-    "50",
-];
+use common::cli::{fricctl, PHYS};
 
 fn run(args: &[&str]) -> std::process::Output {
     fricctl()

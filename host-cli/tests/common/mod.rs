@@ -14,6 +14,51 @@ use model_core::protocol::{
     decode, encode, Body, Deframed, Deframer, Frame, Request, CRC, MAX_FRAME, PROTOCOL_VERSION,
 };
 
+/// `drive set` with the devices tests' drive: 20 kHz, Δu_z = 2 µm,
+/// Δu_x = 0.3 µm, u_z0 = 4 µm, φ = 40° (the drive of
+/// [`host_mu_of_test_drive`]).
+pub const DRIVE: &[&str] = &[
+    "drive",
+    "set",
+    "--freq",
+    "20000",
+    "--amp-z",
+    "2e-6",
+    "--amp-x",
+    "3e-7",
+    "--offset-z",
+    "4e-6",
+    "--phase-deg",
+    "40",
+];
+
+/// `device drive set --freq FREQ --amp-z AMP_Z --amp-x AMP_X --offset-z
+/// OFFSET_Z [--phase-deg PHASE_DEG]` (Hz, m, m, m, degrees).
+pub fn drive_set<'a>(
+    freq: &'a str,
+    amp_z: &'a str,
+    amp_x: &'a str,
+    offset_z: &'a str,
+    phase_deg: Option<&'a str>,
+) -> Vec<&'a str> {
+    let mut v = vec![
+        "drive",
+        "set",
+        "--freq",
+        freq,
+        "--amp-z",
+        amp_z,
+        "--amp-x",
+        amp_x,
+        "--offset-z",
+        offset_z,
+    ];
+    if let Some(p) = phase_deg {
+        v.extend(["--phase-deg", p]);
+    }
+    v
+}
+
 /// An encoded request frame.
 pub fn req(seq: u32, r: Request) -> Vec<u8> {
     let mut b = [0u8; MAX_FRAME];

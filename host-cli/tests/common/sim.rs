@@ -13,7 +13,7 @@ use super::cli::fricctl;
 pub struct Sim {
     /// The process.
     pub child: Child,
-    /// The pty's path.
+    /// The pty's path (the TCP address of a `--tcp` sim).
     pub path: String,
 }
 
@@ -31,10 +31,18 @@ pub fn sim() -> Sim {
 
 /// `sim-device --pty --seconds SECONDS` with the plant flags `plant`.
 pub fn sim_with(plant: &[&str], seconds: u32) -> Sim {
+    let s = spawn(&[&["--pty", "--seconds", &seconds.to_string()][..], plant].concat());
+    assert!(s.path.starts_with("/dev/"), "{}", s.path);
+    s
+}
+
+/// `sim-device ARGS`; [`Sim::path`] is the first line it prints (the pty's
+/// path, or the TCP address with `--tcp`).
+pub fn spawn(args: &[&str]) -> Sim {
     let mut child = StdCommand::cargo_bin("fricctl")
         .unwrap()
-        .args(["sim-device", "--pty", "--seconds", &seconds.to_string()])
-        .args(plant)
+        .arg("sim-device")
+        .args(args)
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
@@ -44,7 +52,6 @@ pub fn sim_with(plant: &[&str], seconds: u32) -> Sim {
         .read_line(&mut line)
         .unwrap();
     let path = line.trim().to_string();
-    assert!(path.starts_with("/dev/"), "{path}");
     Sim { child, path }
 }
 
