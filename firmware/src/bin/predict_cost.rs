@@ -193,12 +193,8 @@ fn main() -> ! {
         Err(_) => 0.0,
     };
     let mut plan = None;
-    let t = ticks(|| {
-        plan = Some(model_core::control::plan(
-            &scene, target, 4e-3, 0.0, limit,
-        ))
-    })
-    .saturating_sub(empty);
+    let t = ticks(|| plan = Some(model_core::control::plan(&scene, target, 4e-3, 0.0, limit)))
+        .saturating_sub(empty);
     match plan {
         Some(Ok(p)) => {
             let plan_insn = (t as f32 / per_insn) as u32;
