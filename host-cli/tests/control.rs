@@ -120,3 +120,43 @@ fn closed_loop_over_a_pty() {
         num(&t, "duz")
     );
 }
+
+#[test]
+fn device_tune_maximize_applies_the_phase_and_takes_json_where_a_user_puts_it() {
+    // `device tune --maximize asymmetry --adjust phase --json` (--json after
+    // the tune flags): fricctl tune's f64 search over φ on the device's model,
+    // then SetDrive with that phase. The device produces it within the f32
+    // rounding of φ in radians (SetDrive's field; ulp below 2π is 4.8e-7 rad
+    // = 2.7e-5°) plus the DDS phase resolution 360°/2³² = 8.4e-8°: 1e-4° is
+    // used.
+    let s = sim();
+    ok_json(&s, &drive_set("40000", "1e-6", "3e-7", "4e-6", Some("40")));
+    let o = common::cli::fricctl()
+        .args(["device", "--port", &s.path, "tune"])
+        .args(["--maximize", "asymmetry", "--adjust", "phase", "--json"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let t: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(t["objective"], "asymmetry", "{t}");
+    // The asymmetry is a ratio of the law's limits: in [0, 1].
+    let value = num(&t, "value");
+    assert!((0.0..=1.0).contains(&value), "{t}");
+    let phi = num(&t, "phi_deg");
+    let d = ok_json(&s, &["drive", "get"]);
+    let got = num(&d, "phi_achieved_deg");
+    let diff = (got - phi).rem_euclid(360.0);
+    assert!(
+        diff.min(360.0 - diff) < 1e-4,
+        "tune φ {phi}°, device {got}°"
+    );
+    // A tune flag error: one line, exit 2, no doubled prefix.
+    let o = dev(&s, &["tune", "--maximize", "asymmetry"]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert_eq!(
+        err.trim(),
+        "error: device tune: the following required arguments were not provided: --adjust <ADJUST>"
+    );
+}

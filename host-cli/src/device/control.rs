@@ -740,15 +740,31 @@ pub fn tune(c: &mut Client, a: &DeviceTuneArgs, json: bool) -> CliResult {
         s(render::f32v(margin)),
         "--json".into(),
     ];
-    argv.extend(a.tune.iter().cloned());
+    // `--json` among the tune flags (`device tune … --json`, where a user
+    // puts it) is the device command's own output flag, not a tune flag.
+    let mut json = json;
+    for t in &a.tune {
+        if t == "--json" {
+            json = true;
+        } else {
+            argv.push(t.clone());
+        }
+    }
     let parsed = <TuneOnly as clap::Parser>::try_parse_from(&argv).map_err(|e| {
-        CliError::usage(
-            e.to_string()
-                .lines()
-                .next()
-                .unwrap_or("bad tune flags")
-                .to_string(),
-        )
+        // clap's first line, with the list it announces ("…: --adjust <ADJUST>").
+        let msg = e.to_string();
+        let mut lines = msg.lines().map(str::trim).filter(|l| !l.is_empty());
+        let mut line = lines
+            .next()
+            .unwrap_or("bad tune flags")
+            .trim_start_matches("error: ")
+            .to_string();
+        if line.ends_with(':') {
+            if let Some(next) = lines.next() {
+                line = format!("{line} {next}");
+            }
+        }
+        CliError::usage(format!("device tune: {line}"))
     })?;
     let mut buf = Vec::new();
     parsed.tune.run(&mut buf)?;
@@ -791,9 +807,15 @@ pub fn tune(c: &mut Client, a: &DeviceTuneArgs, json: bool) -> CliResult {
         }
         writeln!(w, "{o}")
     } else {
-        let mu = v["mu"]
-            .as_f64()
-            .map_or(String::new(), |m| format!(", model mu = {m}"));
+        let mu = match (
+            v["mu"].as_f64(),
+            v["objective"].as_str(),
+            v["value"].as_f64(),
+        ) {
+            (Some(m), ..) => format!(", model mu = {m}"),
+            (None, Some(o), Some(x)) => format!(", model {o} = {x} (maximised)"),
+            _ => String::new(),
+        };
         writeln!(
             w,
             "tuned {} on the device's model{mu}; drive set:",
