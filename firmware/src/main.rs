@@ -22,10 +22,15 @@
 //!   interrupt; a few hundred instructions, no model call) and applies the
 //!   command at the next DAC refill. The feedforward's model search runs in
 //!   the main loop on a snapshot (`Server`), with interrupts enabled.
+//! * Under QEMU (`--features qemu`) the DMA streams, DAC and analog world are
+//!   missing: module `qemu` refills the DAC halves from the main loop on a
+//!   SysTick tick and feeds the ADC intake from a simulated plant instead.
 #![no_std]
 #![no_main]
 
 mod panic;
+#[cfg(feature = "qemu")]
+mod qemu;
 
 use core::cell::RefCell;
 
@@ -48,11 +53,7 @@ const HALF: usize = 256;
 /// the 168 MHz core here.
 const FS_HZ: u32 = 500_000;
 /// TIM2 kernel clock: APB1 = 42 MHz, ×2 for timers when APB1 is divided (RM0090 §6.2).
-#[cfg(not(feature = "qemu"))]
 const TIMCLK_HZ: u32 = 84_000_000;
-/// Under QEMU the clock tree is a stub: the 16 MHz HSI stays the system clock.
-#[cfg(feature = "qemu")]
-const TIMCLK_HZ: u32 = 16_000_000;
 /// APB1 clock for the USART baud rate.
 #[cfg(not(feature = "qemu"))]
 const PCLK1_HZ: u32 = 42_000_000;
@@ -225,6 +226,8 @@ fn main() -> ! {
     adc_dma(&dp);
     usart2(&dp);
     tim2(&dp);
+    #[cfg(feature = "qemu")]
+    qemu::tick(&mut cp.SYST);
     watchdog(&dp);
 
     // SAFETY: the handlers only touch state behind critical sections.
@@ -246,11 +249,16 @@ fn main() -> ! {
     );
 
     let mut io = Usart2Link;
+    #[cfg(feature = "qemu")]
+    let mut analog = qemu::Analog::new(cfg);
     loop {
         // Feed the independent watchdog (KR = 0xAAAA, RM0090 §21.4.1).
         dp.IWDG.kr().write(|w| unsafe { w.bits(0xAAAA) });
         // Requests in, answers and telemetry into the transmit ring; never waits.
         link::serve(&mut server, &mut Shared, &mut io, now_us());
+        // QEMU: one due DAC half through the emulated plant (module `qemu`).
+        #[cfg(feature = "qemu")]
+        analog.step();
         // The only wait of the loop: check and WFI with interrupts masked, so
         // a byte that lands after the check still wakes the core (the
         // USART2 handler runs right after the masked section). The
@@ -258,9 +266,18 @@ fn main() -> ! {
         link::sleep_unless(&mut CortexM4, |_| {
             cortex_m::interrupt::free(|cs| {
                 link::has_work(RX.borrow(cs).borrow().len(), TX.borrow(cs).borrow().free())
+                    || analog_due()
             })
         });
     }
+}
+
+/// Whether emulated analog work waits (QEMU only; never on the board).
+fn analog_due() -> bool {
+    #[cfg(feature = "qemu")]
+    return qemu::due();
+    #[cfg(not(feature = "qemu"))]
+    false
 }
 
 /// 168 MHz from an 8 MHz HSE: PLL M = 8, N = 336, P = 2, Q = 7; AHB/1,

@@ -346,6 +346,41 @@ fn main() -> ! {
                 means[1] as f32 * 1e3 / clock * 100.0,
                 means[1] as f32 * 1e4 / clock * 100.0
             );
+            // The QEMU build's plant (module `qemu` of the firmware): one
+            // half-buffer at 40 kHz, 8 sub-steps per sample, fast-f32 sine.
+            {
+                use model_core::board::plant::{HalfDrive, Plant, SampleConditions};
+                let d = HalfDrive {
+                    before: *dds.channels(),
+                    after: *dds.channels(),
+                    acc0: dds.accumulator(),
+                    tw: dds.tuning_word(),
+                };
+                let cfg = device::DeviceConfig::driver_board(1);
+                let mut plant = Plant::<f32>::new(0.24, 1e7, 1e7);
+                let mut out = [(0u16, 0u16); 256];
+                let t = ticks(|| {
+                    plant.run_half::<FastF32>(
+                        &cfg,
+                        &d,
+                        8,
+                        0.0,
+                        |_| SampleConditions {
+                            mu0: 0.24,
+                            v0: 0.004,
+                            counts_z: 0.0,
+                            counts_x: 0.0,
+                        },
+                        &mut out,
+                    )
+                })
+                .saturating_sub(empty);
+                core::hint::black_box(&out);
+                hprintln!(
+                    "QEMU plant (8 sub-steps, fast-f32): {} instructions per sample",
+                    (t as f32 / per_insn / 256.0) as u32
+                );
+            }
             dds.set_interp(model_core::dds::Interp::Nearest);
             let t = ticks(|| dds.fill(&mut buf)).saturating_sub(empty);
             hprintln!(

@@ -1,10 +1,11 @@
 //! The virtual device: the firmware's own device logic and protocol server
-//! (model-core `device`, `server`) plus a simulated plant. The plant is the
-//! paper's spring contact integrated in physical units with 32 sub-steps per
-//! ADC sample, driven by the DDS channels' *current* levels (so ramps act on
-//! it), loaded by a stage sliding at `v0`; its forces go through the ADC
-//! calibrations with optional noise, sample by sample, into the device's
-//! estimator — the same path as on the board.
+//! (model-core `device`, `server`) plus a simulated plant
+//! ([`model_core::board::plant`], the same code the firmware runs under
+//! QEMU): the paper's spring contact integrated in physical units with 32
+//! sub-steps per ADC sample, driven by the DDS channels' *current* levels (so
+//! ramps act on it), loaded by a stage sliding at `v0`; its forces go through
+//! the ADC calibrations with optional noise, sample by sample, into the
+//! device's estimator — the same path as on the board.
 //!
 //! The plant is *not* the device's model: its contact (μ₀, k_z, k_x) is its
 //! own ([`PlantOptions`], default equal to the device's power-up contact
@@ -22,18 +23,19 @@
 
 use std::f64::consts::TAU;
 
-use model_core::dds::{phase_rad, SineTable};
+use model_core::board::plant::{HalfDrive, Noise, Plant, SampleConditions};
+use model_core::dds::SineTable;
 use model_core::device::{Contact, Device, DeviceConfig, DriveSetting};
-use model_core::fixed_step::SpringContact;
 use model_core::protocol::Info;
 use model_core::server::Server;
+use model_core::Libm;
 
 /// Table size of the virtual device (as the firmware).
 pub const TABLE_N: usize = 1024;
 /// Samples per half-buffer (as the firmware: 256, 512 µs at 500 kS/s).
 pub const HALF: usize = 256;
 /// Sub-steps of the plant per ADC sample.
-const SUB: usize = 32;
+const SUB: u32 = 32;
 
 /// The virtual board's configuration: the driver board's (model-core), with
 /// the plant sampled at each sample's own drive phase (no DAC lag).
@@ -241,38 +243,18 @@ pub fn read_profile(path: &std::path::Path) -> crate::error::CliResult<Vec<(f64,
 pub struct VirtualDevice {
     dev: Device<'static, TABLE_N>,
     server: Server,
-    plant: Plant,
+    plant: Plant<f64>,
     dac: Vec<u32>,
     half: usize,
-    rng: u64,
+    rng: Noise,
     opts: PlantOptions,
     /// Samples produced since the device was made.
     samples: u64,
     /// Fills made ahead of the half-buffer being simulated (0: fill, then
     /// simulate it; the board: 2, see [`VirtualDevice::set_fill_lead`]).
     fill_lead: usize,
-    /// Filled half-buffers not yet simulated: (levels before, levels after,
-    /// accumulator and tuning word at the fill, half index).
-    filled: std::collections::VecDeque<Filled>,
-}
-
-/// A filled half-buffer waiting to be simulated.
-#[derive(Clone, Copy)]
-struct Filled {
-    before: [model_core::dds::Channel; 2],
-    after: [model_core::dds::Channel; 2],
-    acc0: u32,
-    tw: u32,
-    half: usize,
-}
-
-struct Plant {
-    /// The contact (model-core's scheme in physical units).
-    contact: SpringContact<f64>,
-    /// Stage position ∫v0 dt, m.
-    stage: f64,
-    /// The transducers' amplitudes Δu_z, Δu_x now (lagging the DAC's), m.
-    amp: (f64, f64),
+    /// Filled half-buffers not yet simulated, with their half index.
+    filled: std::collections::VecDeque<(HalfDrive, usize)>,
 }
 
 impl VirtualDevice {
@@ -294,14 +276,10 @@ impl VirtualDevice {
         let mut v = VirtualDevice {
             dev,
             server: Server::new(info(&cfg)),
-            plant: Plant {
-                contact: SpringContact::new(opts.mu0, opts.kz, opts.kx),
-                stage: 0.0,
-                amp: (0.0, 0.0),
-            },
+            plant: Plant::new(opts.mu0, opts.kz, opts.kx),
             dac: vec![0; HALF],
             half: 0,
-            rng: 0x9E37_79B9_7F4A_7C15,
+            rng: Noise::new(0x9E37_79B9_7F4A_7C15),
             opts,
             samples: 0,
             fill_lead: 0,
@@ -405,120 +383,59 @@ impl VirtualDevice {
     }
 
     fn noise(&mut self) -> f64 {
-        self.rng ^= self.rng << 13;
-        self.rng ^= self.rng >> 7;
-        self.rng ^= self.rng << 17;
-        let u = (self.rng >> 11) as f64 / (1u64 << 53) as f64;
-        (2.0 * u - 1.0) * self.opts.noise_counts
+        self.rng.uniform(self.opts.noise_counts)
     }
 
     /// Makes DAC fills until `fill_lead + 1` halves wait to be simulated.
     fn fill_ahead(&mut self) {
         while self.filled.len() <= self.fill_lead {
-            let before = *self.dev.dds().channels();
-            let acc0 = self.dev.dds().accumulator();
-            let tw = self.dev.dds().tuning_word();
             let half = self.half;
             let mut buf = std::mem::take(&mut self.dac);
-            self.dev.fill_dac(half, &mut buf);
+            let d = HalfDrive::fill(&mut self.dev, half, &mut buf);
             self.dac = buf;
-            self.filled.push_back(Filled {
-                before,
-                after: *self.dev.dds().channels(),
-                acc0,
-                tw,
-                half,
-            });
+            self.filled.push_back((d, half));
             self.half ^= 1;
         }
     }
 
     fn step_half(&mut self) {
-        let cfg = *self.dev.config();
         self.fill_ahead();
-        let Some(Filled {
-            before: ch,
-            after: end,
-            acc0,
-            tw,
-            half,
-        }) = self.filled.pop_front()
-        else {
+        let Some((d, half)) = self.filled.pop_front() else {
             return;
         };
-        let (mz, mx) = (
-            f64::from(cfg.dac_z.metres_per_code),
-            f64::from(cfg.dac_x.metres_per_code),
-        );
-        let uz0 = (f64::from(ch[0].dc) - f64::from(cfg.dac_z.zero_code)) * mz;
-        // The DDS ramps its levels during the fill (at the slew rate): the
-        // transducers' drive moves linearly from the levels before the fill to
-        // those after it across the half-buffer.
-        let (duz_a, dux_a) = (f64::from(ch[0].amp) * mz, f64::from(ch[1].amp) * mx);
-        let (duz_b, dux_b) = (f64::from(end[0].amp) * mz, f64::from(end[1].amp) * mx);
-        let dac_at = |i: usize| {
-            let w = i as f64 / HALF as f64;
-            (duz_a + (duz_b - duz_a) * w, dux_a + (dux_b - dux_a) * w)
-        };
-        let (duz_dac, dux_dac) = dac_at(0);
-        // ch1 = dc + amp·sin(θ + p1), ch2 = zero + amp·sin(θ + p2): u_z = u_z0 + Δu_z sin(θ + p1),
-        // u_x = Δu_x sin(θ + p2) (the device sets p1 = −π/2, p2 = φ + π/2).
-        let (p1, p2) = (phase_rad(ch[0].phase), phase_rad(ch[1].phase));
-        let ts = 1.0 / cfg.sample_rate_hz;
-        let dt = ts / SUB as f64;
-        let dtheta = TAU * f64::from(tw) / 4_294_967_296.0;
         // Amplitude lag per sample: exact solution of dA/dt = (A_DAC − A)/τ
         // over one sample with A_DAC constant, τ = lag_periods/f = lag_periods·2π/(dθ·f_s).
+        let dtheta = d.dtheta();
         let keep = if self.opts.lag_periods > 0.0 && dtheta > 0.0 {
             (-dtheta / (TAU * self.opts.lag_periods)).exp()
         } else {
             0.0
         };
-        if keep == 0.0 {
-            // No lag: the transducers follow the DAC exactly.
-            self.plant.amp = (duz_dac, dux_dac);
-        }
-        let mut samples = Vec::with_capacity(HALF);
-        let mut th = phase_rad(acc0);
-        for i in 0..HALF {
-            let t_s = (self.samples + i as u64) as f64 * ts;
-            self.plant.contact.mu0 = self.opts.mu0_at(t_s);
-            let v0 = self.opts.v0_at(t_s);
-            let (duz, dux) = self.plant.amp;
-            // The sample is taken at θ; then the plant advances to the next tick.
-            let uz = uz0 + duz * (th + p1).sin();
-            let ux = dux * (th + p2).sin() + self.plant.stage;
-            let (fx, fz) = self.plant.contact.step(ux, uz);
-            let z = (fz / f64::from(cfg.adc_z.gain)
-                + f64::from(cfg.adc_z.offset)
-                + self.opts.offset_counts
-                + self.noise())
-            .round()
-            .clamp(0.0, 4095.0);
-            let x = (fx / f64::from(cfg.adc_x.gain)
-                + f64::from(cfg.adc_x.offset)
-                + self.opts.offset_counts
-                + self.noise())
-            .round()
-            .clamp(0.0, 4095.0);
-            samples.push((x as u16, z as u16));
-            // Sub-steps to the next sample (the paper's scheme on a finer grid).
-            for k in 1..=SUB {
-                let t = th + dtheta * k as f64 / SUB as f64;
-                self.plant.stage += v0 * dt;
-                self.plant.contact.step(
-                    dux * (t + p2).sin() + self.plant.stage,
-                    uz0 + duz * (t + p1).sin(),
-                );
-            }
-            th += dtheta;
-            // The transducers move towards the DAC's amplitudes for the next sample.
-            let (duz_dac, dux_dac) = dac_at(i + 1);
-            self.plant.amp = (
-                duz_dac + (duz - duz_dac) * keep,
-                dux_dac + (dux - dux_dac) * keep,
-            );
-        }
+        let ts = 1.0 / self.sample_rate();
+        let t0 = self.samples;
+        let offset = self.opts.offset_counts;
+        let mut samples = [(0u16, 0u16); HALF];
+        let cfg = *self.dev.config();
+        let mut plant = self.plant;
+        plant.run_half::<Libm>(
+            &cfg,
+            &d,
+            SUB,
+            keep,
+            |i| {
+                let t_s = (t0 + i as u64) as f64 * ts;
+                let counts_z = offset + self.noise();
+                let counts_x = offset + self.noise();
+                SampleConditions {
+                    mu0: self.opts.mu0_at(t_s),
+                    v0: self.opts.v0_at(t_s),
+                    counts_z,
+                    counts_x,
+                }
+            },
+            &mut samples,
+        );
+        self.plant = plant;
         self.dev.adc_block(half, &samples);
         self.samples += HALF as u64;
     }

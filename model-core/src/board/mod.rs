@@ -14,7 +14,9 @@
 //! * [`server`] — the device side of the protocol, with the session state
 //!   (idempotent `Measure`, the stream, `Reset`);
 //! * [`link`] — the firmware's serial link: queues, one loop pass, sleeping
-//!   without a lost wake-up.
+//!   without a lost wake-up;
+//! * [`plant`] — the simulated analog side (transducers, contact, force
+//!   sensors) of the host's virtual device and of the firmware under QEMU.
 //!
 //! **Dependencies.** The board uses [`crate::model`] (scene, solvers, regimes)
 //! and nothing uses the board from inside the model.
@@ -24,5 +26,6 @@ pub mod dds;
 pub mod device;
 pub mod estimator;
 pub mod link;
+pub mod plant;
 pub mod protocol;
 pub mod server;

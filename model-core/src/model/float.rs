@@ -73,6 +73,9 @@ pub trait Float:
     fn to_f64(self) -> f64;
     /// Conversion of a count (exact up to 2²⁴ for `f32`, 2⁵³ for `f64`).
     fn from_u32(n: u32) -> Self;
+    /// Truncation towards zero to a count, saturating at 0 and `u32::MAX`
+    /// (NaN gives 0): Rust's `as` cast.
+    fn to_u32(self) -> u32;
     /// `true` unless NaN or ±∞.
     fn is_finite(self) -> bool;
     /// `true` for NaN.
@@ -137,6 +140,10 @@ macro_rules! impl_float {
             #[inline(always)]
             fn from_u32(n: u32) -> Self {
                 n as $t
+            }
+            #[inline(always)]
+            fn to_u32(self) -> u32 {
+                self as u32
             }
             #[inline(always)]
             fn is_finite(self) -> bool {

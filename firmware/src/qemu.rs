@@ -1,0 +1,158 @@
+//! QEMU only (`--features qemu`): the analog side the emulated chip lacks.
+//!
+//! QEMU's netduinoplus2 models the STM32F405's USART, TIM2–5 and ADC
+//! registers, but its DMA controllers and DAC are stubs that never transfer
+//! nor interrupt, so on the emulated chip neither the DDS refill nor the ADC
+//! intake (both run from DMA half-transfer interrupts on the board) would
+//! ever happen, and no measurement could close. This module stands in for
+//! the DMA streams and the analog world:
+//! * SysTick interrupts once per half-buffer, `HALF/FS_HZ` = 512 µs of
+//!   emulated time, and counts a half as due;
+//! * the main loop then refills the next DAC half through the same
+//!   [`Device::fill_dac`](model_core::device::Device::fill_dac) the DMA
+//!   interrupt calls on the board, runs the plant of
+//!   [`model_core::board::plant`] (the same code as the host's virtual
+//!   device) on what that half drives, and hands the samples to
+//!   [`Device::adc_block`](model_core::device::Device::adc_block) as the
+//!   ADC interrupt does. Device time (the protocol's clock, ramps,
+//!   measurement windows) counts the halves so processed: when the emulated
+//!   core cannot keep up with 512 µs per half, device time runs slower than
+//!   the host's clock and nothing is skipped.
+//!
+//! The plant is the true contact, deliberately *not* the device's model
+//! (μ₀ 0.3, k_z = k_x = 10⁷ N/m at power-up): μ₀ = [`PLANT_MU0`],
+//! k_z = k_x = 10⁷ N/m, the stage sliding at [`PLANT_V0`], no transducer lag,
+//! ADC noise uniform in ±[`ADC_NOISE_COUNTS`] (as the virtual device's
+//! default), rounded to whole counts. It runs in
+//! `f32` with the FastF32 sine, [`SUB`] sub-steps per sample.
+
+use core::sync::atomic::{AtomicU32, Ordering};
+
+use model_core::board::plant::{HalfDrive, Noise, Plant, SampleConditions};
+use model_core::device::DeviceConfig;
+use model_core::float::FastF32;
+use cortex_m::peripheral::{syst::SystClkSource, SYST};
+use cortex_m_rt::exception;
+
+use crate::{DEVICE, FS_HZ, HALF, HALVES};
+
+/// The plant's true friction coefficient (the device's model says 0.3 until
+/// `scene set` changes it).
+pub const PLANT_MU0: f32 = 0.24;
+/// The plant's true normal and tangential stiffness, N/m.
+pub const PLANT_K: f32 = 1e7;
+/// Stage velocity v₀, m/s (`sweep --v0 0.004` predicts at the same).
+pub const PLANT_V0: f32 = 0.004;
+/// ADC noise, ± counts (uniform; the virtual device's default).
+pub const ADC_NOISE_COUNTS: f32 = 1.0;
+/// Plant sub-steps per ADC sample: 8·12.5 = 100 steps per 40 kHz period,
+/// whose fixed-step error ≈ 10·(1+b)/100² = 1e-3·(1+b) of μ₀.
+pub const SUB: u32 = 8;
+/// The core clock of QEMU's netduinoplus2 (`hw/arm/netduinoplus2.c`:
+/// SYSCLK_FRQ = 168 MHz), which SysTick counts. QEMU's model of TIM2 is not
+/// used: its update rate did not follow PSC/ARR here (QEMU 10.0, ≈ 14 times
+/// slower than programmed).
+const QEMU_SYSCLK_HZ: u32 = 168_000_000;
+
+/// Half-buffers whose 512 µs have passed and that are not yet processed.
+static DUE: AtomicU32 = AtomicU32::new(0);
+
+/// Whether a half-buffer is waiting (the main loop must not sleep).
+pub fn due() -> bool {
+    DUE.load(Ordering::Relaxed) > 0
+}
+
+/// SysTick on the core clock: one exception per half-buffer.
+pub fn tick(syst: &mut SYST) {
+    syst.set_clock_source(SystClkSource::Core);
+    syst.set_reload(QEMU_SYSCLK_HZ / FS_HZ * HALF as u32 - 1);
+    syst.clear_current();
+    syst.enable_interrupt();
+    syst.enable_counter();
+}
+
+#[exception]
+fn SysTick() {
+    // At most two halves queued: a core that falls behind slows device time
+    // rather than bursting through a backlog.
+    let _ = DUE.fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| {
+        (n < 2).then_some(n + 1)
+    });
+}
+
+/// The emulated analog side: the DAC half being refilled and the plant.
+pub struct Analog {
+    plant: Plant<f32>,
+    dac: [u32; HALF],
+    samples: [(u16, u16); HALF],
+    noise: Noise,
+    half: usize,
+    cfg: DeviceConfig,
+}
+
+impl Analog {
+    /// The plant at rest.
+    pub fn new(cfg: DeviceConfig) -> Self {
+        Analog {
+            plant: Plant::new(PLANT_MU0, PLANT_K, PLANT_K),
+            dac: [0; HALF],
+            samples: [(0, 0); HALF],
+            noise: Noise::new(0x9E37_79B9_7F4A_7C15),
+            half: 0,
+            cfg,
+        }
+    }
+
+    /// Processes one due half-buffer, if any: DAC refill, plant, ADC block.
+    pub fn step(&mut self) {
+        if DUE
+            .fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| n.checked_sub(1))
+            .is_err()
+        {
+            return;
+        }
+        let half = self.half;
+        self.half ^= 1;
+        let dac = &mut self.dac;
+        let Some((d, quiescent)) = cortex_m::interrupt::free(|cs| {
+            DEVICE.borrow(cs).borrow_mut().as_mut().map(|dev| {
+                let s = dev.status();
+                let d = HalfDrive::fill(dev, half, dac);
+                (d, !s.running && s.settled && !s.measuring)
+            })
+        }) else {
+            return;
+        };
+        HALVES.fetch_add(1, Ordering::Relaxed);
+        // Drive stopped and settled, nothing measuring: the samples reach
+        // nothing, so the plant is not run (the emulator idles); the ADC
+        // block keeps its place in the fill/block sequence.
+        if !quiescent {
+            // With interrupts enabled: the link stays served meanwhile.
+            self.run_plant(&d);
+        }
+        let samples = &self.samples;
+        cortex_m::interrupt::free(|cs| {
+            if let Some(dev) = DEVICE.borrow(cs).borrow_mut().as_mut() {
+                dev.adc_block(half, samples);
+            }
+        });
+    }
+
+    fn run_plant(&mut self, d: &HalfDrive) {
+        let noise = &mut self.noise;
+        self.plant.run_half::<FastF32>(
+            &self.cfg,
+            d,
+            SUB,
+            0.0,
+            |_| SampleConditions {
+                mu0: PLANT_MU0,
+                v0: PLANT_V0,
+                counts_z: noise.uniform(ADC_NOISE_COUNTS),
+                counts_x: noise.uniform(ADC_NOISE_COUNTS),
+            },
+            &mut self.samples,
+        );
+    }
+}
