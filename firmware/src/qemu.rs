@@ -28,11 +28,11 @@
 
 use core::sync::atomic::{AtomicU32, Ordering};
 
+use cortex_m::peripheral::{syst::SystClkSource, SYST};
+use cortex_m_rt::exception;
 use model_core::board::plant::{HalfDrive, Noise, Plant, SampleConditions};
 use model_core::device::DeviceConfig;
 use model_core::float::FastF32;
-use cortex_m::peripheral::{syst::SystClkSource, SYST};
-use cortex_m_rt::exception;
 
 use crate::{DEVICE, FS_HZ, HALF, HALVES};
 

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 mod common;
 
 use common::sim::{dev, ok_json, sim, spawn, Sim};
-use common::{drive_set, DRIVE};
+use common::{drive_set, signal_and_wait, DRIVE};
 
 use assert_cmd::cargo::CommandCargoExt;
 use assert_cmd::Command;
@@ -411,33 +411,6 @@ const INFO_KEYS: &[&str] = &[
     "byte_timeout_us",
     "retract_z_m",
 ];
-
-/// Sends `signal` (`kill SIGNAL PID`) to `child` and waits for it to end,
-/// failing if it takes longer than `limit_s` seconds ("`what` ignored …").
-fn signal_and_wait(
-    child: &mut std::process::Child,
-    signal: &str,
-    limit_s: u64,
-    what: &str,
-) -> std::process::ExitStatus {
-    let k = StdCommand::new("kill")
-        .args([signal, &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(k.success());
-    let t = Instant::now();
-    loop {
-        if let Some(st) = child.try_wait().unwrap() {
-            break st;
-        }
-        assert!(
-            t.elapsed() < Duration::from_secs(limit_s),
-            "{what} ignored SIG{}",
-            &signal[1..]
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
 
 const DRIVE_KEYS: &[&str] = &[
     "freq",

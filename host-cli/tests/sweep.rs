@@ -17,6 +17,7 @@ use serde_json::Value;
 
 mod common;
 
+use common::fit;
 use common::sim::{dev, ok_json, sim_with, Sim};
 
 /// Sets the drive (f in Hz, φ = 40°) and starts it.
@@ -46,19 +47,6 @@ fn sweep_args<'a>(csv: &'a str, points: &'a str) -> Vec<&'a str> {
         "--csv",
         csv,
     ]
-}
-
-fn fit(csv: &Path, params: &str, out: &Path) -> Value {
-    let o = Command::cargo_bin("fricctl")
-        .unwrap()
-        .args(["fit", "--json", "--params", params, "--data"])
-        .arg(csv)
-        .arg("--out")
-        .arg(out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    serde_json::from_slice(&o.stdout).unwrap()
 }
 
 fn rows(csv: &Path) -> Vec<csv::StringRecord> {

@@ -150,3 +150,44 @@ pub fn host_mu_of_test_drive() -> serde_json::Value {
     assert!(m.status.success(), "{}", String::from_utf8_lossy(&m.stderr));
     serde_json::from_slice(&m.stdout).unwrap()
 }
+
+/// Sends `signal` (`kill SIGNAL PID`) to `child` and waits for it to end,
+/// failing if it takes longer than `limit_s` seconds ("`what` ignored …").
+pub fn signal_and_wait(
+    child: &mut std::process::Child,
+    signal: &str,
+    limit_s: u64,
+    what: &str,
+) -> std::process::ExitStatus {
+    let k = std::process::Command::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(k.success());
+    let t = std::time::Instant::now();
+    loop {
+        if let Some(st) = child.try_wait().unwrap() {
+            break st;
+        }
+        assert!(
+            t.elapsed() < std::time::Duration::from_secs(limit_s),
+            "{what} ignored SIG{}",
+            &signal[1..]
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
+/// `fricctl fit --json --params PARAMS --data CSV --out OUT`, which must succeed.
+pub fn fit(csv: &std::path::Path, params: &str, out: &std::path::Path) -> serde_json::Value {
+    let o = assert_cmd::Command::cargo_bin("fricctl")
+        .unwrap()
+        .args(["fit", "--json", "--params", params, "--data"])
+        .arg(csv)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_slice(&o.stdout).unwrap()
+}

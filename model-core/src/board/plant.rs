@@ -13,10 +13,15 @@
 //! sample). The normal displacement is u_z = u_z0 + Δu_z sin(θ + p₁), the
 //! tangential u_x = Δu_x sin(θ + p₂) relative to the stage (the device sets
 //! p₁ = −π/2, p₂ = φ + π/2, so these are eqs. 1–2 of the paper). The contact
-//! is the paper's spring scheme ([`SpringContact`], eqs. 3–5) in the stage's
-//! frame: the stage moving at `v0` shifts the contact point by −v0·dt per
-//! step, so no coordinate grows with time (an `f32` plant keeps its
-//! resolution for hours). Sample `i` is taken at the phase of DAC word
+//! is the paper's spring scheme ([`SpringContact`], eqs. 3–5) in the frame
+//! of the stage's position at the start of the half-buffer: within the half
+//! the stage's travel s(t) = Σ v0·dt is added to u_x (a fresh product per
+//! sub-step, no growing sum of tiny increments), and at the end of the half
+//! the contact point is moved into the next half's frame (u_x,c −= s). So no
+//! coordinate grows with time and no per-step increment is lost to rounding:
+//! an `f32` plant keeps its resolution for hours (a contact point of ~1 µm
+//! has a 1e-13 m ulp, a tenth of a sub-step's travel of 1e-9 m at 4 mm/s —
+//! subtracting the travel from it step by step would round it systematically). Sample `i` is taken at the phase of DAC word
 //! `i − adc_lag_samples` ([`DeviceConfig::adc_lag_samples`]), converted by
 //! the ADC calibrations (counts = F/gain + offset, rounded, clamped to
 //! 0…full scale); then the plant advances to the next tick in `sub`
@@ -79,7 +84,11 @@ impl Noise {
     /// A generator from a non-zero seed (0 is replaced by a fixed one).
     pub const fn new(seed: u64) -> Self {
         Noise {
-            state: if seed == 0 { 0x9E37_79B9_7F4A_7C15 } else { seed },
+            state: if seed == 0 {
+                0x9E37_79B9_7F4A_7C15
+            } else {
+                seed
+            },
         }
     }
 
@@ -111,7 +120,7 @@ pub struct SampleConditions<F> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Plant<F> {
     /// The true contact (μ₀, k_z, k_x in N/m) and its contact point relative
-    /// to the stage, m.
+    /// to the stage at the start of the next half-buffer, m.
     pub contact: SpringContact<F>,
     /// Transducer amplitudes (Δu_z, Δu_x) now, m.
     pub amp: (F, F),
@@ -157,14 +166,14 @@ impl<F: Float> Plant<F> {
         // The sub-step rotation: (sin, cos) of θ advanced by dθ/sub.
         let (sd, cd) = M::sin_cos(F::from_f64(d.dtheta() / f64::from(sub)));
         let rad = F::from_f64(RAD_PER_WORD);
-        let word0 = d
-            .acc0
-            .wrapping_sub(cfg.adc_lag_samples.wrapping_mul(d.tw));
+        let word0 = d.acc0.wrapping_sub(cfg.adc_lag_samples.wrapping_mul(d.tw));
         let (zg, zo) = (f(cfg.adc_z.gain), f(cfg.adc_z.offset));
         let (xg, xo) = (f(cfg.adc_x.gain), f(cfg.adc_x.offset));
         let full = F::from_u32(u32::from(cfg.adc_full_scale));
         // Rounded to the nearest count (ties up) and clamped, all in F.
         let counts = |v: F| (v.max(F::ZERO).min(full) + F::HALF).to_u32() as u16;
+        // The stage's travel since the start of the half, m.
+        let mut travel = F::ZERO;
         for (i, o) in out.iter_mut().enumerate() {
             let c = at(i);
             self.contact.mu0 = c.mu0;
@@ -173,23 +182,26 @@ impl<F: Float> Plant<F> {
             let w = word0.wrapping_add((i as u32).wrapping_mul(d.tw));
             let (mut s1, mut c1) = M::sin_cos(F::from_u32(w.wrapping_add(p1)) * rad);
             let (mut s2, mut c2) = M::sin_cos(F::from_u32(w.wrapping_add(p2)) * rad);
-            let (fx, fz) = self.contact.step(dux * s2, uz0 + duz * s1);
+            let (fx, fz) = self.contact.step(dux * s2 + travel, uz0 + duz * s1);
             *o = (
                 counts(fx / xg + xo + c.counts_x),
                 counts(fz / zg + zo + c.counts_z),
             );
             // Sub-steps to the next tick, the stage moving on meanwhile.
-            let shift = c.v0 * dt;
-            for _ in 0..sub {
+            let step = c.v0 * dt;
+            for j in 1..=sub {
                 (s1, c1) = (s1 * cd + c1 * sd, c1 * cd - s1 * sd);
                 (s2, c2) = (s2 * cd + c2 * sd, c2 * cd - s2 * sd);
-                self.contact.uxc = self.contact.uxc - shift;
-                self.contact.step(dux * s2, uz0 + duz * s1);
+                let x = travel + step * F::from_u32(j);
+                self.contact.step(dux * s2 + x, uz0 + duz * s1);
             }
+            travel = travel + step * F::from_u32(sub);
             // The transducers move towards the DAC's amplitudes for the next sample.
             let w = F::from_u32(i as u32 + 1);
             let (tz, tx) = (duz_a + ddz * w, dux_a + ddx * w);
             self.amp = (tz + (duz - tz) * keep, tx + (dux - tx) * keep);
         }
+        // Into the frame of the next half's start.
+        self.contact.uxc = self.contact.uxc - travel;
     }
 }
