@@ -195,13 +195,13 @@ impl<F: Float> Plant<F> {
                 let x = travel + step * F::from_u32(j);
                 self.contact.step(dux * s2 + x, uz0 + duz * s1);
             }
-            travel = travel + step * F::from_u32(sub);
+            travel += step * F::from_u32(sub);
             // The transducers move towards the DAC's amplitudes for the next sample.
             let w = F::from_u32(i as u32 + 1);
             let (tz, tx) = (duz_a + ddz * w, dux_a + ddx * w);
             self.amp = (tz + (duz - tz) * keep, tx + (dux - tx) * keep);
         }
         // Into the frame of the next half's start.
-        self.contact.uxc = self.contact.uxc - travel;
+        self.contact.uxc -= travel;
     }
 }
