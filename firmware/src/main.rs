@@ -45,8 +45,8 @@ use model_core::protocol::{Info, PROTOCOL_VERSION};
 use model_core::server::{DeviceAccess, Server};
 use stm32f4::stm32f405::{self as pac, interrupt, Interrupt};
 
-/// Samples per DMA half-buffer (512 µs at 500 kS/s).
-const HALF: usize = 256;
+/// Samples per DMA half-buffer (model-core's `HALF_BUFFER`: 64, 128 µs at 500 kS/s).
+const HALF: usize = model_core::device::HALF_BUFFER;
 /// DDS/ADC sample rate: 12.5 samples per period at 40 kHz. The DDS refill costs
 /// 97 instructions per sample once settled (125 while ramping; measured under
 /// QEMU at `opt-level = "z"`, see `src/bin/predict_cost.rs`), i.e. ≈ 29 % of
@@ -63,7 +63,7 @@ const TABLE_N: usize = 1024;
 
 static mut DAC_BUF: [u32; 2 * HALF] = [0; 2 * HALF];
 /// DAC half-buffers refilled since power-up: the server's clock (one half =
-/// `HALF/FS_HZ` = 512 µs) for the protocol's inter-byte timeout.
+/// `HALF/FS_HZ` = 128 µs) for the protocol's inter-byte timeout.
 static HALVES: core::sync::atomic::AtomicU32 = core::sync::atomic::AtomicU32::new(0);
 
 /// Microseconds since power-up (wrapping), at the resolution of one half-buffer.

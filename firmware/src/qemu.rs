@@ -6,7 +6,7 @@
 //! intake (both run from DMA half-transfer interrupts on the board) would
 //! ever happen, and no measurement could close. This module stands in for
 //! the DMA streams and the analog world:
-//! * SysTick interrupts once per half-buffer, `HALF/FS_HZ` = 512 µs of
+//! * SysTick interrupts once per half-buffer, `HALF/FS_HZ` = 128 µs of
 //!   emulated time, and counts a half as due;
 //! * the main loop then refills the next DAC half through the same
 //!   [`Device::fill_dac`](model_core::device::Device::fill_dac) the DMA
@@ -16,7 +16,7 @@
 //!   [`Device::adc_block`](model_core::device::Device::adc_block) as the
 //!   ADC interrupt does. Device time (the protocol's clock, ramps,
 //!   measurement windows) counts the halves so processed: when the emulated
-//!   core cannot keep up with 512 µs per half, device time runs slower than
+//!   core cannot keep up with 128 µs per half, device time runs slower than
 //!   the host's clock and nothing is skipped.
 //!
 //! The plant is the true contact, deliberately *not* the device's model
@@ -54,7 +54,7 @@ pub const SUB: u32 = 8;
 /// slower than programmed).
 const QEMU_SYSCLK_HZ: u32 = 168_000_000;
 
-/// Half-buffers whose 512 µs have passed and that are not yet processed.
+/// Half-buffers whose 128 µs have passed and that are not yet processed.
 static DUE: AtomicU32 = AtomicU32::new(0);
 
 /// Whether a half-buffer is waiting (the main loop must not sleep).

@@ -182,9 +182,9 @@ fn main() -> ! {
     );
 
     // The closed loop (model-core `board::control`): the plan (feedforward
-    // search, once per setpoint) and one update (eqs. C1–C4, once per ADC
-    // half-buffer of 256 samples at 500 kS/s = 0.512 ms = 86 016 cycles at
-    // 168 MHz). The estimate the update uses is the estimator's, not counted.
+    // search, once per setpoint) and one update (eqs. C1–C4, at most once
+    // per ADC half-buffer of 64 samples at 500 kS/s = 0.128 ms = 21 504
+    // cycles at 168 MHz). The estimate the update uses is the estimator's, not counted.
     // Target μ*: the model's μ at this drive's Δu_z and 4 mm/s (reachable by
     // construction); the search starts from Δu_z = 0.
     let limit = 0.95 * params.uz0;
@@ -204,14 +204,14 @@ fn main() -> ! {
             };
             let mut ctl = model_core::control::Controller::new(p, gains, params.duz);
             let mut out = None;
-            let t = ticks(|| out = Some(core::hint::black_box(ctl.update(0.24, 0.512e-3))))
+            let t = ticks(|| out = Some(core::hint::black_box(ctl.update(0.24, 0.384e-3))))
                 .saturating_sub(empty);
             let upd = (t as f32 / per_insn) as u32;
             hprintln!(
-                "closed loop: plan (feedforward search, per setpoint) {} instructions; update {} instructions = {}% of a 0.512 ms half-buffer at 168 MHz",
+                "closed loop: plan (feedforward search, per setpoint) {} instructions; update {} instructions = {}% of a 0.128 ms half-buffer at 168 MHz",
                 plan_insn,
                 upd,
-                upd as f32 * 100.0 / 86_016.0
+                upd as f32 * 100.0 / 21_504.0
             );
         }
         _ => hprintln!("closed loop: the plan was refused for this scene"),

@@ -675,11 +675,12 @@ fn chart(
         size: (1200, 900),
         legend: Vec::new(),
         caption: vec![format!(
-            "fricctl device control-bench --fill-lead {}: settling to 2 % after the setpoint step {} periods ({} ms); DAC fills {} half-buffers of 256 samples ahead",
+            "fricctl device control-bench --fill-lead {}: settling to 2 % after the setpoint step {} periods ({} ms); DAC fills {} half-buffers of {} samples ahead",
             o.fill_lead,
             opt(o.events[1].settle_periods, 0),
             opt(o.events[1].settle_ms, 3),
-            o.fill_lead
+            o.fill_lead,
+            o.half_buffer_samples
         )],
     };
     render_figure(path, &fig)

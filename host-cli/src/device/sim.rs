@@ -32,8 +32,8 @@ use model_core::Libm;
 
 /// Table size of the virtual device (as the firmware).
 pub const TABLE_N: usize = 1024;
-/// Samples per half-buffer (as the firmware: 256, 512 µs at 500 kS/s).
-pub const HALF: usize = 256;
+/// Samples per half-buffer (the firmware's, [`model_core::device::HALF_BUFFER`]).
+pub const HALF: usize = model_core::device::HALF_BUFFER;
 /// Sub-steps of the plant per ADC sample.
 const SUB: u32 = 32;
 

@@ -16,10 +16,15 @@
 //! DAC's refill of the same boundary runs first), so a command computed from
 //! block `n` reaches the output at fill `n + 3`; in the virtual device (by
 //! default) at fill `n + 1`. An estimate is used only if its block's fill
-//! had the latest command (`u_n = u_latest`, "fresh"); estimates of blocks
-//! still running an older command are dropped, so no update acts on an
-//! error its predecessor already corrected. The update interval is
-//! therefore one half-buffer in the virtual device and three on the board.
+//! had the latest command with the normal channel's amplitude already at it
+//! (`u_n = u_latest`, not ramping at the slew rate: "fresh"); estimates of
+//! blocks still running an older command, or ramping towards the new one,
+//! are dropped, so no update acts on an error its predecessor already
+//! corrected. The update interval is therefore at least one half-buffer in
+//! the virtual device and three on the board (3 × 128 µs with
+//! [`super::HALF_BUFFER`] = 64), longer while a large change ramps (1 µm per
+//! ms): with 128 µs blocks, estimates taken mid-ramp made the integral
+//! overshoot a setpoint step by 24 % (`fricctl device control-bench`).
 //! (A Smith predictor `μ̂ + s·(u_latest − u_n)` was tried instead: with the
 //! plant's gain about half the model's it over-corrected and settled slower.)
 //! The estimator is the loop's while it runs (`Measure`, `Stream` and
@@ -286,7 +291,14 @@ impl<const N: usize> Device<'_, N> {
                 self.drive.amp_z_m = u;
             }
         }
-        l.at_fill[fill as usize % FILL_RING] = self.drive.amp_z_m;
+        // The command in force, if the normal channel has reached it (a level
+        // settled before a fill stays settled through it); NaN while it
+        // still ramps at the slew rate: that block's estimate is not fresh.
+        l.at_fill[fill as usize % FILL_RING] = if self.dds.channels()[0].settled() {
+            self.drive.amp_z_m
+        } else {
+            f32::NAN
+        };
     }
 
     /// Before ADC block `block` of `len` samples is pushed: where the loop's

@@ -61,6 +61,17 @@ pub struct DeviceConfig {
     pub adc_lag_samples: u32,
 }
 
+/// Samples per DAC/ADC half-buffer of the driver board (and of the virtual
+/// device, which runs the same pipeline): 64 = 128 µs at 500 kS/s. The DMA
+/// refills one half while the other is output, so a command computed from
+/// ADC block `n` reaches the output at fill `n + 3` (see
+/// [`crate::device`]'s closed loop): three half-buffers of dead time,
+/// 384 µs. With 256-sample halves (the first boards' value) that was
+/// 1.536 ms, and the closed loop could not settle within 2 ms.
+/// Interrupt cost per half: two DMA interrupts every 128 µs, each a few
+/// hundred cycles of 21 504 at 168 MHz.
+pub const HALF_BUFFER: usize = 64;
+
 /// Allowed drive periods of a measurement or a streamed estimate, inclusive.
 pub const PERIODS_RANGE: (u32, u32) = (1, 1_000_000);
 

@@ -27,7 +27,9 @@ mod measure;
 mod predict;
 
 pub use closed_loop::MIN_GAIN;
-pub use config::{DacCal, DeviceConfig, MAX_PHASE_RAD, MAX_VELOCITY_M_S, PERIODS_RANGE};
+pub use config::{
+    DacCal, DeviceConfig, HALF_BUFFER, MAX_PHASE_RAD, MAX_VELOCITY_M_S, PERIODS_RANGE,
+};
 pub use error::{ConfigError, DeviceError};
 pub use measure::check_periods;
 pub use predict::{predict, regime};
