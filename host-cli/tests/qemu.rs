@@ -676,7 +676,8 @@ fn lab_session_on_the_firmware() {
     // 10·(1+b)/N²·μ0 with N = 8 sub-steps × 250 samples = 2000 steps a period
     // (1 + b read off the exact solver's stated bound 1e-9·(1+b)): 7.9e-7 here;
     // plus the estimator's aliasing at 250 samples a period, ≤ 1.1e-6 (the
-    // virtual device's fit residual at 2 kHz, README "Sweeps, fits"); plus the
+    // virtual device's fit rms residual at 2 kHz, README "Sweeps, fits":
+    // 3.9e-7 now, 1.1e-6 with 256-sample half-buffers; the larger); plus the
     // f32 plant: displacements off by ≤ 1.3e-6 relative (fast-f32 sine 3e-7,
     // then ≤ 8 rotations of 1.2e-7 each), forces by a few ulp (2.4e-7
     // relative), so μ ≈ 0.19 moves by < 1e-6.

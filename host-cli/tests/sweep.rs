@@ -66,7 +66,8 @@ fn f(r: &csv::StringRecord, i: usize) -> f64 {
 /// stick-slip force is ~3e-5 in μ (fit rms residual 3.4e-5 with standard
 /// errors ~2e-6, χ²/ν ≈ 200–350 measured), which puts the fitted μ0 2e-4
 /// below the plant's and at the edge of its 95 % interval; at 2 kHz
-/// (250 samples a period) the rms residual is 1.1e-6, χ²/ν ≈ 2.5 (measured
+/// (250 samples a period) the rms residual is 3.9e-7, χ²/ν ≈ 0.4 (1.1e-6 and
+/// 2.5 with the 256-sample half-buffers of earlier boards; measured
 /// with the commands of README "Sweeps, fits").
 const FIT_FREQ: &str = "2000";
 
