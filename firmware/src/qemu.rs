@@ -17,7 +17,9 @@
 //!   ADC interrupt does. Device time (the protocol's clock, ramps,
 //!   measurement windows) counts the halves so processed: when the emulated
 //!   core cannot keep up with 128 µs per half, device time runs slower than
-//!   the host's clock and nothing is skipped.
+//!   the host's clock and nothing is skipped. While the device is quiescent
+//!   (drive stopped and settled, nothing measuring) a due half only moves
+//!   device time on: no refill, no plant, no ADC block (the emulator idles).
 //!
 //! The plant is the true contact, deliberately *not* the device's model
 //! (μ₀ 0.3, k_z = k_x = 10⁷ N/m at power-up): μ₀ = [`PLANT_MU0`],
@@ -111,26 +113,34 @@ impl Analog {
         {
             return;
         }
+        // Drive stopped and settled, nothing measuring: the DAC would repeat
+        // its DC level and the samples reach nothing, so neither the refill
+        // nor the plant is run (the emulator idles) — only device time moves
+        // on. (The board refills regardless; its DMA costs no CPU.)
+        let quiescent = cortex_m::interrupt::free(|cs| {
+            DEVICE.borrow(cs).borrow().as_ref().is_none_or(|dev| {
+                let s = dev.status();
+                !s.running && s.settled && !s.measuring
+            })
+        });
+        HALVES.fetch_add(1, Ordering::Relaxed);
+        if quiescent {
+            return;
+        }
         let half = self.half;
         self.half ^= 1;
         let dac = &mut self.dac;
-        let Some((d, quiescent)) = cortex_m::interrupt::free(|cs| {
-            DEVICE.borrow(cs).borrow_mut().as_mut().map(|dev| {
-                let s = dev.status();
-                let d = HalfDrive::fill(dev, half, dac);
-                (d, !s.running && s.settled && !s.measuring)
-            })
+        let Some(d) = cortex_m::interrupt::free(|cs| {
+            DEVICE
+                .borrow(cs)
+                .borrow_mut()
+                .as_mut()
+                .map(|dev| HalfDrive::fill(dev, half, dac))
         }) else {
             return;
         };
-        HALVES.fetch_add(1, Ordering::Relaxed);
-        // Drive stopped and settled, nothing measuring: the samples reach
-        // nothing, so the plant is not run (the emulator idles); the ADC
-        // block keeps its place in the fill/block sequence.
-        if !quiescent {
-            // With interrupts enabled: the link stays served meanwhile.
-            self.run_plant(&d);
-        }
+        // With interrupts enabled: the link stays served meanwhile.
+        self.run_plant(&d);
         let samples = &self.samples;
         cortex_m::interrupt::free(|cs| {
             if let Some(dev) = DEVICE.borrow(cs).borrow_mut().as_mut() {
