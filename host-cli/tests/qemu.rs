@@ -648,28 +648,7 @@ fn lab_session_on_the_firmware() {
     // measure against the host's exact f64 solver for the *plant's* contact.
     let m = ok(&q, &["measure", "--periods", "200"]);
     assert_eq!(m["valid"], true, "{m}");
-    let exact = common::cli::json(&[
-        "mu",
-        "--mu0",
-        "0.24",
-        "--kz",
-        "1e7",
-        "--kx",
-        "1e7",
-        "--uz0",
-        "4e-6",
-        "--duz",
-        "2e-6",
-        "--dux",
-        "3e-7",
-        "--freq",
-        "2000",
-        "--phi-deg",
-        "40",
-        "--v0",
-        "0.004",
-        "--json",
-    ]);
+    let exact = common::host_mu_of_drive("0.24", "2000");
     let (mu, se) = (m["mu"].as_f64().unwrap(), m["std_error"].as_f64().unwrap());
     let want = exact["mu"].as_f64().unwrap();
     // 4 standard errors of the noise, plus the plant's fixed-step bound
@@ -752,14 +731,7 @@ fn lab_session_on_the_firmware() {
     assert!(rows.iter().all(|r| r["valid"] == true), "{s}");
     let fit_json = dir.path().join("fit.json");
     let fr = common::fit(&sweep_csv, "mu0", &fit_json);
-    let mu0 = fr["mu0"].as_f64().unwrap();
-    // The acceptance: within 2 % of the plant's 0.24, interval covers it.
-    assert!((mu0 - 0.24).abs() < 0.02 * 0.24, "{fr}");
-    let (lo, hi) = (
-        fr["mu0_ci95_low"].as_f64().unwrap(),
-        fr["mu0_ci95_high"].as_f64().unwrap(),
-    );
-    assert!(lo <= 0.24 && 0.24 <= hi, "{fr}");
+    common::assert_fit_recovers(&fr, "mu0", 0.24);
     let rms = fr["rms_residual_mu"].as_f64().unwrap();
     let before = ok(&q, &["predict", "--v0", "0.004"])["mu"]
         .as_f64()
@@ -772,15 +744,8 @@ fn lab_session_on_the_firmware() {
     // measure again at the sweep's last point (φ = 180°): now the model agrees.
     let m = ok(&q, &["measure", "--periods", "200"]);
     let p = ok(&q, &["predict", "--v0", "0.004"]);
-    let (mu_m, se) = (m["mu"].as_f64().unwrap(), m["std_error"].as_f64().unwrap());
-    let mu_p = p["mu"].as_f64().unwrap();
-    // As in tests/sweep.rs: 3 standard errors, plus the bias the fit
-    // measured (|r_i| ≤ √7·rms at any of the 7 phases, φ = 180° among them),
-    // plus 1e-6 for the f32 prediction.
-    let tol = 3.0 * se + 7f64.sqrt() * rms + 1e-6;
-    assert!(
-        (mu_m - mu_p).abs() <= tol,
-        "measured {mu_m} ± {se}, predicted {mu_p}, tolerance {tol}"
-    );
+    let (d, tol) = common::measure_vs_predict(&m, &p, rms);
+    assert!(d <= tol, "measured {m}, predicted {p}, tolerance {tol}");
+    let mu_m = m["mu"].as_f64().unwrap();
     assert!((mu_m - before).abs() > 10.0 * tol, "{mu_m} {before} {tol}");
 }

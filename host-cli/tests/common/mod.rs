@@ -120,35 +120,65 @@ pub fn read_responses<R: Read + ?Sized>(r: &mut R, want: usize) -> Vec<Frame> {
 /// tests set on the board (μ0 = 0.3, k_z = k_x = 1e7 N/m, u_z0 = 4 µm,
 /// Δu_z = 2 µm, Δu_x = 0.3 µm, 20 kHz, φ = 40°) at v0 = 4 mm/s.
 pub fn host_mu_of_test_drive() -> serde_json::Value {
-    use assert_cmd::cargo::CommandCargoExt;
-    let m = std::process::Command::cargo_bin("fricctl")
-        .unwrap()
-        .args([
-            "mu",
-            "--mu0",
-            "0.3",
-            "--kz",
-            "1e7",
-            "--kx",
-            "1e7",
-            "--uz0",
-            "4e-6",
-            "--duz",
-            "2e-6",
-            "--dux",
-            "3e-7",
-            "--freq",
-            "20000",
-            "--phi-deg",
-            "40",
-            "--v0",
-            "0.004",
-            "--json",
-        ])
-        .output()
-        .unwrap();
-    assert!(m.status.success(), "{}", String::from_utf8_lossy(&m.stderr));
-    serde_json::from_slice(&m.stdout).unwrap()
+    host_mu_of_drive("0.3", "20000")
+}
+
+/// `fricctl mu --json` for the test drive (k_z = k_x = 1e7 N/m, u_z0 = 4 µm,
+/// Δu_z = 2 µm, Δu_x = 0.3 µm, φ = 40°, v0 = 4 mm/s) with contact `mu0` at
+/// frequency `freq` (Hz).
+pub fn host_mu_of_drive(mu0: &str, freq: &str) -> serde_json::Value {
+    cli::json(&[
+        "mu",
+        "--mu0",
+        mu0,
+        "--kz",
+        "1e7",
+        "--kx",
+        "1e7",
+        "--uz0",
+        "4e-6",
+        "--duz",
+        "2e-6",
+        "--dux",
+        "3e-7",
+        "--freq",
+        freq,
+        "--phi-deg",
+        "40",
+        "--v0",
+        "0.004",
+        "--json",
+    ])
+}
+
+/// The acceptance of a fit of `key`: within 2 % of the plant's
+/// `truth`, and the 95 % interval covers it.
+pub fn assert_fit_recovers(fr: &serde_json::Value, key: &str, truth: f64) {
+    let v = fr[key].as_f64().unwrap();
+    assert!((v - truth).abs() < 0.02 * truth, "{key}: {fr}");
+    let lo = fr[format!("{key}_ci95_low")].as_f64().unwrap();
+    let hi = fr[format!("{key}_ci95_high")].as_f64().unwrap();
+    assert!(lo <= truth && truth <= hi, "{key}: {fr}");
+}
+
+/// How far a `measure` may be from the device's `predict` once the model is
+/// the plant's fitted one: 3 standard errors of the estimate, plus the
+/// plant's discretisation bias (sampled estimator, sub-stepped plant vs the
+/// exact solver), which the fit measured — its residuals at the 7 phases
+/// are bias + noise, and at any one of them |r_i| ≤ √7·rms (as Σr² = 7·rms²),
+/// the drive's phase being one of them — plus 1e-6 for the f32 prediction.
+/// Returns (|measured − predicted|, tolerance).
+pub fn measure_vs_predict(
+    measure: &serde_json::Value,
+    predict: &serde_json::Value,
+    fit_rms: f64,
+) -> (f64, f64) {
+    let (mu_m, se) = (
+        measure["mu"].as_f64().unwrap(),
+        measure["std_error"].as_f64().unwrap(),
+    );
+    let mu_p = predict["mu"].as_f64().unwrap();
+    ((mu_m - mu_p).abs(), 3.0 * se + 7f64.sqrt() * fit_rms + 1e-6)
 }
 
 /// Sends `signal` (`kill SIGNAL PID`) to `child` and waits for it to end,
