@@ -6,9 +6,11 @@
 //! world: its main loop runs this plant on each DAC half-buffer instead).
 //!
 //! Per half-buffer of `n` samples the plant sees the DDS channels before and
-//! after the refill ([`HalfDrive`]): the transducers' amplitudes Δu_z, Δu_x
-//! move linearly between the two across the half (the DDS ramps its levels
-//! at the slew rate during the fill) and follow them with a first-order lag
+//! after the refill ([`HalfDrive`]): the transducers' amplitudes Δu_z, Δu_x,
+//! the offset u_z0 and the phase offsets move linearly between the two
+//! across the half (the DDS ramps its levels at the slew rate during the
+//! fill, phases the shortest way round); the transducers follow the
+//! amplitudes with a first-order lag
 //! (`keep` = e^(−T_s/τ) per sample, exact for a constant target over one
 //! sample). The normal displacement is u_z = u_z0 + Δu_z sin(θ + p₁), the
 //! tangential u_x = Δu_x sin(θ + p₂) relative to the stage (the device sets
@@ -153,15 +155,22 @@ impl<F: Float> Plant<F> {
         let sub = sub.max(1);
         let f = |x: f32| F::from_f64(f64::from(x));
         let (mz, mx) = (f(cfg.dac_z.metres_per_code), f(cfg.dac_x.metres_per_code));
-        let uz0 = (f(d.before[0].dc) - f(cfg.dac_z.zero_code)) * mz;
+        // u_z0 and the phase offsets ramp too (DC at the slew rate, phases
+        // the shortest way round): interpolated across the half like Δu.
+        let uz0_a = (f(d.before[0].dc) - f(cfg.dac_z.zero_code)) * mz;
+        let uz0_b = (f(d.after[0].dc) - f(cfg.dac_z.zero_code)) * mz;
         let (duz_a, dux_a) = (f(d.before[0].amp) * mz, f(d.before[1].amp) * mx);
         let (duz_b, dux_b) = (f(d.after[0].amp) * mz, f(d.after[1].amp) * mx);
         let inv_n = F::ONE / F::from_u32(n as u32);
         let (ddz, ddx) = ((duz_b - duz_a) * inv_n, (dux_b - dux_a) * inv_n);
+        let d_uz0 = (uz0_b - uz0_a) * inv_n;
+        // Signed phase change of each channel over the half, words.
+        let dp = |c: usize| d.after[c].phase.wrapping_sub(d.before[c].phase) as i32 as i64;
+        let (dp1, dp2) = (dp(0), dp(1));
+        let nn = n as i64;
         if keep == F::ZERO {
             self.amp = (duz_a, dux_a);
         }
-        let (p1, p2) = (d.before[0].phase, d.before[1].phase);
         let dt = F::ONE / (F::from_f64(cfg.sample_rate_hz) * F::from_u32(sub));
         // The sub-step rotation: (sin, cos) of θ advanced by dθ/sub.
         let (sd, cd) = M::sin_cos(F::from_f64(d.dtheta() / f64::from(sub)));
@@ -180,8 +189,16 @@ impl<F: Float> Plant<F> {
             let (duz, dux) = self.amp;
             // Phases as accumulator words (exact, wrapping), then radians.
             let w = word0.wrapping_add((i as u32).wrapping_mul(d.tw));
+            let ramp = |c: usize, dpc: i64| match dpc {
+                0 => d.before[c].phase,
+                _ => d.before[c]
+                    .phase
+                    .wrapping_add((dpc * i as i64 / nn) as i32 as u32),
+            };
+            let (p1, p2) = (ramp(0, dp1), ramp(1, dp2));
             let (mut s1, mut c1) = M::sin_cos(F::from_u32(w.wrapping_add(p1)) * rad);
             let (mut s2, mut c2) = M::sin_cos(F::from_u32(w.wrapping_add(p2)) * rad);
+            let uz0 = uz0_a + d_uz0 * F::from_u32(i as u32);
             let (fx, fz) = self.contact.step(dux * s2 + travel, uz0 + duz * s1);
             *o = (
                 counts(fx / xg + xo + c.counts_x),

@@ -1,0 +1,163 @@
+//! The simulated analog side (`model_core::board::plant`), the plant of the
+//! host's virtual device and of the firmware under QEMU, checked without the
+//! estimator: ADC counts straight from the plant, driven by a real `Device`
+//! (DDS ramps, phases, the ADC lag).
+//!
+//! Drive: 20 kHz (25 samples a period at 500 kS/s), Δu_z = 2 µm,
+//! Δu_x = 0.3 µm, u_z0 = 4 µm, φ = 40°; contact μ0 = 0.3, k_z = k_x = 1e7 N/m.
+
+use model_core::board::plant::{HalfDrive, Plant, SampleConditions};
+use model_core::dds::SineTable;
+use model_core::device::{Contact, Device, DeviceConfig, DriveSetting, HALF_BUFFER};
+use model_core::{FastF32, Float, Libm, Math};
+
+const MU0: f64 = 0.3;
+
+fn drive(phase_rad: f32) -> DriveSetting {
+    DriveSetting {
+        freq_hz: 20_000.0,
+        amp_z_m: 2e-6,
+        amp_x_m: 0.3e-6,
+        offset_z_m: 4e-6,
+        phase_rad,
+    }
+}
+
+/// Runs the device and the plant (no noise, stage at `v0`, `sub` sub-steps)
+/// until the drive has settled and 20 more halves have passed, then returns
+/// the ADC samples (x, z) of the next `halves` halves.
+fn run<F: Float, M: Math<F>>(
+    cfg: DeviceConfig,
+    setting: DriveSetting,
+    v0: f64,
+    sub: u32,
+    halves: usize,
+) -> Vec<(u16, u16)> {
+    let table = SineTable::<1024>::libm();
+    let contact = Contact {
+        mu0: MU0 as f32,
+        kz: 1e7,
+        kx: 1e7,
+    };
+    let mut dev = Device::new(cfg, &table, contact).unwrap();
+    dev.set_drive(setting).unwrap();
+    dev.start().unwrap();
+    let mut plant = Plant::<F>::new(F::from_f64(MU0), F::from_f64(1e7), F::from_f64(1e7));
+    let mut dac = [0u32; HALF_BUFFER];
+    let mut block = [(0u16, 0u16); HALF_BUFFER];
+    let mut out = Vec::new();
+    let (mut half, mut after_settled) = (0, 0);
+    while out.len() < halves * HALF_BUFFER {
+        let d = HalfDrive::fill(&mut dev, half, &mut dac);
+        half ^= 1;
+        plant.run_half::<M>(
+            &cfg,
+            &d,
+            sub,
+            F::ZERO,
+            |_| SampleConditions {
+                mu0: F::from_f64(MU0),
+                v0: F::from_f64(v0),
+                counts_z: F::ZERO,
+                counts_x: F::ZERO,
+            },
+            &mut block,
+        );
+        if dev.status().settled {
+            after_settled += 1;
+        }
+        if after_settled > 20 {
+            out.extend_from_slice(&block);
+        }
+    }
+    out
+}
+
+/// Σf_x/Σf_z from the counts through the calibrations (N), and the bound of
+/// the ADC's rounding on it: each count is off by ≤ ½, so Σf is off by
+/// ≤ ½·gain per sample, and the ratio by ≤ |μ|·(½g_x/|f̄_x| + ½g_z/f̄_z).
+fn mu_of(cfg: &DeviceConfig, s: &[(u16, u16)]) -> (f64, f64) {
+    let (gx, ox) = (f64::from(cfg.adc_x.gain), f64::from(cfg.adc_x.offset));
+    let (gz, oz) = (f64::from(cfg.adc_z.gain), f64::from(cfg.adc_z.offset));
+    let n = s.len() as f64;
+    let fx: f64 = s
+        .iter()
+        .map(|&(x, _)| (f64::from(x) - ox) * gx)
+        .sum::<f64>()
+        / n;
+    let fz: f64 = s
+        .iter()
+        .map(|&(_, z)| (f64::from(z) - oz) * gz)
+        .sum::<f64>()
+        / n;
+    let mu = fx / fz;
+    (mu, mu.abs() * (0.5 * gx / fx.abs() + 0.5 * gz / fz))
+}
+
+/// Beyond the forward critical velocity the contact slides the whole period
+/// and f_x = μ0·f_z at every instant (eq. 8): Σf_x/Σf_z = μ0 up to the ADC's
+/// rounding, in f64 (libm, 32 sub-steps) and in f32 (fast-f32, 8 sub-steps,
+/// the QEMU build's). v_c forward = 0.107 m/s here (`fricctl mu`); 0.2 m/s.
+/// 100 halves of 64 samples = 256 whole periods.
+#[test]
+fn continuous_sliding_gives_mu0_in_f64_and_f32() {
+    let cfg = DeviceConfig::driver_board(0);
+    for (name, s) in [
+        ("f64", run::<f64, Libm>(cfg, drive(0.7), 0.2, 32, 100)),
+        ("f32", run::<f32, FastF32>(cfg, drive(0.7), 0.2, 8, 100)),
+    ] {
+        let (mu, tol) = mu_of(&cfg, &s);
+        assert!(
+            (mu - MU0).abs() <= tol,
+            "{name}: μ = {mu}, μ0 = {MU0}, rounding bound {tol:.2e}"
+        );
+    }
+}
+
+/// Mirror symmetry of eqs. 1–5: reversing the stage (v0 → −v0) and shifting
+/// the tangential drive by half a period (φ → φ + π) reverses μ. The two
+/// runs differ only in rounding: |μ₊ + μ₋| ≤ the two rounding bounds.
+/// v0 = 4 mm/s: stick-slip (μ ≈ 0.108 from `fricctl mu`), where the phase,
+/// the stage's direction and the clamp all matter.
+#[test]
+fn mirror_symmetry_in_stick_slip() {
+    let cfg = DeviceConfig::driver_board(0);
+    let phi = 40f32.to_radians();
+    let (a, ta) = mu_of(&cfg, &run::<f64, Libm>(cfg, drive(phi), 0.004, 32, 100));
+    let (b, tb) = mu_of(
+        &cfg,
+        &run::<f64, Libm>(cfg, drive(phi + core::f32::consts::PI), -0.004, 32, 100),
+    );
+    assert!(a > 0.05 && a < 0.2, "{a}");
+    assert!(
+        (a + b).abs() <= ta + tb,
+        "μ(v0, φ) = {a}, μ(−v0, φ+π) = {b}"
+    );
+}
+
+/// The ADC lag: with `adc_lag_samples` = 1 sample k sees the drive of DAC
+/// word k − 1, so in the periodic steady state the whole record is the
+/// lag-0 record delayed by one sample: x₁[k] = x₀[k − 1] within one count
+/// (the two runs round differently). A lag applied the wrong way would
+/// shift by −1 and differ by the force's change over two samples (tens of
+/// counts here).
+#[test]
+fn adc_lag_delays_the_record_by_one_sample() {
+    let r0 = run::<f64, Libm>(DeviceConfig::driver_board(0), drive(0.7), 0.004, 32, 40);
+    let r1 = run::<f64, Libm>(DeviceConfig::driver_board(1), drive(0.7), 0.004, 32, 40);
+    let close = |a: u16, b: u16| (i32::from(a) - i32::from(b)).abs() <= 1;
+    let mut moved = 0;
+    for k in 1..r0.len() {
+        assert!(
+            close(r1[k].0, r0[k - 1].0) && close(r1[k].1, r0[k - 1].1),
+            "sample {k}: lag 1 {:?}, lag 0 one before {:?}",
+            r1[k],
+            r0[k - 1]
+        );
+        if !close(r0[k].0, r0[k - 1].0) {
+            moved += 1;
+        }
+    }
+    // The record does change from sample to sample (so the check has teeth).
+    assert!(moved > r0.len() / 2, "{moved} of {}", r0.len());
+}
