@@ -103,13 +103,22 @@ fn mu0_mismatch_is_fitted_applied_and_then_measure_agrees_with_predict() {
     let fr = fit(&csv, "mu0", &fit_json);
     let mu0 = fr["mu0"].as_f64().unwrap();
     assert_fit_recovers(&fr, "mu0", 0.24);
-    let rms = fr["rms_residual_mu"].as_f64().unwrap();
+    // The comparisons run at φ = 30°, one of the sweep's phases and in
+    // stick-slip (at 180°, where the sweep ends, the contact slides the whole
+    // period and μ = μ0: that would only compare two μ0's).
+    ok_json(
+        &s,
+        &common::drive_set(FIT_FREQ, "2e-6", "3e-7", "4e-6", Some("30")),
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    let row_se = f(&rs[1], STD_ERROR);
+    assert_eq!(f(&rs[1], VALUE), 30.0);
 
     // Before the scene is set from the fit, the device's prediction (μ0 = 0.3)
-    // misses the plant at the sweep's last point (φ = 180°, where the drive stays).
+    // misses the plant.
     let m = ok_json(&s, &["measure", "--periods", "300"]);
     let p = ok_json(&s, &["predict", "--v0", "0.004"]);
-    let (d, tol) = measure_vs_predict(&m, &p, rms);
+    let (d, tol) = measure_vs_predict(&m, &p, &fr, row_se);
     assert!(d > 10.0 * tol, "{m} {p} {tol}");
 
     ok_json(
@@ -121,7 +130,7 @@ fn mu0_mismatch_is_fitted_applied_and_then_measure_agrees_with_predict() {
     assert!((got["mu0"].as_f64().unwrap() - mu0).abs() < 1e-7 * mu0);
     let m = ok_json(&s, &["measure", "--periods", "300"]);
     let p = ok_json(&s, &["predict", "--v0", "0.004"]);
-    let (d, tol) = measure_vs_predict(&m, &p, rms);
+    let (d, tol) = measure_vs_predict(&m, &p, &fr, row_se);
     assert!(d <= tol, "measured {m}, predicted {p}, tolerance {tol}");
 }
 

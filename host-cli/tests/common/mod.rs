@@ -152,33 +152,51 @@ pub fn host_mu_of_drive(mu0: &str, freq: &str) -> serde_json::Value {
 }
 
 /// The acceptance of a fit of `key`: within 2 % of the plant's
-/// `truth`, and the 95 % interval covers it.
+/// `truth`, and an interval covers it. A 95 % interval misses the truth in
+/// 5 % of runs by design (the noise differs from run to run with the
+/// timing), too often for a test; the check widens the fit's 95 % interval
+/// (Student t, the fit's `dof`) to 99.9 %: half-width × t(0.9995)/t(0.975).
 pub fn assert_fit_recovers(fr: &serde_json::Value, key: &str, truth: f64) {
+    use statrs::distribution::{ContinuousCDF, StudentsT};
     let v = fr[key].as_f64().unwrap();
     assert!((v - truth).abs() < 0.02 * truth, "{key}: {fr}");
     let lo = fr[format!("{key}_ci95_low")].as_f64().unwrap();
     let hi = fr[format!("{key}_ci95_high")].as_f64().unwrap();
-    assert!(lo <= truth && truth <= hi, "{key}: {fr}");
+    let t = StudentsT::new(0.0, 1.0, fr["dof"].as_f64().unwrap()).unwrap();
+    let half = 0.5 * (hi - lo) * t.inverse_cdf(0.9995) / t.inverse_cdf(0.975);
+    assert!(
+        (v - truth).abs() <= half,
+        "{key}: 99.9 % half-width {half:e}: {fr}"
+    );
 }
 
 /// How far a `measure` may be from the device's `predict` once the model is
-/// the plant's fitted one: 3 standard errors of the estimate, plus the
-/// plant's discretisation bias (sampled estimator, sub-stepped plant vs the
-/// exact solver), which the fit measured — its residuals at the 7 phases
-/// are bias + noise, and at any one of them |r_i| ≤ √7·rms (as Σr² = 7·rms²),
-/// the drive's phase being one of them — plus 1e-6 for the f32 prediction.
+/// the plant's fitted one, at one of the sweep's phases: the measurement is
+/// μ + bias + n′ and the sweep row at that phase was μ_fit + r, with
+/// r = bias − n (its residual: the plant's discretisation bias, sampled
+/// estimator and sub-stepped plant against the exact solver, less the row's
+/// noise n). The fit bounds every residual: Σr² = n_rows·rms², so
+/// |r| ≤ √n_rows·rms. Hence |measured − predicted| ≤ 3σ′ + 3σ_row +
+/// √n_rows·rms + the f32 prediction's error (< 1e-6: f32 vectors' worst
+/// 5.5e-7·μ0 plus Δu rounding). `row_se` is σ_row, `n_rows` the fit's rows.
 /// Returns (|measured − predicted|, tolerance).
 pub fn measure_vs_predict(
     measure: &serde_json::Value,
     predict: &serde_json::Value,
-    fit_rms: f64,
+    fit: &serde_json::Value,
+    row_se: f64,
 ) -> (f64, f64) {
     let (mu_m, se) = (
         measure["mu"].as_f64().unwrap(),
         measure["std_error"].as_f64().unwrap(),
     );
     let mu_p = predict["mu"].as_f64().unwrap();
-    ((mu_m - mu_p).abs(), 3.0 * se + 7f64.sqrt() * fit_rms + 1e-6)
+    let rms = fit["rms_residual_mu"].as_f64().unwrap();
+    let n_rows = fit["rows_used"].as_f64().unwrap();
+    (
+        (mu_m - mu_p).abs(),
+        3.0 * se + 3.0 * row_se + n_rows.sqrt() * rms + 1e-6,
+    )
 }
 
 /// Sends `signal` (`kill SIGNAL PID`) to `child` and waits for it to end,
