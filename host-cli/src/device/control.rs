@@ -144,6 +144,9 @@ pub struct BenchArgs {
     /// the fastest possible pipeline
     #[arg(long, default_value_t = 2, value_parser = crate::args::count::<usize, 0>)]
     pub fill_lead: usize,
+    /// Seed of the plant's ADC noise (0: the virtual device's default record)
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
 }
 
 /// The bench's fixed drive and schedule (device time).
@@ -219,6 +222,8 @@ pub struct BenchOut {
     pub half_buffer_samples: usize,
     /// Half-buffers the DAC fills run ahead of the output.
     pub fill_lead: usize,
+    /// Seed of the ADC noise (0: the default record).
+    pub noise_seed: u64,
     /// Updates run.
     pub updates: u32,
     /// Largest commanded Δu_z, m.
@@ -347,6 +352,9 @@ pub fn bench(a: &BenchArgs, json: bool) -> CliResult {
         deframer: Deframer::default(),
     };
     b.dev.set_fill_lead(a.fill_lead);
+    if a.seed != 0 {
+        b.dev.set_noise_seed(a.seed);
+    }
     let drive = DriveSetting {
         freq_hz: FREQ_HZ,
         amp_z_m: AMP_Z0_M,
@@ -447,6 +455,7 @@ pub fn bench(a: &BenchArgs, json: bool) -> CliResult {
         periods: a.periods,
         half_buffer_samples: HALF,
         fill_lead: a.fill_lead,
+        noise_seed: a.seed,
         updates: b.log.last().map_or(0, |(_, u)| u.update),
         max_duz,
         liftoff_limit: limit,

@@ -377,6 +377,11 @@ impl VirtualDevice {
         self.fill_lead = halves;
     }
 
+    /// Reseeds the ADC noise (a different, equally likely noise record).
+    pub fn set_noise_seed(&mut self, seed: u64) {
+        self.rng = Noise::new(seed);
+    }
+
     /// Samples per second.
     pub fn sample_rate(&self) -> f64 {
         self.dev.config().sample_rate_hz
