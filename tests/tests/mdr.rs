@@ -594,7 +594,7 @@ fn cpu_time_per_point() {
     for &(a, b, phi) in &[(0.5, 0.25, 1.0), (0.5, 1.0, 0.3), (1.5, 0.7, 2.0)] {
         let d = Drive::new::<Libm>(a, b, phi);
         let (cf, cb) = mdr::critical_velocities::<f64, Libm>(&d, &Profile::Sphere).unwrap();
-        for tol in [1e-6, 1e-8] {
+        for tol in [1e-6, 1e-8, 1e-9] {
             let n = 1000u32;
             let mut springs = 0;
             let mut worst_bound: f64 = 0.0;
