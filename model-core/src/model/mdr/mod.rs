@@ -499,7 +499,9 @@ fn curved<T: Float, M: Math<T>>(
         let sliding = j == sliding_segment;
         let mut left = l;
         if !sliding {
-            searched += kinks::<T, M>(d, v, l, r, &offset, |xi| {
+            // The extra samples next to the lift-off onset ξ_a (both sides).
+            let at_onset = (a < T::ONE && j == 0, a < T::ONE && j == 1);
+            searched += kinks::<T, M>(d, v, l, r, at_onset, &offset, |xi| {
                 if xi > left && xi < r {
                     let _ = pieces.push((left, xi, false));
                     left = xi;
@@ -561,18 +563,26 @@ fn curved<T: Float, M: Math<T>>(
 }
 
 /// Most pieces of the quadrature's first partition: two searched segments
-/// cut by at most `KINK_SAMPLES − 1` kinks each, and the sliding segment
-/// (17 ≤ 20, checked at compile time).
-const MAX_PIECES: usize = 20;
-const _: () = assert!(2 * (KINK_SAMPLES as usize) < MAX_PIECES);
+/// cut by at most `KINK_SAMPLES + 1` kinks each (between the `KINK_SAMPLES + 2`
+/// samples), and the sliding segment (21 ≤ 24, checked at compile time).
+const MAX_PIECES: usize = 24;
+const _: () = assert!(2 * (KINK_SAMPLES as usize + 2) + 1 <= MAX_PIECES);
 
 /// Width (in units of π of the segment's `t`) to which a kink is bracketed:
 /// one left that close to an interval end costs the Kronrod rule about
 /// `|Δf'|·(10⁻⁵ π h)²`, which the adaptive bisection then resolves.
 const KINK_RESOLUTION: f64 = 1e-5;
 
-/// Points sampled per segment for changes of the arc structure.
+/// Points sampled per segment for changes of the arc structure, equally
+/// spaced in `t` (plus one [`KINK_END`] from each end).
 const KINK_SAMPLES: u32 = 8;
+
+/// Distance (units of π in `t`) from the lift-off onset `ξ_a` of an extra
+/// sample on each side of it: changes between it and the nearest regular
+/// sample are searched too (a permanent spring just above the onset,
+/// `d → a⁺`, changes its arc structure within `d − a ≈ 10⁻⁴` in some
+/// scenes, inside the last `π/9` of the segment).
+const KINK_END: f64 = 1e-4;
 
 /// The kinks of the springs' `⟨s⟩` inside `[l, r]` (ξ), in increasing order,
 /// searched in `t` of the segment's map `ξ = l + (r − l)(1 − cos t)/2`: the arc
@@ -586,6 +596,7 @@ fn kinks<T: Float, M: Math<T>>(
     v: T,
     l: T,
     r: T,
+    ends: (bool, bool),
     offset: &impl Fn(T) -> T,
     mut found: impl FnMut(T),
 ) -> u32 {
@@ -597,10 +608,22 @@ fn kinks<T: Float, M: Math<T>>(
         spring::signature::<T, M>(d, offset(l + half * (T::ONE - cos_t)), v)
     };
     let step = T::PI / T::from_u32(KINK_SAMPLES + 1);
-    let mut t_prev = step;
+    let end = T::from_f64(KINK_END) * T::PI;
+    let sample = |i: u32| match i {
+        0 if ends.1 => end,
+        i if i == KINK_SAMPLES + 1 && ends.0 => T::PI - end,
+        i => step * T::from_u32(i.clamp(1, KINK_SAMPLES)),
+    };
+    let first = if ends.1 { 0 } else { 1 };
+    let last = if ends.0 {
+        KINK_SAMPLES + 1
+    } else {
+        KINK_SAMPLES
+    };
+    let mut t_prev = sample(first);
     let mut s_prev = sig(t_prev);
-    for i in 2..=KINK_SAMPLES {
-        let t = step * T::from_u32(i);
+    for i in first + 1..=last {
+        let t = sample(i);
         let s = sig(t);
         if s != s_prev && s.is_some() && s_prev.is_some() {
             let (mut lo, mut hi) = (t_prev, t);
