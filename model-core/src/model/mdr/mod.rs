@@ -77,9 +77,11 @@
 //!
 //! where `E_quad` is the sum of the `|K₁₅ − G₇|` estimates (of `I`, and of
 //! `D` times `I/D` when `D` is not closed form) with a safety factor 2,
-//! `ε_s = (precision_constant + M::MAX_REL_ERROR)(1 + a + b)` the per-spring
-//! solver error (the flat solvers' bounds, [`crate::model::exact::error_bound`],
-//! [`crate::model::liftoff::error_bound`], in absolute units of `W₀`), and `U`
+//! `ε_s = (SPRING_PRECISION + M::MAX_REL_ERROR)(1 + a + b)` the per-spring
+//! solver error in absolute units of `W₀` ([`SPRING_PRECISION`] = 10⁻¹¹ in
+//! f64, checked spring by spring against a brute force at 2²¹ steps per
+//! period; the permanent springs' limits at rest and f32 keep the flat
+//! solvers' generic constant, [`precision_constant`]), and `U`
 //! the band of springs a solver could not resolve (counted as `|⟨s⟩| ≤ ⟨w⁺⟩`:
 //! slivers of contact at the rim below `64ε(1 + a + b)`, and permanent springs
 //! whose scaled drive `b/d > 10⁷` the exact solver refuses).
@@ -92,26 +94,35 @@
 //! sequence of a spring (stick / forward / backward, arcs shorter than
 //! 10⁻⁶ rad ignored — at `V = 0` rounding makes and unmakes such slivers —
 //! the permanent spring's period taken as a cycle) is sampled at 8 interior
-//! points of each segment, every change between neighbours is bisected to
+//! points of each segment, plus one at `10⁻⁴π` in `t` from the lift-off
+//! onset `ξ_a` on each side (the permanent springs change their arc
+//! structure in a layer `d − a ≈ 10⁻⁴` in some scenes, which otherwise cost
+//! the adaptive bisection several rounds), every change between neighbours is bisected to
 //! `10⁻⁵π` in `t`, and the segment is cut there into pieces, each with its own
 //! `1 − cos t` map (a slip that sets in tangentially makes `⟨s⟩` behave like
 //! `(ξ − ξ_k)^{3/2}` past the kink, smooth in that piece's `t`). Two
 //! changes that cancel between samples, and changes the sequence does not
-//! show, are left to the adaptive bisection and to the estimate. Measured
-//! (`tests/mdr.rs`): over 40 random scenes and four profiles the answers at
-//! `tol = 10⁻⁶` (at V and the limits μ(0±)) differ from those at the
-//! tightest tolerance by at most 0.71 of the two bounds; against the brute force over springs all
-//! gaps are within the brute force's own error (≤ 10⁻⁶).
+//! show, are left to the adaptive bisection and to the estimate (checked
+//! below, "Cost"); against the brute force over springs all gaps are within
+//! the brute force's own error (≤ 10⁻⁶, `tests/mdr.rs`).
 //!
-//! **Cost.** Each spring is one solve (~0.4–0.7 µs). A sphere's μ took
-//! 74–105 spring solves (kink search included) and 54–74 µs of CPU at
-//! `tol = 10⁻⁶`, 122–178 solves and 81–133 µs at `10⁻⁸` (three drives,
-//! 1000 velocities each, release, `cargo test -p integration-tests --release
-//! --test mdr cpu_time -- --ignored --nocapture`; the machine was loaded, so
-//! these are upper values). A tolerance below the per-spring solvers' part
-//! ([`solver_bound`], ~3–8·10⁻⁹ for a sphere in f64: the flat solvers'
-//! verified precision constant 10⁻⁹·(1 + a + b), far above their true
-//! rounding) is refused with [`MdrError::ToleranceTooTight`].
+//! **Cost.** Each spring is one solve (~0.4–0.7 µs). Averaged over 1000
+//! velocities across ±v_c for three drives (`cargo test -p integration-tests
+//! --release --test mdr cpu_time -- --ignored --nocapture`, loaded machine,
+//! so upper values), a sphere's μ took 98/105/74 spring solves and
+//! 58/69/38 µs of CPU at `tol = 10⁻⁶`, 142/145/113 and 84/92/64 µs at
+//! `10⁻⁸`, 172/184/143 and 99/120/76 µs at `10⁻⁹` (a = 0.5, b = 0.25,
+//! φ = 1; a = 0.5, b = 1, φ = 0.3; a = 1.5, b = 0.7, φ = 2). Before the
+//! per-spring constant was checked at 10⁻¹¹ a tolerance of 10⁻⁹ was refused
+//! and `10⁻⁸` took 178/162/122 solves. A tolerance below the per-spring
+//! solvers' part ([`solver_bound`], ~10⁻¹⁰ for a sphere in f64;
+//! [`solver_bound_at_rest`] for μ(0±) with `a < 1`, ~3–8·10⁻⁹) is refused
+//! with [`MdrError::ToleranceTooTight`]. The quadrature's bound stays an
+//! estimate: over 80 random scenes and four profiles the answers at
+//! `tol = 10⁻⁶` and `10⁻⁹` (at V) and at `10⁻⁶` (the limits μ(0±)) differ
+//! from those at the tightest tolerance (≈ 10⁻¹⁰ at V) by at most 0.18 of
+//! the two bounds, 0 of 320 comparisons outside them (`tests/mdr.rs`,
+//! `bound_estimate_holds_against_a_tighter_run`).
 
 pub mod normal;
 pub mod profile;
@@ -566,7 +577,7 @@ fn curved<T: Float, M: Math<T>>(
 /// cut by at most `KINK_SAMPLES + 1` kinks each (between the `KINK_SAMPLES + 2`
 /// samples), and the sliding segment (21 ≤ 24, checked at compile time).
 const MAX_PIECES: usize = 24;
-const _: () = assert!(2 * (KINK_SAMPLES as usize + 2) + 1 <= MAX_PIECES);
+const _: () = assert!(2 * (KINK_SAMPLES as usize + 2) < MAX_PIECES);
 
 /// Width (in units of π of the segment's `t`) to which a kink is bracketed:
 /// one left that close to an interval end costs the Kronrod rule about
