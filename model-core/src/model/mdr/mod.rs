@@ -97,7 +97,9 @@
 //! points of each segment, plus one at `10⁻⁴π` in `t` from the lift-off
 //! onset `ξ_a` on each side (the permanent springs change their arc
 //! structure in a layer `d − a ≈ 10⁻⁴` in some scenes, which otherwise cost
-//! the adaptive bisection several rounds), every change between neighbours is bisected to
+//! the adaptive bisection several rounds; without the sample on the
+//! intermittent side the estimate check below fails at μ(0±) of one sphere
+//! scene — an arc change there was missed), every change between neighbours is bisected to
 //! `10⁻⁵π` in `t`, and the segment is cut there into pieces, each with its own
 //! `1 − cos t` map (a slip that sets in tangentially makes `⟨s⟩` behave like
 //! `(ξ − ξ_k)^{3/2}` past the kink, smooth in that piece's `t`). Two
