@@ -638,3 +638,40 @@ fn cpu_time_per_point() {
         }
     }
 }
+
+/// Continuity of a sphere's μ across `a = 1` (the central spring starts to
+/// lift off). Bound derived here: every spring's band `d − a cos θ` moves by
+/// at most `ε` when `a` goes from `1 − ε` to `1 + ε` (the drive does not
+/// depend on `a`), and the flat punch's argument (the clamp to a band is
+/// 1-Lipschitz; `host-cli/tests/contacts.rs`, `liftoff` module docs) moves
+/// each spring's `⟨s⟩` by at most `2ε` plus the `O(ε^{3/2})` of an airborne
+/// arc; `⟨w⁺⟩` moves by at most `ε`. Over `ξ ≤ ξ_max = √(1 + a)` the
+/// numerator and `D` move by at most `2ε ξ_max` and `ε ξ_max`, and
+/// `|μ| ≤ 1`, `D ≥ 2/3` (Jensen, `mdr::solver_bound` docs), so
+/// `|Δμ| ≤ 3ε ξ_max/(2/3) + 10(1 + b)ε^{3/2}` plus the two bounds.
+#[test]
+fn sphere_is_continuous_across_a_equals_one() {
+    let eps = 1e-6;
+    let mut worst: f64 = 0.0;
+    for &(b, phi) in &[(0.0, 0.0), (0.5, 0.5), (1.2, 2.1), (3.0, -1.9)] {
+        for v in [0.05, 0.4, -0.3, -1.1] {
+            let below = mdr64(Profile::Sphere, 1.0 - eps, b, phi, v, 1e-9);
+            let above = mdr64(Profile::Sphere, 1.0 + eps, b, phi, v, 1e-9);
+            let jump = (below.mu_over_mu0 - above.mu_over_mu0).abs();
+            let xi_max = (2.0f64 + eps).sqrt();
+            let tol = 3.0 * eps * xi_max / (2.0 / 3.0)
+                + 10.0 * (1.0 + b) * eps.powf(1.5)
+                + below.bound
+                + above.bound;
+            worst = worst.max(jump / eps);
+            assert!(
+                jump <= tol,
+                "b={b} phi={phi} V={v}: jump {jump:e} > {tol:e}"
+            );
+        }
+    }
+    println!(
+        "largest |mu(1 - eps) - mu(1 + eps)|/eps = {worst:.3} (bound {:.2})",
+        4.5 * 2f64.sqrt()
+    );
+}
