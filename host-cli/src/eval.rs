@@ -471,6 +471,16 @@ pub fn profile_tol(scene: &Scene<f64>, p: &Profile<f64>) -> f64 {
     }
 }
 
+/// [`profile_tol`] for the one-sided limits at rest (`v0 = 0` with
+/// `duz < uz0`): there the permanent springs keep the flat solver's generic
+/// precision constant (`mdr::solver_bound_at_rest`).
+pub fn profile_tol_at_rest(scene: &Scene<f64>, p: &Profile<f64>) -> f64 {
+    match p.exponent() {
+        Some(n) => PROFILE_TOL.max(2.0 * mdr::solver_bound_at_rest::<f64, Libm>(&scene.drive(), n)),
+        None => PROFILE_TOL,
+    }
+}
+
 /// [`mu_at`] for a curved profile: the MDR quadrature (`--method auto` by
 /// `select::mu_within_profile`, `--method exact` the same quadrature); the
 /// fixed-step scheme and the approximations are for the flat punch.
@@ -478,6 +488,7 @@ fn profile_at(scene: &Scene<f64>, v0: f64, m: &MethodArgs, out: &mut MuOutcome) 
     let p = &m.profile;
     let tol = match (m.method, m.tol) {
         (Method::Auto, Some(t)) => t,
+        (Method::Auto | Method::Exact, _) if v0 == 0.0 => profile_tol_at_rest(scene, p),
         (Method::Auto | Method::Exact, _) => profile_tol(scene, p),
         (Method::Fixed | Method::Approx, _) => {
             return Err(CliError::usage(format!(
@@ -565,7 +576,8 @@ pub fn classify_scene_profile(s: &Scene<f64>, p: &Profile<f64>) -> CliResult<Cla
         let m0 = mu(0.0)?;
         (m0, m0)
     } else {
-        let (pl, mi) = mdr::limits_at_zero::<f64, Libm>(&d, p, tol).map_err(mdr_failure)?;
+        let tol_rest = tol.max(profile_tol_at_rest(s, p));
+        let (pl, mi) = mdr::limits_at_zero::<f64, Libm>(&d, p, tol_rest).map_err(mdr_failure)?;
         limits_bound = pl.bound.max(mi.bound);
         (pl.mu_over_mu0, mi.mu_over_mu0)
     };

@@ -435,7 +435,7 @@ fn profile_curve(
     use model_core::select::{mu_within_profile, Value};
     // The largest of the three methods' own bounds: each answers within it.
     let d = s.drive();
-    let tol = crate::eval::profile_tol(s, p)
+    let tol = crate::eval::profile_tol_at_rest(s, p)
         .max(exact::error_bound::<f64, Libm>(&d))
         .max(liftoff::error_bound::<f64, Libm>(&d));
     let mut pts = Vec::with_capacity(vs.len() + 1);

@@ -941,12 +941,12 @@ fn bench_methods_reports_times_and_mix() {
     ]);
     let csv = std::fs::read_to_string(dir.path().join("methods.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().skip(1).collect();
-    assert_eq!(lines.len(), 17);
+    assert_eq!(lines.len(), 19);
     // Curved profiles: v/v_c = −1.5 + 3i/19 slides for |v/v_c| ≥ 1 (i ≤ 3 and
     // i ≥ 16, the flat punch's v_c for every profile), the other 12 points go
     // to the exact solver (flat) or the MDR quadrature (sphere, cone).
     assert!(lines[12].contains("sliding 8 + exact 12"), "{}", lines[12]);
-    for l in &lines[13..17] {
+    for l in &lines[13..19] {
         assert!(l.contains("sliding 8 + mdr 12"), "{l}");
     }
     // Normal-only curve at tol 1e-2: |v| ≥ v_c slides (v/v_c = −1.5 + 3i/199:

@@ -8,7 +8,7 @@
 //! fixed-step runs use fewer points (they are ~10⁴× slower) and are compared
 //! per point. A last case times curved profiles ([`profile_case`]): the
 //! flat punch against a sphere and a cone through the MDR quadrature
-//! (`select::mu_within_profile`) at two tolerances, on fewer points.
+//! (`select::mu_within_profile`) at three tolerances, on fewer points.
 
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -163,12 +163,14 @@ fn profile_case(a: &MethodsArgs, out: &mut Vec<Timing>) -> CliResult {
         .map(|x| from_rel(&vc, x, "v-rel"))
         .collect::<CliResult<_>>()?;
     let flat_tol = model_core::exact::error_bound::<f64, Libm>(&s.drive());
-    let configs: [(&str, Profile<f64>, f64); 5] = [
+    let configs: [(&str, Profile<f64>, f64); 7] = [
         ("flat auto (default tol)", Profile::Flat, flat_tol),
         ("sphere mdr --tol 1e-6", Profile::Sphere, 1e-6),
         ("sphere mdr --tol 1e-8", Profile::Sphere, 1e-8),
+        ("sphere mdr --tol 1e-9", Profile::Sphere, 1e-9),
         ("cone mdr --tol 1e-6", Profile::Cone, 1e-6),
         ("cone mdr --tol 1e-8", Profile::Cone, 1e-8),
+        ("cone mdr --tol 1e-9", Profile::Cone, 1e-9),
     ];
     for (label, p, tol) in configs {
         let (t, methods) = best_of(a.repeats, || {

@@ -17,6 +17,7 @@ use crate::error::CliResult;
 pub mod dac;
 pub mod methods;
 pub mod motion;
+pub mod springs;
 pub mod stability;
 pub mod work_precision;
 

@@ -13,8 +13,10 @@
 //! period; the exact solver over `Δu_z/u_z0 → 1` × `v0 → v_c`, over the
 //! tangential amplitude `b` (huge and tiny) × `v0 → 0`, and over extreme SI
 //! magnitudes (`u_z0` × `k_z` at `k_x` = 1 GPa/m); and `select::mu_within`
-//! (auto) across lift-off, `Δu_z/u_z0` from 0.5 to 2 × `v0/v_c` (the
-//! permanent-contact solver below 1, the lift-off solver from 1).
+//! (auto) across lift-off, `Δu_z/u_z0` from 0.5 to 3 × `v0/v_c` (the
+//! permanent-contact solver below 1, the lift-off solver from 1); and a
+//! sphere through the MDR quadrature over the same plane, against a brute
+//! force over its springs ([`super::springs`]).
 
 use std::fmt::Write as _;
 
@@ -29,6 +31,7 @@ use model_core::{Drive, Float, Groups, Libm, Scene, SceneError, SceneParams};
 use plotters::style::RGBColor;
 use rayon::prelude::*;
 
+use super::springs;
 use super::work_precision::warm_state;
 use crate::error::{CliError, CliResult};
 use crate::plot::{prepare_out_dir, render_heat, Heat, HeatMap};
@@ -284,7 +287,7 @@ pub fn lift_off_cell<T: Float>(x: f64, y: f64, budget: u64) -> Outcome {
     exact_cell::<T>(&d64, v, budget)
 }
 
-/// Cell of the plane across lift-off: x = Δu_z/u_z0 (0.5 … 2), y = v0/v_c of
+/// Cell of the plane across lift-off: x = Δu_z/u_z0 (0.5 … 3), y = v0/v_c of
 /// the direction of motion (eq. 8 below a = 1, the contact window's eq. L5
 /// from 1), b = 0.6, φ = 1; `select::mu_within` in `T` at the bound of the
 /// solver it uses. f32 is judged against f64; f64 against the fixed-step
@@ -392,6 +395,76 @@ pub fn across_lift_off_cell<T: Float>(x: f64, y: f64, budget: u64) -> Outcome {
             }
         }
         None => Outcome::NoReference,
+    }
+}
+
+/// The tolerance asked of the MDR in the curved-profile plane.
+pub const MDR_TOL: f64 = 1e-9;
+
+/// Springs per segment and steps per period of the brute-force reference
+/// of the curved-profile plane ([`springs::mu_with_error`] at `M`, `2M`, `4M`
+/// springs and `N`, `2N` steps).
+pub const MDR_REFERENCE: (u32, u32) = (48, 1024);
+
+/// Cell of the curved-profile plane across lift-off: a sphere through the
+/// MDR, x = Δu_z/u_z0 = a (read as Δu_z/d₀, 0.5 … 3: only the rim lifts off
+/// below 1, every spring from 1), y = v0/v_c of the direction of motion (the
+/// flat punch's, eq. 8 below 1 and the contact window's eq. L5 from 1, which
+/// the profile shares), b = 0.6, φ = 1 rad; `select::mu_within_profile` at
+/// [`MDR_TOL`] (or twice the per-spring part of the bound where larger).
+/// Judged against the brute force over springs ([`springs`], code shared
+/// with neither the quadrature nor the per-spring solvers) with its own
+/// error estimate: `allowed = MDR bound + reference allowance`.
+pub fn mdr_across_lift_off_cell(x: f64, y: f64) -> Outcome {
+    use model_core::mdr::{self, Profile};
+    let (a, b, phi) = (x, 0.6, 1.0);
+    let d = Drive::new::<Libm>(a, b, phi);
+    let Ok((cf, cb)) = mdr::critical_velocities::<f64, Libm>(&d, &Profile::Sphere) else {
+        return Outcome::NoReference;
+    };
+    let v = if y >= 0.0 { y * cf } else { y * cb };
+    let s = match Scene::dimensionless_with_contact(
+        Groups {
+            duz_rel: a,
+            dux_rel: b,
+            phi,
+        },
+        ContactMode::Intermittent,
+    ) {
+        Ok(s) => s,
+        Err(e) => return Outcome::Failure(scene_failure(&e)),
+    };
+    let tol = MDR_TOL.max(2.0 * mdr::solver_bound::<f64, Libm>(&s.drive(), 2.0));
+    let (got, bound) = match select::mu_within_profile::<f64, Libm>(&s, &Profile::Sphere, v, tol) {
+        Ok(select::Answer {
+            value: Value::Mu(m),
+            bound,
+            ..
+        }) => (m, bound),
+        Ok(_) => return Outcome::NoReference,
+        Err(SelectError::Mdr(e)) => return Outcome::Failure(mdr_failure(&e)),
+        Err(SelectError::Exact(e)) => return Outcome::Failure(exact_failure(&e)),
+        Err(SelectError::ToleranceTooTight { .. }) => return Outcome::Failure("ill-conditioned"),
+        Err(SelectError::BadTolerance) => return Outcome::Failure("refused input"),
+    };
+    let (m, n) = MDR_REFERENCE;
+    let (reference, allowance) = springs::mu_with_error(2.0, a, b, phi, v, m, n);
+    if !reference.is_finite() {
+        return Outcome::NoReference;
+    }
+    Outcome::Value {
+        error: (got - reference).abs(),
+        allowed: bound + allowance,
+    }
+}
+
+fn mdr_failure(e: &model_core::mdr::MdrError) -> &'static str {
+    use model_core::mdr::MdrError;
+    match e {
+        MdrError::NotConverged { .. } => "not converged",
+        MdrError::IllConditioned | MdrError::ToleranceTooTight { .. } => "ill-conditioned",
+        MdrError::Inconsistent => "inconsistent",
+        _ => "refused input",
     }
 }
 
@@ -577,7 +650,7 @@ pub fn run(a: &StabilityArgs) -> CliResult {
         title: format!("Auto (select::mu_within, {t}) across lift-off: b = 0.6, φ = 1 rad (57.3°)"),
         x_label: "Δu_z/u_z0 (≥ 1: the contact lifts off)",
         y_label: "v0/v_c (v_c of the direction; the contact window's from 1)",
-        x: (0.5, 2.0),
+        x: (0.5, 3.0),
         y: (-1.1, 1.1),
         log_x: false,
         log_y: false,
@@ -598,6 +671,25 @@ pub fn run(a: &StabilityArgs) -> CliResult {
             ..across("f32, against f64")
         },
         |x, y| across_lift_off_cell::<f32>(x, y, budget),
+    )?
+    .1;
+    let (m, n) = MDR_REFERENCE;
+    silent += map(
+        a,
+        &Plane {
+            name: "mdr_sphere_across_lift_off",
+            title: format!(
+                "Sphere (MDR, f64, tol {MDR_TOL:e}) vs brute force ({} springs/segment, {n} steps/period): b = 0.6, φ = 1 rad",
+                4 * m
+            ),
+            x_label: "Δu_z/d0 (≥ 1: every spring lifts off)",
+            y_label: "v0/v_c (v_c of the direction; the contact window's from 1)",
+            x: (0.5, 3.0),
+            y: (-1.1, 1.1),
+            log_x: false,
+            log_y: false,
+        },
+        mdr_across_lift_off_cell,
     )?
     .1;
     let ratio = |t: &str| Plane {
@@ -665,4 +757,31 @@ pub fn run(a: &StabilityArgs) -> CliResult {
     }
     eprintln!("wrote the maps to {}", a.out.display());
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The curved-profile plane on a coarse grid (12 × 12 cells over the
+    /// same ranges): every cell a number within the MDR's bound plus the
+    /// brute force's allowance (the map's criterion), none outside.
+    #[test]
+    fn mdr_plane_has_no_cell_outside_its_bound() {
+        let xs = centres(0.5, 3.0, 12);
+        let ys = centres(-1.1, 1.1, 12);
+        let mut worst: f64 = 0.0;
+        for &x in &xs {
+            for &y in &ys {
+                match mdr_across_lift_off_cell(x, y) {
+                    Outcome::Value { error, allowed } => {
+                        worst = worst.max(error / allowed.max(1e-300));
+                        assert!(error <= allowed, "a={x} v/vc={y}: {error:e} > {allowed:e}");
+                    }
+                    o => panic!("a={x} v/vc={y}: {o:?}"),
+                }
+            }
+        }
+        println!("worst error/allowed {worst:.3}");
+    }
 }
