@@ -6,24 +6,23 @@
 //! μ(v) comes through [`crate::motion::law::Law`], the one interface for
 //! every contact model: stall forces, no-load velocities and the output
 //! power `−μ(v)F̄z·v` exist for all of them. The transducers' input power and
-//! so the efficiency are derived for the flat punch in permanent contact only
-//! ([`load_line::powers`]); for another contact they are refused with one
-//! line naming it (JSON `null`), not approximated.
+//! so the efficiency are derived for the flat punch, in permanent contact
+//! ([`load_line::powers`]) and with lift-off ([`load_line::liftoff_powers`]);
+//! for a curved profile they are refused with one line naming it (JSON
+//! `null`), not approximated.
 
 use std::io::Write;
 use std::path::PathBuf;
 
 use clap::Args;
 use model_core::model::load_line::{
-    self, best_forward, load_line_of, maximise_forward, powers, Objective, OperatingPoint,
+    self, best_forward_of, load_line_of, maximise_forward, Objective, OperatingPoint,
 };
 use model_core::scene::ContactMode;
-use model_core::Libm;
 use serde::Serialize;
 
 use crate::args::count;
 use crate::error::{CliError, CliResult};
-use crate::eval::exact_failure;
 use crate::motion::law::{Law, LawError};
 use crate::output::{stdout_error, write_json};
 use crate::plot::{render_panels, Mark, Panel, Series};
@@ -72,9 +71,9 @@ struct LoadLineOut {
     max_efficiency: Option<f64>,
     /// Velocity of the maximum efficiency point (null as max_efficiency).
     velocity_at_max_efficiency: Option<f64>,
-    /// Contact model: flat | lift-off.
+    /// Contact model: flat | lift-off | sphere | cone | power.
     contact: &'static str,
-    /// Mean normal force F̄z (N; kz·uz0 in permanent contact, kz·uz0·⟨w⁺⟩ with lift-off; in units of kz·uz0 for a dimensionless scene, whose forces and powers are in units of μ0·F̄z and μ0·F̄z·ωW0).
+    /// Mean normal force F̄z (N; kz·uz0 in permanent contact, kz·uz0·⟨w⁺⟩ with lift-off, kz·uz0·D (eq. M5) for a curved profile whose kz is its incremental stiffness 2E*a0; in units of kz·uz0 for a dimensionless scene, whose forces and powers are in units of μ0·F̄z and μ0·F̄z·ωW0).
     fz_mean: f64,
     /// Velocity unit ωW0 (m/s; 1 for a dimensionless scene).
     velocity_scale: f64,
@@ -92,19 +91,11 @@ impl LoadLineCmd {
         }
         let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         let s = &rs.scene;
-        let d = s.drive();
         let p = s.params();
         let law = Law::with_profile(s, rs.profile);
-        let normal = match law.mean_normal() {
-            Some(n) => n,
-            None if rs.dimensionless => 1.0,
-            None => {
-                return Err(CliError::usage(format!(
-                    "--profile: the {} profile's mean normal force in newtons is not derived here; give the scene by its groups (--duz-rel, --ratio) for a load line in units of μ0·F̄z",
-                    law.name()
-                )))
-            }
-        };
+        let normal = law
+            .mean_normal()
+            .map_err(|e| CliError::failure(e.to_string()))?;
         let fz = p.kz * p.uz0 * normal;
         // Dimensionless scenes report forces in units of μ0·F̄z (F̄z = 1 unit).
         let force_scale = if rs.dimensionless { 1.0 } else { s.mu0() * fz };
@@ -121,9 +112,9 @@ impl LoadLineCmd {
         .map_err(fail)?;
         let (vp, fp, pp, eff) = if law.has_powers() {
             let best_p =
-                best_forward::<f64, Libm>(&d, &line, Objective::Power).map_err(exact_failure)?;
-            let best_e = best_forward::<f64, Libm>(&d, &line, Objective::Efficiency)
-                .map_err(exact_failure)?;
+                best_forward_of(&line, Objective::Power, |v| law.powers(v)).map_err(fail)?;
+            let best_e =
+                best_forward_of(&line, Objective::Efficiency, |v| law.powers(v)).map_err(fail)?;
             let get = |b: &Option<OperatingPoint<f64>>| {
                 b.map_or((0.0, 0.0, 0.0), |o| (o.v, o.force, o.powers.output))
             };
@@ -141,7 +132,7 @@ impl LoadLineCmd {
         };
         if eff.is_none() {
             eprintln!(
-                "load-line: input power and efficiency not computed for the {} contact (derived for the flat punch in permanent contact only)",
+                "load-line: input power and efficiency not computed for the {} profile (derived for the flat punch only: the bed of springs' power sum is not implemented)",
                 law.name()
             );
         }
@@ -213,7 +204,9 @@ impl LoadLineCmd {
             let v = line.no_load_forward * i as f64 / n as f64;
             let x = v * o.velocity_scale;
             if law.has_powers() {
-                let pw = powers::<f64, Libm>(d, v).map_err(exact_failure)?;
+                let pw = law
+                    .powers(v)
+                    .map_err(|e| CliError::failure(e.to_string()))?;
                 force.push((x, -pw.mu_over_mu0));
                 pin.push((x, pw.input * o.power_scale));
                 pout.push((x, pw.output * o.power_scale));

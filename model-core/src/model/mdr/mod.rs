@@ -239,6 +239,30 @@ pub fn critical_velocities<T: Float, M: Math<T>>(
     ))
 }
 
+/// The mean normal force `F̄z/(k_z u_z0)` of a profile at `a` with its
+/// bound (units of `k_z u_z0`): `⟨w⁺⟩` of eq. L4 (1 for `a < 1`) for
+/// [`Profile::Flat`], else `D` of eq. M5 ([`normal::mean_normal_force`],
+/// whose doc states how the scene's `k_z` reads for a curved profile).
+///
+/// # Errors
+/// As [`normal::mean_normal_force`].
+pub fn mean_normal_force<T: Float, M: Math<T>>(
+    p: &Profile<T>,
+    a: T,
+    tol: T,
+) -> Result<(T, T), MdrError> {
+    p.validate()?;
+    match p.exponent() {
+        None if !(a.is_finite() && a >= T::ZERO) => Err(MdrError::BadDrive),
+        None if a < T::ONE => Ok((T::ONE, T::ZERO)),
+        None => {
+            let d = liftoff::mean_band::<T, M>(a);
+            Ok((d, T::from_f64(64.0) * T::EPSILON * d))
+        }
+        Some(n) => normal::mean_normal_force::<T, M>(n, a, tol),
+    }
+}
+
 /// The per-spring solver part of the bound of a curved profile, units of
 /// μ₀, before the quadrature: `ε_s ξ_max / D_min` with `D ≥ n/(n + 1)`
 /// (Jensen: `⟨(1 − a cos θ)₊^p⟩ ≥ ⟨1 − a cos θ⟩^p = 1`, eq. M5), or the closed
