@@ -162,8 +162,7 @@ fn fit_reads_a_sweep_file_and_refuses_bad_ones() {
 /// and a sphere (stall force −μ(0⁺) of the MDR, no-load velocity a root of
 /// its law: |μ(v_nl)| within the MDR's bound plus the law's slope (≤ 5 per
 /// ωW₀ here, checked by a difference quotient) times the root's bracket
-/// 8ε·v_c). Lift-off has a derived input power and so an efficiency; the
-/// sphere does not: its efficiency is null and stderr names it in one line.
+/// 8ε·v_c). Both have a derived input power and so an efficiency.
 #[test]
 fn load_line_of_every_contact() {
     use model_core::mdr::{self, Profile};
@@ -219,7 +218,24 @@ fn load_line_of_every_contact() {
         .concat(),
     );
     assert_eq!(o["contact"], "sphere");
-    assert!(o["max_efficiency"].is_null());
+    // Its efficiency is the bed's (mdr::powers::profile_powers): at least
+    // every value of a dense scan over (0, v_nl), and in (0, 1].
+    {
+        let eta = o["max_efficiency"].as_f64().unwrap();
+        let vnl = o["no_load_velocity"].as_f64().unwrap();
+        let d = Drive::new::<Libm>(0.5, 1.0, 40f64.to_radians());
+        let mut scan: f64 = 0.0;
+        for i in 1..200 {
+            let v = vnl * f64::from(i) / 200.0;
+            let r =
+                mdr::powers::profile_powers::<f64, Libm>(&d, &Profile::Sphere, v, 1e-6).unwrap();
+            scan = scan.max(r.powers.efficiency());
+        }
+        assert!(
+            eta >= scan - 1e-12 && eta <= 1.0 && eta > 0.0,
+            "η {eta} scan {scan}"
+        );
+    }
     let d = Drive::new::<Libm>(0.5, 1.0, 40f64.to_radians());
     let p = Profile::Sphere;
     let (plus, _) = mdr::limits_at_zero::<f64, Libm>(&d, &p, 1e-8).unwrap();
@@ -280,5 +296,5 @@ fn load_line_of_every_contact() {
     let rel = o["stall_force_over_mu0_fz"].as_f64().unwrap();
     let newton = o["stall_force"].as_f64().unwrap();
     assert!((newton - rel * 0.3 * fz).abs() <= 1e-12 * newton.abs().max(1e-300));
-    assert!(o["max_efficiency"].is_null());
+    assert!(o["max_efficiency"].as_f64().unwrap() > 0.0);
 }

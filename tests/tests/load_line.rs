@@ -433,3 +433,121 @@ fn liftoff_powers_match_an_independent_simulation() {
     );
     println!("  P_in Richardson-extrapolated from 2^18, 2^19: worst gap {worst_richardson:e}");
 }
+
+/// One MDR spring of band offset `dd` with lift-off (`|dd| ≤ a`), fixed-step
+/// from θ = 0 — in the air for every such spring (`w(0) = dd − a ≤ 0`) — the
+/// paper's clamp to `[−w⁺, w⁺]`: `(∫s X'dθ, ∫s u̇_c dθ, ∫s dθ)/2π` (per unit
+/// phase; trapezoid work sums as `simulate_liftoff`).
+fn simulate_spring(dd: f64, a: f64, bc: f64, bs: f64, v: f64, n: u32) -> [f64; 3] {
+    let h = TAU / f64::from(n);
+    let x = |t: f64| bc * t.cos() - bs * t.sin();
+    let mut s = 0.0f64;
+    let (mut p_in, mut p_f, mut sum_s) = (0.0, 0.0, 0.0);
+    for k in 0..n {
+        let t0 = f64::from(k) * h;
+        let t1 = t0 + h;
+        let dx = x(t1) - x(t0);
+        let trial = s + v * h + dx;
+        p_in += 0.5 * (s + trial) * dx;
+        let band = (dd - a * t1.cos()).max(0.0);
+        let clamped = trial.clamp(-band, band);
+        p_f += 0.5 * (trial + clamped) * (trial - clamped);
+        sum_s += 0.5 * (s + clamped) * h;
+        s = clamped;
+    }
+    [p_in / TAU, p_f / TAU, sum_s / TAU]
+}
+
+/// A bed of `m` springs of the profile ξⁿ at a ≥ 1 (all lift off), each
+/// simulated with `steps` per period; midpoints in ξ over [0, ξ_max]; D by
+/// the same midpoints with each spring's ⟨w⁺⟩ on the same grid.
+/// Returns `(μ, P_in, P_fric)` in units of μ₀F̄z ωW₀.
+fn bed_brute_force(n: f64, a: f64, bc: f64, bs: f64, v: f64, m: u32, steps: u32) -> [f64; 3] {
+    let xi_max = (1.0 + a).powf(1.0 / n);
+    let hx = xi_max / f64::from(m);
+    let (mut tot, mut den) = ([0.0; 3], 0.0);
+    for i in 0..m {
+        let dd = 1.0 - ((f64::from(i) + 0.5) * hx).powf(n);
+        let w = simulate_spring(dd, a, bc, bs, v, steps);
+        for k in 0..3 {
+            tot[k] += w[k] * hx;
+        }
+        let ht = TAU / f64::from(steps);
+        let band: f64 = (0..steps)
+            .map(|j| (dd - a * ((f64::from(j) + 0.5) * ht).cos()).max(0.0))
+            .sum::<f64>()
+            / f64::from(steps);
+        den += band * hx;
+    }
+    [tot[2] / den, tot[0] / den, tot[1] / den]
+}
+
+/// Curved profiles (`mdr::powers::profile_powers`): the bed's balance
+/// P_in = P_out + P_fric (each spring balances exactly; the three totals
+/// come from one quadrature, so they may differ by the stated bound of each,
+/// and P_out = −μV by |V| times μ's), μ against the MDR's own μ quadrature
+/// (`mdr::mu_over_mu0`, which also searches the kinks) within both bounds;
+/// and at a ≥ 1 (every spring lifts off, one period each is its steady
+/// state) against a brute force over springs written here: 200 springs ×
+/// 2¹² steps and 400 × 2¹³, accepted within 1.5× that change (both the ξ
+/// midpoints and the per-spring runs converge at order ≥ 1) plus each
+/// spring's landing offset bound `(|V| + b)h` times `(1 + a + b + |V|)`
+/// (as `liftoff_powers_match_an_independent_simulation`), weighted
+/// `ξ_max/D`, and the profile's bound.
+#[test]
+fn profile_powers_balance_and_brute_force() {
+    use model_core::mdr::powers::profile_powers;
+    use model_core::mdr::{self, Profile};
+    use model_core::Drive;
+    let mut worst: f64 = 0.0;
+    for p in [Profile::Sphere, Profile::Cone] {
+        for &(a, b, phi) in &[(0.5, 1.0, 0.7), (1.5, 0.75, 0.35)] {
+            let d = Drive::new::<Libm>(a, b, phi);
+            let (cf, cb) = mdr::critical_velocities::<f64, Libm>(&d, &p).unwrap();
+            for frac in [0.1, 0.5, -0.4, 1.1] {
+                let v = if frac > 0.0 { frac * cf } else { frac * cb };
+                let r = profile_powers::<f64, Libm>(&d, &p, v, 1e-6).unwrap();
+                let pw = r.powers;
+                let gap = (pw.input - pw.output - pw.friction).abs();
+                worst = worst.max(gap);
+                assert!(
+                    gap <= (2.0 + v.abs()) * r.bound,
+                    "{p:?} a={a} v={v}: balance gap {gap:e}, bound {:e}",
+                    r.bound
+                );
+                assert!(pw.friction >= -r.bound);
+                let m = mdr::mu_over_mu0::<f64, Libm>(&d, &p, v, 1e-6).unwrap();
+                assert!(
+                    (m.mu_over_mu0 - pw.mu_over_mu0).abs() <= m.bound + r.bound,
+                    "{p:?} a={a} v={v}: μ {} vs MDR {}",
+                    pw.mu_over_mu0,
+                    m.mu_over_mu0
+                );
+                if a >= 1.0 && frac.abs() < 1.0 {
+                    let nexp = p.exponent().unwrap();
+                    let c = bed_brute_force(nexp, a, d.bc, d.bs, v, 200, 1 << 12);
+                    let f = bed_brute_force(nexp, a, d.bc, d.bs, v, 400, 1 << 13);
+                    let h = TAU / f64::from(1u32 << 13);
+                    let xi_max = (1.0 + a).powf(1.0 / nexp);
+                    let landing =
+                        (v.abs() + b) * h * (1.0 + a + b + v.abs()) * xi_max / r.mean_normal;
+                    for (k, exact) in [pw.mu_over_mu0, pw.input, pw.friction].iter().enumerate() {
+                        let allow = 1.5 * (c[k] - f[k]).abs() + landing + r.bound;
+                        assert!(
+                            (exact - f[k]).abs() <= allow,
+                            "{p:?} a={a} v={v} [{k}]: {exact} vs brute force {} (allow {allow:e})",
+                            f[k]
+                        );
+                    }
+                    println!(
+                        "{p:?} a={a} v={v:.3}: gaps μ {:.1e} P_in {:.1e} P_fric {:.1e}",
+                        (pw.mu_over_mu0 - f[0]).abs(),
+                        (pw.input - f[1]).abs(),
+                        (pw.friction - f[2]).abs()
+                    );
+                }
+            }
+        }
+    }
+    println!("profile powers: worst balance gap {worst:e}");
+}

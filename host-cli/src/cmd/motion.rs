@@ -9,7 +9,7 @@
 //!
 //! # Method choice (`--method auto`)
 //! The homogenised model replaces the contact by its steady-state law. Its
-//! error `E_h = π²KS/(2n̄)` (units ωW₀) is derived in
+//! error `E_h = π²K·reach·S/(2n̄)` (units ωW₀; `reach` 1 for the flat punch) is derived in
 //! [`crate::motion::estimate`]: `K` bounds the body's acceleration in
 //! ultrasonic units (its ripple within a period against its response time
 //! for `M > 0`; the scale separation `ν·max|dV/dT|` for `M = 0`), `S` is the

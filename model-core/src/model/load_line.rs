@@ -3,8 +3,10 @@
 //! equivalent to a vibrational drive or actuator", §3.2).
 //!
 //! # Conventions
-//! The friction force on the body is `−μ(v)·F̄z` along `+x` (`F̄z = k_z u_z0`,
-//! the mean normal force); an external force `F` on the body is balanced in the
+//! The friction force on the body is `−μ(v)·F̄z` along `+x` (`F̄z` the mean
+//! normal force: `k_z u_z0` in permanent contact, `k_z u_z0⟨w⁺⟩` with
+//! lift-off, `k_z u_z0·D` for a curved profile, [`crate::model::mdr::powers`]);
+//! an external force `F` on the body is balanced in the
 //! quasi-static steady state when `F = μ(v)·F̄z`. The contact *pushes* forward
 //! where `μ(v) < 0` for `v ≥ 0`.
 //!
@@ -139,20 +141,22 @@ pub fn liftoff_powers<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<Powers
 }
 
 /// The work integrals of a run of arcs (per unit phase, not yet divided by
-/// a period): input `∫s X' dθ`, friction `∫s u̇_x,c dθ`, and the stretch at
-/// the last arc's end.
+/// a period): input `∫s X' dθ`, friction `∫s u̇_x,c dθ`, `∫s dθ`, and the
+/// stretch at the last arc's end.
 #[derive(Debug, Clone, Copy)]
-struct ArcWork<T> {
-    input: T,
-    friction: T,
-    s_end: T,
+pub(crate) struct ArcWork<T> {
+    pub(crate) input: T,
+    pub(crate) friction: T,
+    /// `∫ s dθ`.
+    pub(crate) stretch: T,
+    pub(crate) s_end: T,
 }
 
 /// Integrates the input and friction work over consecutive arcs of the band
 /// `w = offset − a cos θ`, starting from the stretch `s0` at the first arc's
 /// start: on a stick arc `s = C + Vθ + X(θ)`, on a forward (backward) slip
 /// arc `s = +w` (`−w`), `X = b cos(θ + φ)`.
-fn arc_work<T: Float, M: Math<T>>(
+pub(crate) fn arc_work<T: Float, M: Math<T>>(
     d: &Drive<T>,
     offset: T,
     v: T,
@@ -172,7 +176,7 @@ fn arc_work<T: Float, M: Math<T>>(
         offset * x_at(s, c) - a * ((bc * c2 - bs * s2) * T::from_f64(0.25) - bs * T::HALF * t)
     };
     let mut s0 = s0;
-    let (mut input, mut friction) = (T::ZERO, T::ZERO);
+    let (mut input, mut friction, mut stretch) = (T::ZERO, T::ZERO, T::ZERO);
     for arc in arcs {
         let (t0, t1) = (arc.start, arc.end);
         let (sn0, cs0) = M::sin_cos(t0);
@@ -186,6 +190,9 @@ fn arc_work<T: Float, M: Math<T>>(
                 input += cc * (x1 - x0)
                     + v * ((t1 * x1 - t0 * x0) - (x_int(sn1, cs1) - x_int(sn0, cs0)))
                     + (x1 * x1 - x0 * x0) * T::HALF;
+                stretch += cc * (t1 - t0)
+                    + v * (t1 - t0) * (t1 + t0) * T::HALF
+                    + (x_int(sn1, cs1) - x_int(sn0, cs0));
                 s0 = cc + v * t1 + x1;
             }
             ArcKind::SlipForward | ArcKind::SlipBackward => {
@@ -200,6 +207,7 @@ fn arc_work<T: Float, M: Math<T>>(
                 let w_int = offset * (t1 - t0) - a * (sn1 - sn0);
                 let (w0, w1) = (w_at(cs0), w_at(cs1));
                 input += sign * wx;
+                stretch += sign * w_int;
                 friction += sign * (v * w_int + wx) - (w1 * w1 - w0 * w0) * T::HALF;
                 s0 = sign * w1;
             }
@@ -208,6 +216,7 @@ fn arc_work<T: Float, M: Math<T>>(
     ArcWork {
         input,
         friction,
+        stretch,
         s_end: s0,
     }
 }

@@ -114,6 +114,7 @@
 //! rounding) is refused with [`MdrError::ToleranceTooTight`].
 
 pub mod normal;
+pub mod powers;
 pub mod profile;
 pub mod quadrature;
 pub(crate) mod spring;
@@ -208,7 +209,7 @@ pub struct MdrResult<T> {
     pub evaluations: u32,
 }
 
-fn check<T: Float>(d: &Drive<T>, p: &Profile<T>) -> Result<(), MdrError> {
+pub(crate) fn check<T: Float>(d: &Drive<T>, p: &Profile<T>) -> Result<(), MdrError> {
     p.validate()?;
     if !d.is_valid_with_contact(ContactMode::Intermittent) {
         return Err(MdrError::BadDrive);
