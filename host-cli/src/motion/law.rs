@@ -7,16 +7,15 @@
 //! |---|---|---|---|---|
 //! | flat punch, permanent contact (`a < 1`) | exact solver (or eq. 21/24 when their bound fits) | the static band `[μ(0⁻), μ(0⁺)]` (`Value::AtRest`) | eq. 8 | `k_z u_z0` |
 //! | flat punch with lift-off (`a ≥ 1`) | lift-off window solver | unique: `μ(0⁺) = μ(0⁻) = μ(0)` | eq. L5 | `k_z u_z0⟨w⁺⟩` (eq. L4) |
-//!
 //! | curved profile (sphere, cone, power; MDR) | MDR quadrature | `[μ(0⁻), μ(0⁺)]` (`Value::Limits`; unique for `a ≥ 1`) | the flat punch's (`mdr::critical_velocities`) | `k_z u_z0·D` (eq. M5; `k_z = 2E*a₀`, `mdr::mean_normal_force`) |
 //!
 //! All of them are asked through one function, [`select::mu_within_profile`]
 //! (the flat profile is exactly [`select::mu_within`]). The rest of the slow
 //! dynamics needs nothing else from a contact model except where stated:
 //! [`Law::exponent`] (the resolved model's bed of springs),
-//! [`Law::powers`] (input power, friction loss: every contact) and [`Law::mean_normal`] (the mean normal force in units of
-//! `k_z u_z0`, unknown for a curved profile: a body with mass or a spring,
-//! whose units need it, is refused there).
+//! [`Law::powers`] (input power, friction loss: every contact),
+//! [`Law::mean_normal`] (the mean normal force in units of `k_z u_z0`: every
+//! contact) and [`Law::spring_bounds`] (for the error estimate).
 //!
 //! Every value carries the bound `select` guarantees for it (units μ₀). The
 //! tolerance asked of `select` is the caller's; when no method of the contact
