@@ -675,3 +675,75 @@ fn sphere_is_continuous_across_a_equals_one() {
         4.5 * 2f64.sqrt()
     );
 }
+
+/// Brute force of the mean normal force `D = ∫₀^{ξ_max} ⟨w⁺⟩ dξ` over `m`
+/// springs (midpoints in ξ), each spring's `⟨(1 − ξⁿ − a cos θ)⁺⟩` by the
+/// midpoint rule over `k` phases in `[0, π]` (the band is even in θ): no
+/// closed form, no quadrature, no `mean_band` (eq. M4).
+fn normal_brute_force(n: f64, a: f64, m: u32, k: u32) -> f64 {
+    let xi_max = (1.0 + a).powf(1.0 / n);
+    let hx = xi_max / f64::from(m);
+    let ht = std::f64::consts::PI / f64::from(k);
+    let cos: Vec<f64> = (0..k).map(|j| ((f64::from(j) + 0.5) * ht).cos()).collect();
+    let mut sum = 0.0;
+    for i in 0..m {
+        let d = 1.0 - ((f64::from(i) + 0.5) * hx).powf(n);
+        let mut band = 0.0;
+        for c in &cos {
+            band += (d - a * c).max(0.0);
+        }
+        sum += band / f64::from(k);
+    }
+    sum * hx
+}
+
+/// `mdr::mean_normal_force` (the curved contact's F̄z/(k_z u_z0), eq. M5,
+/// closed form or Gauss–Kronrod) against the brute force over springs at
+/// (m, k) = (2000, 2000) and (4000, 4000): accepted within twice the brute
+/// force's change between the two (its error at the finer level is below
+/// that change for an order ≥ 1 method: the ξ midpoint rule on the rim's
+/// `(ξ_max − ξ)^{3/2}` converges at order 1.5, the θ midpoint on a kinked
+/// band at order 2) plus the quadrature's stated bound. a = 0 is Hertz's
+/// `n/(n + 1)` exactly (every spring in permanent contact).
+#[test]
+fn mean_normal_force_against_brute_force_over_springs() {
+    use model_core::mdr::mean_normal_force;
+    for n in [1.0, 2.0, 1.5, 3.0] {
+        let p = match n {
+            1.0 => Profile::Cone,
+            2.0 => Profile::Sphere,
+            _ => Profile::Power(n),
+        };
+        let (d0, b0) = mean_normal_force::<f64, Libm>(&p, 0.0, 1e-10).unwrap();
+        assert!(
+            (d0 - n / (n + 1.0)).abs() <= b0 + 1e-15,
+            "n={n}: D(0) = {d0}"
+        );
+        for a in [0.3, 0.7, 1.0, 1.5, 2.5] {
+            let (d, bound) = mean_normal_force::<f64, Libm>(&p, a, 1e-10).unwrap();
+            assert!(bound <= 1e-10 * d);
+            let coarse = normal_brute_force(n, a, 2000, 2000);
+            let fine = normal_brute_force(n, a, 4000, 4000);
+            let allow = 2.0 * (coarse - fine).abs() + bound;
+            assert!(
+                (d - fine).abs() <= allow,
+                "n={n} a={a}: D = {d}, brute force {fine} (allow {allow:e})"
+            );
+        }
+    }
+    // The flat punch: 1 in permanent contact, ⟨w⁺⟩ of eq. L4 with lift-off.
+    assert_eq!(
+        mean_normal_force::<f64, Libm>(&Profile::Flat, 0.5, 1e-10)
+            .unwrap()
+            .0,
+        1.0
+    );
+    let (w, _) = mean_normal_force::<f64, Libm>(&Profile::Flat, 1.5, 1e-10).unwrap();
+    let tc = (1.0f64 / 1.5).acos();
+    let l4 = (std::f64::consts::PI - tc + (1.5f64 * 1.5 - 1.0).sqrt()) / std::f64::consts::PI;
+    assert!((w - l4).abs() <= 1e-15);
+    // Refusals: a bad exponent, a negative a, a bad tolerance.
+    assert!(mean_normal_force::<f64, Libm>(&Profile::Power(-1.0), 0.5, 1e-10).is_err());
+    assert!(mean_normal_force::<f64, Libm>(&Profile::Sphere, -0.5, 1e-10).is_err());
+    assert!(mean_normal_force::<f64, Libm>(&Profile::Power(1.5), 0.5, 0.0).is_err());
+}

@@ -124,7 +124,7 @@ fn compare(c: &Case, inv_nu: f64, mass: f64, tick: &mut dyn FnMut()) -> Point {
         nu: 1.0 / inv_nu,
         mass,
         kappa: 0.0,
-        normal: c.law.mean_normal().unwrap_or(1.0),
+        normal: c.law.mean_normal().expect("flat punch: closed form"),
     };
     let tol = 0.1 * TOL * c.v_ref();
     let t0 = Instant::now();
@@ -139,11 +139,12 @@ fn compare(c: &Case, inv_nu: f64, mass: f64, tick: &mut dyn FnMut()) -> Point {
         tick,
     );
     let h_time = t0.elapsed().as_secs_f64() + c.table_time;
-    let e_h = estimate::homogenisation_error(&p, c.law.scene().drive().a, &c.table, &h);
+    let e_h = estimate::homogenisation_error(&p, c.law.spring_bounds(), &c.table, &h);
     let t0 = Instant::now();
     let r = resolved::run(
         &p,
         &c.law.scene().drive(),
+        c.law.exponent(),
         &resolved::Settings {
             tol,
             periods: None,

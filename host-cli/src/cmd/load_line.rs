@@ -5,25 +5,24 @@
 //!
 //! μ(v) comes through [`crate::motion::law::Law`], the one interface for
 //! every contact model: stall forces, no-load velocities and the output
-//! power `−μ(v)F̄z·v` exist for all of them. The transducers' input power and
-//! so the efficiency are derived for the flat punch in permanent contact only
-//! ([`load_line::powers`]); for another contact they are refused with one
-//! line naming it (JSON `null`), not approximated.
+//! power `−μ(v)F̄z·v` exist for all of them, and so do the transducers' input
+//! power and the efficiency: the flat punch in permanent contact
+//! ([`load_line::powers`]) and with lift-off ([`load_line::liftoff_powers`]),
+//! closed form; a curved profile as the bed's sum
+//! ([`model_core::mdr::powers::profile_powers`], bound 1e-6).
 
 use std::io::Write;
 use std::path::PathBuf;
 
 use clap::Args;
 use model_core::model::load_line::{
-    self, best_forward, load_line_of, maximise_forward, powers, Objective, OperatingPoint,
+    self, best_forward_of, load_line_of, Objective, OperatingPoint,
 };
 use model_core::scene::ContactMode;
-use model_core::Libm;
 use serde::Serialize;
 
 use crate::args::count;
 use crate::error::{CliError, CliResult};
-use crate::eval::exact_failure;
 use crate::motion::law::{Law, LawError};
 use crate::output::{stdout_error, write_json};
 use crate::plot::{render_panels, Mark, Panel, Series};
@@ -67,14 +66,13 @@ struct LoadLineOut {
     velocity_at_max_power: f64,
     /// Load force there (units μ0·F̄z).
     force_at_max_power_over_mu0_fz: f64,
-    /// Largest forward efficiency P_out/P_in (null where the contact model
-    /// has no derived input power).
+    /// Largest forward efficiency P_out/P_in (0 when the scene does not push forward).
     max_efficiency: Option<f64>,
-    /// Velocity of the maximum efficiency point (null as max_efficiency).
+    /// Velocity of the maximum efficiency point.
     velocity_at_max_efficiency: Option<f64>,
-    /// Contact model: flat | lift-off.
+    /// Contact model: flat | lift-off | sphere | cone | power.
     contact: &'static str,
-    /// Mean normal force F̄z (N; kz·uz0 in permanent contact, kz·uz0·⟨w⁺⟩ with lift-off; in units of kz·uz0 for a dimensionless scene, whose forces and powers are in units of μ0·F̄z and μ0·F̄z·ωW0).
+    /// Mean normal force F̄z (N; kz·uz0 in permanent contact, kz·uz0·⟨w⁺⟩ with lift-off, kz·uz0·D (eq. M5) for a curved profile whose kz is its incremental stiffness 2E*a0; in units of kz·uz0 for a dimensionless scene, whose forces and powers are in units of μ0·F̄z and μ0·F̄z·ωW0).
     fz_mean: f64,
     /// Velocity unit ωW0 (m/s; 1 for a dimensionless scene).
     velocity_scale: f64,
@@ -92,19 +90,11 @@ impl LoadLineCmd {
         }
         let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         let s = &rs.scene;
-        let d = s.drive();
         let p = s.params();
         let law = Law::with_profile(s, rs.profile);
-        let normal = match law.mean_normal() {
-            Some(n) => n,
-            None if rs.dimensionless => 1.0,
-            None => {
-                return Err(CliError::usage(format!(
-                    "--profile: the {} profile's mean normal force in newtons is not derived here; give the scene by its groups (--duz-rel, --ratio) for a load line in units of μ0·F̄z",
-                    law.name()
-                )))
-            }
-        };
+        let normal = law
+            .mean_normal()
+            .map_err(|e| CliError::failure(e.to_string()))?;
         let fz = p.kz * p.uz0 * normal;
         // Dimensionless scenes report forces in units of μ0·F̄z (F̄z = 1 unit).
         let force_scale = if rs.dimensionless { 1.0 } else { s.mu0() * fz };
@@ -119,32 +109,14 @@ impl LoadLineCmd {
             law.mu(v, tol).map(|m| m.0)
         })
         .map_err(fail)?;
-        let (vp, fp, pp, eff) = if law.has_powers() {
-            let best_p =
-                best_forward::<f64, Libm>(&d, &line, Objective::Power).map_err(exact_failure)?;
-            let best_e = best_forward::<f64, Libm>(&d, &line, Objective::Efficiency)
-                .map_err(exact_failure)?;
-            let get = |b: &Option<OperatingPoint<f64>>| {
-                b.map_or((0.0, 0.0, 0.0), |o| (o.v, o.force, o.powers.output))
-            };
-            let (vp, fp, pp) = get(&best_p);
-            let eff = best_e.map_or((0.0, 0.0), |o| (o.powers.efficiency(), o.v));
-            (vp, fp, pp, Some(eff))
-        } else if line.no_load_forward > 0.0 {
-            // Output power −μ(V)·V needs only the law.
-            let vp = maximise_forward(line.no_load_forward, |v| law.mu(v, tol).map(|m| -m.0 * v))
-                .map_err(fail)?;
-            let mu = law.mu(vp, tol).map_err(fail)?.0;
-            (vp, -mu, -mu * vp, None)
-        } else {
-            (0.0, 0.0, 0.0, None)
+        let best_p = best_forward_of(&line, Objective::Power, |v| law.powers(v)).map_err(fail)?;
+        let best_e =
+            best_forward_of(&line, Objective::Efficiency, |v| law.powers(v)).map_err(fail)?;
+        let get = |b: &Option<OperatingPoint<f64>>| {
+            b.map_or((0.0, 0.0, 0.0), |o| (o.v, o.force, o.powers.output))
         };
-        if eff.is_none() {
-            eprintln!(
-                "load-line: input power and efficiency not computed for the {} contact (derived for the flat punch in permanent contact only)",
-                law.name()
-            );
-        }
+        let (vp, fp, pp) = get(&best_p);
+        let eff = Some(best_e.map_or((0.0, 0.0), |o| (o.powers.efficiency(), o.v)));
         let o = LoadLineOut {
             stall_force_over_mu0_fz: line.stall_forward,
             stall_force: line.stall_forward * force_scale,
@@ -212,21 +184,14 @@ impl LoadLineCmd {
         for i in 1..n {
             let v = line.no_load_forward * i as f64 / n as f64;
             let x = v * o.velocity_scale;
-            if law.has_powers() {
-                let pw = powers::<f64, Libm>(d, v).map_err(exact_failure)?;
-                force.push((x, -pw.mu_over_mu0));
-                pin.push((x, pw.input * o.power_scale));
-                pout.push((x, pw.output * o.power_scale));
-                pf.push((x, pw.friction * o.power_scale));
-                eta.push((x, pw.efficiency()));
-            } else {
-                let mu = law
-                    .mu(v, 1e-12)
-                    .map_err(|e| CliError::failure(e.to_string()))?
-                    .0;
-                force.push((x, -mu));
-                pout.push((x, -mu * v * o.power_scale));
-            }
+            let pw = law
+                .powers(v)
+                .map_err(|e| CliError::failure(e.to_string()))?;
+            force.push((x, -pw.mu_over_mu0));
+            pin.push((x, pw.input * o.power_scale));
+            pout.push((x, pw.output * o.power_scale));
+            pf.push((x, pw.friction * o.power_scale));
+            eta.push((x, pw.efficiency()));
         }
         force.insert(0, (0.0, line.stall_forward));
         force.push((o.no_load_velocity, 0.0));
@@ -246,30 +211,13 @@ impl LoadLineCmd {
             color,
         };
         let line_panel = Panel {
-            title: format!("load line, {} contact ({scene})", law.name()),
+            title: format!("{}: {scene}", law.name()),
             x_label: vunit.into(),
             y_label: "load −μ/μ0 (units μ0·F̄z)".into(),
             x: (0.0, xmax),
             y: (0.0, line.stall_forward * 1.1),
             series: vec![series("−μ(v)/μ0", force, Mark::Line, 0)],
         };
-        if !law.has_powers() {
-            let panels = [
-                line_panel,
-                Panel {
-                    title: format!(
-                        "output power −μ(v)F̄z·v (input power: not derived for the {} contact)",
-                        law.name()
-                    ),
-                    x_label: vunit.into(),
-                    y_label: punit.into(),
-                    x: (0.0, xmax),
-                    y: (0.0, pmax.max(1e-300)),
-                    series: vec![series("P_out, to the body", pout, Mark::Line, 1)],
-                },
-            ];
-            return render_panels(path, &panels, 1, 2, (1700, 650));
-        }
         let panels = [
             line_panel,
             Panel {

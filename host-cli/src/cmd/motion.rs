@@ -9,7 +9,7 @@
 //!
 //! # Method choice (`--method auto`)
 //! The homogenised model replaces the contact by its steady-state law. Its
-//! error `E_h = π²KS/(2n̄)` (units ωW₀) is derived in
+//! error `E_h = π²K·reach·S/(2n̄)` (units ωW₀; `reach` 1 for the flat punch) is derived in
 //! [`crate::motion::estimate`]: `K` bounds the body's acceleration in
 //! ultrasonic units (its ripple within a period against its response time
 //! for `M > 0`; the scale separation `ν·max|dV/dT|` for `M = 0`), `S` is the
@@ -59,13 +59,13 @@ pub struct MotionCmd {
     /// Mass of the body M, kg (0: massless, quasi-static; units k_x/ω² for a dimensionless scene)
     #[arg(long, allow_hyphen_values = true)]
     mass: f64,
-    /// Force amplitude f: F(t) = μ0·kz·uz0·(f0 + f·sin Ωt)
+    /// Force amplitude f: F(t) = μ0·F̄z·(f0 + f·sin Ωt), F̄z the mean normal force
     #[arg(long, allow_hyphen_values = true)]
     force_amp_rel: f64,
     /// Angular frequency Ω of the force, rad/s (units of ω for a dimensionless scene)
     #[arg(long, allow_hyphen_values = true)]
     force_omega: f64,
-    /// Mean force f0, units of μ0·kz·uz0
+    /// Mean force f0, units of μ0·F̄z
     #[arg(long, allow_hyphen_values = true, default_value_t = 0.0)]
     force_offset_rel: f64,
     /// Stiffness K of a spring tying the body to ground, N/m (units of k_x for a dimensionless scene)
@@ -95,7 +95,7 @@ pub struct MotionCmd {
 #[derive(Serialize, Debug)]
 struct Outcome {
     method: &'static str,
-    /// Contact model: flat | lift-off.
+    /// Contact model: flat | lift-off | sphere | cone | power.
     contact: &'static str,
     /// Drift over the last load period, m/s.
     mean_velocity: f64,
@@ -114,13 +114,15 @@ struct Outcome {
     periods: u32,
     /// Steps per load period (homogenised) or per ultrasonic period (resolved).
     steps: u64,
+    /// Springs of the resolved contact (1: flat punch; a curved profile's MDR bed after doubling); 0 for homogenised runs.
+    springs: usize,
     /// ω/Ω.
     scale_separation: f64,
     /// Body's response time M/(largest slope of μ(v)·F̄z), s.
     response_time: f64,
     /// Mω²/k_x.
     mass_rel: f64,
-    /// Mean normal force F̄z in units of kz·uz0 (1: permanent contact).
+    /// Mean normal force F̄z in units of kz·uz0 (1: permanent contact; ⟨w⁺⟩ with lift-off; D of eq. M5 for a curved profile, kz = 2E*a0).
     fz_mean_over_kz_uz0: f64,
     mu_0plus_over_mu0: f64,
     mu_0minus_over_mu0: f64,
@@ -202,30 +204,11 @@ impl MotionCmd {
             }
         };
         let law_fn = Law::with_profile(&scene, rs.profile);
-        // A curved profile's mean normal force (in units of k_z u_z0) is not
-        // derived: only what needs no force scale is computed for it.
-        let normal = match law_fn.mean_normal() {
-            Some(n) => n,
-            None => {
-                let name = law_fn.name();
-                if !rs.dimensionless {
-                    return Err(CliError::usage(format!(
-                        "--profile: the {name} profile's mean normal force in newtons is not derived here; give the scene by its groups (--duz-rel, --ratio)"
-                    )));
-                }
-                if self.mass != 0.0 {
-                    return Err(CliError::usage(format!(
-                        "--mass: a body with mass on the {name} profile needs its mean normal force in units of k_z·u_z0, not derived here; use --mass 0"
-                    )));
-                }
-                if self.spring != 0.0 {
-                    return Err(CliError::usage(format!(
-                        "--spring: a spring on the {name} profile needs its mean normal force in units of k_z·u_z0, not derived here"
-                    )));
-                }
-                1.0
-            }
-        };
+        // The mean normal force in units of k_z u_z0, every contact (a curved
+        // profile's: D of eq. M5 with k_z its incremental stiffness 2E*a0).
+        let normal = law_fn
+            .mean_normal()
+            .map_err(|e| CliError::failure(e.to_string()))?;
         let p = Problem {
             f0,
             f,
@@ -255,11 +238,6 @@ impl MotionCmd {
             }
             (m, _) => m,
         };
-        if method == MotionMethod::Resolved {
-            law_fn
-                .resolvable()
-                .map_err(|e| CliError::usage(format!("--method: {e}")))?;
-        }
         let d = scene.drive();
         let vs = scene.velocity_scale();
         let started = Instant::now();
@@ -286,15 +264,11 @@ impl MotionCmd {
         let h_run = homogenised::run(&p, &law, &hs, &mut || {
             tick();
         });
-        let e_h = estimate::homogenisation_error(&p, d.a, &law, &h_run);
+        let e_h = estimate::homogenisation_error(&p, law_fn.spring_bounds(), &law, &h_run);
         let use_h = match method {
             MotionMethod::Homogenised => true,
             MotionMethod::Resolved => false,
-            MotionMethod::Auto => {
-                mass == 0.0
-                    || e_h + e_table + h_run.numerical_error <= tol_v
-                    || law_fn.resolvable().is_err()
-            }
+            MotionMethod::Auto => mass == 0.0 || e_h + e_table + h_run.numerical_error <= tol_v,
         };
         let run: Run = if use_h {
             h_run
@@ -305,7 +279,7 @@ impl MotionCmd {
                 periods,
                 max_periods: MAX_PERIODS,
             };
-            resolved::run(&p, &d, &s, &mut || {
+            resolved::run(&p, &d, law_fn.exponent(), &s, &mut || {
                 tick();
             })
         };
@@ -328,6 +302,7 @@ impl MotionCmd {
             periodic: run.periodic,
             periods: run.periods,
             steps: run.steps,
+            springs: run.springs,
             scale_separation: 1.0 / p.nu,
             response_time: if slope > 0.0 {
                 p.mass / (p.normal * slope) / prm.omega

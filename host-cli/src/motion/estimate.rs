@@ -23,9 +23,16 @@
 //!    `|X''| ≤ K`). With `L = 2π` the mean spring force over the window is
 //!    within `2·K·4π²/16 = π²K/2` of `μ(V)·F̄z`.
 //!
+//! **Curved profiles** (MDR): every spring of the bed is its own play operator
+//! on the same input, so step 2 holds spring by spring and the total force
+//! (units `k_x W₀`, `k_x = 2G*a₀`) is `2δ·reach`-Lipschitz, `reach =
+//! (1 + a)^{1/n}` the width of the springs that ever touch; step 3 gives
+//! `π²K·reach/2` (`law::Law::spring_bounds`; 1 for the flat punch).
+//!
 //! `K = sup|d²X/dτ²|`: for a body of mass `m̃ = Mω²/k_x`, `m̃X'' = n̄g − s`
-//! with `|s| ≤ 1 + a` and `|g| ≤ G = |f0| + |f| + κ max|X|/n̄`, so
-//! `K ≤ (n̄G + 1 + a)/m̃` — the ultrasonic ripple of the body against its
+//! with `|s| ≤ s_max` (`1 + a` for the flat punch, `n/(n + 1)(1 + a)^{1+1/n}`
+//! for a profile `n`) and `|g| ≤ G = |f0| + |f| + κ max|X|/n̄`, so
+//! `K ≤ (n̄G + s_max)/m̃` — the ultrasonic ripple of the body against its
 //! response time, and the slow acceleration with it. For the massless body
 //! `X' = V(T)` follows the law's inverse, `K = ν max|dV/dT|` (the scale
 //! separation), taken from the trajectory.
@@ -36,7 +43,7 @@
 //! so
 //!
 //! ```text
-//! E_h = π² K S / (2 n̄)       (units ωW₀)
+//! E_h = π² K·reach·S / (2 n̄)       (units ωW₀)
 //! ```
 //!
 //! Steps 1–3 are bounds; the last conversion is an estimate (the local slope
@@ -61,14 +68,15 @@ pub fn inverse_slope(law: &MuTable) -> f64 {
     .fold(0.0, f64::max)
 }
 
-/// `K = sup|d²X/dτ²|` (units W₀ per unit τ², module docs); `a = Δu_z/u_z0`.
-/// `run` is a homogenised run (its trajectory gives max|X| with a spring and
-/// max|dV/dT| for the massless body).
-pub fn curvature(p: &Problem, a: f64, run: &Run) -> f64 {
+/// `K = sup|d²X/dτ²|` (units W₀ per unit τ², module docs); `s_max` bounds
+/// the contact's spring force (units `k_x W₀`; `1 + a` for the flat punch,
+/// `law::Law::spring_bounds`). `run` is a homogenised run (its trajectory
+/// gives max|X| with a spring and max|dV/dT| for the massless body).
+pub fn curvature(p: &Problem, s_max: f64, run: &Run) -> f64 {
     if p.mass > 0.0 {
         let x_max = run.trajectory.iter().map(|s| s.x.abs()).fold(0.0, f64::max);
         let g = p.f0.abs() + p.f.abs() + p.kappa * x_max / p.normal;
-        (p.normal * g + 1.0 + a) / p.mass
+        (p.normal * g + s_max) / p.mass
     } else {
         let dv_dt = run
             .trajectory
@@ -80,7 +88,9 @@ pub fn curvature(p: &Problem, a: f64, run: &Run) -> f64 {
     }
 }
 
-/// `E_h = π²KS/(2n̄)` (units ωW₀, module docs).
-pub fn homogenisation_error(p: &Problem, a: f64, law: &MuTable, run: &Run) -> f64 {
-    PI * PI * curvature(p, a, run) * inverse_slope(law) / (2.0 * p.normal)
+/// `E_h = π²K·reach·S/(2n̄)` (units ωW₀, module docs); `bounds = (reach,
+/// s_max)` of the contact (`law::Law::spring_bounds`; `(1, 1 + a)` for the
+/// flat punch).
+pub fn homogenisation_error(p: &Problem, bounds: (f64, f64), law: &MuTable, run: &Run) -> f64 {
+    PI * PI * curvature(p, bounds.1, run) * bounds.0 * inverse_slope(law) / (2.0 * p.normal)
 }

@@ -278,6 +278,7 @@ fn run_n(
         periods,
         periodic,
         steps: n,
+        springs: 0,
         trajectory: rec.map(|_| Vec::new()).unwrap_or_default(),
     }
 }

@@ -7,17 +7,15 @@
 //! |---|---|---|---|---|
 //! | flat punch, permanent contact (`a < 1`) | exact solver (or eq. 21/24 when their bound fits) | the static band `[μ(0⁻), μ(0⁺)]` (`Value::AtRest`) | eq. 8 | `k_z u_z0` |
 //! | flat punch with lift-off (`a ≥ 1`) | lift-off window solver | unique: `μ(0⁺) = μ(0⁻) = μ(0)` | eq. L5 | `k_z u_z0⟨w⁺⟩` (eq. L4) |
-//!
-//! | curved profile (sphere, cone, power; MDR) | MDR quadrature | `[μ(0⁻), μ(0⁺)]` (`Value::Limits`; unique for `a ≥ 1`) | the flat punch's (`mdr::critical_velocities`) | not derived here |
+//! | curved profile (sphere, cone, power; MDR) | MDR quadrature | `[μ(0⁻), μ(0⁺)]` (`Value::Limits`; unique for `a ≥ 1`) | the flat punch's (`mdr::critical_velocities`) | `k_z u_z0·D` (eq. M5; `k_z = 2E*a₀`, `mdr::mean_normal_force`) |
 //!
 //! All of them are asked through one function, [`select::mu_within_profile`]
 //! (the flat profile is exactly [`select::mu_within`]). The rest of the slow
 //! dynamics needs nothing else from a contact model except where stated:
-//! [`Law::resolvable`] (no resolved model of a curved profile),
-//! [`Law::has_powers`] (input power only for the flat punch in permanent
-//! contact) and [`Law::mean_normal`] (the mean normal force in units of
-//! `k_z u_z0`, unknown for a curved profile: a body with mass or a spring,
-//! whose units need it, is refused there).
+//! [`Law::exponent`] (the resolved model's bed of springs),
+//! [`Law::powers`] (input power, friction loss: every contact),
+//! [`Law::mean_normal`] (the mean normal force in units of `k_z u_z0`: every
+//! contact) and [`Law::spring_bounds`] (for the error estimate).
 //!
 //! Every value carries the bound `select` guarantees for it (units μ₀). The
 //! tolerance asked of `select` is the caller's; when no method of the contact
@@ -26,6 +24,7 @@
 
 use model_core::mdr::{self, Profile};
 use model_core::model::liftoff;
+use model_core::model::load_line::{self, Powers};
 use model_core::select::{self, SelectError, Value};
 use model_core::{Libm, Scene};
 
@@ -125,40 +124,73 @@ impl Law {
     }
 
     /// The mean normal force `F̄z` in units of `k_z u_z0` (1 for permanent
-    /// contact, `⟨w⁺⟩` of eq. L4 with lift-off): friction and applied forces
-    /// are in units of `μ₀F̄z`, the contact's spring force in `μ₀k_z u_z0`.
-    /// `None` for a curved profile (not derived here).
-    pub fn mean_normal(&self) -> Option<f64> {
-        if !self.is_flat() {
-            None
-        } else if self.scene.lifts_off() {
-            Some(liftoff::mean_band::<f64, Libm>(self.scene.drive().a))
-        } else {
-            Some(1.0)
-        }
-    }
-
-    /// Whether the resolved (ultrasonic-scale) model exists for this contact:
-    /// the flat punch's single spring does (permanent or intermittent
-    /// contact); a curved profile's bed of springs does not (yet).
+    /// contact, `⟨w⁺⟩` of eq. L4 with lift-off, `D` of eq. M5 for a curved
+    /// profile, whose `k_z` is its incremental stiffness `2E*a₀`:
+    /// `mdr::mean_normal_force`): friction and applied forces are in units
+    /// of `μ₀F̄z`, the contact's spring force in `μ₀k_z u_z0`. Relative error
+    /// ≤ 1e-10 (closed forms: rounding).
     ///
     /// # Errors
-    /// One line naming the contact when it does not.
-    pub fn resolvable(&self) -> Result<(), LawError> {
-        if self.is_flat() {
-            Ok(())
-        } else {
-            Err(self.err(
-                "no resolved (ultrasonic-scale) model: it integrates the flat punch's single spring only",
-            ))
+    /// [`LawError`] when the profile's quadrature does not converge.
+    pub fn mean_normal(&self) -> Result<f64, LawError> {
+        mdr::mean_normal_force::<f64, Libm>(&self.profile, self.scene.drive().a, 1e-10)
+            .map(|r| r.0)
+            .map_err(|e| self.err(e.to_string()))
+    }
+
+    /// Bounds of the contact's tangential spring force for the error
+    /// estimate (`motion::estimate`), units of `k_x W₀ = μ₀k_z u_z0`:
+    /// `(reach, s_max)` with `reach` the width `∫dξ` of the springs that ever
+    /// touch (the Lipschitz constant of the total force in the drive, per
+    /// unit of the 2-Lipschitz stretch) and `s_max ≥ |Σ s|`. Flat punch:
+    /// `(1, 1 + a)` (`|s| ≤ w ≤ 1 + a`); profile `n`: springs reach
+    /// `ξ_max = (1 + a)^{1/n}` and `|Σs| ≤ ∫₀^{ξ_max}(1 + a − ξⁿ)dξ =
+    /// n/(n + 1)·(1 + a)^{1 + 1/n}` (→ the flat punch's as `n → ∞`).
+    pub fn spring_bounds(&self) -> (f64, f64) {
+        let a = self.scene.drive().a;
+        match self.profile.exponent() {
+            None => (1.0, 1.0 + a),
+            Some(n) => {
+                let reach = (1.0 + a).powf(1.0 / n);
+                (reach, n / (n + 1.0) * (1.0 + a) * reach)
+            }
         }
     }
 
-    /// Whether the transducers' input power (and so the efficiency) is
-    /// derived for this contact: only for the flat punch in permanent
-    /// contact (`model::load_line::powers`, closed form on the exact arcs).
-    pub fn has_powers(&self) -> bool {
-        self.is_flat() && !self.scene.lifts_off()
+    /// The profile's exponent `n` (`None` for the flat punch): the resolved
+    /// model's bed of springs (`resolved::Bed`).
+    pub fn exponent(&self) -> Option<f64> {
+        self.profile.exponent()
+    }
+
+    /// The powers of the steady state at dimensionless velocity `v` (units
+    /// `μ₀F̄z ωW₀`, `F̄z` the mean normal force of [`Law::mean_normal`]):
+    /// `v ≠ 0` in permanent contact (or a curved profile with `a < 1`), any
+    /// `v` with lift-off. A curved profile's quadrature is asked for a bound
+    /// of 1e-6 (units μ₀F̄z ωW₀), or the one it reached when that is tighter
+    /// than it can do.
+    ///
+    /// # Errors
+    /// [`LawError`] when the solver fails.
+    pub fn powers(&self, v: f64) -> Result<Powers<f64>, LawError> {
+        let d = self.scene.drive();
+        if !self.is_flat() {
+            let mut tol = 1e-6;
+            for _ in 0..2 {
+                match mdr::powers::profile_powers::<f64, Libm>(&d, &self.profile, v, tol) {
+                    Ok(r) => return Ok(r.powers),
+                    Err(mdr::MdrError::NotConverged { reached }) if reached.is_finite() => {
+                        tol = reached * 1.01;
+                    }
+                    Err(e) => return Err(self.err(e.to_string())),
+                }
+            }
+            Err(self.err("the profile's power quadrature does not meet its own bound"))
+        } else if self.scene.lifts_off() {
+            load_line::liftoff_powers::<f64, Libm>(&d, v).map_err(|e| self.err(e.to_string()))
+        } else {
+            load_line::powers::<f64, Libm>(&d, v).map_err(|e| self.err(e.to_string()))
+        }
     }
 
     /// μ/μ₀ at dimensionless velocity `v` (units ωW₀; 0 gives both one-sided
@@ -234,7 +266,7 @@ mod tests {
         let z = flat.at(0.0, 1e-8).unwrap();
         let (p, q) = exact::limits_at_zero::<f64, Libm>(&d).unwrap();
         assert_eq!((z.upper, z.lower), (p, q));
-        assert_eq!(flat.mean_normal(), Some(1.0));
+        assert_eq!(flat.mean_normal(), Ok(1.0));
         // Lift-off (a = 1.5): μ at rest is unique and is the window solver's.
         let g = Groups {
             duz_rel: 1.5,
@@ -252,7 +284,7 @@ mod tests {
         let w = liftoff::mu_over_mu0::<f64, Libm>(&d, -0.2).unwrap();
         assert!((m - w).abs() <= b + 1e-15);
         assert!(lo.mean_normal().unwrap() > 1.0);
-        // A sphere: the MDR's answer, limits at rest, no resolved model.
+        // A sphere: the MDR's answer, limits at rest, a bed of springs.
         let g = Groups::from_ratio(0.5, 2.0, 0.7).unwrap();
         let sp = Law::with_profile(&Scene::dimensionless(g).unwrap(), Profile::Sphere);
         assert_eq!(sp.name(), "sphere");
@@ -264,6 +296,6 @@ mod tests {
         let (p, q) = mdr::limits_at_zero::<f64, Libm>(&d, &Profile::Sphere, 1e-6).unwrap();
         assert!((z.upper - p.mu_over_mu0).abs() <= z.bound + p.bound);
         assert!((z.lower - q.mu_over_mu0).abs() <= z.bound + q.bound);
-        assert!(sp.resolvable().is_err() && !sp.has_powers() && sp.mean_normal().is_none());
+        assert_eq!(sp.exponent(), Some(2.0));
     }
 }

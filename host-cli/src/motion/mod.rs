@@ -2,8 +2,9 @@
 //! the paper's "substrate subjected to a low-frequency tangential force".
 //!
 //! # Conventions
-//! The friction force on the body is `−μ(v)·F̄z` along `+x` (`F̄z = k_z u_z0`,
-//! the mean normal force, as in `model::load_line`); the external force is
+//! The friction force on the body is `−μ(v)·F̄z` along `+x` (`F̄z` the mean
+//! normal force: `k_z u_z0` in permanent contact, `k_z u_z0⟨w⁺⟩` with
+//! lift-off, `k_z u_z0·D` (eq. M5) for a curved profile, [`law::Law::mean_normal`]); the external force is
 //! `F(t) = μ₀F̄z·(f0 + f sin Ωt)`, a ground spring adds `−K x`. The body's
 //! slow coordinate `x` carries the transducers: the upper spring point is at
 //! `u_x = x + Δu_x cos(ωt + φ)` (eq. 2 with `v₀t → x(t)`).
@@ -13,7 +14,7 @@
 //! `V = v/(ωW₀)`, the ultrasonic phase `τ = ωt` and the load phase `T = Ωt`.
 //! With `m̃ = Mω²/k_x`, `κ = K/k_x`, `ν = Ω/ω`, `g = f0 + f sin T − κX/n̄`
 //! (units μ₀F̄z) and `n̄ = F̄z/(k_z u_z0)` (1 for permanent contact, `⟨w⁺⟩`
-//! of eq. L4 with lift-off):
+//! of eq. L4 with lift-off, `D` of eq. M5 for a curved profile):
 //!
 //! * **homogenised** (`μ` replaced by its steady-state law, [`table`], taken
 //!   through [`law`] for every contact model):
@@ -23,7 +24,8 @@
 //! * **resolved** (no separation of scales): `m̃ d²X/dτ² = n̄g − s` with the
 //!   spring stretch `s = X + b cos(τ + φ) − X_c` kept in the band
 //!   `|s| ≤ max(0, 1 − a cos τ)` by the paper's clamp (`s = 0` in the air,
-//!   lift-off) ([`resolved`]).
+//!   lift-off) ([`resolved`]); for a curved profile `s` is the bed's
+//!   `Σ q_j s_j`, each MDR spring with its own band `max(0, d_j − a cos τ)`.
 
 pub mod estimate;
 pub mod homogenised;
@@ -44,7 +46,8 @@ pub struct Problem {
     pub mass: f64,
     /// `κ = K/k_x`.
     pub kappa: f64,
-    /// `n̄ = F̄z/(k_z u_z0)`: 1 for permanent contact, `⟨w⁺⟩` with lift-off
+    /// `n̄ = F̄z/(k_z u_z0)`: 1 for permanent contact, `⟨w⁺⟩` with lift-off,
+    /// `D` (eq. M5) for a curved profile
     /// ([`law::Law::mean_normal`]); forces in `μ₀F̄z` are `n̄` times forces in
     /// `μ₀k_z u_z0 = k_x W₀`, the unit of the contact's stretch.
     pub normal: f64,
@@ -92,6 +95,10 @@ pub struct Run {
     /// Steps per load period (homogenised) or per ultrasonic period (resolved)
     /// of the final run.
     pub steps: u64,
+    /// Springs of the contact in the final run (resolved: 1 for the flat
+    /// punch, the bed's size for a curved profile; homogenised: 0, the law
+    /// stands for them).
+    pub springs: usize,
     /// The recorded trajectory (the last periods).
     pub trajectory: Vec<Sample>,
 }
@@ -190,6 +197,7 @@ mod tests {
         let r = resolved::run(
             &p,
             &scene.drive(),
+            None,
             &resolved::Settings {
                 tol,
                 periods: None,
@@ -197,7 +205,7 @@ mod tests {
             },
             &mut || {},
         );
-        let e_h = estimate::homogenisation_error(&p, 1.5, &table, &h);
+        let e_h = estimate::homogenisation_error(&p, law.spring_bounds(), &table, &h);
         let diff = (h.mean_velocity - r.mean_velocity).abs();
         eprintln!(
             "lift-off: H {:e} R {:e} |H-R| {diff:e} E_h {e_h:e}",

@@ -11,6 +11,10 @@
 //! contact as its sliding velocity through `ΔX`. The run starts at rest with
 //! the contact point at the origin (`s = b cos φ`, clamped), like the paper's.
 //!
+//! **Curved profiles** (MDR, [`Bed::profile`]): the same step for every
+//! spring of the bed, each with its band `max(0, d_j − a cos τ)`, the body
+//! feeling `Σ q_j s_j`; the bed is refined by doubling ([`run`]).
+//!
 //! `(cos τ, sin τ)` and `sin T` advance by rotation and are recomputed
 //! exactly every 1024 steps. Steps per ultrasonic period start at
 //! `max(64, 2·min_steps_per_period)` (`fixed_step`'s, or with lift-off
@@ -63,6 +67,7 @@ pub fn steps_per_load_period(p: &Problem, n: u64) -> u64 {
 fn run_n(
     p: &Problem,
     d: &Drive<f64>,
+    bed: &Bed,
     s: &Settings,
     n: u64,
     mut rec: Option<&mut Recorder>,
@@ -78,8 +83,17 @@ fn run_n(
     let (sh, ch) = h.sin_cos();
     let (snh, cnh) = (p.nu * h).sin_cos();
     let (mut x, mut v) = (0.0f64, 0.0f64);
-    let w0 = (1.0 - a).max(0.0);
-    let mut s_ = bc.clamp(-w0, w0);
+    // Each spring starts with the contact point at the origin, clamped.
+    let mut stretch: Vec<f64> = bed
+        .springs
+        .iter()
+        .map(|&(off, _)| {
+            let w0 = (off - a).max(0.0);
+            bc.clamp(-w0, w0)
+        })
+        .collect();
+    let force_of = |st: &[f64]| -> f64 { st.iter().zip(&bed.springs).map(|(s, q)| s * q.1).sum() };
+    let mut s_ = force_of(&stretch);
     let normal = p.normal;
     let (mut c, mut sn) = (1.0f64, 0.0f64); // cos τ, sin τ
     let (mut cl, mut sl) = (1.0f64, 0.0f64); // cos T, sin T
@@ -116,21 +130,27 @@ fn run_n(
                 (c, sn) = (c * ch - sn * sh, sn * ch + c * sh);
                 (cl, sl) = (cl * cnh - sl * snh, sl * cnh + cl * snh);
             }
-            // Contact: stick trial and clamp.
+            // Contact: stick trial and clamp, spring by spring.
             let dn = bc * c - bs * sn;
-            // In the air (lift-off) the band is empty: s = 0.
-            let w = (1.0 - a * c).max(0.0);
-            let trial = s_ + dx + (dn - drive);
+            let inc = dx + (dn - drive);
             drive = dn;
-            if trial > w {
-                s_ = w;
-                slipped = true;
-            } else if trial < -w {
-                s_ = -w;
-                slipped = true;
-            } else {
-                s_ = trial;
+            let mut force = 0.0;
+            for (st, &(off, q)) in stretch.iter_mut().zip(&bed.springs) {
+                // In the air (lift-off) the band is empty: s = 0.
+                let w = (off - a * c).max(0.0);
+                let trial = *st + inc;
+                if trial > w {
+                    *st = w;
+                    slipped = true;
+                } else if trial < -w {
+                    *st = -w;
+                    slipped = true;
+                } else {
+                    *st = trial;
+                }
+                force += *st * q;
             }
+            s_ = force;
             if (i + 1) % per_us == 0 {
                 blocks += 1;
                 if !slipped {
@@ -196,20 +216,94 @@ fn run_n(
         periods,
         periodic,
         steps: n,
+        springs: bed.springs.len(),
         trajectory: Vec::new(),
     }
 }
 
-/// Integrates with step halving (module docs). `tick` is called once per
-/// load period integrated.
-pub fn run(p: &Problem, d: &Drive<f64>, s: &Settings, tick: &mut dyn FnMut()) -> Run {
+/// The contact's springs: `(band offset d_j, weight q_j)`, the force on the
+/// body `Σ q_j s_j` in units of `k_x W₀`, each spring's band
+/// `max(0, d_j − a cos τ)`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Bed {
+    /// `(d_j, q_j)` per spring.
+    pub springs: Vec<(f64, f64)>,
+}
+
+impl Bed {
+    /// The flat punch: one spring, `d = 1`, weight 1.
+    pub fn flat() -> Self {
+        Bed {
+            springs: vec![(1.0, 1.0)],
+        }
+    }
+
+    /// The MDR bed of a profile `ξⁿ` (`model_core::mdr`): `count` springs
+    /// over the springs that ever touch, `ξ ∈ [0, ξ_max]`, `ξ_max = (1 +
+    /// a)^{1/n}`, at the midpoints `t_j = (j + ½)π/count` of the map
+    /// `ξ = ξ_max(1 − cos t)/2` (dense at the rim, where the springs' mean
+    /// force has its `(ξ_max − ξ)^{3/2}` onset), offset `d_j = 1 − ξ_jⁿ` and
+    /// weight `q_j = (ξ_max/2) sin t_j · π/count`. With `k_x = 2G*a₀` the
+    /// force of both sides `2G*a₀W₀∫₀^{ξ_max} s dξ` is `Σ q_j s_j` in units
+    /// of `k_x W₀` (`mdr::normal::mean_normal_force`'s reading of the scene).
+    pub fn profile(n: f64, a: f64, count: usize) -> Self {
+        let xi_max = (1.0 + a).powf(1.0 / n);
+        let h = std::f64::consts::PI / count as f64;
+        let springs = (0..count)
+            .map(|j| {
+                let t = (j as f64 + 0.5) * h;
+                let xi = 0.5 * xi_max * (1.0 - t.cos());
+                (1.0 - xi.powf(n), 0.5 * xi_max * t.sin() * h)
+            })
+            .collect();
+        Bed { springs }
+    }
+}
+
+/// Springs of a curved profile's first bed; doubled (up to
+/// [`MAX_SPRINGS`]) until the drift changes by at most the tolerance.
+pub const START_SPRINGS: usize = 32;
+/// Most springs of a curved profile's bed.
+pub const MAX_SPRINGS: usize = 512;
+
+/// Integrates with step halving (module docs); for a curved profile
+/// (`exponent = Some(n)`) then with the bed of springs doubled at the final
+/// step count until two beds agree, the difference added to the numerical
+/// error. `tick` is called once per load period integrated.
+pub fn run(
+    p: &Problem,
+    d: &Drive<f64>,
+    exponent: Option<f64>,
+    s: &Settings,
+    tick: &mut dyn FnMut(),
+) -> Run {
+    let Some(ne) = exponent else {
+        return run_bed(p, d, &Bed::flat(), s, tick);
+    };
+    let mut count = START_SPRINGS;
+    let mut prev = run_bed(p, d, &Bed::profile(ne, d.a, count), s, tick);
+    loop {
+        count *= 2;
+        let mut cur = run_bed(p, d, &Bed::profile(ne, d.a, count), s, tick);
+        let diff = (cur.mean_velocity - prev.mean_velocity).abs();
+        if diff <= s.tol || count >= MAX_SPRINGS {
+            cur.numerical_error += diff;
+            cur.springs = count;
+            return cur;
+        }
+        prev = cur;
+    }
+}
+
+/// Step halving on one bed.
+fn run_bed(p: &Problem, d: &Drive<f64>, bed: &Bed, s: &Settings, tick: &mut dyn FnMut()) -> Run {
     let mut n = start_steps(d);
-    let mut prev = run_n(p, d, s, n, None, tick);
+    let mut prev = run_n(p, d, bed, s, n, None, tick);
     loop {
         n *= 2;
         let last = n >= MAX_STEPS;
         let mut rec = Recorder::default();
-        let mut cur = run_n(p, d, s, n, Some(&mut rec), tick);
+        let mut cur = run_n(p, d, bed, s, n, Some(&mut rec), tick);
         let halving = (cur.mean_velocity - prev.mean_velocity).abs();
         if halving <= s.tol || last {
             cur.numerical_error += halving;

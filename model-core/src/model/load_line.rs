@@ -3,8 +3,10 @@
 //! equivalent to a vibrational drive or actuator", §3.2).
 //!
 //! # Conventions
-//! The friction force on the body is `−μ(v)·F̄z` along `+x` (`F̄z = k_z u_z0`,
-//! the mean normal force); an external force `F` on the body is balanced in the
+//! The friction force on the body is `−μ(v)·F̄z` along `+x` (`F̄z` the mean
+//! normal force: `k_z u_z0` in permanent contact, `k_z u_z0⟨w⁺⟩` with
+//! lift-off, `k_z u_z0·D` for a curved profile, [`crate::model::mdr::powers`]);
+//! an external force `F` on the body is balanced in the
 //! quasi-static steady state when `F = μ(v)·F̄z`. The contact *pushes* forward
 //! where `μ(v) < 0` for `v ≥ 0`.
 //!
@@ -33,9 +35,17 @@
 //! Each power is integrated in closed form over the arcs of the exact steady
 //! state ([`exact::steady_state`]): on a stick arc `s = s₀ + V(θ−θ₀) + X(θ) − X(θ₀)`,
 //! on a forward (backward) slip arc `s = +w` (`−w`), `w = 1 − a cos θ`.
+//!
+//! With lift-off (`a ≥ 1`, [`liftoff_powers`]) the same integrals run over
+//! the contact window's arcs ([`liftoff::window_arcs`]) from `s = 0` at
+//! landing to `s = 0` at lift-off (`|s| ≤ w → 0`), so again `⟨s s'⟩ = 0` and
+//! the balance is exact; the unit is `μ₀F̄z ωW₀` with `F̄z = k_z u_z0⟨w⁺⟩`
+//! (eq. L4). What becomes of the spring's energy when the contact opens is
+//! derived in [`liftoff_powers`].
 
-use crate::model::exact::{self, ArcKind, ExactError};
+use crate::model::exact::{self, Arc, ArcKind, ExactError};
 use crate::model::float::{Float, Math};
+use crate::model::liftoff::{self, LiftOffError};
 use crate::model::scene::Drive;
 
 /// The powers of one steady state (unit `μ₀ F̄z ω W₀`; `F̄z = k_z u_z0`).
@@ -69,29 +79,105 @@ impl<T: Float> Powers<T> {
 /// As [`exact::steady_state`].
 pub fn powers<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<Powers<T>, ExactError> {
     let (mu, arcs) = exact::steady_state::<T, M>(d, v)?;
-    let (a, bc, bs) = (d.a, d.bc, d.bs);
-    // X(θ) = b cos(θ+φ) = bc cos θ − bs sin θ;  ∫X = bc sin θ + bs cos θ.
-    let x_at = |s: T, c: T| bc * c - bs * s;
-    let x_int = |s: T, c: T| bc * s + bs * c;
-    let w_at = |c: T| T::ONE - a * c;
-    // ∫ w X' dθ = X − a·∫cos θ·X' dθ, and cos θ·X' = −b cos θ sin(θ+φ)
-    // = −(b/2)(sin(2θ+φ) + sin φ): ∫ = (b/4)cos(2θ+φ) − (b sin φ/2)θ, with
-    // b cos(2θ+φ) = bc cos 2θ − bs sin 2θ.
-    let wx_int = |t: T, s: T, c: T| {
-        let (s2, c2) = (T::TWO * s * c, c * c - s * s);
-        x_at(s, c) - a * ((bc * c2 - bs * s2) * T::from_f64(0.25) - bs * T::HALF * t)
-    };
     let last = arcs.last().ok_or(ExactError::Inconsistent)?;
     let first = arcs.first().ok_or(ExactError::Inconsistent)?;
     let (_, c_first) = M::sin_cos(first.start);
     // The period closes on the last arc's slip: s starts at ±w there.
-    let mut s0 = match last.kind {
-        ArcKind::SlipForward => w_at(c_first),
-        ArcKind::SlipBackward => -w_at(c_first),
+    let s0 = match last.kind {
+        ArcKind::SlipForward => T::ONE - d.a * c_first,
+        ArcKind::SlipBackward => -(T::ONE - d.a * c_first),
         ArcKind::Stick => return Err(ExactError::Inconsistent),
     };
-    let (mut input, mut friction) = (T::ZERO, T::ZERO);
-    for arc in &arcs {
+    let w = arc_work::<T, M>(d, T::ONE, v, &arcs, s0);
+    let inv = T::ONE / T::TAU;
+    Ok(Powers {
+        mu_over_mu0: mu,
+        input: w.input * inv,
+        output: -mu * v,
+        friction: w.friction * inv,
+    })
+}
+
+/// The powers of a flat punch with lift-off (`a ≥ 1`) at any finite
+/// dimensionless velocity (also 0), in units of `μ₀ F̄z ωW₀` with the mean
+/// normal force `F̄z = k_z u_z0⟨w⁺⟩` (eq. L4).
+///
+/// # Energy over a period with a contact window
+/// Off contact the spring carries no force (`s = 0`, `f_z = 0`): nothing is
+/// done there. At landing `s = 0 = w`. Inside the window `|s| ≤ w`, and
+/// `w → 0` at lift-off, so `s → 0` continuously: the stored energy
+/// `½k_x s²` is 0 at both ends of the window and **nothing is released or
+/// lost at the opening itself**. Where the contact sticks until lift-off the
+/// stick trajectory itself reaches `s = 0` (the energy goes back to the
+/// transducer through `⟨s X'⟩`); where it slips, `s = ±w` shrinks with the
+/// band and the spring's energy `w²/2` is dissipated at the contact (the
+/// term `−[w²/2]` of the slip arc's friction integral, with `u̇_x,c ≥ 0` on a
+/// forward slip, so the loss is ≥ 0). The normal transducer's input
+/// `k_z⟨u_z⁺ u̇_z⟩ = k_z⟨d((u_z⁺)²/2)/dt⟩ = 0` (a continuous periodic function's
+/// derivative). With `P_in = ∫s X'`, `P_out = −V∫s`, `P_fric = ∫s(V + X' − s')`
+/// over the window, `P_in − P_out − P_fric = [s²/2]_{θ_L}^{θ_R} = 0`: the
+/// balance `P_in = P_out + P_fric` is exact, with the same closed forms as
+/// [`powers`] on the window's arcs ([`liftoff::window_arcs`]), normalised by
+/// `∫_window w dθ = 2π⟨w⁺⟩`.
+///
+/// # Errors
+/// As [`liftoff::window_arcs`]; [`LiftOffError::Inconsistent`] when the
+/// stretch at lift-off is not 0 to rounding (internal check).
+pub fn liftoff_powers<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<Powers<T>, LiftOffError> {
+    let (mu, arcs) = liftoff::window_arcs::<T, M>(d, v)?;
+    let w = arc_work::<T, M>(d, T::ONE, v, &arcs, T::ZERO);
+    let scale = T::ONE + d.a + d.b + v.abs() * T::TAU;
+    let tol = T::from_f64(1e3) * T::EPSILON * scale + T::from_f64(M::MAX_REL_ERROR) * scale;
+    if w.s_end.is_nan() || w.s_end.abs() > tol {
+        return Err(LiftOffError::Inconsistent);
+    }
+    let band = liftoff::mean_band::<T, M>(d.a) * T::TAU;
+    Ok(Powers {
+        mu_over_mu0: mu,
+        input: w.input / band,
+        output: -mu * v,
+        friction: w.friction / band,
+    })
+}
+
+/// The work integrals of a run of arcs (per unit phase, not yet divided by
+/// a period): input `∫s X' dθ`, friction `∫s u̇_x,c dθ`, `∫s dθ`, and the
+/// stretch at the last arc's end.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ArcWork<T> {
+    pub(crate) input: T,
+    pub(crate) friction: T,
+    /// `∫ s dθ`.
+    pub(crate) stretch: T,
+    pub(crate) s_end: T,
+}
+
+/// Integrates the input and friction work over consecutive arcs of the band
+/// `w = offset − a cos θ`, starting from the stretch `s0` at the first arc's
+/// start: on a stick arc `s = C + Vθ + X(θ)`, on a forward (backward) slip
+/// arc `s = +w` (`−w`), `X = b cos(θ + φ)`.
+pub(crate) fn arc_work<T: Float, M: Math<T>>(
+    d: &Drive<T>,
+    offset: T,
+    v: T,
+    arcs: &[Arc<T>],
+    s0: T,
+) -> ArcWork<T> {
+    let (a, bc, bs) = (d.a, d.bc, d.bs);
+    // X(θ) = b cos(θ+φ) = bc cos θ − bs sin θ;  ∫X = bc sin θ + bs cos θ.
+    let x_at = |s: T, c: T| bc * c - bs * s;
+    let x_int = |s: T, c: T| bc * s + bs * c;
+    let w_at = |c: T| offset - a * c;
+    // ∫ w X' dθ = offset·X − a·∫cos θ·X' dθ, and cos θ·X' = −b cos θ sin(θ+φ)
+    // = −(b/2)(sin(2θ+φ) + sin φ): ∫ = (b/4)cos(2θ+φ) − (b sin φ/2)θ, with
+    // b cos(2θ+φ) = bc cos 2θ − bs sin 2θ.
+    let wx_int = |t: T, s: T, c: T| {
+        let (s2, c2) = (T::TWO * s * c, c * c - s * s);
+        offset * x_at(s, c) - a * ((bc * c2 - bs * s2) * T::from_f64(0.25) - bs * T::HALF * t)
+    };
+    let mut s0 = s0;
+    let (mut input, mut friction, mut stretch) = (T::ZERO, T::ZERO, T::ZERO);
+    for arc in arcs {
         let (t0, t1) = (arc.start, arc.end);
         let (sn0, cs0) = M::sin_cos(t0);
         let (sn1, cs1) = M::sin_cos(t1);
@@ -104,6 +190,9 @@ pub fn powers<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<Powers<T>, Exa
                 input += cc * (x1 - x0)
                     + v * ((t1 * x1 - t0 * x0) - (x_int(sn1, cs1) - x_int(sn0, cs0)))
                     + (x1 * x1 - x0 * x0) * T::HALF;
+                stretch += cc * (t1 - t0)
+                    + v * (t1 - t0) * (t1 + t0) * T::HALF
+                    + (x_int(sn1, cs1) - x_int(sn0, cs0));
                 s0 = cc + v * t1 + x1;
             }
             ArcKind::SlipForward | ArcKind::SlipBackward => {
@@ -115,21 +204,21 @@ pub fn powers<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<Powers<T>, Exa
                 // s = ±w: ∫ s X' = ±∫ w X';
                 // ∫ s u̇_c = ±(V∫w + ∫wX') − [w²/2]  (s' = ±a sin θ, w w' = a w sin θ).
                 let wx = wx_int(t1, sn1, cs1) - wx_int(t0, sn0, cs0);
-                let w_int = (t1 - t0) - a * (sn1 - sn0);
+                let w_int = offset * (t1 - t0) - a * (sn1 - sn0);
                 let (w0, w1) = (w_at(cs0), w_at(cs1));
                 input += sign * wx;
+                stretch += sign * w_int;
                 friction += sign * (v * w_int + wx) - (w1 * w1 - w0 * w0) * T::HALF;
                 s0 = sign * w1;
             }
         }
     }
-    let inv = T::ONE / T::TAU;
-    Ok(Powers {
-        mu_over_mu0: mu,
-        input: input * inv,
-        output: -mu * v,
-        friction: friction * inv,
-    })
+    ArcWork {
+        input,
+        friction,
+        stretch,
+        s_end: s0,
+    }
 }
 
 /// The actuator characteristics of a drive (dimensionless: forces in
@@ -261,7 +350,7 @@ pub enum Objective {
 
 /// The forward operating point (0 < V < no-load velocity) that maximises
 /// `objective`, or `None` when the contact does not push forward
-/// ([`maximise_forward`] on [`powers`]; flat punch in permanent contact).
+/// ([`best_forward_of`] on [`powers`]; flat punch in permanent contact).
 ///
 /// # Errors
 /// As [`powers`].
@@ -270,18 +359,32 @@ pub fn best_forward<T: Float, M: Math<T>>(
     line: &LoadLine<T>,
     objective: Objective,
 ) -> Result<Option<OperatingPoint<T>>, ExactError> {
+    best_forward_of(line, objective, |v| powers::<T, M>(d, v))
+}
+
+/// The forward operating point maximising `objective` for any contact
+/// model whose powers `powers(V)` are known (e.g. [`liftoff_powers`]), by
+/// [`maximise_forward`]; `None` when the contact does not push forward.
+///
+/// # Errors
+/// Those of `powers`.
+pub fn best_forward_of<T: Float, E>(
+    line: &LoadLine<T>,
+    objective: Objective,
+    mut powers: impl FnMut(T) -> Result<Powers<T>, E>,
+) -> Result<Option<OperatingPoint<T>>, E> {
     let vnl = line.no_load_forward;
     if vnl <= T::ZERO {
         return Ok(None);
     }
     let v = maximise_forward(vnl, |v| {
-        let p = powers::<T, M>(d, v)?;
+        let p = powers(v)?;
         Ok(match objective {
             Objective::Power => p.output,
             Objective::Efficiency => p.efficiency(),
         })
     })?;
-    let p = powers::<T, M>(d, v)?;
+    let p = powers(v)?;
     Ok(Some(OperatingPoint {
         v,
         force: -p.mu_over_mu0,

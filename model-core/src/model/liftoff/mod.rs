@@ -400,6 +400,50 @@ pub fn window_arcs<T: Float, M: Math<T>>(
     Ok((sign * m, arcs))
 }
 
+/// The arcs of the window of the band `w = d − a cos θ`, `|d| ≤ a` (as
+/// [`window_arcs`], which is the case `d = 1` with the drive checked; here
+/// the caller validated the drive): absolute phases, kinds in the original
+/// drive's sense.
+///
+/// # Errors
+/// [`LiftOffError::Inconsistent`].
+pub(crate) fn banded_window_arcs<T: Float, M: Math<T>>(
+    d: &Drive<T>,
+    offset: T,
+    v: T,
+) -> Result<Vec<Arc<T>, MAX_ARCS>, LiftOffError> {
+    let (drive, v, mirrored) = if v >= T::ZERO {
+        (*d, v, false)
+    } else {
+        (d.mirrored(), -v, true)
+    };
+    let window = Window::of::<M>(offset, drive.a);
+    let mut arcs: Vec<Arc<T>, MAX_ARCS> = Vec::new();
+    if v >= forward_critical::<T, M>(&drive, &window) {
+        let kind = if mirrored {
+            ArcKind::SlipBackward
+        } else {
+            ArcKind::SlipForward
+        };
+        let _ = arcs.push(Arc {
+            kind,
+            start: window.landing.at,
+            end: window.lift_off.at,
+        });
+        return Ok(arcs);
+    }
+    let mut push = |arc: Arc<T>| {
+        let kind = match (arc.kind, mirrored) {
+            (ArcKind::SlipForward, true) => ArcKind::SlipBackward,
+            (ArcKind::SlipBackward, true) => ArcKind::SlipForward,
+            (kind, _) => kind,
+        };
+        let _ = arcs.push(Arc { kind, ..arc });
+    };
+    ContactWindow::new::<M>(&drive, offset, v, window).mean_stretch::<M>(Some(&mut push))?;
+    Ok(arcs)
+}
+
 /// The sequence of arc kinds of the window of the band `w = d − a cos θ`
 /// (as [`banded_stretch_integral`]), in the forward convention of `V ≥ 0`,
 /// encoded base 4 (stick 1, forward slip 2, backward slip 3; zero-length arcs

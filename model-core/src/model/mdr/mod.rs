@@ -127,6 +127,7 @@
 //! `bound_estimate_holds_against_a_tighter_run`).
 
 pub mod normal;
+pub mod powers;
 pub mod profile;
 pub mod quadrature;
 pub(crate) mod spring;
@@ -247,7 +248,7 @@ pub struct MdrResult<T> {
     pub evaluations: u32,
 }
 
-fn check<T: Float>(d: &Drive<T>, p: &Profile<T>) -> Result<(), MdrError> {
+pub(crate) fn check<T: Float>(d: &Drive<T>, p: &Profile<T>) -> Result<(), MdrError> {
     p.validate()?;
     if !d.is_valid_with_contact(ContactMode::Intermittent) {
         return Err(MdrError::BadDrive);
@@ -304,6 +305,30 @@ pub fn critical_velocities<T: Float, M: Math<T>>(
         forward_critical::<T, M>(d, T::ONE),
         forward_critical::<T, M>(&d.mirrored(), T::ONE),
     ))
+}
+
+/// The mean normal force `F̄z/(k_z u_z0)` of a profile at `a` with its
+/// bound (units of `k_z u_z0`): `⟨w⁺⟩` of eq. L4 (1 for `a < 1`) for
+/// [`Profile::Flat`], else `D` of eq. M5 ([`normal::mean_normal_force`],
+/// whose doc states how the scene's `k_z` reads for a curved profile).
+///
+/// # Errors
+/// As [`normal::mean_normal_force`].
+pub fn mean_normal_force<T: Float, M: Math<T>>(
+    p: &Profile<T>,
+    a: T,
+    tol: T,
+) -> Result<(T, T), MdrError> {
+    p.validate()?;
+    match p.exponent() {
+        None if !(a.is_finite() && a >= T::ZERO) => Err(MdrError::BadDrive),
+        None if a < T::ONE => Ok((T::ONE, T::ZERO)),
+        None => {
+            let d = liftoff::mean_band::<T, M>(a);
+            Ok((d, T::from_f64(64.0) * T::EPSILON * d))
+        }
+        Some(n) => normal::mean_normal_force::<T, M>(n, a, tol),
+    }
 }
 
 /// The per-spring solver part of the bound of a curved profile at `V ≠ 0`

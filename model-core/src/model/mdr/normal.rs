@@ -31,6 +31,7 @@
 //! `a = 0` gives `2/3 = ∫₀¹ (1 − ξ²) dξ`). Other cases are integrated with
 //! the numerator ([`super`]).
 
+use super::{quadrature, MdrError};
 use crate::model::float::{Float, Math};
 
 /// `⟨w⁺⟩` of a spring with band offset `d` (eq. M4), units of `d₀`.
@@ -104,6 +105,83 @@ fn elliptic_ke<T: Float, M: Math<T>>(k2: T) -> (T, T) {
     }
     let k = T::FRAC_PI_2 / a;
     (k, k * (T::ONE - sum))
+}
+
+/// The mean normal force of a profile `n` at `a = Δu_z/d₀`, `D` of eq. M5
+/// (units `E* d₀ a₀` per side), with its error bound, `≤ tol·D`.
+///
+/// **In the scene's units.** The scene's `k_z`, `k_x` of a curved profile
+/// are its incremental stiffnesses at the mean indentation, `2E*a₀` and
+/// `2G*a₀` (for every axisymmetric profile the MDR's contact of radius `a₀`
+/// has normal stiffness `2E*a₀`, as the flat punch of that radius; so
+/// `k_z/k_x = E*/G*` as [`super`] reads them). The mean normal force of both
+/// sides, `2E* d₀ a₀ D`, is then `k_z u_z0 · D` (`u_z0 = d₀`): **`D` is
+/// `F̄z/(k_z u_z0)`**, as `⟨w⁺⟩` is for the flat punch (its limit `n → ∞`:
+/// `ξ_max → 1`, `D → ⟨w⁺⟩`). `a = 0` gives `n/(n + 1)` (Hertz: `2/3`).
+///
+/// Closed form (eqs. M6, M7) where there is one (bound: rounding, 64ε·D);
+/// otherwise M5 by adaptive Gauss–Kronrod over `θ ∈ [θ₁, π]`, `cos θ₁ =
+/// 1/a` for `a > 1` (0 else), mapped `θ = θ₁ + (π − θ₁)(1 − cos t)/2` so the
+/// `(θ − θ₁)^{1+1/n}` onset is smooth in `t`; bound `2·Σ|K₁₅ − G₇|`
+/// (an estimate, [`super::quadrature`]) plus 64ε·D.
+///
+/// # Errors
+/// [`MdrError::BadExponent`] (`n` not finite or ≤ 0), [`MdrError::BadDrive`]
+/// (`a` negative or not finite), [`MdrError::BadTolerance`],
+/// [`MdrError::NotConverged`].
+pub fn mean_normal_force<T: Float, M: Math<T>>(n: T, a: T, tol: T) -> Result<(T, T), MdrError> {
+    if !(n.is_finite() && n > T::ZERO) {
+        return Err(MdrError::BadExponent);
+    }
+    if !(a.is_finite() && a >= T::ZERO) {
+        return Err(MdrError::BadDrive);
+    }
+    if !(tol.is_finite() && tol > T::ZERO) {
+        return Err(MdrError::BadTolerance);
+    }
+    let floor = T::from_f64(64.0) * T::EPSILON;
+    if let Some(d) = closed_form::<T, M>(n, a) {
+        return Ok((d, floor * d));
+    }
+    let theta1 = if a > T::ONE {
+        M::atan2(M::sqrt((a - T::ONE) * (a + T::ONE)), T::ONE)
+    } else {
+        T::ZERO
+    };
+    let p = T::ONE + T::ONE / n;
+    let half = (T::PI - theta1) * T::HALF;
+    let f = |t: T| -> Result<[T; 1], MdrError> {
+        let (sin_t, cos_t) = M::sin_cos(t);
+        let theta = theta1 + half * (T::ONE - cos_t);
+        let (_, c) = M::sin_cos(theta);
+        let w = T::ONE - a * c;
+        let v = if w > T::ZERO {
+            T::from_f64(libm::pow(w.to_f64(), p.to_f64()))
+        } else {
+            T::ZERO
+        };
+        Ok([v * half * sin_t])
+    };
+    // D = n/(n+1)·(1/π)∫₀^π (1 − a cos θ)₊^p dθ.
+    let scale = n / ((n + T::ONE) * T::PI);
+    let safety = T::from_f64(super::SAFETY);
+    let weight = |e: [T; 1], v: [T; 1]| {
+        let d = (v[0] * scale).abs();
+        if d > T::ZERO {
+            (safety * e[0] * scale) / d + floor
+        } else {
+            T::MAX
+        }
+    };
+    let out = quadrature::integrate(f, &[T::ZERO, T::PI], tol, weight)?;
+    let d = out.value[0] * scale;
+    let rel = weight(out.error, out.value);
+    if !out.converged || rel.is_nan() || rel > tol || d.is_nan() || d <= T::ZERO {
+        return Err(MdrError::NotConverged {
+            reached: rel.to_f64(),
+        });
+    }
+    Ok((d, rel * d))
 }
 
 #[cfg(test)]
