@@ -799,28 +799,9 @@ fn lab_session_on_the_firmware() {
 
     // sweep φ over 7 points, fit μ0, apply it.
     let sweep_csv = dir.path().join("sweep.csv");
-    let s = ok(
-        &q,
-        &[
-            "sweep",
-            "--param",
-            "phase-deg",
-            "--from",
-            "0",
-            "--to",
-            "180",
-            "--points",
-            "7",
-            "--periods",
-            "200",
-            "--settle-periods",
-            "20",
-            "--v0",
-            "0.004",
-            "--csv",
-            sweep_csv.to_str().unwrap(),
-        ],
-    );
+    let mut args = common::sweep_args(sweep_csv.to_str().unwrap(), "7");
+    args.extend(["--settle-periods", "20"]);
+    let s = ok(&q, &args);
     let rows = s["rows"].as_array().unwrap();
     assert_eq!(rows.len(), 7);
     assert!(rows.iter().all(|r| r["valid"] == true), "{s}");

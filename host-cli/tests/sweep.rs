@@ -18,7 +18,7 @@ use serde_json::Value;
 mod common;
 
 use common::sim::{dev, ok_json, sim_with, Sim};
-use common::{assert_fit_recovers, fit, measure_vs_predict};
+use common::{assert_fit_recovers, fit, measure_vs_predict, sweep_args};
 
 /// Sets the drive (f in Hz, φ = 40°) and starts it.
 fn drive_and_start(s: &Sim, freq: &str) {
@@ -27,26 +27,6 @@ fn drive_and_start(s: &Sim, freq: &str) {
         &common::drive_set(freq, "2e-6", "3e-7", "4e-6", Some("40")),
     );
     ok_json(s, &["start"]);
-}
-
-fn sweep_args<'a>(csv: &'a str, points: &'a str) -> Vec<&'a str> {
-    vec![
-        "sweep",
-        "--param",
-        "phase-deg",
-        "--from",
-        "0",
-        "--to",
-        "180",
-        "--points",
-        points,
-        "--periods",
-        "200",
-        "--v0",
-        "0.004",
-        "--csv",
-        csv,
-    ]
 }
 
 fn rows(csv: &Path) -> Vec<csv::StringRecord> {

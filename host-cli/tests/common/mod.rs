@@ -239,3 +239,26 @@ pub fn fit(csv: &std::path::Path, params: &str, out: &std::path::Path) -> serde_
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     serde_json::from_slice(&o.stdout).unwrap()
 }
+
+/// `device sweep` of φ from 0 to 180° in `points` points of 200 periods
+/// each at v0 = 4 mm/s into `csv` (the sessions of tests/sweep.rs and
+/// tests/qemu.rs).
+pub fn sweep_args<'a>(csv: &'a str, points: &'a str) -> Vec<&'a str> {
+    vec![
+        "sweep",
+        "--param",
+        "phase-deg",
+        "--from",
+        "0",
+        "--to",
+        "180",
+        "--points",
+        points,
+        "--periods",
+        "200",
+        "--v0",
+        "0.004",
+        "--csv",
+        csv,
+    ]
+}
