@@ -343,6 +343,59 @@ fn stick_slip_converges_at_first_order() {
     );
 }
 
+/// Heavy bodies that stick (Fig. 7 ratchet, force 0.5 sin Ωt, ω/Ω = 10³,
+/// `Mω²/k_x` = 10³…10⁵): the resolved body, stuck on the contact's
+/// tangential stiffness, rings with a period `2π√(M/k_x)` that approaches the
+/// load period; the homogenised body stands rigidly. Every run's |H − R| is
+/// within the estimate `E_h` (plus both runs' numerical errors), and at
+/// `Mω²/k_x = 10⁵` it is the sticking term `E_s = N(1 + a)ν/π`
+/// (`motion::estimate`, N the arrivals at rest the homogenised run counts)
+/// that covers it: the sliding term alone, `E_h − E_s`, does not.
+#[test]
+fn heavy_stuck_body_within_the_sticking_term() {
+    let (a, nu) = (0.5, 1e-3);
+    for mass in ["1e3", "1e4", "1e5"] {
+        let run = |m: &str| {
+            motion_doubtful(
+                &fig7(0.0),
+                &[
+                    "--mass",
+                    mass,
+                    "--force-amp-rel",
+                    "0.5",
+                    "--force-omega",
+                    &nu.to_string(),
+                    "--method",
+                    m,
+                    "--tol",
+                    "1e-4",
+                ],
+            )
+        };
+        let (h, r) = (run("homogenised"), run("resolved"));
+        let diff = (num(&h, "mean_velocity") - num(&r, "mean_velocity")).abs();
+        let noise = num(&h, "numerical_error") + num(&r, "numerical_error");
+        let e_h = num(&h, "homogenisation_error_estimate");
+        let n = num(&h, "stick_onsets");
+        let e_s = n * (1.0 + a) * nu / std::f64::consts::PI;
+        eprintln!(
+            "M {mass}: |H − R| {diff:.3e} noise {noise:.3e} E_h {e_h:.3e} E_s {e_s:.3e} N {n}"
+        );
+        assert!(n >= 1.0, "M {mass}: the body never comes to rest");
+        assert!(
+            diff <= e_h + noise,
+            "M {mass}: |H − R| = {diff:e} above E_h = {e_h:e} + {noise:e}"
+        );
+        if mass == "1e5" {
+            assert!(
+                diff > e_h - e_s + noise,
+                "the sliding term alone should miss the ringing body: {diff:e} vs {:e}",
+                e_h - e_s
+            );
+        }
+    }
+}
+
 /// A single-mode drive (Δu_x = 0) gives a law odd in V; under a symmetric
 /// sine force the drift vanishes: the mirror x → −x maps the motion onto
 /// itself shifted by half a load period (500 whole ultrasonic periods at

@@ -9,11 +9,13 @@
 //!
 //! # Method choice (`--method auto`)
 //! The homogenised model replaces the contact by its steady-state law. Its
-//! error `E_h = π²K·reach·S/(2n̄)` (units ωW₀; `reach` 1 for the flat punch) is derived in
+//! error `E_h = π²K·reach·S/(2n̄) + N(1 + a)ν/π` (units ωW₀; `reach` 1 for
+//! the flat punch, `N` the arrivals at rest per load period) is derived in
 //! [`crate::motion::estimate`]: `K` bounds the body's acceleration in
 //! ultrasonic units (its ripple within a period against its response time
 //! for `M > 0`; the scale separation `ν·max|dV/dT|` for `M = 0`), `S` is the
-//! law's mean inverse slope. The homogenised model always runs first (it is
+//! law's mean inverse slope; the second term is the stuck body's offset on the
+//! contact's tangential stiffness. The homogenised model always runs first (it is
 //! cheap and gives `K`); `auto` keeps it when `E_h` plus its numerical error
 //! is within `--tol·v_ref`, and runs the resolved one otherwise (`M = 0` is
 //! always homogenised: a massless body has no resolved dynamics).
@@ -110,6 +112,8 @@ struct Outcome {
     /// Numerical error (step halving + period-to-period change), m/s.
     numerical_error: f64,
     stick_fraction: f64,
+    /// Arrivals at rest in the homogenised run's last load period (the N of E_h's sticking term).
+    stick_onsets: u32,
     periodic: bool,
     periods: u32,
     /// Steps per load period (homogenised) or per ultrasonic period (resolved).
@@ -265,6 +269,7 @@ impl MotionCmd {
             tick();
         });
         let e_h = estimate::homogenisation_error(&p, law_fn.spring_bounds(), &law, &h_run);
+        let h_onsets = h_run.stick_onsets;
         let use_h = match method {
             MotionMethod::Homogenised => true,
             MotionMethod::Resolved => false,
@@ -299,6 +304,7 @@ impl MotionCmd {
             homogenisation_error_estimate: e_h * vs,
             numerical_error: numerical * vs,
             stick_fraction: run.stick_fraction,
+            stick_onsets: h_onsets,
             periodic: run.periodic,
             periods: run.periods,
             steps: run.steps,
@@ -396,6 +402,11 @@ fn write_text(out: &mut impl Write, o: &Outcome, dimless: bool) -> std::io::Resu
         o.mean_velocity_over_v_ref
     )?;
     writeln!(out, "stick fraction         {:.4}", o.stick_fraction)?;
+    writeln!(
+        out,
+        "arrivals at rest       {} per load period (homogenised)",
+        o.stick_onsets
+    )?;
     writeln!(out, "periodic               {}", o.periodic)?;
     writeln!(out, "load periods           {}", o.periods)?;
     writeln!(out, "steps                  {}", o.steps)?;

@@ -101,8 +101,17 @@ impl Body<'_> {
         }
     }
 
-    /// Advances `(x, v, mode)` from `t` by `h`; returns the time stuck in it.
-    fn step(&self, t: f64, x: &mut f64, v: &mut f64, mode: &mut Mode, h: f64) -> f64 {
+    /// Advances `(x, v, mode)` from `t` by `h`; returns the time stuck in it
+    /// and counts the body's arrivals at rest (stick onsets) in `onsets`.
+    fn step(
+        &self,
+        t: f64,
+        x: &mut f64,
+        v: &mut f64,
+        mode: &mut Mode,
+        h: f64,
+        onsets: &mut u32,
+    ) -> f64 {
         let (mut t, end) = (t, t + h);
         let mut stuck = 0.0;
         // At most a few events per step (each bisection consumes part of it).
@@ -159,7 +168,10 @@ impl Body<'_> {
                     // At rest: stick, or pass through into the other side.
                     *mode = match self.at_rest(t, *x) {
                         Mode::Moving(d) if d != dir => Mode::Moving(d),
-                        _ => Mode::Stuck,
+                        _ => {
+                            *onsets += 1;
+                            Mode::Stuck
+                        }
                     };
                 }
             }
@@ -192,6 +204,7 @@ fn run_n(
     let mut prev_change = f64::INFINITY;
     let mut periods = 0;
     let mut periodic = false;
+    let mut onsets = 0u32;
     for k in 1..=limit {
         periods = k;
         if let Some(r) = rec.as_deref_mut() {
@@ -200,6 +213,7 @@ fn run_n(
         let t0 = TAU * f64::from(k - 1);
         let x0 = x;
         let mut stuck = 0.0;
+        onsets = 0;
         for i in 0..n {
             let t = t0 + h * i as f64;
             if let Some(r) = rec.as_deref_mut() {
@@ -223,7 +237,7 @@ fn run_n(
                 }
             }
             if p.mass > 0.0 {
-                stuck += body.step(t, &mut x, &mut v, &mut mode, h);
+                stuck += body.step(t, &mut x, &mut v, &mut mode, h, &mut onsets);
             } else {
                 // dX/dT = V(T, X)/ν, RK4; stick time by Simpson weights.
                 let f = |tt: f64, xx: f64| body.massless_v(tt, xx) / p.nu;
@@ -232,6 +246,8 @@ fn run_n(
                 let k3 = f(t + 0.5 * h, x + 0.5 * h * k2);
                 let k4 = f(t + h, x + h * k3);
                 let w = [k1 == 0.0, k2 == 0.0 && k3 == 0.0, k4 == 0.0];
+                // A stick onset: moving at the step's start, at rest at its end.
+                onsets += u32::from(k1 != 0.0 && k4 == 0.0);
                 stuck += h
                     * (f64::from(u8::from(w[0]))
                         + 4.0 * f64::from(u8::from(w[1]))
@@ -274,6 +290,7 @@ fn run_n(
     Run {
         mean_velocity: mean,
         stick_fraction,
+        stick_onsets: onsets,
         numerical_error: if change.is_finite() { change } else { 0.0 },
         periods,
         periodic,

@@ -28,6 +28,17 @@ use model_core::model::load_line::{self, Powers};
 use model_core::select::{self, SelectError, Value};
 use model_core::{Libm, Scene};
 
+/// Bounds of the contact's tangential springs ([`Law::spring_bounds`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpringBounds {
+    /// Width `∫dξ` of the springs that ever touch (1 for the flat punch).
+    pub reach: f64,
+    /// Bound of the total spring force `|Σ s|` (units `k_x W₀`).
+    pub s_max: f64,
+    /// The widest band of one spring, `1 + a` (units `W₀`).
+    pub band: f64,
+}
+
 /// Why the law could not be evaluated.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LawError {
@@ -140,19 +151,29 @@ impl Law {
 
     /// Bounds of the contact's tangential spring force for the error
     /// estimate (`motion::estimate`), units of `k_x W₀ = μ₀k_z u_z0`:
-    /// `(reach, s_max)` with `reach` the width `∫dξ` of the springs that ever
-    /// touch (the Lipschitz constant of the total force in the drive, per
-    /// unit of the 2-Lipschitz stretch) and `s_max ≥ |Σ s|`. Flat punch:
-    /// `(1, 1 + a)` (`|s| ≤ w ≤ 1 + a`); profile `n`: springs reach
-    /// `ξ_max = (1 + a)^{1/n}` and `|Σs| ≤ ∫₀^{ξ_max}(1 + a − ξⁿ)dξ =
-    /// n/(n + 1)·(1 + a)^{1 + 1/n}` (→ the flat punch's as `n → ∞`).
-    pub fn spring_bounds(&self) -> (f64, f64) {
+    /// `reach`, the width `∫dξ` of the springs that ever touch (the Lipschitz
+    /// constant of the total force in the drive, per unit of the 2-Lipschitz
+    /// stretch), `s_max ≥ |Σ s|`, and `band = 1 + a`, the widest band of one
+    /// spring (units W₀). Flat punch: `(1, 1 + a, 1 + a)` (`|s| ≤ w ≤ 1 + a`);
+    /// profile `n`: springs reach `ξ_max = (1 + a)^{1/n}` and `|Σs| ≤
+    /// ∫₀^{ξ_max}(1 + a − ξⁿ)dξ = n/(n + 1)·(1 + a)^{1 + 1/n}` (→ the flat
+    /// punch's as `n → ∞`).
+    pub fn spring_bounds(&self) -> SpringBounds {
         let a = self.scene.drive().a;
+        let band = 1.0 + a;
         match self.profile.exponent() {
-            None => (1.0, 1.0 + a),
+            None => SpringBounds {
+                reach: 1.0,
+                s_max: band,
+                band,
+            },
             Some(n) => {
-                let reach = (1.0 + a).powf(1.0 / n);
-                (reach, n / (n + 1.0) * (1.0 + a) * reach)
+                let reach = band.powf(1.0 / n);
+                SpringBounds {
+                    reach,
+                    s_max: n / (n + 1.0) * band * reach,
+                    band,
+                }
             }
         }
     }

@@ -84,6 +84,9 @@ pub struct Run {
     pub mean_velocity: f64,
     /// Fraction of the last load period the body was stuck.
     pub stick_fraction: f64,
+    /// Arrivals at rest (stick onsets) in the last load period (homogenised
+    /// runs; 0 for resolved runs, which do not count them).
+    pub stick_onsets: u32,
     /// Estimated numerical error of `mean_velocity` (units ωW₀): the step
     /// halving difference plus the last period-to-period change.
     pub numerical_error: f64,

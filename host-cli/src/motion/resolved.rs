@@ -212,6 +212,7 @@ fn run_n(
     Run {
         mean_velocity: mean,
         stick_fraction,
+        stick_onsets: 0,
         numerical_error: if change.is_finite() { change } else { 0.0 },
         periods,
         periodic,
