@@ -127,6 +127,7 @@ fn compare(c: &Case, inv_nu: f64, mass: f64, tick: &mut dyn FnMut()) -> Point {
         normal: c.law.mean_normal().expect("flat punch: closed form"),
     };
     let tol = 0.1 * TOL * c.v_ref();
+    let relaxation = crate::motion::relaxation_per_period(&p, estimate::inverse_slope(&c.table));
     let t0 = Instant::now();
     let h = homogenised::run(
         &p,
@@ -135,6 +136,7 @@ fn compare(c: &Case, inv_nu: f64, mass: f64, tick: &mut dyn FnMut()) -> Point {
             tol,
             periods: None,
             max_periods: 2000,
+            relaxation,
         },
         tick,
     );
@@ -149,6 +151,7 @@ fn compare(c: &Case, inv_nu: f64, mass: f64, tick: &mut dyn FnMut()) -> Point {
             tol,
             periods: None,
             max_periods: 2000,
+            relaxation,
         },
         tick,
     );
@@ -556,6 +559,7 @@ fn drift_map(a: &MotionArgs) -> CliResult {
                             tol: 1e-6,
                             periods: None,
                             max_periods: 10,
+                            relaxation: 0.0,
                         },
                         &mut || {},
                     );

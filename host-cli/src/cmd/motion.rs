@@ -179,6 +179,16 @@ impl MotionCmd {
         if big_omega <= 0.0 {
             return Err(CliError::usage("--force-omega: must be > 0"));
         }
+        // Slow dynamics: the load period spans at least two ultrasonic
+        // periods (the periodicity tests compare whole load periods; ω/Ω = 10
+        // is already where homogenisation fails).
+        if big_omega > 0.5 * prm.omega {
+            let unit = if rs.dimensionless { "ω" } else { "rad/s" };
+            return Err(CliError::usage(format!(
+                "--force-omega: {big_omega:e} {unit} is faster than half the vibration's ω = {:e} {unit}; a slow load needs Ω ≤ ω/2",
+                prm.omega
+            )));
+        }
         let spring = finite(self.spring, "spring")?;
         if spring < 0.0 {
             return Err(CliError::usage("--spring: must be >= 0"));
@@ -198,7 +208,8 @@ impl MotionCmd {
                 let n = (t / load_period).floor();
                 if n < 1.0 {
                     return Err(CliError::usage(format!(
-                        "--duration: shorter than one load period 2π/Ω = {load_period:e} s"
+                        "--duration: shorter than one load period 2π/Ω = {load_period:e} {}",
+                        if rs.dimensionless { "1/ω" } else { "s" }
                     )));
                 }
                 if n > f64::from(u32::MAX) {
@@ -255,15 +266,17 @@ impl MotionCmd {
         let total = periods.unwrap_or(MAX_PERIODS);
         let pb = progress_bar(
             u64::from(total),
-            "motion {bar:40} {pos} load periods (of at most {len} per run)",
+            "motion {bar:40} {pos} load periods integrated (runs of at most {len}, repeated while halving the step)",
         );
         let tick = || pb.inc(1);
         // The homogenised run always comes first: cheap, and it gives the
         // body's acceleration bound K of the estimate.
+        let relaxation = crate::motion::relaxation_per_period(&p, estimate::inverse_slope(&law));
         let hs = homogenised::Settings {
             tol: 0.1 * tol_v,
             periods,
             max_periods: MAX_PERIODS,
+            relaxation,
         };
         let h_run = homogenised::run(&p, &law, &hs, &mut || {
             tick();
@@ -273,7 +286,12 @@ impl MotionCmd {
         let use_h = match method {
             MotionMethod::Homogenised => true,
             MotionMethod::Resolved => false,
-            MotionMethod::Auto => mass == 0.0 || e_h + e_table + h_run.numerical_error <= tol_v,
+            // A homogenised body that reaches no periodic regime is reported
+            // as such (exit 1): the resolved body, the same slow dynamics at
+            // a far higher cost, would not settle either.
+            MotionMethod::Auto => {
+                mass == 0.0 || !h_run.periodic || e_h + e_table + h_run.numerical_error <= tol_v
+            }
         };
         let run: Run = if use_h {
             h_run
@@ -283,6 +301,7 @@ impl MotionCmd {
                 tol: 0.1 * tol_v,
                 periods,
                 max_periods: MAX_PERIODS,
+                relaxation,
             };
             resolved::run(&p, &d, law_fn.exponent(), &s, &mut || {
                 tick();

@@ -99,14 +99,17 @@ pub fn curvature(p: &Problem, s_max: f64, run: &Run) -> f64 {
         let g = p.f0.abs() + p.f.abs() + p.kappa * x_max / p.normal;
         (p.normal * g + s_max) / p.mass
     } else {
-        let dv_dt = run
-            .trajectory
-            .windows(2)
-            .filter(|w| w[1].t > w[0].t)
-            .map(|w| ((w[1].v - w[0].v) / (w[1].t - w[0].t)).abs())
-            .fold(0.0, f64::max);
-        p.nu * dv_dt
+        p.nu * max_dv_dt(run)
     }
+}
+
+/// `max|dV/dT|` over a run's recorded trajectory (units ωW₀ per unit `T`).
+pub fn max_dv_dt(run: &Run) -> f64 {
+    run.trajectory
+        .windows(2)
+        .filter(|w| w[1].t > w[0].t)
+        .map(|w| ((w[1].v - w[0].v) / (w[1].t - w[0].t)).abs())
+        .fold(0.0, f64::max)
 }
 
 /// The homogenised model's estimated error `E_h` (units ωW₀, module docs):

@@ -106,18 +106,35 @@ pub struct Run {
     pub trajectory: Vec<Sample>,
 }
 
-/// How far the last load period's mean may still be from the periodic
+/// How far the last load period's state may still be from the periodic
 /// regime, from the last two period-to-period changes `change` and `prev`
-/// (same units): a body relaxing geometrically with ratio `ρ = change/prev`
-/// (its response time against the load period) is still `change·ρ/(1 − ρ)`
-/// away, so the change plus that tail, `change/(1 − ρ)`, is returned. `ρ` is
-/// capped at 0.99: a sequence that does not contract yet counts 100 changes.
-pub fn remaining(change: f64, prev: f64) -> f64 {
-    if !(prev.is_finite() && prev > 0.0) {
-        return change;
-    }
-    let rho = (change / prev).clamp(0.0, 0.99);
+/// (same units): a body relaxing geometrically with ratio `ρ` per load period
+/// is still `change·ρ/(1 − ρ)` away, so the change plus that tail,
+/// `change/(1 − ρ)`, is returned. `ρ` is the larger of the measured ratio
+/// `change/prev` and `floor`, the body's own relaxation over a load period
+/// ([`relaxation_per_period`]; the measured ratio alone is blind at the second
+/// period and where the changes happen to shrink), capped at 0.999: a
+/// sequence that does not contract yet counts 1000 changes.
+pub fn remaining(change: f64, prev: f64, floor: f64) -> f64 {
+    let measured = if prev.is_finite() && prev > 0.0 {
+        change / prev
+    } else {
+        0.0
+    };
+    let rho = measured.max(floor).clamp(0.0, 0.999);
     change / (1.0 - rho)
+}
+
+/// The body's relaxation over one load period, `ρ = exp(−2π n̄/(m̃ν S))`:
+/// linearised about a sliding state, `m̃ν dV/dT = n̄(g − μ(V)/μ₀)` relaxes at
+/// the rate `n̄/(m̃ν S)` in `T`, `S` the law's mean inverse slope
+/// (`estimate::inverse_slope`, units ωW₀ per μ₀). 0 for the massless body.
+pub fn relaxation_per_period(p: &Problem, inverse_slope: f64) -> f64 {
+    if p.mass > 0.0 && inverse_slope > 0.0 {
+        (-std::f64::consts::TAU * p.normal / (p.mass * p.nu * inverse_slope)).exp()
+    } else {
+        0.0
+    }
 }
 
 /// Samples kept per load period of the trajectory.
@@ -194,6 +211,7 @@ mod tests {
                 tol,
                 periods: None,
                 max_periods: 500,
+                relaxation: relaxation_per_period(&p, estimate::inverse_slope(&table)),
             },
             &mut || {},
         );
@@ -205,6 +223,7 @@ mod tests {
                 tol,
                 periods: None,
                 max_periods: 500,
+                relaxation: relaxation_per_period(&p, estimate::inverse_slope(&table)),
             },
             &mut || {},
         );
