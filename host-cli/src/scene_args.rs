@@ -296,7 +296,7 @@ impl SceneArgs {
         let profile = self
             .contact
             .resolve_with_file(file.profile.as_deref(), file.exponent)?;
-        Ok(ResolvedScene {
+        checked_reach(ResolvedScene {
             scene,
             dimensionless: false,
             profile,
@@ -321,6 +321,19 @@ impl SceneArgs {
             (None, None, None, Some(r)) => finite(r, "phi-rad")?,
             _ => 0.0,
         };
+        // An angle of a few thousand turns is certainly a mistake, and far
+        // beyond it the angle's low digits are lost.
+        if phi.abs() > 1e4 {
+            let name = if self.phi_rad.is_some() || (self.phi_deg.is_none() && file_rad.is_some()) {
+                "phi-rad"
+            } else {
+                "phi-deg"
+            };
+            return Err(CliError::usage(format!(
+                "--{name}: |φ| = {:.3e} rad is beyond 10⁴ rad (≈ 1600 turns); give the phase within a turn",
+                phi.abs()
+            )));
+        }
         Ok(phi)
     }
 
@@ -364,12 +377,29 @@ impl SceneArgs {
             }
         };
         let scene = Scene::dimensionless_with_contact(groups, contact).map_err(scene_err)?;
-        Ok(ResolvedScene {
+        checked_reach(ResolvedScene {
             scene,
             dimensionless: true,
             profile: self.contact.resolve()?,
         })
     }
+}
+
+/// Refuses a power-law exponent so small that the springs' reach
+/// `(1 + a)^{1/n}` (the widest ξ that ever touches, `mdr`) is not a
+/// representable number for this drive.
+fn checked_reach(rs: ResolvedScene) -> CliResult<ResolvedScene> {
+    if let Some(n) = rs.profile.exponent() {
+        let a = rs.scene.drive().a;
+        let reach = (1.0 + a).powf(1.0 / n);
+        if !(reach.is_finite() && reach < 1e100) {
+            return Err(CliError::usage(format!(
+                "--exponent: n = {n:e} is too small for Δu_z/u_z0 = {a}: the springs' reach (1 + a)^(1/n) overflows (use n ≥ {:.3e})",
+                (1.0 + a).ln() / 1e100f64.ln()
+            )));
+        }
+    }
+    Ok(rs)
 }
 
 /// The groups of eq. 26 (`b = ratio·a`) for a contact mode: `Groups::from_ratio`

@@ -476,6 +476,21 @@ fn invalid_input_classes() {
     );
     bad(&["mu", "--duz-rel", "0.5", "--v-rel", "0.1"], "--dux-rel");
     bad(
+        &[
+            "mu",
+            "--duz-rel",
+            "0.5",
+            "--ratio",
+            "1",
+            "--phi-deg",
+            "1e300",
+            "--v-rel",
+            "0.1",
+        ],
+        "--phi-deg: |φ| = 1.745e298 rad is beyond 10⁴ rad",
+    );
+    bad(&refs(&with("--phi-deg", "1e7")), "--phi-deg");
+    bad(
         &["mu", "--duz-rel", "0", "--ratio", "1", "--v-rel", "0.1"],
         "--ratio",
     );

@@ -579,6 +579,11 @@ fn profile_flags_and_refusals() {
             "--exponent: must be a finite number > 0",
         ),
         (
+            // (1.5)^(1/n) overflows 1e100 below n = ln 1.5/ln 1e100 = 1.761e-3.
+            &["--profile", "power", "--exponent", "1e-5"][..],
+            "--exponent: n = 1e-5 is too small for Δu_z/u_z0 = 0.5: the springs' reach (1 + a)^(1/n) overflows (use n ≥ 1.761e-3)",
+        ),
+        (
             &["--profile", "sphere", "--method", "fixed"][..],
             "--profile: --method fixed is for the flat punch; a sphere profile is computed by the MDR quadrature (--method auto or exact)",
         ),
