@@ -57,7 +57,13 @@ impl AtomicFile {
             .suffix(".part")
             .tempfile_in(dir)
             .map_err(|e| {
-                CliError::failure(format!("--{flag}: cannot create {}: {e}", path.display()))
+                // Name the user's file, not the temporary one next to it.
+                let why = if dir.is_dir() {
+                    e.kind().to_string()
+                } else {
+                    format!("no directory {}", dir.display())
+                };
+                CliError::failure(format!("--{flag}: cannot create {}: {why}", path.display()))
             })?;
         Ok(AtomicFile {
             tmp,

@@ -35,7 +35,7 @@ use crate::motion::law::Law;
 use crate::motion::table::MuTable;
 use crate::motion::{homogenised, resolved, Problem, Run};
 use crate::output::{stdout_error, write_json, write_rows};
-use crate::plot::{render_panels, Mark, Panel, Series};
+use crate::plot::{render_figure, Corner, Extras, Figure, Mark, Panel, Series};
 use crate::scene_args::SceneArgs;
 use crate::sweep::progress_bar;
 
@@ -342,7 +342,18 @@ impl MotionCmd {
             table_error_over_mu0: law.interpolation_error,
             wall_time: wall,
         };
-        let fz = prm.mu0 * prm.kz * prm.uz0 * p.normal;
+        // The results first: a file that cannot be written loses nothing.
+        if self.json {
+            write_json(out, &o)?;
+        } else {
+            write_text(out, &o, rs.dimensionless).map_err(stdout_error)?;
+        }
+        // Forces in N (SI) or in μ0·F̄z (dimensionless, as the text output).
+        let fz = if rs.dimensionless {
+            1.0
+        } else {
+            prm.mu0 * prm.kz * prm.uz0 * p.normal
+        };
         if let Some(path) = &self.csv {
             let rows: Vec<Row> = run
                 .trajectory
@@ -359,7 +370,30 @@ impl MotionCmd {
         }
         if let Some(path) = &self.plot {
             let g = scene.groups();
-            let sf = (f0, f, g.duz_rel, g.dux_rel, g.phi.to_degrees());
+            let caption = vec![
+                if rs.dimensionless {
+                    format!(
+                        "{} contact: Δu_z/u_z0 = {:.4}, k_xΔu_x/(μ0k_z u_z0) = {:.4}, φ = {:.1}°; Mω²/k_x = {:.4e}, ω/Ω = {:.4e}, K/k_x = {:.4e}",
+                        o.contact, g.duz_rel, g.dux_rel, g.phi.to_degrees(), o.mass_rel, o.scale_separation, p.kappa
+                    )
+                } else {
+                    format!(
+                        "{} contact: μ0 = {}, k_z = {:e} N/m, k_x = {:e} N/m, u_z0 = {:e} m, Δu_z = {:e} m, Δu_x = {:e} m, ω/2π = {:e} Hz, φ = {:.1}°",
+                        o.contact, prm.mu0, prm.kz, prm.kx, prm.uz0, prm.duz, prm.dux, prm.omega / TAU, prm.phi.to_degrees()
+                    )
+                },
+                if rs.dimensionless {
+                    format!(
+                        "F = μ0F̄z·(f0 + f sin Ωt), f0 = {f0}, f = {f}; F̄z = {:.5} k_z u_z0; forces in μ0F̄z, velocities in ωW0",
+                        p.normal
+                    )
+                } else {
+                    format!(
+                        "M = {mass:e} kg, Ω = {big_omega:e} rad/s, K = {:e} N/m; F = μ0F̄z·(f0 + f sin Ωt), f0 = {f0}, f = {f}, F̄z = {:.5e} N",
+                        self.spring, prm.kz * prm.uz0 * p.normal
+                    )
+                },
+            ];
             plot(
                 path,
                 &run,
@@ -369,13 +403,8 @@ impl MotionCmd {
                 fz,
                 &law,
                 rs.dimensionless,
-                sf,
+                caption,
             )?;
-        }
-        if self.json {
-            write_json(out, &o)?;
-        } else {
-            write_text(out, &o, rs.dimensionless).map_err(stdout_error)?;
         }
         if !run.periodic {
             return Err(CliError::failure(format!(
@@ -455,8 +484,9 @@ fn plot(
     fz: f64,
     law: &MuTable,
     dimless: bool,
-    scene_f: (f64, f64, f64, f64, f64),
+    caption: Vec<String>,
 ) -> CliResult {
+    // The last (at most three) load periods of the recorded trajectory.
     let last = run.trajectory.last().map_or(0.0, |s| s.t);
     let from = last - 3.0 * TAU;
     let pts: Vec<_> = run.trajectory.iter().filter(|s| s.t >= from).collect();
@@ -470,8 +500,10 @@ fn plot(
     let force: Vec<(f64, f64)> = pts.iter().map(|s| (t_of(s.t), s.force * fz)).collect();
     let stuck: Vec<(f64, f64)> = pts
         .iter()
-        .map(|s| (t_of(s.t), if s.stuck { 0.0 } else { f64::NAN }))
+        .filter(|s| s.stuck)
+        .map(|s| (t_of(s.t), 0.0))
         .collect();
+    // The data's range, with room above it for the legend.
     let span = |v: &[(f64, f64)], extra: &[f64]| {
         let (lo, hi) = v
             .iter()
@@ -481,78 +513,119 @@ fn plot(
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| {
                 (a.min(y), b.max(y))
             });
-        let pad = 0.08 * (hi - lo).max(1e-300);
-        (lo - pad, hi + pad)
+        let r = (hi - lo).max(1e-300);
+        (lo - 0.08 * r, hi + 0.6 * r)
     };
     let (tu, vu, fu) = if dimless {
-        ("t, 1/ω", "v, ωW0", "F, μ0 k_z u_z0")
+        ("t, 1/ω", "v, ωW0", "F, μ0·F̄z")
     } else {
         ("t, s", "v, m/s", "F, N")
     };
     let band = [law.mu_0plus * fz, law.mu_0minus * fz];
-    let panels = [
-        Panel {
-            title: format!(
-                "{} body, M ω²/k_x = {:.3e}, ω/Ω = {:.3e}",
-                o.method, o.mass_rel, o.scale_separation
-            ),
-            x_label: tu.to_string(),
-            y_label: vu.to_string(),
-            x: (t0, t1),
-            y: span(&vel, &[0.0, o.mean_velocity]),
-            series: vec![
-                Series {
-                    label: "velocity".into(),
-                    points: vel,
-                    mark: Mark::Line,
-                    color: 0,
-                },
-                Series {
-                    label: format!("mean (drift) {:.4e}", o.mean_velocity),
-                    points: vec![(t0, o.mean_velocity), (t1, o.mean_velocity)],
-                    mark: Mark::Dashed,
-                    color: 1,
-                },
-                Series {
-                    label: format!("stuck ({:.1} % of a period)", 100.0 * o.stick_fraction),
-                    points: stuck,
-                    mark: Mark::Points,
-                    color: 2,
-                },
-            ],
+    let mut v_series = vec![
+        Series {
+            label: "velocity".into(),
+            points: vel,
+            mark: Mark::Line,
+            color: 0,
         },
-        Panel {
-            title: format!(
-                "f0 = {}, f = {}; Δu_z/u_z0 = {:.3}, k_xΔu_x/(μ0k_z u_z0) = {:.3}, φ = {:.1}°",
-                scene_f.0, scene_f.1, scene_f.2, scene_f.3, scene_f.4
-            ),
-            x_label: tu.to_string(),
-            y_label: fu.to_string(),
-            x: (t0, t1),
-            y: span(&force, &band),
-            series: vec![
-                Series {
-                    label: "applied force F(t)".into(),
-                    points: force,
-                    mark: Mark::Line,
-                    color: 0,
-                },
-                Series {
-                    label: "μ(0⁺)·F̄z".into(),
-                    points: vec![(t0, band[0]), (t1, band[0])],
-                    mark: Mark::Dashed,
-                    color: 1,
-                },
-                Series {
-                    label: "μ(0⁻)·F̄z".into(),
-                    points: vec![(t0, band[1]), (t1, band[1])],
-                    mark: Mark::Dashed,
-                    color: 3,
-                },
-            ],
+        Series {
+            label: format!("mean (drift) {:.4e}", o.mean_velocity),
+            points: vec![(t0, o.mean_velocity), (t1, o.mean_velocity)],
+            mark: Mark::Dashed,
+            color: 1,
         },
     ];
-    render_panels(path, &panels, 2, 1, (1000, 800))?;
+    if !stuck.is_empty() {
+        v_series.push(Series {
+            label: format!("stuck ({:.1} % of a period)", 100.0 * o.stick_fraction),
+            points: stuck,
+            mark: Mark::Points,
+            color: 2,
+        });
+    }
+    let mut f_series = vec![Series {
+        label: "applied force F(t)".into(),
+        points: force,
+        mark: Mark::Line,
+        color: 0,
+    }];
+    let f_range = f_series[0]
+        .points
+        .iter()
+        .map(|p| p.1.abs())
+        .fold(band[0].abs().max(band[1].abs()), f64::max);
+    if band[0] == band[1] {
+        // Lift-off: μ(0) is unique.
+        f_series.push(Series {
+            label: format!("μ(0)·F̄z = {:.4e} (unique with lift-off)", band[0]),
+            points: vec![(t0, band[0]), (t1, band[0])],
+            mark: Mark::Dashed,
+            color: 1,
+        });
+    } else if (band[0] - band[1]).abs() < 1e-3 * f_range {
+        // Two lines the eye cannot tell apart: one, with both values.
+        f_series.push(Series {
+            label: format!("μ(0⁺)·F̄z = {:.6e} ≈ μ(0⁻)·F̄z = {:.6e}", band[0], band[1]),
+            points: vec![(t0, band[0]), (t1, band[0])],
+            mark: Mark::Dashed,
+            color: 1,
+        });
+    } else {
+        f_series.push(Series {
+            label: format!("μ(0⁺)·F̄z = {:.4e}", band[0]),
+            points: vec![(t0, band[0]), (t1, band[0])],
+            mark: Mark::Dashed,
+            color: 1,
+        });
+        f_series.push(Series {
+            label: format!("μ(0⁻)·F̄z = {:.4e}", band[1]),
+            points: vec![(t0, band[1]), (t1, band[1])],
+            mark: Mark::Dashed,
+            color: 3,
+        });
+    }
+    let y_v = span(&v_series[0].points, &[0.0, o.mean_velocity]);
+    let y_f = span(&f_series[0].points, &band);
+    let extras = Extras {
+        legend_at: Corner::UpperRight,
+        ..Extras::default()
+    };
+    let panels = vec![
+        (
+            Panel {
+                title: format!("{} body: velocity over the last load periods", o.method),
+                x_label: tu.to_string(),
+                y_label: vu.to_string(),
+                x: (t0, t1),
+                y: y_v,
+                series: v_series,
+            },
+            extras.clone(),
+        ),
+        (
+            Panel {
+                title: "applied force and the static band".into(),
+                x_label: tu.to_string(),
+                y_label: fu.to_string(),
+                x: (t0, t1),
+                y: y_f,
+                series: f_series,
+            },
+            extras,
+        ),
+    ];
+    render_figure(
+        path,
+        &Figure {
+            panels,
+            rows: 2,
+            cols: 1,
+            size: (1100, 860),
+            legend: Vec::new(),
+            caption,
+        },
+    )?;
     eprintln!("wrote {}", path.display());
     Ok(())
 }
