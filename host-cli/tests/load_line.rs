@@ -5,7 +5,7 @@ use serde_json::Value;
 
 mod common;
 
-use common::cli::{fricctl, json, PHYS};
+use common::cli::{fricctl, json, run_ok, PHYS};
 
 /// `load-line` on the dimensionless scene a = `duz_rel`, b/a = `ratio`,
 /// φ = `phi_deg` (degrees).
@@ -78,18 +78,374 @@ fn load_line_units_and_keys() {
     ));
 }
 
+/// A scene that pushes backward is plotted (its backward line); one that
+/// pushes neither way has no line: `--plot` is refused with one line naming
+/// it, exit 2, and the results are still printed.
 #[test]
-fn load_line_plot_refused_when_nothing_pushes() {
+fn load_line_plot_of_a_backward_scene_and_refusal_of_a_neutral_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("backward.png");
+    let out = fricctl()
+        .args(dimensionless("0.5", "2", "180"))
+        .arg("--plot")
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
     let out = fricctl()
         .args(dimensionless("0.5", "0.5", "90"))
-        .args(["--plot", "/tmp/never-written.png"])
+        .args(["--plot", "/tmp/never-written.png", "--json"])
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     assert_eq!(
         String::from_utf8_lossy(&out.stderr).trim(),
-        "error: --plot: this scene does not push forward (μ(0⁺) ≥ 0): there is no forward load line to plot"
+        "error: --plot: the scene pushes neither way (μ(0⁺) ≥ 0 ≥ μ(0⁻)): there is no load line"
     );
+    let o: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(o["pushes"], "neither");
+    assert_eq!(o["max_power"].as_f64(), Some(0.0));
+    assert!(!std::path::Path::new("/tmp/never-written.png").exists());
+}
+
+/// `load-line` of one dimensionless scene, parsed.
+fn scene_json(duz_rel: &str, ratio: &str, phi_deg: &str) -> Value {
+    json(&dimensionless(duz_rel, ratio, phi_deg))
+}
+
+/// φ ↔ φ + 180° from the command line: the forward line of one is the
+/// backward line of the other, so the stall forces and no-load velocities
+/// swap, the maxima of power and efficiency are the same values (each is the
+/// largest of one function evaluated with rounding δ = 1e-12·(1 + b)(1 +
+/// v_nl), the bound of the closed-form powers' rounding in the integration
+/// tests, so they agree to 2δ) found on the other line (direction swapped,
+/// velocity and force of opposite sign). The maximiser's location is only
+/// determined to √(δ/κ) (checked in `integration-tests --test load_line
+/// mirror_symmetry_of_powers_and_operating_points`); here it must lie on the
+/// mirrored line. Stall forces: the static analysis' closed forms on
+/// mirrored drives (1e-12); no-load velocities: the root finder brackets to
+/// 8ε·v_c, plus the solver's bound over the slope ≥ 1 (1e-9·(1 + v)).
+#[test]
+fn load_line_mirror_symmetry_from_the_command_line() {
+    for (a, ratio, b, phi, back) in [
+        ("0.5", "2", 1.0, 0, 180),
+        ("0.5", "2", 1.0, 45, 225),
+        ("0.5", "2", 1.0, 90, 270),
+        ("1.5", "0.5", 0.75, 20, 200),
+    ] {
+        let f = scene_json(a, ratio, &phi.to_string());
+        let g = scene_json(a, ratio, &back.to_string());
+        let n = |o: &Value, k: &str| o[k].as_f64().unwrap();
+        let vnl = n(&f, "no_load_velocity").max(n(&f, "no_load_velocity_backward"));
+        let delta = 1e-12 * (1.0 + b) * (1.0 + vnl);
+        for (k, kb) in [
+            (
+                "stall_force_over_mu0_fz",
+                "stall_force_backward_over_mu0_fz",
+            ),
+            (
+                "stall_force_backward_over_mu0_fz",
+                "stall_force_over_mu0_fz",
+            ),
+        ] {
+            assert!((n(&f, k) - n(&g, kb)).abs() <= 1e-12, "φ = {phi}°: {k}");
+        }
+        for (k, kb) in [
+            ("no_load_velocity", "no_load_velocity_backward"),
+            ("no_load_velocity_backward", "no_load_velocity"),
+        ] {
+            assert!(
+                (n(&f, k) - n(&g, kb)).abs() <= 1e-9 * (1.0 + n(&f, k)),
+                "φ = {phi}°: {k}"
+            );
+        }
+        for k in ["max_power", "max_efficiency"] {
+            assert!(n(&f, k) > 0.0, "φ = {phi}°: {k} = 0");
+            assert!(
+                (n(&f, k) - n(&g, k)).abs() <= 2.0 * delta,
+                "φ = {phi}°: {k} {} vs mirror {}",
+                n(&f, k),
+                n(&g, k)
+            );
+        }
+        let swapped = |d: &Value| match d.as_str().unwrap() {
+            "forward" => "backward",
+            "backward" => "forward",
+            other => panic!("direction {other}"),
+        };
+        for at in ["max_power", "max_efficiency"] {
+            let dir = format!("direction_at_{at}");
+            assert_eq!(g[&dir], swapped(&f[&dir]), "φ = {phi}°");
+            for k in [
+                format!("velocity_at_{at}"),
+                format!("force_at_{at}_over_mu0_fz"),
+            ] {
+                assert!(n(&f, &k) * n(&g, &k) < 0.0, "φ = {phi}°: {k} not mirrored");
+            }
+            // The mirrored point lies on the mirrored line.
+            let v = n(&g, &format!("velocity_at_{at}"));
+            let line = if v > 0.0 {
+                n(&g, "no_load_velocity")
+            } else {
+                n(&g, "no_load_velocity_backward")
+            };
+            assert!(v.abs() < line, "φ = {back}°: v = {v} off its line");
+        }
+    }
+}
+
+/// The maximum power point of scenes that push backward (flat φ = 180°,
+/// 135°; lift-off φ = 200°) against `fricctl mu` and `fricctl curve`:
+/// * `P_out = force·v` with the force `−μ(v)F̄z` of `fricctl mu` at the
+///   reported velocity: both are the contact's solver, each within its
+///   bound `e` (the `error_bound_over_mu0` it reports), so they agree to
+///   `2e` and the powers to `2e·|v|`;
+/// * it is a maximum: on an independent scan of `fricctl curve` over the
+///   whole backward line (N = 2000 velocities, step `h = v_nl/N`) no
+///   velocity gives more than `P_out + 2e|v|`, and the best scanned velocity
+///   gives at least `P_out − κ(h/2)²/2 − 2e|v|` (the true maximum lies
+///   within `h/2` of a scan point; `κ` bounds |P''| by the scan's largest
+///   second difference over `h²` plus its error `8e|v|/h²`).
+#[test]
+fn load_line_backward_maximum_against_fricctl_mu() {
+    for (a, ratio, phi) in [
+        ("0.5", "2", "180"),
+        ("0.5", "2", "135"),
+        ("1.5", "0.5", "200"),
+    ] {
+        let o = scene_json(a, ratio, phi);
+        assert_eq!(o["pushes"], "backward", "φ = {phi}°");
+        assert_eq!(o["direction_at_max_power"], "backward");
+        let n = |k: &str| o[k].as_f64().unwrap();
+        let (v, p, force) = (
+            n("velocity_at_max_power"),
+            n("max_power"),
+            n("force_at_max_power_over_mu0_fz"),
+        );
+        assert!(v < 0.0 && p > 0.0 && force < 0.0);
+        let vs = format!("{v:e}");
+        let m = json(&[
+            "mu",
+            "--duz-rel",
+            a,
+            "--ratio",
+            ratio,
+            "--phi-deg",
+            phi,
+            "--v0",
+            &vs,
+        ]);
+        let (mu, e) = (
+            m["mu_over_mu0"].as_f64().unwrap(),
+            m["error_bound_over_mu0"].as_f64().unwrap(),
+        );
+        assert!((force + mu).abs() <= 2.0 * e, "force {force} vs −μ {}", -mu);
+        assert!(
+            (p - (-mu) * v).abs() <= 2.0 * e * v.abs() + 1e-15,
+            "P_out {p} vs F·v {}",
+            -mu * v
+        );
+        let vnl = n("no_load_velocity_backward");
+        let big_n = 2000;
+        let h = vnl / big_n as f64;
+        let out = run_ok(&[
+            "curve",
+            "--duz-rel",
+            a,
+            "--ratio",
+            ratio,
+            "--phi-deg",
+            phi,
+            "--v-min",
+            &format!("{:e}", -vnl + h),
+            "--v-max",
+            &format!("{:e}", -h),
+            "--points",
+            &(big_n - 1).to_string(),
+            "--method",
+            "exact",
+        ]);
+        let text = String::from_utf8(out.stdout).unwrap();
+        let mut scan = Vec::new();
+        let mut emax: f64 = 0.0;
+        for line in text.lines().skip(1) {
+            let c: Vec<&str> = line.split(',').collect();
+            let (x, m, b): (f64, f64, f64) = (
+                c[0].parse().unwrap(),
+                c[3].parse().unwrap(),
+                c[5].parse().unwrap(),
+            );
+            scan.push((x, -m * x));
+            emax = emax.max(b);
+        }
+        assert_eq!(scan.len(), big_n - 1);
+        let eps = 2.0 * emax * vnl + 1e-15;
+        let best = scan.iter().map(|s| s.1).fold(f64::MIN, f64::max);
+        assert!(
+            best <= p + eps,
+            "φ = {phi}°: the scan finds {best} > P_out {p}"
+        );
+        let kappa = scan
+            .windows(3)
+            .map(|w| (w[2].1 - 2.0 * w[1].1 + w[0].1).abs() / (h * h))
+            .fold(0.0f64, f64::max)
+            + 4.0 * eps / (h * h);
+        let resolution = 0.5 * kappa * (h / 2.0).powi(2) + eps;
+        assert!(
+            best >= p - resolution,
+            "φ = {phi}°: P_out {p} above the scan's best {best} by more than {resolution:e}"
+        );
+    }
+}
+
+/// P_in = P_out + P_friction at both operating points to 1e-9 (units
+/// μ0F̄zωW0; the closed forms balance to rounding, 1e-12, in the
+/// integration tests), on scenes pushing forward, backward, and an SI one
+/// (W, scaled by its power unit), with `P_out = force·v` to rounding and
+/// `η = P_out/P_in`.
+#[test]
+fn load_line_energy_balance_at_the_operating_points() {
+    let mut docs: Vec<Value> = ["0", "45", "90", "135", "180"]
+        .iter()
+        .map(|phi| scene_json("0.5", "2", phi))
+        .collect();
+    docs.push(json(&[&["load-line"][..], &si_scene("210")].concat()));
+    for o in docs {
+        let n = |k: &str| o[k].as_f64().unwrap();
+        let (ps, fs) = (n("power_scale"), n("force_scale"));
+        for (at, out_key) in [
+            ("max_power", "max_power"),
+            ("max_efficiency", "output_power_at_max_efficiency"),
+        ] {
+            let p_out = n(out_key);
+            let p_in = n(&format!("input_power_at_{at}"));
+            let p_f = n(&format!("friction_power_at_{at}"));
+            assert!(
+                (p_in - p_out - p_f).abs() <= 1e-9 * ps,
+                "{at}: P_in {p_in} ≠ P_out {p_out} + P_friction {p_f}"
+            );
+            let v = n(&format!("velocity_at_{at}"));
+            let force = n(&format!("force_at_{at}"));
+            assert!((n(&format!("force_at_{at}_over_mu0_fz")) * fs - force).abs() <= 1e-12 * fs);
+            assert!(
+                (p_out - force * v).abs() <= 1e-12 * ps,
+                "{at}: P_out {p_out} vs force·v {}",
+                force * v
+            );
+            let eta = if at == "max_power" {
+                n("efficiency_at_max_power")
+            } else {
+                n("max_efficiency")
+            };
+            assert!((eta - p_out / p_in).abs() <= 1e-12, "{at}: η {eta}");
+        }
+    }
+}
+
+/// `--csv`: the header names the units; every row balances P_in = P_out +
+/// P_friction (1e-9 of the power unit), `p_out = force·v` (rounding), and
+/// the force is `−μ(v)F̄z` with μ of `fricctl curve` at the same velocities
+/// (the rows' grid `−v_nl·i/n` is the curve's linear grid up to rounding of
+/// v, ~1e-16·v_nl, whose effect through the slope is far below the bound):
+/// within twice the solver's bound `e`, times μ0F̄z in newtons for the SI
+/// scene. A bad path: one line naming `--csv`, exit 1, results printed.
+#[test]
+fn load_line_csv_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("line.csv");
+    let pts = 40usize;
+    let o = json(
+        &[
+            &["load-line"][..],
+            &si_scene("210"),
+            &[
+                "--points",
+                &pts.to_string(),
+                "--csv",
+                path.to_str().unwrap(),
+            ],
+        ]
+        .concat(),
+    );
+    assert_eq!(o["pushes"], "backward");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "v [m/s],force [N],p_out [W],p_in [W],p_friction [W],efficiency [1]"
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), pts);
+    let ps = o["power_scale"].as_f64().unwrap();
+    let fs = o["force_scale"].as_f64().unwrap();
+    for r in &rows {
+        let (v, f, p_out, p_in, p_f, eta) = (r[0], r[1], r[2], r[3], r[4], r[5]);
+        assert!(v < 0.0, "backward line: v = {v}");
+        assert!((p_in - p_out - p_f).abs() <= 1e-9 * ps, "row {r:?}");
+        assert!((p_out - f * v).abs() <= 1e-12 * ps, "row {r:?}");
+        assert!(
+            (0.0..=1.0).contains(&eta) && p_f >= -1e-12 * ps,
+            "row {r:?}"
+        );
+    }
+    // The same velocities through `fricctl curve` (increasing v, as the rows).
+    let out = run_ok(
+        &[
+            &["curve"][..],
+            &si_scene("210"),
+            &[
+                "--v-min",
+                &format!("{:e}", rows[0][0]),
+                "--v-max",
+                &format!("{:e}", rows[pts - 1][0]),
+                "--points",
+                &pts.to_string(),
+                "--method",
+                "exact",
+            ],
+        ]
+        .concat(),
+    );
+    let curve = String::from_utf8(out.stdout).unwrap();
+    for (r, line) in rows.iter().zip(curve.lines().skip(1)) {
+        let c: Vec<f64> = line
+            .split(',')
+            .enumerate()
+            .filter(|(i, _)| *i != 4)
+            .map(|(_, x)| x.parse().unwrap())
+            .collect();
+        let (v, mu_rel, e) = (c[0], c[3], c[4]);
+        assert!(
+            (v - r[0]).abs() <= 1e-12 * r[0].abs(),
+            "grid {v} vs {}",
+            r[0]
+        );
+        assert!(
+            (r[1] + mu_rel * fs).abs() <= 2.0 * e * fs,
+            "force {} vs −μF̄z {}",
+            r[1],
+            -mu_rel * fs
+        );
+    }
+    // A path that cannot be written.
+    let out = fricctl()
+        .args(dimensionless("0.5", "2", "0"))
+        .args(["--csv", "/nonexistent-dir/line.csv"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.starts_with("error: --csv: "), "{err}");
+    assert!(String::from_utf8_lossy(&out.stdout).contains("max power"));
 }
 
 #[test]

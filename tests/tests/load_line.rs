@@ -6,7 +6,7 @@ use std::f64::consts::TAU;
 
 use integration_tests::scene_ratio;
 use model_core::exact;
-use model_core::model::load_line::{best_forward, load_line, powers, Objective};
+use model_core::model::load_line::{best, best_forward, load_line, powers, Objective, Powers};
 use model_core::Libm;
 
 /// Steady-state period of the paper's scheme (stick trial, clamp to ±w) with
@@ -195,6 +195,135 @@ fn mirror_symmetry_and_symmetric_law() {
     assert!(best_forward::<f64, Libm>(&d, &l, Objective::Power)
         .unwrap()
         .is_none());
+}
+
+/// φ → φ + π (`Drive::mirrored`, an exact sign change of the tangential
+/// drive) maps μ(v) to −μ(−v), so the powers at `−v` of the mirror equal
+/// those at `v`, and the backward line's operating points of the mirror are
+/// the forward line's at `−v`.
+///
+/// Tolerances: the powers are closed-form sums over a few arcs of O(1 + b)
+/// terms, so two evaluations on mirrored arcs differ by rounding, bounded by
+/// `δ = 1e-12·(1 + b)(1 + |v|)` (the bound of
+/// `energy_balance_holds_to_rounding`). The maximum's *value* is then known
+/// to `2δ` (plus the golden section's last bracket, 1e-9·v_nl, times the
+/// curvature squared: < 1e-17 here). Its *location* is ill-conditioned: a
+/// point whose value is within `ε = 4δ` of the maximum lies within
+/// `√(2ε/κ)` of it, `κ = |P''|` there (a second difference with step
+/// 1e-3·v_nl; its own error ≤ `4δ/h²`, taken off κ), so the two velocities
+/// agree to `2√(2ε/κ)`, and a power `Q` at the points to `|Q'|·Δv + 2δ` (`Q'`
+/// by a difference quotient, doubled for its variation over `Δv`).
+#[test]
+fn mirror_symmetry_of_powers_and_operating_points() {
+    let mut points = 0;
+    let mut worst_v: f64 = 0.0;
+    for (a, r, p) in scenes() {
+        let d = scene_ratio(a, r, p.to_radians()).drive();
+        let m = d.mirrored();
+        let c = d.c_forward::<Libm>().max(d.c_backward::<Libm>());
+        for i in 1..20 {
+            let v = c * (-1.0 + 2.0 * i as f64 / 20.0) * 1.05;
+            if v == 0.0 {
+                continue;
+            }
+            let (x, y) = (
+                powers::<f64, Libm>(&d, v).unwrap(),
+                powers::<f64, Libm>(&m, -v).unwrap(),
+            );
+            let delta = 1e-12 * (1.0 + d.b) * (1.0 + v.abs());
+            assert!((x.mu_over_mu0 + y.mu_over_mu0).abs() <= delta);
+            for (name, p, q) in [
+                ("input", x.input, y.input),
+                ("output", x.output, y.output),
+                ("friction", x.friction, y.friction),
+            ] {
+                assert!(
+                    (p - q).abs() <= delta,
+                    "{name} at a={a} ratio={r} φ={p}° v={v}: {p} vs mirror {q}"
+                );
+            }
+        }
+        let l = load_line::<f64, Libm>(&d).unwrap();
+        let lm = load_line::<f64, Libm>(&m).unwrap();
+        for obj in [Objective::Power, Objective::Efficiency] {
+            let (o, om) = (
+                best::<f64, Libm>(&d, &l, obj).unwrap(),
+                best::<f64, Libm>(&m, &lm, obj).unwrap(),
+            );
+            let (o, om) = match (o, om) {
+                (None, None) => continue,
+                (Some(o), Some(om)) => (o, om),
+                _ => panic!("a={a} ratio={r} φ={p}°: one side has an operating point"),
+            };
+            assert!(o.v * om.v < 0.0, "the mirror's point is on the other line");
+            let vnl = if o.v > 0.0 {
+                l.no_load_forward
+            } else {
+                l.no_load_backward
+            };
+            let delta = 1e-12 * (1.0 + d.b) * (1.0 + vnl);
+            let val = |v: f64| obj.of(&powers::<f64, Libm>(&d, v).unwrap());
+            assert!((obj.of(&o.powers) - obj.of(&om.powers)).abs() <= 2.0 * delta + 1e-17);
+            // Curvature at the maximum (interior: both neighbours inside the line).
+            let h = 1e-3 * vnl;
+            let v = o.v;
+            let inside = |x: f64| x * v.signum() > 0.0 && x.abs() < vnl;
+            let dv = if inside(v - h) && inside(v + h) {
+                let kappa = ((val(v + h) - 2.0 * val(v) + val(v - h)) / (h * h)).abs()
+                    - 4.0 * delta / (h * h);
+                if kappa > 0.0 {
+                    2.0 * (2.0 * 4.0 * delta / kappa).sqrt() + 2e-9 * vnl
+                } else {
+                    // The curvature is not resolved against δ at this step:
+                    // both points lie in the optimiser's refined cell, two
+                    // scan steps of v_nl/64 wide.
+                    2.0 * vnl / 64.0
+                }
+            } else {
+                // A maximum at the line's end (η as v → 0): the optimiser's
+                // first scan cell bounds it from both sides.
+                vnl / 64.0
+            };
+            worst_v = worst_v.max((o.v + om.v).abs() / dv);
+            assert!(
+                (o.v + om.v).abs() <= dv,
+                "{obj:?} at a={a} ratio={r} φ={p}°: v {} vs mirror {} (allow {dv:e})",
+                o.v,
+                om.v
+            );
+            let slope = |f: fn(&Powers<f64>) -> f64| {
+                let hh = (dv).max(1e-6 * vnl).min(0.5 * (vnl - v.abs()).max(1e-12));
+                let (lo, hi) = (v - hh, v + hh);
+                if inside(lo) && inside(hi) {
+                    let q = |x: f64| f(&powers::<f64, Libm>(&d, x).unwrap());
+                    2.0 * ((q(hi) - q(lo)) / (2.0 * hh)).abs()
+                } else {
+                    10.0 * (1.0 + d.b)
+                }
+            };
+            for (name, f) in [
+                ("input", (|p| p.input) as fn(&Powers<f64>) -> f64),
+                ("friction", |p| p.friction),
+                ("force", |p| p.mu_over_mu0),
+            ] {
+                let gap = if name == "force" {
+                    (f(&o.powers) + f(&om.powers)).abs()
+                } else {
+                    (f(&o.powers) - f(&om.powers)).abs()
+                };
+                let allow = slope(f) * (o.v + om.v).abs() + 2.0 * delta;
+                assert!(
+                    gap <= allow,
+                    "{obj:?} {name} at a={a} ratio={r} φ={p}°: gap {gap:e} > {allow:e}"
+                );
+            }
+            points += 1;
+        }
+    }
+    println!("mirror: {points} operating points, worst |v + v_mirror| / allowed = {worst_v:.3e}");
+    // Pushing scenes here (ratio 2 at 0°, 45°, 160°, 250°; b = 2), two
+    // objectives each.
+    assert!(points >= 8, "only {points} operating points compared");
 }
 
 #[test]

@@ -13,9 +13,10 @@
 //!   homogenised, μ⁻¹ of the force) over (φ, ratio) at Δu_z/u_z0 = 0.5 under
 //!   `F = 0.5 μ0F̄z sin Ωt`, in units of ωW₀.
 //! * `motion_load_lines.png` (+ `.csv`): the load lines of the paper's Fig. 6
-//!   scenes (Δu_z/u_z0 = 0.5, ratio 2, φ = 0, 45°, 135°, 180°; 90° is
-//!   symmetric and pushes neither way): force–velocity, output power and
-//!   efficiency, each in the direction the scene pushes.
+//!   scenes (Δu_z/u_z0 = 0.5, ratio 2, φ = 0, 45°, 90°, 135°, 180°; 90° is
+//!   not symmetric at this ratio and pushes backward weakly, stall force
+//!   0.0348 μ0F̄z): force–velocity, output power and efficiency, each in the
+//!   direction the scene pushes.
 //!
 //! Everything is dimensionless (velocities in ωW₀, forces in μ0F̄z, masses in
 //! k_x/ω²). A run with default sizes takes well under a minute (release).
@@ -614,7 +615,7 @@ fn load_lines(out: &Path) -> CliResult {
     let mut se = Vec::new();
     let mut csv = String::from("phi_deg,direction,v,load_over_mu0_fz,p_out,p_in,efficiency\n");
     let (mut vmax, mut fmax, mut pmax, mut emax) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
-    for (k, phi_deg) in [0.0f64, 45.0, 135.0, 180.0].into_iter().enumerate() {
+    for (k, phi_deg) in [0.0f64, 45.0, 90.0, 135.0, 180.0].into_iter().enumerate() {
         let d0 = Scene::dimensionless(
             Groups::from_ratio(a, 2.0, phi_deg.to_radians()).map_err(scene_err)?,
         )
@@ -669,6 +670,14 @@ fn load_lines(out: &Path) -> CliResult {
         se.push(series(label, e, mark, k));
     }
     write_file(&out.join("motion_load_lines.csv"), &csv)?;
+    // One legend under the panels (it covers no data); the panels' series unlabelled.
+    let legend: Vec<Series> = sf
+        .iter()
+        .map(|s| series(s.label.clone(), Vec::new(), s.mark, s.color))
+        .collect();
+    for s in sf.iter_mut().chain(sp.iter_mut()).chain(se.iter_mut()) {
+        s.label.clear();
+    }
     let panel = |title: &str, y_label: &str, y: f64, s: Vec<Series>| {
         (
             Panel {
@@ -679,10 +688,7 @@ fn load_lines(out: &Path) -> CliResult {
                 y: (0.0, y * 1.1),
                 series: s,
             },
-            Extras {
-                legend_at: Corner::UpperRight,
-                ..Extras::default()
-            },
+            Extras::default(),
         )
     };
     let fig = Figure {
@@ -699,10 +705,11 @@ fn load_lines(out: &Path) -> CliResult {
         rows: 1,
         cols: 3,
         size: (2100, 700),
-        legend: Vec::new(),
+        legend,
         caption: vec![
-            "Fig. 6 scenes: Δu_z/u_z0 = 0.5, k_xΔu_x/(μ0k_zΔu_z) = 2; φ = 90° is symmetric (active control) and pushes neither way; φ = 180° mirrors φ = 0° exactly (dashed over solid)"
+            "Fig. 6 scenes: flat punch, permanent contact, Δu_z/u_z0 = 0.5, k_xΔu_x/(μ0k_zΔu_z) = 2 (b = 1); φ = 90° pushes backward weakly (stall force 0.0348 μ0F̄z, no-load velocity 0.0303 ωW0: μ(0±) = 0.0348 μ0);"
                 .into(),
+            "φ = 180° mirrors φ = 0° exactly (dashed over solid); velocities in ωW0 (W0 = μ0k_zu_z0/k_x), forces in μ0F̄z, powers in μ0F̄zωW0".into(),
             "exact steady state; P_in = input of the tangential transducer (the normal one's is 0)".into(),
         ],
     };

@@ -1,5 +1,5 @@
 //! `fricctl load-line`: the contact read as an actuator — stall forces,
-//! no-load velocities, the force–velocity line, powers and efficiency
+//! no-load velocities, the force–velocity line(s), powers and efficiency
 //! (model-core [`model_core::model::load_line`], whose doc states the sign
 //! conventions and the power balance).
 //!
@@ -10,14 +10,23 @@
 //! ([`load_line::powers`]) and with lift-off ([`load_line::liftoff_powers`]),
 //! closed form; a curved profile as the bed's sum
 //! ([`model_core::mdr::powers::profile_powers`], bound 1e-6).
+//!
+//! A scene may push forward (`μ(0⁺) < 0`: the line `0 < v < v_nl`),
+//! backward (`μ(0⁻) > 0`: `−v_nl' < v < 0`), or neither. The operating
+//! points of maximum power and maximum efficiency are sought over every line
+//! the scene has ([`load_line::best_of`]) and reported with a signed
+//! velocity, the direction, and the contact's force on the body
+//! `−μ(v)F̄z` along `+x` (the external load it holds is `F = μ(v)F̄z`, the
+//! opposite), so that `P_out = force·v ≥ 0` on either line.
+
+mod csv_rows;
+mod plot;
 
 use std::io::Write;
 use std::path::PathBuf;
 
 use clap::Args;
-use model_core::model::load_line::{
-    self, best_forward_of, load_line_of, Objective, OperatingPoint,
-};
+use model_core::model::load_line::{self, best_of, load_line_of, Objective, OperatingPoint};
 use model_core::scene::ContactMode;
 use serde::Serialize;
 
@@ -25,7 +34,6 @@ use crate::args::count;
 use crate::error::{CliError, CliResult};
 use crate::motion::law::{Law, LawError};
 use crate::output::{stdout_error, write_json};
-use crate::plot::{render_panels, Mark, Panel, Series};
 use crate::scene_args::SceneArgs;
 
 /// Flags of `fricctl load-line`.
@@ -33,10 +41,13 @@ use crate::scene_args::SceneArgs;
 pub struct LoadLineCmd {
     #[command(flatten)]
     scene: SceneArgs,
-    /// Plot the force–velocity line, the powers and the efficiency to FILE.svg or FILE.png
+    /// Plot the force–velocity line(s), the powers and the efficiency to FILE.svg or FILE.png
     #[arg(long, value_name = "FILE")]
     plot: Option<PathBuf>,
-    /// Points on the plotted line (≥ 2, at most 10⁵)
+    /// Write the force–velocity line(s) to FILE (CSV: v, force, p_out, p_in, p_friction, efficiency; units in the header)
+    #[arg(long, value_name = "FILE")]
+    csv: Option<PathBuf>,
+    /// Points per line for --plot and --csv (≥ 2, at most 10⁵)
     #[arg(long, default_value_t = 200, value_parser = count::<usize, 2>)]
     points: usize,
     /// JSON output
@@ -45,12 +56,18 @@ pub struct LoadLineCmd {
 }
 
 /// The JSON document of `fricctl load-line` (flat; SI units for an SI scene,
-/// units of μ0·F̄z, ωW0 and μ0·F̄z·ωW0 for a dimensionless one).
+/// units of μ0·F̄z, ωW0 and μ0·F̄z·ωW0 for a dimensionless one). Velocities
+/// of operating points are signed (negative on the backward line); forces
+/// are the contact's force on the body `−μ(v)F̄z` along `+x`.
 #[derive(Serialize)]
 struct LoadLineOut {
+    /// Contact model: flat | lift-off | sphere | cone | power.
+    contact: &'static str,
+    /// Which load lines the scene has: forward | backward | both | neither.
+    pushes: &'static str,
     /// Forward stall force −μ(0⁺)/μ0 when positive, else 0 (units μ0·F̄z).
     stall_force_over_mu0_fz: f64,
-    /// The same in newtons (μ0·F̄z·…; F̄z = kz·uz0).
+    /// The same in newtons (μ0·F̄z·…).
     stall_force: f64,
     /// Forward no-load velocity (0 when the scene does not push forward).
     no_load_velocity: f64,
@@ -60,20 +77,42 @@ struct LoadLineOut {
     stall_force_backward: f64,
     /// |velocity| of the backward no-load point (0 when it does not push backward).
     no_load_velocity_backward: f64,
-    /// Largest forward output power −μ(v)·F̄z·v (0 when the scene does not push forward).
+    /// Largest output power −μ(v)·F̄z·v over both lines (0 when it pushes neither way).
     max_power: f64,
-    /// Velocity of the maximum power point.
+    /// forward | backward | none.
+    direction_at_max_power: &'static str,
+    /// Signed velocity of the maximum power point.
     velocity_at_max_power: f64,
-    /// Load force there (units μ0·F̄z).
+    /// Contact's force on the body there, −μ/μ0 (units μ0·F̄z, signed).
     force_at_max_power_over_mu0_fz: f64,
-    /// Largest forward efficiency P_out/P_in (0 when the scene does not push forward).
-    max_efficiency: Option<f64>,
-    /// Velocity of the maximum efficiency point.
-    velocity_at_max_efficiency: Option<f64>,
-    /// Contact model: flat | lift-off | sphere | cone | power.
-    contact: &'static str,
+    /// The same in newtons.
+    force_at_max_power: f64,
+    /// Input power of the two transducers there.
+    input_power_at_max_power: f64,
+    /// Friction loss there.
+    friction_power_at_max_power: f64,
+    /// Efficiency P_out/P_in there.
+    efficiency_at_max_power: f64,
+    /// Largest efficiency P_out/P_in over both lines (0 when it pushes neither way).
+    max_efficiency: f64,
+    /// forward | backward | none.
+    direction_at_max_efficiency: &'static str,
+    /// Signed velocity of the maximum efficiency point.
+    velocity_at_max_efficiency: f64,
+    /// Contact's force on the body there, −μ/μ0 (units μ0·F̄z, signed).
+    force_at_max_efficiency_over_mu0_fz: f64,
+    /// The same in newtons.
+    force_at_max_efficiency: f64,
+    /// Output power there.
+    output_power_at_max_efficiency: f64,
+    /// Input power of the two transducers there.
+    input_power_at_max_efficiency: f64,
+    /// Friction loss there.
+    friction_power_at_max_efficiency: f64,
     /// Mean normal force F̄z (N; kz·uz0 in permanent contact, kz·uz0·⟨w⁺⟩ with lift-off, kz·uz0·D (eq. M5) for a curved profile whose kz is its incremental stiffness 2E*a0; in units of kz·uz0 for a dimensionless scene, whose forces and powers are in units of μ0·F̄z and μ0·F̄z·ωW0).
     fz_mean: f64,
+    /// Force unit μ0·F̄z (N; 1 for a dimensionless scene).
+    force_scale: f64,
     /// Velocity unit ωW0 (m/s; 1 for a dimensionless scene).
     velocity_scale: f64,
     /// Power unit μ0·F̄z·ωW0 (W; 1 for a dimensionless scene).
@@ -81,6 +120,62 @@ struct LoadLineOut {
     /// Whether values are dimensionless.
     dimensionless: bool,
 }
+
+/// An operating point in output units (SI or dimensionless).
+#[derive(Debug, Clone, Copy, Default)]
+struct Point {
+    direction: &'static str,
+    v: f64,
+    force_rel: f64,
+    force: f64,
+    p_out: f64,
+    p_in: f64,
+    p_friction: f64,
+    efficiency: f64,
+}
+
+/// The output units: `μ0·F̄z` (N), `ωW0` (m/s), `μ0·F̄z·ωW0` (W); all 1
+/// for a dimensionless scene.
+#[derive(Debug, Clone, Copy)]
+struct Units {
+    force: f64,
+    velocity: f64,
+    power: f64,
+    dimensionless: bool,
+}
+
+impl Units {
+    fn point(&self, o: Option<OperatingPoint<f64>>) -> Point {
+        o.map_or(
+            Point {
+                direction: "none",
+                ..Point::default()
+            },
+            |o| Point {
+                direction: if o.v > 0.0 { "forward" } else { "backward" },
+                v: o.v * self.velocity,
+                force_rel: o.force,
+                force: o.force * self.force,
+                p_out: o.powers.output * self.power,
+                p_in: o.powers.input * self.power,
+                p_friction: o.powers.friction * self.power,
+                efficiency: o.powers.efficiency(),
+            },
+        )
+    }
+
+    /// Unit names of force, velocity and power.
+    fn names(&self) -> (&'static str, &'static str, &'static str) {
+        if self.dimensionless {
+            ("μ0·F̄z", "ωW0", "μ0·F̄z·ωW0")
+        } else {
+            ("N", "m/s", "W")
+        }
+    }
+}
+
+/// One sample of a load line: dimensionless velocity (signed) and powers.
+pub(crate) type Sample = (f64, load_line::Powers<f64>);
 
 impl LoadLineCmd {
     /// Runs the command.
@@ -99,7 +194,12 @@ impl LoadLineCmd {
         // Dimensionless scenes report forces in units of μ0·F̄z (F̄z = 1 unit).
         let force_scale = if rs.dimensionless { 1.0 } else { s.mu0() * fz };
         let vs = s.velocity_scale();
-        let ps = force_scale * vs;
+        let units = Units {
+            force: force_scale,
+            velocity: vs,
+            power: force_scale * vs,
+            dimensionless: rs.dimensionless,
+        };
         let fail = |e: LawError| CliError::failure(e.to_string());
         // The solver's own tolerance: its best bound (the law retries with it).
         let tol = 1e-12;
@@ -109,152 +209,126 @@ impl LoadLineCmd {
             law.mu(v, tol).map(|m| m.0)
         })
         .map_err(fail)?;
-        let best_p = best_forward_of(&line, Objective::Power, |v| law.powers(v)).map_err(fail)?;
-        let best_e =
-            best_forward_of(&line, Objective::Efficiency, |v| law.powers(v)).map_err(fail)?;
-        let get = |b: &Option<OperatingPoint<f64>>| {
-            b.map_or((0.0, 0.0, 0.0), |o| (o.v, o.force, o.powers.output))
+        let best_p = best_of(&line, Objective::Power, |v| law.powers(v)).map_err(fail)?;
+        let best_e = best_of(&line, Objective::Efficiency, |v| law.powers(v)).map_err(fail)?;
+        let (mp, me) = (units.point(best_p), units.point(best_e));
+        let pushes = match (line.no_load_forward > 0.0, line.no_load_backward > 0.0) {
+            (true, true) => "both",
+            (true, false) => "forward",
+            (false, true) => "backward",
+            (false, false) => "neither",
         };
-        let (vp, fp, pp) = get(&best_p);
-        let eff = Some(best_e.map_or((0.0, 0.0), |o| (o.powers.efficiency(), o.v)));
         let o = LoadLineOut {
+            contact: law.name(),
+            pushes,
             stall_force_over_mu0_fz: line.stall_forward,
             stall_force: line.stall_forward * force_scale,
             no_load_velocity: line.no_load_forward * vs,
             stall_force_backward_over_mu0_fz: line.stall_backward,
             stall_force_backward: line.stall_backward * force_scale,
             no_load_velocity_backward: line.no_load_backward * vs,
-            max_power: pp * ps,
-            velocity_at_max_power: vp * vs,
-            force_at_max_power_over_mu0_fz: fp,
-            max_efficiency: eff.map(|e| e.0),
-            velocity_at_max_efficiency: eff.map(|e| e.1 * vs),
-            contact: law.name(),
+            max_power: mp.p_out,
+            direction_at_max_power: mp.direction,
+            velocity_at_max_power: mp.v,
+            force_at_max_power_over_mu0_fz: mp.force_rel,
+            force_at_max_power: mp.force,
+            input_power_at_max_power: mp.p_in,
+            friction_power_at_max_power: mp.p_friction,
+            efficiency_at_max_power: mp.efficiency,
+            max_efficiency: me.efficiency,
+            direction_at_max_efficiency: me.direction,
+            velocity_at_max_efficiency: me.v,
+            force_at_max_efficiency_over_mu0_fz: me.force_rel,
+            force_at_max_efficiency: me.force,
+            output_power_at_max_efficiency: me.p_out,
+            input_power_at_max_efficiency: me.p_in,
+            friction_power_at_max_efficiency: me.p_friction,
             fz_mean: fz,
+            force_scale,
             velocity_scale: vs,
-            power_scale: ps,
+            power_scale: units.power,
             dimensionless: rs.dimensionless,
         };
-        if let Some(path) = &self.plot {
-            self.plot_line(path, &law, &line, &o)?;
-            eprintln!("wrote {}", path.display());
+        // Files first; their errors are reported after the results, which
+        // are printed whatever happens to the files.
+        let mut file_error = None;
+        if self.plot.is_some() || self.csv.is_some() {
+            if pushes == "neither" {
+                let flag = if self.plot.is_some() {
+                    "--plot"
+                } else {
+                    "--csv"
+                };
+                file_error = Some(CliError::usage(format!(
+                    "{flag}: the scene pushes neither way (μ(0⁺) ≥ 0 ≥ μ(0⁻)): there is no load line"
+                )));
+            } else {
+                let samples = sample_lines(&law, &line, self.points).map_err(fail)?;
+                if let Some(path) = &self.csv {
+                    match csv_rows::write(path, &samples, &units) {
+                        Ok(()) => eprintln!("wrote {}", path.display()),
+                        Err(e) => file_error = Some(e),
+                    }
+                }
+                if let Some(path) = &self.plot {
+                    let scene = plot::SceneText::of(&law, &rs, fz);
+                    let marks = [(best_p, "maximum power"), (best_e, "maximum efficiency")];
+                    match plot::plot(path, &samples, &line, &marks, &units, &scene) {
+                        Ok(()) => eprintln!("wrote {}", path.display()),
+                        Err(e) => file_error = file_error.or(Some(e)),
+                    }
+                }
+            }
         }
         if self.json {
-            return write_json(out, &o);
-        }
-        write_text(out, &o).map_err(stdout_error)
-    }
-
-    fn plot_line(
-        &self,
-        path: &std::path::Path,
-        law: &Law,
-        line: &load_line::LoadLine<f64>,
-        o: &LoadLineOut,
-    ) -> CliResult {
-        if line.no_load_forward <= 0.0 {
-            return Err(CliError::usage(
-                "--plot: this scene does not push forward (μ(0⁺) ≥ 0): there is no forward load line to plot",
-            ));
-        }
-        let n = self.points;
-        let d = &law.scene().drive();
-        let g = model_core::Groups {
-            duz_rel: d.a,
-            dux_rel: d.b,
-            phi: 0.0,
-        };
-        let ratio = if g.duz_rel > 0.0 {
-            format!("{:.3}", g.dux_rel / g.duz_rel)
+            write_json(out, &o)?;
         } else {
-            "∞".into()
-        };
-        let scene = format!(
-            "Δuz/uz0 = {:.3}, kxΔux/(μ0kzΔuz) = {ratio}, φ = {:.1}°",
-            g.duz_rel,
-            d.bs.atan2(d.bc).to_degrees().rem_euclid(360.0)
-        );
-        let (vunit, punit) = if o.dimensionless {
-            ("v0 (ωW0)", "power (μ0·F̄z·ωW0)")
-        } else {
-            ("v0 (m/s)", "power (W)")
-        };
-        let (mut force, mut pin, mut pout, mut pf, mut eta) =
-            (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        for i in 1..n {
-            let v = line.no_load_forward * i as f64 / n as f64;
-            let x = v * o.velocity_scale;
-            let pw = law
-                .powers(v)
-                .map_err(|e| CliError::failure(e.to_string()))?;
-            force.push((x, -pw.mu_over_mu0));
-            pin.push((x, pw.input * o.power_scale));
-            pout.push((x, pw.output * o.power_scale));
-            pf.push((x, pw.friction * o.power_scale));
-            eta.push((x, pw.efficiency()));
+            write_text(out, &o, &units, &mp, &me).map_err(stdout_error)?;
         }
-        force.insert(0, (0.0, line.stall_forward));
-        force.push((o.no_load_velocity, 0.0));
-        let xmax = o.no_load_velocity;
-        let pmax = pin
-            .iter()
-            .chain(pf.iter())
-            .chain(pout.iter())
-            .map(|p| p.1)
-            .fold(0.0f64, f64::max)
-            * 1.1;
-        let emax = eta.iter().map(|p| p.1).fold(0.0f64, f64::max) * 1.2;
-        let series = |label: &str, points: Vec<(f64, f64)>, mark: Mark, color: usize| Series {
-            label: label.into(),
-            points,
-            mark,
-            color,
-        };
-        let line_panel = Panel {
-            title: format!("{}: {scene}", law.name()),
-            x_label: vunit.into(),
-            y_label: "load −μ/μ0 (units μ0·F̄z)".into(),
-            x: (0.0, xmax),
-            y: (0.0, line.stall_forward * 1.1),
-            series: vec![series("−μ(v)/μ0", force, Mark::Line, 0)],
-        };
-        let panels = [
-            line_panel,
-            Panel {
-                title: "powers: P_in = P_out + P_friction (normal transducer: 0)".into(),
-                x_label: vunit.into(),
-                y_label: punit.into(),
-                x: (0.0, xmax),
-                y: (0.0, pmax.max(1e-300)),
-                series: vec![
-                    series("P_in, tangential transducer", pin, Mark::Line, 0),
-                    series("P_friction", pf, Mark::Dashed, 2),
-                    series("P_out, to the body", pout, Mark::Line, 1),
-                ],
-            },
-            Panel {
-                title: "efficiency η = P_out/P_in".into(),
-                x_label: vunit.into(),
-                y_label: "η".into(),
-                x: (0.0, xmax),
-                y: (0.0, emax.max(1e-12)),
-                series: vec![series("η", eta, Mark::Line, 3)],
-            },
-        ];
-        render_panels(path, &panels, 1, 3, (1800, 600))
+        file_error.map_or(Ok(()), Err)
     }
 }
 
+/// Samples of every load line the scene has: `n` velocities each, at
+/// `±v_nl·i/n` (`i = 1…n`, the no-load point included, `v = 0` left out:
+/// the stall is the limit there), backward line first, in increasing `v`.
+fn sample_lines(
+    law: &Law,
+    line: &load_line::LoadLine<f64>,
+    n: usize,
+) -> Result<Vec<Vec<Sample>>, LawError> {
+    let mut lines = Vec::new();
+    for (vnl, sign) in [(line.no_load_backward, -1.0), (line.no_load_forward, 1.0)] {
+        if vnl <= 0.0 {
+            continue;
+        }
+        let mut l = Vec::with_capacity(n);
+        for i in 1..=n {
+            let v = sign * vnl * i as f64 / n as f64;
+            l.push((v, law.powers(v)?));
+        }
+        if sign < 0.0 {
+            l.reverse();
+        }
+        lines.push(l);
+    }
+    Ok(lines)
+}
+
 /// The aligned text summary.
-fn write_text(out: &mut impl Write, o: &LoadLineOut) -> std::io::Result<()> {
-    let (fu, vu, pu) = if o.dimensionless {
-        ("μ0·F̄z", "ωW0", "μ0·F̄z·ωW0")
-    } else {
-        ("N", "m/s", "W")
-    };
+fn write_text(
+    out: &mut impl Write,
+    o: &LoadLineOut,
+    u: &Units,
+    mp: &Point,
+    me: &Point,
+) -> std::io::Result<()> {
+    let (fu, vu, pu) = u.names();
+    writeln!(out, "contact                 {}", o.contact)?;
+    writeln!(out, "pushes                  {}", o.pushes)?;
     writeln!(
         out,
-        "stall force, forward    {:<12.6} μ0·F̄z  = {:.6e} {fu}",
+        "stall force, forward    {:<12.6} μ0·F̄z = {:.6e} {fu}",
         o.stall_force_over_mu0_fz, o.stall_force
     )?;
     writeln!(
@@ -264,35 +338,72 @@ fn write_text(out: &mut impl Write, o: &LoadLineOut) -> std::io::Result<()> {
     )?;
     writeln!(
         out,
-        "stall force, backward   {:<12.6} μ0·F̄z  = {:.6e} {fu}",
+        "stall force, backward   {:<12.6} μ0·F̄z = {:.6e} {fu}",
         o.stall_force_backward_over_mu0_fz, o.stall_force_backward
     )?;
     writeln!(
         out,
-        "no-load velocity, back  {:.6e} {vu}",
+        "no-load velocity, back  {:.6e} {vu} (|v|)",
         o.no_load_velocity_backward
     )?;
-    if o.no_load_velocity > 0.0 {
-        writeln!(
+    if o.pushes == "neither" {
+        return writeln!(
             out,
-            "max power (forward)     {:.6e} {pu} at v0 = {:.6e} {vu}, load {:.6} μ0·F̄z",
-            o.max_power, o.velocity_at_max_power, o.force_at_max_power_over_mu0_fz
-        )?;
-        match (o.max_efficiency, o.velocity_at_max_efficiency) {
-            (Some(e), Some(v)) => {
-                writeln!(out, "max efficiency          {e:.6} at v0 = {v:.6e} {vu}")?
-            }
-            _ => writeln!(
-                out,
-                "max efficiency          not computed ({} contact: no derived input power)",
-                o.contact
-            )?,
-        }
-    } else {
-        writeln!(
+            "the scene pushes neither way (μ(0⁺) ≥ 0 ≥ μ(0⁻)): no output power, no efficiency"
+        );
+    }
+    writeln!(out)?;
+    writeln!(
+        out,
+        "operating point          {:>14}  {:>18}",
+        "max power", "max efficiency"
+    )?;
+    let row = |out: &mut dyn Write, name: &str, a: String, b: String| {
+        // Pad by displayed width: combining marks (the bar of F̄) take none.
+        let width = name
+            .chars()
+            .filter(|c| !('\u{300}'..='\u{36f}').contains(c))
+            .count();
+        let pad = " ".repeat(24usize.saturating_sub(width));
+        writeln!(out, "{name}{pad} {a:>14}  {b:>18}")
+    };
+    row(out, "direction", mp.direction.into(), me.direction.into())?;
+    row(
+        out,
+        &format!("velocity ({vu})"),
+        format!("{:.6e}", mp.v),
+        format!("{:.6e}", me.v),
+    )?;
+    row(
+        out,
+        "force −μF̄z (μ0·F̄z)",
+        format!("{:.6}", mp.force_rel),
+        format!("{:.6}", me.force_rel),
+    )?;
+    if !u.dimensionless {
+        row(
             out,
-            "the scene does not push forward: no forward power or efficiency"
+            &format!("force −μF̄z ({fu})"),
+            format!("{:.6e}", mp.force),
+            format!("{:.6e}", me.force),
         )?;
     }
-    Ok(())
+    for (name, a, b) in [
+        ("P_out", mp.p_out, me.p_out),
+        ("P_in", mp.p_in, me.p_in),
+        ("P_friction", mp.p_friction, me.p_friction),
+    ] {
+        row(
+            out,
+            &format!("{name} ({pu})"),
+            format!("{a:.6e}"),
+            format!("{b:.6e}"),
+        )?;
+    }
+    row(
+        out,
+        "efficiency P_out/P_in",
+        format!("{:.6}", mp.efficiency),
+        format!("{:.6}", me.efficiency),
+    )
 }

@@ -326,13 +326,17 @@ fn root<T: Float, E>(
     Ok((lo + hi) * T::HALF)
 }
 
-/// An operating point on the forward load line.
+/// An operating point on the forward or the backward load line.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct OperatingPoint<T> {
-    /// Dimensionless velocity V.
+    /// Dimensionless velocity V, signed: `V > 0` on the forward line,
+    /// `V < 0` on the backward one.
     pub v: T,
-    /// The load `−μ/μ₀` the contact pushes against (units μ₀F̄z).
+    /// The contact's force on the body `−μ/μ₀` along `+x` (units μ₀F̄z):
+    /// positive on the forward line, negative on the backward one, so that
+    /// `P_out = force·V > 0`; the load it holds is the external force
+    /// `F = μF̄z = −force`.
     pub force: T,
     /// The powers there.
     pub powers: Powers<T>,
@@ -348,6 +352,16 @@ pub enum Objective {
     Efficiency,
 }
 
+impl Objective {
+    /// The value maximised: `P_out` or `η` of `p`.
+    pub fn of<T: Float>(self, p: &Powers<T>) -> T {
+        match self {
+            Objective::Power => p.output,
+            Objective::Efficiency => p.efficiency(),
+        }
+    }
+}
+
 /// The forward operating point (0 < V < no-load velocity) that maximises
 /// `objective`, or `None` when the contact does not push forward
 /// ([`best_forward_of`] on [`powers`]; flat punch in permanent contact).
@@ -360,6 +374,20 @@ pub fn best_forward<T: Float, M: Math<T>>(
     objective: Objective,
 ) -> Result<Option<OperatingPoint<T>>, ExactError> {
     best_forward_of(line, objective, |v| powers::<T, M>(d, v))
+}
+
+/// The operating point over both load lines that maximises `objective`
+/// ([`best_of`] on [`powers`]; flat punch in permanent contact), `None`
+/// when the contact pushes neither way.
+///
+/// # Errors
+/// As [`powers`].
+pub fn best<T: Float, M: Math<T>>(
+    d: &Drive<T>,
+    line: &LoadLine<T>,
+    objective: Objective,
+) -> Result<Option<OperatingPoint<T>>, ExactError> {
+    best_of(line, objective, |v| powers::<T, M>(d, v))
 }
 
 /// The forward operating point maximising `objective` for any contact
@@ -377,19 +405,66 @@ pub fn best_forward_of<T: Float, E>(
     if vnl <= T::ZERO {
         return Ok(None);
     }
-    let v = maximise_forward(vnl, |v| {
-        let p = powers(v)?;
-        Ok(match objective {
-            Objective::Power => p.output,
-            Objective::Efficiency => p.efficiency(),
-        })
-    })?;
+    let v = maximise_forward(vnl, |v| Ok(objective.of(&powers(v)?)))?;
     let p = powers(v)?;
     Ok(Some(OperatingPoint {
         v,
         force: -p.mu_over_mu0,
         powers: p,
     }))
+}
+
+/// The backward operating point (`−v_nl' < V < 0`) maximising `objective`,
+/// or `None` when the contact does not push backward: [`maximise_forward`]
+/// on `U = −V ∈ (0, v_nl')` (the backward line read in its own direction;
+/// `P_out = −μV > 0` there since `μ > 0`).
+///
+/// # Errors
+/// Those of `powers`.
+pub fn best_backward_of<T: Float, E>(
+    line: &LoadLine<T>,
+    objective: Objective,
+    mut powers: impl FnMut(T) -> Result<Powers<T>, E>,
+) -> Result<Option<OperatingPoint<T>>, E> {
+    let vnl = line.no_load_backward;
+    if vnl <= T::ZERO {
+        return Ok(None);
+    }
+    let u = maximise_forward(vnl, |u| Ok(objective.of(&powers(-u)?)))?;
+    let p = powers(-u)?;
+    Ok(Some(OperatingPoint {
+        v: -u,
+        force: -p.mu_over_mu0,
+        powers: p,
+    }))
+}
+
+/// The operating point maximising `objective` over **both** load lines
+/// (forward, [`best_forward_of`], and backward, [`best_backward_of`]; the
+/// forward one where they tie), or `None` when the contact pushes neither
+/// way. Under the mirror `φ → φ + π` (`μ(V; φ + π) = −μ(−V; φ)`) the
+/// powers at `−V` equal those at `V`, so the point maps to `−V` with the
+/// same powers.
+///
+/// # Errors
+/// Those of `powers`.
+pub fn best_of<T: Float, E>(
+    line: &LoadLine<T>,
+    objective: Objective,
+    mut powers: impl FnMut(T) -> Result<Powers<T>, E>,
+) -> Result<Option<OperatingPoint<T>>, E> {
+    let f = best_forward_of(line, objective, &mut powers)?;
+    let b = best_backward_of(line, objective, &mut powers)?;
+    Ok(match (f, b) {
+        (Some(f), Some(b)) => {
+            if objective.of(&b.powers) > objective.of(&f.powers) {
+                Some(b)
+            } else {
+                Some(f)
+            }
+        }
+        (f, b) => f.or(b),
+    })
 }
 
 /// The velocity in `(0, vnl)` maximising `value` (any contact model; e.g.
