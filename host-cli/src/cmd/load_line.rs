@@ -326,10 +326,18 @@ fn write_text(
     let (fu, vu, pu) = u.names();
     writeln!(out, "contact                 {}", o.contact)?;
     writeln!(out, "pushes                  {}", o.pushes)?;
+    // In newtons too for an SI scene; once for a dimensionless one.
+    let stall = |rel: f64, abs: f64| {
+        if u.dimensionless {
+            format!("{rel:.6} μ0·F̄z")
+        } else {
+            format!("{rel:<12.6} μ0·F̄z = {abs:.6e} {fu}")
+        }
+    };
     writeln!(
         out,
-        "stall force, forward    {:<12.6} μ0·F̄z = {:.6e} {fu}",
-        o.stall_force_over_mu0_fz, o.stall_force
+        "stall force, forward    {}",
+        stall(o.stall_force_over_mu0_fz, o.stall_force)
     )?;
     writeln!(
         out,
@@ -338,8 +346,8 @@ fn write_text(
     )?;
     writeln!(
         out,
-        "stall force, backward   {:<12.6} μ0·F̄z = {:.6e} {fu}",
-        o.stall_force_backward_over_mu0_fz, o.stall_force_backward
+        "stall force, backward   {}",
+        stall(o.stall_force_backward_over_mu0_fz, o.stall_force_backward)
     )?;
     writeln!(
         out,
