@@ -141,7 +141,7 @@ use crate::model::scene::{ContactMode, Drive};
 use spring::{forward_critical, spring, Limit};
 
 /// Safety factor on the Gauss–Kronrod estimate in the bound.
-pub const SAFETY: f64 = 2.0;
+pub const SAFETY: f64 = 4.0;
 
 /// The per-spring precision constant of the quadrature's bound in f64:
 /// each spring's `⟨s⟩` ([`spring_means`]) errs by at most this times
