@@ -539,7 +539,23 @@ fn curved<T: Float, M: Math<T>>(
         if !sliding {
             // The extra samples next to the lift-off onset ξ_a (both sides).
             let at_onset = (a < T::ONE && j == 0, a < T::ONE && j == 1);
-            searched += kinks::<T, M>(d, v, l, r, at_onset, &offset, |xi| {
+            // Intermittent springs: the landing-slip thresholds in closed form.
+            let mut hint: heapless::Vec<T, MAX_LANDING> = heapless::Vec::new();
+            if j == 1 {
+                landing_thresholds::<T, M>(d, v, |dd| {
+                    let xi = Profile::root(n, T::ONE - dd);
+                    if xi > l && xi < r {
+                        let _ = hint.push(xi);
+                    }
+                });
+            }
+            let search = Search {
+                l,
+                r,
+                ends: at_onset,
+                hint: &hint,
+            };
+            searched += kinks::<T, M>(d, v, &search, &offset, |xi| {
                 if xi > left && xi < r {
                     let _ = pieces.push((left, xi, false));
                     left = xi;
@@ -622,22 +638,80 @@ const KINK_SAMPLES: u32 = 8;
 /// scenes, inside the last `π/9` of the segment).
 const KINK_END: f64 = 1e-4;
 
+/// A segment `[l, r]` (ξ) to search for kinks.
+struct Search<'h, T> {
+    l: T,
+    r: T,
+    /// Extra samples next to the lift-off onset at its left / right end.
+    ends: (bool, bool),
+    /// Kink candidates in closed form (ξ, any order; [`landing_thresholds`]).
+    hint: &'h [T],
+}
+
+/// Most landing-slip thresholds kept ([`landing_thresholds`]).
+const MAX_LANDING: usize = 8;
+
+/// Points on `θ_c ∈ (0, π)` where [`landing_thresholds`] looks for sign
+/// changes before refining each one.
+const LANDING_GRID: u32 = 64;
+
+/// The band offsets `d = a cos θ_c` (`|d| < a`) at which an intermittent
+/// spring's landing changes from a stick to a slip (forward convention):
+/// at landing `s = 0 = w`, and the band opens at `dw/dθ = a sin θ_c` while
+/// the drive moves the stick at `u̇_x = V − b sin(θ_c + φ)` (eq. 2): the
+/// spring slips from the landing iff `|u̇_x| > a sin θ_c`. The sign changes of
+/// `h(θ) = a sin θ − |V − b sin(θ + φ)|` over [`LANDING_GRID`] points are
+/// bisected to rounding (trigonometry only, no spring solved). A change of
+/// the landing arc is a change of the arc structure, hence a candidate kink
+/// of `⟨s⟩(ξ)`; [`kinks`] checks it against the signatures before using it.
+fn landing_thresholds<T: Float, M: Math<T>>(d: &Drive<T>, v: T, mut found: impl FnMut(T)) {
+    let h = |th: T| {
+        let (s, c) = M::sin_cos(th);
+        d.a * s - (v - (d.bs * c + d.bc * s)).abs()
+    };
+    let step = T::PI / T::from_u32(LANDING_GRID);
+    let mut t0 = T::ZERO;
+    let mut h0 = h(t0);
+    for i in 1..=LANDING_GRID {
+        let t1 = step * T::from_u32(i);
+        let h1 = h(t1);
+        if (h0 < T::ZERO) != (h1 < T::ZERO) {
+            let (mut lo, mut hi) = (t0, t1);
+            for _ in 0..60 {
+                let mid = (lo + hi) * T::HALF;
+                if !(mid > lo && mid < hi) {
+                    break;
+                }
+                if (h(mid) < T::ZERO) == (h0 < T::ZERO) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            found(d.a * M::sin_cos((lo + hi) * T::HALF).1);
+        }
+        t0 = t1;
+        h0 = h1;
+    }
+}
+
 /// The kinks of the springs' `⟨s⟩` inside `[l, r]` (ξ), in increasing order,
 /// searched in `t` of the segment's map `ξ = l + (r − l)(1 − cos t)/2`: the arc
 /// structure ([`spring::signature`]) is sampled at [`KINK_SAMPLES`] interior
 /// points equally spaced in `t`, and each change between neighbours is
-/// bisected in `t` to [`KINK_RESOLUTION`]`·π`. Changes that cancel between
-/// two samples are left to the adaptive bisection. Returns the number of
-/// springs solved.
+/// located to [`KINK_RESOLUTION`]`·π` in `t`: by the closed-form candidate
+/// inside the bracket if the signatures half that width either side of it
+/// match the bracket's ends (two solves), else by bisection. Changes that
+/// cancel between two samples are left to the adaptive quadrature. Returns
+/// the number of springs solved.
 fn kinks<T: Float, M: Math<T>>(
     d: &Drive<T>,
     v: T,
-    l: T,
-    r: T,
-    ends: (bool, bool),
+    seg: &Search<'_, T>,
     offset: &impl Fn(T) -> T,
     mut found: impl FnMut(T),
 ) -> u32 {
+    let (l, r, ends) = (seg.l, seg.r, seg.ends);
     let half = (r - l) * T::HALF;
     let calls = core::cell::Cell::new(0u32);
     let sig = |t: T| {
@@ -645,8 +719,14 @@ fn kinks<T: Float, M: Math<T>>(
         let (_, cos_t) = M::sin_cos(t);
         spring::signature::<T, M>(d, offset(l + half * (T::ONE - cos_t)), v)
     };
+    // ξ → t of the segment's map.
+    let t_of = |xi: T| {
+        let c = (T::ONE - (xi - l) / half).max(-T::ONE).min(T::ONE);
+        M::atan2(M::sqrt((T::ONE - c) * (T::ONE + c)), c)
+    };
     let step = T::PI / T::from_u32(KINK_SAMPLES + 1);
     let end = T::from_f64(KINK_END) * T::PI;
+    let resolution = T::from_f64(KINK_RESOLUTION) * T::PI;
     let sample = |i: u32| match i {
         0 if ends.1 => end,
         i if i == KINK_SAMPLES + 1 && ends.0 => T::PI - end,
@@ -664,20 +744,76 @@ fn kinks<T: Float, M: Math<T>>(
         let t = sample(i);
         let s = sig(t);
         if s != s_prev && s.is_some() && s_prev.is_some() {
-            let (mut lo, mut hi) = (t_prev, t);
-            while hi - lo > T::from_f64(KINK_RESOLUTION) * T::PI {
-                let mid = (lo + hi) * T::HALF;
-                if sig(mid) == s_prev {
-                    lo = mid;
-                } else {
-                    hi = mid;
+            let candidate =
+                seg.hint.iter().map(|&xi| t_of(xi)).find(|&tk| {
+                    tk - resolution * T::HALF > t_prev && tk + resolution * T::HALF < t
+                });
+            let confirmed = candidate.filter(|&tk| {
+                sig(tk - resolution * T::HALF) == s_prev && sig(tk + resolution * T::HALF) == s
+            });
+            if let Some(tk) = confirmed {
+                let (_, cos_t) = M::sin_cos(tk);
+                found(l + half * (T::ONE - cos_t));
+            } else {
+                let (mut lo, mut hi) = (t_prev, t);
+                while hi - lo > resolution {
+                    let mid = (lo + hi) * T::HALF;
+                    if sig(mid) == s_prev {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
                 }
+                let (_, cos_t) = M::sin_cos((lo + hi) * T::HALF);
+                found(l + half * (T::ONE - cos_t));
             }
-            let (_, cos_t) = M::sin_cos((lo + hi) * T::HALF);
-            found(l + half * (T::ONE - cos_t));
         }
         t_prev = t;
         s_prev = s;
     }
     calls.get()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::float::Libm;
+
+    /// Each closed-form landing-slip threshold is a change of the spring's
+    /// arc structure as the event walk sees it: the signatures a little
+    /// either side differ (δ = 10⁻⁴ a in `d`, far above the walk's 10⁻⁶ rad
+    /// arc floor, far below the distance to the next threshold).
+    #[test]
+    fn landing_thresholds_are_arc_structure_changes() {
+        let mut checked = 0;
+        for &(a, b, phi, v) in &[
+            (0.5, 1.0, 0.3, 0.2),
+            (0.9, 1.0, 0.3, 0.2),
+            (1.5, 0.7, 2.0, 0.1),
+            (0.25, 1.0, 0.3, 0.0),
+            (2.0, 0.4, -1.0, 0.05),
+        ] {
+            let d = Drive::new::<Libm>(a, b, phi);
+            let mut found: heapless::Vec<f64, MAX_LANDING> = heapless::Vec::new();
+            landing_thresholds::<f64, Libm>(&d, v, |x| {
+                let _ = found.push(x);
+            });
+            for &dk in &found {
+                assert!(dk.abs() < a);
+                let delta = 1e-4 * a;
+                if found
+                    .iter()
+                    .any(|&o| o != dk && (o - dk).abs() < 4.0 * delta)
+                {
+                    continue;
+                }
+                let lo = spring::signature::<f64, Libm>(&d, dk - delta, v);
+                let hi = spring::signature::<f64, Libm>(&d, dk + delta, v);
+                assert!(lo.is_some() && hi.is_some());
+                assert_ne!(lo, hi, "a={a} b={b} phi={phi} v={v} d={dk}");
+                checked += 1;
+            }
+        }
+        assert!(checked >= 3, "{checked}");
+    }
 }
