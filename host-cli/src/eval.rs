@@ -472,8 +472,9 @@ pub fn profile_tol(scene: &Scene<f64>, p: &Profile<f64>) -> f64 {
 }
 
 /// [`profile_tol`] for the one-sided limits at rest (`v0 = 0` with
-/// `duz < uz0`): there the permanent springs keep the flat solver's generic
-/// precision constant (`mdr::solver_bound_at_rest`).
+/// `duz < uz0`), from `mdr::solver_bound_at_rest` (now equal to
+/// `mdr::solver_bound`: the springs at rest are checked at the same
+/// per-spring precision).
 pub fn profile_tol_at_rest(scene: &Scene<f64>, p: &Profile<f64>) -> f64 {
     match p.exponent() {
         Some(n) => PROFILE_TOL.max(2.0 * mdr::solver_bound_at_rest::<f64, Libm>(&scene.drive(), n)),

@@ -691,6 +691,63 @@ fn bench_work_precision_writes_charts_and_csv() {
         println!("{scene}: error at N = 128 {e128:.2e}, bound {bound:.2e}");
         assert!(e128 <= bound && e128 > 0.0, "{scene}: {e128} > {bound}");
     }
+    // Across lift-off: every point within its stated bound against its
+    // reference. Flat punch: the exact/lift-off solver in f64 is the
+    // reference (error 0), the fixed-step / lift-off stepping errors are
+    // within the schemes' stated bounds (column 5). Sphere: the MDR at
+    // 1e-6, 1e-8, 1e-9 against the MDR at 2× its per-spring part, whose own
+    // bound is ≤ 2·ε_s·ξ_max/D ≤ 2·1e-11·(1 + 3 + 0.6)·2/(2/3) < 3e-10
+    // (`mdr::solver_bound`, a ≤ 3, b = 0.6, D ≥ n/(n + 1)): error ≤ bound +
+    // 3e-10.
+    let num = |s: &str| s.parse::<f64>().unwrap();
+    for a in ["0.5", "0.9", "1.1", "1.5", "2", "3"] {
+        let scene = format!("flat across lift-off a={a}");
+        assert!(rows
+            .iter()
+            .any(|r| r[0] == scene && r[1] == "exact f64" && r[3] == "0"));
+        let method = if num(a) < 1.0 {
+            "fixed f64 from rest"
+        } else {
+            "lift-off stepping f64"
+        };
+        let series: Vec<&Vec<&str>> = rows
+            .iter()
+            .filter(|r| r[0] == scene && r[1] == method && r[6] == "ok")
+            .collect();
+        assert!(series.len() >= 3, "{scene}: {} points", series.len());
+        for r in series {
+            assert!(
+                num(r[3]) <= num(r[5]),
+                "{scene} N={}: {} > {}",
+                r[2],
+                r[3],
+                r[5]
+            );
+        }
+    }
+    for a in ["0.5", "0.9", "1.1", "1.5", "3"] {
+        let scene = format!("sphere across lift-off a={a}");
+        let mdr: Vec<&Vec<&str>> = rows
+            .iter()
+            .filter(|r| r[0] == scene && r[1] == "MDR f64")
+            .collect();
+        assert_eq!(mdr.len(), 3, "{scene}");
+        for r in mdr {
+            assert_eq!(r[6], "ok", "{scene}");
+            assert!(
+                num(r[3]) <= num(r[5]) + 3e-10,
+                "{scene}: {} > {}",
+                r[3],
+                r[5]
+            );
+        }
+        assert_eq!(
+            rows.iter()
+                .filter(|r| r[0] == scene && r[1] == "brute force over springs")
+                .count(),
+            4
+        );
+    }
     let orders = std::fs::read_to_string(dir.path().join("convergence_orders.csv")).unwrap();
     assert!(orders.lines().count() > 8);
 }

@@ -747,3 +747,30 @@ fn mean_normal_force_against_brute_force_over_springs() {
     assert!(mean_normal_force::<f64, Libm>(&Profile::Sphere, -0.5, 1e-10).is_err());
     assert!(mean_normal_force::<f64, Libm>(&Profile::Power(1.5), 0.5, 0.0).is_err());
 }
+
+/// A cone at `a = 1.55`, `V = 0`, at the tightest tolerance: the quadrature's
+/// nodes come within ~10⁻⁸ of the rim, where a spring's contact window is
+/// ~5·10⁻⁴ rad and its event walk failed its check (this was
+/// `Inconsistent`). Such a spring (`⟨w⁺⟩ ≤ √ε(1 + a + b)`) is now counted in
+/// the bound as `|⟨s⟩| ≤ ⟨w⁺⟩`; the answer agrees with the one at `10⁻⁸`
+/// within the two bounds.
+#[test]
+fn rim_sliver_is_counted_in_the_bound() {
+    let (a, b, phi) = (
+        1.550_211_453_523_333_3,
+        0.231_019_044_288_452_93,
+        -2.235_246_366_965_200_5,
+    );
+    let d = Drive::new::<Libm>(a, b, phi);
+    let tight = tightest(1.0, a, b, phi, false);
+    let t = mdr::mu_over_mu0::<f64, Libm>(&d, &Profile::Cone, 0.0, tight).unwrap();
+    let l = mdr::mu_over_mu0::<f64, Libm>(&d, &Profile::Cone, 0.0, 1e-8).unwrap();
+    assert!(t.bound <= tight && l.bound <= 1e-8);
+    let gap = (t.mu_over_mu0 - l.mu_over_mu0).abs();
+    assert!(
+        gap <= t.bound + l.bound,
+        "gap {gap:e}, bounds {:e} {:e}",
+        t.bound,
+        l.bound
+    );
+}

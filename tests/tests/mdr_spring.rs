@@ -197,3 +197,61 @@ fn per_spring_solvers_within_spring_precision() {
     );
     assert!(checked >= 40, "only {checked} springs resolved");
 }
+
+/// The springs at rest, `V → 0⁺` (`mdr::spring_means_at_rest`, what
+/// `mdr::limits_at_zero` integrates), against the same brute force at
+/// `V = 0`. A permanent spring's μ(0⁺) is the limit of the steady states as
+/// `V → 0⁺`, each of which has a forward clamp; at `V = 0` the scheme's
+/// orbits are not unique, and the brute force picks the one through the
+/// forward clamp at the phase where one is certain — the limit orbit (the
+/// scheme is 1-Lipschitz in its state and continuous in `V`, so the limit of
+/// the clamped orbits is the clamped orbit). It checks its own periodicity
+/// (third period against the second, 10⁻¹³) and its convergence in `n`.
+/// Required, as for `V > 0`: `|solver − B(2²¹)| + allowance ≤
+/// SPRING_PRECISION·(1 + a + b)` — the measurement behind using
+/// `SPRING_PRECISION` for the limits at rest too. Springs: permanent (most;
+/// `a < 1`), next to the lift-off onset, and intermittent; μ(0⁻) is the same
+/// computation on the mirrored drive (`φ → φ + π`), covered by the random `φ`.
+#[test]
+fn springs_at_rest_within_spring_precision() {
+    const N: u32 = 1 << 21;
+    let mut rng = Rng::new(2113);
+    let mut worst: f64 = 0.0;
+    let mut checked = 0;
+    for i in 0..32 {
+        let a = rng.range(0.05, 0.95);
+        let b = 10f64.powf(rng.range(-1.0, 0.7));
+        let phi = rng.range(-PI, PI);
+        let drive = Drive::new::<Libm>(a, b, phi);
+        let d = match i % 4 {
+            0 | 1 => rng.range(a, 1.0),
+            2 => a * (1.0 + 10f64.powf(rng.range(-6.0, -1.0))),
+            _ => rng.range(-a, a),
+        };
+        let got = match mdr::spring_means_at_rest::<f64, Libm>(&drive, d) {
+            Ok((s, _)) => s,
+            Err(mdr::MdrError::IllConditioned) => continue,
+            Err(e) => panic!("a={a} b={b} phi={phi} d={d}: {e}"),
+        };
+        let bn = anchored(d, a, b, phi, 0.0, N);
+        let bh = anchored(d, a, b, phi, 0.0, N / 2);
+        let scale = 1.0 + a + b;
+        assert!(
+            (bh - bn).abs() <= allowance(a, b, N / 2),
+            "brute force converges slower than its allowance: a={a} b={b} phi={phi} d={d}: B(N/2) − B(N) = {:e}",
+            bh - bn
+        );
+        let gap = (got - bn).abs();
+        worst = worst.max(gap / scale);
+        checked += 1;
+        assert!(
+            gap + allowance(a, b, N) <= mdr::SPRING_PRECISION * scale,
+            "a={a} b={b} phi={phi} d={d}: solver {got:.15e} brute {bn:.15e} gap {gap:e}"
+        );
+    }
+    println!(
+        "{checked} springs at rest: worst |solver − brute(2^21)|/(1 + a + b) = {worst:.2e}, SPRING_PRECISION {:e}",
+        mdr::SPRING_PRECISION
+    );
+    assert!(checked >= 28, "only {checked} springs resolved");
+}

@@ -1,6 +1,7 @@
 //! `fricctl bench …`: speed against accuracy, measured in one process.
 //!
-//! * [`work_precision`] — error against time for every μ computation;
+//! * [`work_precision`] — error against time for every μ computation
+//!   (with [`across_lift_off`]: the flat punch and a sphere across a = 1);
 //! * [`methods`] — `--method auto` against always-exact and always-fixed-step
 //!   on the curve and map commands;
 //! * [`stability`] — maps of where each method stops being trustworthy;
@@ -14,6 +15,7 @@ use clap::Subcommand;
 
 use crate::error::CliResult;
 
+pub mod across_lift_off;
 pub mod dac;
 pub mod methods;
 pub mod motion;

@@ -7,7 +7,9 @@
 //! jitters with where the events fall on the grid, so every point is kept),
 //! from rest and warm-started at the exact steady state, in f64 and f32, with
 //! libm and with micromath for its set-up; the convergence order of each
-//! fixed-step series is fitted by least squares.
+//! fixed-step series is fitted by least squares. The last row of the chart
+//! crosses lift-off ([`super::across_lift_off`]: the flat punch at
+//! a = 0.5 … 3 and a sphere through the MDR, each against its own reference).
 
 use std::fmt::Write as _;
 use std::hint::black_box;
@@ -19,7 +21,7 @@ use model_core::exact;
 use model_core::fixed_step::{run_dimensionless, FixedStepConfig, Start, State};
 use model_core::{Drive, Float, Groups, Libm, Math, Micromath, Scene};
 
-use super::time_min;
+use super::{across_lift_off, time_min};
 use crate::error::{CliError, CliResult};
 use crate::plot::{prepare_out_dir, render_figure, Extras, Figure, Mark, Marker, Panel, Series};
 
@@ -318,6 +320,21 @@ pub fn run(a: &WpArgs) -> CliResult {
         eprintln!("measuring {name} …");
         all.extend(measure_scene(name, aa, b, phi, x, &steps)?);
     }
+    // Across lift-off: one steps-per-period value per octave (the series
+    // are for the order, which one per octave shows).
+    let octaves: Vec<u32> = steps
+        .iter()
+        .copied()
+        .filter(|n| n.is_power_of_two())
+        .collect();
+    for &(name, aa) in across_lift_off::FLAT {
+        eprintln!("measuring {name} …");
+        all.extend(across_lift_off::measure_flat(name, aa, &octaves)?);
+    }
+    for &(name, aa) in across_lift_off::SPHERE {
+        eprintln!("measuring {name} …");
+        all.extend(across_lift_off::measure_sphere(name, aa)?);
+    }
     // CSV.
     let mut csv = String::from(
         "scene,method,steps_per_period,error_over_mu0,time_s,error_bound_over_mu0,status\n",
@@ -364,6 +381,18 @@ pub fn run(a: &WpArgs) -> CliResult {
             );
         }
     }
+    for &(name, _) in across_lift_off::FLAT {
+        for m in ["fixed f64 from rest", "lift-off stepping f64"] {
+            let pts: Vec<&Point> = all
+                .iter()
+                .filter(|p| p.scene == name && p.method == m)
+                .collect();
+            if let Some(o) = fitted_order(&pts) {
+                let _ = writeln!(orders, "{name},{m},{o:.3}");
+                println!("{name:28} {m:22} order {o:.2}");
+            }
+        }
+    }
     let op = a.out.join("convergence_orders.csv");
     std::fs::write(&op, orders).map_err(|e| CliError::failure(format!("{}: {e}", op.display())))?;
     for ext in ["svg", "png"] {
@@ -386,6 +415,10 @@ fn style(method: &str) -> (usize, Marker) {
         "fixed f64 warm" => (4, Marker::OpenTriangle),
         "fixed f32 from rest" => (3, Marker::OpenSquare),
         "fixed f32 warm" => (8, Marker::Cross),
+        "lift-off stepping f64" => (9, Marker::Triangle),
+        "MDR f64" => (2, Marker::Diamond),
+        "MDR f32" => (0, Marker::Square),
+        "brute force over springs" => (8, Marker::Triangle),
         _ => (9, Marker::OpenDiamond),
     }
 }
@@ -404,6 +437,19 @@ const LEGEND: &[(&str, &str)] = &[
     ("fixed f32 from rest", "fixed-step f32 from rest"),
     ("fixed f32 warm", "fixed-step f32 warm-started"),
     ("fixed f32 micromath", "fixed-step f32, micromath set-up"),
+    (
+        "lift-off stepping f64",
+        "lift-off stepping f64, exact landing (a ≥ 1)",
+    ),
+    (
+        "MDR f64",
+        "sphere: MDR f64 at tol 1e-6, 1e-8, 1e-9 (vs. MDR at 2× its per-spring bound)",
+    ),
+    ("MDR f32", "sphere: MDR f32 at 2× its per-spring bound"),
+    (
+        "brute force over springs",
+        "sphere: brute force over springs, (M, N) = (8, 128) … (64, 1024)",
+    ),
 ];
 
 /// Errors below this are drawn at it (log axis).
@@ -462,6 +508,64 @@ fn render(path: &Path, all: &[Point]) -> CliResult {
             },
         ));
     }
+    let (b, phi, x) = across_lift_off::DRIVE;
+    for (names, what) in [
+        (across_lift_off::FLAT, "flat punch"),
+        (across_lift_off::SPHERE, "sphere (MDR)"),
+    ] {
+        let pts: Vec<&Point> = all
+            .iter()
+            .filter(|p| names.iter().any(|n| n.0 == p.scene) && p.error.is_some())
+            .collect();
+        let tmin = pts
+            .iter()
+            .map(|p| p.time_s)
+            .fold(f64::INFINITY, f64::min)
+            .max(1e-9)
+            / 2.0;
+        let tmax = pts
+            .iter()
+            .map(|p| p.time_s)
+            .fold(0.0f64, f64::max)
+            .max(tmin * 10.0)
+            * 2.0;
+        let series = LEGEND
+            .iter()
+            .map(|&(m, _)| {
+                let (color, marker) = style(m);
+                Series {
+                    label: String::new(),
+                    points: pts
+                        .iter()
+                        .filter(|p| p.method == m)
+                        .map(|p| (p.error.unwrap_or(1.0).max(ERROR_FLOOR), p.time_s))
+                        .collect(),
+                    mark: Mark::Markers(marker),
+                    color,
+                }
+            })
+            .collect();
+        let a_list: Vec<String> = names.iter().map(|n| format!("{}", n.1)).collect();
+        panels.push((
+            Panel {
+                title: format!(
+                    "{what} across lift-off: a = {}; b = {b}, φ = {:.1}°, v0/v_c = {x}",
+                    a_list.join(", "),
+                    phi.to_degrees()
+                ),
+                x_label: "|μ − μ_ref| / μ0".to_string(),
+                y_label: "time per μ, s".to_string(),
+                x: (ERROR_FLOOR, 1.0),
+                y: (tmin, tmax),
+                series,
+            },
+            Extras {
+                log_x: true,
+                log_y: true,
+                ..Extras::default()
+            },
+        ));
+    }
     let legend = LEGEND
         .iter()
         .map(|&(m, text)| {
@@ -476,14 +580,20 @@ fn render(path: &Path, all: &[Point]) -> CliResult {
         .collect();
     let f = Figure {
         panels,
-        rows: 4,
+        rows: 5,
         cols: 2,
-        size: (1800, 1700),
+        size: (1800, 2150),
         legend,
         caption: vec![
             "a = Δu_z/u_z0, b = k_xΔu_x/(μ0 k_z u_z0) (eq. 25). μ_ref: the exact solver in f64 \
              (libm) at the same scene and velocity, which agrees with the paper's fixed-step \
              scheme (Richardson, N = 65 536) to < 1e-9."
+                .to_string(),
+            "Across lift-off (last row): flat punch against the exact f64 solver (the lift-off \
+             solver from a = 1), fixed-step / lift-off stepping at N = 8 … 65 536 (one per octave)."
+                .to_string(),
+            "Sphere against the MDR f64 at twice its per-spring bound, itself checked to lie within \
+             its bound plus the error estimate of a brute force over springs ((M, N) = (48, 1024))."
                 .to_string(),
             "Fixed-step: one point per N = 8 … 65 536 steps per period (4 per octave); \
              refusals (TooFewSteps, PrecisionLimit) are not drawn. Time: minimum over \

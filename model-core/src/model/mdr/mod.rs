@@ -69,22 +69,28 @@
 //! `a < 1`), at `ξ*` and at `ξ_max`; on each piece `ξ = l + (r − l)(1 − cos t)/2`,
 //! `t ∈ [0, π]`, which turns the square-root behaviour at the onset and at the
 //! rim (`θ_c ∝ √(a − d)`, `⟨w⁺⟩ ∝ (a + d)^{3/2}`) into smooth functions of `t`.
-//! [`quadrature`] (adaptive Gauss–Kronrod 7/15) bisects until
+//! [`quadrature`] (adaptive, nested Gauss–Kronrod–Patterson 10/21/43: each
+//! piece starts with `K₂₁`, the worst is raised to `P₄₃`, then bisected)
+//! refines until
 //!
 //! ```text
-//! bound = [2·E_quad + ε_s ξ* + U]/D + 64 ε  ≤ tol
+//! bound = [4·E_quad + ε_s ξ* + U]/D + 64 ε  ≤ tol
 //! ```
 //!
-//! where `E_quad` is the sum of the `|K₁₅ − G₇|` estimates (of `I`, and of
-//! `D` times `I/D` when `D` is not closed form) with a safety factor 2,
-//! `ε_s = (SPRING_PRECISION + M::MAX_REL_ERROR)(1 + a + b)` the per-spring
+//! where `E_quad` is the sum of the per-interval estimates (`|K₂₁ − G₁₀|`,
+//! or `|P₄₃ − K₂₁|` where that is at most a tenth of it; of `I`, and of `D`
+//! times `I/D` when `D` is not closed form) with a safety factor 4
+//! ([`SAFETY`]; 2 was enough for the 7/15 pair used before, whose estimate
+//! is more pessimistic: with 2 the estimate check below reached 0.99 of the
+//! bounds), `ε_s = (SPRING_PRECISION + M::MAX_REL_ERROR)(1 + a + b)` the per-spring
 //! solver error in absolute units of `W₀` ([`SPRING_PRECISION`] = 10⁻¹¹ in
 //! f64, checked spring by spring against a brute force at 2²¹ steps per
-//! period; the permanent springs' limits at rest and f32 keep the flat
-//! solvers' generic constant, [`precision_constant`]), and `U`
+//! period, at `V > 0` and at rest; f32 keeps the flat solvers' generic
+//! constant, [`precision_constant`]), and `U`
 //! the band of springs a solver could not resolve (counted as `|⟨s⟩| ≤ ⟨w⁺⟩`:
-//! slivers of contact at the rim below `64ε(1 + a + b)`, and permanent springs
-//! whose scaled drive `b/d > 10⁷` the exact solver refuses).
+//! slivers of contact at the rim below `64ε(1 + a + b)`, thin rim windows
+//! with `⟨w⁺⟩ ≤ √ε(1 + a + b)` whose event walk fails its check, and
+//! permanent springs whose scaled drive `b/d > 10⁷` the exact solver refuses).
 //! `E_quad` is an **estimate**, not a proof (see [`quadrature`]).
 //!
 //! **Kinks.** Inside the pieces `⟨s⟩(ξ)` has kinks — slope jumps where the
@@ -99,8 +105,12 @@
 //! structure in a layer `d − a ≈ 10⁻⁴` in some scenes, which otherwise cost
 //! the adaptive bisection several rounds; without the sample on the
 //! intermittent side the estimate check below fails at μ(0±) of one sphere
-//! scene — an arc change there was missed), every change between neighbours is bisected to
-//! `10⁻⁵π` in `t`, and the segment is cut there into pieces, each with its own
+//! scene — an arc change there was missed), every change between neighbours is located to
+//! `10⁻⁵π` in `t` — by a closed-form candidate where one lies in the bracket
+//! and the signatures `±0.5·10⁻⁵π` either side of it match the bracket's
+//! ends (two solves: the landing-slip thresholds of the intermittent
+//! springs, `a sin θ_c = |V − b sin(θ_c + φ)|`, [`landing_thresholds`]),
+//! else by bisection (~14 solves) —, and the segment is cut there into pieces, each with its own
 //! `1 − cos t` map (a slip that sets in tangentially makes `⟨s⟩` behave like
 //! `(ξ − ξ_k)^{3/2}` past the kink, smooth in that piece's `t`). Two
 //! changes that cancel between samples, and changes the sequence does not
@@ -108,21 +118,20 @@
 //! below, "Cost"); against the brute force over springs all gaps are within
 //! the brute force's own error (≤ 10⁻⁶, `tests/mdr.rs`).
 //!
-//! **Cost.** Each spring is one solve (~0.4–0.7 µs). Averaged over 1000
+//! **Cost.** Each spring is one solve (~0.4–0.8 µs). Averaged over 1000
 //! velocities across ±v_c for three drives (`cargo test -p integration-tests
 //! --release --test mdr cpu_time -- --ignored --nocapture`, loaded machine,
-//! so upper values), a sphere's μ took 98/105/74 spring solves and
-//! 58/69/38 µs of CPU at `tol = 10⁻⁶`, 142/145/113 and 84/92/64 µs at
-//! `10⁻⁸`, 172/184/143 and 99/120/76 µs at `10⁻⁹` (a = 0.5, b = 0.25,
-//! φ = 1; a = 0.5, b = 1, φ = 0.3; a = 1.5, b = 0.7, φ = 2). Before the
-//! per-spring constant was checked at 10⁻¹¹ a tolerance of 10⁻⁹ was refused
-//! and `10⁻⁸` took 178/162/122 solves. A tolerance below the per-spring
-//! solvers' part ([`solver_bound`], ~10⁻¹⁰ for a sphere in f64;
-//! [`solver_bound_at_rest`] for μ(0±) with `a < 1`, ~3–8·10⁻⁹) is refused
-//! with [`MdrError::ToleranceTooTight`]. The quadrature's bound stays an
+//! so upper values), a sphere's μ took 107/113/62 spring solves and
+//! 67/64/32 µs of CPU at `tol = 10⁻⁶`, 147/132/92 and 94/76/44 µs at
+//! `10⁻⁸`, 173/156/104 and 96/104/46 µs at `10⁻⁹` (a = 0.5, b = 0.25,
+//! φ = 1; a = 0.5, b = 1, φ = 0.3; a = 1.5, b = 0.7, φ = 2); with the 7/15
+//! rules and bisected kinks it was 98/105/74, 142/145/113 and 172/184/143
+//! solves. A tolerance below the per-spring solvers' part ([`solver_bound`],
+//! ~10⁻¹⁰ for a sphere in f64, the same for μ(0±)) is refused with
+//! [`MdrError::ToleranceTooTight`]. The quadrature's bound stays an
 //! estimate: over 80 random scenes and four profiles the answers at
 //! `tol = 10⁻⁶` and `10⁻⁹` (at V) and at `10⁻⁶` (the limits μ(0±)) differ
-//! from those at the tightest tolerance (≈ 10⁻¹⁰ at V) by at most 0.18 of
+//! from those at the tightest tolerance (≈ 10⁻¹⁰) by at most 0.54 of
 //! the two bounds, 0 of 320 comparisons outside them (`tests/mdr.rs`,
 //! `bound_estimate_holds_against_a_tighter_run`).
 
@@ -140,29 +149,31 @@ use crate::model::liftoff;
 use crate::model::scene::{ContactMode, Drive};
 use spring::{forward_critical, spring, Limit};
 
-/// Safety factor on the Gauss–Kronrod estimate in the bound.
-pub const SAFETY: f64 = 2.0;
+/// Safety factor on the quadrature's estimate in the bound (module docs:
+/// with the 10/21/43 rules of [`quadrature`], 2 left the estimate check at
+/// 0.99 of the bounds, 4 at 0.54).
+pub const SAFETY: f64 = 4.0;
 
 /// The per-spring precision constant of the quadrature's bound in f64:
 /// each spring's `⟨s⟩` ([`spring_means`]) errs by at most this times
-/// `1 + a + b` (units of `W₀`) at `V > 0` and for springs that lift off.
+/// `1 + a + b` (units of `W₀`), moving and at rest (μ(0±)).
 ///
 /// It is tighter than the flat solvers' generic constant
 /// ([`precision_constant`], 10⁻⁹, the level a plain fixed-step run can
 /// check): `tests/mdr_spring.rs` checks the per-spring solvers against a
 /// brute force written to avoid accumulated rounding, at 2²¹ steps per
-/// period, over 48 random springs (permanent, intermittent, near the
-/// onset and the rim) and requires `|solver − brute| + brute allowance
-/// ≤ SPRING_PRECISION·(1 + a + b)` for each. The permanent springs' one-sided
-/// limits at rest (`μ(0±)` with `a < 1`) are not covered by that check and keep
-/// the generic constant. f32 keeps its generic constant (10⁻⁶).
+/// period, over 48 random springs at `V > 0` (permanent, intermittent, near
+/// the onset and the rim) and 32 at rest ([`spring_means_at_rest`]: the
+/// permanent springs' one-sided limit μ(0⁺) against the brute force's orbit
+/// through a forward clamp at `V = 0`), and requires `|solver − brute| +
+/// brute allowance ≤ SPRING_PRECISION·(1 + a + b)` for each (worst measured
+/// 4.3·10⁻¹³ and 2.8·10⁻¹³). f32 keeps its generic constant (10⁻⁶).
 pub const SPRING_PRECISION: f64 = 1e-11;
 
-/// The per-spring constant in `T` for the limit taken ([`SPRING_PRECISION`]
-/// in f64 while moving or with every spring lifting off, the flat solvers'
-/// [`precision_constant`] otherwise).
-fn spring_constant<T: Float>(at_rest_permanent: bool) -> T {
-    if T::EPSILON < T::from_f64(1e-10) && !at_rest_permanent {
+/// The per-spring constant in `T` ([`SPRING_PRECISION`] in f64, the flat
+/// solvers' [`precision_constant`] otherwise).
+fn spring_constant<T: Float>() -> T {
+    if T::EPSILON < T::from_f64(1e-10) {
         T::from_f64(SPRING_PRECISION)
     } else {
         precision_constant::<T>()
@@ -287,6 +298,29 @@ pub fn spring_means<T: Float, M: Math<T>>(
     Ok((s.stretch, s.band))
 }
 
+/// [`spring_means`] at rest, `V → 0⁺` (forward convention): the permanent
+/// springs (`d > a`) take their one-sided limit μ(0⁺) of the flat punch
+/// scaled by `d` (eq. M3), the intermittent ones their unique state. The
+/// quantity [`limits_at_zero`] integrates (μ(0⁻) through the mirrored
+/// drive); exposed so that tests can check it against an independent
+/// computation.
+///
+/// # Errors
+/// As [`spring_means`] except [`MdrError::BadVelocity`].
+pub fn spring_means_at_rest<T: Float, M: Math<T>>(
+    drive: &Drive<T>,
+    d: T,
+) -> Result<(T, T), MdrError> {
+    if !drive.is_valid_with_contact(ContactMode::Intermittent) || !d.is_finite() {
+        return Err(MdrError::BadDrive);
+    }
+    let s = spring::<T, M>(drive, d, T::ZERO, Limit::Plus)?;
+    if s.unresolved > T::ZERO {
+        return Err(MdrError::IllConditioned);
+    }
+    Ok((s.stretch, s.band))
+}
+
 /// Dimensionless critical velocities `(V_c⁺, V_c⁻)` of a profile: those of
 /// the flat punch with the same drive (module docs), eq. 8 for `a < 1`,
 /// eq. L5 for `a ≥ 1`. Multiply by `ωW₀` for m/s.
@@ -338,23 +372,18 @@ pub fn mean_normal_force<T: Float, M: Math<T>>(
 /// `⟨(1 − a cos θ)₊^p⟩ ≥ ⟨1 − a cos θ⟩^p = 1`, eq. M5), or the closed form `D`.
 /// The smallest tolerance [`mu_over_mu0`] can meet is above it.
 pub fn solver_bound<T: Float, M: Math<T>>(d: &Drive<T>, n: T) -> T {
-    solver_bound_with::<T, M>(d, n, false)
-}
-
-/// [`solver_bound`] for the one-sided limits at rest with `a < 1`
-/// ([`limits_at_zero`]): the permanent springs' `μ(0⁺)` keeps the flat
-/// solver's generic [`precision_constant`] (10⁻⁹ in f64). Equal to
-/// [`solver_bound`] for `a ≥ 1`.
-pub fn solver_bound_at_rest<T: Float, M: Math<T>>(d: &Drive<T>, n: T) -> T {
-    solver_bound_with::<T, M>(d, n, d.a < T::ONE)
-}
-
-fn solver_bound_with<T: Float, M: Math<T>>(d: &Drive<T>, n: T, at_rest_permanent: bool) -> T {
-    let eps_s = (spring_constant::<T>(at_rest_permanent) + T::from_f64(M::MAX_REL_ERROR))
-        * (T::ONE + d.a + d.b);
+    let eps_s = (spring_constant::<T>() + T::from_f64(M::MAX_REL_ERROR)) * (T::ONE + d.a + d.b);
     let xi_max = Profile::root(n, T::ONE + d.a);
     let dmin = normal::closed_form::<T, M>(n, d.a).unwrap_or(n / (n + T::ONE));
     eps_s * xi_max / dmin + T::from_f64(64.0) * T::EPSILON
+}
+
+/// [`solver_bound`] for the one-sided limits at rest ([`limits_at_zero`]):
+/// the same since the springs at rest were checked at [`SPRING_PRECISION`]
+/// too (before, the permanent springs' μ(0⁺) kept the flat solver's generic
+/// 10⁻⁹ and this was 3–8·10⁻⁹ for a sphere with `a < 1`).
+pub fn solver_bound_at_rest<T: Float, M: Math<T>>(d: &Drive<T>, n: T) -> T {
+    solver_bound::<T, M>(d, n)
 }
 
 /// `μ/μ₀` of a profile at dimensionless velocity `v` (units of `ωW₀`,
@@ -491,7 +520,7 @@ fn curved<T: Float, M: Math<T>>(
             evaluations: 0,
         });
     }
-    let solver = solver_bound_with::<T, M>(d, n, limit == Limit::Plus && a < T::ONE);
+    let solver = solver_bound::<T, M>(d, n);
     if solver >= tol {
         return Err(MdrError::ToleranceTooTight {
             best: solver.to_f64() * 1.01,
@@ -539,7 +568,23 @@ fn curved<T: Float, M: Math<T>>(
         if !sliding {
             // The extra samples next to the lift-off onset ξ_a (both sides).
             let at_onset = (a < T::ONE && j == 0, a < T::ONE && j == 1);
-            searched += kinks::<T, M>(d, v, l, r, at_onset, &offset, |xi| {
+            // Intermittent springs: the landing-slip thresholds in closed form.
+            let mut hint: heapless::Vec<T, MAX_LANDING> = heapless::Vec::new();
+            if j == 1 {
+                landing_thresholds::<T, M>(d, v, |dd| {
+                    let xi = Profile::root(n, T::ONE - dd);
+                    if xi > l && xi < r {
+                        let _ = hint.push(xi);
+                    }
+                });
+            }
+            let search = Search {
+                l,
+                r,
+                ends: at_onset,
+                hint: &hint,
+            };
+            searched += kinks::<T, M>(d, v, &search, &offset, |xi| {
                 if xi > left && xi < r {
                     let _ = pieces.push((left, xi, false));
                     left = xi;
@@ -568,9 +613,7 @@ fn curved<T: Float, M: Math<T>>(
         let _ = ends.push(T::PI * T::from_u32(k as u32));
     }
     let safety = T::from_f64(SAFETY);
-    let at_rest_permanent = limit == Limit::Plus && a < T::ONE;
-    let eps_s = (spring_constant::<T>(at_rest_permanent) + T::from_f64(M::MAX_REL_ERROR))
-        * (T::ONE + a + d.b);
+    let eps_s = (spring_constant::<T>() + T::from_f64(M::MAX_REL_ERROR)) * (T::ONE + a + d.b);
     let floor = T::from_f64(64.0) * T::EPSILON;
     let bound_of = |e: [T; 3], val: [T; 3]| {
         let den = closed.unwrap_or(val[1]);
@@ -622,22 +665,80 @@ const KINK_SAMPLES: u32 = 8;
 /// scenes, inside the last `π/9` of the segment).
 const KINK_END: f64 = 1e-4;
 
+/// A segment `[l, r]` (ξ) to search for kinks.
+struct Search<'h, T> {
+    l: T,
+    r: T,
+    /// Extra samples next to the lift-off onset at its left / right end.
+    ends: (bool, bool),
+    /// Kink candidates in closed form (ξ, any order; [`landing_thresholds`]).
+    hint: &'h [T],
+}
+
+/// Most landing-slip thresholds kept ([`landing_thresholds`]).
+const MAX_LANDING: usize = 8;
+
+/// Points on `θ_c ∈ (0, π)` where [`landing_thresholds`] looks for sign
+/// changes before refining each one.
+const LANDING_GRID: u32 = 64;
+
+/// The band offsets `d = a cos θ_c` (`|d| < a`) at which an intermittent
+/// spring's landing changes from a stick to a slip (forward convention):
+/// at landing `s = 0 = w`, and the band opens at `dw/dθ = a sin θ_c` while
+/// the drive moves the stick at `u̇_x = V − b sin(θ_c + φ)` (eq. 2): the
+/// spring slips from the landing iff `|u̇_x| > a sin θ_c`. The sign changes of
+/// `h(θ) = a sin θ − |V − b sin(θ + φ)|` over [`LANDING_GRID`] points are
+/// bisected to rounding (trigonometry only, no spring solved). A change of
+/// the landing arc is a change of the arc structure, hence a candidate kink
+/// of `⟨s⟩(ξ)`; [`kinks`] checks it against the signatures before using it.
+fn landing_thresholds<T: Float, M: Math<T>>(d: &Drive<T>, v: T, mut found: impl FnMut(T)) {
+    let h = |th: T| {
+        let (s, c) = M::sin_cos(th);
+        d.a * s - (v - (d.bs * c + d.bc * s)).abs()
+    };
+    let step = T::PI / T::from_u32(LANDING_GRID);
+    let mut t0 = T::ZERO;
+    let mut h0 = h(t0);
+    for i in 1..=LANDING_GRID {
+        let t1 = step * T::from_u32(i);
+        let h1 = h(t1);
+        if (h0 < T::ZERO) != (h1 < T::ZERO) {
+            let (mut lo, mut hi) = (t0, t1);
+            for _ in 0..60 {
+                let mid = (lo + hi) * T::HALF;
+                if !(mid > lo && mid < hi) {
+                    break;
+                }
+                if (h(mid) < T::ZERO) == (h0 < T::ZERO) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            found(d.a * M::sin_cos((lo + hi) * T::HALF).1);
+        }
+        t0 = t1;
+        h0 = h1;
+    }
+}
+
 /// The kinks of the springs' `⟨s⟩` inside `[l, r]` (ξ), in increasing order,
 /// searched in `t` of the segment's map `ξ = l + (r − l)(1 − cos t)/2`: the arc
 /// structure ([`spring::signature`]) is sampled at [`KINK_SAMPLES`] interior
 /// points equally spaced in `t`, and each change between neighbours is
-/// bisected in `t` to [`KINK_RESOLUTION`]`·π`. Changes that cancel between
-/// two samples are left to the adaptive bisection. Returns the number of
-/// springs solved.
+/// located to [`KINK_RESOLUTION`]`·π` in `t`: by the closed-form candidate
+/// inside the bracket if the signatures half that width either side of it
+/// match the bracket's ends (two solves), else by bisection. Changes that
+/// cancel between two samples are left to the adaptive quadrature. Returns
+/// the number of springs solved.
 fn kinks<T: Float, M: Math<T>>(
     d: &Drive<T>,
     v: T,
-    l: T,
-    r: T,
-    ends: (bool, bool),
+    seg: &Search<'_, T>,
     offset: &impl Fn(T) -> T,
     mut found: impl FnMut(T),
 ) -> u32 {
+    let (l, r, ends) = (seg.l, seg.r, seg.ends);
     let half = (r - l) * T::HALF;
     let calls = core::cell::Cell::new(0u32);
     let sig = |t: T| {
@@ -645,8 +746,14 @@ fn kinks<T: Float, M: Math<T>>(
         let (_, cos_t) = M::sin_cos(t);
         spring::signature::<T, M>(d, offset(l + half * (T::ONE - cos_t)), v)
     };
+    // ξ → t of the segment's map.
+    let t_of = |xi: T| {
+        let c = (T::ONE - (xi - l) / half).max(-T::ONE).min(T::ONE);
+        M::atan2(M::sqrt((T::ONE - c) * (T::ONE + c)), c)
+    };
     let step = T::PI / T::from_u32(KINK_SAMPLES + 1);
     let end = T::from_f64(KINK_END) * T::PI;
+    let resolution = T::from_f64(KINK_RESOLUTION) * T::PI;
     let sample = |i: u32| match i {
         0 if ends.1 => end,
         i if i == KINK_SAMPLES + 1 && ends.0 => T::PI - end,
@@ -664,20 +771,76 @@ fn kinks<T: Float, M: Math<T>>(
         let t = sample(i);
         let s = sig(t);
         if s != s_prev && s.is_some() && s_prev.is_some() {
-            let (mut lo, mut hi) = (t_prev, t);
-            while hi - lo > T::from_f64(KINK_RESOLUTION) * T::PI {
-                let mid = (lo + hi) * T::HALF;
-                if sig(mid) == s_prev {
-                    lo = mid;
-                } else {
-                    hi = mid;
+            let candidate =
+                seg.hint.iter().map(|&xi| t_of(xi)).find(|&tk| {
+                    tk - resolution * T::HALF > t_prev && tk + resolution * T::HALF < t
+                });
+            let confirmed = candidate.filter(|&tk| {
+                sig(tk - resolution * T::HALF) == s_prev && sig(tk + resolution * T::HALF) == s
+            });
+            if let Some(tk) = confirmed {
+                let (_, cos_t) = M::sin_cos(tk);
+                found(l + half * (T::ONE - cos_t));
+            } else {
+                let (mut lo, mut hi) = (t_prev, t);
+                while hi - lo > resolution {
+                    let mid = (lo + hi) * T::HALF;
+                    if sig(mid) == s_prev {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
                 }
+                let (_, cos_t) = M::sin_cos((lo + hi) * T::HALF);
+                found(l + half * (T::ONE - cos_t));
             }
-            let (_, cos_t) = M::sin_cos((lo + hi) * T::HALF);
-            found(l + half * (T::ONE - cos_t));
         }
         t_prev = t;
         s_prev = s;
     }
     calls.get()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::float::Libm;
+
+    /// Each closed-form landing-slip threshold is a change of the spring's
+    /// arc structure as the event walk sees it: the signatures a little
+    /// either side differ (δ = 10⁻⁴ a in `d`, far above the walk's 10⁻⁶ rad
+    /// arc floor, far below the distance to the next threshold).
+    #[test]
+    fn landing_thresholds_are_arc_structure_changes() {
+        let mut checked = 0;
+        for &(a, b, phi, v) in &[
+            (0.5, 1.0, 0.3, 0.2),
+            (0.9, 1.0, 0.3, 0.2),
+            (1.5, 0.7, 2.0, 0.1),
+            (0.25, 1.0, 0.3, 0.0),
+            (2.0, 0.4, -1.0, 0.05),
+        ] {
+            let d = Drive::new::<Libm>(a, b, phi);
+            let mut found: heapless::Vec<f64, MAX_LANDING> = heapless::Vec::new();
+            landing_thresholds::<f64, Libm>(&d, v, |x| {
+                let _ = found.push(x);
+            });
+            for &dk in &found {
+                assert!(dk.abs() < a);
+                let delta = 1e-4 * a;
+                if found
+                    .iter()
+                    .any(|&o| o != dk && (o - dk).abs() < 4.0 * delta)
+                {
+                    continue;
+                }
+                let lo = spring::signature::<f64, Libm>(&d, dk - delta, v);
+                let hi = spring::signature::<f64, Libm>(&d, dk + delta, v);
+                assert!(lo.is_some() && hi.is_some());
+                assert_ne!(lo, hi, "a={a} b={b} phi={phi} v={v} d={dk}");
+                checked += 1;
+            }
+        }
+        assert!(checked >= 3, "{checked}");
+    }
 }

@@ -120,9 +120,9 @@ fn elliptic_ke<T: Float, M: Math<T>>(k2: T) -> (T, T) {
 /// `ξ_max → 1`, `D → ⟨w⁺⟩`). `a = 0` gives `n/(n + 1)` (Hertz: `2/3`).
 ///
 /// Closed form (eqs. M6, M7) where there is one (bound: rounding, 64ε·D);
-/// otherwise M5 by adaptive Gauss–Kronrod over `θ ∈ [θ₁, π]`, `cos θ₁ =
+/// otherwise M5 by adaptive Gauss–Kronrod–Patterson over `θ ∈ [θ₁, π]`, `cos θ₁ =
 /// 1/a` for `a > 1` (0 else), mapped `θ = θ₁ + (π − θ₁)(1 − cos t)/2` so the
-/// `(θ − θ₁)^{1+1/n}` onset is smooth in `t`; bound `2·Σ|K₁₅ − G₇|`
+/// `(θ − θ₁)^{1+1/n}` onset is smooth in `t`; bound `4·ΣE` (E the per-interval estimates of [`super::quadrature`], [`super::SAFETY`])
 /// (an estimate, [`super::quadrature`]) plus 64ε·D.
 ///
 /// # Errors

@@ -20,7 +20,8 @@
 //! `μ₀F̄z ωW₀`: `P_out = −V∫⟨s⟩dξ/D = −μV`. The ξ-range is split at
 //! `ξ_a = (1 − a)^{1/n}` (lift-off onset) and each piece mapped
 //! `ξ = l + (r − l)(1 − cos t)/2` as in [`super`]'s μ quadrature; adaptive
-//! Gauss–Kronrod, bound `2·Σ|K₁₅ − G₇|/D` (an **estimate**: the kinks of
+//! Gauss–Kronrod–Patterson ([`quadrature`]), bound `4·ΣE/D` (E the per-interval
+//! estimates, [`SAFETY`] = 4; an **estimate**: the kinks of
 //! the springs' arc structure are left to the bisection, not searched as
 //! for μ) plus the per-spring solvers' part `ε_s(1 + a + b)ξ_max/D`.
 
