@@ -79,7 +79,7 @@ impl StaticCmd {
             )));
         }
         if s.lifts_off() {
-            return self.lift_off(s, out);
+            return self.lift_off(s, out, Units::of(rs.dimensionless));
         }
         let vc = CriticalVelocity::of(s);
         let st = StaticFriction::of(s);
@@ -105,13 +105,13 @@ impl StaticCmd {
         if self.json {
             return write_json(out, &o);
         }
-        write_text(out, &o, iv, &st).map_err(stdout_error)
+        write_text(out, &o, iv, &st, Units::of(rs.dimensionless)).map_err(stdout_error)
     }
 
     /// With lift-off "static friction" has no permanent-contact meaning: the
     /// stretch resets at every landing, so a body held at rest feels one
     /// force, μ(0)·⟨f_z⟩, whatever its history (`model_core::model::liftoff`).
-    fn lift_off(&self, s: &Scene<f64>, out: &mut impl Write) -> CliResult {
+    fn lift_off(&self, s: &Scene<f64>, out: &mut impl Write, u: Units) -> CliResult {
         let d = s.drive();
         let mu = liftoff::mu_over_mu0::<f64, Libm>(&d, 0.0).map_err(lift_off_failure)?;
         let (c, cb) = liftoff::critical_velocities::<f64, Libm>(&d).map_err(lift_off_failure)?;
@@ -129,7 +129,36 @@ impl StaticCmd {
         if self.json {
             return write_json(out, &o);
         }
-        write_lift_off_text(out, &o, s).map_err(stdout_error)
+        write_lift_off_text(out, &o, s, u).map_err(stdout_error)
+    }
+}
+
+/// Units of the text output: SI, or the scene's own for a dimensionless one.
+#[derive(Clone, Copy)]
+struct Units {
+    length: &'static str,
+    velocity: &'static str,
+    force: &'static str,
+    tangential: &'static str,
+}
+
+impl Units {
+    fn of(dimensionless: bool) -> Self {
+        if dimensionless {
+            Units {
+                length: "W0",
+                velocity: "ωW0",
+                force: "kz uz0",
+                tangential: "μ0 kz uz0",
+            }
+        } else {
+            Units {
+                length: "m",
+                velocity: "m/s",
+                force: "N",
+                tangential: "N",
+            }
+        }
     }
 }
 
@@ -137,6 +166,7 @@ fn write_lift_off_text(
     out: &mut impl Write,
     o: &LiftOffStaticOut,
     s: &Scene<f64>,
+    u: Units,
 ) -> std::io::Result<()> {
     let p = s.params();
     writeln!(
@@ -155,21 +185,27 @@ fn write_lift_off_text(
     )?;
     writeln!(
         out,
-        "mean normal force      kz<uz+> = {} kz uz0 = {} N",
+        "mean normal force      kz<uz+> = {} kz uz0 = {} {}",
         o.mean_normal_force_over_kz_uz0,
-        o.mean_normal_force_over_kz_uz0 * p.kz * p.uz0
+        o.mean_normal_force_over_kz_uz0 * p.kz * p.uz0,
+        u.force
     )?;
     writeln!(
         out,
-        "tangential force at rest  mu(0)*<fz> = {} N",
-        o.mu_at_rest_over_mu0 * s.mu0() * o.mean_normal_force_over_kz_uz0 * p.kz * p.uz0
+        "tangential force at rest  mu(0)*<fz> = {} {}",
+        o.mu_at_rest_over_mu0 * s.mu0() * o.mean_normal_force_over_kz_uz0 * p.kz * p.uz0,
+        u.tangential
     )?;
     writeln!(
         out,
-        "v_c forward            {} (contact window, eq. L5)",
-        o.vc_forward
+        "v_c forward            {} {} (contact window, eq. L5)",
+        o.vc_forward, u.velocity
     )?;
-    writeln!(out, "v_c backward           {}", o.vc_backward)
+    writeln!(
+        out,
+        "v_c backward           {} {}",
+        o.vc_backward, u.velocity
+    )
 }
 
 fn write_text(
@@ -177,9 +213,18 @@ fn write_text(
     o: &StaticOut,
     iv: Option<(f64, f64)>,
     st: &StaticFriction<f64>,
+    u: Units,
 ) -> std::io::Result<()> {
-    writeln!(out, "v_c forward            {}", o.vc_forward)?;
-    writeln!(out, "v_c backward           {}", o.vc_backward)?;
+    writeln!(
+        out,
+        "v_c forward            {} {}",
+        o.vc_forward, u.velocity
+    )?;
+    writeln!(
+        out,
+        "v_c backward           {} {}",
+        o.vc_backward, u.velocity
+    )?;
     writeln!(
         out,
         "static equilibrium     {}",
@@ -190,7 +235,7 @@ fn write_text(
         }
     )?;
     match iv {
-        Some((lo, hi)) => writeln!(out, "static interval u_x0   [{lo}, {hi}] m")?,
+        Some((lo, hi)) => writeln!(out, "static interval u_x0   [{lo}, {hi}] {}", u.length)?,
         None => writeln!(
             out,
             "static interval u_x0   empty (lo = {} W0 > hi = {} W0)",

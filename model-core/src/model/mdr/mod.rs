@@ -109,7 +109,7 @@
 //! `10⁻⁵π` in `t` — by a closed-form candidate where one lies in the bracket
 //! and the signatures `±0.5·10⁻⁵π` either side of it match the bracket's
 //! ends (two solves: the landing-slip thresholds of the intermittent
-//! springs, `a sin θ_c = |V − b sin(θ_c + φ)|`, [`landing_thresholds`]),
+//! springs, `a sin θ_c = |V − b sin(θ_c + φ)|`, `landing_thresholds`),
 //! else by bisection (~14 solves) —, and the segment is cut there into pieces, each with its own
 //! `1 − cos t` map (a slip that sets in tangentially makes `⟨s⟩` behave like
 //! `(ξ − ξ_k)^{3/2}` past the kink, smooth in that piece's `t`). Two
