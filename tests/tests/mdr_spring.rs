@@ -141,6 +141,26 @@ fn allowance(a: f64, b: f64, n: u32) -> f64 {
     20.0 * (1.0 + a + b) / (f64::from(n) * f64::from(n))
 }
 
+/// One spring against the brute force: checks `B(N/2) − B(N)` within its
+/// allowance (the brute force converges as stated) and `|solver − B(N)| +
+/// allowance ≤ SPRING_PRECISION·(1 + a + b)`; returns the gap over `1 + a + b`.
+fn check_spring(got: f64, d: f64, (a, b, phi): (f64, f64, f64), v: f64, n: u32) -> f64 {
+    let bn = anchored(d, a, b, phi, v, n);
+    let bh = anchored(d, a, b, phi, v, n / 2);
+    let scale = 1.0 + a + b;
+    assert!(
+        (bh - bn).abs() <= allowance(a, b, n / 2),
+        "brute force converges slower than its allowance: a={a} b={b} phi={phi} d={d} v={v}: B(N/2) − B(N) = {:e}",
+        bh - bn
+    );
+    let gap = (got - bn).abs();
+    assert!(
+        gap + allowance(a, b, n) <= mdr::SPRING_PRECISION * scale,
+        "a={a} b={b} phi={phi} d={d} v={v}: solver {got:.15e} brute {bn:.15e} gap {gap:e}"
+    );
+    gap / scale
+}
+
 /// The per-spring solvers against the brute force over random springs:
 /// `|solver − B(2²¹)| + allowance ≤ SPRING_PRECISION·(1 + a + b)` for every
 /// one (printed: the worst measured gap in units of `1 + a + b`).
@@ -174,21 +194,8 @@ fn per_spring_solvers_within_spring_precision() {
             Err(mdr::MdrError::IllConditioned) => continue, // a sliver: counted in U
             Err(e) => panic!("a={a} b={b} phi={phi} d={d} v={v}: {e}"),
         };
-        let bn = anchored(d, a, b, phi, v, N);
-        let bh = anchored(d, a, b, phi, v, N / 2);
-        let scale = 1.0 + a + b;
-        assert!(
-            (bh - bn).abs() <= allowance(a, b, N / 2),
-            "brute force converges slower than its allowance: a={a} b={b} phi={phi} d={d} v={v}: B(N/2) − B(N) = {:e}",
-            bh - bn
-        );
-        let gap = (got - bn).abs();
-        worst = worst.max(gap / scale);
+        worst = worst.max(check_spring(got, d, (a, b, phi), v, N));
         checked += 1;
-        assert!(
-            gap + allowance(a, b, N) <= mdr::SPRING_PRECISION * scale,
-            "a={a} b={b} phi={phi} d={d} v={v}: solver {got:.15e} brute {bn:.15e} gap {gap:e}"
-        );
     }
     println!(
         "{checked} springs: worst |solver − brute(2^21)|/(1 + a + b) = {worst:.2e}, allowance {:.2e}·(1 + a + b), SPRING_PRECISION {:e}",
@@ -233,21 +240,8 @@ fn springs_at_rest_within_spring_precision() {
             Err(mdr::MdrError::IllConditioned) => continue,
             Err(e) => panic!("a={a} b={b} phi={phi} d={d}: {e}"),
         };
-        let bn = anchored(d, a, b, phi, 0.0, N);
-        let bh = anchored(d, a, b, phi, 0.0, N / 2);
-        let scale = 1.0 + a + b;
-        assert!(
-            (bh - bn).abs() <= allowance(a, b, N / 2),
-            "brute force converges slower than its allowance: a={a} b={b} phi={phi} d={d}: B(N/2) − B(N) = {:e}",
-            bh - bn
-        );
-        let gap = (got - bn).abs();
-        worst = worst.max(gap / scale);
+        worst = worst.max(check_spring(got, d, (a, b, phi), 0.0, N));
         checked += 1;
-        assert!(
-            gap + allowance(a, b, N) <= mdr::SPRING_PRECISION * scale,
-            "a={a} b={b} phi={phi} d={d}: solver {got:.15e} brute {bn:.15e} gap {gap:e}"
-        );
     }
     println!(
         "{checked} springs at rest: worst |solver − brute(2^21)|/(1 + a + b) = {worst:.2e}, SPRING_PRECISION {:e}",
