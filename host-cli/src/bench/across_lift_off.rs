@@ -27,7 +27,7 @@ use model_core::{exact, Drive, Libm};
 
 use super::springs;
 use super::time_min;
-use super::work_precision::Point;
+use super::work_precision::{refusal_kind, Point};
 use crate::error::{CliError, CliResult};
 
 /// The drive held fixed across the plane: `b`, `φ` (rad) and `v0/v_c` (the
@@ -95,6 +95,36 @@ fn failed(scene: &'static str, method: &str, steps: Option<u32>, why: String) ->
         time_s: f64::NAN,
         bound: None,
         status: why,
+    }
+}
+
+/// The CSV `status` of a refused lift-off solve: the refusal's kind.
+fn liftoff_kind(e: &liftoff::LiftOffError) -> &'static str {
+    use liftoff::LiftOffError as E;
+    match e {
+        E::BadVelocity(_) => "BadVelocity",
+        E::BadDrive => "BadDrive",
+        E::NoLiftOff => "NoLiftOff",
+        E::IllConditioned => "IllConditioned",
+        E::Inconsistent => "Inconsistent",
+        E::TooFewSteps { .. } => "TooFewSteps",
+        E::PrecisionLimit { .. } => "PrecisionLimit",
+    }
+}
+
+/// The CSV `status` of a refused MDR quadrature: the refusal's kind.
+fn mdr_kind(e: &mdr::MdrError) -> &'static str {
+    use mdr::MdrError as E;
+    match e {
+        E::BadExponent => "BadExponent",
+        E::BadDrive => "BadDrive",
+        E::BadVelocity => "BadVelocity",
+        E::BadTolerance => "BadTolerance",
+        E::IllConditioned => "IllConditioned",
+        E::ToleranceTooTight { .. } => "ToleranceTooTight",
+        E::NotConverged { .. } => "NotConverged",
+        E::AtRest => "AtRest",
+        E::Inconsistent => "Inconsistent",
     }
 }
 
@@ -167,7 +197,7 @@ pub fn measure_flat(scene: &'static str, a: f64, steps: &[u32]) -> CliResult<Vec
                     p.bound = Some(r.error_bound);
                     out.push(p);
                 }
-                Err(e) => out.push(failed(scene, method, Some(n), format!("{e:?}"))),
+                Err(e) => out.push(failed(scene, method, Some(n), liftoff_kind(&e).to_string())),
             }
         } else {
             let method = "fixed f64 from rest";
@@ -186,7 +216,7 @@ pub fn measure_flat(scene: &'static str, a: f64, steps: &[u32]) -> CliResult<Vec
                     p.bound = Some(r.error_bound);
                     out.push(p);
                 }
-                Err(e) => out.push(failed(scene, method, Some(n), format!("{e:?}"))),
+                Err(e) => out.push(failed(scene, method, Some(n), refusal_kind(&e).to_string())),
             }
         }
     }
@@ -228,7 +258,7 @@ pub fn measure_sphere(scene: &'static str, a: f64) -> CliResult<Vec<Point>> {
                 pt.bound = Some(m.bound);
                 out.push(pt);
             }
-            Err(e) => out.push(failed(scene, "MDR f64", None, format!("{e:?}"))),
+            Err(e) => out.push(failed(scene, "MDR f64", None, mdr_kind(&e).to_string())),
         }
     }
     let tol32 = 2.0 * mdr::solver_bound::<f32, Libm>(&d32, 2.0);
@@ -251,7 +281,7 @@ pub fn measure_sphere(scene: &'static str, a: f64) -> CliResult<Vec<Point>> {
             pt.bound = Some(f64::from(m.bound));
             out.push(pt);
         }
-        Err(e) => out.push(failed(scene, "MDR f32", None, format!("{e:?}"))),
+        Err(e) => out.push(failed(scene, "MDR f32", None, mdr_kind(&e).to_string())),
     }
     for (springs_per_segment, steps) in BRUTE {
         let m = springs::mu(2.0, a, b, phi, v, springs_per_segment, steps);

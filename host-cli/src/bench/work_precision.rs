@@ -605,7 +605,7 @@ fn render(path: &Path, all: &[Point]) -> CliResult {
 }
 
 /// The CSV `status` of a refused fixed-step run: the refusal's kind.
-fn refusal_kind<T>(e: &model_core::fixed_step::FixedStepError<T>) -> &'static str {
+pub(crate) fn refusal_kind<T>(e: &model_core::fixed_step::FixedStepError<T>) -> &'static str {
     use model_core::fixed_step::FixedStepError as E;
     match e {
         E::TooFewSteps { .. } => "TooFewSteps",
