@@ -609,13 +609,13 @@ impl<T: Float> ContactWindow<T> {
 
     /// The first zero of `h⁺` on an increasing piece after `from`, with that
     /// piece's end (where forward slip ends).
-    fn forward_touch<M: Math<T>>(&self, k: T, from: T) -> Option<(Phase<T>, Phase<T>)> {
+    fn forward_touch<M: Math<T>>(&self, k: T, from: &Phase<T>) -> Option<(Phase<T>, Phase<T>)> {
         let f = |x: &Phase<T>| self.above_upper_band(k, x);
         for &(l, r) in &self.forward.0[..self.forward.1] {
-            if r <= from {
+            if r <= from.at {
                 continue;
             }
-            let left = Self::phase::<M>(l.max(from));
+            let left = self.piece_start::<M>(l, from);
             let right = self.piece_end::<M>(r);
             let at_left = f(&left).0;
             if at_left >= T::ZERO {
@@ -635,20 +635,36 @@ impl<T: Float> ContactWindow<T> {
         None
     }
 
-    /// The first zero of `h⁻` on a decreasing piece after `from`, with that
-    /// piece's end (where backward slip ends).
-    fn backward_touch<M: Math<T>>(&self, k: T, from: T) -> Option<(Phase<T>, Phase<T>)> {
+    /// The first zero of `h⁻` on a decreasing piece after `from` and
+    /// strictly before `horizon` (a forward touch that comes first, if any),
+    /// with that piece's end (where backward slip ends). A zero at or after
+    /// `horizon` is not sought: the forward slip comes first.
+    fn backward_touch<M: Math<T>>(
+        &self,
+        k: T,
+        from: &Phase<T>,
+        horizon: Option<&Phase<T>>,
+    ) -> Option<(Phase<T>, Phase<T>)> {
         let f = |x: &Phase<T>| self.above_lower_band(k, x);
         for &(l, r) in &self.backward.0[..self.backward.1] {
-            if r <= from {
+            if r <= from.at {
                 continue;
             }
-            let left = Self::phase::<M>(l.max(from));
-            let right = self.piece_end::<M>(r);
+            if horizon.is_some_and(|h| l.max(from.at) >= h.at) {
+                return None;
+            }
+            let left = self.piece_start::<M>(l, from);
             let at_left = f(&left).0;
             if at_left <= T::ZERO {
-                return Some((left, right));
+                return Some((left, self.piece_end::<M>(r)));
             }
+            // The sign at the piece's end, or at the horizon inside it
+            // (h⁻ decreases on the piece: no zero before a positive value).
+            let cut = horizon.filter(|h| h.at < r);
+            let right = match cut {
+                Some(h) => *h,
+                None => self.piece_end::<M>(r),
+            };
             let at_right = f(&right).0;
             if at_right < T::ZERO {
                 let touch = root::<T, M>(
@@ -657,10 +673,27 @@ impl<T: Float> ContactWindow<T> {
                     self.root_tolerance(k),
                     f,
                 );
-                return Some((touch, right));
+                let end = if cut.is_some() {
+                    self.piece_end::<M>(r)
+                } else {
+                    right
+                };
+                return Some((touch, end));
+            }
+            if cut.is_some() {
+                return None;
             }
         }
         None
+    }
+
+    /// A piece start at `l`, or `from` (whose trig is known) if later.
+    fn piece_start<M: Math<T>>(&self, l: T, from: &Phase<T>) -> Phase<T> {
+        if from.at >= l {
+            *from
+        } else {
+            Self::phase::<M>(l)
+        }
     }
 
     /// A piece end with its trig (the lift-off point exactly).
@@ -694,8 +727,8 @@ impl<T: Float> ContactWindow<T> {
         let mut start = self.window.landing;
         let mut k = -(self.v * start.at) - self.drive_swing(&start);
         for _ in 0..MAX_STEPS {
-            let forward = self.forward_touch::<M>(k, start.at);
-            let backward = self.backward_touch::<M>(k, start.at);
+            let forward = self.forward_touch::<M>(k, &start);
+            let backward = self.backward_touch::<M>(k, &start, forward.as_ref().map(|f| &f.0));
             let event = match (forward, backward) {
                 (Some(f), Some(b)) if b.0.at < f.0.at => Some(Event::Backward(b.0, b.1)),
                 (Some(f), _) => Some(Event::Forward(f.0, f.1)),
