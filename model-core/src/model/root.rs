@@ -1,6 +1,7 @@
-//! Safeguarded Newton iteration for a bracketed root of a smooth monotone
-//! function (Newton where it stays in the bracket and shrinks the step,
-//! bisection otherwise). Used for the stick→slip events of the exact solver.
+//! Safeguarded Halley iteration for a bracketed root of a smooth monotone
+//! function (Halley's step where it stays in the bracket and shrinks the
+//! step, bisection otherwise). Used for the stick→slip events of the exact
+//! solver.
 
 use crate::model::float::Float;
 
@@ -9,7 +10,9 @@ use crate::model::float::Float;
 /// `guess` (if inside the bracket) is the first iterate, otherwise regula
 /// falsi; the iteration stops when `|f| ≤ f_tol` (the rounding level of `f`),
 /// when a Newton step is below a few ulps, or when the bracket is that small.
-/// `fd(x)` returns `(f(x), f'(x), sin x, cos x)`; the root is returned as
+/// `fd(x)` returns `(f(x), f'(x), f''(x), sin x, cos x)`; the step is
+/// Halley's `f/f' / (1 − f f''/(2f'²))` (cubic convergence; Newton's where
+/// the correction is not small, `|f f''/(2f'²)| ≥ ½`); the root is returned as
 /// `(x, sin x, cos x)` (the trig of a final Newton step is extrapolated to
 /// first order, exact to O(step²), i.e. to rounding).
 ///
@@ -21,7 +24,7 @@ pub(crate) fn newton_bracketed<T: Float>(
     guess: T,
     f_tol: T,
     max_iter: u32,
-    mut fd: impl FnMut(T) -> (T, T, T, T),
+    mut fd: impl FnMut(T) -> (T, T, T, T, T),
 ) -> (T, T, T) {
     // Orient so that f(lo) < 0 < f(hi).
     let increasing = f_lo < f_hi;
@@ -38,9 +41,9 @@ pub(crate) fn newton_bracketed<T: Float>(
     let mut dx_old = hi - lo;
     let mut last = (x, T::ZERO, T::ONE);
     for _ in 0..max_iter {
-        let (f, d, sx, cx) = fd(x);
+        let (f, d, d2, sx, cx) = fd(x);
         last = (x, sx, cx);
-        let (f, d) = (sgn * f, sgn * d);
+        let (f, d, d2) = (sgn * f, sgn * d, sgn * d2);
         if f.abs() <= f_tol {
             return last;
         }
@@ -58,7 +61,13 @@ pub(crate) fn newton_bracketed<T: Float>(
         let mut step_ok = false;
         let mut xn = x;
         if d > T::ZERO {
-            let dx = f / d;
+            let newton = f / d;
+            let correction = newton * d2 / (d + d);
+            let dx = if correction.abs() < T::HALF {
+                newton / (T::ONE - correction)
+            } else {
+                newton
+            };
             xn = x - dx;
             step_ok = xn > lo && xn < hi && (dx + dx).abs() <= dx_old.abs();
             if step_ok {

@@ -247,7 +247,13 @@ impl<T: Float> PeriodGeometry<T> {
             (left.at, period_end.at, at_left, at_right),
             guess,
             self.root_tolerance(k),
-            |x| (self.above_upper_band(k, x), self.above_upper_band_slope(x)),
+            |x| {
+                (
+                    self.above_upper_band(k, x),
+                    self.above_upper_band_slope(x),
+                    (self.q + self.n) * x.sin - (self.p + self.m) * x.cos,
+                )
+            },
         ))
     }
 
@@ -288,7 +294,13 @@ impl<T: Float> PeriodGeometry<T> {
                     (left.at, piece_end.at, at_left, at_right),
                     guess,
                     self.root_tolerance(k),
-                    |x| (self.above_lower_band(k, x), self.above_lower_band_slope(x)),
+                    |x| {
+                        (
+                            self.above_lower_band(k, x),
+                            self.above_lower_band_slope(x),
+                            (self.q - self.n) * x.sin - (self.p - self.m) * x.cos,
+                        )
+                    },
                 );
                 return if touch.at < horizon {
                     Some((touch, piece_end))
@@ -467,18 +479,18 @@ fn checked_mean<T: Float>(total: T) -> Result<T, ExactError> {
 }
 
 /// Bracketed root `(lo, hi, f(lo), f(hi))` of a stick→slip function, returned
-/// with its trig. `f_and_slope` gives `(f, f')` at a phase.
+/// with its trig. `f_and_slope` gives `(f, f', f'')` at a phase.
 #[inline(always)]
 pub(crate) fn root<T: Float, M: Math<T>>(
     bracket: (T, T, T, T),
     guess: T,
     f_tol: T,
-    f_and_slope: impl Fn(&Phase<T>) -> (T, T),
+    f_and_slope: impl Fn(&Phase<T>) -> (T, T, T),
 ) -> Phase<T> {
     let (at, sin, cos) = newton_bracketed(bracket, guess, f_tol, 100, |at| {
         let (sin, cos) = M::sin_cos(at);
-        let (f, slope) = f_and_slope(&Phase { at, sin, cos });
-        (f, slope, sin, cos)
+        let (f, slope, curvature) = f_and_slope(&Phase { at, sin, cos });
+        (f, slope, curvature, sin, cos)
     });
     Phase { at, sin, cos }
 }

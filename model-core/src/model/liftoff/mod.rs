@@ -273,15 +273,62 @@ pub fn critical_velocities<T: Float, M: Math<T>>(d: &Drive<T>) -> Result<(T, T),
 
 /// `V_c⁺` of eq. L5 (any window: the band offset enters only through it).
 pub(crate) fn forward_critical<T: Float, M: Math<T>>(d: &Drive<T>, window: &Window<T>) -> T {
-    let (re, im) = (d.a + d.bc, d.bs);
-    let c = M::hypot(re, im);
-    // c sin(θ + ψ) = re sin θ + im cos θ; its peak is at θ* = π/2 − ψ.
-    let peak = wrap_tau(T::FRAC_PI_2 - M::atan2(im, re));
-    if peak >= window.landing.at && peak <= window.lift_off.at {
-        return c;
+    Shape::of::<M>(d, T::ZERO).forward_critical(window)
+}
+
+/// What a drive's walk needs that no band offset changes, at one velocity
+/// `V ≥ 0` (forward convention): the peak of `c sin(θ + ψ)` (eq. L5) and the
+/// pieces where `h⁺` increases and `h⁻` decreases, before they are clipped
+/// to a window. Computed once for all the springs of a curved profile
+/// ([`crate::model::mdr`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Shape<T> {
+    drive: Drive<T>,
+    v: T,
+    /// `c = |a + b e^{iφ}|`.
+    c: T,
+    /// The phase of the peak of `c sin(θ + ψ)`, `π/2 − ψ` in `[0, 2π)`.
+    peak: T,
+    /// `h⁺` increases on `[start + 2πj, start + 2πj + length]`.
+    forward: (T, T),
+    /// `h⁻` decreases on these arcs (none if `V ≥ c'`).
+    backward: Option<(T, T)>,
+}
+
+impl<T: Float> Shape<T> {
+    /// The shape of `d` at `v ≥ 0`.
+    pub(crate) fn of<M: Math<T>>(d: &Drive<T>, v: T) -> Self {
+        let (a, bc, bs) = (d.a, d.bc, d.bs);
+        // h⁺ increases on θ + ψ ∈ [π − α, 2π + α] (mod 2π), α = asin(V/c).
+        let c = M::hypot(a + bc, bs);
+        let psi = M::atan2(bs, a + bc);
+        let alpha = M::asin((v / c).min(T::ONE));
+        // h⁻ decreases on θ + ψ' ∈ [α', π − α'], α' = asin(V/c'), if V < c'.
+        let c_back = M::hypot(bc - a, bs);
+        let backward = (v < c_back).then(|| {
+            let psi_b = M::atan2(bs, bc - a);
+            let alpha_b = M::asin((v / c_back).min(T::ONE));
+            (alpha_b - psi_b, T::PI - (alpha_b + alpha_b))
+        });
+        Shape {
+            drive: *d,
+            v,
+            c,
+            peak: wrap_tau(T::FRAC_PI_2 - psi),
+            forward: (T::PI - alpha - psi, T::PI + alpha + alpha),
+            backward,
+        }
     }
-    let at = |x: &Phase<T>| re * x.sin + im * x.cos;
-    at(&window.landing).max(at(&window.lift_off))
+
+    /// `V_c⁺` of eq. L5 on `window`.
+    pub(crate) fn forward_critical(&self, window: &Window<T>) -> T {
+        if self.peak >= window.landing.at && self.peak <= window.lift_off.at {
+            return self.c;
+        }
+        let (re, im) = (self.drive.a + self.drive.bc, self.drive.bs);
+        let at = |x: &Phase<T>| re * x.sin + im * x.cos;
+        at(&window.landing).max(at(&window.lift_off))
+    }
 }
 
 /// `μ/μ₀` of a scene with lift-off at sliding velocity `v0` (m/s), any sign
@@ -330,28 +377,23 @@ pub fn mu_over_mu0<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<T, LiftOf
 /// `∫ s dθ` over the contact window of the band `w = d − a cos θ`,
 /// `|d| < a` (the same walk as [`mu_over_mu0`], which is the case `d = 1`;
 /// a spring of a curved profile, [`crate::model::mdr`]), with `∫ w dθ` over
-/// the window. `V` any finite value; the drive is not checked (the caller
-/// validated it) except through the walk's internal checks.
+/// the window, in the forward convention `V ≥ 0` of the drive's [`Shape`]
+/// (the caller mirrors). The drive is not checked (the caller validated it)
+/// except through the walk's internal checks.
 ///
 /// # Errors
 /// [`LiftOffError::Inconsistent`].
 pub(crate) fn banded_stretch_integral<T: Float, M: Math<T>>(
-    d: &Drive<T>,
+    shape: &Shape<T>,
     offset: T,
-    v: T,
 ) -> Result<(T, T), LiftOffError> {
-    let (drive, v, sign) = if v >= T::ZERO {
-        (*d, v, T::ONE)
-    } else {
-        (d.mirrored(), -v, -T::ONE)
-    };
-    let window = Window::of::<M>(offset, drive.a);
-    let band = window.band_integral(offset, drive.a);
-    if v >= forward_critical::<T, M>(&drive, &window) {
-        return Ok((sign * band, band));
+    let window = Window::of::<M>(offset, shape.drive.a);
+    let band = window.band_integral(offset, shape.drive.a);
+    if shape.v >= shape.forward_critical(&window) {
+        return Ok((band, band));
     }
-    let mu = ContactWindow::new::<M>(&drive, offset, v, window).mean_stretch::<M>(None)?;
-    Ok((sign * mu * band, band))
+    let mu = ContactWindow::on(shape, offset, window).mean_stretch::<M>(None)?;
+    Ok((mu * band, band))
 }
 
 /// The contact window as a list of arcs (absolute drive phases θ = ωt in
@@ -445,18 +487,13 @@ pub(crate) fn banded_window_arcs<T: Float, M: Math<T>>(
 }
 
 /// The sequence of arc kinds of the window of the band `w = d − a cos θ`
-/// (as [`banded_stretch_integral`]), in the forward convention of `V ≥ 0`,
-/// encoded base 4 (stick 1, forward slip 2, backward slip 3; zero-length arcs
+/// (as [`banded_stretch_integral`]), in the forward convention of the
+/// drive's [`Shape`], encoded base 4 (stick 1, forward slip 2, backward slip 3; zero-length arcs
 /// skipped): where it changes with `d`, the spring's `⟨s⟩` may have a kink
 /// ([`crate::model::mdr`] splits its quadrature there).
-pub(crate) fn banded_signature<T: Float, M: Math<T>>(d: &Drive<T>, offset: T, v: T) -> u32 {
-    let (drive, v) = if v >= T::ZERO {
-        (*d, v)
-    } else {
-        (d.mirrored(), -v)
-    };
-    let window = Window::of::<M>(offset, drive.a);
-    if v >= forward_critical::<T, M>(&drive, &window) {
+pub(crate) fn banded_signature<T: Float, M: Math<T>>(shape: &Shape<T>, offset: T) -> u32 {
+    let window = Window::of::<M>(offset, shape.drive.a);
+    if shape.v >= shape.forward_critical(&window) {
         return 2;
     }
     let mut code = 0u32;
@@ -466,7 +503,7 @@ pub(crate) fn banded_signature<T: Float, M: Math<T>>(d: &Drive<T>, offset: T, v:
             code = code.wrapping_mul(4).wrapping_add(digit);
         }
     };
-    match ContactWindow::new::<M>(&drive, offset, v, window).mean_stretch::<M>(Some(&mut push)) {
+    match ContactWindow::on(shape, offset, window).mean_stretch::<M>(Some(&mut push)) {
         Ok(_) => code,
         Err(_) => u32::MAX,
     }
@@ -491,6 +528,24 @@ enum Event<T> {
     Forward(Phase<T>, Phase<T>),
     /// Backward slip from `.0` to `.1`.
     Backward(Phase<T>, Phase<T>),
+}
+
+/// First guess of the zero after `x` of a function rising from `f < 0`
+/// with slope `f1 ≥ 0` and curvature `f2` at `x`: the zero of its
+/// second-order Taylor polynomial, `x + 2|f|/(f1 + √(f1² + 2 f2 |f|))` (exact
+/// at a minimum of a sinusoid to third order); `x` (the root finder then
+/// starts from regula falsi) where that polynomial has no zero.
+fn taylor_guess<T: Float, M: Math<T>>(x: T, f: T, f1: T, f2: T) -> T {
+    let disc = f1 * f1 - T::TWO * f2 * f;
+    if disc.is_nan() || disc < T::ZERO {
+        return x;
+    }
+    let den = f1 + M::sqrt(disc);
+    if den > T::ZERO {
+        x - (f + f) / den
+    } else {
+        x
+    }
 }
 
 /// One contact window in the forward convention (`V ≥ 0`), absolute phases.
@@ -529,32 +584,28 @@ fn clip_arcs<T: Float>(start: T, length: T, lo: T, hi: T) -> ([(T, T); 2], usize
 
 impl<T: Float> ContactWindow<T> {
     fn new<M: Math<T>>(d: &Drive<T>, offset: T, v: T, window: Window<T>) -> Self {
-        let (a, bc, bs) = (d.a, d.bc, d.bs);
+        Self::on(&Shape::of::<M>(d, v), offset, window)
+    }
+
+    /// The window of band offset `offset` for a drive's [`Shape`].
+    fn on(shape: &Shape<T>, offset: T, window: Window<T>) -> Self {
+        let d = &shape.drive;
         let (lo, hi) = (window.landing.at, window.lift_off.at);
-        // h⁺ increases on θ + ψ ∈ [π − α, 2π + α] (mod 2π), α = asin(V/c).
-        let c = M::hypot(a + bc, bs);
-        let psi = M::atan2(bs, a + bc);
-        let alpha = M::asin((v / c).min(T::ONE));
-        let forward = clip_arcs(T::PI - alpha - psi, T::PI + alpha + alpha, lo, hi);
-        // h⁻ decreases on θ + ψ' ∈ [α', π − α'], α' = asin(V/c'), if V < c'.
-        let c_back = M::hypot(bc - a, bs);
-        let backward = if v < c_back {
-            let psi_b = M::atan2(bs, bc - a);
-            let alpha_b = M::asin((v / c_back).min(T::ONE));
-            clip_arcs(alpha_b - psi_b, T::PI - (alpha_b + alpha_b), lo, hi)
-        } else {
-            ([(T::ZERO, T::ZERO); 2], 0)
+        let forward = clip_arcs(shape.forward.0, shape.forward.1, lo, hi);
+        let backward = match shape.backward {
+            Some((start, length)) => clip_arcs(start, length, lo, hi),
+            None => ([(T::ZERO, T::ZERO); 2], 0),
         };
         ContactWindow {
             d: offset,
-            a,
-            bc,
-            bs,
-            v,
+            a: d.a,
+            bc: d.bc,
+            bs: d.bs,
+            v: shape.v,
             window,
             forward,
             backward,
-            rounding_scale: T::ONE + d.b + a + v * T::TAU,
+            rounding_scale: T::ONE + d.b + d.a + shape.v * T::TAU,
         }
     }
 
@@ -585,21 +636,23 @@ impl<T: Float> ContactWindow<T> {
             + (self.bc * (x1.sin - x0.sin) + self.bs * (x1.cos - x0.cos))
     }
 
-    /// `h⁺ = s − w` (eq. L2) and its slope.
-    fn above_upper_band(&self, k: T, x: &Phase<T>) -> (T, T) {
+    /// `h⁺ = s − w` (eq. L2) and its first two derivatives.
+    fn above_upper_band(&self, k: T, x: &Phase<T>) -> (T, T, T) {
         let (p, q) = (self.bc + self.a, self.bs);
         (
             k - self.d + self.v * x.at + p * x.cos - q * x.sin,
             self.v - p * x.sin - q * x.cos,
+            q * x.sin - p * x.cos,
         )
     }
 
-    /// `h⁻ = s + w` (eq. L3) and its slope.
-    fn above_lower_band(&self, k: T, x: &Phase<T>) -> (T, T) {
+    /// `h⁻ = s + w` (eq. L3) and its first two derivatives.
+    fn above_lower_band(&self, k: T, x: &Phase<T>) -> (T, T, T) {
         let (p, q) = (self.bc - self.a, self.bs);
         (
             k + self.d + self.v * x.at + p * x.cos - q * x.sin,
             self.v - p * x.sin - q * x.cos,
+            q * x.sin - p * x.cos,
         )
     }
 
@@ -617,7 +670,7 @@ impl<T: Float> ContactWindow<T> {
             }
             let left = self.piece_start::<M>(l, from);
             let right = self.piece_end::<M>(r);
-            let at_left = f(&left).0;
+            let (at_left, slope, curvature) = f(&left);
             if at_left >= T::ZERO {
                 return Some((left, right));
             }
@@ -625,7 +678,7 @@ impl<T: Float> ContactWindow<T> {
             if at_right > T::ZERO {
                 let touch = root::<T, M>(
                     (left.at, right.at, at_left, at_right),
-                    left.at,
+                    taylor_guess::<T, M>(left.at, at_left, slope, curvature),
                     self.root_tolerance(k),
                     f,
                 );
@@ -654,7 +707,7 @@ impl<T: Float> ContactWindow<T> {
                 return None;
             }
             let left = self.piece_start::<M>(l, from);
-            let at_left = f(&left).0;
+            let (at_left, slope, curvature) = f(&left);
             if at_left <= T::ZERO {
                 return Some((left, self.piece_end::<M>(r)));
             }
@@ -669,7 +722,7 @@ impl<T: Float> ContactWindow<T> {
             if at_right < T::ZERO {
                 let touch = root::<T, M>(
                     (left.at, right.at, at_left, at_right),
-                    left.at,
+                    taylor_guess::<T, M>(left.at, -at_left, -slope, -curvature),
                     self.root_tolerance(k),
                     f,
                 );

@@ -149,7 +149,7 @@ pub use profile::{kappa, mean_contact_radius, Profile};
 
 use crate::model::exact::{self, precision_constant};
 use crate::model::float::{Float, Math};
-use crate::model::liftoff;
+use crate::model::liftoff::{self, Shape};
 use crate::model::scene::{ContactMode, Drive};
 use spring::{forward_critical, spring, Limit};
 
@@ -295,7 +295,7 @@ pub fn spring_means<T: Float, M: Math<T>>(
     if !(v.is_finite() && v >= T::ZERO) {
         return Err(MdrError::BadVelocity);
     }
-    let s = spring::<T, M>(drive, d, v, Limit::Moving)?;
+    let s = spring::<T, M>(&Shape::of::<M>(drive, v), drive, d, v, Limit::Moving)?;
     if s.unresolved > T::ZERO {
         return Err(MdrError::IllConditioned);
     }
@@ -318,7 +318,13 @@ pub fn spring_means_at_rest<T: Float, M: Math<T>>(
     if !drive.is_valid_with_contact(ContactMode::Intermittent) || !d.is_finite() {
         return Err(MdrError::BadDrive);
     }
-    let s = spring::<T, M>(drive, d, T::ZERO, Limit::Plus)?;
+    let s = spring::<T, M>(
+        &Shape::of::<M>(drive, T::ZERO),
+        drive,
+        d,
+        T::ZERO,
+        Limit::Plus,
+    )?;
     if s.unresolved > T::ZERO {
         return Err(MdrError::IllConditioned);
     }
@@ -339,9 +345,10 @@ pub fn critical_velocities<T: Float, M: Math<T>>(
     if !d.is_valid_with_contact(ContactMode::Intermittent) {
         return Err(MdrError::BadDrive);
     }
+    let m = d.mirrored();
     Ok((
-        forward_critical::<T, M>(d, T::ONE),
-        forward_critical::<T, M>(&d.mirrored(), T::ONE),
+        forward_critical::<T, M>(&Shape::of::<M>(d, T::ZERO), d, T::ONE),
+        forward_critical::<T, M>(&Shape::of::<M>(&m, T::ZERO), &m, T::ONE),
     ))
 }
 
@@ -517,7 +524,9 @@ fn curved<T: Float, M: Math<T>>(
     tol: T,
 ) -> Result<MdrResult<T>, MdrError> {
     let a = d.a;
-    if v >= forward_critical::<T, M>(d, T::ONE) {
+    // The drive's geometry at v, shared by every spring.
+    let shape = Shape::of::<M>(d, v);
+    if v >= forward_critical::<T, M>(&shape, d, T::ONE) {
         return Ok(MdrResult {
             mu_over_mu0: T::ONE,
             bound: T::ZERO,
@@ -539,7 +548,7 @@ fn curved<T: Float, M: Math<T>>(
     let offset = |xi: T| T::ONE - Profile::power(n, xi);
     // ξ*: V_c⁺(d(ξ)) > v on [0, ξ*), ≤ v beyond (monotone, module docs).
     let (mut lo, mut hi) = (xi_a, xi_max);
-    if forward_critical::<T, M>(d, offset(hi)) > v {
+    if forward_critical::<T, M>(&shape, d, offset(hi)) > v {
         lo = hi;
     }
     while hi - lo > T::from_f64(4.0) * T::EPSILON * xi_max {
@@ -547,7 +556,7 @@ fn curved<T: Float, M: Math<T>>(
         if !(mid > lo && mid < hi) {
             break;
         }
-        if forward_critical::<T, M>(d, offset(mid)) > v {
+        if forward_critical::<T, M>(&shape, d, offset(mid)) > v {
             lo = mid;
         } else {
             hi = mid;
@@ -589,6 +598,7 @@ fn curved<T: Float, M: Math<T>>(
                 r,
                 ends: at_onset,
                 hint: &hint,
+                shape: &shape,
             };
             searched += kinks::<T, M>(d, v, &search, &offset, |xi| {
                 if xi > left && xi < r {
@@ -611,7 +621,7 @@ fn curved<T: Float, M: Math<T>>(
         if sliding {
             return Ok([T::ZERO, normal::mean_band::<T, M>(dd, a) * jac, T::ZERO]);
         }
-        let s = spring::<T, M>(d, dd, v, limit)?;
+        let s = spring::<T, M>(&shape, d, dd, v, limit)?;
         Ok([(s.band - s.stretch) * jac, s.band * jac, s.unresolved * jac])
     };
     let mut ends: heapless::Vec<T, { MAX_PIECES + 1 }> = heapless::Vec::new();
@@ -691,8 +701,10 @@ struct Search<'h, T> {
     r: T,
     /// Extra samples next to the lift-off onset at its left / right end.
     ends: (bool, bool),
-    /// Kink candidates in closed form (ξ, any order; [`landing_thresholds`]).
+    /// Kink candidates in closed form (ξ, any order; [`kink_candidates`]).
     hint: &'h [T],
+    /// The drive's geometry at the velocity.
+    shape: &'h Shape<T>,
 }
 
 /// Most kink candidates kept ([`kink_candidates`]).
@@ -905,7 +917,7 @@ fn kinks<T: Float, M: Math<T>>(
     let sig = |t: T| {
         calls.set(calls.get() + 1);
         let (_, cos_t) = M::sin_cos(t);
-        spring::signature::<T, M>(d, offset(l + half * (T::ONE - cos_t)), v)
+        spring::signature::<T, M>(seg.shape, d, offset(l + half * (T::ONE - cos_t)), v)
     };
     // ξ → t of the segment's map.
     let t_of = |xi: T| {
@@ -1016,6 +1028,7 @@ mod tests {
             } else {
                 d.c_forward::<Libm>() * rnd()
             };
+            let shape = Shape::of::<Libm>(&d, v);
             let mut cands: heapless::Vec<f64, MAX_CANDIDATES> = heapless::Vec::new();
             kink_candidates::<f64, Libm>(&d, v, |x| {
                 let _ = cands.push(x);
@@ -1024,7 +1037,7 @@ mod tests {
             let (mut prev, mut prev_d) = (None, 1.0);
             for i in 0..=n {
                 let dd = 1.0 - (1.0 + a) * (f64::from(i) / f64::from(n));
-                let sg = spring::signature::<f64, Libm>(&d, dd, v);
+                let sg = spring::signature::<f64, Libm>(&shape, &d, dd, v);
                 let interior = !(dd <= a && prev_d >= a) && dd > -a + 1e-3;
                 if i > 0 && sg != prev && sg.is_some() && prev.is_some() && interior {
                     total += 1;
@@ -1078,8 +1091,9 @@ mod tests {
                 {
                     continue;
                 }
-                let lo = spring::signature::<f64, Libm>(&d, dk - delta, v);
-                let hi = spring::signature::<f64, Libm>(&d, dk + delta, v);
+                let shape = Shape::of::<Libm>(&d, v);
+                let lo = spring::signature::<f64, Libm>(&shape, &d, dk - delta, v);
+                let hi = spring::signature::<f64, Libm>(&shape, &d, dk + delta, v);
                 assert!(lo.is_some() && hi.is_some());
                 assert_ne!(lo, hi, "a={a} b={b} phi={phi} v={v} d={dk}");
                 checked += 1;

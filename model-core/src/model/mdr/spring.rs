@@ -5,7 +5,7 @@ use super::normal::mean_band;
 use super::MdrError;
 use crate::model::exact::{self, ExactError};
 use crate::model::float::{Float, Math};
-use crate::model::liftoff::{self, LiftOffError, Window};
+use crate::model::liftoff::{self, LiftOffError, Shape, Window};
 use crate::model::scene::Drive;
 
 /// Which one-sided limit at `V = 0` a permanent spring takes.
@@ -41,8 +41,10 @@ fn scaled<T: Float>(drive: &Drive<T>, d: T) -> Drive<T> {
 }
 
 /// The spring at band offset `d`, forward convention `V ≥ 0` (the caller
-/// mirrors). `limit` selects μ(0⁺) for permanent springs at `V = 0`.
+/// mirrors; `shape` is `Shape::of(drive, v)`, shared by every spring).
+/// `limit` selects μ(0⁺) for permanent springs at `V = 0`.
 pub(crate) fn spring<T: Float, M: Math<T>>(
+    shape: &Shape<T>,
     drive: &Drive<T>,
     d: T,
     v: T,
@@ -89,7 +91,7 @@ pub(crate) fn spring<T: Float, M: Math<T>>(
             unresolved: band,
         });
     }
-    match liftoff::banded_stretch_integral::<T, M>(drive, d, v) {
+    match liftoff::banded_stretch_integral::<T, M>(shape, d) {
         Ok((s, _)) => Ok(Spring {
             stretch: s / T::TAU,
             band,
@@ -116,12 +118,16 @@ pub(crate) fn spring<T: Float, M: Math<T>>(
 /// slides forward through all its contact (eq. L5 on its window for
 /// `|d| < a`; `c` of eq. 8 for `d > a`). Nondecreasing in `d`: the windows
 /// are nested.
-pub(crate) fn forward_critical<T: Float, M: Math<T>>(drive: &Drive<T>, d: T) -> T {
+pub(crate) fn forward_critical<T: Float, M: Math<T>>(
+    shape: &Shape<T>,
+    drive: &Drive<T>,
+    d: T,
+) -> T {
     if d > drive.a {
         drive.c_forward::<M>()
     } else {
         let window = Window::of::<M>(d.max(-drive.a), drive.a);
-        liftoff::forward_critical::<T, M>(drive, &window)
+        shape.forward_critical(&window)
     }
 }
 
@@ -129,7 +135,12 @@ pub(crate) fn forward_critical<T: Float, M: Math<T>>(drive: &Drive<T>, d: T) -> 
 /// permanent spring at `V = 0` takes its μ(0⁺) period), as a base-4 code: a
 /// change between two offsets brackets a possible kink of `⟨s⟩(d)`. `None`
 /// where it is not available (no contact, or a solver refused).
-pub(crate) fn signature<T: Float, M: Math<T>>(drive: &Drive<T>, d: T, v: T) -> Option<u32> {
+pub(crate) fn signature<T: Float, M: Math<T>>(
+    shape: &Shape<T>,
+    drive: &Drive<T>,
+    d: T,
+    v: T,
+) -> Option<u32> {
     let a = drive.a;
     if d <= -a {
         return None;
@@ -179,5 +190,5 @@ pub(crate) fn signature<T: Float, M: Math<T>>(drive: &Drive<T>, d: T, v: T) -> O
             .unwrap_or(0);
         return Some(code);
     }
-    Some(liftoff::banded_signature::<T, M>(drive, d, v))
+    Some(liftoff::banded_signature::<T, M>(shape, d))
 }
