@@ -167,9 +167,56 @@ fn load_line_mirror_symmetry_from_the_command_line() {
         }
         for k in ["max_power", "max_efficiency"] {
             assert!(n(&f, k) > 0.0, "φ = {phi}°: {k} = 0");
+            // A maximum in the first of the maximiser's 64 scan cells is a
+            // supremum as V → 0⁺ (the efficiency at φ = 0): the objective
+            // falls monotonically from the scan's floor, and the golden
+            // section (ending at a bracket of 1e-9·v_line) follows the same
+            // path in both runs until the objective's change across the
+            // bracket sinks to its rounding, which then decides the last
+            // comparisons differently: the two ends lie within about one
+            // final bracket of each other (seen: 1.2 brackets), allowed
+            // two, times the objective's slope there (from the library over
+            // 1e-7·v_line; f64, a < 1).
+            let v = n(&f, &format!("velocity_at_{k}")).abs();
+            let line = if n(&f, &format!("velocity_at_{k}")) > 0.0 {
+                n(&f, "no_load_velocity")
+            } else {
+                n(&f, "no_load_velocity_backward")
+            };
+            let at_floor = v < line / 64.0;
+            let slack = if at_floor {
+                let a: f64 = a.parse().unwrap();
+                assert!(
+                    a < 1.0,
+                    "a floor maximum at a = {a}: add the lift-off powers"
+                );
+                let d =
+                    model_core::Drive::new::<model_core::Libm>(a, b, f64::from(phi).to_radians());
+                let sign = n(&f, &format!("velocity_at_{k}")).signum();
+                let eta = |x: f64| {
+                    let p =
+                        model_core::model::load_line::powers::<f64, model_core::Libm>(&d, sign * x)
+                            .unwrap();
+                    if k == "max_power" {
+                        p.output
+                    } else {
+                        p.efficiency()
+                    }
+                };
+                let h = 1e-7 * line;
+                let slope = (eta(v + h) - eta(v)).abs() / h;
+                2.0 * slope * 1e-9 * line
+            } else {
+                0.0
+            };
+            eprintln!(
+                "φ = {phi}°: {k} gap {:e}, allowed {:e}",
+                (n(&f, k) - n(&g, k)).abs(),
+                2.0 * delta + slack
+            );
             assert!(
-                (n(&f, k) - n(&g, k)).abs() <= 2.0 * delta,
-                "φ = {phi}°: {k} {} vs mirror {}",
+                (n(&f, k) - n(&g, k)).abs() <= 2.0 * delta + slack,
+                "φ = {phi}°: {k} {} vs mirror {} (slack {slack:e})",
                 n(&f, k),
                 n(&g, k)
             );
