@@ -289,11 +289,74 @@ pub(crate) struct Shape<T> {
     c: T,
     /// The phase of the peak of `c sin(θ + ψ)`, `π/2 − ψ` in `[0, 2π)`.
     peak: T,
-    /// `h⁺` increases on `[start + 2πj, start + 2πj + length]`.
-    forward: (T, T),
+    /// `h⁺` increases on these arcs.
+    forward: Arcs<T>,
     /// `h⁻` decreases on these arcs (none if `V ≥ c'`).
-    backward: Option<(T, T)>,
+    backward: Option<Arcs<T>>,
 }
+
+/// The arcs `[start + 2πj, start + 2πj + length]` with the trig of their
+/// ends (the same for every `j`).
+#[derive(Clone, Copy, Debug)]
+struct Arcs<T> {
+    start: Phase<T>,
+    length: T,
+    end: Phase<T>,
+}
+
+impl<T: Float> Arcs<T> {
+    fn new<M: Math<T>>(start: T, length: T) -> Self {
+        let (s0, c0) = M::sin_cos(start);
+        let (s1, c1) = M::sin_cos(start + length);
+        Arcs {
+            start: Phase {
+                at: start,
+                sin: s0,
+                cos: c0,
+            },
+            length,
+            end: Phase {
+                at: start + length,
+                sin: s1,
+                cos: c1,
+            },
+        }
+    }
+
+    /// The parts inside the window, in time order, with the trig of their
+    /// ends (an end clipped by the window is its landing or lift-off).
+    fn clip(&self, window: &Window<T>) -> Pieces<T> {
+        let (lo, hi) = (window.landing.at, window.lift_off.at);
+        let mut out = [(window.landing, window.lift_off); 2];
+        let mut n = 0;
+        let first = wrap_tau(self.start.at) - T::TAU;
+        for j in 0..3u32 {
+            let s = first + T::TAU * T::from_u32(j);
+            let e = s + self.length;
+            if s.max(lo) < e.min(hi) && n < 2 {
+                let l = if s > lo {
+                    Phase {
+                        at: s,
+                        ..self.start
+                    }
+                } else {
+                    window.landing
+                };
+                let r = if e < hi {
+                    Phase { at: e, ..self.end }
+                } else {
+                    window.lift_off
+                };
+                out[n] = (l, r);
+                n += 1;
+            }
+        }
+        (out, n)
+    }
+}
+
+/// Pieces of a window (start, end) and how many.
+type Pieces<T> = ([(Phase<T>, Phase<T>); 2], usize);
 
 impl<T: Float> Shape<T> {
     /// The shape of `d` at `v ≥ 0`.
@@ -308,14 +371,14 @@ impl<T: Float> Shape<T> {
         let backward = (v < c_back).then(|| {
             let psi_b = M::atan2(bs, bc - a);
             let alpha_b = M::asin((v / c_back).min(T::ONE));
-            (alpha_b - psi_b, T::PI - (alpha_b + alpha_b))
+            Arcs::new::<M>(alpha_b - psi_b, T::PI - (alpha_b + alpha_b))
         });
         Shape {
             drive: *d,
             v,
             c,
             peak: wrap_tau(T::FRAC_PI_2 - psi),
-            forward: (T::PI - alpha - psi, T::PI + alpha + alpha),
+            forward: Arcs::new::<M>(T::PI - alpha - psi, T::PI + alpha + alpha),
             backward,
         }
     }
@@ -558,28 +621,11 @@ struct ContactWindow<T> {
     v: T,
     window: Window<T>,
     /// Pieces where `h⁺` increases (forward slip possible), clipped to the window.
-    forward: ([(T, T); 2], usize),
+    forward: Pieces<T>,
     /// Pieces where `h⁻` decreases (backward slip possible), clipped to the window.
-    backward: ([(T, T); 2], usize),
+    backward: Pieces<T>,
     /// Scale of the rounding of `h±` without the stick constant.
     rounding_scale: T,
-}
-
-/// The parts of the arcs `[start + 2πj, start + 2πj + length]` inside `[lo, hi]`
-/// (`hi − lo < 2π`, `length ≤ 2π`), in time order.
-fn clip_arcs<T: Float>(start: T, length: T, lo: T, hi: T) -> ([(T, T); 2], usize) {
-    let mut out = [(T::ZERO, T::ZERO); 2];
-    let mut n = 0;
-    let first = wrap_tau(start) - T::TAU;
-    for j in 0..3u32 {
-        let s = first + T::TAU * T::from_u32(j);
-        let (l, r) = (s.max(lo), (s + length).min(hi));
-        if l < r && n < 2 {
-            out[n] = (l, r);
-            n += 1;
-        }
-    }
-    (out, n)
 }
 
 impl<T: Float> ContactWindow<T> {
@@ -590,11 +636,10 @@ impl<T: Float> ContactWindow<T> {
     /// The window of band offset `offset` for a drive's [`Shape`].
     fn on(shape: &Shape<T>, offset: T, window: Window<T>) -> Self {
         let d = &shape.drive;
-        let (lo, hi) = (window.landing.at, window.lift_off.at);
-        let forward = clip_arcs(shape.forward.0, shape.forward.1, lo, hi);
+        let forward = shape.forward.clip(&window);
         let backward = match shape.backward {
-            Some((start, length)) => clip_arcs(start, length, lo, hi),
-            None => ([(T::ZERO, T::ZERO); 2], 0),
+            Some(arcs) => arcs.clip(&window),
+            None => ([(window.landing, window.lift_off); 2], 0),
         };
         ContactWindow {
             d: offset,
@@ -607,11 +652,6 @@ impl<T: Float> ContactWindow<T> {
             backward,
             rounding_scale: T::ONE + d.b + d.a + shape.v * T::TAU,
         }
-    }
-
-    fn phase<M: Math<T>>(at: T) -> Phase<T> {
-        let (sin, cos) = M::sin_cos(at);
-        Phase { at, sin, cos }
     }
 
     /// `w = d − a cos θ`.
@@ -664,12 +704,11 @@ impl<T: Float> ContactWindow<T> {
     /// piece's end (where forward slip ends).
     fn forward_touch<M: Math<T>>(&self, k: T, from: &Phase<T>) -> Option<(Phase<T>, Phase<T>)> {
         let f = |x: &Phase<T>| self.above_upper_band(k, x);
-        for &(l, r) in &self.forward.0[..self.forward.1] {
-            if r <= from.at {
+        for &(l, right) in &self.forward.0[..self.forward.1] {
+            if right.at <= from.at {
                 continue;
             }
-            let left = self.piece_start::<M>(l, from);
-            let right = self.piece_end::<M>(r);
+            let left = Self::piece_start(&l, from);
             let (at_left, slope, curvature) = f(&left);
             if at_left >= T::ZERO {
                 return Some((left, right));
@@ -700,23 +739,23 @@ impl<T: Float> ContactWindow<T> {
     ) -> Option<(Phase<T>, Phase<T>)> {
         let f = |x: &Phase<T>| self.above_lower_band(k, x);
         for &(l, r) in &self.backward.0[..self.backward.1] {
-            if r <= from.at {
+            if r.at <= from.at {
                 continue;
             }
-            if horizon.is_some_and(|h| l.max(from.at) >= h.at) {
+            if horizon.is_some_and(|h| l.at.max(from.at) >= h.at) {
                 return None;
             }
-            let left = self.piece_start::<M>(l, from);
+            let left = Self::piece_start(&l, from);
             let (at_left, slope, curvature) = f(&left);
             if at_left <= T::ZERO {
-                return Some((left, self.piece_end::<M>(r)));
+                return Some((left, r));
             }
             // The sign at the piece's end, or at the horizon inside it
             // (h⁻ decreases on the piece: no zero before a positive value).
-            let cut = horizon.filter(|h| h.at < r);
+            let cut = horizon.filter(|h| h.at < r.at);
             let right = match cut {
                 Some(h) => *h,
-                None => self.piece_end::<M>(r),
+                None => r,
             };
             let at_right = f(&right).0;
             if at_right < T::ZERO {
@@ -726,12 +765,7 @@ impl<T: Float> ContactWindow<T> {
                     self.root_tolerance(k),
                     f,
                 );
-                let end = if cut.is_some() {
-                    self.piece_end::<M>(r)
-                } else {
-                    right
-                };
-                return Some((touch, end));
+                return Some((touch, r));
             }
             if cut.is_some() {
                 return None;
@@ -740,21 +774,12 @@ impl<T: Float> ContactWindow<T> {
         None
     }
 
-    /// A piece start at `l`, or `from` (whose trig is known) if later.
-    fn piece_start<M: Math<T>>(&self, l: T, from: &Phase<T>) -> Phase<T> {
-        if from.at >= l {
+    /// A piece start `l`, or `from` if later.
+    fn piece_start(l: &Phase<T>, from: &Phase<T>) -> Phase<T> {
+        if from.at >= l.at {
             *from
         } else {
-            Self::phase::<M>(l)
-        }
-    }
-
-    /// A piece end with its trig (the lift-off point exactly).
-    fn piece_end<M: Math<T>>(&self, r: T) -> Phase<T> {
-        if r >= self.window.lift_off.at {
-            self.window.lift_off
-        } else {
-            Self::phase::<M>(r)
+            *l
         }
     }
 
