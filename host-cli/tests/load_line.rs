@@ -6,6 +6,7 @@ use serde_json::Value;
 mod common;
 
 use common::cli::{fricctl, json, run_ok, PHYS};
+use common::normal;
 
 /// `load-line` on the dimensionless scene a = `duz_rel`, b/a = `ratio`,
 /// φ = `phi_deg` (degrees).
@@ -663,10 +664,10 @@ fn load_line_of_every_contact() {
         at.mu_over_mu0
     );
     // An SI scene with a curved profile: F̄z = kz·uz0·D (eq. M5, kz read as
-    // the incremental stiffness 2E*a0), D here by a brute force over springs
-    // and phases (midpoint rules, m = k = 1000 and 2000; the finer one's
-    // error is below twice their change for methods of order ≥ 1), and the
-    // stall force in newtons is μ0·F̄z times the one in units of μ0·F̄z.
+    // the incremental stiffness 2E*a0), D here by the brute force over springs
+    // and phases (`common::normal::reference`: midpoint rules at m = k = 1000
+    // and 2000, error allowed 2·|coarse − fine|), and the stall force in
+    // newtons is μ0·F̄z times the one in units of μ0·F̄z.
     let o = json(
         &[
             &["load-line"][..],
@@ -675,25 +676,12 @@ fn load_line_of_every_contact() {
         ]
         .concat(),
     );
-    let brute = |m: u32| {
-        let (a, n) = (0.5f64, 2.0f64);
-        let xi_max = (1.0 + a).powf(1.0 / n);
-        let (hx, ht) = (xi_max / f64::from(m), std::f64::consts::PI / f64::from(m));
-        let mut sum = 0.0;
-        for i in 0..m {
-            let d = 1.0 - ((f64::from(i) + 0.5) * hx).powf(n);
-            for j in 0..m {
-                sum += (d - a * ((f64::from(j) + 0.5) * ht).cos()).max(0.0);
-            }
-        }
-        sum * hx / f64::from(m)
-    };
-    let (coarse, fine) = (brute(1000), brute(2000));
+    let (d, e_d) = normal::reference(2.0, 0.5);
     let kz_uz0 = 2e6 * 5e-6;
     let fz = o["fz_mean"].as_f64().unwrap();
     assert!(
-        (fz / kz_uz0 - fine).abs() <= 2.0 * (coarse - fine).abs() + 1e-10,
-        "F̄z/(kz uz0) = {} vs brute force {fine}",
+        (fz / kz_uz0 - d).abs() <= e_d + 1e-10,
+        "F̄z/(kz uz0) = {} vs brute force {d}",
         fz / kz_uz0
     );
     let rel = o["stall_force_over_mu0_fz"].as_f64().unwrap();

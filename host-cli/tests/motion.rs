@@ -4,14 +4,19 @@
 //! asserted), zero drift of a symmetric law, mirror symmetry, the ratchet's
 //! direction, and bad input.
 //!
-//! All scenes are dimensionless (`--duz-rel`, `--ratio`): velocities are in
-//! units of ωW₀, the mass in k_x/ω², `--force-omega` is ν = Ω/ω.
+//! The scenes are dimensionless (`--duz-rel`, `--ratio`): velocities are in
+//! units of ωW₀, the mass in k_x/ω², `--force-omega` is ν = Ω/ω; one SI
+//! scene is checked against its dimensionless form, converted by hand.
 
 use std::f64::consts::{PI, TAU};
 
 use assert_cmd::Command;
 use model_core::{exact, Groups, Libm, Scene};
 use serde_json::Value;
+
+mod common;
+
+use common::normal;
 
 /// The paper's Fig. 7 scene (ratio 0.5, Δu_z/u_z0 = 0.5) at phase `phi_deg`.
 fn fig7(phi_deg: f64) -> Vec<String> {
@@ -900,33 +905,6 @@ fn sphere_massless_drift() {
     );
 }
 
-/// `D = F̄z/(k_z u_z0)` of a profile `ξⁿ` by brute force over `m` springs
-/// (midpoints in ξ) and `k` phases (midpoints in [0, π]): no closed form, no
-/// quadrature, no model-core code (module docs of `mdr::normal`).
-fn normal_brute_force(n: f64, a: f64, m: u32, k: u32) -> f64 {
-    let xi_max = (1.0 + a).powf(1.0 / n);
-    let hx = xi_max / f64::from(m);
-    let ht = PI / f64::from(k);
-    let mut sum = 0.0;
-    for i in 0..m {
-        let d = 1.0 - ((f64::from(i) + 0.5) * hx).powf(n);
-        for j in 0..k {
-            sum += (d - a * ((f64::from(j) + 0.5) * ht).cos()).max(0.0);
-        }
-    }
-    sum * hx / f64::from(k)
-}
-
-/// `(D, its error)`: the brute force at (1000, 1000) and (2000, 2000); the
-/// finer one's error is below the change between them for a method of
-/// order ≥ 1 (ξ midpoints: 1.5 at the rim's `(ξ_max − ξ)^{3/2}` onset; θ
-/// midpoints on a kinked band: 2), allowed 2×.
-fn normal_reference(n: f64, a: f64) -> (f64, f64) {
-    let coarse = normal_brute_force(n, a, 1000, 1000);
-    let fine = normal_brute_force(n, a, 2000, 2000);
-    (fine, 2.0 * (coarse - fine).abs())
-}
-
 /// The positions `x` (column 2) of the last load period of a `--csv` file
 /// (`t` in column 1; `period` in the same unit).
 fn last_period_x(path: &std::path::Path, period: f64) -> Vec<f64> {
@@ -974,7 +952,7 @@ fn sphere_with_mass_and_spring_rests_at_the_force_balance() {
         .unwrap()
         .drive();
     let (plus, minus) = mdr::limits_at_zero::<f64, Libm>(&d, &Profile::Sphere, 1e-8).unwrap();
-    let (nbar, e_nbar) = normal_reference(2.0, a);
+    let (nbar, e_nbar) = normal::reference(2.0, a);
     let x_of = |mu: f64| nbar * (f0 - mu) / kappa;
     let (x_lo, x_hi) = (x_of(plus.mu_over_mu0), x_of(minus.mu_over_mu0));
     let slack = e_nbar * (f0 + 1.0) / kappa + nbar * plus.bound.max(minus.bound) / kappa;
@@ -1051,8 +1029,11 @@ fn sphere_with_mass_and_spring_rests_at_the_force_balance() {
 /// against the resolved one (bed of springs, refined by doubling, no law);
 /// they agree within the homogenised run's stated error (E_h + numerical +
 /// table) plus the resolved one's numerical error — the same criterion as
-/// the flat and lift-off scenes. An SI scene with a sphere runs, and its
-/// F̄z/(k_z u_z0) is the brute force's D at its a = Δu_z/u_z0.
+/// the flat and lift-off scenes. An SI scene with a sphere (resolved) drifts
+/// at its dimensionless scene's drift, converted here by hand, times ωW₀,
+/// within the two runs' stated errors plus rounding; its mass and ω/Ω
+/// are the converted ones, and its F̄z/(k_z u_z0) is the brute force's D
+/// at its a = Δu_z/u_z0 (`common::normal`).
 #[test]
 fn sphere_with_mass_in_both_models_and_si() {
     let mut args = scene_args(0.5, 2.0, 40.0);
@@ -1082,46 +1063,87 @@ fn sphere_with_mass_in_both_models_and_si() {
     let bound = num(&h, "error_estimate") + num(&r, "numerical_error");
     eprintln!("sphere with mass: |H − R| = {diff:e}, bound {bound:e}");
     assert!(diff <= bound, "|H − R| = {diff:e} > {bound:e}");
-    // SI: μ0 0.3, kz 2e6, kx 1.5e6, uz0 5 µm, Δuz 2.5 µm (a = 0.5), 40 kHz.
-    let out = Command::cargo_bin("fricctl")
-        .unwrap()
-        .args([
-            "motion",
-            "--mu0",
-            "0.3",
-            "--kz",
-            "2e6",
-            "--kx",
-            "1.5e6",
-            "--uz0",
-            "5e-6",
-            "--duz",
-            "2.5e-6",
-            "--dux",
-            "2e-6",
-            "--freq",
-            "40e3",
-            "--phi-deg",
-            "40",
-            "--profile",
-            "sphere",
-            "--mass",
-            "0.05",
-            "--force-amp-rel",
-            "0.6",
-            "--force-omega",
-            "62.83",
-            "--json",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    // SI: μ0 0.3, kz 2e6 N/m, kx 1.5e6 N/m, uz0 5 µm, Δuz 2.5 µm, Δux 2 µm,
+    // 40 kHz, φ 40°, M 0.05 kg, f 0.6, Ω 62.83 rad/s; its dimensionless
+    // scene converted here by hand (README "A body on the contact", eq. 25):
+    // W₀ = μ0 (kz/kx) uz0, a = Δuz/uz0, b = Δux/W₀ (`--dux-rel`), mass in
+    // kx/ω², `--force-omega` in ω, velocities in ωW₀; the force stays in
+    // units of μ0·F̄z. The model is pinned (resolved, what `auto` picks
+    // here) so both runs compute the same thing.
+    let (mu0, kz, kx, uz0, duz, dux) = (0.3f64, 2e6f64, 1.5e6, 5e-6, 2.5e-6, 2e-6);
+    let (freq, phi_deg, mass, force_omega) = (40e3f64, 40.0f64, 0.05f64, 62.83f64);
+    let omega = TAU * freq;
+    let w0 = mu0 * (kz / kx) * uz0;
+    let (a, b) = (duz / uz0, dux / w0);
+    let (mass_rel, nu) = (mass * omega * omega / kx, force_omega / omega);
+    let unit = omega * w0;
+    let flags = |pairs: &[(&str, f64)]| -> Vec<String> {
+        pairs
+            .iter()
+            .flat_map(|(k, v)| [k.to_string(), v.to_string()])
+            .collect()
+    };
+    let si_args = flags(&[
+        ("--mu0", mu0),
+        ("--kz", kz),
+        ("--kx", kx),
+        ("--uz0", uz0),
+        ("--duz", duz),
+        ("--dux", dux),
+        ("--freq", freq),
+        ("--phi-deg", phi_deg),
+        ("--mass", mass),
+        ("--force-omega", force_omega),
+    ]);
+    let dl_args = flags(&[
+        ("--duz-rel", a),
+        ("--dux-rel", b),
+        ("--phi-deg", phi_deg),
+        ("--mass", mass_rel),
+        ("--force-omega", nu),
+    ]);
+    let load = [
+        "--profile",
+        "sphere",
+        "--force-amp-rel",
+        "0.6",
+        "--method",
+        "resolved",
+    ];
+    let si = motion(&si_args, &load);
+    let dl = motion(&dl_args, &load);
+    assert_eq!(si["method"], "resolved");
+    assert_eq!(dl["method"], "resolved");
+    // Rounding: a, b, m̃, ν and ωW₀ are each formed here in ≤ 4 roundings
+    // (≤ 4ε relative, ε = 2.2e-16) and by the command in as many. Discrete
+    // choices a perturbation could flip (steps, springs, periods) are inside
+    // each run's stated error; what is left is the exact drift's response to
+    // its inputs' rounding and the product v·ωW₀: 1e-12 relative (≈ 4500ε)
+    // allows a sensitivity |d ln v/d ln p| of ~1000; measured by 1e-3
+    // relative changes of a, b, m̃, ν on the dimensionless run: ≤ 0.9.
+    let rounding = 1e-12;
+    let close = |x: f64, y: f64| (x - y).abs() <= rounding * x.abs().max(y.abs());
+    assert!(close(num(&si, "mass_rel"), mass_rel), "mass_rel: {si}");
+    assert!(close(num(&si, "scale_separation"), 1.0 / nu), "ω/Ω: {si}");
+    assert!(close(num(&si, "v_ref"), unit * num(&dl, "v_ref")), "v_ref");
+    let (v_si, v_dl) = (num(&si, "mean_velocity"), num(&dl, "mean_velocity"));
+    let bound =
+        num(&si, "error_estimate") + unit * num(&dl, "error_estimate") + rounding * v_si.abs();
+    let diff = (v_si - v_dl * unit).abs();
+    eprintln!(
+        "sphere SI: {v_si} m/s, {v_dl} ωW₀ × ωW₀ = {} m/s, |Δ| = {diff:e}, bound {bound:e}",
+        v_dl * unit
     );
-    let o: Value = serde_json::from_slice(&out.stdout).unwrap();
-    let (nbar, e_nbar) = normal_reference(2.0, 0.5);
-    assert!((num(&o, "fz_mean_over_kz_uz0") - nbar).abs() <= e_nbar + 1e-10 * nbar);
-    assert!(num(&o, "mean_velocity").is_finite());
+    // The comparison can fail: the stated errors are below 1 % of the
+    // drift, so a wrong unit (a factor off by ≥ 1 %) would be caught.
+    assert!(
+        bound <= 1e-2 * v_si.abs(),
+        "bound {bound:e} vs drift {v_si}"
+    );
+    assert!(
+        diff <= bound,
+        "SI drift {v_si} m/s vs {v_dl} ωW₀ × {unit} m/s: |Δ| = {diff:e} > {bound:e}"
+    );
+    let (nbar, e_nbar) = normal::reference(2.0, 0.5);
+    assert!((num(&si, "fz_mean_over_kz_uz0") - nbar).abs() <= e_nbar + 1e-10 * nbar);
 }

@@ -1,10 +1,12 @@
 //! Helpers shared by the integration tests of `fricctl`: running the binary
-//! ([`cli`]), the virtual device on a pty ([`sim`]) and the raw protocol of
+//! ([`cli`]), the brute-force mean normal force of a curved profile
+//! ([`normal`]), the virtual device on a pty ([`sim`]) and the raw protocol of
 //! the device tests (pty) and the QEMU test (TCP) (this module).
 #![allow(dead_code)]
 
 pub mod cli;
 pub mod liftoff;
+pub mod normal;
 pub mod sim;
 
 use std::io::Read;
