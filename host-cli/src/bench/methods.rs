@@ -145,26 +145,58 @@ fn curve_case(
 }
 
 /// Times μ over a velocity curve for the flat punch and curved profiles
-/// (`select::mu_within_profile`, rayon over the points as the curve command).
+/// (`select::mu_within_profile`, rayon over the points as the curve command),
+/// without and with lift-off.
 fn profile_case(a: &MethodsArgs, out: &mut Vec<Timing>) -> CliResult {
+    for (duz_rel, case) in [
+        (0.5, "curve, profiles (Δu_z/u_z0 = 0.5, k_xΔu_x/(μ0 k_z u_z0) = 0.25, φ = 1 rad = 57.3°; u_z0 read as the mean indentation), v/v_c in [-1.5, 1.5]"),
+        (1.5, "curve, profiles with lift-off (Δu_z/u_z0 = 1.5, k_xΔu_x/(μ0 k_z u_z0) = 0.25, φ = 1 rad = 57.3°; u_z0 read as the mean indentation), v/v_c in [-1.5, 1.5]"),
+    ] {
+        profile_scene(a, duz_rel, case, out)?;
+    }
+    Ok(())
+}
+
+/// [`profile_case`] for one drive: the flat punch (single-spring solver
+/// below `Δu_z/u_z0 = 1`, the lift-off branch from 1) and a sphere and a
+/// cone through the MDR quadrature at three tolerances.
+fn profile_scene(
+    a: &MethodsArgs,
+    duz_rel: f64,
+    case: &'static str,
+    out: &mut Vec<Timing>,
+) -> CliResult {
     use model_core::mdr::Profile;
     use model_core::select;
     use model_core::Libm;
     use rayon::prelude::*;
     let g = Groups {
-        duz_rel: 0.5,
+        duz_rel,
         dux_rel: 0.25,
         phi: 1.0,
     };
-    let s = Scene::dimensionless(g).map_err(|e| CliError::failure(e.to_string()))?;
+    let s = Scene::dimensionless_with_contact(g, model_core::scene::ContactMode::Intermittent)
+        .map_err(|e| CliError::failure(e.to_string()))?;
     let vc = CriticalVelocity::of(&s);
     let vs: Vec<f64> = linspace(-1.5, 1.5, a.mdr_points)
         .into_iter()
         .map(|x| from_rel(&vc, x, "v-rel"))
         .collect::<CliResult<_>>()?;
-    let flat_tol = model_core::exact::error_bound::<f64, Libm>(&s.drive());
+    let flat_tol = if duz_rel < 1.0 {
+        model_core::exact::error_bound::<f64, Libm>(&s.drive())
+    } else {
+        model_core::model::liftoff::error_bound::<f64, Libm>(&s.drive())
+    };
     let configs: [(&str, Profile<f64>, f64); 7] = [
-        ("flat auto (default tol)", Profile::Flat, flat_tol),
+        (
+            if duz_rel < 1.0 {
+                "flat auto (default tol)"
+            } else {
+                "flat auto (default tol; lift-off solver)"
+            },
+            Profile::Flat,
+            flat_tol,
+        ),
         ("sphere mdr --tol 1e-6", Profile::Sphere, 1e-6),
         ("sphere mdr --tol 1e-8", Profile::Sphere, 1e-8),
         ("sphere mdr --tol 1e-9", Profile::Sphere, 1e-9),
@@ -197,7 +229,7 @@ fn profile_case(a: &MethodsArgs, out: &mut Vec<Timing>) -> CliResult {
                 .collect::<CliResult<Vec<_>>>()
         })?;
         out.push(Timing {
-            case: "curve, profiles (Δu_z/u_z0 = 0.5, k_xΔu_x/(μ0 k_z u_z0) = 0.25, φ = 1 rad = 57.3°; u_z0 read as the mean indentation), v/v_c in [-1.5, 1.5]",
+            case,
             method: label.to_string(),
             points: vs.len(),
             total_s: t,
@@ -284,6 +316,11 @@ pub fn run(a: &MethodsArgs) -> CliResult {
     let mut csv = String::from("case,method,points,total_s,per_point_s,ratio_to_first,mix\n");
     let mut last_case = "";
     let mut first = 0.0;
+    let width = out
+        .iter()
+        .map(|t| t.method.chars().count())
+        .max()
+        .unwrap_or(0);
     for t in &out {
         if t.case != last_case {
             last_case = t.case;
@@ -292,7 +329,7 @@ pub fn run(a: &MethodsArgs) -> CliResult {
         }
         let ratio = t.per_point() / first;
         println!(
-            "  {:24} {:>8} points {:>10.3e} s/point  ×{:<10.1} {}",
+            "  {:width$} {:>8} points {:>10.3e} s/point  ×{:<10.1} {}",
             t.method,
             t.points,
             t.per_point(),

@@ -122,20 +122,24 @@
 //! below, "Cost"); against the brute force over springs all gaps are within
 //! the brute force's own error (≤ 10⁻⁶, `tests/mdr.rs`).
 //!
-//! **Cost.** Each spring is one solve (~0.4–0.8 µs). Averaged over 1000
-//! velocities across ±v_c for three drives (`cargo test -p integration-tests
-//! --release --test mdr cpu_time -- --ignored --nocapture`, loaded machine,
-//! so upper values), a sphere's μ took 107/113/62 spring solves and
-//! 67/64/32 µs of CPU at `tol = 10⁻⁶`, 147/132/92 and 94/76/44 µs at
-//! `10⁻⁸`, 173/156/104 and 96/104/46 µs at `10⁻⁹` (a = 0.5, b = 0.25,
-//! φ = 1; a = 0.5, b = 1, φ = 0.3; a = 1.5, b = 0.7, φ = 2); with the 7/15
-//! rules and bisected kinks it was 98/105/74, 142/145/113 and 172/184/143
+//! **Cost.** Each spring is one solve (~0.45 µs: the touch events by
+//! Halley's method, the drive's walk geometry — `liftoff::Shape` — shared
+//! by all springs of one μ). Averaged over 1000 velocities across ±v_c for
+//! three drives (`cargo test -p integration-tests --release --test mdr
+//! cpu_time -- --ignored --nocapture`, idle machine), a sphere's μ took
+//! 103/104/60 spring solves and 37/44/16 µs of CPU at `tol = 10⁻⁶`,
+//! 142/125/91 and 50/48/28 µs at `10⁻⁸`, 170/150/103 and 58/60/28 µs at
+//! `10⁻⁹` (a = 0.5, b = 0.25, φ = 1; a = 0.5, b = 1, φ = 0.3; a = 1.5,
+//! b = 0.7, φ = 2); with bisected kinks and a solve per spring that
+//! computed its own geometry it was 173/156/104 solves at `10⁻⁹` and
+//! 92–99 µs at the fixed scenes of `examples/mdr_cpu.rs` (now 67–72 µs,
+//! README "Cost of one μ"); with the 7/15 rules 172/184/143
 //! solves. A tolerance below the per-spring solvers' part ([`solver_bound`],
 //! ~10⁻¹⁰ for a sphere in f64, the same for μ(0±)) is refused with
 //! [`MdrError::ToleranceTooTight`]. The quadrature's bound stays an
 //! estimate: over 80 random scenes and four profiles the answers at
 //! `tol = 10⁻⁶` and `10⁻⁹` (at V) and at `10⁻⁶` (the limits μ(0±)) differ
-//! from those at the tightest tolerance (≈ 10⁻¹⁰) by at most 0.54 of
+//! from those at the tightest tolerance (≈ 10⁻¹⁰) by at most 0.60 of
 //! the two bounds, 0 of 320 comparisons outside them (`tests/mdr.rs`,
 //! `bound_estimate_holds_against_a_tighter_run`).
 
@@ -155,7 +159,7 @@ use spring::{forward_critical, spring, Limit};
 
 /// Safety factor on the quadrature's estimate in the bound (module docs:
 /// with the 10/21/43 rules of [`quadrature`], 2 left the estimate check at
-/// 0.99 of the bounds, 4 at 0.54).
+/// 0.99 of the bounds, 4 at 0.54; 0.60 with the closed-form kinks).
 pub const SAFETY: f64 = 4.0;
 
 /// The per-spring precision constant of the quadrature's bound in f64:
