@@ -1013,14 +1013,23 @@ fn bench_methods_reports_times_and_mix() {
     ]);
     let csv = std::fs::read_to_string(dir.path().join("methods.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().skip(1).collect();
-    assert_eq!(lines.len(), 19);
-    // Curved profiles: v/v_c = −1.5 + 3i/19 slides for |v/v_c| ≥ 1 (i ≤ 3 and
-    // i ≥ 16, the flat punch's v_c for every profile), the other 12 points go
-    // to the exact solver (flat) or the MDR quadrature (sphere, cone).
-    assert!(lines[12].contains("sliding 8 + exact 12"), "{}", lines[12]);
-    for l in &lines[13..19] {
-        assert!(l.contains("sliding 8 + mdr 12"), "{l}");
+    assert_eq!(lines.len(), 26);
+    // Curved profiles, without (a = 0.5) and with lift-off (a = 1.5):
+    // v/v_c = −1.5 + 3i/19 slides for |v/v_c| ≥ 1 (i ≤ 3 and i ≥ 16, the flat
+    // punch's v_c for every profile — eq. 8, resp. eq. L5), the other 12
+    // points go to the exact solver (flat: single spring, resp. lift-off) or
+    // the MDR quadrature (sphere, cone).
+    for first in [12, 19] {
+        assert!(
+            lines[first].contains("sliding 8 + exact 12"),
+            "{}",
+            lines[first]
+        );
+        for l in &lines[first + 1..first + 7] {
+            assert!(l.contains("sliding 8 + mdr 12"), "{l}");
+        }
     }
+    assert!(lines[19].contains("lift-off solver"), "{}", lines[19]);
     // Normal-only curve at tol 1e-2: |v| ≥ v_c slides (v/v_c = −1.5 + 3i/199:
     // i·3/199 ≤ 0.5 for i ≤ 33, 34 points on each side), the other 132 are
     // eq. 21 (bound 0.0144·0.4 ≤ 1e-2), or the exact solver at the default tolerance.
