@@ -44,6 +44,7 @@ use crate::model::analytic::static_friction::StaticFriction;
 use crate::model::exact::{self, ExactError};
 use crate::model::float::{Float, Math};
 use crate::model::regime::{classify_drive, ClassifyOptions, Regime};
+use crate::model::root::{illinois, Probe};
 use crate::model::scene::{Drive, Groups, Scene, SceneError};
 
 /// Most solutions kept by [`solve_target`] (more are counted in
@@ -459,43 +460,28 @@ pub fn bracketed<T: Float, M: Math<T>>(
     l: Point<T>,
     r: Point<T>,
 ) -> Result<Point<T>, InverseError<T>> {
-    let (mut lo, mut hi) = (l.x, r.x);
-    let (mut glo, mut ghi) = (l.value - target, r.value - target);
-    let mut side = 0i8;
-    let mut best = if glo.abs() <= ghi.abs() { l } else { r };
-    for _ in 0..MAX_REFINE {
-        let width = T::from_f64(8.0) * T::EPSILON * (lo.abs() + hi.abs());
-        if hi - lo <= width {
-            break;
-        }
-        let mut x = lo - glo * (hi - lo) / (ghi - glo);
-        if !(x > lo && x < hi) {
-            x = (lo + hi) * T::HALF;
-        }
-        let fx = p.mu_at::<M>(x, v)?;
-        let g = fx - target;
-        if g.abs() < (best.value - target).abs() {
-            best = Point { x, value: fx };
-        }
-        if g.abs() <= p.bound_at::<M>(x) / T::from_f64(16.0) {
-            break;
-        }
-        if (g < T::ZERO) == (glo < T::ZERO) {
-            lo = x;
-            glo = g;
-            if side == -1 {
-                ghi *= T::HALF;
+    let mut best = if (l.value - target).abs() <= (r.value - target).abs() {
+        l
+    } else {
+        r
+    };
+    illinois(
+        (l.x, r.x, l.value - target, r.value - target),
+        |lo: T, hi: T| T::from_f64(8.0) * T::EPSILON * (lo.abs() + hi.abs()),
+        MAX_REFINE,
+        |x| {
+            let fx = p.mu_at::<M>(x, v)?;
+            let g = fx - target;
+            if g.abs() < (best.value - target).abs() {
+                best = Point { x, value: fx };
             }
-            side = -1;
-        } else {
-            hi = x;
-            ghi = g;
-            if side == 1 {
-                glo *= T::HALF;
-            }
-            side = 1;
-        }
-    }
+            Ok::<_, ExactError>(if g.abs() <= p.bound_at::<M>(x) / T::from_f64(16.0) {
+                Probe::Stop
+            } else {
+                Probe::Value(g)
+            })
+        },
+    )?;
     Ok(best)
 }
 

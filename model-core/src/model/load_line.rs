@@ -46,6 +46,7 @@
 use crate::model::exact::{self, Arc, ArcKind, ExactError};
 use crate::model::float::{Float, Math};
 use crate::model::liftoff::{self, LiftOffError};
+use crate::model::root::{illinois, Probe};
 use crate::model::scene::Drive;
 
 /// The powers of one steady state (unit `μ₀ F̄z ω W₀`; `F̄z = k_z u_z0`).
@@ -283,8 +284,9 @@ pub fn load_line_of<T: Float, E>(
 }
 
 /// The root of `f` in `(lo, hi)` given `f(lo) = flo < 0 < f(hi) = fhi`:
-/// Illinois regula falsi to a bracket width of 8ε·|hi − lo| or 200
-/// iterations. Its error adds the solver's error over the slope.
+/// Illinois regula falsi ([`illinois`]) to a bracket width of
+/// 8ε·|hi − lo| or 200 iterations. Its error adds the solver's error over
+/// the slope.
 fn root<T: Float, E>(
     lo: T,
     hi: T,
@@ -292,37 +294,13 @@ fn root<T: Float, E>(
     fhi: T,
     f: &mut impl FnMut(T) -> Result<T, E>,
 ) -> Result<T, E> {
-    let (mut lo, mut hi, mut flo, mut fhi) = (lo, hi, flo, fhi);
-    let mut side = 0i8;
     let width = T::from_f64(8.0) * T::EPSILON * (hi - lo);
-    for _ in 0..200 {
-        if hi - lo <= width {
-            break;
-        }
-        let mut x = lo - flo * (hi - lo) / (fhi - flo);
-        if !(x > lo && x < hi) {
-            x = (lo + hi) * T::HALF;
-        }
-        let fx = f(x)?;
-        if fx == T::ZERO {
-            return Ok(x);
-        }
-        if fx < T::ZERO {
-            lo = x;
-            flo = fx;
-            if side == -1 {
-                fhi *= T::HALF;
-            }
-            side = -1;
-        } else {
-            hi = x;
-            fhi = fx;
-            if side == 1 {
-                flo *= T::HALF;
-            }
-            side = 1;
-        }
-    }
+    let (lo, hi) = illinois(
+        (lo, hi, flo, fhi),
+        |_, _| width,
+        200,
+        |x| f(x).map(Probe::Value),
+    )?;
     Ok((lo + hi) * T::HALF)
 }
 

@@ -86,3 +86,63 @@ pub(crate) fn newton_bracketed<T: Float>(
     }
     last
 }
+
+/// What the function of [`illinois`] says at a point.
+pub(crate) enum Probe<T> {
+    /// The function's value there; the iteration goes on.
+    Value(T),
+    /// Stop here (the caller's own criterion is met, or the function does
+    /// not apply there).
+    Stop,
+}
+
+/// Illinois regula falsi (Dowell & Jarratt 1971) on the bracket
+/// `(lo, hi, f(lo), f(hi))` whose values have opposite signs: the secant
+/// point of the bracket, with the value at an end that stayed twice in a row
+/// halved. Stops when the bracket is at most `width(lo, hi)` wide, at an
+/// exact zero (the bracket then collapses onto it), when `f` answers
+/// [`Probe::Stop`], or after `max_iter` evaluations; returns the final
+/// bracket.
+///
+/// # Errors
+/// The first error of `f`.
+pub(crate) fn illinois<T: Float, E>(
+    (mut lo, mut hi, mut flo, mut fhi): (T, T, T, T),
+    width: impl Fn(T, T) -> T,
+    max_iter: u32,
+    mut f: impl FnMut(T) -> Result<Probe<T>, E>,
+) -> Result<(T, T), E> {
+    let mut side = 0i8;
+    for _ in 0..max_iter {
+        if hi - lo <= width(lo, hi) {
+            break;
+        }
+        let mut x = lo - flo * (hi - lo) / (fhi - flo);
+        if !(x > lo && x < hi) {
+            x = (lo + hi) * T::HALF;
+        }
+        let fx = match f(x)? {
+            Probe::Value(v) => v,
+            Probe::Stop => break,
+        };
+        if fx == T::ZERO {
+            return Ok((x, x));
+        }
+        if (fx < T::ZERO) == (flo < T::ZERO) {
+            lo = x;
+            flo = fx;
+            if side == -1 {
+                fhi *= T::HALF;
+            }
+            side = -1;
+        } else {
+            hi = x;
+            fhi = fx;
+            if side == 1 {
+                flo *= T::HALF;
+            }
+            side = 1;
+        }
+    }
+    Ok((lo, hi))
+}

@@ -154,6 +154,7 @@ pub use profile::{kappa, mean_contact_radius, Profile};
 use crate::model::exact::{self, precision_constant};
 use crate::model::float::{Float, Math};
 use crate::model::liftoff::{self, Shape};
+use crate::model::root::{illinois, Probe};
 use crate::model::scene::{ContactMode, Drive};
 use spring::{forward_critical, spring, Limit};
 
@@ -836,7 +837,7 @@ fn kink_candidates<T: Float, M: Math<T>>(d: &Drive<T>, v: T, mut found: impl FnM
 
 /// The band offsets `d = a cos θ_c` at the sign changes of `h(θ_c, sin θ_c,
 /// cos θ_c)` over `θ_c ∈ [0, π]`: on the `grid` (`(θ, sin θ, cos θ)`), each
-/// change refined by regula falsi (Illinois) to ~10⁻¹³ rad; `h` is `None`
+/// change refined by [`illinois`] to 10⁻¹³ rad; `h` is `None`
 /// where it does not apply (no change is sought across such a point).
 fn offsets_of_zeros<T: Float, M: Math<T>>(
     a: T,
@@ -844,10 +845,6 @@ fn offsets_of_zeros<T: Float, M: Math<T>>(
     h: impl Fn(T, T, T) -> Option<T>,
     found: &mut impl FnMut(T),
 ) {
-    let eval = |th: T| {
-        let (s, c) = M::sin_cos(th);
-        (h(th, s, c), c)
-    };
     let mut prev = grid
         .first()
         .and_then(|&(t, s, c)| h(t, s, c).map(|f| (t, f)));
@@ -855,41 +852,21 @@ fn offsets_of_zeros<T: Float, M: Math<T>>(
         let next = h(t1, s1, c1).map(|f| (t1, f));
         if let (Some((t0, f0)), Some((_, f1))) = (prev, next) {
             if (f0 < T::ZERO) != (f1 < T::ZERO) {
-                // Illinois: regula falsi halving the stale end's value.
-                let (mut lo, mut flo, mut hi, mut fhi) = (t0, f0, t1, f1);
-                let mut x_cos = c1;
-                let mut side = 0i8;
-                for _ in 0..ZERO_ITERATIONS {
-                    if hi - lo <= T::from_f64(1e-13) {
-                        break;
-                    }
-                    let mut x = lo + (hi - lo) * (flo / (flo - fhi));
-                    if !(x > lo && x < hi) {
-                        x = (lo + hi) * T::HALF;
-                    }
-                    let (fx, cx) = eval(x);
-                    let Some(fx) = fx else { break };
-                    x_cos = cx;
-                    if (fx < T::ZERO) == (flo < T::ZERO) {
-                        lo = x;
-                        flo = fx;
-                        if side == -1 {
-                            fhi *= T::HALF;
-                        }
-                        side = -1;
-                    } else {
-                        hi = x;
-                        fhi = fx;
-                        if side == 1 {
-                            flo *= T::HALF;
-                        }
-                        side = 1;
-                    }
-                    if fx == T::ZERO {
-                        break;
-                    }
+                let probe = |x: T| {
+                    let (s, c) = M::sin_cos(x);
+                    Ok::<_, ()>(match h(x, s, c) {
+                        Some(v) => Probe::Value(v),
+                        None => Probe::Stop,
+                    })
+                };
+                if let Ok((lo, hi)) = illinois(
+                    (t0, t1, f0, f1),
+                    |_, _| T::from_f64(1e-13),
+                    ZERO_ITERATIONS,
+                    probe,
+                ) {
+                    found(a * M::sin_cos((lo + hi) * T::HALF).1);
                 }
-                found(a * x_cos);
             }
         }
         prev = next;
