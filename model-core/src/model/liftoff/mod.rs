@@ -431,10 +431,11 @@ pub fn mu_over_mu0<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<T, LiftOf
         (d.mirrored(), -v, -T::ONE)
     };
     let window = Window::of::<M>(T::ONE, drive.a);
-    if v >= forward_critical::<T, M>(&drive, &window) {
+    let shape = Shape::of::<M>(&drive, v);
+    if v >= shape.forward_critical(&window) {
         return Ok(sign);
     }
-    Ok(sign * ContactWindow::new::<M>(&drive, T::ONE, v, window).mean_stretch::<M>(None)?)
+    Ok(sign * ContactWindow::on(&shape, T::ONE, window).mean_stretch::<M>(None)?)
 }
 
 /// `∫ s dθ` over the contact window of the band `w = d − a cos θ`,
@@ -477,7 +478,8 @@ pub fn window_arcs<T: Float, M: Math<T>>(
     };
     let window = Window::of::<M>(T::ONE, drive.a);
     let mut arcs: Vec<Arc<T>, MAX_ARCS> = Vec::new();
-    if v >= forward_critical::<T, M>(&drive, &window) {
+    let shape = Shape::of::<M>(&drive, v);
+    if v >= shape.forward_critical(&window) {
         let kind = if sign > T::ZERO {
             ArcKind::SlipForward
         } else {
@@ -501,7 +503,7 @@ pub fn window_arcs<T: Float, M: Math<T>>(
         let _ = arcs.push(Arc { kind, ..arc });
     };
     let m =
-        ContactWindow::new::<M>(&drive, T::ONE, v, window).mean_stretch::<M>(Some(&mut push))?;
+        ContactWindow::on(&shape, T::ONE, window).mean_stretch::<M>(Some(&mut push))?;
     Ok((sign * m, arcs))
 }
 
@@ -524,7 +526,8 @@ pub(crate) fn banded_window_arcs<T: Float, M: Math<T>>(
     };
     let window = Window::of::<M>(offset, drive.a);
     let mut arcs: Vec<Arc<T>, MAX_ARCS> = Vec::new();
-    if v >= forward_critical::<T, M>(&drive, &window) {
+    let shape = Shape::of::<M>(&drive, v);
+    if v >= shape.forward_critical(&window) {
         let kind = if mirrored {
             ArcKind::SlipBackward
         } else {
@@ -545,7 +548,7 @@ pub(crate) fn banded_window_arcs<T: Float, M: Math<T>>(
         };
         let _ = arcs.push(Arc { kind, ..arc });
     };
-    ContactWindow::new::<M>(&drive, offset, v, window).mean_stretch::<M>(Some(&mut push))?;
+    ContactWindow::on(&shape, offset, window).mean_stretch::<M>(Some(&mut push))?;
     Ok(arcs)
 }
 
@@ -629,10 +632,6 @@ struct ContactWindow<T> {
 }
 
 impl<T: Float> ContactWindow<T> {
-    fn new<M: Math<T>>(d: &Drive<T>, offset: T, v: T, window: Window<T>) -> Self {
-        Self::on(&Shape::of::<M>(d, v), offset, window)
-    }
-
     /// The window of band offset `offset` for a drive's [`Shape`].
     fn on(shape: &Shape<T>, offset: T, window: Window<T>) -> Self {
         let d = &shape.drive;
