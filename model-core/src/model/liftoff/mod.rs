@@ -502,8 +502,7 @@ pub fn window_arcs<T: Float, M: Math<T>>(
         };
         let _ = arcs.push(Arc { kind, ..arc });
     };
-    let m =
-        ContactWindow::on(&shape, T::ONE, window).mean_stretch::<M>(Some(&mut push))?;
+    let m = ContactWindow::on(&shape, T::ONE, window).mean_stretch::<M>(Some(&mut push))?;
     Ok((sign * m, arcs))
 }
 
