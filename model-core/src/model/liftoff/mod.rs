@@ -471,45 +471,13 @@ pub fn window_arcs<T: Float, M: Math<T>>(
 ) -> Result<(T, Vec<Arc<T>, MAX_ARCS>), LiftOffError> {
     check_drive(d)?;
     check_velocity(v)?;
-    let (drive, v, sign) = if v >= T::ZERO {
-        (*d, v, T::ONE)
-    } else {
-        (d.mirrored(), -v, -T::ONE)
-    };
-    let window = Window::of::<M>(T::ONE, drive.a);
-    let mut arcs: Vec<Arc<T>, MAX_ARCS> = Vec::new();
-    let shape = Shape::of::<M>(&drive, v);
-    if v >= shape.forward_critical(&window) {
-        let kind = if sign > T::ZERO {
-            ArcKind::SlipForward
-        } else {
-            ArcKind::SlipBackward
-        };
-        let _ = arcs.push(Arc {
-            kind,
-            start: window.landing.at,
-            end: window.lift_off.at,
-        });
-        return Ok((sign, arcs));
-    }
-    // Arcs of the mirrored problem slip the other way.
-    let mirrored = sign < T::ZERO;
-    let mut push = |arc: Arc<T>| {
-        let kind = match (arc.kind, mirrored) {
-            (ArcKind::SlipForward, true) => ArcKind::SlipBackward,
-            (ArcKind::SlipBackward, true) => ArcKind::SlipForward,
-            (kind, _) => kind,
-        };
-        let _ = arcs.push(Arc { kind, ..arc });
-    };
-    let m = ContactWindow::on(&shape, T::ONE, window).mean_stretch::<M>(Some(&mut push))?;
-    Ok((sign * m, arcs))
+    banded_window_arcs::<T, M>(d, T::ONE, v)
 }
 
-/// The arcs of the window of the band `w = d − a cos θ`, `|d| ≤ a` (as
-/// [`window_arcs`], which is the case `d = 1` with the drive checked; here
-/// the caller validated the drive): absolute phases, kinds in the original
-/// drive's sense.
+/// The arcs of the window of the band `w = d − a cos θ`, `|d| ≤ a`, with
+/// `∫s/∫w` over the window (signed; [`window_arcs`] is the case `d = 1`
+/// with the drive checked, here the caller validated it): absolute phases,
+/// kinds in the original drive's sense.
 ///
 /// # Errors
 /// [`LiftOffError::Inconsistent`].
@@ -517,12 +485,13 @@ pub(crate) fn banded_window_arcs<T: Float, M: Math<T>>(
     d: &Drive<T>,
     offset: T,
     v: T,
-) -> Result<Vec<Arc<T>, MAX_ARCS>, LiftOffError> {
+) -> Result<(T, Vec<Arc<T>, MAX_ARCS>), LiftOffError> {
     let (drive, v, mirrored) = if v >= T::ZERO {
         (*d, v, false)
     } else {
         (d.mirrored(), -v, true)
     };
+    let sign = if mirrored { -T::ONE } else { T::ONE };
     let window = Window::of::<M>(offset, drive.a);
     let mut arcs: Vec<Arc<T>, MAX_ARCS> = Vec::new();
     let shape = Shape::of::<M>(&drive, v);
@@ -537,8 +506,9 @@ pub(crate) fn banded_window_arcs<T: Float, M: Math<T>>(
             start: window.landing.at,
             end: window.lift_off.at,
         });
-        return Ok(arcs);
+        return Ok((sign, arcs));
     }
+    // Arcs of the mirrored problem slip the other way.
     let mut push = |arc: Arc<T>| {
         let kind = match (arc.kind, mirrored) {
             (ArcKind::SlipForward, true) => ArcKind::SlipBackward,
@@ -547,8 +517,8 @@ pub(crate) fn banded_window_arcs<T: Float, M: Math<T>>(
         };
         let _ = arcs.push(Arc { kind, ..arc });
     };
-    ContactWindow::on(&shape, offset, window).mean_stretch::<M>(Some(&mut push))?;
-    Ok(arcs)
+    let m = ContactWindow::on(&shape, offset, window).mean_stretch::<M>(Some(&mut push))?;
+    Ok((sign * m, arcs))
 }
 
 /// The sequence of arc kinds of the window of the band `w = d − a cos θ`

@@ -70,7 +70,7 @@ fn spring_powers<T: Float, M: Math<T>>(d: &Drive<T>, dd: T, v: T) -> Result<[T; 
     if normal::mean_band::<T, M>(dd, a) <= floor {
         return Ok([T::ZERO; 3]);
     }
-    let arcs = liftoff::banded_window_arcs::<T, M>(d, dd, v).map_err(|e| match e {
+    let (_, arcs) = liftoff::banded_window_arcs::<T, M>(d, dd, v).map_err(|e| match e {
         LiftOffError::IllConditioned => MdrError::IllConditioned,
         _ => MdrError::Inconsistent,
     })?;
