@@ -970,3 +970,169 @@ fn estimates_track_a_drifting_mu0_of_the_plant() {
         0.3 + D * wall
     );
 }
+
+/// What a host that reads everything receives after writing `n` `GetDrive`
+/// requests (seq 1…n) in one write, far beyond the 2048-byte rule, with a
+/// stream of estimates running.
+struct Flood {
+    /// Distinct seqs answered with `Drive`.
+    answered: std::collections::BTreeSet<u32>,
+    /// `Error(BadCrc | Malformed | Oversize)` answers (broken requests).
+    broken: usize,
+    /// Telemetry frames' seqs, in arrival order.
+    telemetry_seqs: Vec<u32>,
+    /// The last `RxOverflow(total)` announced.
+    announced: Option<u32>,
+    /// `Status.rx_overflows` in the answer to the marker sent after the flood.
+    dropped: Option<u32>,
+}
+
+fn flood(p: &mut Box<dyn SerialPort>, n: u32, read_after: Duration) -> Flood {
+    use model_core::protocol::{decode, Deframed, Deframer, Telemetry};
+    let bytes: Vec<u8> = (1..=n)
+        .flat_map(|seq| common::req(seq, Request::GetDrive))
+        .collect();
+    let mut writer = p.try_clone().unwrap();
+    let w = std::thread::spawn(move || writer.write_all(&bytes).unwrap());
+    std::thread::sleep(read_after);
+    let mut f = Flood {
+        answered: Default::default(),
+        broken: 0,
+        telemetry_seqs: Vec::new(),
+        announced: None,
+        dropped: None,
+    };
+    let mut df = Deframer::default();
+    let mut buf = [0u8; 4096];
+    let start = Instant::now();
+    // Once the writer is done: a 0x00 (ends a half-received frame) and a
+    // `GetStatus` marker (seq > n), again every 2 s until one is answered.
+    // The device serves in order, so the marker's answer comes after every
+    // answer the flood gets, with the count of bytes dropped up to then.
+    let mut marker = n + 1;
+    let mut sent_at: Option<Instant> = None;
+    while f.dropped.is_none() {
+        assert!(start.elapsed() < Duration::from_secs(60), "flood: no end");
+        if w.is_finished() && sent_at.is_none_or(|t| t.elapsed() > Duration::from_secs(2)) {
+            marker += 1;
+            let mut m = vec![0u8];
+            m.extend(common::req(marker, Request::GetStatus));
+            p.write_all(&m).unwrap();
+            sent_at = Some(Instant::now());
+        }
+        let k = p.read(&mut buf).unwrap_or(0);
+        for &b in &buf[..k] {
+            let Deframed::Frame(fr) = df.push(b, 0) else {
+                continue;
+            };
+            let fr = decode(fr).expect("every frame the device sends is valid");
+            match fr.body {
+                Body::Response(Response::Drive { .. }) => {
+                    assert!(f.answered.insert(fr.seq), "seq {} answered twice", fr.seq);
+                }
+                Body::Response(Response::Error(
+                    WireError::BadCrc | WireError::Malformed | WireError::Oversize,
+                )) => f.broken += 1,
+                // The stream's `Ok` (seq 100 000), sent before the flood.
+                Body::Response(Response::Ok) if fr.seq == 100_000 => {}
+                Body::Response(Response::Status(st)) if fr.seq > n => {
+                    f.dropped = Some(st.rx_overflows);
+                }
+                Body::Response(r) => panic!("unexpected answer {r:?}"),
+                Body::Telemetry(t) => {
+                    f.telemetry_seqs.push(fr.seq);
+                    if let Telemetry::RxOverflow(total) = t {
+                        f.announced = Some(total);
+                    }
+                }
+                Body::Request(r) => panic!("a request from the device: {r:?}"),
+            }
+        }
+    }
+    w.join().unwrap();
+    f
+}
+
+/// Writes 3000 `GetDrive` (36 000 bytes) in one write with a stream running,
+/// starts reading after `read_after`, and checks the accounting of
+/// docs/protocol.md, "Pipelining and receive overflow": beyond the rule the
+/// only loss allowed is of received bytes, counted in `Status.rx_overflows`
+/// and announced by `RxOverflow`; every answer the device owes is sent (a
+/// request leaves the queue only when its answer fits), and telemetry is
+/// never dropped (consecutive seqs). Returns (answered, broken, dropped).
+fn flood_is_answered_or_counted(read_after: Duration) -> (u64, usize, u64) {
+    let s = sim();
+    ok_json(&s, DRIVE);
+    ok_json(&s, &["start"]);
+    let mut p = raw_port(&s);
+    // A stream of 20-period estimates (1 ms of device time each) meanwhile.
+    p.write_all(&common::req(
+        100_000,
+        Request::Stream {
+            on: true,
+            periods: 20,
+        },
+    ))
+    .unwrap();
+    let n = 3000; // 3000 × 12 bytes = 36 000 bytes in one write
+    let f = flood(&mut p, n, read_after);
+    drop(p);
+    let dropped = u64::from(f.dropped.unwrap());
+    let answered = f.answered.len() as u64;
+    // Every request that did not get its `Drive` answer lost ≥ 1 byte, and
+    // each dropped byte breaks at most one request: unanswered ≤ dropped.
+    // Broken requests are answered with an error or merged with their
+    // neighbour (a dropped delimiter): answered + broken ≤ n.
+    assert!(
+        u64::from(n) - answered <= dropped,
+        "{answered} of {n} answered, {} broken, {dropped} bytes counted",
+        f.broken
+    );
+    assert!(answered + f.broken as u64 <= u64::from(n));
+    assert!(f.answered.iter().all(|&q| (1..=n).contains(&q)));
+    if dropped == 0 {
+        assert_eq!((answered, f.broken), (u64::from(n), 0));
+    } else {
+        // Announced before the marker's answer (at the device's next poll
+        // after the drop; the marker is served after that poll).
+        assert_eq!(f.announced, Some(dropped as u32), "the loss is announced");
+    }
+    // Telemetry: nothing skipped (its seq counts every frame sent).
+    assert!(
+        f.telemetry_seqs.len() > 2,
+        "the stream ran: {:?}",
+        f.telemetry_seqs
+    );
+    for w in f.telemetry_seqs.windows(2) {
+        assert_eq!(w[1], w[0] + 1, "telemetry skipped: {:?}", f.telemetry_seqs);
+    }
+    let mut runs = Vec::new();
+    let mut prev = 0;
+    for &q in &f.answered {
+        if q != prev + 1 {
+            runs.push((prev + 1, q - 1));
+        }
+        prev = q;
+    }
+    eprintln!(
+        "flood: {answered} of {n} answered, {} broken, {dropped} bytes dropped and counted; unanswered runs {runs:?}",
+        f.broken
+    );
+    (answered, f.broken, dropped)
+}
+
+#[test]
+fn requests_beyond_the_pipelining_rule_are_answered_when_the_host_reads() {
+    // A host that reads while it writes: the device keeps up, nothing lost.
+    let (answered, broken, dropped) = flood_is_answered_or_counted(Duration::ZERO);
+    assert_eq!((answered, broken, dropped), (3000, 0, 0));
+}
+
+#[test]
+fn requests_beyond_the_pipelining_rule_are_counted_when_the_host_does_not_read() {
+    // A host that reads only after 1 s: the transmit ring fills, requests
+    // wait in the 2048-byte receive queue, and the rest of the 36 000 bytes
+    // are dropped — each one counted and announced.
+    let (answered, _, dropped) = flood_is_answered_or_counted(Duration::from_secs(1));
+    assert!(dropped > 0 && answered < 3000, "{answered} {dropped}");
+}

@@ -234,6 +234,7 @@ pub fn fault_names(bits: u32) -> Vec<String> {
         (DAC_UNDERRUN, "dac_underrun"),
         (WATCHDOG_RESET, "watchdog_reset"),
         (EXTERNAL, "external"),
+        (ADC_OVERRUN, "adc_overrun"),
     ];
     let mut v: Vec<String> = known
         .iter()

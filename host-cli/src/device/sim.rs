@@ -23,6 +23,7 @@
 
 use std::f64::consts::TAU;
 
+use model_core::board::link::{self, RxQueue, TxRing};
 use model_core::board::plant::{HalfDrive, Noise, Plant, SampleConditions};
 use model_core::dds::SineTable;
 use model_core::device::{Contact, Device, DeviceConfig, DriveSetting};
@@ -255,6 +256,38 @@ pub struct VirtualDevice {
     fill_lead: usize,
     /// Filled half-buffers not yet simulated, with their half index.
     filled: std::collections::VecDeque<(HalfDrive, usize)>,
+    /// Received bytes not yet served (the firmware's USART queue).
+    rx: Box<RxQueue<{ link::RX_CAPACITY }>>,
+    /// Answers and telemetry not yet on the wire (the firmware's ring).
+    tx: Box<TxRing<{ link::TX_CAPACITY }>>,
+}
+
+/// The virtual device's queues as the firmware's loop sees them.
+struct QueueIo<'a> {
+    rx: &'a mut RxQueue<{ link::RX_CAPACITY }>,
+    tx: &'a mut TxRing<{ link::TX_CAPACITY }>,
+}
+
+impl link::LinkIo for QueueIo<'_> {
+    fn pop_rx(&mut self) -> Option<u8> {
+        self.rx.pop()
+    }
+
+    fn tx_free(&mut self) -> usize {
+        self.tx.free()
+    }
+
+    fn send(&mut self, frame: &[u8]) {
+        // `link::serve` checked the room first: this cannot fail.
+        let _ = self.tx.push_frame(frame);
+    }
+}
+
+/// Moves everything waiting in `tx` into `out`.
+fn drain_all(tx: &mut TxRing<{ link::TX_CAPACITY }>, out: &mut Vec<u8>) {
+    while let Some(b) = tx.pop() {
+        out.push(b);
+    }
 }
 
 impl VirtualDevice {
@@ -284,6 +317,8 @@ impl VirtualDevice {
             samples: 0,
             fill_lead: 0,
             filled: std::collections::VecDeque::new(),
+            rx: Box::default(),
+            tx: Box::default(),
         };
         let _ = v.dev.set_drive(DriveSetting {
             freq_hz: 40_000.0,
@@ -321,14 +356,60 @@ impl VirtualDevice {
         }
     }
 
-    /// Feeds received bytes (arriving now, in device time); returns the
-    /// bytes to send back.
+    /// Feeds received bytes (arriving now, in device time) and serves them
+    /// as a host that reads at once would see it: the bytes enter the
+    /// receive queue in pieces that fit, each followed by the firmware's
+    /// loop; returns the answers and telemetry (the whole transmit ring).
+    /// Nothing is dropped (the in-process link has no wire to overrun).
     pub fn receive(&mut self, bytes: &[u8]) -> Vec<u8> {
         let mut out = Vec::new();
-        let now_us = self.now_us();
-        self.server
-            .receive(&mut self.dev, bytes, now_us, |b| out.extend_from_slice(b));
+        for piece in bytes.chunks(link::RX_CAPACITY) {
+            self.push_rx(piece);
+            loop {
+                self.serve_link();
+                drain_all(&mut self.tx, &mut out);
+                if self.rx.is_empty() {
+                    break;
+                }
+            }
+        }
         out
+    }
+
+    /// Bytes arriving from the wire into the receive queue, as the USART
+    /// interrupt puts them there: a byte that does not fit is dropped and
+    /// counted in `Status.rx_overflows` (announced by `RxOverflow`
+    /// telemetry). Returns the number dropped.
+    pub fn push_rx(&mut self, bytes: &[u8]) -> usize {
+        let dropped = bytes.iter().filter(|&&b| self.rx.push(b).is_err()).count();
+        if dropped > 0 {
+            self.dev
+                .count_rx_overflow(u32::try_from(dropped).unwrap_or(u32::MAX));
+        }
+        dropped
+    }
+
+    /// The firmware's main loop ([`link::serve`]) until it has no work: a
+    /// request leaves the receive queue only while the transmit ring has
+    /// room for its answer, and telemetry is sent only while it has room
+    /// for [`link::POLL_FRAMES`] frames.
+    pub fn serve_link(&mut self) {
+        let now_us = self.now_us();
+        let mut io = QueueIo {
+            rx: &mut self.rx,
+            tx: &mut self.tx,
+        };
+        loop {
+            link::serve(&mut self.server, &mut self.dev, &mut io, now_us);
+            if !link::has_work(io.rx.len(), io.tx.free()) {
+                break;
+            }
+        }
+    }
+
+    /// The transmit ring (answers and telemetry waiting for the wire).
+    pub fn tx(&mut self) -> &mut TxRing<{ link::TX_CAPACITY }> {
+        &mut self.tx
     }
 
     /// Device time, µs since the virtual device was made (wrapping): the
@@ -337,35 +418,44 @@ impl VirtualDevice {
         (self.samples as f64 * 1e6 / self.sample_rate()) as u64 as u32
     }
 
-    /// Advances the simulation by whole half-buffers covering `samples`;
-    /// returns telemetry bytes produced meanwhile.
+    /// Advances the simulation by whole half-buffers covering `samples`,
+    /// running the firmware's loop after each; returns the bytes sent
+    /// meanwhile (the transmit ring drained after each half: a host that
+    /// reads at once).
     pub fn advance(&mut self, samples: usize) -> Vec<u8> {
         let mut out = Vec::new();
+        self.advance_with(samples, |tx| drain_all(tx, &mut out));
+        out
+    }
+
+    /// [`VirtualDevice::advance`] with the transmit ring handed to `drain`
+    /// after each half, which takes what its wire accepts (the rest waits).
+    pub fn advance_with(
+        &mut self,
+        samples: usize,
+        mut drain: impl FnMut(&mut TxRing<{ link::TX_CAPACITY }>),
+    ) {
         let halves = samples.div_ceil(HALF).max(1);
         for _ in 0..halves {
             self.step_half();
-            self.server
-                .poll(&mut self.dev, |b| out.extend_from_slice(b));
+            self.serve_link();
+            drain(&mut self.tx);
         }
-        out
     }
 
-    /// Drive stopped and settled, no measurement (nor stream): the plant's
-    /// samples reach nothing, so a server loop may [`VirtualDevice::skip`]
-    /// instead of simulating them.
+    /// Drive stopped and settled, no measurement (nor stream), nothing
+    /// waiting in the link: the plant's samples reach nothing, so a server
+    /// loop may [`VirtualDevice::skip`] instead of simulating them.
     pub fn quiescent(&self) -> bool {
         let s = self.dev.status();
-        !s.running && s.settled && !s.measuring
+        !s.running && s.settled && !s.measuring && self.rx.is_empty()
     }
 
     /// Moves the device clock on by `samples` without simulating the plant
-    /// (for a [`VirtualDevice::quiescent`] device); returns the telemetry due.
-    pub fn skip(&mut self, samples: u64) -> Vec<u8> {
+    /// (for a [`VirtualDevice::quiescent`] device) and runs the loop once.
+    pub fn skip(&mut self, samples: u64) {
         self.samples += samples;
-        let mut out = Vec::new();
-        self.server
-            .poll(&mut self.dev, |b| out.extend_from_slice(b));
-        out
+        self.serve_link();
     }
 
     /// How many half-buffers the DAC fills run ahead of the output: 0 (the

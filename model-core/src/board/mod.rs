@@ -4,10 +4,13 @@
 //! * [`control`] — the closed loop: μ held at a setpoint by Δu_z (feedforward
 //!   from the f32 inverse model, integral trim, anti-windup, rate limit, lift-off guard);
 //! * [`dds`] — the two phase-locked DAC waveforms (direct digital synthesis);
+//! * [`dma`] — which half of a circular DMA buffer an interrupt hands over,
+//!   and whether its handler was late;
 //! * [`estimator`] — μ from sampled forces (eq. 20) with lock-in harmonics;
 //! * [`device`] — drive settings in physical units, the lift-off guard,
-//!   start/stop ramps, faults, measurement and the model's prediction
-//!   (`config`, `drive`, `measure`, `predict`, `error`);
+//!   start/stop ramps, faults with one path into the safe state, measurement
+//!   and the model's prediction (`config`, `drive`, `fault`, `measure`,
+//!   `predict`, `error`);
 //! * [`protocol`] — the wire format shared by firmware and host
 //!   (`messages`: the wire types and the request → response table;
 //!   `framing`: CRC, COBS, deframing);
@@ -24,6 +27,7 @@
 pub mod control;
 pub mod dds;
 pub mod device;
+pub mod dma;
 pub mod estimator;
 pub mod link;
 pub mod plant;
