@@ -396,12 +396,13 @@ fn adc_dma(dp: &pac::Peripherals) {
 /// SYSCFG_EXTICR1, §12.3 EXTI). Returns whether the input is already active.
 #[cfg(not(feature = "qemu"))]
 fn fault_input(dp: &pac::Peripherals) -> bool {
+    // Clocks: GPIOB (AHB1ENR bit 1), SYSCFG (APB2ENR bit 14).
     dp.RCC
         .ahb1enr()
-        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 1)) }); // GPIOBEN
+        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 1)) });
     dp.RCC
         .apb2enr()
-        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 14)) }); // SYSCFGEN
+        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 14)) });
     // PB0: input (MODER = 00), pull-up (PUPDR = 01).
     dp.GPIOB
         .moder()
@@ -417,9 +418,7 @@ fn fault_input(dp: &pac::Peripherals) -> bool {
         .ftsr()
         .modify(|r, w| unsafe { w.bits(r.bits() | 1) });
     dp.EXTI.pr().write(|w| unsafe { w.bits(1) });
-    dp.EXTI
-        .imr()
-        .modify(|r, w| unsafe { w.bits(r.bits() | 1) });
+    dp.EXTI.imr().modify(|r, w| unsafe { w.bits(r.bits() | 1) });
     // The pull-up needs a few cycles before the pin reads high.
     cortex_m::asm::delay(100);
     dp.GPIOB.idr().read().bits() & 1 == 0
@@ -551,7 +550,11 @@ fn DMA2_STREAM0() {
     // buffer the DMA writes into); each word read with `read_volatile`, as
     // memory another bus master owns. The DMA writes the other half for the
     // next 128 µs; the copy takes well under 1 µs.
-    let first = unsafe { core::ptr::addr_of!(ADC_BUF).cast::<u32>().add(ev.half * HALF) };
+    let first = unsafe {
+        core::ptr::addr_of!(ADC_BUF)
+            .cast::<u32>()
+            .add(ev.half * HALF)
+    };
     for (k, s) in samples.iter_mut().enumerate() {
         let w = unsafe { first.add(k).read_volatile() };
         // CDR: ADC1 (f_z) in bits 0–15, ADC2 (f_x) in bits 16–31.
