@@ -18,6 +18,9 @@
 //!   (idempotent `Measure`, the stream, `Reset`);
 //! * [`link`] — the firmware's serial link: queues, one loop pass, sleeping
 //!   without a lost wake-up;
+//! * [`resonator`] — one transducer mode (f_r, Q, static gain) advanced by
+//!   its exact zero-order-hold update (the building block of the resonant
+//!   plant);
 //! * [`plant`] — the simulated analog side (transducers, contact, force
 //!   sensors) of the host's virtual device and of the firmware under QEMU.
 //!
@@ -32,4 +35,5 @@ pub mod estimator;
 pub mod link;
 pub mod plant;
 pub mod protocol;
+pub mod resonator;
 pub mod server;
