@@ -1,4 +1,4 @@
-//! Stability where methods fail (issue 6 §2): every method returns a number
+//! Stability where methods fail: every method returns a number
 //! within its stated error bound or an explicit failure — never a silently
 //! wrong number. One test per failure class, then randomised agreement tests
 //! over wide parameter ranges where both methods claim success.
