@@ -54,8 +54,8 @@ fn closed_loop_over_a_pty() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("busy"));
     // Settled after a second of device time (the virtual device runs in real
-    // time; at most one update per 3 half-buffers = 384 µs): within 2 % of the setpoint (the issue's
-    // criterion; the estimate's own scatter at ±1 count ADC noise is ~1e-4).
+    // time; at most one update per 3 half-buffers = 384 µs): within 2 % of the setpoint (the
+    // settling criterion; the estimate's own scatter at ±1 count ADC noise is ~1e-4).
     std::thread::sleep(Duration::from_millis(1000));
     let st = ok_json(&s, &["control", "status"]);
     assert_eq!(st["on"], true);
@@ -165,7 +165,7 @@ fn device_tune_maximize_applies_the_phase_and_takes_json_where_a_user_puts_it() 
 /// numbers are reproducible): on the board's pipeline (fill lead 2,
 /// 64-sample half-buffers) with the plant 20 % off the model, lagging 2
 /// periods, drifting and noisy, every event settles to the 2 % band, the
-/// setpoint step within the 2 ms without overshooting the band, and
+/// setpoint step within 2 ms without overshooting the band, and
 /// no command exceeds the lift-off limit.
 #[test]
 fn control_bench_settles_within_2_ms_on_the_board_pipeline() {

@@ -1,4 +1,4 @@
-//! `fricctl motion` against independent computations (issue 14 §4): the
+//! `fricctl motion` against independent computations: the
 //! quasi-static drift by quadrature of μ⁻¹ (no time integrator), the
 //! convergence of homogenised and resolved as ω/Ω grows (rate fitted and
 //! asserted), zero drift of a symmetric law, mirror symmetry, the ratchet's

@@ -253,7 +253,7 @@ fn exact_solver_mu_fast_f32_matches_f64() {
     // 20 000 scenes with a ∈ [0, 0.99), b ∈ [0, 5) (weighted to small b; the
     // README's and the board's scenes have b ≈ 0.25–0.35), φ ∈ [−π, π),
     // v ∈ (−1.1, 1.1)·v_c. Each must meet the solver's bound
-    // (1e-6 + 3e-7)·(1 + b) ≤ 7.8e-6 < 1e-5 (the target), checked per
+    // (1e-6 + 3e-7)·(1 + b) ≤ 7.8e-6 < 1e-5 (the accuracy asked of the f32 build), checked per
     // scene in `mu_errors`.
     let (w_fast, r_fast, n_ss) = mu_errors::<FastF32>(20_000, 5.0);
     let (w_libm, r_libm, _) = mu_errors::<Libm>(20_000, 5.0);
