@@ -14,6 +14,10 @@
 //! - transducers whose displacement amplitudes Δu_z, Δu_x follow the DAC's
 //!   with a first-order lag of time constant τ = `lag_periods`/f
 //!   (dA/dt = (A_DAC − A)/τ, advanced exactly per ADC sample);
+//! - or, with any of the resonant flags ([`super::transducers`]), resonant
+//!   transducers: second-order modes (f_r, Q, static gain) driven by the DAC
+//!   voltages, with resonance drift, self-heating, cross-talk and the
+//!   contact's load ([`model_core::board::plant::Resonant`]);
 //! - a drifting friction coefficient μ₀(t) = μ₀ + `mu0_drift`·t (t = device
 //!   time, s; μ₀(t) stops at 0 rather than change sign);
 //! - a stage velocity that is constant (`v0`) or follows a piecewise-linear
@@ -87,6 +91,8 @@ pub struct PlantOptions {
     pub mu0_drift: f64,
     /// Stage velocity profile (t s, v₀ m/s), piecewise linear, t strictly increasing.
     pub v0_profile: Option<Vec<(f64, f64)>>,
+    /// Resonant transducers (`None`: ideal ones, with `lag_periods`).
+    pub resonant: Option<model_core::board::plant::ResonantOptions<f64>>,
 }
 
 impl PlantOptions {
@@ -136,6 +142,9 @@ pub struct PlantArgs {
     /// Virtual plant: stage velocity profile, CSV `t_s,v0_m_s` (header line, t strictly increasing), piecewise linear in device time, held outside; replaces the constant velocity
     #[arg(long, value_name = "FILE")]
     pub v0_profile: Option<std::path::PathBuf>,
+    /// The transducers: ideal or resonant.
+    #[command(flatten)]
+    pub transducers: super::transducers::TransducerArgs,
 }
 
 impl PlantArgs {
@@ -185,6 +194,15 @@ impl PlantArgs {
             Some(p) => Some(read_profile(p)?),
             None => None,
         };
+        let cfg = config();
+        let resonant = self
+            .transducers
+            .options((cfg.dac_z.metres_per_code, cfg.dac_x.metres_per_code))?;
+        if resonant.is_some() && self.plant_lag_periods != 0.0 {
+            return Err(CliError::usage(
+                "--plant-lag-periods: is for ideal transducers; a resonant one has its own time constant Q/(pi f_r)",
+            ));
+        }
         Ok(PlantOptions {
             v0,
             noise_counts: noise,
@@ -195,6 +213,7 @@ impl PlantArgs {
             lag_periods: self.plant_lag_periods,
             mu0_drift: self.plant_mu0_drift,
             v0_profile,
+            resonant,
         })
     }
 }
@@ -238,6 +257,19 @@ pub fn read_profile(path: &std::path::Path) -> crate::error::CliResult<Vec<(f64,
         return Err(bad("no rows (expected a header and rows t_s,v0_m_s)".into()));
     }
     Ok(out)
+}
+
+/// The plant of `opts`: its contact, and resonant transducers updated with
+/// the plant's sub-step (`SUB` per sample).
+fn plant_of(opts: &PlantOptions, cfg: &DeviceConfig) -> Plant<f64> {
+    let mut p = Plant::new(opts.mu0, opts.kz, opts.kx);
+    if let Some(r) = opts.resonant {
+        let h = 1.0 / (cfg.sample_rate_hz * f64::from(SUB));
+        // The options were checked (`TransducerArgs::options`); a bad set
+        // from code leaves the transducers ideal rather than panic.
+        p.resonant = model_core::board::plant::Resonant::new(r, h).ok();
+    }
+    p
 }
 
 /// A virtual device with its plant.
@@ -309,7 +341,7 @@ impl VirtualDevice {
         let mut v = VirtualDevice {
             dev,
             server: Server::new(info(&cfg)),
-            plant: Plant::new(opts.mu0, opts.kz, opts.kx),
+            plant: plant_of(&opts, &cfg),
             dac: vec![0; HALF],
             half: 0,
             rng: Noise::new(0x9E37_79B9_7F4A_7C15),
