@@ -18,6 +18,8 @@
 //!   (idempotent `Measure`, the stream, `Reset`);
 //! * [`link`] — the firmware's serial link: queues, one loop pass, sleeping
 //!   without a lost wake-up;
+//! * [`lockin`] — amplitude and phase of a sampled signal on the DDS's own
+//!   reference, exact over any window (a least-squares fit, no 2f leak);
 //! * [`resonator`] — one transducer mode (f_r, Q, static gain) advanced by
 //!   its exact zero-order-hold update (the building block of the resonant
 //!   plant);
@@ -33,6 +35,7 @@ pub mod device;
 pub mod dma;
 pub mod estimator;
 pub mod link;
+pub mod lockin;
 pub mod plant;
 pub mod protocol;
 pub mod resonator;
