@@ -242,7 +242,7 @@ fn the_convention_is_the_resonators_phase_lag() {
 /// outside it by chance with probability ≈ 0.3 %; over the 36 rates checked
 /// here, a false failure for fresh seeds has probability ≲ 10 %. The seeds
 /// are fixed, so the test is deterministic; a systematic under-coverage
-/// (e.g. intervals 20 % too narrow: coverage 0.90) would fail it.
+/// (e.g. intervals 20 % too narrow: coverage 0.88) would fail it.
 fn coverage_tolerance(n: usize) -> f64 {
     3.0 * (0.95 * 0.05 / n as f64).sqrt()
 }
@@ -610,4 +610,51 @@ fn per_point_sigma_weights_the_fit_and_its_intervals_cover() {
     for r in rate {
         assert!((r - 0.95).abs() <= tol, "{rate:?}");
     }
+}
+
+#[test]
+fn a_resonance_drifting_during_the_sweep_biases_q_and_the_residual_cannot_tell() {
+    // A quasi-static record whose f_r moves linearly by `drift` Hz while the
+    // sweep crosses the span S: the detuning f − f_r(t) runs at
+    // (1 − drift/S) of the sweep's rate, so near resonance the record is
+    // eq. 1 with Q' = Q·(1 − drift/S) (first order), resonance at the
+    // frequency where the sweep met it. The residual stays at the noise: only
+    // a sweep in both directions shows it (the mean of the two Q's cancels
+    // the first-order bias). Shown for the `identify` command's design.
+    let t = CASES[0];
+    let span = F_HI - F_LO;
+    let rec = |drift: f64| -> Vec<Sample> {
+        freqs(F_LO, F_HI, N)
+            .enumerate()
+            .map(|(i, f)| {
+                let now = Truth {
+                    fr: t.fr + drift * (i as f64 / (N - 1) as f64 - 0.5),
+                    ..t
+                };
+                let (re, im) = now.h(f);
+                Sample {
+                    freq_hz: f,
+                    re_m_per_v: re,
+                    im_m_per_v: im,
+                }
+            })
+            .collect()
+    };
+    let mut qs = Vec::new();
+    for drift in [20.0, -20.0] {
+        let fit = fit(&rec(drift), None, &FitConfig::DEFAULT).expect("fits");
+        // Where the sweep met the resonance: f = f_r(t(f)).
+        let k = drift / span;
+        let f_meet = (t.fr - k * (F_LO + 0.5 * span)) / (1.0 - k);
+        let q_pred = t.q * (1.0 - k);
+        println!(
+            "drift {drift:+} Hz over the sweep: Q {:.2} (first order {q_pred:.2}), f_r {:.3} (met at {f_meet:.3}), rel RMS {:.1e}",
+            fit.q.value, fit.resonance_hz.value, fit.rel_rms
+        );
+        assert!((fit.q.value / q_pred - 1.0).abs() < 1e-3);
+        assert!((fit.resonance_hz.value - f_meet).abs() < 0.01 * t.fr / t.q);
+        assert!(fit.rel_rms < 0.01);
+        qs.push(fit.q.value);
+    }
+    assert!((0.5 * (qs[0] + qs[1]) / t.q - 1.0).abs() < 1e-3);
 }

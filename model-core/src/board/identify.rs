@@ -158,6 +158,15 @@
 //!
 //! [`fit_unchecked`] stops before the residual checks (for plotting a refused
 //! fit next to its record).
+//!
+//! # For the caller
+//!
+//! The record must be quasi-static: each point measured after the mode has
+//! settled (several τ = Q/(π f_r), 16 ms at Q = 1000). A resonance that
+//! drifts linearly by `Δ` Hz while the sweep crosses its span S fits eq. 1
+//! just as well (the residual cannot tell) with `Q' ≈ Q·(1 − Δ/S)` (17),
+//! f_r where the sweep met it: a sweep up and one down give `Q(1 ∓ Δ/S)`,
+//! whose mean cancels the first-order bias (`tests/tests/identify.rs`).
 
 // `!(x > 0.0)` is deliberate: it refuses NaN too. Index loops are the
 // clearest form of the 4×4 matrix algebra.
