@@ -807,14 +807,14 @@ fn start(rec: &Record<'_>) -> Result<[f64; 4], FitError> {
         libm::log(mag(k)),
         libm::log(mag(k + 1)),
     );
-    // Divided differences: y = y1 + d1·(x − x1) + d2·(x − x1)(x − x0) … in
-    // Newton form through x0, x1, x2.
+    // Newton form through x0, x1, x2 (divided differences d01, d2):
+    // y = y0 + d01·(x − x0) + d2·(x − x0)(x − x1).
     let d01 = (y1 - y0) / (x1 - x0);
     let d12 = (y2 - y1) / (x2 - x1);
     let d2 = (d12 - d01) / (x2 - x0);
     let (mut f0, mut ln_peak) = (x1, y1);
     if d2 < 0.0 && d2.is_finite() {
-        // y = y0 + d01(x − x0) + d2(x − x0)(x − x1); y' = 0 at the vertex.
+        // y' = d01 + d2·(2x − x0 − x1) = 0 at the vertex.
         let xv = (0.5 * (x0 + x1) - d01 / (2.0 * d2)).clamp(x0, x2);
         let yv = y0 + d01 * (xv - x0) + d2 * (xv - x0) * (xv - x1);
         if xv.is_finite() && yv.is_finite() {
