@@ -23,6 +23,10 @@
 //! * [`resonator`] — one transducer mode (f_r, Q, static gain) advanced by
 //!   its exact zero-order-hold update (the building block of the resonant
 //!   plant);
+//! * [`identify`] — one transducer mode's f_r, Q, static gain and phase lag
+//!   fitted to a stepped-sine record (Levenberg–Marquardt on the complex
+//!   response), with confidence intervals and a verdict refusing a poor fit
+//!   by name (no device code: `fricctl device identify` collects and calls it);
 //! * [`plant`] — the simulated analog side (transducers, contact, force
 //!   sensors) of the host's virtual device and of the firmware under QEMU.
 //!
@@ -34,6 +38,7 @@ pub mod dds;
 pub mod device;
 pub mod dma;
 pub mod estimator;
+pub mod identify;
 pub mod link;
 pub mod lockin;
 pub mod plant;
