@@ -313,3 +313,154 @@ fn resonant_transducers_follow_their_transfer_functions() {
     // In words: φ set 40°, φ of the displacements ≈ −124° (lags 6.4°, 170°).
     assert!((lag_x - lag_z).to_degrees() > 160.0, "{lag_z} {lag_x}");
 }
+
+/// Runs a device and a plant (with resonant transducers if `resonant`) with
+/// the motion pickups until the drive has settled, then `windows` more
+/// lock-in windows; returns the device's measured motion of each window.
+fn measured_motion(
+    resonant: Option<model_core::board::plant::ResonantOptions<f64>>,
+    settle_halves: usize,
+    windows: usize,
+) -> Vec<model_core::device::MeasuredDrive> {
+    use model_core::board::plant::Resonant;
+    let cfg = DeviceConfig::driver_board(1);
+    let table = SineTable::<1024>::libm();
+    let contact = Contact {
+        mu0: MU0 as f32,
+        kz: 1e7,
+        kx: 1e7,
+    };
+    let mut dev = Device::new(cfg, &table, contact).unwrap();
+    dev.set_drive(drive(40f32.to_radians())).unwrap();
+    dev.start().unwrap();
+    let sub = 8;
+    let mut plant = Plant::<f64>::new(MU0, 1e7, 1e7);
+    plant.resonant =
+        resonant.map(|o| Resonant::new(o, 1.0 / (cfg.sample_rate_hz * f64::from(sub))).unwrap());
+    let mut dac = [0u32; HALF_BUFFER];
+    let mut forces = [(0u16, 0u16); HALF_BUFFER];
+    let mut pickups = [(0u16, 0u16); HALF_BUFFER];
+    let (mut half, mut settled_for) = (0, 0usize);
+    let mut out = Vec::new();
+    let mut seen = 0;
+    while out.len() < windows {
+        let d = HalfDrive::fill(&mut dev, half, &mut dac);
+        plant.run_half_with_pickups::<Libm>(
+            &cfg,
+            &d,
+            sub,
+            0.0,
+            |_| SampleConditions {
+                mu0: MU0,
+                v0: 0.004,
+                counts_z: 0.0,
+                counts_x: 0.0,
+            },
+            &mut forces,
+            &mut pickups,
+        );
+        dev.adc_block_with_pickups(half, &forces, &pickups);
+        half ^= 1;
+        if dev.status().settled {
+            settled_for += 1;
+        }
+        if let Some(m) = dev.measured_drive() {
+            if settled_for > settle_halves && m.windows != seen {
+                out.push(m);
+            }
+            seen = m.windows;
+        }
+    }
+    out
+}
+
+/// The worst-case effect of the pickups' rounding (±½ count per sample) on
+/// one window's fit: the least-squares weights of a (and b) over N samples
+/// have Σ|w_i| ≤ √N·‖w‖₂ ≈ √N·√(2/N) = √2, so a and b are off by ≤ √2/2
+/// counts and the amplitude by ≤ 1 count (×1.05 for the weights' departure
+/// from the whole-period value over 2.56 periods); the phase by ≤ that over
+/// the amplitude.
+fn rounding_bound(gain: f32) -> f64 {
+    1.05 * f64::from(gain)
+}
+
+#[test]
+fn pickups_measure_the_ideal_drive() {
+    let cfg = DeviceConfig::driver_board(1);
+    let d = drive(40f32.to_radians());
+    let (bz, bx) = (
+        rounding_bound(cfg.pickup_z.gain),
+        rounding_bound(cfg.pickup_x.gain),
+    );
+    for m in measured_motion(None, 20, 50) {
+        let (az, ax) = (f64::from(d.amp_z_m), f64::from(d.amp_x_m));
+        assert!((f64::from(m.amp_z_m) - az).abs() <= bz, "{m:?}");
+        assert!((f64::from(m.amp_x_m) - ax).abs() <= bx, "{m:?}");
+        let dphi = f64::from(m.phase_rad) - 40f64.to_radians();
+        assert!(dphi.abs() <= bz / az + bx / ax, "{m:?}: {dphi}");
+        assert!(m.amp_z_peak_m >= m.amp_z_m);
+    }
+}
+
+#[test]
+fn pickups_measure_what_resonant_transducers_really_do() {
+    use model_core::board::plant::{ResonantOptions, DAC_VOLTS_PER_CODE};
+    use model_core::board::resonator::ModeParams;
+    use std::f64::consts::{PI, TAU};
+    let cfg = DeviceConfig::driver_board(1);
+    let modes = [
+        ModeParams {
+            resonance_hz: 20_300.0,
+            q: 300.0,
+            gain_m_per_v: 8e-8,
+        },
+        ModeParams {
+            resonance_hz: 19_700.0,
+            q: 200.0,
+            gain_m_per_v: 4e-8,
+        },
+    ];
+    let opts = ResonantOptions {
+        modes,
+        drift_hz_per_s: [0.0; 2],
+        thermal_hz_per_um2: 0.0,
+        crosstalk: 0.0,
+        load_q: f64::INFINITY,
+    };
+    // 30 τ of the slower mode (4.7 ms) in half-buffers of 128 µs.
+    let settle = (30.0 * 300.0 / (PI * 20_300.0) / 128e-6) as usize;
+    let ms = measured_motion(Some(opts), settle, 50);
+    let f = 20e3;
+    let sinc = (PI * f / cfg.sample_rate_hz).sin() / (PI * f / cfg.sample_rate_hz);
+    let ((hz, lz), (hx, lx)) = (modes[0].response::<Libm>(f), modes[1].response::<Libm>(f));
+    let d = drive(40f32.to_radians());
+    let volts = |amp: f32, mpc: f32| f64::from(amp) / f64::from(mpc) * DAC_VOLTS_PER_CODE;
+    let want_z = volts(d.amp_z_m, cfg.dac_z.metres_per_code) * hz * sinc;
+    let want_x = volts(d.amp_x_m, cfg.dac_x.metres_per_code) * hx * sinc;
+    let want_phi = (40f64.to_radians() - (lx - lz) + PI).rem_euclid(TAU) - PI;
+    let (bz, bx) = (
+        rounding_bound(cfg.pickup_z.gain),
+        rounding_bound(cfg.pickup_x.gain),
+    );
+    // Besides the pickups' rounding, 1e-4 of the amplitude: the held
+    // waveform's images (≤ 2e-6 here, `resonant_transducers_follow_their_
+    // transfer_functions`) and the f32 lock-in's sums of 64 terms
+    // (≤ 64·6e-8·2 ≈ 8e-6), with margin.
+    for m in ms {
+        assert!(
+            (f64::from(m.amp_z_m) - want_z).abs() <= bz + 1e-4 * want_z,
+            "{m:?} vs {want_z:e}"
+        );
+        assert!(
+            (f64::from(m.amp_x_m) - want_x).abs() <= bx + 1e-4 * want_x,
+            "{m:?} vs {want_x:e}"
+        );
+        let dphi = ((f64::from(m.phase_rad) - want_phi + PI).rem_euclid(TAU) - PI).abs();
+        assert!(
+            dphi <= bz / want_z + bx / want_x + 1e-4,
+            "{m:?} vs {want_phi}"
+        );
+    }
+    // The board believes φ = 40°; the displacements run at ≈ −124°.
+    assert!(want_phi.to_degrees() < -100.0, "{}", want_phi.to_degrees());
+}

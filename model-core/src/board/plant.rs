@@ -315,8 +315,26 @@ impl<F: Float> Plant<F> {
         d: &HalfDrive,
         sub: u32,
         keep: F,
+        at: impl FnMut(usize) -> SampleConditions<F>,
+        out: &mut [(u16, u16)],
+    ) {
+        self.run_half_with_pickups::<M>(cfg, d, sub, keep, at, out, &mut []);
+    }
+
+    /// [`Plant::run_half`] that also writes the motion pickups' readings
+    /// `(z, x)` in counts ([`DeviceConfig::pickup_z`], `pickup_x`: the
+    /// transducers' AC displacement at each sample, rounded and clamped like
+    /// the forces) into `pickups` (as many samples as it holds).
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_half_with_pickups<M: Math<F>>(
+        &mut self,
+        cfg: &DeviceConfig,
+        d: &HalfDrive,
+        sub: u32,
+        keep: F,
         mut at: impl FnMut(usize) -> SampleConditions<F>,
         out: &mut [(u16, u16)],
+        pickups: &mut [(u16, u16)],
     ) {
         let n = out.len().max(1);
         let sub = sub.max(1);
@@ -353,6 +371,13 @@ impl<F: Float> Plant<F> {
         let full = F::from_u32(u32::from(cfg.adc_full_scale));
         // Rounded to the nearest count (ties up) and clamped, all in F.
         let counts = |v: F| (v.max(F::ZERO).min(full) + F::HALF).to_u32() as u16;
+        let (pzg, pzo) = (f(cfg.pickup_z.gain), f(cfg.pickup_z.offset));
+        let (pxg, pxo) = (f(cfg.pickup_x.gain), f(cfg.pickup_x.offset));
+        let mut pick = |i: usize, xz: F, xx: F| {
+            if let Some(p) = pickups.get_mut(i) {
+                *p = (counts(xz / pzg + pzo), counts(xx / pxg + pxo));
+            }
+        };
         // The stage's travel since the start of the half, m.
         let mut travel = F::ZERO;
         for (i, o) in out.iter_mut().enumerate() {
@@ -380,6 +405,7 @@ impl<F: Float> Plant<F> {
                 let k = r.opts.crosstalk;
                 let (vz, vx) = (vz + k * vx, vx + k * vz);
                 let [mzd, mxd] = &mut r.modes;
+                pick(i, mzd.x(), mxd.x());
                 let (fx, fz) = self.contact.step(mxd.x() + travel, uz0 + mzd.x());
                 *o = (
                     counts(fx / xg + xo + c.counts_x),
@@ -393,6 +419,7 @@ impl<F: Float> Plant<F> {
                 travel += step * F::from_u32(sub);
                 continue;
             }
+            pick(i, duz * s1, dux * s2);
             let (fx, fz) = self.contact.step(dux * s2 + travel, uz0 + duz * s1);
             *o = (
                 counts(fx / xg + xo + c.counts_x),

@@ -167,6 +167,7 @@ impl<const N: usize> Device<'_, N> {
         };
         self.refresh_scene();
         self.ramp_generation = self.ramp_generation.wrapping_add(1);
+        self.reset_motion_peak();
         if self.running {
             self.dds.set_level(0, plan.levels[0])?;
             self.dds.set_level(1, plan.levels[1])?;
@@ -193,6 +194,7 @@ impl<const N: usize> Device<'_, N> {
         self.dds.set_level(1, plan.levels[1])?;
         self.running = true;
         self.ramp_generation = self.ramp_generation.wrapping_add(1);
+        self.reset_motion_peak();
         Ok(())
     }
 

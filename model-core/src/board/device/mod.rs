@@ -8,6 +8,7 @@
 //!   (every fault source, and where it is raised);
 //! * `measure` — the DAC refill and ADC intake bookkeeping (which drive phase
 //!   each ADC sample belongs to) and the friction measurement;
+//! * `motion` — the transducers' measured motion (the pickups' lock-ins);
 //! * `predict` — the model's prediction for the current drive;
 //! * `closed_loop` — the closed loop's timing (which samples each update
 //!   uses, when its command reaches the DAC);
@@ -26,6 +27,7 @@ mod drive;
 pub mod error;
 mod fault;
 mod measure;
+mod motion;
 mod predict;
 
 pub use closed_loop::MIN_GAIN;
@@ -35,6 +37,7 @@ pub use config::{
 pub use error::{ConfigError, DeviceError};
 pub use fault::faults;
 pub use measure::check_periods;
+pub use motion::MeasuredDrive;
 pub use predict::{predict, regime};
 
 pub use crate::board::protocol::messages::{
@@ -77,6 +80,8 @@ pub struct Device<'t, const N: usize> {
     fills: u32,
     /// ADC blocks since power-up (the number of the next block).
     adc_blocks: u32,
+    /// The motion pickups' lock-ins and last result.
+    motion: motion::Motion,
 }
 
 /// `x` if finite and in `[min, max]`, else [`DeviceError::OutOfRange`].
@@ -135,6 +140,7 @@ impl<'t, const N: usize> Device<'t, N> {
             control: None,
             fills: 0,
             adc_blocks: 0,
+            motion: motion::Motion::default(),
         };
         check_contact(&contact)?;
         d.applied.achieved = d
