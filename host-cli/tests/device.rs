@@ -317,7 +317,7 @@ fn ask(p: &mut dyn SerialPort, payload: &[u8]) -> Frame {
 
 /// `GetStatus` (index 11) with seq `seq`, written from the spec.
 fn raw_status(p: &mut dyn SerialPort, seq: u8) -> model_core::device::Status {
-    match ask(p, &[3, seq, 0, 11]).body {
+    match ask(p, &[4, seq, 0, 11]).body {
         Body::Response(Response::Status(st)) => st,
         other => panic!("{other:?}"),
     }
@@ -330,11 +330,11 @@ fn a_retried_measure_gets_the_same_answer_and_reset_ends_everything() {
     let mut p = raw_port(&s);
     let p = &mut *p;
     // Start (index 3); the ramps take ≈ 45 ms of device time.
-    assert_eq!(ask(p, &[3, 30, 0, 3]).body, Body::Response(Response::Ok));
+    assert_eq!(ask(p, &[4, 30, 0, 3]).body, Body::Response(Response::Ok));
     std::thread::sleep(Duration::from_millis(300));
     // Measure{periods: 20000} with seq 40, written from the spec: version 03,
     // seq 28 (40), Body::Request 00, Request::Measure 08, periods varint a0 9c 01.
-    let measure_40 = [3, 40, 0, 8, 0xa0, 0x9c, 0x01];
+    let measure_40 = [4, 40, 0, 8, 0xa0, 0x9c, 0x01];
     let f = ask(p, &measure_40);
     assert_eq!((f.seq, f.body), (40, Body::Response(Response::Ok)));
     // The retry (same seq) while it runs: the same answer, not Busy.
@@ -342,17 +342,17 @@ fn a_retried_measure_gets_the_same_answer_and_reset_ends_everything() {
     assert_eq!((f.seq, f.body), (40, Body::Response(Response::Ok)));
     assert!(raw_status(p, 43).measuring);
     // A new seq while it runs: Busy.
-    let f = ask(p, &[3, 41, 0, 8, 0xa0, 0x9c, 0x01]);
+    let f = ask(p, &[4, 41, 0, 8, 0xa0, 0x9c, 0x01]);
     assert_eq!((f.seq, err_of(&f)), (41, WireError::Busy));
     // Reset (index 13): ends the measurement and stops the drive.
-    let f = ask(p, &[3, 42, 0, 13]);
+    let f = ask(p, &[4, 42, 0, 13]);
     assert_eq!((f.seq, f.body), (42, Body::Response(Response::Ok)));
     let st = raw_status(p, 44);
     assert!(!st.measuring && !st.running, "{st:?}");
     // A measurement that finished: its retry starts nothing.
-    assert_eq!(ask(p, &[3, 45, 0, 3]).body, Body::Response(Response::Ok));
+    assert_eq!(ask(p, &[4, 45, 0, 3]).body, Body::Response(Response::Ok));
     std::thread::sleep(Duration::from_millis(300));
-    let measure_50 = [3, 50, 0, 8, 0xc8, 0x01]; // 200 periods = 10 ms
+    let measure_50 = [4, 50, 0, 8, 0xc8, 0x01]; // 200 periods = 10 ms
     assert_eq!(ask(p, &measure_50).body, Body::Response(Response::Ok));
     std::thread::sleep(Duration::from_millis(500));
     assert!(!raw_status(p, 51).measuring);
@@ -717,11 +717,11 @@ fn the_virtual_device_survives_a_host_that_stops_reading() {
     ok_json(&s, &["start"]);
     std::thread::sleep(Duration::from_millis(300));
     let mut p = raw_port(&s);
-    // Stream{on: true, periods: 20} (index 10), from the spec: version 03, seq 60,
+    // Stream{on: true, periods: 20} (index 10), from the spec: version 04, seq 60,
     // Body::Request 00, Stream 0a, bool 01, varint 14. 20 periods = 1 ms of
     // device time: ~70-byte estimates fill the pty's few-kB buffer well within
     // the 3 s nobody reads here (the old device exited when a write timed out).
-    p.write_all(&common::raw_frame(&[3, 60, 0, 0x0a, 1, 0x14]))
+    p.write_all(&common::raw_frame(&[4, 60, 0, 0x0a, 1, 0x14]))
         .unwrap();
     std::thread::sleep(Duration::from_secs(3));
     assert!(

@@ -23,7 +23,10 @@
 //! - a stage velocity that is constant (`v0`) or follows a piecewise-linear
 //!   profile v₀(t) read from a CSV file (`t_s,v0_m_s`; held at the end values
 //!   before the first and after the last row);
-//! - ADC noise (uniform ± counts) and an uncalibrated ADC offset.
+//! - ADC noise (uniform ± counts) and an uncalibrated ADC offset;
+//! - motion pickups on each transducer ([`DeviceConfig::pickup_z`],
+//!   `pickup_x`) reading its displacement with the same ADC noise, fed to the
+//!   device's lock-ins (`Status.measured`).
 
 use std::f64::consts::TAU;
 
@@ -542,9 +545,10 @@ impl VirtualDevice {
         let t0 = self.samples;
         let offset = self.opts.offset_counts;
         let mut samples = [(0u16, 0u16); HALF];
+        let mut pickups = [(0u16, 0u16); HALF];
         let cfg = *self.dev.config();
         let mut plant = self.plant;
-        plant.run_half::<Libm>(
+        plant.run_half_with_pickups::<Libm>(
             &cfg,
             &d,
             SUB,
@@ -561,9 +565,17 @@ impl VirtualDevice {
                 }
             },
             &mut samples,
+            &mut pickups,
         );
         self.plant = plant;
-        self.dev.adc_block(half, &samples);
+        // The pickups' ADC noise, as the forces' (uniform ± counts, on the
+        // rounded reading, clamped to the ADC's range).
+        let full = f64::from(cfg.adc_full_scale);
+        for p in pickups.iter_mut() {
+            let mut n = |c: u16| (f64::from(c) + self.noise()).round().clamp(0.0, full) as u16;
+            *p = (n(p.0), n(p.1));
+        }
+        self.dev.adc_block_with_pickups(half, &samples, &pickups);
         self.samples += HALF as u64;
     }
 }

@@ -212,6 +212,7 @@ impl<'t, const N: usize> Device<'t, N> {
             out_amp_x_m: ch[1].amp.abs() * x.metres_per_code,
             out_offset_z_m: (ch[0].dc - z.zero_code) * z.metres_per_code,
             liftoff_allowed: self.allow_liftoff,
+            measured: self.measured_drive(),
         }
     }
 

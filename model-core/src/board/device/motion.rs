@@ -18,24 +18,8 @@
 
 use super::Device;
 use crate::board::lockin::LockIn;
+pub use crate::board::protocol::messages::MeasuredDrive;
 use crate::float::FastF32;
-
-/// What the pickups measured over the last finished window.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct MeasuredDrive {
-    /// Normal amplitude Δu_z measured, m.
-    pub amp_z_m: f32,
-    /// Tangential amplitude Δu_x measured, m.
-    pub amp_x_m: f32,
-    /// φ between the measured modes (eq. M1), rad in (−π, π].
-    pub phase_rad: f32,
-    /// The largest normal amplitude measured since the last accepted
-    /// `set_drive` or `start`, m.
-    pub amp_z_peak_m: f32,
-    /// Windows finished since power-up.
-    pub windows: u32,
-}
 
 /// The pickups' lock-ins and the last result.
 #[derive(Debug, Clone, Copy, Default)]
