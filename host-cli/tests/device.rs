@@ -447,6 +447,10 @@ const STATUS_KEYS: &[&str] = &[
     "out_dux",
     "out_uz0",
     "liftoff_allowed",
+    "amp_z_measured_m",
+    "amp_x_measured_m",
+    "phase_measured_deg",
+    "amp_z_peak_m",
 ];
 
 fn sorted(k: &[&str]) -> Vec<String> {
@@ -1157,4 +1161,67 @@ fn requests_beyond_the_pipelining_rule_are_counted_when_the_host_does_not_read()
     // are dropped — each one counted and announced.
     let (answered, _, dropped) = flood_is_answered_or_counted(Duration::from_secs(1));
     assert!(dropped > 0 && answered < 3000, "{answered} {dropped}");
+}
+
+/// `status --json` on a resonant virtual device reports what the motion
+/// pickups measure: the bench (20 300 Hz / Q 300 and 19 700 Hz /
+/// Q 200, the default static gains and load) driven at 20 kHz. Expected from
+/// each mode's transfer function (`resonator::ModeParams::response`, loaded
+/// Q, the DAC's hold sinc(πf/f_s)); the bound of one lock-in window is the
+/// pickups' rounding and ±1-count noise, ≤ 1.5·√2 counts on each of a and b
+/// (Σ|w_i| ≤ √2 for the least-squares weights over 64 samples), i.e.
+/// ≤ 2.2 counts of 5 nm on the amplitude and that over the amplitude on
+/// each mode's phase.
+#[test]
+fn status_reports_the_measured_motion_of_resonant_transducers() {
+    use model_core::board::resonator::ModeParams;
+    use model_core::Libm;
+    use std::f64::consts::PI;
+    let s = common::sim::sim_with(
+        &[
+            "--plant-resonance-z",
+            "20300",
+            "--plant-q-z",
+            "300",
+            "--plant-resonance-x",
+            "19700",
+            "--plant-q-x",
+            "200",
+        ],
+        60,
+    );
+    ok_json(&s, DRIVE);
+    ok_json(&s, &["start"]);
+    // 30 τ of the normal mode (τ = Q_eff/(π f_r) = 4.1 ms) in device time.
+    ok_json(&s, &["measure", "--periods", "3000", "--allow-invalid"]);
+    let st = ok_json(&s, &["status"]);
+    let loaded = |q: f64| 1.0 / (1.0 / q + 1.0 / 2000.0);
+    let resp = |fr: f64, q: f64| {
+        ModeParams {
+            resonance_hz: fr,
+            q: loaded(q),
+            gain_m_per_v: 1.0,
+        }
+        .response::<Libm>(20e3)
+    };
+    let ((hz, lz), (hx, lx)) = (resp(20_300.0, 300.0), resp(19_700.0, 200.0));
+    let sinc = (PI * 20e3 / 500e3).sin() / (PI * 20e3 / 500e3);
+    // Static gain = calibration/30 per volt: the ideal amplitude × |H|/g / 30.
+    let (want_z, want_x) = (2e-6 * hz / 30.0 * sinc, 3e-7 * hx / 30.0 * sinc);
+    let bound = 2.2 * 5e-9;
+    let az = st["amp_z_measured_m"].as_f64().unwrap();
+    let ax = st["amp_x_measured_m"].as_f64().unwrap();
+    assert!((az - want_z).abs() <= bound, "{az:e} vs {want_z:e}");
+    assert!((ax - want_x).abs() <= bound, "{ax:e} vs {want_x:e}");
+    let want_phi = 40.0 - (lx - lz).to_degrees();
+    let phi = st["phase_measured_deg"].as_f64().unwrap();
+    let dphi = (phi - want_phi + 540.0).rem_euclid(360.0) - 180.0;
+    let allowed = (bound / want_z + bound / want_x).to_degrees();
+    assert!(
+        dphi.abs() <= allowed,
+        "phi {phi} vs {want_phi} (allowed {allowed})"
+    );
+    // The board set φ = 40°; the displacements run near −124°.
+    assert!(want_phi < -100.0);
+    assert!(st["amp_z_peak_m"].as_f64().unwrap() >= az);
 }

@@ -42,6 +42,8 @@ use model_core::Libm;
 pub const TABLE_N: usize = 1024;
 /// Samples per half-buffer (the firmware's, [`model_core::device::HALF_BUFFER`]).
 pub const HALF: usize = model_core::device::HALF_BUFFER;
+/// Seed of the pickups' noise record (xor'ed into a reseed).
+const PICKUP_SEED: u64 = 0xD1B5_4A32_D192_ED03;
 /// Sub-steps of the plant per ADC sample.
 const SUB: u32 = 32;
 
@@ -283,6 +285,10 @@ pub struct VirtualDevice {
     dac: Vec<u32>,
     half: usize,
     rng: Noise,
+    /// The pickups' ADC noise: its own record, so that adding the pickups
+    /// left the forces' noise records (and every result seeded by them) as
+    /// they were.
+    pickup_rng: Noise,
     opts: PlantOptions,
     /// Samples produced since the device was made.
     samples: u64,
@@ -348,6 +354,7 @@ impl VirtualDevice {
             dac: vec![0; HALF],
             half: 0,
             rng: Noise::new(0x9E37_79B9_7F4A_7C15),
+            pickup_rng: Noise::new(PICKUP_SEED),
             opts,
             samples: 0,
             fill_lead: 0,
@@ -505,6 +512,7 @@ impl VirtualDevice {
     /// Reseeds the ADC noise (a different, equally likely noise record).
     pub fn set_noise_seed(&mut self, seed: u64) {
         self.rng = Noise::new(seed);
+        self.pickup_rng = Noise::new(seed ^ PICKUP_SEED);
     }
 
     /// Samples per second.
@@ -571,8 +579,13 @@ impl VirtualDevice {
         // The pickups' ADC noise, as the forces' (uniform ± counts, on the
         // rounded reading, clamped to the ADC's range).
         let full = f64::from(cfg.adc_full_scale);
+        let amp = self.opts.noise_counts;
         for p in pickups.iter_mut() {
-            let mut n = |c: u16| (f64::from(c) + self.noise()).round().clamp(0.0, full) as u16;
+            let mut n = |c: u16| {
+                (f64::from(c) + self.pickup_rng.uniform(amp))
+                    .round()
+                    .clamp(0.0, full) as u16
+            };
             *p = (n(p.0), n(p.1));
         }
         self.dev.adc_block_with_pickups(half, &samples, &pickups);
