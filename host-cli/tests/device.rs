@@ -1167,11 +1167,11 @@ fn requests_beyond_the_pipelining_rule_are_counted_when_the_host_does_not_read()
 /// pickups measure: the bench (20 300 Hz / Q 300 and 19 700 Hz /
 /// Q 200, the default static gains and load) driven at 20 kHz. Expected from
 /// each mode's transfer function (`resonator::ModeParams::response`, loaded
-/// Q, the DAC's hold sinc(πf/f_s)); the bound of one lock-in window is the
-/// pickups' rounding and ±1-count noise, ≤ 1.5·√2 counts on each of a and b
-/// (Σ|w_i| ≤ √2 for the least-squares weights over 64 samples), i.e.
-/// ≤ 2.2 counts of 5 nm on the amplitude and that over the amplitude on
-/// each mode's phase.
+/// Q, the DAC's hold sinc(πf/f_s)); the bound of one lock-in window (one
+/// 64-sample block at 20 kHz) is the pickups' rounding and ±1-count noise,
+/// ≤ 1.5 counts of 5 nm per sample, times the window's error gain
+/// (`integration_tests::lockin_error_gain`) on the amplitude, and that over
+/// the amplitude on each mode's phase.
 #[test]
 fn status_reports_the_measured_motion_of_resonant_transducers() {
     use model_core::board::resonator::ModeParams;
@@ -1208,7 +1208,8 @@ fn status_reports_the_measured_motion_of_resonant_transducers() {
     let sinc = (PI * 20e3 / 500e3).sin() / (PI * 20e3 / 500e3);
     // Static gain = calibration/30 per volt: the ideal amplitude × |H|/g / 30.
     let (want_z, want_x) = (2e-6 * hz / 30.0 * sinc, 3e-7 * hx / 30.0 * sinc);
-    let bound = 2.2 * 5e-9;
+    let gain = integration_tests::lockin_error_gain(64, std::f64::consts::TAU * 20e3 / 500e3);
+    let bound = 1.5 * gain * 5e-9;
     let az = st["amp_z_measured_m"].as_f64().unwrap();
     let ax = st["amp_x_measured_m"].as_f64().unwrap();
     assert!((az - want_z).abs() <= bound, "{az:e} vs {want_z:e}");

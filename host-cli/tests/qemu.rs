@@ -724,6 +724,29 @@ fn lab_session_on_the_firmware() {
         assert!(t.elapsed() < Duration::from_secs(20), "never settled");
         std::thread::sleep(Duration::from_millis(20));
     }
+    // The motion pickups of the emulated plant (ideal transducers, no
+    // pickup noise): the firmware's lock-ins measure the drive set, within
+    // the pickups' rounding (±½ count of 5 nm per sample times the error
+    // gain of a window of 4 blocks, one period at 2 kHz:
+    // `integration_tests::lockin_error_gain`; that over the amplitudes on φ)
+    // and the sine table's phases (< 1e-6 rad).
+    let st = status_json(&q);
+    let (az, ax) = (
+        st["amp_z_measured_m"].as_f64().unwrap(),
+        st["amp_x_measured_m"].as_f64().unwrap(),
+    );
+    let dtheta = std::f64::consts::TAU * 2e3 / 500e3;
+    let b = 0.5 * integration_tests::lockin_error_gain(256, dtheta) * 5e-9;
+    assert!(
+        (az - 2e-6).abs() <= b && (ax - 3e-7).abs() <= b,
+        "{st} (bound {b:e})"
+    );
+    let allowed = (b / 2e-6 + b / 3e-7 + 1e-6f64).to_degrees();
+    let phi = st["phase_measured_deg"].as_f64().unwrap();
+    assert!(
+        (phi - 40.0).abs() <= allowed,
+        "{st} (allowed {allowed} deg)"
+    );
     // measure against the host's exact f64 solver for the *plant's* contact.
     let m = ok(&q, &["measure", "--periods", "200"]);
     assert_eq!(m["valid"], true, "{m}");

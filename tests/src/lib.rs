@@ -197,3 +197,48 @@ pub fn board_config_1mhz() -> DeviceConfig {
         ..DeviceConfig::driver_board(0)
     }
 }
+
+/// The worst-case effect of an error of at most ±1 (count) on every sample
+/// on a lock-in window's amplitude (`model_core::board::lockin`, the
+/// least-squares fit of d + a cos θ + b sin θ): the fit's a and b are linear
+/// in the samples with weights `w_a`, `w_b` (rows of `(XᵀX)⁻¹Xᵀ`), so
+/// `|δa| ≤ Σ|w_a|`, `|δb| ≤ Σ|w_b|` and `|δA| ≤ √((Σ|w_a|)² + (Σ|w_b|)²)`;
+/// the phase moves by at most that over the amplitude. Computed here for a
+/// window of `n` samples `dtheta` apart, the worst over 64 starting phases.
+pub fn lockin_error_gain(n: usize, dtheta: f64) -> f64 {
+    let mut worst: f64 = 0.0;
+    for k in 0..64 {
+        let th0 = std::f64::consts::TAU * k as f64 / 64.0;
+        let rows: Vec<[f64; 3]> = (0..n)
+            .map(|i| {
+                let t = th0 + i as f64 * dtheta;
+                [1.0, t.cos(), t.sin()]
+            })
+            .collect();
+        let mut m = [[0.0f64; 3]; 3];
+        for r in &rows {
+            for i in 0..3 {
+                for j in 0..3 {
+                    m[i][j] += r[i] * r[j];
+                }
+            }
+        }
+        // Inverse of the symmetric 3×3 by cofactors.
+        let c = |i: usize, j: usize| {
+            let (a, b) = ((i + 1) % 3, (i + 2) % 3);
+            let (p, q) = ((j + 1) % 3, (j + 2) % 3);
+            m[a][p] * m[b][q] - m[a][q] * m[b][p]
+        };
+        let det = m[0][0] * c(0, 0) + m[0][1] * c(0, 1) + m[0][2] * c(0, 2);
+        let inv = |i: usize, j: usize| c(j, i) / det;
+        let (mut sa, mut sb) = (0.0, 0.0);
+        for r in &rows {
+            let wa: f64 = (0..3).map(|j| inv(1, j) * r[j]).sum();
+            let wb: f64 = (0..3).map(|j| inv(2, j) * r[j]).sum();
+            sa += wa.abs();
+            sb += wb.abs();
+        }
+        worst = worst.max((sa * sa + sb * sb).sqrt());
+    }
+    worst
+}

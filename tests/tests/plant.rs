@@ -375,13 +375,12 @@ fn measured_motion(
 }
 
 /// The worst-case effect of the pickups' rounding (±½ count per sample) on
-/// one window's fit: the least-squares weights of a (and b) over N samples
-/// have Σ|w_i| ≤ √N·‖w‖₂ ≈ √N·√(2/N) = √2, so a and b are off by ≤ √2/2
-/// counts and the amplitude by ≤ 1 count (×1.05 for the weights' departure
-/// from the whole-period value over 2.56 periods); the phase by ≤ that over
-/// the amplitude.
+/// one lock-in window of the device (one 64-sample block at 20 kHz and
+/// 500 kS/s): ½ count × the window's error gain
+/// (`integration_tests::lockin_error_gain`, from the fit's weights), in m.
 fn rounding_bound(gain: f32) -> f64 {
-    1.05 * f64::from(gain)
+    let dtheta = std::f64::consts::TAU * 20e3 / 500e3;
+    0.5 * integration_tests::lockin_error_gain(HALF_BUFFER, dtheta) * f64::from(gain)
 }
 
 #[test]

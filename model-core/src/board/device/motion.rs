@@ -2,9 +2,9 @@
 //! next to the force sensors, [`super::DeviceConfig::pickup_z`], `pickup_x`)
 //! through the lock-in of [`crate::board::lockin`] on the DDS's own phases
 //! of each sample (the same phases the friction estimate uses, ADC lag
-//! included). Each window of whole ADC blocks spanning at least
-//! [`crate::board::lockin::MIN_SPAN_RAD`] of drive phase (one block at the
-//! drive frequencies of the board's transducers) gives the amplitude and
+//! included). Each window of whole ADC blocks spanning at least one drive
+//! period ([`WINDOW_SPAN_RAD`]: one 64-sample block from 7.8 kHz up at
+//! 500 kS/s, so every half-buffer at the transducers' frequencies) gives the amplitude and
 //! phase of each mode; the phase between them is the φ the contact sees:
 //! with the drive `u_z = −Δu_z cos θ`, `u_x = Δu_x cos(θ + φ)` (eqs. 1–2),
 //! the pickups read `A_z cos(θ + ψ_z)` and `A_x cos(θ + ψ_x)`, and
@@ -20,6 +20,12 @@ use super::Device;
 use crate::board::lockin::LockIn;
 pub use crate::board::protocol::messages::MeasuredDrive;
 use crate::float::FastF32;
+
+/// The least drive phase a window spans, rad: a whole period, where the
+/// fit's regressors are nearly orthogonal and its noise gain near the
+/// textbook `√(2/N)` (a shorter window would be exact too, but its noise
+/// gain grows like 1/span²: `lockin::MIN_SPAN_RAD`).
+pub const WINDOW_SPAN_RAD: f32 = core::f32::consts::TAU;
 
 /// The pickups' lock-ins and the last result.
 #[derive(Debug, Clone, Copy, Default)]
@@ -66,6 +72,9 @@ impl<const N: usize> Device<'_, N> {
             acc = acc.wrapping_add(tw);
         }
         let m = &mut self.motion;
+        if m.lock[0].span_rad() < WINDOW_SPAN_RAD {
+            return;
+        }
         if let (Ok(z), Ok(x)) = (m.lock[0].solve(), m.lock[1].solve()) {
             let (az, ax) = (z.amplitude::<FastF32>(), x.amplitude::<FastF32>());
             let pi = core::f32::consts::PI;
