@@ -221,7 +221,8 @@ impl Real {
             };
             return Err(Refused(format!("must be {rule} (got {shown})")));
         }
-        Ok(x)
+        // −0 is 0 (so that no result or message shows "-0").
+        Ok(x + 0.0)
     }
 
     /// Whether `x` lies within the flag's own range (not the magnitude bounds).

@@ -419,8 +419,7 @@ pub fn check_reach(a: f64, b: f64, flag_a: &str, flag_b: &str) -> CliResult {
         flag.to_string()
     };
     Err(CliError::usage(format!(
-        "{flag}: gives {what} = {}, beyond what the solvers resolve in f64 (1 + duz/uz0 + kx·dux/(mu0·kz·uz0) ≤ {}; beyond it their error bound exceeds 1 % of mu0)",
-        short(x),
+        "{flag}: gives {what} = {x:.3e}; the solvers resolve 1 + duz/uz0 + kx·dux/(mu0·kz·uz0) ≤ {} in f64 (beyond, their error bound exceeds 1 % of mu0)",
         short(limit)
     )))
 }

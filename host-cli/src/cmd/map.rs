@@ -38,18 +38,18 @@ pub struct MapCmd {
     /// Δu_z/u_z0 (fixed for the map; ≥ 1: the contact lifts off once per period)
     #[arg(long, value_parser = Real::positive().because("the ratio needs Δu_z > 0"))]
     pub duz_rel: f64,
-    /// Smallest amplitude ratio k_xΔu_x/(μ0 k_z Δu_z)
-    #[arg(long, default_value_t = 0.0, value_parser = Real::non_negative())]
-    pub ratio_min: f64,
-    /// Largest amplitude ratio
-    #[arg(long, default_value_t = 3.0, value_parser = Real::non_negative())]
-    pub ratio_max: f64,
-    /// Smallest phase, degrees
-    #[arg(long, default_value_t = 0.0, value_parser = PHI_DEG)]
-    pub phi_min_deg: f64,
-    /// Largest phase, degrees (at most ten turns above --phi-min-deg)
-    #[arg(long, default_value_t = 360.0, value_parser = PHI_DEG)]
-    pub phi_max_deg: f64,
+    /// Smallest amplitude ratio k_xΔu_x/(μ0 k_z Δu_z) [default: 0]
+    #[arg(long, value_parser = Real::non_negative())]
+    pub ratio_min: Option<f64>,
+    /// Largest amplitude ratio [default: 3]
+    #[arg(long, value_parser = Real::non_negative())]
+    pub ratio_max: Option<f64>,
+    /// Smallest phase, degrees [default: 0]
+    #[arg(long, value_parser = PHI_DEG)]
+    pub phi_min_deg: Option<f64>,
+    /// Largest phase, degrees, at most ten turns above --phi-min-deg [default: 360]
+    #[arg(long, value_parser = PHI_DEG)]
+    pub phi_max_deg: Option<f64>,
     /// Cells per axis (2 to 1000)
     #[arg(long, default_value_t = 120, value_parser = Count::<usize>::at_least(2).at_most(1000, "a map of 10⁶ cells is the largest drawn"))]
     pub res: usize,
@@ -75,35 +75,26 @@ impl MapCmd {
     pub fn run(mut self, _out: &mut impl Write) -> CliResult {
         self.how.profile = self.contact.resolve()?;
         let a = &self;
+        let r = Range::of(a.ratio_min, a.ratio_max, (0.0, 3.0), "ratio");
+        let phi = Range::of(a.phi_min_deg, a.phi_max_deg, (0.0, 360.0), "phi");
         // Every value is in its domain (the flags' parsers); what depends
         // on two flags is checked here, before the missing-output check.
-        if a.ratio_max <= a.ratio_min {
+        r.check()?;
+        phi.check()?;
+        if phi.hi - phi.lo > MAX_PHI_SPAN_DEG {
             return Err(CliError::usage(format!(
-                "--ratio-max: must be greater than --ratio-min (got {} ≤ {})",
-                short(a.ratio_max),
-                short(a.ratio_min)
-            )));
-        }
-        if a.phi_max_deg <= a.phi_min_deg {
-            return Err(CliError::usage(format!(
-                "--phi-max-deg: must be greater than --phi-min-deg (got {} ≤ {})",
-                short(a.phi_max_deg),
-                short(a.phi_min_deg)
-            )));
-        }
-        if a.phi_max_deg - a.phi_min_deg > MAX_PHI_SPAN_DEG {
-            return Err(CliError::usage(format!(
-                "--phi-max-deg: the phase span {}° exceeds ten turns (3600°); the regimes repeat every turn",
-                short(a.phi_max_deg - a.phi_min_deg)
+                "{}: the phase span {}° exceeds ten turns (3600°); the regimes repeat every turn",
+                phi.flag(),
+                short(phi.hi - phi.lo)
             )));
         }
         // The largest drive of the map must be one the solvers resolve.
-        check_reach(
-            a.duz_rel,
-            a.duz_rel * a.ratio_max,
-            "--duz-rel",
-            "--ratio-max",
-        )?;
+        let b_flag = if a.ratio_max.is_some() {
+            "--ratio-max"
+        } else {
+            "--duz-rel"
+        };
+        check_reach(a.duz_rel, a.duz_rel * r.hi, "--duz-rel", b_flag)?;
         if let Some(p) = &a.plot {
             crate::plot::ext(p)?;
         }
@@ -114,7 +105,7 @@ impl MapCmd {
             ));
         }
         if let Some(x) = a.v_rel {
-            return run_mu_map(a, x);
+            return run_mu_map(a, x, &r, &phi);
         }
         if a.how.method != Method::Auto || a.how.tol.is_some() {
             let flag = if a.how.method != Method::Auto {
@@ -126,8 +117,8 @@ impl MapCmd {
                 "{flag}: the regime map is always exact; --method and --tol apply to a μ map (--v-rel)"
             )));
         }
-        let ratios = centres(a.ratio_min, a.ratio_max, a.res);
-        let phis = centres(a.phi_min_deg, a.phi_max_deg, a.res);
+        let ratios = centres(r.lo, r.hi, a.res);
+        let phis = centres(phi.lo, phi.hi, a.res);
         let (cells, class) = cells(a.duz_rel, &ratios, &phis, &a.how.profile, true)?;
         let counts = [0u8, 1, 2].map(|k| class.iter().filter(|&&c| c == k).count());
         eprintln!(
@@ -152,7 +143,65 @@ impl MapCmd {
     }
 }
 
-fn run_mu_map(a: &MapCmd, x: f64) -> CliResult {
+/// One axis of the map: `--{name}-min` … `--{name}-max` (or `--phi-min-deg`
+/// … `--phi-max-deg`), with which of them were given.
+struct Range {
+    lo: f64,
+    hi: f64,
+    lo_given: bool,
+    hi_given: bool,
+    name: &'static str,
+}
+
+impl Range {
+    fn of(lo: Option<f64>, hi: Option<f64>, default: (f64, f64), name: &'static str) -> Range {
+        Range {
+            lo: lo.unwrap_or(default.0),
+            hi: hi.unwrap_or(default.1),
+            lo_given: lo.is_some(),
+            hi_given: hi.is_some(),
+            name,
+        }
+    }
+
+    fn flag_of(&self, end: &str) -> String {
+        if self.name == "phi" {
+            format!("--phi-{end}-deg")
+        } else {
+            format!("--{}-{end}", self.name)
+        }
+    }
+
+    /// The flag to name for the range: the upper end if it was given, else
+    /// the lower one.
+    fn flag(&self) -> String {
+        if self.hi_given || !self.lo_given {
+            self.flag_of("max")
+        } else {
+            self.flag_of("min")
+        }
+    }
+
+    /// `lo < hi`, naming a flag that was given.
+    fn check(&self) -> CliResult {
+        if self.hi > self.lo {
+            return Ok(());
+        }
+        let (max, min) = (self.flag_of("max"), self.flag_of("min"));
+        let what = if self.hi_given || !self.lo_given {
+            format!("{max}: must be greater than {min}")
+        } else {
+            format!("{min}: must be less than {max}")
+        };
+        Err(CliError::usage(format!(
+            "{what} (got {} … {})",
+            short(self.lo),
+            short(self.hi)
+        )))
+    }
+}
+
+fn run_mu_map(a: &MapCmd, x: f64, r: &Range, phi: &Range) -> CliResult {
     if x == 0.0 && a.duz_rel < 1.0 {
         if a.how.profile != Profile::Flat {
             return Err(CliError::usage(
@@ -163,8 +212,8 @@ fn run_mu_map(a: &MapCmd, x: f64) -> CliResult {
             "--v-rel: must be != 0 (at rest μ has two one-sided limits; the regime map shows them)",
         ));
     }
-    let ratios = centres(a.ratio_min, a.ratio_max, a.res);
-    let phis = centres(a.phi_min_deg, a.phi_max_deg, a.res);
+    let ratios = centres(r.lo, r.hi, a.res);
+    let phis = centres(phi.lo, phi.hi, a.res);
     let cells =
         mu_cells(a.duz_rel, &ratios, &phis, x, &a.how).map_err(|e| e.renamed("--v0", "--v-rel"))?;
     let mix = method_mix(cells.iter().map(|c| c.method));

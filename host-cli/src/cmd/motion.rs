@@ -207,7 +207,7 @@ impl WorkPlan {
             self.mass == 0.0 || (law_steps > homogenised::STIFF_STEPS as f64 && bounded);
         if !quasi_static && law_steps > 2.5 * max {
             return Err(CliError::usage(format!(
-                "--mass: the body responds so fast against the load (Mω²/k_x = {}, ω/Ω = {}) that the homogenised model needs ≥ {} steps per load period (at most {}); a heavier body or a slower load, or |f0| + |f| < 1 (the quasi-static limit)",
+                "--mass: the body (Mω²/k_x = {}) follows the load (ω/Ω = {}) so fast that the homogenised model needs ≥ {} steps per load period (max {}); heavier body, slower load or |f0| + |f| < 1",
                 short(self.mass),
                 short(1.0 / self.nu),
                 approx(law_steps / 2.5),
@@ -217,7 +217,7 @@ impl WorkPlan {
         let spring_steps = self.spring_steps(p, law);
         if spring_steps > max {
             return Err(CliError::usage(format!(
-                "--spring: K/k_x = {} is so stiff against the load (ω/Ω = {}) that the homogenised model needs ≥ {} steps per load period (at most {}); a softer spring or a slower load",
+                "--spring: K/k_x = {} is so stiff against the load (ω/Ω = {}) that the homogenised model needs ≥ {} steps per load period (max {}); softer spring or slower load",
                 short(self.kappa),
                 short(1.0 / self.nu),
                 approx(spring_steps),
@@ -262,7 +262,15 @@ impl WorkPlan {
     /// ultrasonic period, at most [`resolved::MAX_STEPS`]), and its least
     /// work (two step counts, `n/ν` steps per load period, three periods or
     /// those of `--duration`) within [`WORK_BUDGET`].
-    fn check_resolved(&self) -> CliResult {
+    /// `auto` is the homogenised estimate over `v_ref` when `--method auto`
+    /// chose the resolved model (it is named in the refusal).
+    fn check_resolved(&self, auto: Option<f64>) -> CliResult {
+        let subject = |model: &str| match auto {
+            Some(e) => {
+                format!("auto needs {model} (homogenised estimate {e:.2e} v_ref > --tol), which")
+            }
+            None => model.to_string(),
+        };
         let stable = std::f64::consts::PI * ((1.0 + self.kappa) / self.mass).sqrt();
         if stable > resolved::MAX_STEPS as f64 {
             let flag = if self.kappa > 1.0 {
@@ -271,10 +279,11 @@ impl WorkPlan {
                 "--mass"
             };
             return Err(CliError::usage(format!(
-                "{flag}: with Mω²/k_x = {} and K/k_x = {} the body rings on the contact faster than the resolved model resolves ({} steps per ultrasonic period needed, at most {}); use --method homogenised or a heavier body",
+                "{flag}: {} needs {} steps per period for this body (Mω²/k_x = {}, K/k_x = {}; max {}); try --method homogenised",
+                subject("the resolved model"),
+                approx(stable.ceil()),
                 short(self.mass),
                 short(self.kappa),
-                approx(stable.ceil()),
                 resolved::MAX_STEPS
             )));
         }
@@ -288,22 +297,23 @@ impl WorkPlan {
             } else {
                 "--force-omega"
             };
-            return Err(self.too_long(asked, "the resolved model", flag));
+            return Err(self.too_long(asked, &subject("the resolved model"), flag));
         }
         Ok(())
     }
 
-    fn too_long(&self, work: f64, model: &str, flag: &str) -> CliError {
+    /// The refusal of a run whose least work exceeds [`WORK_BUDGET`].
+    fn too_long(&self, work: f64, subject: &str, flag: &str) -> CliError {
         let how = if flag == "--duration" {
             "give a shorter --duration".to_string()
         } else {
             format!(
-                "ω/Ω = {} sets its steps per load period; use --method homogenised or a faster load",
+                "ω/Ω = {} sets them; try --method homogenised",
                 short(1.0 / self.nu)
             )
         };
         CliError::usage(format!(
-            "{flag}: {model} would take at least {} integration steps (the work bound is {}); {how}",
+            "{flag}: {subject} takes ≥ {} steps (work bound {}); {how}",
             approx(work),
             short(WORK_BUDGET)
         ))
@@ -405,7 +415,7 @@ impl MotionCmd {
             plan.check_homogenised(&p, &law)?;
         }
         if method == MotionMethod::Resolved {
-            plan.check_resolved()?;
+            plan.check_resolved(None)?;
         }
         let c = law.c_forward.max(law.c_backward);
         let v_ref = if c > 0.0 { c } else { 1.0 };
@@ -448,13 +458,10 @@ impl MotionCmd {
         } else {
             // Auto chose the resolved model: its cost and stability first.
             if method == MotionMethod::Auto {
-                if let Err(e) = plan.check_resolved() {
+                let estimate = (e_h + e_table + h_run.numerical_error) / v_ref;
+                if let Err(e) = plan.check_resolved(Some(estimate)) {
                     pb.finish_and_clear();
-                    return Err(CliError::usage(format!(
-                        "{} (auto needs it: the homogenised estimate {:.3e} v_ref exceeds --tol)",
-                        e.msg,
-                        (e_h + e_table + h_run.numerical_error) / v_ref
-                    )));
+                    return Err(e);
                 }
             }
             pb.set_position(0);

@@ -65,7 +65,7 @@ pub struct TuneCmd {
     #[arg(long, value_parser = Real::ANY)]
     v0: Option<f64>,
     /// Target μ/μ0, strictly between −1 and 1
-    #[arg(long, value_name = "T", value_parser = Real::ANY.above(-1.0).below(1.0).because("|mu| = mu0 is continuous sliding"))]
+    #[arg(long, value_name = "T", value_parser = Real::ANY.above(-1.0).below(1.0).because("mu/mu0 lies strictly inside (−1, 1): |mu| = mu0 is continuous sliding"))]
     target_mu_rel: Option<f64>,
     /// Target μ, strictly between −μ0 and μ0
     #[arg(long, value_name = "X", value_parser = Real::ANY)]
@@ -607,4 +607,60 @@ fn write_maximize_text(out: &mut impl Write, o: &MaximizeOut) -> std::io::Result
         knob_text(o.drive.adjust, o.drive.range_hi),
         o.drive.scan_cells
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A target result with `residual` against the bound 1e-9.
+    fn result(residual: f64) -> TargetOut {
+        TargetOut {
+            drive: DriveOut {
+                adjust: "duz",
+                duz: 1e-6,
+                dux: 7e-7,
+                phi_deg: 50.0,
+                duz_rel: 0.2,
+                dux_rel: 0.35,
+                range_lo: 0.0,
+                range_hi: 4.75e-6,
+                scan_cells: SCAN_CELLS,
+            },
+            v0: 0.01,
+            target_mu: 0.15,
+            target_mu_over_mu0: 0.5,
+            mu: 0.15 + 0.3 * residual,
+            mu_over_mu0: 0.5 + residual,
+            residual_over_mu0: residual,
+            method: "exact",
+            error_bound_over_mu0: 1e-9,
+            solutions: vec![1e-6],
+            solutions_found: 1,
+            start: 2e-6,
+            reachable_min_over_mu0: -0.1,
+            reachable_max_over_mu0: 0.7,
+        }
+    }
+
+    /// Issue 24 §9: the "doubtful residual" path (never observed with the
+    /// exact solver) prints the result and exits 1 with one line; a residual
+    /// within the bound exits 0.
+    #[test]
+    fn doubtful_residual_prints_and_fails() {
+        for json in [false, true] {
+            let mut out = Vec::new();
+            let e = finish_target(&mut out, &result(3e-9), json).unwrap_err();
+            assert_eq!(e.code, 1);
+            assert_eq!(
+                e.msg,
+                "doubtful: the residual 3e-9 exceeds the solver's bound 1e-9 (the law is steeper than the float type resolves here)"
+            );
+            let text = String::from_utf8(out).unwrap();
+            assert!(text.contains("3e-9"), "{text}");
+            let mut out = Vec::new();
+            assert!(finish_target(&mut out, &result(5e-10), json).is_ok());
+            assert!(!out.is_empty());
+        }
+    }
 }

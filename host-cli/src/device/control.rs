@@ -121,7 +121,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = -0.5, value_parser = Real::ANY)]
     pub drift: f64,
     /// ADC noise, ± counts
-    #[arg(long, default_value_t = 2.0, value_parser = Real::non_negative())]
+    #[arg(long, default_value_t = 2.0, value_parser = super::sim::NOISE_COUNTS)]
     pub noise: f64,
     /// κ of the loop, in [0.01, 1]
     #[arg(long, default_value_t = DEFAULT_GAIN, value_parser = GAIN)]
@@ -131,8 +131,8 @@ pub struct BenchArgs {
     pub periods: u32,
     /// Half-buffers the DAC fills run ahead of the output: 2 as on the board
     /// (a command reaches the output 2 half-buffers after the next), 0 for
-    /// the fastest possible pipeline
-    #[arg(long, default_value_t = 2, value_parser = Count::<usize>::at_least(0))]
+    /// the fastest possible pipeline (at most 16)
+    #[arg(long, default_value_t = 2, value_parser = Count::<usize>::at_least(0).at_most(16, "the board fills 2 ahead"))]
     pub fill_lead: usize,
     /// Seed of the plant's ADC noise (0: the virtual device's default record)
     #[arg(long, default_value_t = 0, value_parser = Count::<u64>::at_least(0))]
@@ -294,8 +294,23 @@ impl Bench {
     }
 }
 
-/// `fricctl device control-bench`.
+/// `fricctl device control-bench`. A plant whose forces leave the ADC's
+/// range latches the device's saturation fault: that ends the bench with
+/// the verdict (exit 1) rather than the device's raw refusal.
 pub fn bench(a: &BenchArgs, json: bool) -> CliResult {
+    bench_run(a, json).map_err(|e| {
+        if e.msg.contains("a fault is latched") {
+            CliError::failure(format!(
+                "the loop did not settle: the plant latched a device fault ({}); its forces leave the ADC's range",
+                e.msg.trim_start_matches("device error: ")
+            ))
+        } else {
+            e
+        }
+    })
+}
+
+fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
     use scenario::*;
     // Every value is in its domain (the flags' parsers).
     if let Some(p) = &a.plot {

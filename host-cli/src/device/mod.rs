@@ -412,7 +412,9 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
         _ => None,
     };
     let mut c = open(t)?;
-    if !t.json {
+    // Which device answers: for a person at a terminal (a script reads the
+    // exit status and a refusal's one line).
+    if !t.json && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
         eprintln!("talking to {}", c.describe());
     }
     match cmd {

@@ -368,8 +368,19 @@ pub fn run(c: &mut Client, a: &SweepArgs, json: bool) -> CliResult {
     );
     bar.set_position(rows.len() as u64);
     for &x in &values[rows.len()..] {
-        bar.set_message(format!("{} = {x} {}", a.param.name(), a.param.unit()));
-        let (setting, freq, phi) = drive_of(ask(c, Request::SetDrive(a.param.apply(base, x)))?)?;
+        bar.set_message(format!(
+            "{} = {} {}",
+            a.param.name(),
+            short(x),
+            a.param.unit()
+        ));
+        // A value the device refuses is named by the end of the sweep that
+        // reaches it (the points lie between --from and --to).
+        let end = if x == a.from { "--from" } else { "--to" };
+        let (setting, freq, phi) = drive_of(
+            ask(c, Request::SetDrive(a.param.apply(base, x)))
+                .map_err(|e| e.renamed(&format!("--{}", a.param.name()), end))?,
+        )?;
         wait_status(c, Duration::from_secs(60), "settling of the ramps", |s| {
             s.settled
         })?;
