@@ -1,7 +1,37 @@
-//! Numeric argument values: counts read like every other number (`1e6`,
-//! `-5`), then checked, with the reason shown as `--flag: reason`.
+//! Numeric flags: the one place where a flag's text becomes a number.
+//!
+//! Every numeric flag of every command is read by one of two clap value
+//! parsers, [`Real`] (a real number in a stated domain) or [`Count`] (a whole
+//! number in a stated range, written like any number: `1e6`). Both refuse
+//! with one reason, printed by `main` as `--flag: reason` (exit status 2),
+//! and echo the value as the user typed it:
+//!
+//! * `'abc' is not a number`, `'nan' is not a number`;
+//! * the flag's own range: `must be > 0 (got -1)`, `must be < 1 (got inf)`;
+//! * the magnitude every real flag shares ([`MAX_MAGNITUDE`],
+//!   [`MIN_MAGNITUDE`]): `must be of magnitude ≤ 1e100 (got 1e308)`,
+//!   `must be 0 or of magnitude ≥ 1e-100 (got 1e-320)`. No physical input
+//!   of this tool comes near these bounds, and within them products and
+//!   quotients of a few inputs stay normal `f64` numbers, so no command
+//!   meets an overflow, an underflow or a subnormal number (which has lost
+//!   precision) that came from a flag;
+//! * counts: `must be a whole number (got 2.5)`, `must be ≤ 1000 (got 1e9)`.
+//!
+//! [`numbers_take_hyphens`] lets every numeric flag take a value that starts
+//! with `-` (`--tol -1`, `--amp-z=-2e-6`, `--v0 -inf`), so that a negative
+//! value reaches the parser and is refused by name instead of being read as
+//! an unknown option. Numbers in messages are written by [`short`].
 
+use std::ffi::OsStr;
 use std::fmt;
+use std::marker::PhantomData;
+
+use clap::builder::TypedValueParser;
+
+/// Largest magnitude of a real flag's value.
+pub const MAX_MAGNITUDE: f64 = 1e100;
+/// Smallest magnitude of a non-zero real flag's value.
+pub const MIN_MAGNITUDE: f64 = 1e-100;
 
 /// Why a value was refused; `main` prints it as `--flag: reason` (without
 /// clap's "invalid value" wrapper).
@@ -16,31 +46,306 @@ impl fmt::Display for Refused {
 
 impl std::error::Error for Refused {}
 
-/// A whole number ≥ `MIN`, written as any number (`1000`, `1e3`, `1000.0`):
-/// the clap value parser of counts. Negative values and values below `MIN`
-/// answer "must be ≥ MIN", fractions "must be a whole number", values beyond
-/// `T` "must be ≤ T::MAX".
-pub fn count<T, const MIN: u64>(s: &str) -> Result<T, Refused>
+/// A number as messages and text output write it: the shortest text that
+/// reads back as the same `f64`, in plain notation for magnitudes in
+/// `[1e-4, 1e9)` (`0.3`, `40000`) and in scientific notation outside
+/// (`1e308`, `2.5e-12`), so that no number takes more than 24 characters.
+pub fn short(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || !x.is_finite() || (1e-4..1e9).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// [`short`] as a `Display` value, for `format!` arguments.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Short(pub f64);
+
+impl fmt::Display for Short {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&short(self.0))
+    }
+}
+
+/// One end of a [`Real`] domain.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum End {
+    /// No bound (beyond the shared magnitude).
+    Open,
+    /// `x ≥ v` (lower end) or `x ≤ v` (upper end).
+    Incl(f64),
+    /// `x > v` (lower end) or `x < v` (upper end).
+    Excl(f64),
+}
+
+/// The domain of a real-valued flag, and its clap value parser
+/// (`value_parser = Real::positive()`): a finite number within the flag's
+/// own range and within the shared magnitude bounds (module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Real {
+    lo: End,
+    hi: End,
+    /// Appended to a range refusal (`must be < 1 (got 2); why`).
+    why: Option<&'static str>,
+    /// Smallest non-zero and largest magnitude.
+    magnitude: (f64, f64),
+}
+
+impl Real {
+    /// Any number (within the shared magnitude bounds).
+    pub const ANY: Real = Real {
+        lo: End::Open,
+        hi: End::Open,
+        why: None,
+        magnitude: (MIN_MAGNITUDE, MAX_MAGNITUDE),
+    };
+
+    /// `x > 0`.
+    pub const fn positive() -> Real {
+        Real::ANY.above(0.0)
+    }
+
+    /// `x ≥ 0`.
+    pub const fn non_negative() -> Real {
+        Real::ANY.at_least(0.0)
+    }
+
+    /// Also `x ≥ lo`.
+    pub const fn at_least(self, lo: f64) -> Real {
+        Real {
+            lo: End::Incl(lo),
+            ..self
+        }
+    }
+
+    /// Also `x > lo`.
+    pub const fn above(self, lo: f64) -> Real {
+        Real {
+            lo: End::Excl(lo),
+            ..self
+        }
+    }
+
+    /// Also `x ≤ hi`.
+    pub const fn at_most(self, hi: f64) -> Real {
+        Real {
+            hi: End::Incl(hi),
+            ..self
+        }
+    }
+
+    /// Also `x < hi`.
+    pub const fn below(self, hi: f64) -> Real {
+        Real {
+            hi: End::Excl(hi),
+            ..self
+        }
+    }
+
+    /// For a value sent to the device as an `f32`: its magnitude within the
+    /// normal `f32` numbers, rounded inwards to `1.2e-38 … 3.4e38`, instead
+    /// of the shared bounds, so that it neither overflows nor loses
+    /// precision on the way.
+    pub const fn single_precision(self) -> Real {
+        Real {
+            magnitude: (1.2e-38, 3.4e38),
+            ..self
+        }
+    }
+
+    /// The reason of the range, appended to a refusal.
+    pub const fn because(self, why: &'static str) -> Real {
+        Real {
+            why: Some(why),
+            ..self
+        }
+    }
+
+    /// Reads `text` as a number of this domain.
+    ///
+    /// # Errors
+    /// The reason it is not one (module docs), echoing `text`.
+    pub fn parse(&self, text: &str) -> Result<f64, Refused> {
+        let x: f64 = text
+            .trim()
+            .parse()
+            .map_err(|_| Refused(format!("'{text}' is not a number")))?;
+        self.check(x, text)
+    }
+
+    /// Checks a number given as `x` (from a file, or computed from flags),
+    /// echoing it as `shown`.
+    ///
+    /// # Errors
+    /// The reason it is outside the domain.
+    pub fn check(&self, x: f64, shown: &str) -> Result<f64, Refused> {
+        if x.is_nan() {
+            return Err(Refused(format!("'{shown}' is not a number")));
+        }
+        let why = self.why.map_or(String::new(), |w| format!("; {w}"));
+        let refuse = |rule: String| Err(Refused(format!("must be {rule} (got {shown}{why})")));
+        match self.lo {
+            End::Incl(lo) if x < lo => return refuse(format!("≥ {}", short(lo))),
+            End::Excl(lo) if x <= lo => return refuse(format!("> {}", short(lo))),
+            _ => {}
+        }
+        match self.hi {
+            End::Incl(hi) if x > hi => return refuse(format!("≤ {}", short(hi))),
+            End::Excl(hi) if x >= hi => return refuse(format!("< {}", short(hi))),
+            _ => {}
+        }
+        let a = x.abs();
+        // Whether the domain holds negative numbers (the message says
+        // "magnitude" only then) and 0.
+        let negatives = match self.lo {
+            End::Open => true,
+            End::Incl(lo) | End::Excl(lo) => lo < 0.0,
+        };
+        let zero = self.admits(0.0);
+        let (min, max) = self.magnitude;
+        if a > max {
+            let rule = if negatives {
+                format!("of magnitude ≤ {}", short(max))
+            } else {
+                format!("≤ {}", short(max))
+            };
+            return Err(Refused(format!("must be {rule} (got {shown})")));
+        }
+        if a != 0.0 && a < min {
+            let rule = match (zero, negatives) {
+                (true, _) => format!("0 or of magnitude ≥ {}", short(min)),
+                (false, true) => format!("of magnitude ≥ {}", short(min)),
+                (false, false) => format!("≥ {}", short(min)),
+            };
+            return Err(Refused(format!("must be {rule} (got {shown})")));
+        }
+        // −0 is 0 (so that no result or message shows "-0").
+        Ok(x + 0.0)
+    }
+
+    /// Whether `x` lies within the flag's own range (not the magnitude bounds).
+    fn admits(&self, x: f64) -> bool {
+        let lo = match self.lo {
+            End::Open => true,
+            End::Incl(lo) => x >= lo,
+            End::Excl(lo) => x > lo,
+        };
+        let hi = match self.hi {
+            End::Open => true,
+            End::Incl(hi) => x <= hi,
+            End::Excl(hi) => x < hi,
+        };
+        lo && hi
+    }
+}
+
+impl TypedValueParser for Real {
+    type Value = f64;
+
+    fn parse_ref(
+        &self,
+        cmd: &clap::Command,
+        arg: Option<&clap::Arg>,
+        value: &OsStr,
+    ) -> Result<f64, clap::Error> {
+        // clap's own parser for `Fn(&str)` attaches the flag and the value
+        // to the error (`main` prints them).
+        let me = *self;
+        (move |s: &str| me.parse(s)).parse_ref(cmd, arg, value)
+    }
+}
+
+/// A whole number in `[min, max]`, written as any number (`1000`, `1e3`,
+/// `1000.0`): the clap value parser of counts. Negative values and values
+/// below `min` answer "must be ≥ min", fractions "must be a whole number",
+/// values beyond `max` (at most `T`'s largest) "must be ≤ max".
+#[derive(Debug)]
+pub struct Count<T> {
+    min: u64,
+    max: u64,
+    why: Option<&'static str>,
+    ty: PhantomData<fn() -> T>,
+}
+
+impl<T> Clone for Count<T> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<T> Copy for Count<T> {}
+
+impl<T: Bounded> Count<T> {
+    /// At least `min`, at most `T`'s largest value.
+    pub const fn at_least(min: u64) -> Self {
+        Count {
+            min,
+            max: T::MAX_U64,
+            why: None,
+            ty: PhantomData,
+        }
+    }
+
+    /// Also at most `max`, for the reason `why` (appended to the refusal).
+    pub const fn at_most(self, max: u64, why: &'static str) -> Self {
+        Count {
+            max: if max < T::MAX_U64 { max } else { T::MAX_U64 },
+            why: Some(why),
+            ..self
+        }
+    }
+
+    /// Reads `s` as a count.
+    ///
+    /// # Errors
+    /// The reason it is not one, echoing `s`.
+    pub fn parse(&self, s: &str) -> Result<T, Refused>
+    where
+        T: TryFrom<u64>,
+    {
+        let x: f64 = s
+            .trim()
+            .parse()
+            .map_err(|_| Refused(format!("'{s}' is not a number")))?;
+        if x.is_nan() {
+            return Err(Refused(format!("'{s}' is not a number")));
+        }
+        let why = self.why.map_or(String::new(), |w| format!("; {w}"));
+        if x < self.min as f64 {
+            return Err(Refused(format!("must be ≥ {} (got {s})", self.min)));
+        }
+        // 2⁶⁴: `u64::MAX as f64` rounds up to it, so it is tested apart.
+        if x > self.max as f64 || x >= 18_446_744_073_709_551_616.0 {
+            return Err(Refused(format!("must be ≤ {} (got {s}{why})", self.max)));
+        }
+        if x.fract() != 0.0 {
+            return Err(Refused(format!("must be a whole number (got {s})")));
+        }
+        let n = x as u64;
+        if n > self.max {
+            return Err(Refused(format!("must be ≤ {} (got {s}{why})", self.max)));
+        }
+        T::try_from(n).map_err(|_| Refused(format!("must be ≤ {} (got {s}{why})", self.max)))
+    }
+}
+
+impl<T> TypedValueParser for Count<T>
 where
-    T: TryFrom<u64> + Bounded,
+    T: Bounded + TryFrom<u64> + Clone + Send + Sync + 'static,
 {
-    let x: f64 = s
-        .trim()
-        .parse()
-        .map_err(|_| Refused(format!("'{s}' is not a number")))?;
-    if x.is_nan() {
-        return Err(Refused(format!("'{s}' is not a number")));
+    type Value = T;
+
+    fn parse_ref(
+        &self,
+        cmd: &clap::Command,
+        arg: Option<&clap::Arg>,
+        value: &OsStr,
+    ) -> Result<T, clap::Error> {
+        let me = *self;
+        (move |s: &str| me.parse(s)).parse_ref(cmd, arg, value)
     }
-    if x < MIN as f64 {
-        return Err(Refused(format!("must be ≥ {MIN}")));
-    }
-    if x > T::MAX_U64 as f64 {
-        return Err(Refused(format!("must be ≤ {}", T::MAX_U64)));
-    }
-    if x.fract() != 0.0 {
-        return Err(Refused(format!("must be a whole number (got {s})")));
-    }
-    T::try_from(x as u64).map_err(|_| Refused(format!("must be ≤ {}", T::MAX_U64)))
 }
 
 /// The largest value of an unsigned count type.
@@ -61,32 +366,228 @@ impl Bounded for usize {
     const MAX_U64: u64 = usize::MAX as u64;
 }
 
+/// Whether an argument takes a number (its value type is `f64`, `u32`,
+/// `u64` or `usize`).
+pub fn is_numeric(a: &clap::Arg) -> bool {
+    use std::any::TypeId;
+    let t = a.get_value_parser().type_id();
+    a.get_action().takes_values()
+        && [
+            TypeId::of::<f64>(),
+            TypeId::of::<u32>(),
+            TypeId::of::<u64>(),
+            TypeId::of::<usize>(),
+        ]
+        .iter()
+        .any(|id| t == *id)
+}
+
+/// Lets every numeric option of `cmd` and its subcommands take a value that
+/// starts with `-` (`--tol -1`, `--amp-z -2e-6`, `--v0 -inf`): the value
+/// reaches the flag's parser, which refuses it by name where it is invalid,
+/// instead of being read as an unknown option.
+pub fn numbers_take_hyphens(cmd: clap::Command) -> clap::Command {
+    cmd.mut_args(|a| {
+        if is_numeric(&a) {
+            a.allow_hyphen_values(true)
+        } else {
+            a
+        }
+    })
+    .mut_subcommands(numbers_take_hyphens)
+}
+
+/// The one line `fricctl` prints for a clap error (without `error: `):
+/// `--flag: reason` for a value our parsers refused, `--flag: given twice`,
+/// `--flag: missing`, `--flag: unknown option`, clap's first line otherwise.
+pub fn clap_message(e: &clap::Error) -> String {
+    use clap::error::{ContextKind, ContextValue, ErrorKind};
+    use std::error::Error as _;
+    let ctx = |k: ContextKind| match e.get(k) {
+        Some(ContextValue::String(s)) => Some(s.clone()),
+        Some(ContextValue::Strings(v)) => Some(v.join(", ")),
+        _ => None,
+    };
+    let arg = ctx(ContextKind::InvalidArg)
+        .map(|a| a.split_whitespace().next().unwrap_or("").to_string())
+        .unwrap_or_default();
+    let msg = match e.kind() {
+        ErrorKind::ValueValidation if refused(e).is_some() => {
+            format!("{arg}: {}", refused(e).unwrap_or_default())
+        }
+        ErrorKind::InvalidValue if e.get(ContextKind::ValidValue).is_some() => {
+            let val = ctx(ContextKind::InvalidValue).unwrap_or_default();
+            let valid = ctx(ContextKind::ValidValue).unwrap_or_default();
+            format!("{arg}: invalid value '{val}' (one of: {valid})")
+        }
+        ErrorKind::InvalidValue | ErrorKind::ValueValidation => {
+            let val = ctx(ContextKind::InvalidValue).unwrap_or_default();
+            let reason = e
+                .source()
+                .map(|s| s.to_string())
+                .unwrap_or_else(|| "invalid value".to_string());
+            format!("{arg}: invalid value '{val}': {reason}")
+        }
+        ErrorKind::MissingRequiredArgument => {
+            let what = ctx(ContextKind::InvalidArg).unwrap_or_default();
+            format!(
+                "{}: missing",
+                what.split_whitespace().next().unwrap_or("argument")
+            )
+        }
+        ErrorKind::ArgumentConflict => {
+            let other = ctx(ContextKind::PriorArg).unwrap_or_default();
+            let other = other.split_whitespace().next().unwrap_or("");
+            // clap reports a flag given twice (`ArgAction::Set`) as a
+            // conflict with itself.
+            if other == arg {
+                format!("{arg}: given twice (give it once)")
+            } else {
+                format!("{arg}: cannot be used with {other}")
+            }
+        }
+        ErrorKind::UnknownArgument => format!(
+            "{}: unknown option",
+            ctx(ContextKind::InvalidArg).unwrap_or_default()
+        ),
+        _ => {
+            // Fall back to clap's first line.
+            let s = e.render().to_string();
+            s.lines()
+                .next()
+                .unwrap_or("invalid arguments")
+                .trim_start_matches("error: ")
+                .to_string()
+        }
+    };
+    msg
+}
+
+/// The reason of a value refused by one of our value parsers ([`Refused`]).
+fn refused(e: &clap::Error) -> Option<String> {
+    use std::error::Error as _;
+    e.source()
+        .and_then(|s| s.downcast_ref::<Refused>())
+        .map(|r| r.to_string())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    fn count<T: Bounded + TryFrom<u64>>(min: u64, s: &str) -> Result<T, Refused> {
+        Count::<T>::at_least(min).parse(s)
+    }
+
+    fn refused(s: &str) -> Refused {
+        Refused(s.to_string())
+    }
+
     #[test]
     fn counts_read_like_numbers() {
-        assert_eq!(count::<usize, 2>("1e6"), Ok(1_000_000));
-        assert_eq!(count::<usize, 2>("12"), Ok(12));
-        assert_eq!(count::<u32, 1>("3.0"), Ok(3));
-        assert_eq!(count::<usize, 2>("-5"), Err(Refused("must be ≥ 2".into())));
-        assert_eq!(count::<u32, 1>("0"), Err(Refused("must be ≥ 1".into())));
+        assert_eq!(count::<usize>(2, "1e6"), Ok(1_000_000));
+        assert_eq!(count::<usize>(2, "12"), Ok(12));
+        assert_eq!(count::<u32>(1, "3.0"), Ok(3));
         assert_eq!(
-            count::<u32, 1>("2.5"),
-            Err(Refused("must be a whole number (got 2.5)".into()))
+            count::<usize>(2, "-5"),
+            Err(refused("must be ≥ 2 (got -5)"))
+        );
+        assert_eq!(count::<u32>(1, "0"), Err(refused("must be ≥ 1 (got 0)")));
+        assert_eq!(
+            count::<u32>(1, "2.5"),
+            Err(refused("must be a whole number (got 2.5)"))
         );
         assert_eq!(
-            count::<u32, 1>("5e9"),
-            Err(Refused("must be ≤ 4294967295".into()))
+            count::<u32>(1, "5e9"),
+            Err(refused("must be ≤ 4294967295 (got 5e9)"))
+        );
+        assert_eq!(count::<u32>(1, "x"), Err(refused("'x' is not a number")));
+        assert_eq!(
+            count::<u32>(1, "NaN"),
+            Err(refused("'NaN' is not a number"))
         );
         assert_eq!(
-            count::<u32, 1>("x"),
-            Err(Refused("'x' is not a number".into()))
+            count::<u32>(1, "inf"),
+            Err(refused("must be ≤ 4294967295 (got inf)"))
         );
         assert_eq!(
-            count::<u32, 1>("inf"),
-            Err(Refused("must be ≤ 4294967295".into()))
+            count::<u64>(1, "1e300"),
+            Err(refused("must be ≤ 18446744073709551615 (got 1e300)"))
         );
+        // 2^64 rounds to u64::MAX as f64 but is not a u64.
+        assert_eq!(
+            count::<u64>(1, "18446744073709551616"),
+            Err(refused(
+                "must be ≤ 18446744073709551615 (got 18446744073709551616)"
+            ))
+        );
+        assert_eq!(
+            Count::<usize>::at_least(1)
+                .at_most(1000, "a bound")
+                .parse("1e9"),
+            Err(refused("must be ≤ 1000 (got 1e9; a bound)"))
+        );
+    }
+
+    #[test]
+    fn reals_name_the_limit_and_echo_the_value() {
+        let p = Real::positive();
+        assert_eq!(p.parse("0.5"), Ok(0.5));
+        assert_eq!(p.parse("-1"), Err(refused("must be > 0 (got -1)")));
+        assert_eq!(p.parse("-inf"), Err(refused("must be > 0 (got -inf)")));
+        assert_eq!(p.parse("inf"), Err(refused("must be ≤ 1e100 (got inf)")));
+        assert_eq!(
+            p.parse("1e308"),
+            Err(refused("must be ≤ 1e100 (got 1e308)"))
+        );
+        assert_eq!(
+            p.parse("1e-320"),
+            Err(refused("must be ≥ 1e-100 (got 1e-320)"))
+        );
+        assert_eq!(p.parse("nan"), Err(refused("'nan' is not a number")));
+        assert_eq!(p.parse("1,5"), Err(refused("'1,5' is not a number")));
+        let any = Real::ANY;
+        assert_eq!(any.parse("-0"), Ok(0.0));
+        assert_eq!(
+            any.parse("-1e308"),
+            Err(refused("must be of magnitude ≤ 1e100 (got -1e308)"))
+        );
+        assert_eq!(
+            any.parse("-1e-320"),
+            Err(refused("must be 0 or of magnitude ≥ 1e-100 (got -1e-320)"))
+        );
+        let unit = Real::ANY
+            .above(-1.0)
+            .below(1.0)
+            .because("|μ| = μ0 is sliding");
+        assert_eq!(
+            unit.parse("1e300"),
+            Err(refused("must be < 1 (got 1e300; |μ| = μ0 is sliding)"))
+        );
+        assert_eq!(
+            Real::non_negative().parse("1e-200"),
+            Err(refused("must be 0 or of magnitude ≥ 1e-100 (got 1e-200)"))
+        );
+    }
+
+    #[test]
+    fn short_numbers() {
+        assert_eq!(short(0.3), "0.3");
+        assert_eq!(short(-0.0), "-0");
+        assert_eq!(short(40e3), "40000");
+        assert_eq!(short(1e308), "1e308");
+        assert_eq!(short(1e-320), "1e-320");
+        assert_eq!(short(2.5e-12), "2.5e-12");
+        assert_eq!(short(f64::INFINITY), "inf");
+        for x in [
+            f64::MAX,
+            f64::MIN_POSITIVE,
+            5e-324,
+            1.0 / 3.0,
+            -7.123456789e-5,
+        ] {
+            assert!(short(x).len() <= 24, "{x}");
+            assert_eq!(short(x).parse::<f64>(), Ok(x));
+        }
     }
 }

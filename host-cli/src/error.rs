@@ -27,6 +27,18 @@ impl CliError {
             msg: format!("{} (at {at})", self.msg),
         }
     }
+    /// The same error with a leading `from:` (a flag name) replaced by
+    /// `to:`: for a value a command derived from another flag (`--v-rel`
+    /// gives the `--v0` that a shared function checks).
+    pub fn renamed(self, from: &str, to: &str) -> Self {
+        match self.msg.strip_prefix(from) {
+            Some(rest) if rest.starts_with(':') => CliError {
+                code: self.code,
+                msg: format!("{to}{rest}"),
+            },
+            _ => self,
+        }
+    }
     /// The computation or I/O failed (exit status 1).
     pub fn failure(msg: impl Into<String>) -> Self {
         CliError {

@@ -15,6 +15,7 @@ use model_core::select::{self, SelectError, Value};
 use model_core::{Libm, Scene};
 use serde::Serialize;
 
+use crate::args::{short, Count, Real};
 use crate::error::{CliError, CliResult};
 
 /// How μ is computed.
@@ -167,19 +168,24 @@ pub fn v_rel(vc: &CriticalVelocity<f64>, v0: f64) -> Option<f64> {
 }
 
 /// Velocity from a relative one: `x·v_c` (forward v_c for x > 0, backward for x < 0).
+/// `x` is in its domain (the flag's parser); the product must be a normal
+/// number (or 0).
 pub fn from_rel(vc: &CriticalVelocity<f64>, x: f64, flag: &str) -> CliResult<f64> {
-    if !x.is_finite() {
-        return Err(CliError::usage(format!(
-            "--{flag}: must be a finite number"
-        )));
-    }
     let c = if x > 0.0 { vc.forward } else { vc.backward };
     if x != 0.0 && c == 0.0 {
         return Err(CliError::usage(format!(
             "--{flag}: the critical velocity in this direction is 0 (μ = ±μ0 at any speed); give --v0"
         )));
     }
-    Ok(x * c)
+    let v = x * c;
+    if !v.is_finite() || (v != 0.0 && v.abs() < f64::MIN_POSITIVE) {
+        return Err(CliError::usage(format!(
+            "--{flag}: {}·v_c with v_c = {} over- or underflows the number type",
+            short(x),
+            short(c)
+        )));
+    }
+    Ok(v)
 }
 
 /// How to compute μ: the flags shared by `mu`, `curve` and `map`.
@@ -188,11 +194,11 @@ pub struct MethodArgs {
     /// Computation method
     #[arg(long, value_enum, default_value_t = Method::Auto)]
     pub method: Method,
-    /// Steps per period for --method fixed
-    #[arg(long, default_value_t = 10_000, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 1>)]
-    pub steps_per_period: u32,
+    /// Steps per period for --method fixed (default 10000; refused with the other methods)
+    #[arg(long, value_parser = Count::<u32>::at_least(1))]
+    pub steps_per_period: Option<u32>,
     /// Error tolerance of --method auto, in units of μ0: the cheapest method whose guaranteed bound is within it answers (default: the exact solver's bound; 1e-9 for a curved --profile)
-    #[arg(long, value_name = "TOL")]
+    #[arg(long, value_name = "TOL", value_parser = Real::positive())]
     pub tol: Option<f64>,
     /// The contact's shape (set from `--profile` by the command, not a flag
     /// of its own): a curved profile goes to the MDR quadrature.
@@ -205,11 +211,14 @@ pub struct MethodArgs {
 /// part of the bound where that is larger.
 pub const PROFILE_TOL: f64 = 1e-9;
 
+/// Steps per period of `--method fixed` when `--steps-per-period` is not given.
+pub const DEFAULT_STEPS_PER_PERIOD: u32 = 10_000;
+
 impl Default for MethodArgs {
     fn default() -> Self {
         MethodArgs {
             method: Method::Auto,
-            steps_per_period: 10_000,
+            steps_per_period: None,
             tol: None,
             profile: Profile::Flat,
         }
@@ -217,19 +226,36 @@ impl Default for MethodArgs {
 }
 
 impl MethodArgs {
-    /// Checks the flags that do not depend on the scene.
+    /// Checks the flags that do not depend on the scene: `--tol` only with
+    /// `--method auto`, `--steps-per-period` only with `--method fixed`
+    /// (a flag that would be ignored is refused).
     pub fn validate(&self) -> CliResult {
-        if let Some(t) = self.tol {
-            if !(t.is_finite() && t > 0.0) {
-                return Err(CliError::usage("--tol: must be a finite number > 0"));
-            }
-            if self.method != Method::Auto {
-                return Err(CliError::usage(
-                    "--tol: only --method auto chooses by tolerance (the other methods report their bound)",
-                ));
-            }
+        if self.tol.is_some() && self.method != Method::Auto {
+            return Err(CliError::usage(
+                "--tol: only --method auto chooses by tolerance (the other methods report their bound)",
+            ));
+        }
+        if self.steps_per_period.is_some() && self.method != Method::Fixed {
+            return Err(CliError::usage(
+                "--steps-per-period: only with --method fixed (the other methods do not step)",
+            ));
         }
         Ok(())
+    }
+
+    /// Steps per period of `--method fixed`.
+    pub fn steps(&self) -> u32 {
+        self.steps_per_period.unwrap_or(DEFAULT_STEPS_PER_PERIOD)
+    }
+
+    /// The flag that set the step count: `--steps-per-period`, or
+    /// `--method` when the default is used.
+    pub fn steps_flag(&self) -> &'static str {
+        if self.steps_per_period.is_some() {
+            "--steps-per-period"
+        } else {
+            "--method"
+        }
     }
 }
 
@@ -240,7 +266,7 @@ impl MethodArgs {
 /// fixed-step run that does not converge is *not* an error here: it returns
 /// `converged: false` with `mu: null`.
 pub fn mu_at(scene: &Scene<f64>, v0: f64, m: &MethodArgs) -> CliResult<MuOutcome> {
-    let (method, steps) = (m.method, m.steps_per_period);
+    let (method, steps) = (m.method, m.steps());
     if !v0.is_finite() {
         return Err(CliError::usage("--v0: must be a finite number"));
     }
@@ -368,17 +394,19 @@ pub fn mu_at(scene: &Scene<f64>, v0: f64, m: &MethodArgs) -> CliResult<MuOutcome
                 }
                 Err(FixedStepError::TooFewSteps { min_steps }) => {
                     return Err(CliError::usage(format!(
-                        "--steps-per-period: this drive needs at least {min_steps} (fewer cannot resolve its stick windows: the error bound would exceed 10 % of mu0)"
+                        "{}: this drive needs at least {min_steps} steps per period (fewer cannot resolve its stick windows: the error bound would exceed 10 % of mu0)",
+                        m.steps_flag()
                     )))
                 }
                 Err(FixedStepError::PrecisionLimit { max_steps }) => {
                     return Err(CliError::usage(format!(
-                        "--steps-per-period: at most {max_steps} (beyond it rounding grows faster than the discretisation error shrinks)"
+                        "{}: at most {max_steps} steps per period (beyond it rounding grows faster than the discretisation error shrinks)",
+                        m.steps_flag()
                     )))
                 }
                 Err(FixedStepError::IllConditioned) => {
                     return Err(CliError::failure(
-                        "the fixed-step method cannot resolve this drive in f64 (dux-rel too large): its error bound exceeds 1 % of mu0 at any step count",
+                        "the fixed-step method cannot resolve this drive in f64 (kx·dux/(mu0·kz·uz0) too large): its error bound exceeds 1 % of mu0 at any step count",
                     ))
                 }
                 Err(FixedStepError::BadVelocity(e)) => {
@@ -444,10 +472,15 @@ fn lift_off_at(scene: &Scene<f64>, v0: f64, m: &MethodArgs, out: &mut MuOutcome)
             }
         }
         Method::Fixed => {
-            let r = stepping::mu_over_mu0::<f64, Libm>(&d, v, m.steps_per_period)
-                .map_err(lift_off_failure)?;
+            let r = stepping::mu_over_mu0::<f64, Libm>(&d, v, m.steps()).map_err(|e| {
+                let e = lift_off_failure(e);
+                match e.msg.strip_prefix("--steps-per-period:") {
+                    Some(rest) => CliError::usage(format!("{}:{rest}", m.steps_flag())),
+                    None => e,
+                }
+            })?;
             set(out, r.mu_over_mu0, "fixed", r.error_bound);
-            out.steps_per_period = Some(m.steps_per_period);
+            out.steps_per_period = Some(m.steps());
             // One contact window is the exact steady state (the state resets
             // at every landing): one period, nothing to converge.
             out.periods = Some(1);
@@ -619,13 +652,13 @@ pub fn lift_off_failure(e: LiftOffError) -> CliError {
     match e {
         LiftOffError::BadVelocity(s) => CliError::usage(format!("--{s}")),
         LiftOffError::TooFewSteps { min_steps } => CliError::usage(format!(
-            "--steps-per-period: this lift-off drive needs at least {min_steps} (fewer: the stepping's bound 10(1 + a + b)/N^2 would exceed 10 % of mu0)"
+            "--steps-per-period: this lift-off drive needs at least {min_steps} steps per period (fewer: the stepping's bound 10(1 + a + b)/N^2 would exceed 10 % of mu0)"
         )),
         LiftOffError::PrecisionLimit { max_steps } => CliError::usage(format!(
-            "--steps-per-period: at most {max_steps} (beyond it rounding grows faster than the discretisation error shrinks)"
+            "--steps-per-period: at most {max_steps} steps per period (beyond it rounding grows faster than the discretisation error shrinks)"
         )),
         LiftOffError::IllConditioned => CliError::failure(
-            "the lift-off solver cannot resolve this drive in f64 (dux-rel or duz-rel too large): its error bound would exceed 1 % of mu0",
+            "the lift-off solver cannot resolve this drive in f64 (duz/uz0 or kx·dux/(mu0·kz·uz0) too large): its error bound would exceed 1 % of mu0",
         ),
         other => CliError::failure(format!("lift-off solver failed: {other}")),
     }
@@ -636,7 +669,7 @@ pub fn exact_failure(e: ExactError) -> CliError {
     match e {
         ExactError::BadVelocity(s) => CliError::usage(format!("--{s}")),
         ExactError::IllConditioned => CliError::failure(
-            "the exact solver cannot resolve this drive in f64 (dux-rel too large): its error bound would exceed 1 % of mu0",
+            "the exact solver cannot resolve this drive in f64 (kx·dux/(mu0·kz·uz0) too large): its error bound would exceed 1 % of mu0",
         ),
         other => CliError::failure(format!("exact solver failed: {other}")),
     }

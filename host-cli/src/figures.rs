@@ -549,9 +549,7 @@ fn profiles(out: &Path) -> CliResult {
 
 /// `fricctl figures --out DIR`.
 pub fn run(out: &Path, map_res: usize) -> CliResult {
-    if !(2..=2000).contains(&map_res) {
-        return Err(CliError::usage("--map-res: must be between 2 and 2000"));
-    }
+    // `map_res` is in 2..=2000 (the flag's parser).
     prepare_out_dir(out)?;
     fig2(out)?;
     fig3(
@@ -585,7 +583,7 @@ pub fn run(out: &Path, map_res: usize) -> CliResult {
             &phis,
             &cs,
             class.clone(),
-            &p,
+            Some(&p),
             None,
         )?;
     }

@@ -27,7 +27,9 @@ use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use serde::Serialize;
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
+use crate::args::short;
 use crate::error::{CliError, CliResult};
+use crate::scene_args::domain;
 use crate::sweep_file::SweepRow;
 
 /// A fittable contact parameter.
@@ -247,6 +249,15 @@ pub fn fit(rows: &[SweepRow], which: &[FitParam]) -> CliResult<(FitResult, Vec<R
     let first = rows
         .first()
         .ok_or_else(|| CliError::usage("--data: the sweep file has no rows"))?;
+    // The device model's contact, in the scene's domain (the flags' check).
+    for (name, v, d) in [
+        ("model_mu0", first.model_mu0, domain::MU0),
+        ("model_kz", first.model_kz, domain::KZ),
+        ("model_kx", first.model_kx, domain::KX),
+    ] {
+        d.check(v, &short(v))
+            .map_err(|r| CliError::usage(format!("--data: line 2: {name} {r}")))?;
+    }
     let (mu0_model, kz, kx_model) = (first.model_mu0, first.model_kz, first.model_kx);
     let used: Vec<(usize, SweepRow)> = rows
         .iter()

@@ -23,13 +23,13 @@ mod sweep_file;
 use std::io::Write;
 use std::process::ExitCode;
 
-use clap::error::{ContextKind, ContextValue, ErrorKind};
-use clap::{Parser, Subcommand};
+use clap::error::ErrorKind;
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// Model tool for dual-mode (normal + tangential) ultrasonic friction control
 /// (Popov & Li single-spring model).
 #[derive(Parser, Debug)]
-#[command(name = "fricctl", version, about, long_about = None)]
+#[command(name = "fricctl", version, about, long_about = None, after_help = EXIT_STATUS)]
 struct Cli {
     #[command(subcommand)]
     cmd: Command,
@@ -74,14 +74,21 @@ enum Command {
         /// Output directory (created if missing)
         #[arg(long, value_name = "DIR")]
         out: std::path::PathBuf,
-        /// Map resolution (cells per axis, ≥ 2)
-        #[arg(long, default_value_t = 160, allow_hyphen_values = true, value_parser = args::count::<usize, 2>)]
+        /// Map resolution (cells per axis, 2 to 2000)
+        #[arg(long, default_value_t = 160, value_parser = args::Count::<usize>::at_least(2).at_most(2000, "a finer map is not drawn"))]
         map_res: usize,
     },
 }
 
+/// The exit statuses, shown by `fricctl --help`.
+const EXIT_STATUS: &str = "Exit status: 0 success; 1 the computation or the device failed, or a result is printed but doubtful (the message says why); 2 bad input (one line naming the flag); 130 interrupted (Ctrl-C).";
+
 fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
+    // Every numeric flag takes values that start with `-` (args module).
+    let parsed = args::numbers_take_hyphens(Cli::command())
+        .try_get_matches()
+        .and_then(|m| Cli::from_arg_matches(&m));
+    let cli = match parsed {
         Ok(c) => c,
         Err(e) => return clap_error(e),
     };
@@ -126,69 +133,7 @@ fn clap_error(e: clap::Error) -> ExitCode {
         }
         _ => {}
     }
-    let ctx = |k: ContextKind| match e.get(k) {
-        Some(ContextValue::String(s)) => Some(s.clone()),
-        Some(ContextValue::Strings(v)) => Some(v.join(", ")),
-        _ => None,
-    };
-    let arg = ctx(ContextKind::InvalidArg)
-        .map(|a| a.split_whitespace().next().unwrap_or("").to_string())
-        .unwrap_or_default();
-    let msg = match e.kind() {
-        ErrorKind::ValueValidation if refused(&e).is_some() => {
-            format!("{arg}: {}", refused(&e).unwrap_or_default())
-        }
-        ErrorKind::InvalidValue if e.get(ContextKind::ValidValue).is_some() => {
-            let val = ctx(ContextKind::InvalidValue).unwrap_or_default();
-            let valid = ctx(ContextKind::ValidValue).unwrap_or_default();
-            format!("{arg}: invalid value '{val}' (one of: {valid})")
-        }
-        ErrorKind::InvalidValue | ErrorKind::ValueValidation => {
-            let val = ctx(ContextKind::InvalidValue).unwrap_or_default();
-            let reason = e
-                .source()
-                .map(|s| s.to_string())
-                .unwrap_or_else(|| "invalid value".to_string());
-            format!("{arg}: invalid value '{val}': {reason}")
-        }
-        ErrorKind::MissingRequiredArgument => {
-            let what = ctx(ContextKind::InvalidArg).unwrap_or_default();
-            format!(
-                "{}: missing",
-                what.split_whitespace().next().unwrap_or("argument")
-            )
-        }
-        ErrorKind::ArgumentConflict => {
-            let other = ctx(ContextKind::PriorArg).unwrap_or_default();
-            format!(
-                "{arg}: cannot be used with {}",
-                other.split_whitespace().next().unwrap_or("")
-            )
-        }
-        ErrorKind::UnknownArgument => format!(
-            "{}: unknown option",
-            ctx(ContextKind::InvalidArg).unwrap_or_default()
-        ),
-        _ => {
-            // Fall back to clap's first line.
-            let s = e.render().to_string();
-            s.lines()
-                .next()
-                .unwrap_or("invalid arguments")
-                .trim_start_matches("error: ")
-                .to_string()
-        }
-    };
+    let msg = args::clap_message(&e);
     eprintln!("error: {msg}");
     ExitCode::from(2)
-}
-
-use std::error::Error as _;
-
-/// The reason of a value refused by one of our value parsers
-/// ([`args::Refused`]), printed as `--flag: reason`.
-fn refused(e: &clap::Error) -> Option<String> {
-    e.source()
-        .and_then(|s| s.downcast_ref::<args::Refused>())
-        .map(|r| r.to_string())
 }

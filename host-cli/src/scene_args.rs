@@ -2,14 +2,15 @@
 //! file, or the paper's dimensionless groups.
 
 use std::f64::consts::TAU;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
 use model_core::mdr::Profile;
 use model_core::scene::ContactMode;
-use model_core::{Groups, Scene, SceneParams};
+use model_core::{Groups, Param, Scene, SceneError, SceneParams};
 use serde::Deserialize;
 
+use crate::args::short;
 use crate::error::{CliError, CliResult};
 
 /// Scene flags (see `fricctl --help`).
@@ -19,53 +20,53 @@ pub struct SceneArgs {
     #[arg(long, value_name = "FILE", help_heading = "Scene")]
     pub scene: Option<PathBuf>,
     /// Local coefficient of friction μ0 (> 0)
-    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    #[arg(long, value_parser = domain::MU0, help_heading = "Scene")]
     pub mu0: Option<f64>,
     /// Normal contact stiffness k_z, N/m
-    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    #[arg(long, value_parser = domain::KZ, help_heading = "Scene")]
     pub kz: Option<f64>,
     /// Tangential contact stiffness k_x, N/m
-    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    #[arg(long, value_parser = domain::KX, help_heading = "Scene")]
     pub kx: Option<f64>,
     /// Mean indentation u_z0, m
-    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    #[arg(long, value_parser = domain::UZ0, help_heading = "Scene")]
     pub uz0: Option<f64>,
     /// Normal oscillation amplitude Δu_z, m (≥ uz0: the contact lifts off once per period, where the command supports it)
-    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    #[arg(long, value_parser = domain::DUZ, help_heading = "Scene")]
     pub duz: Option<f64>,
     /// Tangential oscillation amplitude Δu_x, m
-    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    #[arg(long, value_parser = domain::DUX, help_heading = "Scene")]
     pub dux: Option<f64>,
     /// Drive frequency f, Hz
-    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    #[arg(long, value_parser = domain::FREQ, help_heading = "Scene")]
     pub freq: Option<f64>,
     /// Drive angular frequency ω, rad/s (instead of --freq)
-    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    #[arg(long, value_parser = domain::OMEGA, help_heading = "Scene")]
     pub omega: Option<f64>,
     /// Phase φ of the tangential oscillation, degrees (default 0)
-    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    #[arg(long, value_parser = domain::PHI, help_heading = "Scene")]
     pub phi_deg: Option<f64>,
     /// Phase φ, radians (instead of --phi-deg)
-    #[arg(long, allow_hyphen_values = true, help_heading = "Scene")]
+    #[arg(long, value_parser = domain::PHI, help_heading = "Scene")]
     pub phi_rad: Option<f64>,
     /// Dimensionless: Δu_z/u_z0 (eq. 25; ≥ 1: lift-off); with the groups, μ0 = k_z = k_x = u_z0 = ω = 1 and --v0 is in units of ωW0 = ωμ0k_z u_z0/k_x
     #[arg(
         long,
-        allow_hyphen_values = true,
+        value_parser = domain::DUZ_REL,
         help_heading = "Scene (dimensionless, eq. 25/26)"
     )]
     pub duz_rel: Option<f64>,
     /// Dimensionless: k_xΔu_x/(μ0 k_z u_z0) (eq. 25)
     #[arg(
         long,
-        allow_hyphen_values = true,
+        value_parser = domain::DUX_REL,
         help_heading = "Scene (dimensionless, eq. 25/26)"
     )]
     pub dux_rel: Option<f64>,
     /// Dimensionless: k_xΔu_x/(μ0 k_z Δu_z) (eq. 26, instead of --dux-rel)
     #[arg(
         long,
-        allow_hyphen_values = true,
+        value_parser = domain::RATIO,
         help_heading = "Scene (dimensionless, eq. 25/26)"
     )]
     pub ratio: Option<f64>,
@@ -93,7 +94,7 @@ pub struct ProfileArgs {
     #[arg(long, value_enum, help_heading = "Contact")]
     pub profile: Option<ProfileKind>,
     /// Exponent n of --profile power (f = c·rⁿ, n > 0; refused with the other profiles)
-    #[arg(long, allow_hyphen_values = true, help_heading = "Contact")]
+    #[arg(long, value_parser = domain::EXPONENT, help_heading = "Contact")]
     pub exponent: Option<f64>,
 }
 
@@ -124,12 +125,8 @@ impl ProfileArgs {
             (ProfileKind::Power, None) => Err(CliError::usage(
                 "--exponent: missing (--profile power needs --exponent n > 0)",
             )),
-            (ProfileKind::Power, Some(n)) => {
-                if !(n.is_finite() && n > 0.0) {
-                    return Err(CliError::usage("--exponent: must be a finite number > 0"));
-                }
-                Ok(Profile::Power(n))
-            }
+            // In its domain: the flag's parser or the file's check.
+            (ProfileKind::Power, Some(n)) => Ok(Profile::Power(n)),
             (k, Some(_)) => Err(CliError::usage(format!(
                 "--exponent: only with --profile power (the {} profile has {})",
                 k.name(),
@@ -166,8 +163,46 @@ impl ProfileKind {
 pub fn profile_text(p: &Profile<f64>) -> String {
     match p.exponent() {
         None => p.name().to_string(),
-        Some(n) => format!("{} (n = {n})", p.name()),
+        Some(n) => format!("{} (n = {})", p.name(), short(n)),
     }
+}
+
+/// The domain of every scene input: one check shared by the flags (as their
+/// value parsers) and the keys of a scene file ([`SceneArgs::resolve_with`]),
+/// on top of the magnitude every numeric input shares
+/// ([`crate::args::MAX_MAGNITUDE`], [`crate::args::MIN_MAGNITUDE`]: no
+/// subnormal and no absurdly large input). `model_core::Scene` then checks
+/// what depends on several inputs (lift-off, the derived scales), and
+/// [`check_reach`] the amplitudes the solvers resolve in `f64`.
+pub mod domain {
+    use crate::args::Real;
+
+    /// μ0 > 0.
+    pub const MU0: Real = Real::positive();
+    /// k_z > 0, N/m.
+    pub const KZ: Real = Real::positive();
+    /// k_x > 0, N/m.
+    pub const KX: Real = Real::positive();
+    /// u_z0 > 0, m.
+    pub const UZ0: Real = Real::positive();
+    /// Δu_z ≥ 0, m.
+    pub const DUZ: Real = Real::non_negative();
+    /// Δu_x ≥ 0, m.
+    pub const DUX: Real = Real::non_negative();
+    /// f > 0, Hz.
+    pub const FREQ: Real = Real::positive();
+    /// ω > 0, rad/s.
+    pub const OMEGA: Real = Real::positive();
+    /// φ, degrees or radians (|φ| ≤ 10⁴ rad is checked with the unit).
+    pub const PHI: Real = Real::ANY;
+    /// Δu_z/u_z0 ≥ 0.
+    pub const DUZ_REL: Real = Real::non_negative();
+    /// k_xΔu_x/(μ0 k_z u_z0) ≥ 0.
+    pub const DUX_REL: Real = Real::non_negative();
+    /// k_xΔu_x/(μ0 k_z Δu_z) ≥ 0.
+    pub const RATIO: Real = Real::non_negative();
+    /// Power-law exponent n > 0.
+    pub const EXPONENT: Real = Real::positive();
 }
 
 /// The scene file's keys.
@@ -188,6 +223,139 @@ struct SceneFile {
     exponent: Option<f64>,
 }
 
+impl SceneFile {
+    /// Reads and checks a scene file: every key in its [`domain`] (the
+    /// flags' own check), refusals naming `--scene`, the file and the key.
+    fn read(p: &Path) -> CliResult<SceneFile> {
+        if p.is_dir() {
+            return Err(CliError::usage(format!(
+                "--scene: {} is a directory",
+                p.display()
+            )));
+        }
+        let text = std::fs::read_to_string(p)
+            .map_err(|e| CliError::usage(format!("--scene: cannot read {}: {e}", p.display())))?;
+        let f = toml::from_str::<SceneFile>(&text).map_err(|e| {
+            let m = e.message().replace('\n', " ");
+            CliError::usage(format!("--scene: {}: {}", p.display(), m.trim()))
+        })?;
+        for (key, x, d) in [
+            ("mu0", f.mu0, domain::MU0),
+            ("kz", f.kz, domain::KZ),
+            ("kx", f.kx, domain::KX),
+            ("uz0", f.uz0, domain::UZ0),
+            ("duz", f.duz, domain::DUZ),
+            ("dux", f.dux, domain::DUX),
+            ("freq", f.freq, domain::FREQ),
+            ("omega", f.omega, domain::OMEGA),
+            ("phi_deg", f.phi_deg, domain::PHI),
+            ("phi_rad", f.phi_rad, domain::PHI),
+            ("exponent", f.exponent, domain::EXPONENT),
+        ] {
+            if let Some(x) = x {
+                d.check(x, &short(x))
+                    .map_err(|r| CliError::usage(format!("--scene: {}: {key} {r}", p.display())))?;
+            }
+        }
+        Ok(f)
+    }
+}
+
+/// Which flag gave each scene quantity (`--duz`, `--duz-rel`, `--scene`, …),
+/// so that an error names a flag the user gave.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Given {
+    /// μ0.
+    pub mu0: &'static str,
+    /// k_z.
+    pub kz: &'static str,
+    /// k_x.
+    pub kx: &'static str,
+    /// u_z0.
+    pub uz0: &'static str,
+    /// Δu_z (`--duz`, `--duz-rel` or `--scene`).
+    pub duz: &'static str,
+    /// Δu_x (`--dux`, `--dux-rel`, `--ratio` or `--scene`).
+    pub dux: &'static str,
+    /// ω (`--freq`, `--omega` or `--scene`).
+    pub omega: &'static str,
+    /// φ (`--phi-deg`, `--phi-rad`, `--scene`, or the default 0: `--phi-deg`).
+    pub phi: &'static str,
+}
+
+impl Given {
+    /// The flag that gave parameter `p` (a velocity: `--v0`).
+    pub fn flag(&self, p: Param) -> &'static str {
+        match p {
+            Param::Mu0 => self.mu0,
+            Param::Kz => self.kz,
+            Param::Kx => self.kx,
+            Param::Uz0 => self.uz0,
+            Param::Duz | Param::DuzRel => self.duz,
+            Param::Dux | Param::DuxRel | Param::Ratio => self.dux,
+            Param::Omega => self.omega,
+            Param::Phi => self.phi,
+            Param::Velocity => "--v0",
+        }
+    }
+
+    /// The one-line usage error of a scene refusal, naming the flag that
+    /// gave the parameter (for a scene file: `--scene` and the key).
+    pub fn error(&self, e: SceneError) -> CliError {
+        let p = match e {
+            SceneError::NonFinite(p)
+            | SceneError::NotPositive(p)
+            | SceneError::Negative(p)
+            | SceneError::OutOfRange(p) => p,
+            SceneError::LiftOff => Param::Duz,
+            SceneError::RatioNeedsNormalAmplitude => Param::Ratio,
+        };
+        let flag = self.flag(p);
+        let what = match e {
+            SceneError::NonFinite(_) => "must be a finite number".to_string(),
+            SceneError::NotPositive(_) => "must be > 0".to_string(),
+            SceneError::Negative(_) => "must be ≥ 0".to_string(),
+            SceneError::LiftOff if flag == "--duz-rel" => {
+                "must be < 1 for this command (Δu_z ≥ u_z0 lifts the contact off the plane)"
+                    .to_string()
+            }
+            SceneError::LiftOff => {
+                "must be < uz0 for this command (the normal oscillation would lift the contact off the plane)"
+                    .to_string()
+            }
+            SceneError::RatioNeedsNormalAmplitude => {
+                "needs --duz-rel > 0 (it is kx·dux/(mu0·kz·duz))".to_string()
+            }
+            SceneError::OutOfRange(Param::Velocity) => {
+                "v0/(ωW0) over- or underflows the number type with this scene".to_string()
+            }
+            SceneError::OutOfRange(_) => {
+                "with the other inputs the scene's derived scales (W0 = μ0·kz·uz0/kx, ωW0, the groups) over- or underflow the number type".to_string()
+            }
+        };
+        if flag == "--scene" {
+            CliError::usage(format!("--scene: {}: {what}", p.name()))
+        } else {
+            CliError::usage(format!("{flag}: {what}"))
+        }
+    }
+
+    /// The flags of a dimensionless scene (`--duz-rel` with `--dux-rel` or
+    /// `--ratio`); the unit quantities are named by `--duz-rel`.
+    fn dimensionless(ratio: bool, phi: &'static str) -> Given {
+        Given {
+            mu0: "--duz-rel",
+            kz: "--duz-rel",
+            kx: "--duz-rel",
+            uz0: "--duz-rel",
+            duz: "--duz-rel",
+            dux: if ratio { "--ratio" } else { "--dux-rel" },
+            omega: "--duz-rel",
+            phi,
+        }
+    }
+}
+
 /// A validated scene and how it was given.
 #[derive(Debug, Clone, Copy)]
 pub struct ResolvedScene {
@@ -200,10 +368,60 @@ pub struct ResolvedScene {
     /// profile the scene's u_z0 is the mean indentation d0 and k_z/k_x is E*/G*
     /// (`model_core::mdr`); `select::mu_within_profile` computes μ for it.
     pub profile: Profile<f64>,
+    /// Which flag gave each quantity (for errors).
+    pub given: Given,
 }
 
-fn scene_err(e: model_core::SceneError) -> CliError {
-    CliError::usage(format!("--{e}"))
+impl ResolvedScene {
+    /// The dimensionless velocity `v0/(ωW0)` of a velocity given by `flag`,
+    /// refused by name when it over- or underflows.
+    ///
+    /// # Errors
+    /// One line naming `flag`.
+    pub fn velocity(&self, v0: f64, flag: &str) -> CliResult<f64> {
+        self.scene.dimensionless_velocity(v0).map_err(|_| {
+            CliError::usage(format!(
+                "{flag}: {} over the scene's velocity scale ωW0 = {} over- or underflows the number type",
+                short(v0),
+                short(self.scene.velocity_scale())
+            ))
+        })
+    }
+}
+
+/// Largest `1 + b` (`1 + a + b` with lift-off) the solvers resolve in `f64`:
+/// beyond it their precision part of the error bound exceeds 1 % of μ0 and
+/// they refuse the drive as ill-conditioned (`exact::ILL_CONDITIONED_AT`).
+pub fn reach_limit() -> f64 {
+    model_core::exact::ILL_CONDITIONED_AT / model_core::exact::precision_constant::<f64>()
+}
+
+/// Refuses, naming the flag that gave it, a drive whose amplitudes the
+/// solvers cannot resolve in `f64` ([`reach_limit`]): `a` = Δu_z/u_z0 given
+/// by `flag_a`, `b` = k_xΔu_x/(μ0 k_z u_z0) given by `flag_b`.
+///
+/// # Errors
+/// One line naming the flag of the amplitude that is too large.
+pub fn check_reach(a: f64, b: f64, flag_a: &str, flag_b: &str) -> CliResult {
+    let limit = reach_limit();
+    let a_part = if a >= 1.0 { a } else { 0.0 };
+    if 1.0 + a_part + b <= limit {
+        return Ok(());
+    }
+    let (flag, what, x) = if b >= a_part {
+        (flag_b, "kx·dux/(mu0·kz·uz0)", b)
+    } else {
+        (flag_a, "duz/uz0", a)
+    };
+    let flag = if flag == "--scene" {
+        format!("--scene: {}", if b >= a_part { "dux" } else { "duz" })
+    } else {
+        flag.to_string()
+    };
+    Err(CliError::usage(format!(
+        "{flag}: gives {what} = {x:.3e}; the solvers resolve 1 + duz/uz0 + kx·dux/(mu0·kz·uz0) ≤ {} in f64 (beyond, their error bound exceeds 1 % of mu0)",
+        short(limit)
+    )))
 }
 
 impl SceneArgs {
@@ -227,58 +445,68 @@ impl SceneArgs {
     /// `model_core::model::liftoff`).
     pub fn resolve_with(&self, contact: ContactMode) -> CliResult<ResolvedScene> {
         let dimless = self.duz_rel.is_some() || self.dux_rel.is_some() || self.ratio.is_some();
-        if dimless {
-            return self.resolve_dimensionless(contact);
-        }
+        let rs = if dimless {
+            self.resolve_dimensionless(contact)?
+        } else {
+            self.resolve_physical(contact)?
+        };
+        let d = rs.scene.drive();
+        check_reach(d.a, d.b, rs.given.duz, rs.given.dux)?;
+        Ok(rs)
+    }
+
+    fn resolve_physical(&self, contact: ContactMode) -> CliResult<ResolvedScene> {
         let file = match &self.scene {
-            Some(p) => {
-                let text = std::fs::read_to_string(p).map_err(|e| {
-                    CliError::usage(format!("--scene: cannot read {}: {e}", p.display()))
-                })?;
-                toml::from_str::<SceneFile>(&text).map_err(|e| {
-                    let m = e.message().replace('\n', " ");
-                    CliError::usage(format!("--scene: {}: {}", p.display(), m.trim()))
-                })?
-            }
+            Some(p) => SceneFile::read(p)?,
             None => SceneFile::default(),
         };
-        let pick = |flag: Option<f64>, file: Option<f64>| flag.or(file);
-        let need = |v: Option<f64>, name: &str| {
-            v.ok_or_else(|| {
-                CliError::usage(format!(
-                    "--{name}: missing (give it as a flag or in --scene FILE)"
-                ))
-            })
+        // A flag beats the file.
+        let pick = |flag: Option<f64>, file: Option<f64>, name: &'static str| match (flag, file) {
+            (Some(x), _) => Ok((x, name)),
+            (None, Some(x)) => Ok((x, "--scene")),
+            (None, None) => Err(CliError::usage(format!(
+                "{name}: missing (give it as a flag or in --scene FILE)"
+            ))),
         };
-        let mu0 = need(pick(self.mu0, file.mu0), "mu0")?;
-        let kz = need(pick(self.kz, file.kz), "kz")?;
-        let kx = need(pick(self.kx, file.kx), "kx")?;
-        let uz0 = need(pick(self.uz0, file.uz0), "uz0")?;
-        let duz = need(pick(self.duz, file.duz), "duz")?;
-        let dux = need(pick(self.dux, file.dux), "dux")?;
+        let (mu0, mu0_by) = pick(self.mu0, file.mu0, "--mu0")?;
+        let (kz, kz_by) = pick(self.kz, file.kz, "--kz")?;
+        let (kx, kx_by) = pick(self.kx, file.kx, "--kx")?;
+        let (uz0, uz0_by) = pick(self.uz0, file.uz0, "--uz0")?;
+        let (duz, duz_by) = pick(self.duz, file.duz, "--duz")?;
+        let (dux, dux_by) = pick(self.dux, file.dux, "--dux")?;
         // Frequency: a flag beats the file; two flags conflict.
         if self.freq.is_some() && self.omega.is_some() {
             return Err(CliError::usage(
                 "--omega: give either --freq or --omega, not both",
             ));
         }
-        let omega = match (self.freq, self.omega, file.freq, file.omega) {
-            (Some(f), None, _, _) => freq_to_omega(f)?,
-            (None, Some(w), _, _) => w,
+        let (omega, omega_by) = match (self.freq, self.omega, file.freq, file.omega) {
+            (Some(f), None, _, _) => (TAU * f, "--freq"),
+            (None, Some(w), _, _) => (w, "--omega"),
             (None, None, Some(_), Some(_)) => {
                 return Err(CliError::usage(
                     "--scene: give either freq or omega in the file, not both",
                 ))
             }
-            (None, None, Some(f), None) => freq_to_omega(f)?,
-            (None, None, None, Some(w)) => w,
+            (None, None, Some(f), None) => (TAU * f, "--scene"),
+            (None, None, None, Some(w)) => (w, "--scene"),
             _ => {
                 return Err(CliError::usage(
                     "--freq: missing (give --freq <Hz> or --omega <rad/s>)",
                 ))
             }
         };
-        let phi = self.phi(file.phi_deg, file.phi_rad)?;
+        let (phi, phi_by) = self.phi(file.phi_deg, file.phi_rad)?;
+        let given = Given {
+            mu0: mu0_by,
+            kz: kz_by,
+            kx: kx_by,
+            uz0: uz0_by,
+            duz: duz_by,
+            dux: dux_by,
+            omega: omega_by,
+            phi: phi_by,
+        };
         let scene = Scene::new_with_contact(
             SceneParams {
                 mu0,
@@ -292,49 +520,55 @@ impl SceneArgs {
             },
             contact,
         )
-        .map_err(scene_err)?;
+        .map_err(|e| given.error(e))?;
+        let exponent_by = if self.contact.exponent.is_some() {
+            "--exponent"
+        } else {
+            "--scene"
+        };
         let profile = self
             .contact
             .resolve_with_file(file.profile.as_deref(), file.exponent)?;
-        checked_reach(ResolvedScene {
-            scene,
-            dimensionless: false,
-            profile,
-        })
+        checked_reach(
+            ResolvedScene {
+                scene,
+                dimensionless: false,
+                profile,
+                given,
+            },
+            exponent_by,
+        )
     }
 
-    fn phi(&self, file_deg: Option<f64>, file_rad: Option<f64>) -> CliResult<f64> {
+    /// φ in radians from the flags or the file, and the flag that gave it.
+    fn phi(&self, file_deg: Option<f64>, file_rad: Option<f64>) -> CliResult<(f64, &'static str)> {
         if self.phi_deg.is_some() && self.phi_rad.is_some() {
             return Err(CliError::usage(
                 "--phi-rad: give either --phi-deg or --phi-rad, not both",
             ));
         }
-        let phi = match (self.phi_deg, self.phi_rad, file_deg, file_rad) {
-            (Some(d), None, _, _) => finite(d, "phi-deg")?.to_radians(),
-            (None, Some(r), _, _) => finite(r, "phi-rad")?,
+        let (phi, by) = match (self.phi_deg, self.phi_rad, file_deg, file_rad) {
+            (Some(d), None, _, _) => (d.to_radians(), "--phi-deg"),
+            (None, Some(r), _, _) => (r, "--phi-rad"),
             (None, None, Some(_), Some(_)) => {
                 return Err(CliError::usage(
                     "--scene: give either phi_deg or phi_rad in the file, not both",
                 ))
             }
-            (None, None, Some(d), None) => finite(d, "phi-deg")?.to_radians(),
-            (None, None, None, Some(r)) => finite(r, "phi-rad")?,
-            _ => 0.0,
+            (None, None, Some(d), None) => (d.to_radians(), "--scene"),
+            (None, None, None, Some(r)) => (r, "--scene"),
+            // The default names the flag that would change it.
+            _ => (0.0, "--phi-deg"),
         };
         // An angle of a few thousand turns is certainly a mistake, and far
         // beyond it the angle's low digits are lost.
         if phi.abs() > 1e4 {
-            let name = if self.phi_rad.is_some() || (self.phi_deg.is_none() && file_rad.is_some()) {
-                "phi-rad"
-            } else {
-                "phi-deg"
-            };
             return Err(CliError::usage(format!(
-                "--{name}: |φ| = {:.3e} rad is beyond 10⁴ rad (≈ 1600 turns); give the phase within a turn",
+                "{by}: |φ| = {:.3e} rad is beyond 10⁴ rad (≈ 1600 turns); give the phase within a turn",
                 phi.abs()
             )));
         }
-        Ok(phi)
+        Ok((phi, by))
     }
 
     fn resolve_dimensionless(&self, contact: ContactMode) -> CliResult<ResolvedScene> {
@@ -357,7 +591,8 @@ impl SceneArgs {
         let a = self.duz_rel.ok_or_else(|| {
             CliError::usage("--duz-rel: missing (needed with --dux-rel or --ratio)")
         })?;
-        let phi = self.phi(None, None)?;
+        let (phi, phi_by) = self.phi(None, None)?;
+        let given = Given::dimensionless(self.ratio.is_some(), phi_by);
         let groups = match (self.dux_rel, self.ratio) {
             (Some(_), Some(_)) => {
                 return Err(CliError::usage(
@@ -369,32 +604,44 @@ impl SceneArgs {
                 dux_rel: b,
                 phi,
             },
-            (None, Some(r)) => ratio_groups(a, r, phi, contact)?,
+            (None, Some(r)) => ratio_groups(a, r, phi, contact).map_err(|e| given.error(e))?,
             (None, None) => {
                 return Err(CliError::usage(
                     "--dux-rel: missing (give --dux-rel or --ratio)",
                 ))
             }
         };
-        let scene = Scene::dimensionless_with_contact(groups, contact).map_err(scene_err)?;
-        checked_reach(ResolvedScene {
-            scene,
-            dimensionless: true,
-            profile: self.contact.resolve()?,
-        })
+        let scene =
+            Scene::dimensionless_with_contact(groups, contact).map_err(|e| given.error(e))?;
+        checked_reach(
+            ResolvedScene {
+                scene,
+                dimensionless: true,
+                profile: self.contact.resolve()?,
+                given,
+            },
+            "--exponent",
+        )
     }
 }
 
 /// Refuses a power-law exponent so small that the springs' reach
 /// `(1 + a)^{1/n}` (the widest ξ that ever touches, `mdr`) is not a
-/// representable number for this drive.
-fn checked_reach(rs: ResolvedScene) -> CliResult<ResolvedScene> {
+/// representable number for this drive; `flag` gave the exponent.
+fn checked_reach(rs: ResolvedScene, flag: &str) -> CliResult<ResolvedScene> {
     if let Some(n) = rs.profile.exponent() {
         let a = rs.scene.drive().a;
         let reach = (1.0 + a).powf(1.0 / n);
         if !(reach.is_finite() && reach < 1e100) {
+            let flag = if flag == "--scene" {
+                "--scene: exponent"
+            } else {
+                flag
+            };
             return Err(CliError::usage(format!(
-                "--exponent: n = {n:e} is too small for Δu_z/u_z0 = {a}: the springs' reach (1 + a)^(1/n) overflows (use n ≥ {:.3e})",
+                "{flag}: n = {} is too small for Δu_z/u_z0 = {}: the springs' reach (1 + a)^(1/n) overflows (use n ≥ {:.3e})",
+                short(n),
+                short(a),
                 (1.0 + a).ln() / 1e100f64.ln()
             )));
         }
@@ -405,39 +652,13 @@ fn checked_reach(rs: ResolvedScene) -> CliResult<ResolvedScene> {
 /// The groups of eq. 26 (`b = ratio·a`) for a contact mode: `Groups::from_ratio`
 /// checks them for permanent contact, so with lift-off the product is formed
 /// here and checked by the scene.
-fn ratio_groups(a: f64, r: f64, phi: f64, contact: ContactMode) -> CliResult<Groups<f64>> {
+fn ratio_groups(a: f64, r: f64, phi: f64, contact: ContactMode) -> Result<Groups<f64>, SceneError> {
     if contact == ContactMode::Permanent || a < 1.0 {
-        return Groups::from_ratio(a, r, phi).map_err(scene_err);
-    }
-    if !r.is_finite() {
-        return Err(CliError::usage("--ratio: must be a finite number"));
-    }
-    if r < 0.0 {
-        return Err(CliError::usage("--ratio: must be >= 0"));
+        return Groups::from_ratio(a, r, phi);
     }
     Ok(Groups {
         duz_rel: a,
         dux_rel: r * a,
         phi,
     })
-}
-
-fn finite(x: f64, name: &str) -> CliResult<f64> {
-    if x.is_finite() {
-        Ok(x)
-    } else {
-        Err(CliError::usage(format!(
-            "--{name}: must be a finite number"
-        )))
-    }
-}
-
-fn freq_to_omega(f: f64) -> CliResult<f64> {
-    if !f.is_finite() {
-        return Err(CliError::usage("--freq: must be a finite number"));
-    }
-    if f <= 0.0 {
-        return Err(CliError::usage("--freq: must be > 0"));
-    }
-    Ok(TAU * f)
 }

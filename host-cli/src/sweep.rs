@@ -9,6 +9,7 @@ use model_core::{Groups, Scene};
 use rayon::prelude::*;
 use serde::Serialize;
 
+use crate::args::Short;
 use crate::error::{CliError, CliResult};
 use model_core::mdr::Profile;
 
@@ -182,8 +183,8 @@ pub fn mu_cells(
             let s = cell_scene(a, r, phi)?;
             let vc = critical_velocity(&s)?;
             let v = from_rel(&vc, x, "v-rel")?;
-            let o =
-                mu_at(&s, v, how).map_err(|e| e.with_context(&format!("ratio {r}, φ {phi}°")))?;
+            let o = mu_at(&s, v, how)
+                .map_err(|e| e.with_context(&format!("ratio {}, φ {}°", Short(r), Short(phi))))?;
             Ok(MuCell {
                 phi_deg: phi,
                 ratio: r,
@@ -234,7 +235,7 @@ pub fn cells(
             let (r, phi) = (ratios[i / phis_deg.len()], phis_deg[i % phis_deg.len()]);
             let s = cell_scene(a, r, phi)?;
             let c = classify_scene_profile(&s, profile)
-                .map_err(|e| e.with_context(&format!("ratio {r}, φ {phi}°")))?;
+                .map_err(|e| e.with_context(&format!("ratio {}, φ {}°", Short(r), Short(phi))))?;
             pb.inc(1);
             let k = match c.regime {
                 Regime::ActiveControl => 0,

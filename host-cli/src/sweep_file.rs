@@ -80,7 +80,7 @@ impl SweepRow {
             omega: std::f64::consts::TAU * self.freq_hz,
             phi: self.phi_deg.to_radians(),
         })
-        .map_err(|e| CliError::usage(format!("row {line}: {e}")))
+        .map_err(|e| CliError::usage(format!("--data: line {line}: {e}")))
     }
 }
 
@@ -97,6 +97,12 @@ pub fn read(path: &Path) -> CliResult<Vec<SweepRow>> {
 /// # Errors
 /// As [`read`].
 pub fn read_as(path: &Path, flag: &str) -> CliResult<Vec<SweepRow>> {
+    if path.is_dir() {
+        return Err(CliError::usage(format!(
+            "--{flag}: {} is a directory",
+            path.display()
+        )));
+    }
     let mut r = csv::Reader::from_path(path)
         .map_err(|e| CliError::usage(format!("--{flag}: cannot read {}: {e}", path.display())))?;
     let mut rows = Vec::new();

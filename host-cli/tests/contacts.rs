@@ -240,7 +240,7 @@ fn lift_off_refusals_are_one_line() {
     // min steps = ⌈√(10(1 + a + b)/0.1)⌉ = ⌈√330⌉ = 19 (liftoff::stepping).
     refused(
         &with(&["mu", "--v0", "0.1", "--method", "fixed", "--steps-per-period", "18"], &s),
-        "--steps-per-period: this lift-off drive needs at least 19 (fewer: the stepping's bound 10(1 + a + b)/N^2 would exceed 10 % of mu0)",
+        "--steps-per-period: this lift-off drive needs at least 19 steps per period (fewer: the stepping's bound 10(1 + a + b)/N^2 would exceed 10 % of mu0)",
     );
     refused(
         &with(
@@ -252,7 +252,7 @@ fn lift_off_refusals_are_one_line() {
     // The permanent-contact refusal still applies to commands that need it.
     refused(
         &["mu", "--duz-rel", "1.5", "--ratio", "-1", "--v0", "0"],
-        "--ratio: must be >= 0",
+        "--ratio: must be ≥ 0 (got -1)",
     );
 }
 
@@ -577,7 +577,7 @@ fn profile_flags_and_refusals() {
         ),
         (
             &["--profile", "power", "--exponent", "0"][..],
-            "--exponent: must be a finite number > 0",
+            "--exponent: must be > 0 (got 0)",
         ),
         (
             // (1.5)^(1/n) overflows 1e100 below n = ln 1.5/ln 1e100 = 1.761e-3.

@@ -40,7 +40,7 @@ pub struct DacArgs {
     #[arg(long, value_name = "DIR")]
     pub out: std::path::PathBuf,
     /// Timing rounds (every configuration is timed once per round; the fastest is kept)
-    #[arg(long, default_value_t = 60)]
+    #[arg(long, default_value_t = 60, value_parser = crate::args::Count::<usize>::at_least(1).at_most(10_000, "the fastest of 10⁴ rounds is as good as it gets"))]
     pub rounds: usize,
 }
 
@@ -227,9 +227,7 @@ pub fn measure(rounds: usize) -> CliResult<Vec<DacPoint>> {
 
 /// `fricctl bench dac`.
 pub fn run(a: &DacArgs) -> CliResult {
-    if a.rounds == 0 || a.rounds > 10_000 {
-        return Err(CliError::usage("--rounds: must be between 1 and 10000"));
-    }
+    // `a.rounds` is in 1..=10⁴ (the flag's parser).
     prepare_out_dir(&a.out)?;
     let pts = measure(a.rounds)?;
     let mut csv = String::from("table_size,interp,backend,sfdr_db,worst_lsb,ns_per_sample\n");

@@ -16,6 +16,7 @@ use std::time::Instant;
 use clap::Args;
 use model_core::{Groups, Scene};
 
+use crate::args::Count;
 use crate::error::{CliError, CliResult};
 use crate::eval::{from_rel, Method, MethodArgs};
 use crate::plot::{color, log_axis_tick, prepare_out_dir, write_chart};
@@ -29,28 +30,28 @@ pub struct MethodsArgs {
     #[arg(long, value_name = "DIR")]
     pub out: std::path::PathBuf,
     /// Velocities per curve (even, so that v0 = 0 is not among them)
-    #[arg(long, default_value_t = 200_000)]
+    #[arg(long, default_value_t = 200_000, value_parser = Count::<usize>::at_least(2).at_most(10_000_000, "as `fricctl curve`"))]
     pub points: usize,
     /// Cells per map axis
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = Count::<usize>::at_least(2).at_most(1000, "as `fricctl map`"))]
     pub res: usize,
     /// Velocities per curve for the fixed-step runs
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, value_parser = Count::<usize>::at_least(2).at_most(100_000, "the fixed-step method is slow"))]
     pub fixed_points: usize,
     /// Cells per map axis for the fixed-step runs
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, value_parser = Count::<usize>::at_least(2).at_most(1000, "as `fricctl map`"))]
     pub fixed_res: usize,
     /// Steps per period of the fixed-step runs
-    #[arg(long, default_value_t = 10_000)]
+    #[arg(long, default_value_t = 10_000, value_parser = Count::<u32>::at_least(1))]
     pub steps_per_period: u32,
     /// The loose tolerance for `auto`, units of μ0
-    #[arg(long, default_value_t = 1e-2)]
+    #[arg(long, default_value_t = 1e-2, value_parser = crate::args::Real::positive())]
     pub tol: f64,
     /// Repeats (the minimum is kept)
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = 5, value_parser = Count::<usize>::at_least(1).at_most(1000, "timing repeats"))]
     pub repeats: usize,
     /// Velocities per curve for the curved-profile (MDR) runs
-    #[arg(long, default_value_t = 2_000)]
+    #[arg(long, default_value_t = 2_000, value_parser = Count::<usize>::at_least(2).at_most(1_000_000, "the MDR curve's largest"))]
     pub mdr_points: usize,
 }
 
@@ -93,7 +94,7 @@ fn best_of<T>(repeats: usize, mut f: impl FnMut() -> CliResult<T>) -> CliResult<
 fn configs(a: &MethodsArgs) -> Vec<(String, MethodArgs, bool)> {
     let m = |method, tol| MethodArgs {
         method,
-        steps_per_period: a.steps_per_period,
+        steps_per_period: Some(a.steps_per_period),
         tol,
         ..MethodArgs::default()
     };
@@ -260,31 +261,16 @@ fn map_case(a: &MethodsArgs, out: &mut Vec<Timing>) -> CliResult {
 
 /// `fricctl bench methods`.
 pub fn run(a: &MethodsArgs) -> CliResult {
-    if a.points < 2 || a.points % 2 == 1 || a.fixed_points < 2 || a.fixed_points % 2 == 1 {
-        return Err(CliError::usage(
-            "--points: must be even and >= 2 (as must --fixed-points)",
-        ));
-    }
-    if !(2..=1000).contains(&a.res) || !(2..=1000).contains(&a.fixed_res) {
-        return Err(CliError::usage(
-            "--res: must be between 2 and 1000 (as must --fixed-res)",
-        ));
-    }
-    if a.points > 10_000_000 || a.fixed_points > 100_000 {
-        return Err(CliError::usage(
-            "--points: at most 10000000 (and --fixed-points at most 100000)",
-        ));
-    }
-    if a.mdr_points < 2 || a.mdr_points % 2 == 1 || a.mdr_points > 1_000_000 {
-        return Err(CliError::usage(
-            "--mdr-points: must be even, >= 2 and at most 1000000",
-        ));
-    }
-    if a.repeats == 0 || a.repeats > 1000 {
-        return Err(CliError::usage("--repeats: must be between 1 and 1000"));
-    }
-    if !(a.tol.is_finite() && a.tol > 0.0) {
-        return Err(CliError::usage("--tol: must be a finite number > 0"));
+    // Every count is in its range and --tol > 0 (the flags' parsers); the
+    // curves need an even number of points (v = 0 between two of them).
+    for (n, flag) in [
+        (a.points, "--points"),
+        (a.fixed_points, "--fixed-points"),
+        (a.mdr_points, "--mdr-points"),
+    ] {
+        if n % 2 == 1 {
+            return Err(CliError::usage(format!("{flag}: must be even (got {n})")));
+        }
     }
     prepare_out_dir(&a.out)?;
     let mut out = Vec::new();

@@ -52,7 +52,7 @@ pub struct MotionArgs {
     #[arg(long)]
     pub full: bool,
     /// Cells per axis of the drift map (φ × ratio), 4…200
-    #[arg(long, default_value_t = 36)]
+    #[arg(long, default_value_t = 36, value_parser = crate::args::Count::<usize>::at_least(4).at_most(200, "the drift map's largest"))]
     pub res: usize,
 }
 
@@ -138,6 +138,7 @@ fn compare(c: &Case, inv_nu: f64, mass: f64, tick: &mut dyn FnMut()) -> Point {
             periods: None,
             max_periods: 2000,
             relaxation,
+            min_steps: 0,
         },
         tick,
     );
@@ -561,6 +562,7 @@ fn drift_map(a: &MotionArgs) -> CliResult {
                             periods: None,
                             max_periods: 10,
                             relaxation: 0.0,
+                            min_steps: 0,
                         },
                         &mut || {},
                     );

@@ -44,10 +44,10 @@ pub struct StabilityArgs {
     #[arg(long, value_name = "DIR")]
     pub out: std::path::PathBuf,
     /// Cells per map axis
-    #[arg(long, default_value_t = 48)]
+    #[arg(long, default_value_t = 48, value_parser = crate::args::Count::<usize>::at_least(4).at_most(400, "the maps' largest"))]
     pub res: usize,
     /// Step budget of one fixed-step run (past it: not converged)
-    #[arg(long, default_value_t = 20_000_000)]
+    #[arg(long, default_value_t = 20_000_000, value_parser = crate::args::Count::<u64>::at_least(1000).at_most(10_000_000_000, "a run's largest budget"))]
     pub budget: u64,
 }
 
@@ -573,14 +573,7 @@ pub fn si_cell<T: Float>(x: f64, y: f64) -> Outcome {
 
 /// `fricctl bench stability`.
 pub fn run(a: &StabilityArgs) -> CliResult {
-    if !(4..=400).contains(&a.res) {
-        return Err(CliError::usage("--res: must be between 4 and 400"));
-    }
-    if !(1000..=10_000_000_000).contains(&a.budget) {
-        return Err(CliError::usage(
-            "--budget: must be between 1000 and 10000000000 steps",
-        ));
-    }
+    // `a.res` and `a.budget` are in their ranges (the flags' parsers).
     prepare_out_dir(&a.out)?;
     let budget = a.budget;
     let vlog = "v0/v_c";

@@ -33,7 +33,7 @@ pub struct WpArgs {
     #[arg(long, value_name = "DIR")]
     pub out: std::path::PathBuf,
     /// Largest steps per period (power of two, ≤ 65536)
-    #[arg(long, default_value_t = 65536)]
+    #[arg(long, default_value_t = 65536, value_parser = crate::args::Count::<u32>::at_least(8).at_most(65536, "the largest step count charted"))]
     pub max_steps: u32,
 }
 

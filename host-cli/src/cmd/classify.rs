@@ -8,6 +8,7 @@ use model_core::regime::rule_of_thumb;
 use model_core::scene::ContactMode;
 use serde::Serialize;
 
+use crate::args::Short;
 use crate::error::CliResult;
 use crate::eval::{classify_scene_profile, critical_velocity};
 use crate::output::{stdout_error, write_json};
@@ -113,30 +114,39 @@ fn write_text(out: &mut impl Write, o: &ClassifyOut, p: &Profile<f64>) -> std::i
         writeln!(
             out,
             "contact                lifts off once per period (duz/uz0 = {} >= 1)",
-            o.duz_rel
+            Short(o.duz_rel)
         )?;
         writeln!(
             out,
             "mu(0)/mu0              {} (unique at rest: the state resets at every landing)",
-            o.mu_0plus_over_mu0
+            Short(o.mu_0plus_over_mu0)
         )?;
         writeln!(
             out,
             "static equilibrium     none (no static interval with lift-off)"
         )?;
     } else {
-        writeln!(out, "mu(0+)/mu0             {}", o.mu_0plus_over_mu0)?;
-        writeln!(out, "mu(0-)/mu0             {}", o.mu_0minus_over_mu0)?;
+        writeln!(out, "mu(0+)/mu0             {}", Short(o.mu_0plus_over_mu0))?;
+        writeln!(
+            out,
+            "mu(0-)/mu0             {}",
+            Short(o.mu_0minus_over_mu0)
+        )?;
         match o.static_exists {
             Some(x) => writeln!(out, "static equilibrium     {x}")?,
             None => writeln!(out, "static equilibrium     n/a (curved profile)")?,
         }
     }
-    writeln!(out, "asymmetry max|mu(v)+mu(-v)|/mu0  {}", o.asymmetry)?;
+    writeln!(
+        out,
+        "asymmetry max|mu(v)+mu(-v)|/mu0  {}",
+        Short(o.asymmetry)
+    )?;
     writeln!(
         out,
         "v_c forward/backward   {} / {}",
-        o.vc_forward, o.vc_backward
+        Short(o.vc_forward),
+        Short(o.vc_backward)
     )?;
     match (o.rule_of_thumb, o.rule_of_thumb_agrees) {
         (Some(r), Some(agrees)) => writeln!(

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use clap::Args;
 use model_core::scene::ContactMode;
 
-use crate::args::count;
+use crate::args::{Count, Real};
 use crate::error::{CliError, CliResult};
 use crate::eval::{critical_velocity, from_rel, MethodArgs};
 use crate::output::{csv_bytes, stdout_error, AtomicFile};
@@ -21,19 +21,19 @@ pub struct CurveCmd {
     #[command(flatten)]
     scene: crate::scene_args::SceneArgs,
     /// Lowest velocity, m/s
-    #[arg(long, allow_hyphen_values = true, requires = "v_max", conflicts_with_all = ["v_rel_min", "v_rel_max"])]
+    #[arg(long, value_parser = Real::ANY, requires = "v_max", conflicts_with_all = ["v_rel_min", "v_rel_max"])]
     v_min: Option<f64>,
     /// Highest velocity, m/s
-    #[arg(long, allow_hyphen_values = true, requires = "v_min")]
+    #[arg(long, value_parser = Real::ANY, requires = "v_min")]
     v_max: Option<f64>,
     /// Lowest velocity relative to v_c (negative: relative to the backward v_c)
-    #[arg(long, allow_hyphen_values = true, requires = "v_rel_max")]
+    #[arg(long, value_parser = Real::ANY, requires = "v_rel_max")]
     v_rel_min: Option<f64>,
     /// Highest velocity relative to v_c
-    #[arg(long, allow_hyphen_values = true, requires = "v_rel_min")]
+    #[arg(long, value_parser = Real::ANY, requires = "v_rel_min")]
     v_rel_max: Option<f64>,
     /// Number of velocities (≥ 2, at most 10⁷; written like any number: 1e6)
-    #[arg(long, allow_hyphen_values = true, value_parser = count::<usize, 2>)]
+    #[arg(long, value_parser = Count::<usize>::at_least(2).at_most(MAX_POINTS as u64, "write several curves for more"))]
     points: usize,
     #[command(flatten)]
     how: MethodArgs,
@@ -80,11 +80,6 @@ impl CurveCmd {
         let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         self.how.profile = rs.profile;
         let n = self.points;
-        if n > MAX_POINTS {
-            return Err(CliError::usage(format!(
-                "--points: at most {MAX_POINTS} (write several curves for more)"
-            )));
-        }
         if let Some(p) = &self.plot {
             crate::plot::ext(p)?;
         }
@@ -95,13 +90,15 @@ impl CurveCmd {
         ) {
             (Some((lo, hi)), None) => {
                 check_range(lo, hi, "v-min", "v-max")?;
+                rs.velocity(lo, "--v-min")?;
+                rs.velocity(hi, "--v-max")?;
                 Axis::Absolute(lo, hi)
             }
             (None, Some((lo, hi))) => {
                 check_range(lo, hi, "v-rel-min", "v-rel-max")?;
                 // The ends decide whether each direction's v_c is needed.
-                from_rel(&vc, lo, "v-rel-min")?;
-                from_rel(&vc, hi, "v-rel-max")?;
+                rs.velocity(from_rel(&vc, lo, "v-rel-min")?, "--v-rel-min")?;
+                rs.velocity(from_rel(&vc, hi, "v-rel-max")?, "--v-rel-max")?;
                 Axis::Relative(lo, hi)
             }
             (None, None) => {
@@ -155,7 +152,14 @@ impl CurveCmd {
             for i in start..(start + CHUNK).min(n) {
                 vs.push(velocity(i)?);
             }
-            let rows = curve_rows(&rs.scene, &vs, &self.how)?;
+            // A velocity between the ends that the solver refuses is named
+            // by the range's upper flag.
+            let upper = match axis {
+                Axis::Absolute(..) => "--v-max",
+                Axis::Relative(..) => "--v-rel-max",
+            };
+            let rows =
+                curve_rows(&rs.scene, &vs, &self.how).map_err(|e| e.renamed("--v0", upper))?;
             for r in &rows {
                 mix.add(r.method);
                 worst = worst.max(r.error_bound_over_mu0);
@@ -300,16 +304,13 @@ impl Envelope {
     }
 }
 
+/// `lo < hi` (both in their domain: the flags' parsers).
 fn check_range(lo: f64, hi: f64, a: &str, b: &str) -> CliResult {
-    if !lo.is_finite() {
-        return Err(CliError::usage(format!("--{a}: must be a finite number")));
-    }
-    if !hi.is_finite() {
-        return Err(CliError::usage(format!("--{b}: must be a finite number")));
-    }
     if hi <= lo {
         return Err(CliError::usage(format!(
-            "--{b}: must be greater than --{a}"
+            "--{b}: must be greater than --{a} (got {} ≤ {})",
+            crate::args::short(hi),
+            crate::args::short(lo)
         )));
     }
     Ok(())

@@ -30,7 +30,7 @@ use model_core::model::load_line::{self, best_of, load_line_of, Objective, Opera
 use model_core::scene::ContactMode;
 use serde::Serialize;
 
-use crate::args::count;
+use crate::args::Count;
 use crate::error::{CliError, CliResult};
 use crate::motion::law::{Law, LawError};
 use crate::output::{stdout_error, write_json};
@@ -48,7 +48,7 @@ pub struct LoadLineCmd {
     #[arg(long, value_name = "FILE")]
     csv: Option<PathBuf>,
     /// Points per line for --plot and --csv (≥ 2, at most 10⁵)
-    #[arg(long, default_value_t = 200, value_parser = count::<usize, 2>)]
+    #[arg(long, default_value_t = 200, value_parser = Count::<usize>::at_least(2).at_most(100_000, "a plot or CSV line needs no more"))]
     points: usize,
     /// JSON output
     #[arg(long)]
@@ -180,9 +180,6 @@ pub(crate) type Sample = (f64, load_line::Powers<f64>);
 impl LoadLineCmd {
     /// Runs the command.
     pub fn run(self, out: &mut impl Write) -> CliResult {
-        if self.points > 100_000 {
-            return Err(CliError::usage("--points: at most 100000"));
-        }
         let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         let s = &rs.scene;
         let p = s.params();

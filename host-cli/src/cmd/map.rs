@@ -8,43 +8,59 @@ use clap::Args;
 use model_core::regime::Regime;
 use plotters::style::RGBColor;
 
+use crate::args::{short, Count, Real};
 use crate::error::{CliError, CliResult};
 use crate::eval::{classify_scene_profile, Method, MethodArgs};
 use crate::output::write_rows;
 use crate::plot::{render_heat, render_map, Heat, HeatMap, RegimeMap};
-use crate::scene_args::{profile_text, ProfileArgs};
+use crate::scene_args::{check_reach, profile_text, ProfileArgs};
 use crate::sweep::{cell_scene, cells, centres, method_mix, mix_text, mu_cells, Cell};
 use model_core::mdr::Profile;
+
+/// Largest |φ| of the map's phase range, degrees: 10⁴ rad (572 957.8°,
+/// rounded down), as the scene flags (`--phi-deg`) allow.
+const PHI_LIMIT_DEG: f64 = 572_957.0;
+
+/// Widest phase span, degrees: ten turns. The regimes repeat every turn, and
+/// the exact active-control lines are drawn every 180° (each one 400
+/// classifications), so the span bounds the map's work.
+const MAX_PHI_SPAN_DEG: f64 = 3600.0;
+
+/// The phase flags' domain.
+const PHI_DEG: Real = Real::ANY
+    .at_least(-PHI_LIMIT_DEG)
+    .at_most(PHI_LIMIT_DEG)
+    .because("≈ 10⁴ rad; give the phase within a turn");
 
 /// Flags of `fricctl map`.
 #[derive(Args, Debug, Clone)]
 pub struct MapCmd {
     /// Δu_z/u_z0 (fixed for the map; ≥ 1: the contact lifts off once per period)
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, value_parser = Real::positive().because("the ratio needs Δu_z > 0"))]
     pub duz_rel: f64,
-    /// Smallest amplitude ratio k_xΔu_x/(μ0 k_z Δu_z)
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-    pub ratio_min: f64,
-    /// Largest amplitude ratio
-    #[arg(long, default_value_t = 3.0, allow_hyphen_values = true)]
-    pub ratio_max: f64,
-    /// Smallest phase, degrees
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-    pub phi_min_deg: f64,
-    /// Largest phase, degrees
-    #[arg(long, default_value_t = 360.0, allow_hyphen_values = true)]
-    pub phi_max_deg: f64,
+    /// Smallest amplitude ratio k_xΔu_x/(μ0 k_z Δu_z) [default: 0]
+    #[arg(long, value_parser = Real::non_negative())]
+    pub ratio_min: Option<f64>,
+    /// Largest amplitude ratio [default: 3]
+    #[arg(long, value_parser = Real::non_negative())]
+    pub ratio_max: Option<f64>,
+    /// Smallest phase, degrees [default: 0]
+    #[arg(long, value_parser = PHI_DEG)]
+    pub phi_min_deg: Option<f64>,
+    /// Largest phase, degrees, at most ten turns above --phi-min-deg [default: 360]
+    #[arg(long, value_parser = PHI_DEG)]
+    pub phi_max_deg: Option<f64>,
     /// Cells per axis (2 to 1000)
-    #[arg(long, default_value_t = 120, allow_hyphen_values = true, value_parser = crate::args::count::<usize, 2>)]
+    #[arg(long, default_value_t = 120, value_parser = Count::<usize>::at_least(2).at_most(1000, "a map of 10⁶ cells is the largest drawn"))]
     pub res: usize,
-    /// Plot file (.svg or .png)
+    /// Plot file (.svg or .png); at least one of --plot and --csv
     #[arg(long, value_name = "FILE")]
-    pub plot: PathBuf,
-    /// Also write the cells as CSV
+    pub plot: Option<PathBuf>,
+    /// Write the cells as CSV; at least one of --plot and --csv
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
     /// Map μ/μ0 at v0 = X·v_c (forward v_c for X > 0, backward for X < 0) instead of the regimes
-    #[arg(long, value_name = "X", allow_hyphen_values = true)]
+    #[arg(long, value_name = "X", value_parser = Real::ANY)]
     pub v_rel: Option<f64>,
     /// How μ is computed per cell (with --v-rel)
     #[command(flatten)]
@@ -59,55 +75,50 @@ impl MapCmd {
     pub fn run(mut self, _out: &mut impl Write) -> CliResult {
         self.how.profile = self.contact.resolve()?;
         let a = &self;
-        for (v, name) in [
-            (a.duz_rel, "duz-rel"),
-            (a.ratio_min, "ratio-min"),
-            (a.ratio_max, "ratio-max"),
-            (a.phi_min_deg, "phi-min-deg"),
-            (a.phi_max_deg, "phi-max-deg"),
-        ] {
-            if !v.is_finite() {
-                return Err(CliError::usage(format!(
-                    "--{name}: must be a finite number"
-                )));
-            }
+        let r = Range::of(a.ratio_min, a.ratio_max, (0.0, 3.0), "ratio");
+        let phi = Range::of(a.phi_min_deg, a.phi_max_deg, (0.0, 360.0), "phi");
+        // Every value is in its domain (the flags' parsers); what depends
+        // on two flags is checked here, before the missing-output check.
+        r.check()?;
+        phi.check()?;
+        if phi.hi - phi.lo > MAX_PHI_SPAN_DEG {
+            return Err(CliError::usage(format!(
+                "{}: the phase span {}° exceeds ten turns (3600°); the regimes repeat every turn",
+                phi.flag(),
+                short(phi.hi - phi.lo)
+            )));
         }
-        if a.duz_rel <= 0.0 {
-            return Err(CliError::usage(
-                "--duz-rel: must be > 0 (the ratio needs Δu_z > 0)",
-            ));
+        // The largest drive of the map must be one the solvers resolve.
+        let b_flag = if a.ratio_max.is_some() {
+            "--ratio-max"
+        } else {
+            "--duz-rel"
+        };
+        check_reach(a.duz_rel, a.duz_rel * r.hi, "--duz-rel", b_flag)?;
+        if let Some(p) = &a.plot {
+            crate::plot::ext(p)?;
         }
-        if a.ratio_min < 0.0 {
-            return Err(CliError::usage("--ratio-min: must be >= 0"));
-        }
-        if a.ratio_max <= a.ratio_min {
-            return Err(CliError::usage(
-                "--ratio-max: must be greater than --ratio-min",
-            ));
-        }
-        if a.phi_max_deg <= a.phi_min_deg {
-            return Err(CliError::usage(
-                "--phi-max-deg: must be greater than --phi-min-deg",
-            ));
-        }
-        if a.res > 1000 {
-            return Err(CliError::usage("--res: must be ≤ 1000"));
-        }
-        crate::plot::ext(&a.plot)?;
         a.how.validate()?;
+        if a.plot.is_none() && a.csv.is_none() {
+            return Err(CliError::usage(
+                "--plot: missing (give --plot FILE, --csv FILE or both)",
+            ));
+        }
         if let Some(x) = a.v_rel {
-            if !x.is_finite() {
-                return Err(CliError::usage("--v-rel: must be a finite number"));
-            }
-            return run_mu_map(a, x);
+            return run_mu_map(a, x, &r, &phi);
         }
         if a.how.method != Method::Auto || a.how.tol.is_some() {
-            return Err(CliError::usage(
-            "--method: the regime map is always exact; --method and --tol apply to a μ map (--v-rel)",
-        ));
+            let flag = if a.how.method != Method::Auto {
+                "--method"
+            } else {
+                "--tol"
+            };
+            return Err(CliError::usage(format!(
+                "{flag}: the regime map is always exact; --method and --tol apply to a μ map (--v-rel)"
+            )));
         }
-        let ratios = centres(a.ratio_min, a.ratio_max, a.res);
-        let phis = centres(a.phi_min_deg, a.phi_max_deg, a.res);
+        let ratios = centres(r.lo, r.hi, a.res);
+        let phis = centres(phi.lo, phi.hi, a.res);
         let (cells, class) = cells(a.duz_rel, &ratios, &phis, &a.how.profile, true)?;
         let counts = [0u8, 1, 2].map(|k| class.iter().filter(|&&c| c == k).count());
         eprintln!(
@@ -124,7 +135,7 @@ impl MapCmd {
             &phis,
             &cells,
             class,
-            &a.plot,
+            a.plot.as_deref(),
             a.csv.as_deref(),
         )?;
         let _ = std::io::stderr().flush();
@@ -132,7 +143,65 @@ impl MapCmd {
     }
 }
 
-fn run_mu_map(a: &MapCmd, x: f64) -> CliResult {
+/// One axis of the map: `--{name}-min` … `--{name}-max` (or `--phi-min-deg`
+/// … `--phi-max-deg`), with which of them were given.
+struct Range {
+    lo: f64,
+    hi: f64,
+    lo_given: bool,
+    hi_given: bool,
+    name: &'static str,
+}
+
+impl Range {
+    fn of(lo: Option<f64>, hi: Option<f64>, default: (f64, f64), name: &'static str) -> Range {
+        Range {
+            lo: lo.unwrap_or(default.0),
+            hi: hi.unwrap_or(default.1),
+            lo_given: lo.is_some(),
+            hi_given: hi.is_some(),
+            name,
+        }
+    }
+
+    fn flag_of(&self, end: &str) -> String {
+        if self.name == "phi" {
+            format!("--phi-{end}-deg")
+        } else {
+            format!("--{}-{end}", self.name)
+        }
+    }
+
+    /// The flag to name for the range: the upper end if it was given, else
+    /// the lower one.
+    fn flag(&self) -> String {
+        if self.hi_given || !self.lo_given {
+            self.flag_of("max")
+        } else {
+            self.flag_of("min")
+        }
+    }
+
+    /// `lo < hi`, naming a flag that was given.
+    fn check(&self) -> CliResult {
+        if self.hi > self.lo {
+            return Ok(());
+        }
+        let (max, min) = (self.flag_of("max"), self.flag_of("min"));
+        let what = if self.hi_given || !self.lo_given {
+            format!("{max}: must be greater than {min}")
+        } else {
+            format!("{min}: must be less than {max}")
+        };
+        Err(CliError::usage(format!(
+            "{what} (got {} … {})",
+            short(self.lo),
+            short(self.hi)
+        )))
+    }
+}
+
+fn run_mu_map(a: &MapCmd, x: f64, r: &Range, phi: &Range) -> CliResult {
     if x == 0.0 && a.duz_rel < 1.0 {
         if a.how.profile != Profile::Flat {
             return Err(CliError::usage(
@@ -143,9 +212,10 @@ fn run_mu_map(a: &MapCmd, x: f64) -> CliResult {
             "--v-rel: must be != 0 (at rest μ has two one-sided limits; the regime map shows them)",
         ));
     }
-    let ratios = centres(a.ratio_min, a.ratio_max, a.res);
-    let phis = centres(a.phi_min_deg, a.phi_max_deg, a.res);
-    let cells = mu_cells(a.duz_rel, &ratios, &phis, x, &a.how)?;
+    let ratios = centres(r.lo, r.hi, a.res);
+    let phis = centres(phi.lo, phi.hi, a.res);
+    let cells =
+        mu_cells(a.duz_rel, &ratios, &phis, x, &a.how).map_err(|e| e.renamed("--v0", "--v-rel"))?;
     let mix = method_mix(cells.iter().map(|c| c.method));
     let mix_text = mix_text(&mix, ", ");
     let worst = cells
@@ -171,8 +241,9 @@ fn run_mu_map(a: &MapCmd, x: f64) -> CliResult {
         });
     let m = HeatMap {
         title: format!(
-            "μ/μ0 at v0 = {x}·v_c, Δu_z/u_z0 = {}, {} ({mix_text})",
-            a.duz_rel,
+            "μ/μ0 at v0 = {}·v_c, Δu_z/u_z0 = {}, {} ({mix_text})",
+            short(x),
+            short(a.duz_rel),
             profile_text(&a.how.profile)
         ),
         x_label: "phase φ, degrees".to_string(),
@@ -194,8 +265,10 @@ fn run_mu_map(a: &MapCmd, x: f64) -> CliResult {
             Vec::new()
         },
     };
-    render_heat(&a.plot, &m, (1100, 760))?;
-    eprintln!("wrote {}", a.plot.display());
+    if let Some(p) = &a.plot {
+        render_heat(p, &m, (1100, 760))?;
+        eprintln!("wrote {}", p.display());
+    }
     if let Some(p) = a.csv.as_deref() {
         write_rows(p, &cells)?;
     }
@@ -272,8 +345,26 @@ pub fn write_map(
     phis: &[f64],
     cells: &[Cell],
     class: Vec<u8>,
-    plot: &Path,
+    plot: Option<&Path>,
     csv_path: Option<&Path>,
+) -> CliResult {
+    if let Some(plot) = plot {
+        draw_map(a, profile, ratios, phis, class, plot)?;
+    }
+    if let Some(p) = csv_path {
+        write_rows(p, cells)?;
+    }
+    Ok(())
+}
+
+/// Draws a regime map with the paper's rules and the exact active-control lines.
+fn draw_map(
+    a: f64,
+    profile: &Profile<f64>,
+    ratios: &[f64],
+    phis: &[f64],
+    class: Vec<u8>,
+    plot: &Path,
 ) -> CliResult {
     let (plo, phi_hi) = (phis[0], *phis.last().unwrap_or(&phis[0]));
     let (rlo, rhi) = (ratios[0], *ratios.last().unwrap_or(&ratios[0]));
@@ -302,13 +393,17 @@ pub fn write_map(
     let m = RegimeMap {
         title: if *profile != Profile::Flat {
             format!(
-                "Regimes at Δu_z/u_z0 = {a}, {} (MDR quadrature)",
+                "Regimes at Δu_z/u_z0 = {}, {} (MDR quadrature)",
+                short(a),
                 profile_text(profile)
             )
         } else if a < 1.0 {
-            format!("Regimes at Δu_z/u_z0 = {a} (exact classification)")
+            format!("Regimes at Δu_z/u_z0 = {} (exact classification)", short(a))
         } else {
-            format!("Regimes at Δu_z/u_z0 = {a} (lifts off; exact lift-off classification)")
+            format!(
+                "Regimes at Δu_z/u_z0 = {} (lifts off; exact lift-off classification)",
+                short(a)
+            )
         },
         x_label: "phase φ, degrees".to_string(),
         y_label: "k_xΔu_x / (μ0 k_z Δu_z)".to_string(),
@@ -321,8 +416,5 @@ pub fn write_map(
     };
     render_map(plot, &m, (1100, 760))?;
     eprintln!("wrote {}", plot.display());
-    if let Some(p) = csv_path {
-        write_rows(p, cells)?;
-    }
     Ok(())
 }

@@ -29,6 +29,7 @@ use clap::{Args, ValueEnum};
 use model_core::scene::ContactMode;
 use serde::Serialize;
 
+use crate::args::{short, Real};
 use crate::error::{CliError, CliResult};
 use crate::motion::estimate;
 use crate::motion::law::Law;
@@ -41,6 +42,14 @@ use crate::sweep::progress_bar;
 
 /// Most load periods when running until the periodic regime.
 const MAX_PERIODS: u32 = 2000;
+
+/// Domain of the force's mean and amplitude, units of μ0·F̄z: at most ten
+/// times the largest force the contact exerts. Beyond it the load, not the
+/// contact, moves the body, and the body's speed swings far beyond v_c.
+const FORCE_REL: Real = Real::ANY
+    .at_least(-10.0)
+    .at_most(10.0)
+    .because("ten times the contact's largest force μ0·F̄z");
 
 /// Which model integrates the body.
 #[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
@@ -59,28 +68,28 @@ pub struct MotionCmd {
     #[command(flatten)]
     scene: SceneArgs,
     /// Mass of the body M, kg (0: massless, quasi-static; units k_x/ω² for a dimensionless scene)
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, value_parser = Real::non_negative())]
     mass: f64,
-    /// Force amplitude f: F(t) = μ0·F̄z·(f0 + f·sin Ωt), F̄z the mean normal force
-    #[arg(long, allow_hyphen_values = true)]
+    /// Force amplitude f: F(t) = μ0·F̄z·(f0 + f·sin Ωt), F̄z the mean normal force (|f| ≤ 10)
+    #[arg(long, value_parser = FORCE_REL)]
     force_amp_rel: f64,
     /// Angular frequency Ω of the force, rad/s (units of ω for a dimensionless scene)
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, value_parser = Real::positive())]
     force_omega: f64,
-    /// Mean force f0, units of μ0·F̄z
-    #[arg(long, allow_hyphen_values = true, default_value_t = 0.0)]
+    /// Mean force f0, units of μ0·F̄z (|f0| ≤ 10)
+    #[arg(long, default_value_t = 0.0, value_parser = FORCE_REL)]
     force_offset_rel: f64,
     /// Stiffness K of a spring tying the body to ground, N/m (units of k_x for a dimensionless scene)
-    #[arg(long, allow_hyphen_values = true, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = Real::non_negative())]
     spring: f64,
     /// Simulated time, s: whole load periods 2π/Ω (default: until periodic, at most 2000 periods)
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, value_parser = Real::positive())]
     duration: Option<f64>,
     /// Model
     #[arg(long, value_enum, default_value_t = MotionMethod::Auto)]
     method: MotionMethod,
-    /// Tolerance on the mean velocity, relative to the larger critical velocity
-    #[arg(long, allow_hyphen_values = true, default_value_t = 1e-3)]
+    /// Tolerance on the mean velocity, relative to the larger critical velocity (0 < tol < 1)
+    #[arg(long, default_value_t = 1e-3, value_parser = Real::ANY.above(0.0).below(1.0))]
     tol: f64,
     /// Write the trajectory (t, x, v, force, stuck; the last ≤ 50 load periods) to FILE
     #[arg(long, value_name = "FILE")]
@@ -153,13 +162,161 @@ struct Row {
     stuck: u8,
 }
 
-fn finite(x: f64, flag: &str) -> CliResult<f64> {
-    if x.is_finite() {
-        Ok(x)
-    } else {
-        Err(CliError::usage(format!(
-            "--{flag}: must be a finite number"
-        )))
+/// Most integration steps one `motion` run may take, in either model and
+/// over all its step doublings and load periods (≈ 30 s of the resolved
+/// model, whose steps cost ≈ 25 ns). A run whose least possible cost exceeds
+/// it is refused before it starts, naming the flag that makes it large.
+const WORK_BUDGET: f64 = 1e9;
+
+/// An estimate in messages: three significant digits (`2.24e28`).
+fn approx(x: f64) -> String {
+    format!("{x:.2e}")
+}
+
+/// What the run will cost and whether its integrators can resolve it,
+/// estimated before it starts (the work bound of issue 28): each refusal
+/// names the flag that makes the run large or unresolvable.
+struct WorkPlan {
+    /// `ν = Ω/ω`.
+    nu: f64,
+    /// `m̃ = Mω²/k_x`.
+    mass: f64,
+    /// `κ = K/k_x`.
+    kappa: f64,
+    /// Load periods of `--duration` (None: until periodic).
+    periods: Option<u32>,
+    /// The first steps per ultrasonic period of the resolved model.
+    resolved_start: u64,
+}
+
+impl WorkPlan {
+    /// The homogenised model: RK4 must be stable at its finest step for the
+    /// body on the law (`λ = 2πn̄·max dμ/dV/(m̃ν)` steps, unless the
+    /// quasi-static limit takes over) and on the ground spring
+    /// (`2π·√(κ/m̃)/ν/2.8` steps; massless: `2πκS/(2.8n̄ν)`), and its least
+    /// work, two step counts over the periods asked, within [`WORK_BUDGET`].
+    fn check_homogenised(&self, p: &Problem, law: &MuTable) -> CliResult {
+        let max = homogenised::MAX_STEPS as f64;
+        let law_steps = if self.mass > 0.0 {
+            TAU * p.normal * law.max_slope() / (self.mass * self.nu)
+        } else {
+            0.0
+        };
+        let bounded = p.f0.abs() + p.f.abs() < 1.0;
+        let quasi_static =
+            self.mass == 0.0 || (law_steps > homogenised::STIFF_STEPS as f64 && bounded);
+        if !quasi_static && law_steps > 2.5 * max {
+            return Err(CliError::usage(format!(
+                "--mass: the body (Mω²/k_x = {}) follows the load (ω/Ω = {}) so fast that the homogenised model needs ≥ {} steps per load period (max {}); heavier body, slower load or |f0| + |f| < 1",
+                short(self.mass),
+                short(1.0 / self.nu),
+                approx(law_steps / 2.5),
+                homogenised::MAX_STEPS
+            )));
+        }
+        let spring_steps = self.spring_steps(p, law);
+        if spring_steps > max {
+            return Err(CliError::usage(format!(
+                "--spring: K/k_x = {} is so stiff against the load (ω/Ω = {}) that the homogenised model needs ≥ {} steps per load period (max {}); softer spring or slower load",
+                short(self.kappa),
+                short(1.0 / self.nu),
+                approx(spring_steps),
+                homogenised::MAX_STEPS
+            )));
+        }
+        let n0 = (homogenised::MIN_STEPS as f64)
+            .max(law_steps.min(max / 2.0))
+            .max(spring_steps);
+        let periods = f64::from(self.periods.unwrap_or(2));
+        let work = 3.0 * n0 * periods;
+        if work > WORK_BUDGET {
+            return Err(self.too_long(work, "the homogenised model", "--duration"));
+        }
+        Ok(())
+    }
+
+    /// Steps per load period RK4 needs to stay stable on the ground spring:
+    /// `2π·√(κ/m̃)/ν/2.8` for a body with mass (its ringing on the spring),
+    /// `2πκS/(2.8n̄ν)` for the quasi-static body (`S` the law's mean inverse
+    /// slope); 0 without a spring.
+    fn spring_steps(&self, p: &Problem, law: &MuTable) -> f64 {
+        let law_steps = if self.mass > 0.0 {
+            TAU * p.normal * law.max_slope() / (self.mass * self.nu)
+        } else {
+            0.0
+        };
+        let bounded = p.f0.abs() + p.f.abs() < 1.0;
+        let quasi_static =
+            self.mass == 0.0 || (law_steps > homogenised::STIFF_STEPS as f64 && bounded);
+        if self.kappa == 0.0 {
+            0.0
+        } else if quasi_static {
+            TAU * self.kappa * estimate::inverse_slope(law) / (2.8 * p.normal * self.nu)
+        } else {
+            TAU * (self.kappa / self.mass).sqrt() / (2.8 * self.nu)
+        }
+    }
+
+    /// The resolved model: symplectic Euler must be stable for the body on
+    /// the contact's and the spring's stiffness (`π√((1 + κ)/m̃)` steps per
+    /// ultrasonic period, at most [`resolved::MAX_STEPS`]), and its least
+    /// work (two step counts, `n/ν` steps per load period, three periods or
+    /// those of `--duration`) within [`WORK_BUDGET`].
+    /// `auto` is the homogenised estimate over `v_ref` when `--method auto`
+    /// chose the resolved model (it is named in the refusal).
+    fn check_resolved(&self, auto: Option<f64>) -> CliResult {
+        let subject = |model: &str| match auto {
+            Some(e) => {
+                format!("auto needs {model} (homogenised estimate {e:.2e} v_ref > --tol), which")
+            }
+            None => model.to_string(),
+        };
+        let stable = std::f64::consts::PI * ((1.0 + self.kappa) / self.mass).sqrt();
+        if stable > resolved::MAX_STEPS as f64 {
+            let flag = if self.kappa > 1.0 {
+                "--spring"
+            } else {
+                "--mass"
+            };
+            return Err(CliError::usage(format!(
+                "{flag}: {} needs {} steps per period for this body (Mω²/k_x = {}, K/k_x = {}; max {}); try --method homogenised",
+                subject("the resolved model"),
+                approx(stable.ceil()),
+                short(self.mass),
+                short(self.kappa),
+                resolved::MAX_STEPS
+            )));
+        }
+        let per_load = self.resolved_start as f64 / self.nu;
+        let work = |periods: f64| 3.0 * per_load * periods;
+        let asked = work(f64::from(self.periods.unwrap_or(3)));
+        if asked > WORK_BUDGET {
+            // The duration makes it large only if three periods would do.
+            let flag = if self.periods.is_some() && work(3.0) <= WORK_BUDGET {
+                "--duration"
+            } else {
+                "--force-omega"
+            };
+            return Err(self.too_long(asked, &subject("the resolved model"), flag));
+        }
+        Ok(())
+    }
+
+    /// The refusal of a run whose least work exceeds [`WORK_BUDGET`].
+    fn too_long(&self, work: f64, subject: &str, flag: &str) -> CliError {
+        let how = if flag == "--duration" {
+            "give a shorter --duration".to_string()
+        } else {
+            format!(
+                "ω/Ω = {} sets them; try --method homogenised",
+                short(1.0 / self.nu)
+            )
+        };
+        CliError::usage(format!(
+            "{flag}: {subject} takes ≥ {} steps (work bound {}); {how}",
+            approx(work),
+            short(WORK_BUDGET)
+        ))
     }
 }
 
@@ -169,16 +326,10 @@ impl MotionCmd {
         let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         let scene = rs.scene;
         let prm = *scene.params();
-        let mass = finite(self.mass, "mass")?;
-        if mass < 0.0 {
-            return Err(CliError::usage("--mass: must be >= 0"));
-        }
-        let f = finite(self.force_amp_rel, "force-amp-rel")?;
-        let f0 = finite(self.force_offset_rel, "force-offset-rel")?;
-        let big_omega = finite(self.force_omega, "force-omega")?;
-        if big_omega <= 0.0 {
-            return Err(CliError::usage("--force-omega: must be > 0"));
-        }
+        // Every value is in its domain (the flags' parsers): M, K ≥ 0,
+        // Ω > 0, |f|, |f0| ≤ 10, 0 < tol < 1, duration > 0.
+        let (mass, f, f0) = (self.mass, self.force_amp_rel, self.force_offset_rel);
+        let (big_omega, spring, tol) = (self.force_omega, self.spring, self.tol);
         // Slow dynamics: the load period spans at least two ultrasonic
         // periods (the periodicity tests compare whole load periods; ω/Ω = 10
         // is already where homogenisation fails).
@@ -189,14 +340,6 @@ impl MotionCmd {
                 prm.omega
             )));
         }
-        let spring = finite(self.spring, "spring")?;
-        if spring < 0.0 {
-            return Err(CliError::usage("--spring: must be >= 0"));
-        }
-        let tol = finite(self.tol, "tol")?;
-        if !(tol > 0.0 && tol < 1.0) {
-            return Err(CliError::usage("--tol: must be > 0 and < 1"));
-        }
         if let Some(p) = &self.plot {
             crate::plot::ext(p)?;
         }
@@ -204,7 +347,6 @@ impl MotionCmd {
         let periods = match self.duration {
             None => None,
             Some(t) => {
-                let t = finite(t, "duration")?;
                 let n = (t / load_period).floor();
                 if n < 1.0 {
                     return Err(CliError::usage(format!(
@@ -213,7 +355,11 @@ impl MotionCmd {
                     )));
                 }
                 if n > f64::from(u32::MAX) {
-                    return Err(CliError::usage("--duration: too many load periods"));
+                    return Err(CliError::usage(format!(
+                        "--duration: {} load periods of 2π/Ω are more than the {} a run can count",
+                        short(n),
+                        u32::MAX
+                    )));
                 }
                 Some(n as u32)
             }
@@ -258,6 +404,19 @@ impl MotionCmd {
         let started = Instant::now();
         let law = MuTable::new(&law_fn, (0.02 * tol).max(1e-9))
             .map_err(|e| CliError::failure(e.to_string()))?;
+        let plan = WorkPlan {
+            nu: p.nu,
+            mass: p.mass,
+            kappa: p.kappa,
+            periods,
+            resolved_start: resolved::start_steps(&d),
+        };
+        if method != MotionMethod::Resolved {
+            plan.check_homogenised(&p, &law)?;
+        }
+        if method == MotionMethod::Resolved {
+            plan.check_resolved(None)?;
+        }
         let c = law.c_forward.max(law.c_backward);
         let v_ref = if c > 0.0 { c } else { 1.0 };
         let tol_v = tol * v_ref;
@@ -277,6 +436,7 @@ impl MotionCmd {
             periods,
             max_periods: MAX_PERIODS,
             relaxation,
+            min_steps: plan.spring_steps(&p, &law).ceil() as u64,
         };
         let h_run = homogenised::run(&p, &law, &hs, &mut || {
             tick();
@@ -296,6 +456,14 @@ impl MotionCmd {
         let run: Run = if use_h {
             h_run
         } else {
+            // Auto chose the resolved model: its cost and stability first.
+            if method == MotionMethod::Auto {
+                let estimate = (e_h + e_table + h_run.numerical_error) / v_ref;
+                if let Err(e) = plan.check_resolved(Some(estimate)) {
+                    pb.finish_and_clear();
+                    return Err(e);
+                }
+            }
             pb.set_position(0);
             let s = resolved::Settings {
                 tol: 0.1 * tol_v,
@@ -311,6 +479,15 @@ impl MotionCmd {
         let wall = started.elapsed().as_secs_f64();
         let numerical = run.numerical_error + if use_h { e_table } else { 0.0 };
         let error = numerical + if use_h { e_h } else { 0.0 };
+        // No result is ever printed as NaN or infinite with exit 0.
+        if !(run.mean_velocity.is_finite() && error.is_finite()) {
+            return Err(CliError::failure(format!(
+                "the {} model did not give a finite drift (mean velocity {}, error estimate {}): the integration is unstable for these inputs",
+                if use_h { "homogenised" } else { "resolved" },
+                short(run.mean_velocity * vs),
+                short(error * vs)
+            )));
+        }
         let slope = law.max_slope();
         let o = Outcome {
             method: if use_h { "homogenised" } else { "resolved" },

@@ -5,6 +5,7 @@ use std::io::Write;
 use clap::Args;
 use model_core::scene::ContactMode;
 
+use crate::args::{short, Real, Short};
 use crate::error::{CliError, CliResult};
 use crate::eval::{
     critical_velocity, from_rel, mean_normal_force_over_kz_uz0, mu_at, MethodArgs, MuOutcome,
@@ -21,13 +22,13 @@ pub struct MuCmd {
     /// Sliding velocity v0, m/s (units of ωW0 for a dimensionless scene)
     #[arg(
         long,
-        allow_hyphen_values = true,
+        value_parser = Real::ANY,
         conflicts_with = "v_rel",
         required_unless_present = "v_rel"
     )]
     v0: Option<f64>,
     /// Velocity relative to v_c: v0 = X·v_c (forward v_c for X > 0, backward for X < 0)
-    #[arg(long, allow_hyphen_values = true, value_name = "X")]
+    #[arg(long, value_parser = Real::ANY, value_name = "X")]
     v_rel: Option<f64>,
     #[command(flatten)]
     how: MethodArgs,
@@ -43,7 +44,12 @@ impl MuCmd {
         let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         self.how.profile = rs.profile;
         let v = self.velocity(&rs)?;
-        let o = mu_at(&rs.scene, v, &self.how)?;
+        let flag = if self.v_rel.is_some() {
+            "--v-rel"
+        } else {
+            "--v0"
+        };
+        let o = mu_at(&rs.scene, v, &self.how).map_err(|e| e.renamed("--v0", flag))?;
         if self.json {
             write_json(out, &o)?;
         } else {
@@ -53,39 +59,43 @@ impl MuCmd {
             return Err(CliError::failure(format!(
                 "the fixed-step method did not reach a steady state in {} periods (last period's mu/mu0 = {}, not a result)",
                 o.periods.unwrap_or(0),
-                o.last_mu_over_mu0.unwrap_or(f64::NAN)
+                o.last_mu_over_mu0.map_or("-".to_string(), short)
             )));
         }
         Ok(())
     }
 
+    /// The velocity (m/s, or ωW0) from `--v0` or `--v-rel`, checked against
+    /// the scene's velocity scale.
     fn velocity(&self, rs: &ResolvedScene) -> CliResult<f64> {
-        match (self.v0, self.v_rel) {
-            (Some(v), None) => {
-                if !v.is_finite() {
-                    return Err(CliError::usage("--v0: must be a finite number"));
-                }
-                Ok(v)
-            }
-            (None, Some(x)) => from_rel(&critical_velocity(&rs.scene)?, x, "v-rel"),
-            _ => Err(CliError::usage("--v0: give either --v0 or --v-rel")),
-        }
+        let (v, flag) = match (self.v0, self.v_rel) {
+            (Some(v), None) => (v, "--v0"),
+            (None, Some(x)) => (
+                from_rel(&critical_velocity(&rs.scene)?, x, "v-rel")?,
+                "--v-rel",
+            ),
+            _ => return Err(CliError::usage("--v0: give either --v0 or --v-rel")),
+        };
+        rs.velocity(v, flag)?;
+        Ok(v)
     }
 }
 
 fn write_text(out: &mut impl Write, o: &MuOutcome, rs: &ResolvedScene) -> std::io::Result<()> {
-    writeln!(out, "v0           {}", o.v0)?;
+    writeln!(out, "v0           {}", Short(o.v0))?;
     match o.v_rel {
-        Some(x) => writeln!(out, "v0/v_c       {x}")?,
+        Some(x) => writeln!(out, "v0/v_c       {}", Short(x))?,
         None => writeln!(out, "v0/v_c       (v_c = 0 in this direction)")?,
     }
     if let Some(m) = o.mu {
-        writeln!(out, "mu           {m}")?;
-        writeln!(out, "mu/mu0       {}", o.mu_over_mu0.unwrap_or(f64::NAN))?;
+        writeln!(out, "mu           {}", Short(m))?;
+        if let Some(r) = o.mu_over_mu0 {
+            writeln!(out, "mu/mu0       {}", Short(r))?;
+        }
     }
     if let (Some(p), Some(m)) = (o.mu_0plus_over_mu0, o.mu_0minus_over_mu0) {
-        writeln!(out, "mu(0+)/mu0   {p}")?;
-        writeln!(out, "mu(0-)/mu0   {m}")?;
+        writeln!(out, "mu(0+)/mu0   {}", Short(p))?;
+        writeln!(out, "mu(0-)/mu0   {}", Short(m))?;
     }
     writeln!(out, "method       {}", o.method)?;
     if let Some(b) = o.error_bound_over_mu0 {
@@ -96,8 +106,8 @@ fn write_text(out: &mut impl Write, o: &MuOutcome, rs: &ResolvedScene) -> std::i
         writeln!(out, "periods      {}", o.periods.unwrap_or(0))?;
         writeln!(out, "converged    {}", o.converged.unwrap_or(false))?;
     }
-    writeln!(out, "v_c forward  {}", o.vc_forward)?;
-    writeln!(out, "v_c backward {}", o.vc_backward)?;
+    writeln!(out, "v_c forward  {}", Short(o.vc_forward))?;
+    writeln!(out, "v_c backward {}", Short(o.vc_backward))?;
     if rs.profile != Profile::Flat {
         write_profile_notes(out, rs)?;
     } else if o.lifts_off {
@@ -139,11 +149,13 @@ fn write_lift_off_notes(
     let w = mean_normal_force_over_kz_uz0(&rs.scene);
     writeln!(
         out,
-        "contact      lifts off once per period (duz/uz0 = {a} >= 1)"
+        "contact      lifts off once per period (duz/uz0 = {} >= 1)",
+        Short(a)
     )?;
     writeln!(
         out,
-        "normal force mean kz<uz+> = {w} kz uz0: mu = <fx>/<fz> is normalised by it, not by kz uz0"
+        "normal force mean kz<uz+> = {} kz uz0: mu = <fx>/<fz> is normalised by it, not by kz uz0",
+        Short(w)
     )?;
     writeln!(
         out,

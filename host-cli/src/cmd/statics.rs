@@ -10,6 +10,7 @@ use model_core::scene::ContactMode;
 use model_core::{exact, Libm, Scene};
 use serde::Serialize;
 
+use crate::args::Short;
 use crate::error::CliResult;
 use crate::eval::{exact_failure, lift_off_failure, mean_normal_force_over_kz_uz0};
 use crate::output::{stdout_error, write_json};
@@ -172,7 +173,7 @@ fn write_lift_off_text(
     writeln!(
         out,
         "contact                lifts off once per period (duz/uz0 = {} >= 1)",
-        s.drive().a
+        Short(s.drive().a)
     )?;
     writeln!(
         out,
@@ -181,30 +182,33 @@ fn write_lift_off_text(
     writeln!(
         out,
         "force at rest          unique: mu(0)/mu0 = {} (error bound {:e} mu0)",
-        o.mu_at_rest_over_mu0, o.error_bound_over_mu0
+        Short(o.mu_at_rest_over_mu0),
+        o.error_bound_over_mu0
     )?;
     writeln!(
         out,
         "mean normal force      kz<uz+> = {} kz uz0 = {} {}",
-        o.mean_normal_force_over_kz_uz0,
-        o.mean_normal_force_over_kz_uz0 * p.kz * p.uz0,
+        Short(o.mean_normal_force_over_kz_uz0),
+        Short(o.mean_normal_force_over_kz_uz0 * p.kz * p.uz0),
         u.force
     )?;
     writeln!(
         out,
         "tangential force at rest  mu(0)*<fz> = {} {}",
-        o.mu_at_rest_over_mu0 * s.mu0() * o.mean_normal_force_over_kz_uz0 * p.kz * p.uz0,
+        Short(o.mu_at_rest_over_mu0 * s.mu0() * o.mean_normal_force_over_kz_uz0 * p.kz * p.uz0),
         u.tangential
     )?;
     writeln!(
         out,
         "v_c forward            {} {} (contact window, eq. L5)",
-        o.vc_forward, u.velocity
+        Short(o.vc_forward),
+        u.velocity
     )?;
     writeln!(
         out,
         "v_c backward           {} {}",
-        o.vc_backward, u.velocity
+        Short(o.vc_backward),
+        u.velocity
     )
 }
 
@@ -218,12 +222,14 @@ fn write_text(
     writeln!(
         out,
         "v_c forward            {} {}",
-        o.vc_forward, u.velocity
+        Short(o.vc_forward),
+        u.velocity
     )?;
     writeln!(
         out,
         "v_c backward           {} {}",
-        o.vc_backward, u.velocity
+        Short(o.vc_backward),
+        u.velocity
     )?;
     writeln!(
         out,
@@ -235,14 +241,21 @@ fn write_text(
         }
     )?;
     match iv {
-        Some((lo, hi)) => writeln!(out, "static interval u_x0   [{lo}, {hi}] {}", u.length)?,
+        Some((lo, hi)) => writeln!(
+            out,
+            "static interval u_x0   [{}, {}] {}",
+            Short(lo),
+            Short(hi),
+            u.length
+        )?,
         None => writeln!(
             out,
             "static interval u_x0   empty (lo = {} W0 > hi = {} W0)",
-            st.lo, st.hi
+            Short(st.lo),
+            Short(st.hi)
         )?,
     }
-    let opt = |x: Option<f64>| x.map_or("-".to_string(), |v| v.to_string());
+    let opt = |x: Option<f64>| x.map_or("-".to_string(), crate::args::short);
     writeln!(
         out,
         "mu_s+/mu0 (exact)      {}",
@@ -256,13 +269,17 @@ fn write_text(
     writeln!(
         out,
         "paper eq. 18 (forward) {}",
-        o.paper_eq18_forward_over_mu0
+        Short(o.paper_eq18_forward_over_mu0)
     )?;
     writeln!(
         out,
         "paper eq. 19 (backward) {}",
-        o.paper_eq19_backward_over_mu0
+        Short(o.paper_eq19_backward_over_mu0)
     )?;
-    writeln!(out, "mu(0+)/mu0             {}", o.mu_0plus_over_mu0)?;
-    writeln!(out, "mu(0-)/mu0             {}", o.mu_0minus_over_mu0)
+    writeln!(out, "mu(0+)/mu0             {}", Short(o.mu_0plus_over_mu0))?;
+    writeln!(
+        out,
+        "mu(0-)/mu0             {}",
+        Short(o.mu_0minus_over_mu0)
+    )
 }

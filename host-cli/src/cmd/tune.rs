@@ -19,10 +19,14 @@ use model_core::regime::{classify_drive, ClassifyOptions};
 use model_core::{Libm, Scene};
 use serde::Serialize;
 
+use crate::args::{short, Real, Short};
 use crate::error::{CliError, CliResult};
 use crate::eval::exact_failure;
 use crate::output::{stdout_error, write_json};
-use crate::scene_args::SceneArgs;
+use crate::scene_args::{check_reach, ResolvedScene, SceneArgs};
+
+/// The exit statuses of `fricctl tune`, shown by its `--help`.
+const EXIT_STATUS: &str = "Exit status: 0 a solution (or maximum) within the solver's bound; 1 the result is printed but doubtful (its residual exceeds the solver's bound), or the solver failed; 2 bad input, including a target out of reach and a --maximize with no feasible drive (every drive in the range an actuator, or none pushes forward).";
 
 /// Cells of the scan of the adjusted quantity (the phase: 360°/256 = 1.41° per cell).
 pub const SCAN_CELLS: usize = 256;
@@ -52,18 +56,19 @@ pub enum Maximize {
 
 /// Flags of `fricctl tune`.
 #[derive(Args, Debug, Clone)]
+#[command(after_help = EXIT_STATUS)]
 #[command(group(ArgGroup::new("goal").multiple(false).args(["target_mu_rel", "target_mu", "maximize"])))]
 pub struct TuneCmd {
     #[command(flatten)]
     scene: SceneArgs,
     /// Sliding velocity v0, m/s (units of ωW0 for a dimensionless scene); needed with a target
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, value_parser = Real::ANY)]
     v0: Option<f64>,
     /// Target μ/μ0, strictly between −1 and 1
-    #[arg(long, allow_hyphen_values = true, value_name = "T")]
+    #[arg(long, value_name = "T", value_parser = Real::ANY.above(-1.0).below(1.0).because("mu/mu0 lies strictly inside (−1, 1): |mu| = mu0 is continuous sliding"))]
     target_mu_rel: Option<f64>,
     /// Target μ, strictly between −μ0 and μ0
-    #[arg(long, allow_hyphen_values = true, value_name = "X")]
+    #[arg(long, value_name = "X", value_parser = Real::ANY)]
     target_mu: Option<f64>,
     /// Maximise an objective over the adjusted quantity instead of meeting a target
     #[arg(long, value_enum, value_name = "OBJECTIVE")]
@@ -72,17 +77,17 @@ pub struct TuneCmd {
     #[arg(long, value_enum)]
     adjust: Adjust,
     /// Largest Δu_z, m (default and upper limit: (1 − liftoff-margin)·uz0)
-    #[arg(long, allow_hyphen_values = true, value_name = "M")]
+    #[arg(long, value_name = "M", value_parser = Real::positive())]
     max_duz: Option<f64>,
     /// Largest Δu_x, m (default 10·W0 = 10·μ0·kz·uz0/kx)
-    #[arg(long, allow_hyphen_values = true, value_name = "M")]
+    #[arg(long, value_name = "M", value_parser = Real::positive())]
     max_dux: Option<f64>,
     /// Lift-off margin m: every drive keeps Δu_z ≤ (1 − m)·uz0
     #[arg(
         long,
-        allow_hyphen_values = true,
         default_value_t = 0.05,
-        value_name = "M"
+        value_name = "M",
+        value_parser = Real::ANY.above(0.0).below(1.0)
     )]
     liftoff_margin: f64,
     /// JSON output
@@ -182,14 +187,19 @@ impl TuneCmd {
     /// Runs the command.
     pub fn run(self, out: &mut impl Write) -> CliResult {
         let rs = self.scene.resolve()?;
-        let setup = self.setup(rs.scene)?;
+        let setup = self.setup(&rs)?;
         match (self.target_mu_rel, self.target_mu, self.maximize) {
-            (Some(t), None, None) => self.target(out, &setup, t, "target-mu-rel"),
+            (Some(t), None, None) => self.target(out, &setup, &rs, t, "target-mu-rel"),
             (None, Some(x), None) => {
-                if !x.is_finite() {
-                    return Err(CliError::usage("--target-mu: must be a finite number"));
+                let mu0 = setup.scene.mu0();
+                if x.abs() >= mu0 {
+                    return Err(CliError::usage(format!(
+                        "--target-mu: {} must lie strictly inside (−{m}, {m}) (|mu| = mu0 is continuous sliding)",
+                        short(x),
+                        m = short(mu0)
+                    )));
                 }
-                self.target(out, &setup, x / setup.scene.mu0(), "target-mu")
+                self.target(out, &setup, &rs, x / mu0, "target-mu")
             }
             (None, None, Some(m)) => self.maximize(out, &setup, m),
             _ => Err(CliError::usage(
@@ -198,26 +208,14 @@ impl TuneCmd {
         }
     }
 
-    fn setup(&self, scene: Scene<f64>) -> CliResult<Setup> {
+    fn setup(&self, rs: &ResolvedScene) -> CliResult<Setup> {
+        let scene = rs.scene;
+        // Every flag is in its domain (the parsers): 0 < margin < 1, limits > 0.
         let m = self.liftoff_margin;
-        if !(m.is_finite() && m > 0.0 && m < 1.0) {
-            return Err(CliError::usage(
-                "--liftoff-margin: must be a number in (0, 1)",
-            ));
-        }
         let p = scene.params();
         let limit = (1.0 - m) * p.uz0;
         let g = scene.groups();
-        let positive = |x: Option<f64>, flag: &str| -> CliResult<Option<f64>> {
-            match x {
-                Some(v) if !(v.is_finite() && v > 0.0) => Err(CliError::usage(format!(
-                    "--{flag}: must be a finite number > 0"
-                ))),
-                _ => Ok(x),
-            }
-        };
-        let max_duz = positive(self.max_duz, "max-duz")?;
-        let max_dux = positive(self.max_dux, "max-dux")?;
+        let (max_duz, max_dux) = (self.max_duz, self.max_dux);
         if self.adjust != Adjust::Duz && max_duz.is_some() {
             return Err(CliError::usage("--max-duz: only with --adjust duz"));
         }
@@ -225,9 +223,16 @@ impl TuneCmd {
             return Err(CliError::usage("--max-dux: only with --adjust dux"));
         }
         if self.adjust != Adjust::Duz && p.duz > limit {
+            let (name, unit) = if rs.dimensionless {
+                ("duz-rel", "")
+            } else {
+                ("duz", " m")
+            };
+            let flag = rs.given.duz;
             return Err(CliError::usage(format!(
-                "--duz: {} m is above the lift-off limit (1 − liftoff-margin)·uz0 = {limit} m",
-                p.duz
+                "{flag}: {name} = {}{unit} is above the lift-off limit (1 − liftoff-margin)·uz0 = {}{unit}",
+                short(p.duz),
+                short(limit)
             )));
         }
         let (knob, hi, unit) = match self.adjust {
@@ -235,7 +240,9 @@ impl TuneCmd {
                 let hi = max_duz.unwrap_or(limit);
                 if hi > limit {
                     return Err(CliError::usage(format!(
-                        "--max-duz: {hi} m is above the lift-off limit (1 − liftoff-margin)·uz0 = {limit} m"
+                        "--max-duz: {} m is above the lift-off limit (1 − liftoff-margin)·uz0 = {} m",
+                        short(hi),
+                        short(limit)
                     )));
                 }
                 (Knob::Duz, hi / p.uz0, p.uz0)
@@ -243,6 +250,8 @@ impl TuneCmd {
             Adjust::Dux => {
                 let w0 = scene.w0();
                 let hi = max_dux.unwrap_or(DEFAULT_MAX_DUX_REL * w0);
+                // The widest drive of the search must be one the solvers resolve.
+                check_reach(0.0, hi / w0, rs.given.duz, "--max-dux")?;
                 (Knob::Dux, hi / w0, w0)
             }
             Adjust::Phase => (Knob::Phase, std::f64::consts::TAU, 1.0),
@@ -281,33 +290,24 @@ impl TuneCmd {
         }
     }
 
-    fn target(&self, out: &mut impl Write, s: &Setup, t: f64, flag: &str) -> CliResult {
+    fn target(
+        &self,
+        out: &mut impl Write,
+        s: &Setup,
+        rs: &ResolvedScene,
+        t: f64,
+        flag: &str,
+    ) -> CliResult {
         let v0 = self.v0.ok_or_else(|| {
             CliError::usage("--v0: missing (a target mu is at a sliding velocity)")
         })?;
-        if !v0.is_finite() {
-            return Err(CliError::usage("--v0: must be a finite number"));
-        }
         if v0 == 0.0 {
             return Err(CliError::usage(
                 "--v0: must be != 0 for a target (at rest mu is not unique; see `fricctl static`)",
             ));
         }
         let mu0 = s.scene.mu0();
-        if !(t.is_finite() && t.abs() < 1.0) {
-            let (given, range) = if flag == "target-mu" {
-                (t * mu0, format!("(−{mu0}, {mu0})"))
-            } else {
-                (t, "(−1, 1)".to_string())
-            };
-            return Err(CliError::usage(format!(
-                "--{flag}: {given} must lie strictly inside {range} (|mu| = mu0 is continuous sliding)"
-            )));
-        }
-        let v = s
-            .scene
-            .dimensionless_velocity(v0)
-            .map_err(|e| CliError::usage(format!("--{e}")))?;
+        let v = rs.velocity(v0, "--v0")?;
         let mut scan = vec![0.0; self.scan_points()];
         let r = match inverse::solve_target::<f64, Libm>(&s.problem, v, t, &mut scan) {
             Ok(r) => r,
@@ -320,11 +320,12 @@ impl TuneCmd {
                     "m"
                 };
                 return Err(CliError::usage(format!(
-                    "--{flag}: {} is out of reach by adjusting {} at v0 = {v0} m/s: reachable {}…{} ({} from {} to {} {unit})",
-                    t * scale,
+                    "--{flag}: {} is out of reach by adjusting {} at v0 = {} m/s: reachable {}…{} ({} from {} to {} {unit})",
+                    short(t * scale),
                     s.problem.knob().name(),
-                    min * scale,
-                    max * scale,
+                    short(v0),
+                    short(min * scale),
+                    short(max * scale),
                     s.problem.knob().name(),
                     knob_text(s.problem.knob().name(), self.shown(s, lo)),
                     knob_text(s.problem.knob().name(), self.shown(s, hi)),
@@ -353,18 +354,7 @@ impl TuneCmd {
             reachable_min_over_mu0: r.min.value,
             reachable_max_over_mu0: r.max.value,
         };
-        if self.json {
-            write_json(out, &o)?;
-        } else {
-            write_target_text(out, &o).map_err(stdout_error)?;
-        }
-        if o.residual_over_mu0.abs() > bound {
-            return Err(CliError::failure(format!(
-                "doubtful: the residual {:e} exceeds the solver's bound {bound:e} (the law is steeper than the float type resolves here)",
-                o.residual_over_mu0
-            )));
-        }
-        Ok(())
+        finish_target(out, &o, self.json)
     }
 
     fn maximize(&self, out: &mut impl Write, s: &Setup, m: Maximize) -> CliResult {
@@ -396,7 +386,7 @@ impl TuneCmd {
             return Err(CliError::usage(format!(
                 "--maximize: the contact never pushes forward with {} in its range (largest −mu(0+)/mu0 = {})",
                 s.problem.knob().name(),
-                best.value
+                short(best.value)
             )));
         }
         let o = self.maximize_out(s, best, name, m)?;
@@ -460,6 +450,25 @@ impl TuneCmd {
     }
 }
 
+/// Prints a target's result, then judges it: a residual above the solver's
+/// bound is reported (exit 1, the result still printed: it is the best the
+/// search found, but not within the stated bound).
+fn finish_target(out: &mut impl Write, o: &TargetOut, json: bool) -> CliResult {
+    if json {
+        write_json(out, o)?;
+    } else {
+        write_target_text(out, o).map_err(stdout_error)?;
+    }
+    let bound = o.error_bound_over_mu0;
+    if o.residual_over_mu0.abs() > bound {
+        return Err(CliError::failure(format!(
+            "doubtful: the residual {:e} exceeds the solver's bound {bound:e} (the law is steeper than the float type resolves here)",
+            o.residual_over_mu0
+        )));
+    }
+    Ok(())
+}
+
 fn wrap_deg(d: f64) -> f64 {
     let w = d.rem_euclid(360.0);
     if w >= 360.0 {
@@ -479,7 +488,7 @@ fn inverse_failure(e: InverseError<f64>) -> CliError {
 /// A value of the adjusted quantity as text: metres in `e` notation, degrees plain.
 fn knob_text(adjust: &str, x: f64) -> String {
     if adjust == "phase" || x == 0.0 {
-        format!("{x}")
+        short(x)
     } else {
         format!("{x:e}")
     }
@@ -497,30 +506,34 @@ fn write_drive(out: &mut impl Write, d: &DriveOut) -> std::io::Result<()> {
     writeln!(
         out,
         "duz             {:e} m   (duz/uz0 = {})",
-        d.duz, d.duz_rel
+        d.duz,
+        Short(d.duz_rel)
     )?;
     writeln!(
         out,
         "dux             {:e} m   (kx·dux/(mu0·kz·uz0) = {})",
-        d.dux, d.dux_rel
+        d.dux,
+        Short(d.dux_rel)
     )?;
-    writeln!(out, "phi             {} deg", d.phi_deg)
+    writeln!(out, "phi             {} deg", Short(d.phi_deg))
 }
 
 fn write_target_text(out: &mut impl Write, o: &TargetOut) -> std::io::Result<()> {
     let unit = unit_of(o.drive.adjust);
     writeln!(out, "adjust          {}", o.drive.adjust)?;
-    writeln!(out, "v0              {} m/s", o.v0)?;
+    writeln!(out, "v0              {} m/s", Short(o.v0))?;
     writeln!(
         out,
         "target          mu = {}   (mu/mu0 = {})",
-        o.target_mu, o.target_mu_over_mu0
+        Short(o.target_mu),
+        Short(o.target_mu_over_mu0)
     )?;
     write_drive(out, &o.drive)?;
     writeln!(
         out,
         "mu              {}   (mu/mu0 = {})",
-        o.mu, o.mu_over_mu0
+        Short(o.mu),
+        Short(o.mu_over_mu0)
     )?;
     writeln!(
         out,
@@ -548,7 +561,8 @@ fn write_target_text(out: &mut impl Write, o: &TargetOut) -> std::io::Result<()>
     writeln!(
         out,
         "reachable       mu/mu0 {} … {}",
-        o.reachable_min_over_mu0, o.reachable_max_over_mu0
+        Short(o.reachable_min_over_mu0),
+        Short(o.reachable_max_over_mu0)
     )?;
     writeln!(
         out,
@@ -567,7 +581,7 @@ fn write_maximize_text(out: &mut impl Write, o: &MaximizeOut) -> std::io::Result
     writeln!(
         out,
         "value           {}   (bound {:e}, units of {})",
-        o.value,
+        Short(o.value),
         o.error_bound_over_mu0,
         if o.objective == "asymmetry" {
             "mu0"
@@ -577,14 +591,14 @@ fn write_maximize_text(out: &mut impl Write, o: &MaximizeOut) -> std::io::Result
     )?;
     write_drive(out, &o.drive)?;
     writeln!(out, "regime          {}", o.regime)?;
-    writeln!(out, "asymmetry       {}", o.asymmetry)?;
+    writeln!(out, "asymmetry       {}", Short(o.asymmetry))?;
     writeln!(
         out,
         "stall force     {} (units of mu0·kz·uz0, forward)",
-        o.stall_force_forward
+        Short(o.stall_force_forward)
     )?;
-    writeln!(out, "mu(0+)/mu0      {}", o.mu_0plus_over_mu0)?;
-    writeln!(out, "mu(0-)/mu0      {}", o.mu_0minus_over_mu0)?;
+    writeln!(out, "mu(0+)/mu0      {}", Short(o.mu_0plus_over_mu0))?;
+    writeln!(out, "mu(0-)/mu0      {}", Short(o.mu_0minus_over_mu0))?;
     writeln!(
         out,
         "search          {} in [{}, {}] {unit}, {} cells, maxima refined",
@@ -593,4 +607,60 @@ fn write_maximize_text(out: &mut impl Write, o: &MaximizeOut) -> std::io::Result
         knob_text(o.drive.adjust, o.drive.range_hi),
         o.drive.scan_cells
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A target result with `residual` against the bound 1e-9.
+    fn result(residual: f64) -> TargetOut {
+        TargetOut {
+            drive: DriveOut {
+                adjust: "duz",
+                duz: 1e-6,
+                dux: 7e-7,
+                phi_deg: 50.0,
+                duz_rel: 0.2,
+                dux_rel: 0.35,
+                range_lo: 0.0,
+                range_hi: 4.75e-6,
+                scan_cells: SCAN_CELLS,
+            },
+            v0: 0.01,
+            target_mu: 0.15,
+            target_mu_over_mu0: 0.5,
+            mu: 0.15 + 0.3 * residual,
+            mu_over_mu0: 0.5 + residual,
+            residual_over_mu0: residual,
+            method: "exact",
+            error_bound_over_mu0: 1e-9,
+            solutions: vec![1e-6],
+            solutions_found: 1,
+            start: 2e-6,
+            reachable_min_over_mu0: -0.1,
+            reachable_max_over_mu0: 0.7,
+        }
+    }
+
+    /// Issue 24 §9: the "doubtful residual" path (never observed with the
+    /// exact solver) prints the result and exits 1 with one line; a residual
+    /// within the bound exits 0.
+    #[test]
+    fn doubtful_residual_prints_and_fails() {
+        for json in [false, true] {
+            let mut out = Vec::new();
+            let e = finish_target(&mut out, &result(3e-9), json).unwrap_err();
+            assert_eq!(e.code, 1);
+            assert_eq!(
+                e.msg,
+                "doubtful: the residual 3e-9 exceeds the solver's bound 1e-9 (the law is steeper than the float type resolves here)"
+            );
+            let text = String::from_utf8(out).unwrap();
+            assert!(text.contains("3e-9"), "{text}");
+            let mut out = Vec::new();
+            assert!(finish_target(&mut out, &result(5e-10), json).is_ok());
+            assert!(!out.is_empty());
+        }
+    }
 }

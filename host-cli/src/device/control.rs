@@ -18,11 +18,15 @@ use super::client::Client;
 use super::render;
 use super::sim::{PlantOptions, VirtualDevice, HALF};
 use super::{expect, out, unexpected};
+use crate::args::{Count, Real};
 use crate::error::{CliError, CliResult};
 use crate::plot::{render_figure, Corner, Extras, Figure, Mark, Panel, Series};
 
 /// Default κ (fraction of the error removed per update).
 pub const DEFAULT_GAIN: f64 = 0.7;
+/// The loop gain's domain: a fraction of the error removed per update.
+const GAIN: Real = Real::ANY.at_least(0.01).at_most(1.0);
+
 /// Default drive periods per update.
 pub const DEFAULT_PERIODS: u32 = 4;
 /// Default rate limit of the commanded Δu_z, m/s (the driver board's slew).
@@ -36,19 +40,19 @@ pub struct ControlArgs {
     #[arg(value_parser = ["off", "status"])]
     pub action: Option<String>,
     /// Setpoint μ* (|μ*| < μ0 of the device's contact)
-    #[arg(long, allow_hyphen_values = true, value_name = "X")]
+    #[arg(long, value_name = "X", value_parser = Real::ANY.single_precision())]
     pub target_mu: Option<f64>,
     /// Sliding velocity v0 the setpoint holds at, m/s (≠ 0)
-    #[arg(long, allow_hyphen_values = true, value_name = "V")]
+    #[arg(long, value_name = "V", value_parser = Real::ANY.single_precision())]
     pub v0: Option<f64>,
     /// κ: fraction of the error removed per update, in [0.01, 1]
-    #[arg(long, default_value_t = DEFAULT_GAIN, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = DEFAULT_GAIN, value_parser = GAIN)]
     pub gain: f64,
     /// Drive periods per estimate (one update each), 1 … 10 000
-    #[arg(long, default_value_t = DEFAULT_PERIODS, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 1>)]
+    #[arg(long, default_value_t = DEFAULT_PERIODS, value_parser = Count::<u32>::at_least(1))]
     pub periods: u32,
     /// Rate limit of the commanded Δu_z, m/s (at most the board's slew, 1e-3)
-    #[arg(long, default_value_t = DEFAULT_RATE, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = DEFAULT_RATE, value_parser = Real::positive().single_precision())]
     pub rate: f64,
 }
 
@@ -78,23 +82,9 @@ impl ControlArgs {
         let v0 = self.v0.ok_or_else(|| {
             CliError::usage("--v0: missing (the setpoint holds at a sliding velocity)")
         })?;
-        if !target.is_finite() {
-            return Err(CliError::usage("--target-mu: must be a finite number"));
-        }
-        if !(v0.is_finite() && v0 != 0.0) {
-            return Err(CliError::usage("--v0: must be a finite number != 0"));
-        }
-        if !(self.gain.is_finite() && (0.01..=1.0).contains(&self.gain)) {
-            return Err(CliError::usage(format!(
-                "--gain: must be in [0.01, 1] (got {})",
-                self.gain
-            )));
-        }
-        if !(self.rate.is_finite() && self.rate > 0.0) {
-            return Err(CliError::usage(format!(
-                "--rate: must be > 0 m/s (got {})",
-                self.rate
-            )));
+        // Each value is in its domain (the flags' parsers).
+        if v0 == 0.0 {
+            return Err(CliError::usage("--v0: must be != 0 (got 0)"));
         }
         Ok(Request::SetControl(ControlSetting {
             on: true,
@@ -122,30 +112,30 @@ pub struct BenchArgs {
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
     /// True μ0 of the plant relative to the device's model μ0 = 0.3 (0.8: 20 % lower)
-    #[arg(long, default_value_t = 0.8, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 0.8, value_parser = Real::positive())]
     pub mu0_ratio: f64,
     /// Transducer amplitude lag of the plant, drive periods
-    #[arg(long, default_value_t = 2.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 2.0, value_parser = Real::non_negative())]
     pub lag_periods: f64,
     /// Drift of the plant's μ0, per second of device time
-    #[arg(long, default_value_t = -0.5, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = -0.5, value_parser = Real::ANY)]
     pub drift: f64,
     /// ADC noise, ± counts
-    #[arg(long, default_value_t = 2.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 2.0, value_parser = super::sim::NOISE_COUNTS)]
     pub noise: f64,
-    /// κ of the loop
-    #[arg(long, default_value_t = DEFAULT_GAIN, allow_hyphen_values = true)]
+    /// κ of the loop, in [0.01, 1]
+    #[arg(long, default_value_t = DEFAULT_GAIN, value_parser = GAIN)]
     pub gain: f64,
     /// Drive periods per update
-    #[arg(long, default_value_t = DEFAULT_PERIODS, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 1>)]
+    #[arg(long, default_value_t = DEFAULT_PERIODS, value_parser = Count::<u32>::at_least(1))]
     pub periods: u32,
     /// Half-buffers the DAC fills run ahead of the output: 2 as on the board
     /// (a command reaches the output 2 half-buffers after the next), 0 for
-    /// the fastest possible pipeline
-    #[arg(long, default_value_t = 2, value_parser = crate::args::count::<usize, 0>)]
+    /// the fastest possible pipeline (at most 16)
+    #[arg(long, default_value_t = 2, value_parser = Count::<usize>::at_least(0).at_most(16, "the board fills 2 ahead"))]
     pub fill_lead: usize,
     /// Seed of the plant's ADC noise (0: the virtual device's default record)
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = Count::<u64>::at_least(0))]
     pub seed: u64,
     /// The transducers (ideal, with --lag-periods, or resonant).
     #[command(flatten)]
@@ -307,28 +297,25 @@ impl Bench {
     }
 }
 
-/// `fricctl device control-bench`.
+/// `fricctl device control-bench`. A plant whose forces leave the ADC's
+/// range latches the device's saturation fault: that ends the bench with
+/// the verdict (exit 1) rather than the device's raw refusal.
 pub fn bench(a: &BenchArgs, json: bool) -> CliResult {
-    use scenario::*;
-    for (x, n) in [
-        (a.mu0_ratio, "mu0-ratio"),
-        (a.lag_periods, "lag-periods"),
-        (a.drift, "drift"),
-        (a.noise, "noise"),
-        (a.gain, "gain"),
-    ] {
-        if !x.is_finite() {
-            return Err(CliError::usage(format!("--{n}: must be a finite number")));
+    bench_run(a, json).map_err(|e| {
+        if e.msg.contains("a fault is latched") {
+            CliError::failure(format!(
+                "the loop did not settle: the plant latched a device fault ({}); its forces leave the ADC's range",
+                e.msg.trim_start_matches("device error: ")
+            ))
+        } else {
+            e
         }
-    }
-    if a.mu0_ratio <= 0.0 {
-        return Err(CliError::usage("--mu0-ratio: must be > 0"));
-    }
-    if a.lag_periods < 0.0 || a.noise < 0.0 {
-        return Err(CliError::usage(
-            "--lag-periods: --lag-periods and --noise must be >= 0",
-        ));
-    }
+    })
+}
+
+fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
+    use scenario::*;
+    // Every value is in its domain (the flags' parsers).
     if let Some(p) = &a.plot {
         crate::plot::ext(p)?;
     }
@@ -768,22 +755,10 @@ pub fn tune(c: &mut Client, a: &DeviceTuneArgs, json: bool) -> CliResult {
             argv.push(t.clone());
         }
     }
-    let parsed = <TuneOnly as clap::Parser>::try_parse_from(&argv).map_err(|e| {
-        // clap's first line, with the list it announces ("…: --adjust <ADJUST>").
-        let msg = e.to_string();
-        let mut lines = msg.lines().map(str::trim).filter(|l| !l.is_empty());
-        let mut line = lines
-            .next()
-            .unwrap_or("bad tune flags")
-            .trim_start_matches("error: ")
-            .to_string();
-        if line.ends_with(':') {
-            if let Some(next) = lines.next() {
-                line = format!("{line} {next}");
-            }
-        }
-        CliError::usage(format!("device tune: {line}"))
-    })?;
+    let parsed = crate::args::numbers_take_hyphens(<TuneOnly as clap::CommandFactory>::command())
+        .try_get_matches_from(&argv)
+        .and_then(|m| <TuneOnly as clap::FromArgMatches>::from_arg_matches(&m))
+        .map_err(|e| CliError::usage(format!("device tune: {}", crate::args::clap_message(&e))))?;
     let mut buf = Vec::new();
     parsed.tune.run(&mut buf)?;
     let v: serde_json::Value =

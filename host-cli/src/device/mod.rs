@@ -24,6 +24,7 @@ use self::client::Client;
 use self::link::{Link, SerialLink, SimLink, TcpLink};
 use self::render::Report;
 use self::sim::VirtualDevice;
+use crate::args::{short, Count, Real};
 use crate::error::{CliError, CliResult};
 
 /// Where the device is.
@@ -38,20 +39,20 @@ pub struct Target {
     /// The virtual device, in process
     #[arg(long)]
     pub sim: bool,
-    /// Per-attempt timeout, ms (≥ 1)
-    #[arg(long, default_value_t = 500, allow_hyphen_values = true, value_parser = crate::args::count::<u64, 1>)]
+    /// Per-attempt timeout, ms (1 ms to 1 hour)
+    #[arg(long, default_value_t = 500, value_parser = Count::<u64>::at_least(1).at_most(3_600_000, "one hour"))]
     pub timeout_ms: u64,
-    /// Attempts per request (≥ 1; retries keep the sequence number)
-    #[arg(long, default_value_t = 3, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 1>)]
+    /// Attempts per request (1 to 100; retries keep the sequence number)
+    #[arg(long, default_value_t = 3, value_parser = Count::<u32>::at_least(1).at_most(100, "a device that does not answer 100 times is gone"))]
     pub attempts: u32,
     /// Virtual device: stage velocity v0, m/s
-    #[arg(long, default_value_t = 0.004, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 0.004, value_parser = sim::STAGE_VELOCITY)]
     pub sim_v0: f64,
     /// Virtual device: ADC noise, ± counts
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 1.0, value_parser = sim::NOISE_COUNTS)]
     pub sim_noise: f64,
     /// Virtual device: uncalibrated ADC offset, counts
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 0.0, value_parser = sim::OFFSET_COUNTS)]
     pub sim_offset: f64,
     /// Virtual device: the plant (true contact and transducers)
     #[command(flatten)]
@@ -83,13 +84,13 @@ pub enum DeviceCmd {
     /// The model's μ at a sliding velocity for the current drive
     Predict {
         /// Sliding velocity, m/s
-        #[arg(long, allow_hyphen_values = true)]
+        #[arg(long, value_parser = Real::ANY.single_precision())]
         v0: f64,
     },
     /// Measure μ over N drive periods (exit 1 if the estimate is not valid)
     Measure {
         /// Drive periods (1 … 10⁶, as the device's Info advertises)
-        #[arg(long, default_value_t = 1000, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 1>)]
+        #[arg(long, default_value_t = 1000, value_parser = Count::<u32>::at_least(1))]
         periods: u32,
         /// Accept an estimate the device marks as not valid (drive stopped or
         /// ramping, saturated, too few periods, fault)
@@ -122,10 +123,10 @@ pub enum DeviceCmd {
     /// Stream estimates (Ctrl-C to stop, or --count)
     Watch {
         /// Periods per estimate (1 … 10⁶)
-        #[arg(long, default_value_t = 1000, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 1>)]
+        #[arg(long, default_value_t = 1000, value_parser = Count::<u32>::at_least(1))]
         periods: u32,
         /// Stop after this many estimates
-        #[arg(long, allow_hyphen_values = true, value_parser = crate::args::count::<u64, 1>)]
+        #[arg(long, value_parser = Count::<u64>::at_least(1))]
         count: Option<u64>,
         /// Also record to CSV
         #[arg(long, value_name = "FILE")]
@@ -155,19 +156,19 @@ pub enum DriveCmd {
     /// Set the drive (refused as a whole if any value is out of range)
     Set {
         /// Frequency, Hz
-        #[arg(long)]
+        #[arg(long, value_parser = Real::ANY.single_precision())]
         freq: f64,
         /// Normal amplitude Δu_z, m
-        #[arg(long)]
+        #[arg(long, value_parser = Real::ANY.single_precision())]
         amp_z: f64,
         /// Tangential amplitude Δu_x, m
-        #[arg(long)]
+        #[arg(long, value_parser = Real::ANY.single_precision())]
         amp_x: f64,
         /// Normal offset = mean indentation u_z0, m
-        #[arg(long)]
+        #[arg(long, value_parser = Real::ANY.single_precision())]
         offset_z: f64,
         /// Phase φ, degrees
-        #[arg(long, allow_hyphen_values = true, default_value_t = 0.0)]
+        #[arg(long, default_value_t = 0.0, value_parser = Real::ANY.single_precision())]
         phase_deg: f64,
     },
 }
@@ -180,13 +181,13 @@ pub enum SceneCmd {
     /// Set μ0, k_z, k_x (or all three from `fricctl fit --out FILE`)
     Set {
         /// μ0 (> 0)
-        #[arg(long, allow_hyphen_values = true, required_unless_present = "from_fit")]
+        #[arg(long, required_unless_present = "from_fit", value_parser = Real::positive().single_precision())]
         mu0: Option<f64>,
         /// k_z, N/m (> 0)
-        #[arg(long, allow_hyphen_values = true, required_unless_present = "from_fit")]
+        #[arg(long, required_unless_present = "from_fit", value_parser = Real::positive().single_precision())]
         kz: Option<f64>,
         /// k_x, N/m (> 0)
-        #[arg(long, allow_hyphen_values = true, required_unless_present = "from_fit")]
+        #[arg(long, required_unless_present = "from_fit", value_parser = Real::positive().single_precision())]
         kx: Option<f64>,
         /// Take mu0, kz, kx from the JSON written by `fricctl fit --out FILE`
         #[arg(long, value_name = "FILE", conflicts_with_all = ["mu0", "kz", "kx"])]
@@ -305,18 +306,27 @@ fn wire_error(e: WireError) -> CliError {
     };
     match e {
         WireError::OutOfRange { param, min, max } => {
-            CliError::usage(format!("{}: refused by the device: allowed range [{min}, {max}]", name(param)))
+            CliError::usage(format!(
+                "{}: refused by the device: allowed range [{}, {}]",
+                name(param),
+                short(render::f32v(min)),
+                short(render::f32v(max))
+            ))
         }
         WireError::LiftOffRefused { amp_z_m, limit_m } => CliError::usage(format!(
-            "--amp-z: refused by the device: {amp_z_m} m would lift the contact off (limit {limit_m} m); \
-             lower it, or allow lift-off on purpose with `fricctl device config --allow-liftoff`"
+            "--amp-z: refused by the device: {} m would lift the contact off (limit {} m); \
+             lower it, or allow lift-off on purpose with `fricctl device config --allow-liftoff`",
+            short(render::f32v(amp_z_m)),
+            short(render::f32v(limit_m))
         )),
         WireError::BadScene => CliError::usage(
             "--offset-z: the device has no valid scene: it needs a contact (scene set) and a drive with a normal offset (drive set)"
                 .to_string(),
         ),
         WireError::OutOfReach { min, max } => CliError::usage(format!(
-            "--target-mu: out of reach of the device's model by adjusting Δu_z up to the lift-off limit: reachable mu {min} … {max}"
+            "--target-mu: out of reach of the device's model by adjusting Δu_z up to the lift-off limit: reachable mu {} … {}",
+            short(render::f32v(min)),
+            short(render::f32v(max))
         )),
         WireError::NotRunning => CliError::usage(
             "the drive is not running: `fricctl device start` first".to_string(),
@@ -403,7 +413,9 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
         _ => None,
     };
     let mut c = open(t)?;
-    if !t.json {
+    // Which device answers: for a person at a terminal (a script reads the
+    // exit status and a refusal's one line).
+    if !t.json && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
         eprintln!("talking to {}", c.describe());
     }
     match cmd {
@@ -424,17 +436,8 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
                     phase_deg,
                 },
         } => {
-            for (v, n) in [
-                (*freq, "freq"),
-                (*amp_z, "amp-z"),
-                (*amp_x, "amp-x"),
-                (*offset_z, "offset-z"),
-                (*phase_deg, "phase-deg"),
-            ] {
-                if !v.is_finite() {
-                    return Err(CliError::usage(format!("--{n}: must be a finite number")));
-                }
-            }
+            // Each value is a normal f32 number or 0 (the flags' parsers);
+            // the device checks its ranges and names the flag.
             let d = DriveSetting {
                 freq_hz: *freq,
                 amp_z_m: *amp_z as f32,
@@ -476,18 +479,13 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             )?;
             out(t.json, &render::contact(&contact))
         }
-        DeviceCmd::Predict { v0 } => {
-            if !v0.is_finite() {
-                return Err(CliError::usage("--v0: must be a finite number"));
-            }
-            match expect(c.call(Request::Predict { v0: *v0 as f32 })?)? {
-                Response::Prediction { prediction, regime } => out(
-                    t.json,
-                    &render::prediction(render::f32v(*v0 as f32), &prediction, regime),
-                ),
-                other => Err(unexpected(other)),
-            }
-        }
+        DeviceCmd::Predict { v0 } => match expect(c.call(Request::Predict { v0: *v0 as f32 })?)? {
+            Response::Prediction { prediction, regime } => out(
+                t.json,
+                &render::prediction(render::f32v(*v0 as f32), &prediction, regime),
+            ),
+            other => Err(unexpected(other)),
+        },
         DeviceCmd::Measure {
             periods,
             allow_invalid,
@@ -666,19 +664,19 @@ pub struct SimArgs {
     #[arg(long, value_name = "ADDR")]
     pub tcp: Option<String>,
     /// Stage velocity v0, m/s
-    #[arg(long, default_value_t = 0.004, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 0.004, value_parser = sim::STAGE_VELOCITY)]
     pub v0: f64,
     /// ADC noise, ± counts
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 1.0, value_parser = sim::NOISE_COUNTS)]
     pub noise: f64,
     /// Uncalibrated ADC offset, counts
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 0.0, value_parser = sim::OFFSET_COUNTS)]
     pub offset: f64,
     /// The plant (true contact and transducers)
     #[command(flatten)]
     pub plant: sim::PlantArgs,
     /// Stop after this many seconds (default: run until killed)
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, value_parser = Real::non_negative().at_most(1e9).because("about 30 years; omit it to run until killed"))]
     pub seconds: Option<f64>,
 }
 
@@ -687,10 +685,9 @@ pub fn serve(a: &SimArgs) -> CliResult {
     let plant = a
         .plant
         .options(a.v0, a.noise, a.offset, ["v0", "noise", "offset"])?;
-    if let Some(sec) = a.seconds {
-        if !(sec.is_finite() && sec >= 0.0) {
-            return Err(CliError::usage("--seconds: must be a finite number >= 0"));
-        }
+    // The address is checked before the device starts: bad input, exit 2.
+    if let Some(addr) = &a.tcp {
+        check_host_port(addr)?;
     }
     let mut dev = VirtualDevice::new(plant);
     let deadline = a

@@ -38,6 +38,8 @@ use model_core::protocol::Info;
 use model_core::server::Server;
 use model_core::Libm;
 
+use crate::args::Real;
+
 /// Table size of the virtual device (as the firmware).
 pub const TABLE_N: usize = 1024;
 /// Samples per half-buffer (the firmware's, [`model_core::device::HALF_BUFFER`]).
@@ -126,23 +128,39 @@ impl PlantOptions {
     }
 }
 
+/// Domain of the plant's stage velocity, m/s (`--v0`, `--sim-v0`): a
+/// normal `f32` number or 0, as every velocity the device is told.
+pub const STAGE_VELOCITY: Real = Real::ANY.single_precision();
+/// Domain of the plant's ADC noise, counts: within the 12-bit ADC's full scale.
+pub const NOISE_COUNTS: Real = Real::non_negative()
+    .at_most(4095.0)
+    .because("the 12-bit ADC's full scale");
+/// Domain of the plant's ADC offset, counts: within the ADC's full scale.
+pub const OFFSET_COUNTS: Real = Real::ANY
+    .at_least(-4095.0)
+    .at_most(4095.0)
+    .because("the 12-bit ADC's full scale");
+/// Domain of the plant's contact (μ0, k_z, k_x): the scene's domain
+/// ([`crate::scene_args::domain`]), in `f32` as the device's contact.
+const PLANT_CONTACT: Real = Real::positive().single_precision();
+
 /// The plant's flags, shared by `fricctl sim-device` and `fricctl device --sim`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct PlantArgs {
     /// Virtual plant: true μ0 (the device's model keeps its own, see `scene`)
-    #[arg(long, default_value_t = DEFAULT_CONTACT.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = DEFAULT_CONTACT.0, value_parser = PLANT_CONTACT)]
     pub plant_mu0: f64,
     /// Virtual plant: true k_z, N/m
-    #[arg(long, default_value_t = DEFAULT_CONTACT.1, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = DEFAULT_CONTACT.1, value_parser = PLANT_CONTACT)]
     pub plant_kz: f64,
     /// Virtual plant: true k_x, N/m
-    #[arg(long, default_value_t = DEFAULT_CONTACT.2, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = DEFAULT_CONTACT.2, value_parser = PLANT_CONTACT)]
     pub plant_kx: f64,
     /// Virtual plant: first-order lag of the transducers' displacement amplitudes, time constant in drive periods (0 = none)
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 0.0, value_parser = Real::non_negative().single_precision())]
     pub plant_lag_periods: f64,
     /// Virtual plant: drift of μ0, per second of device time (μ0 stops at 0)
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = 0.0, value_parser = Real::ANY.single_precision())]
     pub plant_mu0_drift: f64,
     /// Virtual plant: stage velocity profile, CSV `t_s,v0_m_s` (header line, t strictly increasing), piecewise linear in device time, held outside; replaces the constant velocity
     #[arg(long, value_name = "FILE")]
@@ -167,33 +185,15 @@ impl PlantArgs {
         names: [&str; 3],
     ) -> crate::error::CliResult<PlantOptions> {
         use crate::error::CliError;
-        for (x, n) in [
-            (v0, names[0]),
-            (noise, names[1]),
-            (offset, names[2]),
-            (self.plant_mu0_drift, "plant-mu0-drift"),
+        // The flags' parsers checked each value; `v0`, `noise` and `offset`
+        // may come from elsewhere, so they are checked here once more.
+        for (x, n, d) in [
+            (v0, names[0], STAGE_VELOCITY),
+            (noise, names[1], NOISE_COUNTS),
+            (offset, names[2], OFFSET_COUNTS),
         ] {
-            if !x.is_finite() {
-                return Err(CliError::usage(format!("--{n}: must be a finite number")));
-            }
-        }
-        if noise < 0.0 {
-            return Err(CliError::usage(format!("--{}: must be >= 0", names[1])));
-        }
-        for (x, n) in [
-            (self.plant_mu0, "plant-mu0"),
-            (self.plant_kz, "plant-kz"),
-            (self.plant_kx, "plant-kx"),
-        ] {
-            if !(x.is_finite() && x > 0.0) {
-                return Err(CliError::usage(format!("--{n}: must be > 0 (got {x})")));
-            }
-        }
-        if !(self.plant_lag_periods.is_finite() && self.plant_lag_periods >= 0.0) {
-            return Err(CliError::usage(format!(
-                "--plant-lag-periods: must be >= 0 (got {})",
-                self.plant_lag_periods
-            )));
+            d.check(x, &crate::args::short(x))
+                .map_err(|r| CliError::usage(format!("--{n}: {r}")))?;
         }
         let v0_profile = match &self.v0_profile {
             Some(p) => Some(read_profile(p)?),

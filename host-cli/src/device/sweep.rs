@@ -18,6 +18,7 @@ use serde::Serialize;
 use super::client::Client;
 use super::render::reason_names;
 use super::{expect, unexpected};
+use crate::args::{short, Count, Real};
 use crate::error::{CliError, CliResult};
 use crate::plot::{render_panels, Mark, Panel, Series};
 use crate::sweep_file::{self, SweepRow};
@@ -71,6 +72,11 @@ impl SweepParam {
     }
 }
 
+/// Most points of one sweep: each is a measurement of at least one drive
+/// period plus the device's ramps, so 10⁴ points are already hours of a
+/// board's time.
+pub const MAX_POINTS: usize = 10_000;
+
 /// Flags of `fricctl device sweep`.
 #[derive(Args, Debug, Clone)]
 pub struct SweepArgs {
@@ -78,22 +84,22 @@ pub struct SweepArgs {
     #[arg(long, value_enum)]
     pub param: SweepParam,
     /// First value
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, value_parser = Real::ANY.single_precision())]
     pub from: f64,
     /// Last value
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, value_parser = Real::ANY.single_precision())]
     pub to: f64,
-    /// Number of points, evenly spaced from --from to --to (≥ 1)
-    #[arg(long, allow_hyphen_values = true, value_parser = crate::args::count::<usize, 1>)]
+    /// Number of points, evenly spaced from --from to --to (1 to 10⁴)
+    #[arg(long, value_parser = Count::<usize>::at_least(1).at_most(MAX_POINTS as u64, "sweep in several files for more"))]
     pub points: usize,
     /// Drive periods measured per point (≥ 1)
-    #[arg(long, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 1>)]
+    #[arg(long, value_parser = Count::<u32>::at_least(1))]
     pub periods: u32,
     /// Extra drive periods waited (in device time: a discarded measurement) after the device's ramps have settled, for a lagging plant
-    #[arg(long, default_value_t = 0, allow_hyphen_values = true, value_parser = crate::args::count::<u32, 0>)]
+    #[arg(long, default_value_t = 0, value_parser = Count::<u32>::at_least(0))]
     pub settle_periods: u32,
     /// Stage (sliding) velocity during the sweep, m/s: the device cannot know it; used for its prediction and written to every row
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, value_parser = Real::ANY.single_precision())]
     pub v0: f64,
     /// The sweep file (one row per point; refused if it exists, unless --resume)
     #[arg(long, value_name = "FILE")]
@@ -112,11 +118,8 @@ impl SweepArgs {
     /// # Errors
     /// One line naming the flag.
     pub fn check(&self) -> CliResult {
-        for (x, n) in [(self.from, "from"), (self.to, "to"), (self.v0, "v0")] {
-            if !x.is_finite() {
-                return Err(CliError::usage(format!("--{n}: must be a finite number")));
-            }
-        }
+        // Each value is in its domain (the flags' parsers; `--points` is
+        // capped before anything is allocated).
         if self.points == 1 && self.from != self.to {
             return Err(CliError::usage(
                 "--points: 1 point needs --from equal to --to",
@@ -365,8 +368,19 @@ pub fn run(c: &mut Client, a: &SweepArgs, json: bool) -> CliResult {
     );
     bar.set_position(rows.len() as u64);
     for &x in &values[rows.len()..] {
-        bar.set_message(format!("{} = {x} {}", a.param.name(), a.param.unit()));
-        let (setting, freq, phi) = drive_of(ask(c, Request::SetDrive(a.param.apply(base, x)))?)?;
+        bar.set_message(format!(
+            "{} = {} {}",
+            a.param.name(),
+            short(x),
+            a.param.unit()
+        ));
+        // A value the device refuses is named by the end of the sweep that
+        // reaches it (the points lie between --from and --to).
+        let end = if x == a.from { "--from" } else { "--to" };
+        let (setting, freq, phi) = drive_of(
+            ask(c, Request::SetDrive(a.param.apply(base, x)))
+                .map_err(|e| e.renamed(&format!("--{}", a.param.name()), end))?,
+        )?;
         wait_status(c, Duration::from_secs(60), "settling of the ramps", |s| {
             s.settled
         })?;
@@ -647,12 +661,13 @@ pub fn scene_values(
     };
     let mut out = [0.0; 3];
     for ((x, name), o) in vals.iter().zip(["mu0", "kz", "kx"]).zip(&mut out) {
+        // The flags' own domain, for the values of a fit file too.
         match x {
-            Some(x) if x.is_finite() && *x > 0.0 => *o = *x,
             Some(x) => {
-                return Err(CliError::usage(format!(
-                    "{src}{name}: must be > 0 (got {x})"
-                )));
+                *o = Real::positive()
+                    .single_precision()
+                    .check(*x, &short(*x))
+                    .map_err(|r| CliError::usage(format!("{src}{name}: {r}")))?;
             }
             None => return Err(CliError::usage(format!("{src}{name}: missing"))),
         }

@@ -41,11 +41,15 @@ pub struct Settings {
     /// ([`super::relaxation_per_period`]), the least ratio the periodicity
     /// test assumes for the changes still to come.
     pub relaxation: f64,
+    /// Fewest steps per load period the caller knows the problem needs
+    /// (e.g. RK4's stability on a stiff ground spring); 0 for none.
+    pub min_steps: u64,
 }
 
-/// Fewest and most steps per load period.
-const MIN_STEPS: u64 = 256;
-const MAX_STEPS: u64 = 1 << 20;
+/// Fewest steps per load period.
+pub const MIN_STEPS: u64 = 256;
+/// Most steps per load period.
+pub const MAX_STEPS: u64 = 1 << 20;
 /// Above this stiffness bound on the steps per load period (`2πλ`, [`run`])
 /// the body is run in its quasi-static (massless) limit.
 pub const STIFF_STEPS: u64 = 1 << 16;
@@ -335,7 +339,9 @@ pub fn run(p: &Problem, law: &MuTable, s: &Settings, tick: &mut dyn FnMut()) -> 
         r.numerical_error += tau_r * super::estimate::max_dv_dt(&r);
         return r;
     }
-    let mut n = MIN_STEPS.max((stiff.ceil() as u64).next_power_of_two().min(MAX_STEPS / 2));
+    let mut n = MIN_STEPS
+        .max((stiff.ceil() as u64).next_power_of_two().min(MAX_STEPS / 2))
+        .max(s.min_steps.next_power_of_two().min(MAX_STEPS / 2));
     let mut prev = run_n(p, law, s, n, None, tick);
     loop {
         n *= 2;

@@ -212,6 +212,7 @@ mod tests {
                 periods: None,
                 max_periods: 500,
                 relaxation: relaxation_per_period(&p, estimate::inverse_slope(&table)),
+                min_steps: 0,
             },
             &mut || {},
         );

@@ -51,7 +51,7 @@ pub struct Settings {
 const QUASI: usize = 10;
 
 /// Most steps per ultrasonic period.
-const MAX_STEPS: u64 = 1024;
+pub const MAX_STEPS: u64 = 1024;
 
 /// The first step count per ultrasonic period.
 pub fn start_steps(d: &Drive<f64>) -> u64 {

@@ -276,8 +276,9 @@ pub fn load_line_of<T: Float, E>(
         T::ZERO
     };
     Ok(LoadLine {
-        stall_forward: (-plus).max(T::ZERO),
-        stall_backward: minus.max(T::ZERO),
+        // `if` rather than `max`: `(-0.0).max(0.0)` may be −0, printed `-0`.
+        stall_forward: if -plus > T::ZERO { -plus } else { T::ZERO },
+        stall_backward: if minus > T::ZERO { minus } else { T::ZERO },
         no_load_forward: forward,
         no_load_backward: backward,
     })

@@ -116,9 +116,13 @@ impl core::fmt::Display for SceneError {
             SceneError::RatioNeedsNormalAmplitude => {
                 write!(f, "ratio: needs duz-rel > 0 (it is kx·dux/(mu0·kz·duz))")
             }
+            SceneError::OutOfRange(Param::Velocity) => write!(
+                f,
+                "v0: v0/(ωW0) over- or underflows the number type, or v0 is subnormal"
+            ),
             SceneError::OutOfRange(p) => write!(
                 f,
-                "{}: the scene's derived scales over- or underflow the number type",
+                "{}: subnormal, or the scene's derived scales over- or underflow the number type",
                 p.name()
             ),
         }
@@ -216,7 +220,8 @@ impl<T: Float> Groups<T> {
     }
 
     /// Checks the groups for a contact mode: finite, `a ≥ 0` (and `a < 1`
-    /// for [`ContactMode::Permanent`]), `b ≥ 0`.
+    /// for [`ContactMode::Permanent`]), `b ≥ 0`, and none subnormal
+    /// ([`SceneError::OutOfRange`]).
     ///
     /// # Errors
     /// The first violated condition.
@@ -232,6 +237,16 @@ impl<T: Float> Groups<T> {
         }
         if self.duz_rel >= T::ONE && contact == ContactMode::Permanent {
             return Err(SceneError::LiftOff);
+        }
+        // Subnormal groups have lost relative precision, as subnormal inputs.
+        for (x, param) in [
+            (self.duz_rel, Param::DuzRel),
+            (self.dux_rel, Param::DuxRel),
+            (self.phi, Param::Phi),
+        ] {
+            if x != T::ZERO {
+                check_normal(x.abs(), param)?;
+            }
         }
         Ok(())
     }
@@ -441,9 +456,13 @@ impl<T: Float> Scene<T> {
         ] {
             check_normal(x, param)?;
         }
-        for (x, param) in [(p.duz, Param::Duz), (p.dux, Param::Dux)] {
+        for (x, param) in [
+            (p.duz, Param::Duz),
+            (p.dux, Param::Dux),
+            (p.phi, Param::Phi),
+        ] {
             if x != T::ZERO {
-                check_normal(x, param)?;
+                check_normal(x.abs(), param)?;
             }
         }
         // W₀ = μ₀ (k_z/k_x) u_z0, formed so that intermediate products stay in range.
@@ -613,12 +632,19 @@ impl<T: Float> Scene<T> {
     /// Dimensionless velocity `V = v₀/(ωW₀)` of a sliding velocity in m/s.
     ///
     /// # Errors
-    /// [`SceneError::NonFinite`] (`Param::Velocity`) for NaN/∞ or a velocity
-    /// so large that `V` overflows.
+    /// [`SceneError::NonFinite`] (`Param::Velocity`) for NaN/∞;
+    /// [`SceneError::OutOfRange`] (`Param::Velocity`) for a velocity so large
+    /// that `V` overflows, or a non-zero one whose `V` (or `v₀` itself) is
+    /// subnormal: like a subnormal scene input it has lost relative
+    /// precision.
     pub fn dimensionless_velocity(&self, v0: T) -> Result<T, SceneError> {
         check_finite(v0, Param::Velocity)?;
+        if v0 == T::ZERO {
+            return Ok(v0);
+        }
+        check_normal(v0.abs(), Param::Velocity)?;
         let v = v0 / self.velocity_scale();
-        check_finite(v, Param::Velocity)?;
+        check_normal(v.abs(), Param::Velocity)?;
         Ok(v)
     }
 }
