@@ -28,10 +28,11 @@
 //! `|K₁₅ − G₇|` (an over-estimate on smooth panels, where the Kronrod rule
 //! is far more accurate than the Gauss rule it is compared with), and the
 //! time step's, from the same nodes at `n`, `n/2` and `n/4` steps: the
-//! scheme is second order, so the error at `n` is a third of the last change
-//! `|B(n) − B(n/2)|`, or of the one before over 4; the larger of the two,
-//! doubled (the changes jitter with where the events fall on the grid), is
-//! allowed. `μ`'s error is `(δN + |μ|δD)/D`.
+//! scheme is second order, so the error at `n` would be a third of the last
+//! change `|B(n) − B(n/2)|`; but the changes jitter with where the events
+//! fall on the grid (a single spring's mean can move by the same amount over
+//! three doublings), so twice a third of the larger of the last two changes
+//! is allowed. `μ`'s error is `(δN + |μ|δD)/D`.
 
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
@@ -282,7 +283,7 @@ pub fn mu(n_exp: f64, a: f64, b: f64, phi: f64, v: f64, tol: f64, n: u32) -> Bru
         }
     }
     let [fine, half, quarter] = total;
-    let step = |x: f64, y: f64, z: f64| 2.0 * (x - y).abs().max((y - z).abs() / 4.0) / 3.0;
+    let step = |x: f64, y: f64, z: f64| 2.0 * (x - y).abs().max((y - z).abs()) / 3.0;
     let bed_err = Bed {
         num: quad.num + step(fine.num, half.num, quarter.num),
         den: quad.den + step(fine.den, half.den, quarter.den),
