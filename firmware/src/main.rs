@@ -6,7 +6,7 @@
 //!
 //! Pins: PA4 = DAC1 (normal transducer), PA5 = DAC2 (tangential), PA0 = ADC1
 //! IN0 (normal force), PA1 = ADC2 IN1 (tangential force), PA2/PA3 = USART2
-//! TX/RX (AF7). Register facts cite RM0090 (STM32F405/407 reference manual).
+//! TX/RX (AF7), PB0 = external fault input (active low, pull-up; EXTI0). Register facts cite RM0090 (STM32F405/407 reference manual).
 //!
 //! Data path, per sample tick (TIM2 update → TRGO, 500 kS/s):
 //! * DAC: the trigger moves DHR → DOR on both channels and raises one DMA
@@ -37,6 +37,7 @@ use core::cell::RefCell;
 use cortex_m::interrupt::Mutex;
 use cortex_m_rt::entry;
 use defmt_rtt as _;
+use model_core::board::dma;
 use model_core::board::link::{self, Core, LinkIo, RxQueue, TxRing, RX_CAPACITY, TX_CAPACITY};
 use model_core::dds::SineTable;
 use model_core::device::{faults, Contact, Device, DeviceConfig, DriveSetting};
@@ -203,6 +204,12 @@ fn main() -> ! {
         defmt::warn!("reset by the independent watchdog");
         dev.fault(faults::WATCHDOG_RESET);
     }
+    // The external fault input: an alarm already raised at power-up is
+    // latched now (its edge came before the interrupt was armed).
+    if fault_input(&dp) {
+        defmt::warn!("external fault input active at power-up");
+        dev.fault(faults::EXTERNAL);
+    }
     // A safe default drive (stopped): 40 kHz, zero amplitudes, no preload.
     let _ = dev.set_drive(DriveSetting {
         freq_hz: 40_000.0,
@@ -230,7 +237,13 @@ fn main() -> ! {
     qemu::tick(&mut cp.SYST);
     watchdog(&dp);
 
-    // SAFETY: the handlers only touch state behind critical sections.
+    // SAFETY: the handlers share state with the loop and each other only
+    // behind critical sections (DEVICE, RX, TX) or atomics (HALVES); the DMA
+    // buffers they touch are reached through raw pointers to the half the
+    // DMA has left (DAC: the only reference to those words; ADC: volatile
+    // reads after an acquire fence), never through a reference to a whole
+    // buffer the DMA is using. Unmasking cannot break a critical section in
+    // progress (there is none here).
     unsafe {
         cp.NVIC.set_priority(Interrupt::DMA1_STREAM5, 0x10);
         cp.NVIC.set_priority(Interrupt::DMA2_STREAM0, 0x20);
@@ -238,6 +251,11 @@ fn main() -> ! {
         pac::NVIC::unmask(Interrupt::DMA1_STREAM5);
         pac::NVIC::unmask(Interrupt::DMA2_STREAM0);
         pac::NVIC::unmask(Interrupt::USART2);
+        #[cfg(not(feature = "qemu"))]
+        {
+            cp.NVIC.set_priority(Interrupt::EXTI0, 0x08);
+            pac::NVIC::unmask(Interrupt::EXTI0);
+        }
     }
     // A byte may have arrived before RXNEIE was set (it then raises no edge):
     // let the handler look once.
@@ -373,6 +391,45 @@ fn adc_dma(dp: &pac::Peripherals) {
         .write(|w| unsafe { w.bits(1 | (0b0110 << 24) | (0b01 << 28)) });
 }
 
+/// The external fault input on PB0 (active low, pull-up: an amplifier's
+/// alarm output, open drain): EXTI line 0 on the falling edge (RM0090 §9.2.3
+/// SYSCFG_EXTICR1, §12.3 EXTI). Returns whether the input is already active.
+#[cfg(not(feature = "qemu"))]
+fn fault_input(dp: &pac::Peripherals) -> bool {
+    // Clocks: GPIOB (AHB1ENR bit 1), SYSCFG (APB2ENR bit 14).
+    dp.RCC
+        .ahb1enr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 1)) });
+    dp.RCC
+        .apb2enr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 14)) });
+    // PB0: input (MODER = 00), pull-up (PUPDR = 01).
+    dp.GPIOB
+        .moder()
+        .modify(|r, w| unsafe { w.bits(r.bits() & !0b11) });
+    dp.GPIOB
+        .pupdr()
+        .modify(|r, w| unsafe { w.bits((r.bits() & !0b11) | 0b01) });
+    // EXTI0 ← port B (EXTICR1[3:0] = 0001), falling edge, unmasked.
+    dp.SYSCFG
+        .exticr1()
+        .modify(|r, w| unsafe { w.bits((r.bits() & !0xF) | 0b0001) });
+    dp.EXTI
+        .ftsr()
+        .modify(|r, w| unsafe { w.bits(r.bits() | 1) });
+    dp.EXTI.pr().write(|w| unsafe { w.bits(1) });
+    dp.EXTI.imr().modify(|r, w| unsafe { w.bits(r.bits() | 1) });
+    // The pull-up needs a few cycles before the pin reads high.
+    cortex_m::asm::delay(100);
+    dp.GPIOB.idr().read().bits() & 1 == 0
+}
+
+/// QEMU: the GPIO is a stub (it reads 0): no external input.
+#[cfg(feature = "qemu")]
+fn fault_input(_dp: &pac::Peripherals) -> bool {
+    false
+}
+
 /// TIM2: update event every TIMCLK/FS ticks, TRGO on update (MMS = 010).
 fn tim2(dp: &pac::Peripherals) {
     let t = &dp.TIM2;
@@ -444,60 +501,86 @@ fn tx_pump() {
 
 #[interrupt]
 fn DMA1_STREAM5() {
-    // SAFETY: register access only; HISR/HIFCR of DMA1 (stream 5 flags).
+    // SAFETY: register access only; HISR/HIFCR and NDTR of DMA1 stream 5.
     let dma = unsafe { &*pac::DMA1::ptr() };
     let isr = dma.hisr().read().bits();
+    let ndtr = dma.st(5).ndtr().read().bits();
     let (ht, tc) = (isr & (1 << 10) != 0, isr & (1 << 11) != 0); // HTIF5, TCIF5
     dma.hifcr()
         .write(|w| unsafe { w.bits((1 << 10) | (1 << 11) | (1 << 9) | (1 << 8) | (1 << 6)) });
-    // Half transfer: the DMA is in the second half, refill the first; full: the reverse.
-    let half = if tc {
-        1
-    } else if ht {
-        0
-    } else {
+    let Some(ev) = dma::half_event(ht, tc, ndtr, HALF as u32) else {
         return;
     };
     HALVES.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
     cortex_m::interrupt::free(|cs| {
         if let Some(dev) = DEVICE.borrow(cs).borrow_mut().as_mut() {
-            // SAFETY: the DMA is reading the other half.
-            let buf = unsafe { &mut *core::ptr::addr_of_mut!(DAC_BUF) };
-            let (a, b) = buf.split_at_mut(HALF);
-            dev.fill_dac(half, if half == 0 { a } else { b });
-            if ht && tc {
-                // Both flags at once: we were late by a whole half.
-                dev.fault(faults::DAC_UNDERRUN);
-            }
+            // SAFETY: `ev.half` is the half the DMA has left (`half_event`:
+            // from NDTR when the handler is late); the DMA reads only the
+            // other half until this handler's next run, 128 µs later, and no
+            // other code touches DAC_BUF after `main`'s pre-fill. So this is
+            // the only reference to these words, and nothing reads them
+            // while it lives. The release fence orders the refill before the
+            // DMA's later reads as seen by the compiler.
+            let buf = unsafe {
+                let first = core::ptr::addr_of_mut!(DAC_BUF).cast::<u32>();
+                core::slice::from_raw_parts_mut(first.add(ev.half * HALF), HALF)
+            };
+            dev.dac_half_done(ev, buf);
+            core::sync::atomic::compiler_fence(core::sync::atomic::Ordering::Release);
         }
     });
 }
 
 #[interrupt]
 fn DMA2_STREAM0() {
-    // SAFETY: register access only; LISR/LIFCR of DMA2 (stream 0 flags).
+    // SAFETY: register access only; LISR/LIFCR and NDTR of DMA2 stream 0.
     let dma = unsafe { &*pac::DMA2::ptr() };
     let isr = dma.lisr().read().bits();
+    let ndtr = dma.st(0).ndtr().read().bits();
     let (ht, tc) = (isr & (1 << 4) != 0, isr & (1 << 5) != 0); // HTIF0, TCIF0
     dma.lifcr().write(|w| unsafe { w.bits(0b11_1101) });
-    let half = if ht {
-        0
-    } else if tc {
-        1
-    } else {
+    let Some(ev) = dma::half_event(ht, tc, ndtr, HALF as u32) else {
         return;
     };
-    // SAFETY: the DMA is writing the other half.
-    let buf = unsafe { &*core::ptr::addr_of!(ADC_BUF) };
-    let words = &buf[half * HALF..(half + 1) * HALF];
+    // The DMA wrote the finished half before raising its flag; the acquire
+    // fence keeps the reads below after the flag read.
+    core::sync::atomic::fence(core::sync::atomic::Ordering::Acquire);
     let mut samples = [(0u16, 0u16); HALF];
-    for (s, &w) in samples.iter_mut().zip(words) {
+    // SAFETY: a raw pointer to the finished half only (no reference to the
+    // buffer the DMA writes into); each word read with `read_volatile`, as
+    // memory another bus master owns. The DMA writes the other half for the
+    // next 128 µs; the copy takes well under 1 µs.
+    let first = unsafe {
+        core::ptr::addr_of!(ADC_BUF)
+            .cast::<u32>()
+            .add(ev.half * HALF)
+    };
+    for (k, s) in samples.iter_mut().enumerate() {
+        let w = unsafe { first.add(k).read_volatile() };
         // CDR: ADC1 (f_z) in bits 0–15, ADC2 (f_x) in bits 16–31.
         *s = ((w >> 16) as u16, (w & 0xFFFF) as u16);
     }
     cortex_m::interrupt::free(|cs| {
         if let Some(dev) = DEVICE.borrow(cs).borrow_mut().as_mut() {
-            dev.adc_block(half, &samples);
+            // A late handler (both flags) is the fault ADC_OVERRUN, through
+            // the device's one fault path.
+            dev.adc_half_done(ev, &samples);
+        }
+    });
+}
+
+/// The external fault input (PB0, active low: an amplifier alarm): the
+/// falling edge latches `faults::EXTERNAL` through the device's one fault
+/// path. Not wired under QEMU (its GPIO is a stub that reads 0).
+#[cfg(not(feature = "qemu"))]
+#[interrupt]
+fn EXTI0() {
+    // SAFETY: register access only; EXTI_PR bit 0 is cleared by writing 1.
+    let exti = unsafe { &*pac::EXTI::ptr() };
+    exti.pr().write(|w| unsafe { w.bits(1) });
+    cortex_m::interrupt::free(|cs| {
+        if let Some(dev) = DEVICE.borrow(cs).borrow_mut().as_mut() {
+            dev.fault(faults::EXTERNAL);
         }
     });
 }

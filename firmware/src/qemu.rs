@@ -87,6 +87,9 @@ pub struct Analog {
     plant: Plant<f32>,
     dac: [u32; HALF],
     samples: [(u16, u16); HALF],
+    /// The motion pickups' readings (z, x) of the same half (noise-free
+    /// but for the ADC's rounding).
+    pickups: [(u16, u16); HALF],
     noise: Noise,
     half: usize,
     cfg: DeviceConfig,
@@ -99,6 +102,7 @@ impl Analog {
             plant: Plant::new(PLANT_MU0, PLANT_K, PLANT_K),
             dac: [0; HALF],
             samples: [(0, 0); HALF],
+            pickups: [(0, 0); HALF],
             noise: Noise::new(0x9E37_79B9_7F4A_7C15),
             half: 0,
             cfg,
@@ -141,17 +145,17 @@ impl Analog {
         };
         // With interrupts enabled: the link stays served meanwhile.
         self.run_plant(&d);
-        let samples = &self.samples;
+        let (samples, pickups) = (&self.samples, &self.pickups);
         cortex_m::interrupt::free(|cs| {
             if let Some(dev) = DEVICE.borrow(cs).borrow_mut().as_mut() {
-                dev.adc_block(half, samples);
+                dev.adc_block_with_pickups(half, samples, pickups);
             }
         });
     }
 
     fn run_plant(&mut self, d: &HalfDrive) {
         let noise = &mut self.noise;
-        self.plant.run_half::<FastF32>(
+        self.plant.run_half_with_pickups::<FastF32>(
             &self.cfg,
             d,
             SUB,
@@ -163,6 +167,7 @@ impl Analog {
                 counts_x: noise.uniform(ADC_NOISE_COUNTS),
             },
             &mut self.samples,
+            &mut self.pickups,
         );
     }
 }

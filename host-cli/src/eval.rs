@@ -207,7 +207,7 @@ pub struct MethodArgs {
 }
 
 /// Default tolerance of the MDR quadrature for a curved profile, units of μ0
-/// (the target for a sphere), raised to twice the per-spring solvers'
+/// (the accuracy asked of a sphere's μ), raised to twice the per-spring solvers'
 /// part of the bound where that is larger.
 pub const PROFILE_TOL: f64 = 1e-9;
 

@@ -1,6 +1,6 @@
 //! `fricctl figures`: the paper's Figs. 2–7 from the exact solver, the
-//! regime map, and the contacts the paper sets aside (issue 12: lift-off of
-//! the flat punch), as SVG and PNG.
+//! regime map, and a contact the paper sets aside (the flat punch lifting
+//! off, [`model_core::model::liftoff`]), as SVG and PNG.
 //!
 //! Every panel names its fixed parameters; the dimensionless groups are
 //! those of eqs. 25/26: `Δu_z/u_z0`, `k_xΔu_x/(μ0 k_z u_z0)` and the ratio

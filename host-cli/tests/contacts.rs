@@ -1,4 +1,4 @@
-//! `fricctl` with contacts the paper sets aside (issue 12): a flat punch that
+//! `fricctl` with contacts the paper sets aside: a flat punch that
 //! lifts off once per period (Δu_z ≥ u_z0).
 //!
 //! Reference numbers are independent of the solver under test: the lift-off
@@ -414,8 +414,9 @@ fn curve_and_map_across_lift_off() {
 /// `[θ_c, 2π − θ_c]`, `cos θ_c = d/a`, and lands with s = 0), by the plain
 /// fixed-step scheme of the paper (add the drive increment, clamp to ±w)
 /// started exactly at the landing with `n` steps per period and the
-/// trapezoid rule — written here from the model's statement (issue 12 §1/§2),
-/// independent of model-core. ∫w⁺ is closed form.
+/// trapezoid rule — written here from the model's statement (a spring of the
+/// MDR bed that lifts off and lands, as the README states it), independent of
+/// model-core's code. ∫w⁺ is closed form.
 fn spring_brute(d: f64, a: f64, b: f64, phi: f64, v: f64, n: usize) -> (f64, f64) {
     let tc = (d / a).clamp(-1.0, 1.0).acos();
     let (tl, tr) = (tc, TAU - tc);

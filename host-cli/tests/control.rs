@@ -54,8 +54,8 @@ fn closed_loop_over_a_pty() {
     assert_eq!(o.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&o.stderr).contains("busy"));
     // Settled after a second of device time (the virtual device runs in real
-    // time; at most one update per 3 half-buffers = 384 µs): within 2 % of the setpoint (the issue's
-    // criterion; the estimate's own scatter at ±1 count ADC noise is ~1e-4).
+    // time; at most one update per 3 half-buffers = 384 µs): within 2 % of the setpoint (the
+    // settling criterion; the estimate's own scatter at ±1 count ADC noise is ~1e-4).
     std::thread::sleep(Duration::from_millis(1000));
     let st = ok_json(&s, &["control", "status"]);
     assert_eq!(st["on"], true);
@@ -162,7 +162,7 @@ fn device_tune_maximize_applies_the_phase_and_takes_json_where_a_user_puts_it() 
 /// numbers are reproducible): on the board's pipeline (fill lead 2,
 /// 64-sample half-buffers) with the plant 20 % off the model, lagging 2
 /// periods, drifting and noisy, every event settles to the 2 % band, the
-/// setpoint step within the 2 ms without overshooting the band, and
+/// setpoint step within 2 ms without overshooting the band, and
 /// no command exceeds the lift-off limit.
 #[test]
 fn control_bench_settles_within_2_ms_on_the_board_pipeline() {
@@ -196,8 +196,7 @@ fn control_bench_settles_within_2_ms_on_the_board_pipeline() {
     }
     let step = &events[1];
     assert_eq!(step["event"], "setpoint_step");
-    let ms = step["settle_ms"].as_f64().unwrap();
-    assert!(ms < 2.0, "setpoint step settled in {ms} ms");
+    check_step_timing(&out, step);
     // Overshoot relative to the step 0.10 → 0.13 (f32 setpoints): none past
     // the 2 % band of 0.13, i.e. 0.02·0.13/0.03 of the step.
     let (a, b) = (f64::from(0.10f32), f64::from(0.13f32));
@@ -207,9 +206,8 @@ fn control_bench_settles_within_2_ms_on_the_board_pipeline() {
 
 /// The same over 8 other noise records (`--seed 1..=8`): the step response
 /// is not one lucky record. Every run must settle the setpoint step within
-/// 2 ms with no overshoot past the band and no command above the lift-off
-/// limit (measured: 1.664 ms for all 16 seeds tried, the update instants
-/// quantise it).
+/// the derived limit ([`check_step_timing`]) with no overshoot past the band
+/// and no command above the lift-off limit.
 #[test]
 fn control_bench_step_response_holds_across_noise_records() {
     let mut worst: f64 = 0.0;
@@ -224,11 +222,63 @@ fn control_bench_step_response_holds_across_noise_records() {
         assert_eq!(out["noise_seed"], seed);
         assert_eq!(out["commands_above_limit"], 0, "{out}");
         let step = &out["events"][1];
-        let ms = step["settle_ms"].as_f64().unwrap_or(f64::INFINITY);
         let (lo, hi) = (f64::from(0.10f32), f64::from(0.13f32));
         let band_pct = 100.0 * 0.02 * hi / (hi - lo);
         assert!(step["overshoot_pct"].as_f64().unwrap() < band_pct, "{step}");
-        worst = worst.max(ms);
+        worst = worst.max(check_step_timing(&out, step));
     }
-    assert!(worst < 2.0, "slowest setpoint step {worst} ms");
+    println!("slowest setpoint step over 8 noise records: {worst} ms");
+}
+
+/// The setpoint step's settling against the board's update cadence
+/// (`model_core::device` closed-loop docs: an update closes each 128 µs
+/// ADC block whose estimate is fresh; a command reaches the DAC three fills
+/// after its block and ramps at the slew rate; estimates of blocks still
+/// ramping are dropped). Returns the settling time, ms.
+///
+/// * Updates happen at block closes: the settling instant is a whole number
+///   of half-buffers after the event (the events fall on block boundaries).
+/// * The count: the first update's estimate predates the new command (error
+///   the whole step, 23 % of the target: not settled), the second follows the
+///   feedforward, and with the plant's gain g within 20 % of the model's the
+///   error after it is ≤ 0.2 of the step (4.6 % of the target) and each
+///   correction multiplies it by |1 − κg| ≤ 1 − 0.7·0.8 = 0.44: within 2 %
+///   after one more. So 2 ≤ updates ≤ 3.
+/// * The time of the third update: ≤ 1 half-buffer to the first block close,
+///   then per later update 3 (dead time) + ⌈ramp⌉ + 1 (a fresh block)
+///   half-buffers, the ramps being the feedforward's change over the slew
+///   rate (3.3 half-buffers here) and at most 0.2κ times that for the
+///   correction: 1 + 8 + 5 = 14 half-buffers, 1.792 ms (below the 2 ms the
+///   loop is specified to settle in).
+fn check_step_timing(out: &Value, step: &Value) -> f64 {
+    const HALF_MS: f64 = 0.128;
+    let ms = step["settle_ms"]
+        .as_f64()
+        .expect("the setpoint step settles");
+    let updates = step["settle_updates"].as_u64().unwrap();
+    let blocks = ms / HALF_MS;
+    assert!(
+        (blocks - blocks.round()).abs() <= 1e-9,
+        "settled {ms} ms after the step: not at a block close"
+    );
+    assert!(
+        (2..=3).contains(&updates),
+        "settled after {updates} updates: {step}"
+    );
+    let events = out["events"].as_array().unwrap();
+    let ff_change = (events[1]["duz_feedforward"].as_f64().unwrap()
+        - events[0]["duz_feedforward"].as_f64().unwrap())
+    .abs();
+    let rate = 1e-3; // m/s, the driver board's slew (fricctl device control --rate default)
+    let ramp1 = (ff_change / rate * 1e3 / HALF_MS).ceil();
+    // The correction: κ times the error after the feedforward (≤ 0.2 of the
+    // step) over the model's slope, i.e. ≤ 0.2κ times the feedforward's change.
+    let ramp2 = (0.2 * out["gain"].as_f64().unwrap() * ff_change / rate * 1e3 / HALF_MS).ceil();
+    let limit = HALF_MS * (1.0 + (3.0 + ramp1 + 1.0) + (3.0 + ramp2 + 1.0));
+    assert!(limit < 2.0, "derived limit {limit} ms");
+    assert!(
+        ms <= limit,
+        "setpoint step settled in {ms} ms, beyond the cadence's {limit} ms"
+    );
+    ms
 }

@@ -724,6 +724,29 @@ fn lab_session_on_the_firmware() {
         assert!(t.elapsed() < Duration::from_secs(20), "never settled");
         std::thread::sleep(Duration::from_millis(20));
     }
+    // The motion pickups of the emulated plant (ideal transducers, no
+    // pickup noise): the firmware's lock-ins measure the drive set, within
+    // the pickups' rounding (±½ count of 5 nm per sample times the error
+    // gain of a window of 4 blocks, one period at 2 kHz:
+    // `integration_tests::lockin_error_gain`; that over the amplitudes on φ)
+    // and the sine table's phases (< 1e-6 rad).
+    let st = status_json(&q);
+    let (az, ax) = (
+        st["amp_z_measured_m"].as_f64().unwrap(),
+        st["amp_x_measured_m"].as_f64().unwrap(),
+    );
+    let dtheta = std::f64::consts::TAU * 2e3 / 500e3;
+    let b = 0.5 * integration_tests::lockin_error_gain(256, dtheta) * 5e-9;
+    assert!(
+        (az - 2e-6).abs() <= b && (ax - 3e-7).abs() <= b,
+        "{st} (bound {b:e})"
+    );
+    let allowed = (b / 2e-6 + b / 3e-7 + 1e-6f64).to_degrees();
+    let phi = st["phase_measured_deg"].as_f64().unwrap();
+    assert!(
+        (phi - 40.0).abs() <= allowed,
+        "{st} (allowed {allowed} deg)"
+    );
     // measure against the host's exact f64 solver for the *plant's* contact.
     let m = ok(&q, &["measure", "--periods", "200"]);
     assert_eq!(m["valid"], true, "{m}");
@@ -832,4 +855,115 @@ fn lab_session_on_the_firmware() {
     assert!(d <= tol, "measured {m}, predicted {p}, tolerance {tol}");
     let mu_m = m["mu"].as_f64().unwrap();
     assert!((mu_m - before).abs() > 10.0 * tol, "{mu_m} {before} {tol}");
+}
+
+/// The conformance report's provocation, on the firmware: the drive at the
+/// top of the offset range with no normal amplitude presses the emulated
+/// contact until the normal force saturates the ADC; a stream's estimate
+/// sees it. The firmware must latch ADC_SATURATED *and* enter the safe state
+/// (one fault path, `model-core/src/board/device/fault.rs`): drive stopped,
+/// every output ramped to 0, one `RampDone`, the stream ended by the
+/// refusal, `Start` refused until `ResetFaults`.
+#[test]
+#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+fn adc_saturation_reaches_the_safe_state_on_the_firmware() {
+    use model_core::device::faults;
+    let q = qemu();
+    let top = ok(&q, &["info"])["max_offset_z_m"].as_f64().unwrap();
+    let top = format!("{top:e}");
+    ok(
+        &q,
+        &[
+            "drive",
+            "set",
+            "--freq",
+            "40000",
+            "--amp-z",
+            "0",
+            "--amp-x",
+            "1e-6",
+            "--offset-z",
+            &top,
+            "--phase-deg",
+            "0",
+        ],
+    );
+    ok(&q, &["start"]);
+    let mut link = RawLink::connect(&q);
+    link.sync();
+    link.tele.clear();
+    // Stream{on: true, periods: 100}.
+    assert_eq!(link.ask(40, 10, &[1, 100]), Response::Ok);
+    let mut seq = 41u8;
+    let t = Instant::now();
+    let faulted = loop {
+        let st = link.status(seq);
+        seq += 1;
+        if st.faults != 0 {
+            break st;
+        }
+        assert!(t.elapsed() < Duration::from_secs(20), "no fault: {st:?}");
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert_eq!(faulted.faults, faults::ADC_SATURATED, "{faulted:?}");
+    assert!(
+        !faulted.running,
+        "the fault stops the drive at once: {faulted:?}"
+    );
+    // The ramps to rest: 8.19 µm at 1 µm/ms ≈ 8.2 ms of device time.
+    let t = Instant::now();
+    let st = loop {
+        let st = link.status(seq);
+        seq += 1;
+        if st.settled {
+            break st;
+        }
+        assert!(
+            t.elapsed() < Duration::from_secs(20),
+            "never settled: {st:?}"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert_eq!(
+        (
+            st.out_amp_z_m,
+            st.out_amp_x_m,
+            st.out_offset_z_m,
+            st.running
+        ),
+        (0.0, 0.0, 0.0, false),
+        "{st:?}"
+    );
+    // Telemetry after the fault: its Fault, the stream's end, one RampDone.
+    let _ = link.status(seq);
+    seq += 1;
+    let after: Vec<_> = link
+        .tele
+        .iter()
+        .skip_while(|t| !matches!(t, Telemetry::Fault(_)))
+        .filter(|t| !matches!(t, Telemetry::Estimate(_)))
+        .copied()
+        .collect();
+    assert_eq!(
+        after.first(),
+        Some(&Telemetry::Fault(faults::ADC_SATURATED))
+    );
+    assert!(
+        after.contains(&Telemetry::StreamStopped(StreamEnd::Refused(
+            WireError::Faulted(faults::ADC_SATURATED)
+        ))),
+        "{after:?}"
+    );
+    assert_eq!(
+        after.iter().filter(|t| **t == Telemetry::RampDone).count(),
+        1,
+        "{after:?}"
+    );
+    // Start (3) refused until ResetFaults (12).
+    assert_eq!(
+        link.ask(seq, 3, &[]),
+        Response::Error(WireError::Faulted(faults::ADC_SATURATED))
+    );
+    assert_eq!(link.ask(seq + 1, 12, &[]), Response::Ok);
+    assert_eq!(link.ask(seq + 2, 4, &[]), Response::Ok);
 }

@@ -4,8 +4,7 @@
 
 use integration_tests::fixed_warm;
 use model_core::exact;
-use model_core::regime::{classify, ClassifyOptions};
-use model_core::{Groups, Libm, Scene, SceneParams};
+use model_core::{Libm, Scene, SceneParams};
 use serde_json::Value;
 
 mod common;
@@ -222,11 +221,25 @@ fn target_text_layout() {
     assert!(text.contains("(units of mu0, method exact)"));
 }
 
+/// Half a unit in the last printed digit of the decimal number `s` (as
+/// printed in a message: the reading's rounding).
+fn half_ulp_of_printed(s: &str) -> f64 {
+    let (mantissa, exp) = match s.find(['e', 'E']) {
+        Some(i) => (&s[..i], s[i + 1..].parse::<i32>().unwrap()),
+        None => (s, 0),
+    };
+    let decimals = mantissa.split_once('.').map_or(0, |(_, d)| d.len()) as i32;
+    0.5 * 10f64.powi(exp - decimals)
+}
+
 /// Out of reach: the message gives the reachable range, whose ends are
 /// checked against a dense brute-force scan of the exact law over the
 /// default range a = Δuz/uz0 ∈ [0, 0.95] (4 097 points, 16× the search's
-/// scan): the reported ends are attained values (so no wider than the law's
-/// range) and no narrower than the dense scan's by more than the solver's bound.
+/// scan): the reported ends are attained values, so no wider than the law's
+/// range — the dense range widened by the scan's Lipschitz bound (largest
+/// secant slope × half the spacing: an extremum between two dense points)
+/// — and no narrower than the dense scan's by more than the solver's bound;
+/// both plus the rounding of the printed numbers.
 #[test]
 fn out_of_reach_is_refused_with_the_range() {
     let err = refused(
@@ -240,25 +253,36 @@ fn out_of_reach_is_refused_with_the_range() {
     assert!(err.contains("(duz from 0 to 4.75e-6 m)"), "{err}");
     let range = err.split("reachable ").nth(1).unwrap();
     let range = range.split(" (").next().unwrap();
-    let (lo, hi) = range.split_once('…').unwrap();
-    let (lo, hi): (f64, f64) = (lo.parse().unwrap(), hi.parse().unwrap());
+    let (lo_s, hi_s) = range.split_once('…').unwrap();
+    let (lo, hi): (f64, f64) = (lo_s.parse().unwrap(), hi_s.parse().unwrap());
     let s = integration_tests::physical_scene();
     let g = s.groups();
     let vv = s.dimensionless_velocity(0.05).unwrap();
     let (mut dmin, mut dmax) = (f64::INFINITY, f64::NEG_INFINITY);
+    let (mut prev, mut slope) = (f64::NAN, 0.0f64);
+    let h = 0.95 / 4096.0;
     for i in 0..4097 {
         let a = 0.95 * i as f64 / 4096.0;
         let d = model_core::Drive::new::<Libm>(a, g.dux_rel, g.phi);
         let m = exact::mu_over_mu0::<f64, Libm>(&d, vv).unwrap();
         dmin = dmin.min(m);
         dmax = dmax.max(m);
+        if i > 0 {
+            slope = slope.max((m - prev).abs() / h);
+        }
+        prev = m;
     }
     let bound = exact::error_bound::<f64, Libm>(&s.drive());
+    let (plo, phi_) = (half_ulp_of_printed(lo_s), half_ulp_of_printed(hi_s));
     assert!(
-        lo <= dmin + bound && hi >= dmax - bound,
+        lo <= dmin + bound + plo && hi >= dmax - bound - phi_,
         "{lo}..{hi} vs dense {dmin}..{dmax}"
     );
-    assert!(lo >= dmin - 1e-3 && hi <= dmax + 1e-3);
+    let over = slope * h / 2.0 + bound;
+    assert!(
+        lo >= dmin - over - plo && hi <= dmax + over + phi_,
+        "{lo}..{hi} beyond dense {dmin}..{dmax} ± {over:e}"
+    );
     assert!(0.02 < lo);
     // In units of μ with --target-mu.
     let err = refused(
@@ -268,8 +292,16 @@ fn out_of_reach_is_refused_with_the_range() {
     assert!(err.contains("0.006 is out of reach"), "{err}");
 }
 
-/// `--maximize asymmetry` over the phase: JSON keys, a non-actuator result,
-/// and no worse than a dense scan of `regime::classify` over 1 440 phases.
+/// `--maximize asymmetry` over the phase: JSON keys and the closed form.
+/// With a static equilibrium at every phase (a + b = 0.75 < 1 for the
+/// README's scene, a = 0.4, b = 0.35), μ(0±) at φ ∈ {0, π} are
+/// ±(1 − |a − b|), ∓(1 − (a + b)) (the static interval `[c' − 1, 1 − c]`),
+/// |μ(0⁺) + μ(0⁻)| = 2·min(a, b) = 0.70 there, and |c − c'| ≤ 2·min(a, b)
+/// at every φ (triangle inequality): the optimum is 0.70 at φ* ∈ {0°, 180°}
+/// (tests/inverse.rs checks the closed form on random scenes). Tolerances:
+/// the value, the reported bound (two exact bounds); μ(0±), one exact bound
+/// each; the phase from the curvature at the maximum, asym ≈ 0.70 − κφ²/2,
+/// κ = ab/|a − b| + ab/(a + b) = 2.99: |φ − φ*| ≤ √(2·bound/κ).
 #[test]
 fn maximize_asymmetry_json() {
     let v = json(&["--maximize", "asymmetry", "--adjust", "phase", "--json"]);
@@ -291,23 +323,49 @@ fn maximize_asymmetry_json() {
         assert!(v.get(key).is_some(), "{key} missing in {v}");
     }
     assert_eq!(v["objective"], "asymmetry");
-    assert_ne!(v["regime"], "actuator");
-    let s = integration_tests::physical_scene();
-    let g = s.groups();
-    let mut dense: f64 = 0.0;
-    for i in 0..1440 {
-        let phi = std::f64::consts::TAU * i as f64 / 1440.0;
-        let sc = Scene::dimensionless(Groups { phi, ..g }).unwrap();
-        let c = classify(&sc, &ClassifyOptions::default()).unwrap();
-        if c.regime != model_core::regime::Regime::Actuator {
-            dense = dense.max(c.asymmetry);
-        }
+    assert_eq!(v["regime"], "dynamic_ratchet");
+    let g = integration_tests::physical_scene().groups();
+    let (a, b) = (g.duz_rel, g.dux_rel);
+    let bound = f(&v, "error_bound_over_mu0");
+    let want = 2.0 * a.min(b);
+    assert!((want - 0.70).abs() < 1e-12);
+    for key in ["value", "asymmetry"] {
+        assert!(
+            (f(&v, key) - want).abs() <= bound,
+            "{key} {} vs 2·min(a, b) = {want}",
+            f(&v, key)
+        );
     }
-    assert!(f(&v, "value") >= dense - f(&v, "error_bound_over_mu0"));
-    assert_eq!(f(&v, "value"), f(&v, "asymmetry"));
+    let kappa = a * b / (a - b).abs() + a * b / (a + b);
+    let dphi = (2.0 * bound / kappa).sqrt().to_degrees();
+    let phi = f(&v, "phi_deg");
+    let (plus, minus) = (f(&v, "mu_0plus_over_mu0"), f(&v, "mu_0minus_over_mu0"));
+    let one = bound / 2.0;
+    if (phi - 180.0).abs() <= dphi {
+        assert!((plus - (1.0 - (a - b).abs())).abs() <= one, "μ(0+) {plus}");
+        assert!((minus + (1.0 - (a + b))).abs() <= one, "μ(0−) {minus}");
+    } else {
+        assert!(
+            phi.min(360.0 - phi) <= dphi,
+            "φ* = {phi}° (allowed ±{dphi:e}° of 0 or 180)"
+        );
+        assert!((plus - (1.0 - (a + b))).abs() <= one, "μ(0+) {plus}");
+        assert!(
+            (minus + (1.0 - (a - b).abs())).abs() <= one,
+            "μ(0−) {minus}"
+        );
+    }
+    assert_eq!(f(&v, "stall_force_forward"), 0.0);
 }
 
-/// `--maximize stall-force` over Δux: text layout and the value against a dense scan.
+/// `--maximize stall-force` over Δux: text layout and the closed form. With
+/// a static equilibrium μ(0⁺) = 1 − c, c = |a + b e^{iφ}|, falling with b
+/// while the static interval `[c' − 1, 1 − c]` is non-empty (c + c' ≤ 2); at
+/// its end μ(0⁺) = μ(0⁻) and c − c' = (c² − c'²)/2 = 2ab cos φ, so the stall
+/// force is `ab* cos φ` at `b* = √((1 − a²)/(1 − a² cos² φ))`, the maximum
+/// over Δux (tests/inverse.rs). README scene: a = 0.4, φ = 50°: b* = 0.94840,
+/// 0.24385. Tolerance: the printed bound plus the golden section's bracket at
+/// the kink (8ε relative in b at a slope ≤ 1: 16ε(1 + b*)) plus the printing.
 #[test]
 fn maximize_stall_force_text() {
     let out = run(&["--maximize", "stall-force", "--adjust", "dux"]);
@@ -315,25 +373,29 @@ fn maximize_stall_force_text() {
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.starts_with("adjust          dux\nmaximize        stall_force\nvalue           "));
     assert!(text.contains("regime          actuator"));
-    let value: f64 = text
-        .lines()
-        .nth(2)
-        .unwrap()
-        .split_whitespace()
-        .nth(1)
-        .unwrap()
-        .parse()
-        .unwrap();
-    let s = integration_tests::physical_scene();
-    let g = s.groups();
-    let mut dense = f64::NEG_INFINITY;
-    for i in 0..4097 {
-        let b = 10.0 * i as f64 / 4096.0;
-        let d = model_core::Drive::new::<Libm>(g.duz_rel, b, g.phi);
-        dense = dense.max(-exact::limits_at_zero::<f64, Libm>(&d).unwrap().0);
-    }
-    // Bound: the exact solver's at b = 10, (1 + 10)·1e-9.
-    assert!(value >= dense - 11e-9, "{value} < dense {dense}");
+    let word = |line: usize, k: usize| -> String {
+        text.lines()
+            .nth(line)
+            .unwrap()
+            .split_whitespace()
+            .nth(k)
+            .unwrap()
+            .trim_start_matches('(')
+            .trim_end_matches(',')
+            .to_string()
+    };
+    let value_s = word(2, 1);
+    let value: f64 = value_s.parse().unwrap();
+    let bound: f64 = word(2, 3).parse().unwrap();
+    let g = integration_tests::physical_scene().groups();
+    let (a, phi) = (g.duz_rel, g.phi);
+    let b_star = ((1.0 - a * a) / (1.0 - (a * phi.cos()).powi(2))).sqrt();
+    let want = a * b_star * phi.cos();
+    let tol = bound + 16.0 * f64::EPSILON * (1.0 + b_star) + half_ulp_of_printed(&value_s);
+    assert!(
+        (value - want).abs() <= tol,
+        "{value} vs closed form {want} (tol {tol:e})"
+    );
 }
 
 #[test]

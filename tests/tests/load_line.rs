@@ -475,7 +475,7 @@ fn liftoff_cases() -> Vec<(f64, f64, f64, f64)> {
 /// state (`[s²/2]` over the window is 0 because `s = 0` at landing and at
 /// lift-off); the three powers come from separate closed forms, so only
 /// rounding of the O((1 + a + b)(1 + 2π|V|)) terms over ≤ 9 arcs separates them.
-/// Checked to 1e-9 as the issue asks (and reported: the worst gap is ~1e-15).
+/// Checked to 1e-9 (and reported: the worst gap is ~1e-15).
 #[test]
 fn liftoff_energy_balance() {
     use model_core::model::load_line::liftoff_powers;
@@ -664,7 +664,7 @@ fn profile_powers_balance_and_brute_force() {
                     "{p:?} a={a} v={v}: balance gap {gap:e}, bound {:e}",
                     r.bound
                 );
-                // The issue's 1e-9: the three totals share one subdivision
+                // Balance to 1e-9: the three totals share one subdivision
                 // and nodes, and each spring balances in closed form, so the
                 // sums balance to rounding whatever the quadrature's error.
                 assert!(gap <= 1e-9, "{p:?} a={a} v={v}: balance gap {gap:e}");

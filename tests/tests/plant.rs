@@ -161,3 +161,305 @@ fn adc_lag_delays_the_record_by_one_sample() {
     // The record does change from sample to sample (so the check has teeth).
     assert!(moved > r0.len() / 2, "{moved} of {}", r0.len());
 }
+
+/// Resonant transducers (`plant::Resonant`) driven by a real `Device` at
+/// 20 kHz: the modes' steady amplitudes and the phase between them are those
+/// of the transfer function of each mode (`resonator::ModeParams::response`)
+/// with the contact's load and the DAC's hold — the phase φ the device
+/// believes it sets is off by the difference of the modes' lags (here
+/// ≈ 164°: the tangential mode is above its resonance).
+#[test]
+fn resonant_transducers_follow_their_transfer_functions() {
+    use model_core::board::plant::{Resonant, ResonantOptions, DAC_VOLTS_PER_CODE};
+    use model_core::board::resonator::ModeParams;
+    use std::f64::consts::{PI, TAU};
+    let cfg = DeviceConfig::driver_board(0);
+    let table = SineTable::<1024>::libm();
+    let contact = Contact {
+        mu0: MU0 as f32,
+        kz: 1e7,
+        kx: 1e7,
+    };
+    let mut dev = Device::new(cfg, &table, contact).unwrap();
+    let phi = 40f64.to_radians();
+    dev.set_drive(drive(phi as f32)).unwrap();
+    dev.start().unwrap();
+    let modes = [
+        ModeParams {
+            resonance_hz: 20_300.0,
+            q: 300.0,
+            gain_m_per_v: 8e-8,
+        },
+        ModeParams {
+            resonance_hz: 19_700.0,
+            q: 200.0,
+            gain_m_per_v: 4e-8,
+        },
+    ];
+    let load_q = 2000.0;
+    let opts = ResonantOptions {
+        modes,
+        drift_hz_per_s: [0.0; 2],
+        thermal_hz_per_um2: 0.0,
+        crosstalk: 0.0,
+        load_q,
+    };
+    let sub = 8;
+    let fs = cfg.sample_rate_hz;
+    let mut plant = Plant::<f64>::new(MU0, 1e7, 1e7);
+    plant.resonant = Some(Resonant::new(opts, 1.0 / (fs * f64::from(sub))).unwrap());
+    let mut dac = [0u32; HALF_BUFFER];
+    let mut block = [(0u16, 0u16); HALF_BUFFER];
+    let loaded_q = |q: f64| 1.0 / (1.0 / q + 1.0 / load_q);
+    // Settle for 30 of the slower mode's τ = Q_eff/(π f_r) after the ramps.
+    let tau = loaded_q(300.0) / (PI * 20_300.0);
+    let t_half = HALF_BUFFER as f64 / fs;
+    let settle_halves = (30.0 * tau / t_half) as usize;
+    let record = 400;
+    let mut half = 0;
+    let (mut settled_at, mut k) = (None, 0usize);
+    let mut rows: Vec<(f64, f64, f64)> = Vec::new(); // (t, x_z, x_x) at half ends
+    while rows.len() < record {
+        let d = HalfDrive::fill(&mut dev, half, &mut dac);
+        half ^= 1;
+        plant.run_half::<Libm>(
+            &cfg,
+            &d,
+            sub,
+            0.0,
+            |_| SampleConditions {
+                mu0: MU0,
+                v0: 0.004,
+                counts_z: 0.0,
+                counts_x: 0.0,
+            },
+            &mut block,
+        );
+        k += 1;
+        if settled_at.is_none() && dev.status().settled {
+            settled_at = Some(k);
+        }
+        if settled_at.is_some_and(|s| k >= s + settle_halves) {
+            let r = plant.resonant.as_ref().unwrap();
+            rows.push((k as f64 * t_half, r.modes[0].x(), r.modes[1].x()));
+        }
+    }
+    // Least squares x ≈ a cos ωt + b sin ωt at the half ends (2.56 periods
+    // apart: the phases are spread, the 2×2 normal equations well posed).
+    let w = TAU * dev.applied().achieved.freq_hz;
+    let fit = |col: usize| {
+        let (mut cc, mut ss, mut cs, mut xc, mut xs) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for r in &rows {
+            let x = if col == 0 { r.1 } else { r.2 };
+            let (s, c) = (w * r.0).sin_cos();
+            cc += c * c;
+            ss += s * s;
+            cs += c * s;
+            xc += x * c;
+            xs += x * s;
+        }
+        let det = cc * ss - cs * cs;
+        let a = (xc * ss - xs * cs) / det;
+        let b = (xs * cc - xc * cs) / det;
+        ((a * a + b * b).sqrt(), b.atan2(a)) // x = A cos(ωt − ψ'), ψ' = atan2(b, a)
+    };
+    let ((az, pz), (ax, px)) = (fit(0), fit(1));
+    // Expected: the DAC's AC amplitude in volts (Δu/metres_per_code codes ×
+    // V/code) × |H| × sinc(π f/f_s) (the hold over a sample), for each mode
+    // with its loaded Q.
+    let f = dev.applied().achieved.freq_hz;
+    let sinc = (PI * f / fs).sin() / (PI * f / fs);
+    let resp = |m: ModeParams<f64>| {
+        ModeParams {
+            q: loaded_q(m.q),
+            ..m
+        }
+        .response::<Libm>(f)
+    };
+    let ((hz, lag_z), (hx, lag_x)) = (resp(modes[0]), resp(modes[1]));
+    let d = drive(phi as f32);
+    let volts = |amp: f32, mpc: f32| f64::from(amp) / f64::from(mpc) * DAC_VOLTS_PER_CODE;
+    let want_z = volts(d.amp_z_m, cfg.dac_z.metres_per_code) * hz * sinc;
+    let want_x = volts(d.amp_x_m, cfg.dac_x.metres_per_code) * hx * sinc;
+    // Images of the held waveform near f_s ± f pass with gain
+    // ≤ g/((f_s − f)²/f_r² − 1) at amplitudes ≤ f/(f_s − f) of the
+    // fundamental's drive: relative to the resonant response ≤ that × g/|H|;
+    // the sampled record aliases them onto the fit at most once each.
+    let image = |m: ModeParams<f64>, h: f64| {
+        2.0 * (f / (fs - f)) / ((fs - f).powi(2) / m.resonance_hz.powi(2) - 1.0) * m.gain_m_per_v
+            / h
+    };
+    let (ez, ex) = (image(modes[0], hz), image(modes[1], hx));
+    assert!(
+        (az / want_z - 1.0).abs() <= ez,
+        "z: {az:e} vs {want_z:e} (allowed {ez:e})"
+    );
+    assert!(
+        (ax / want_x - 1.0).abs() <= ex,
+        "x: {ax:e} vs {want_x:e} (allowed {ex:e})"
+    );
+    // The phase between the modes. The ideal drive is u_z = −Δu_z cos θ,
+    // u_x = Δu_x cos(θ + φ); each mode lags its own ψ (the hold and the
+    // ADC lag delay both alike), so x_x leads −x_z by φ − (ψ_x − ψ_z).
+    // With x = A cos(ωt − ψ') from the fit: −x_z ∝ cos(ωt − (ψ'_z − π)),
+    // x_x ∝ cos(ωt − ψ'_x); x_x leads by (ψ'_z − π) − ψ'_x.
+    let measured = (pz - PI - px).rem_euclid(TAU);
+    let want = (phi - (lag_x - lag_z)).rem_euclid(TAU);
+    let diff = ((measured - want + PI).rem_euclid(TAU) - PI).abs();
+    assert!(
+        diff <= ez + ex,
+        "phase {measured} vs {want} (lags {lag_z}, {lag_x})"
+    );
+    // In words: φ set 40°, φ of the displacements ≈ −124° (lags 6.4°, 170°).
+    assert!((lag_x - lag_z).to_degrees() > 160.0, "{lag_z} {lag_x}");
+}
+
+/// Runs a device and a plant (with resonant transducers if `resonant`) with
+/// the motion pickups until the drive has settled, then `windows` more
+/// lock-in windows; returns the device's measured motion of each window.
+fn measured_motion(
+    resonant: Option<model_core::board::plant::ResonantOptions<f64>>,
+    settle_halves: usize,
+    windows: usize,
+) -> Vec<model_core::device::MeasuredDrive> {
+    use model_core::board::plant::Resonant;
+    let cfg = DeviceConfig::driver_board(1);
+    let table = SineTable::<1024>::libm();
+    let contact = Contact {
+        mu0: MU0 as f32,
+        kz: 1e7,
+        kx: 1e7,
+    };
+    let mut dev = Device::new(cfg, &table, contact).unwrap();
+    dev.set_drive(drive(40f32.to_radians())).unwrap();
+    dev.start().unwrap();
+    let sub = 8;
+    let mut plant = Plant::<f64>::new(MU0, 1e7, 1e7);
+    plant.resonant =
+        resonant.map(|o| Resonant::new(o, 1.0 / (cfg.sample_rate_hz * f64::from(sub))).unwrap());
+    let mut dac = [0u32; HALF_BUFFER];
+    let mut forces = [(0u16, 0u16); HALF_BUFFER];
+    let mut pickups = [(0u16, 0u16); HALF_BUFFER];
+    let (mut half, mut settled_for) = (0, 0usize);
+    let mut out = Vec::new();
+    let mut seen = 0;
+    while out.len() < windows {
+        let d = HalfDrive::fill(&mut dev, half, &mut dac);
+        plant.run_half_with_pickups::<Libm>(
+            &cfg,
+            &d,
+            sub,
+            0.0,
+            |_| SampleConditions {
+                mu0: MU0,
+                v0: 0.004,
+                counts_z: 0.0,
+                counts_x: 0.0,
+            },
+            &mut forces,
+            &mut pickups,
+        );
+        dev.adc_block_with_pickups(half, &forces, &pickups);
+        half ^= 1;
+        if dev.status().settled {
+            settled_for += 1;
+        }
+        if let Some(m) = dev.measured_drive() {
+            if settled_for > settle_halves && m.windows != seen {
+                out.push(m);
+            }
+            seen = m.windows;
+        }
+    }
+    out
+}
+
+/// The worst-case effect of the pickups' rounding (±½ count per sample) on
+/// one lock-in window of the device (one 64-sample block at 20 kHz and
+/// 500 kS/s): ½ count × the window's error gain
+/// (`integration_tests::lockin_error_gain`, from the fit's weights), in m.
+fn rounding_bound(gain: f32) -> f64 {
+    let dtheta = std::f64::consts::TAU * 20e3 / 500e3;
+    0.5 * integration_tests::lockin_error_gain(HALF_BUFFER, dtheta) * f64::from(gain)
+}
+
+#[test]
+fn pickups_measure_the_ideal_drive() {
+    let cfg = DeviceConfig::driver_board(1);
+    let d = drive(40f32.to_radians());
+    let (bz, bx) = (
+        rounding_bound(cfg.pickup_z.gain),
+        rounding_bound(cfg.pickup_x.gain),
+    );
+    for m in measured_motion(None, 20, 50) {
+        let (az, ax) = (f64::from(d.amp_z_m), f64::from(d.amp_x_m));
+        assert!((f64::from(m.amp_z_m) - az).abs() <= bz, "{m:?}");
+        assert!((f64::from(m.amp_x_m) - ax).abs() <= bx, "{m:?}");
+        let dphi = f64::from(m.phase_rad) - 40f64.to_radians();
+        assert!(dphi.abs() <= bz / az + bx / ax, "{m:?}: {dphi}");
+        assert!(m.amp_z_peak_m >= m.amp_z_m);
+    }
+}
+
+#[test]
+fn pickups_measure_what_resonant_transducers_really_do() {
+    use model_core::board::plant::{ResonantOptions, DAC_VOLTS_PER_CODE};
+    use model_core::board::resonator::ModeParams;
+    use std::f64::consts::{PI, TAU};
+    let cfg = DeviceConfig::driver_board(1);
+    let modes = [
+        ModeParams {
+            resonance_hz: 20_300.0,
+            q: 300.0,
+            gain_m_per_v: 8e-8,
+        },
+        ModeParams {
+            resonance_hz: 19_700.0,
+            q: 200.0,
+            gain_m_per_v: 4e-8,
+        },
+    ];
+    let opts = ResonantOptions {
+        modes,
+        drift_hz_per_s: [0.0; 2],
+        thermal_hz_per_um2: 0.0,
+        crosstalk: 0.0,
+        load_q: f64::INFINITY,
+    };
+    // 30 τ of the slower mode (4.7 ms) in half-buffers of 128 µs.
+    let settle = (30.0 * 300.0 / (PI * 20_300.0) / 128e-6) as usize;
+    let ms = measured_motion(Some(opts), settle, 50);
+    let f = 20e3;
+    let sinc = (PI * f / cfg.sample_rate_hz).sin() / (PI * f / cfg.sample_rate_hz);
+    let ((hz, lz), (hx, lx)) = (modes[0].response::<Libm>(f), modes[1].response::<Libm>(f));
+    let d = drive(40f32.to_radians());
+    let volts = |amp: f32, mpc: f32| f64::from(amp) / f64::from(mpc) * DAC_VOLTS_PER_CODE;
+    let want_z = volts(d.amp_z_m, cfg.dac_z.metres_per_code) * hz * sinc;
+    let want_x = volts(d.amp_x_m, cfg.dac_x.metres_per_code) * hx * sinc;
+    let want_phi = (40f64.to_radians() - (lx - lz) + PI).rem_euclid(TAU) - PI;
+    let (bz, bx) = (
+        rounding_bound(cfg.pickup_z.gain),
+        rounding_bound(cfg.pickup_x.gain),
+    );
+    // Besides the pickups' rounding, 1e-4 of the amplitude: the held
+    // waveform's images (≤ 2e-6 here, `resonant_transducers_follow_their_
+    // transfer_functions`) and the f32 lock-in's sums of 64 terms
+    // (≤ 64·6e-8·2 ≈ 8e-6), with margin.
+    for m in ms {
+        assert!(
+            (f64::from(m.amp_z_m) - want_z).abs() <= bz + 1e-4 * want_z,
+            "{m:?} vs {want_z:e}"
+        );
+        assert!(
+            (f64::from(m.amp_x_m) - want_x).abs() <= bx + 1e-4 * want_x,
+            "{m:?} vs {want_x:e}"
+        );
+        let dphi = ((f64::from(m.phase_rad) - want_phi + PI).rem_euclid(TAU) - PI).abs();
+        assert!(
+            dphi <= bz / want_z + bx / want_x + 1e-4,
+            "{m:?} vs {want_phi}"
+        );
+    }
+    // The board believes φ = 40°; the displacements run at ≈ −124°.
+    assert!(want_phi.to_degrees() < -100.0, "{}", want_phi.to_degrees());
+}

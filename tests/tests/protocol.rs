@@ -11,7 +11,7 @@ use model_core::protocol::{
 use model_core::server::Server;
 
 /// The protocol version byte of the hand-built frames (docs/protocol.md, "Frame").
-const V: u8 = 3;
+const V: u8 = 4;
 
 fn cfg() -> DeviceConfig {
     integration_tests::board_config_1mhz()
@@ -291,11 +291,11 @@ fn refused_commands_change_nothing_over_the_wire() {
 #[test]
 fn docs_protocol_examples() {
     // The annotated examples of docs/protocol.md (computed independently with
-    // Python's zlib.crc32 and a hand-written COBS encoder).
+    // Python's zlib.crc32, struct.pack and a hand-written COBS encoder).
     let mut out = [0u8; MAX_FRAME];
     let req = encode(
         &Frame {
-            version: 3,
+            version: 4,
             seq: 5,
             body: Body::Request(Request::GetStatus),
         },
@@ -304,7 +304,7 @@ fn docs_protocol_examples() {
     .unwrap();
     assert_eq!(
         req,
-        &[0x03, 0x03, 0x05, 0x06, 0x0b, 0x91, 0x6b, 0xe8, 0xa2, 0x00]
+        &[0x03, 0x04, 0x05, 0x06, 0x0b, 0x28, 0x53, 0x3f, 0x3f, 0x00]
     );
     let status = model_core::device::Status {
         running: true,
@@ -316,11 +316,18 @@ fn docs_protocol_examples() {
         out_amp_x_m: 3e-7,
         out_offset_z_m: 4e-6,
         liftoff_allowed: false,
+        measured: Some(model_core::device::MeasuredDrive {
+            amp_z_m: 2.2e-6,
+            amp_x_m: 3.2e-7,
+            phase_rad: -2.1,
+            amp_z_peak_m: 3.3e-6,
+            windows: 7,
+        }),
     };
     let mut out = [0u8; MAX_FRAME];
     let resp = encode(
         &Frame {
-            version: 3,
+            version: 4,
             seq: 5,
             body: Body::Response(Response::Status(status)),
         },
@@ -330,8 +337,10 @@ fn docs_protocol_examples() {
     assert_eq!(
         resp,
         &[
-            0x07, 0x03, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x01, 0x0d, 0xbd, 0x37, 0x06, 0x36,
-            0xb0, 0x0f, 0xa1, 0x34, 0xbd, 0x37, 0x86, 0x36, 0x05, 0x29, 0x2c, 0x97, 0x87, 0x00
+            0x07, 0x04, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x01, 0x0d, 0xbd, 0x37, 0x06, 0x36,
+            0xb0, 0x0f, 0xa1, 0x34, 0xbd, 0x37, 0x86, 0x36, 0x17, 0x01, 0xb6, 0xa3, 0x13, 0x36,
+            0x77, 0xcc, 0xab, 0x34, 0x66, 0x66, 0x06, 0xc0, 0x91, 0x75, 0x5d, 0x36, 0x07, 0xbf,
+            0xc6, 0x57, 0x17, 0x00
         ]
     );
 }
@@ -912,8 +921,9 @@ fn ramp_done_follows_every_start_and_stop_and_status_shows_the_output() {
     assert_eq!(&st[4..6], [1, 1]);
     assert!((f32_at(&st, 9) - g.amp_z_m).abs() <= 2.0 * f32::EPSILON * g.amp_z_m);
     assert!((f32_at(&st, 13) - g.amp_x_m).abs() <= 2.0 * f32::EPSILON * g.amp_x_m);
-    // v3: the last Status field, liftoff_allowed, false at power-up.
-    assert_eq!((st.len(), st[21]), (22, 0));
+    // v3: liftoff_allowed, false at power-up; v4: the last field, measured,
+    // None (00): this loop feeds the forces only, no motion pickups.
+    assert_eq!((st.len(), st[21], st[22]), (23, 0, 0));
     // SetLiftOff (14) {allow: true} → Ok; Status shows it.
     assert_eq!(ask(&mut s, &mut dev, &[V, 10, 0, 14, 1]), [V, 10, 1, 2]);
     assert_eq!(ask(&mut s, &mut dev, &[V, 11, 0, 11])[21], 1);

@@ -1,5 +1,5 @@
-//! Regime classification: the paper's Figs. 5–7 scenes, the counter-
-//! examples to the rule of thumb, and a brute-force scan on random scenes.
+//! Regime classification: the paper's Figs. 5–7 scenes, counter-examples to
+//! the rule of thumb, and a brute-force scan on random scenes.
 
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -178,7 +178,8 @@ fn rule_of_thumb_is_exact_on_the_curve_a_equals_one_over_sqrt_2_plus_2_cos_phi()
             "φ={deg}° a={lo} r={r}"
         );
     }
-    // The example: a = 1/√3, φ = 60°.
+    // At a = 1/√3, φ = 60° the boundary is at ratio 1 too: a ratchet just
+    // below it, an actuator just above.
     let a = 1.0 / 3f64.sqrt();
     assert_eq!(regime(a, 0.99, PI / 3.0), Regime::DynamicRatchet);
     assert_eq!(regime(a, 1.01, PI / 3.0), Regime::Actuator);

@@ -25,9 +25,9 @@ use model_core::mdr::{self, Profile};
 use model_core::model::liftoff::{self, stepping};
 use model_core::{exact, Drive, Libm};
 
+use super::point::{refusal_kind, Point};
 use super::springs;
 use super::time_min;
-use super::work_precision::{refusal_kind, Point};
 use crate::error::{CliError, CliResult};
 
 /// The drive held fixed across the plane: `b`, `φ` (rad) and `v0/v_c` (the

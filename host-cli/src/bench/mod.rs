@@ -7,7 +7,8 @@
 //! * [`stability`] — maps of where each method stops being trustworthy;
 //! * [`dac`] — the DAC waveform path: spectral purity against time per sample;
 //! * [`motion`] — the slow dynamics: homogenised against resolved over scale
-//!   separation and mass, the drift map, the Fig. 6 load lines.
+//!   separation and mass, the drift map, the Fig. 6 load lines;
+//! * [`point`] — the measured point both work-precision modules produce.
 
 use std::time::Instant;
 
@@ -19,6 +20,7 @@ pub mod across_lift_off;
 pub mod dac;
 pub mod methods;
 pub mod motion;
+pub mod point;
 pub mod springs;
 pub mod stability;
 pub mod work_precision;

@@ -1,4 +1,4 @@
-//! `fricctl bench motion --out DIR`: the slow dynamics' charts (issue 14 §3).
+//! `fricctl bench motion --out DIR`: the slow dynamics' charts.
 //!
 //! * `motion_error_cost.png` (+ `.csv`): homogenised against resolved on the
 //!   paper's Fig. 7 ratchet (Δu_z/u_z0 = 0.5, ratio 0.5, φ = 0) and on a

@@ -21,6 +21,7 @@ use model_core::exact;
 use model_core::fixed_step::{run_dimensionless, FixedStepConfig, Start, State};
 use model_core::{Drive, Float, Groups, Libm, Math, Micromath, Scene};
 
+use super::point::{refusal_kind, Point};
 use super::{across_lift_off, time_min};
 use crate::error::{CliError, CliResult};
 use crate::plot::{prepare_out_dir, render_figure, Extras, Figure, Mark, Marker, Panel, Series};
@@ -47,25 +48,6 @@ pub const SCENES: &[(&str, f64, f64, f64, f64)] = &[
     ("low velocity", 0.5, 0.25, 1.0, 0.02),
     ("near lift-off", 0.97, 0.3, 2.0, 0.4),
 ];
-
-/// One measured point.
-#[derive(Debug, Clone)]
-pub struct Point {
-    /// Scene name.
-    pub scene: &'static str,
-    /// Method name.
-    pub method: String,
-    /// Steps per period (fixed-step only).
-    pub steps: Option<u32>,
-    /// |Δμ|/μ0 against exact f64, or `None` on failure.
-    pub error: Option<f64>,
-    /// Seconds per evaluation.
-    pub time_s: f64,
-    /// The method's stated error bound, units of μ0.
-    pub bound: Option<f64>,
-    /// "ok" or the failure.
-    pub status: String,
-}
 
 fn steps_list(max: u32) -> Vec<u32> {
     let mut v = Vec::new();
@@ -602,20 +584,4 @@ fn render(path: &Path, all: &[Point]) -> CliResult {
         ],
     };
     render_figure(path, &f)
-}
-
-/// The CSV `status` of a refused fixed-step run: the refusal's kind.
-pub(crate) fn refusal_kind<T>(e: &model_core::fixed_step::FixedStepError<T>) -> &'static str {
-    use model_core::fixed_step::FixedStepError as E;
-    match e {
-        E::TooFewSteps { .. } => "TooFewSteps",
-        E::PrecisionLimit { .. } => "PrecisionLimit",
-        E::IllConditioned => "IllConditioned",
-        E::BadConfig => "BadConfig",
-        E::BadVelocity(_) => "BadVelocity",
-        E::ZeroVelocity => "ZeroVelocity",
-        E::BadStart => "BadStart",
-        E::BadDrive => "BadDrive",
-        E::NotConverged { .. } => "NotConverged",
-    }
 }

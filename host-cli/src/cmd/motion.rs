@@ -1,5 +1,5 @@
 //! `fricctl motion`: a body of mass M driven by a slow force over the
-//! vibrated contact (issue 14 §2; the physics in [`crate::motion`]).
+//! vibrated contact (the physics in [`crate::motion`]).
 //!
 //! # Contact models
 //! The law μ(v) comes from [`crate::motion::law::Law`], one interface for

@@ -137,6 +137,9 @@ pub struct BenchArgs {
     /// Seed of the plant's ADC noise (0: the virtual device's default record)
     #[arg(long, default_value_t = 0, value_parser = Count::<u64>::at_least(0))]
     pub seed: u64,
+    /// The transducers (ideal, with --lag-periods, or resonant).
+    #[command(flatten)]
+    pub transducers: super::transducers::TransducerArgs,
 }
 
 /// The bench's fixed drive and schedule (device time).
@@ -316,6 +319,10 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
     if let Some(p) = &a.plot {
         crate::plot::ext(p)?;
     }
+    let cfg = super::sim::config();
+    let resonant = a
+        .transducers
+        .options((cfg.dac_z.metres_per_code, cfg.dac_x.metres_per_code))?;
     let model_mu0 = super::sim::DEFAULT_CONTACT.0;
     // Settle 20 ms, then the events; the velocity step is at its time after settling.
     let settle_s = 0.02;
@@ -330,6 +337,7 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
         lag_periods: a.lag_periods,
         mu0_drift: a.drift,
         v0_profile: Some(vec![(t_v, V0), (t_v + V_RAMP_MS * 1e-3, V1)]),
+        resonant,
     };
     let mut b = Bench {
         dev: VirtualDevice::new(opts),

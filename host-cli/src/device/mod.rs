@@ -8,6 +8,7 @@ pub mod render;
 pub mod serve;
 pub mod sim;
 pub mod sweep;
+pub mod transducers;
 pub mod watch;
 
 use std::io::Write;

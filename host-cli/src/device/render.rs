@@ -234,6 +234,7 @@ pub fn fault_names(bits: u32) -> Vec<String> {
         (DAC_UNDERRUN, "dac_underrun"),
         (WATCHDOG_RESET, "watchdog_reset"),
         (EXTERNAL, "external"),
+        (ADC_OVERRUN, "adc_overrun"),
     ];
     let mut v: Vec<String> = known
         .iter()
@@ -302,6 +303,36 @@ pub fn status(s: &Status) -> Report {
         .row("out_dux", "output dux", f32v(s.out_amp_x_m), "m")
         .row("out_uz0", "output uz0", f32v(s.out_offset_z_m), "m")
         .row("liftoff_allowed", "lift-off allowed", s.liftoff_allowed, "")
+        .measured(s.measured.as_ref())
+}
+
+impl Report {
+    /// The pickups' measured motion (`Status.measured`), `null` / `-` when
+    /// the device has none yet.
+    fn measured(self, m: Option<&model_core::device::MeasuredDrive>) -> Self {
+        let v = |f: fn(&model_core::device::MeasuredDrive) -> f64| -> Value {
+            m.map_or(Value::Null, |m| Value::from(f(m)))
+        };
+        self.row(
+            "amp_z_measured_m",
+            "measured duz",
+            v(|m| f32v(m.amp_z_m)),
+            "m",
+        )
+        .row(
+            "amp_x_measured_m",
+            "measured dux",
+            v(|m| f32v(m.amp_x_m)),
+            "m",
+        )
+        .row(
+            "phase_measured_deg",
+            "measured phi",
+            v(|m| f32v(m.phase_rad.to_degrees())),
+            "deg",
+        )
+        .row("amp_z_peak_m", "peak duz", v(|m| f32v(m.amp_z_peak_m)), "m")
+    }
 }
 
 /// The closed loop's state (`device control`): the setting, the model's

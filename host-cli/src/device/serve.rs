@@ -14,6 +14,8 @@ use std::net::{TcpListener, TcpStream};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
+use model_core::board::link::{self, TxRing};
+
 use super::sim::{self, VirtualDevice};
 use crate::error::{CliError, CliResult};
 
@@ -40,15 +42,26 @@ impl Port for TcpStream {
     }
 }
 
-/// Writes `bytes`; a host that does not read (the pty's buffer is full, a
-/// write times out) loses them, counted in `lost`, instead of ending the
-/// device. `Err` only when the host is gone.
-fn send(p: &mut dyn Port, bytes: &[u8], lost: &mut u64) -> io::Result<()> {
-    let mut rest = bytes;
-    while !rest.is_empty() {
-        match p.write(rest) {
+/// Moves what waits in the device's transmit ring to the host, as far as
+/// the host takes it: bytes the port does not accept now (its buffer is
+/// full, the write times out) stay in the ring for the next turn, so an
+/// answer is never lost; meanwhile the device's loop serves no request whose
+/// answer would not fit (the firmware's rule). Sets `blocked` when the port
+/// would not take more (no further write is tried this turn). `Err` only
+/// when the host is gone.
+fn drain(
+    p: &mut dyn Port,
+    tx: &mut TxRing<{ link::TX_CAPACITY }>,
+    blocked: &mut bool,
+) -> io::Result<()> {
+    while !*blocked {
+        let front = tx.front();
+        if front.is_empty() {
+            break;
+        }
+        match p.write(front) {
             Ok(0) => return Err(io::ErrorKind::WriteZero.into()),
-            Ok(n) => rest = &rest[n..],
+            Ok(n) => tx.consume(n),
             Err(e)
                 if matches!(
                     e.kind(),
@@ -57,9 +70,7 @@ fn send(p: &mut dyn Port, bytes: &[u8], lost: &mut u64) -> io::Result<()> {
                         | io::ErrorKind::Interrupted
                 ) =>
             {
-                // The host's deframer resynchronises on the next delimiter.
-                *lost += rest.len() as u64;
-                return Ok(());
+                *blocked = true;
             }
             Err(e) => return Err(e),
         }
@@ -81,29 +92,48 @@ impl Clock {
         }
     }
 
-    /// Advances the device to now; returns the telemetry produced.
-    fn tick(&mut self, dev: &mut VirtualDevice) -> Vec<u8> {
+    /// Advances the device to now, handing its transmit ring to `port`
+    /// (if any) after each simulated half-buffer.
+    fn tick(&mut self, dev: &mut VirtualDevice, port: Option<&mut dyn Port>) -> io::Result<()> {
         let now = Instant::now();
         let rate = dev.sample_rate();
         self.debt += now.duration_since(self.last).as_secs_f64() * rate;
         self.last = now;
         let half = sim::HALF as f64;
+        let mut blocked = false;
+        let mut result = Ok(());
+        let mut to_port = |tx: &mut TxRing<{ link::TX_CAPACITY }>,
+                           port: &mut Option<&mut dyn Port>| {
+            match port {
+                Some(p) => {
+                    if result.is_ok() {
+                        result = drain(&mut **p, tx, &mut blocked);
+                    }
+                }
+                // Between clients the bytes go nowhere (a board's UART with no host).
+                None => tx.consume(usize::MAX),
+            }
+        };
+        let mut port = port;
         if dev.quiescent() {
             // Move the clock in whole half-buffers; nothing is simulated.
             let whole = (self.debt / half).floor();
             self.debt -= whole * half;
-            return dev.skip(whole as u64 * sim::HALF as u64);
+            dev.skip(whole as u64 * sim::HALF as u64);
+            to_port(dev.tx(), &mut port);
+            return result;
         }
         // At most 50 ms of simulation per turn, so requests stay responsive.
         let n = self.debt.min(rate / 20.0);
-        let mut t = Vec::new();
         if n >= half {
-            t = dev.advance(n as usize);
+            dev.advance_with(n as usize, |tx| to_port(tx, &mut port));
             self.debt -= (n as usize).div_ceil(sim::HALF) as f64 * half;
+        } else {
+            to_port(dev.tx(), &mut port);
         }
         // Never owe more than 1 s (a slow machine falls behind real time).
         self.debt = self.debt.min(rate);
-        t
+        result
     }
 }
 
@@ -114,10 +144,7 @@ pub fn serve_pty(
     deadline: Option<Instant>,
 ) -> CliResult {
     let mut clock = Clock::new();
-    let mut lost = 0u64;
-    let r = pump(dev, p, &mut clock, deadline, &mut lost);
-    report_lost(lost);
-    match r {
+    match pump(dev, p, &mut clock, deadline) {
         Ok(()) => Ok(()),
         Err(e) => Err(CliError::failure(format!("pty: {e}"))),
     }
@@ -135,10 +162,8 @@ pub fn serve_tcp(dev: &mut VirtualDevice, l: TcpListener, deadline: Option<Insta
         }
     });
     let mut clock = Clock::new();
-    let mut lost = 0u64;
     loop {
         if deadline.is_some_and(|d| Instant::now() >= d) {
-            report_lost(lost);
             return Ok(());
         }
         let wait = if dev.quiescent() {
@@ -151,7 +176,7 @@ pub fn serve_tcp(dev: &mut VirtualDevice, l: TcpListener, deadline: Option<Insta
                 let peer = s.peer_addr().map(|a| a.to_string()).unwrap_or_default();
                 eprintln!("client {peer}");
                 let _ = s.set_nodelay(true);
-                if let Err(e) = pump(dev, &mut s, &mut clock, deadline, &mut lost) {
+                if let Err(e) = pump(dev, &mut s, &mut clock, deadline) {
                     eprintln!("client {peer}: {e}");
                 }
             }
@@ -162,19 +187,21 @@ pub fn serve_tcp(dev: &mut VirtualDevice, l: TcpListener, deadline: Option<Insta
             }
         }
         // Between clients the telemetry goes nowhere (as a board's UART with no host).
-        let _ = clock.tick(dev);
+        let _ = clock.tick(dev, None);
     }
 }
 
 /// Moves bytes between a host and the virtual device, advancing the
 /// simulation in real time; `Ok` when the host closes the connection or the
-/// deadline passes.
+/// deadline passes. Received bytes go into the device's receive queue as a
+/// USART would put them there (a byte that does not fit is dropped and
+/// counted, `Status.rx_overflows`, and announced); answers and telemetry
+/// wait in its transmit ring until the host takes them.
 fn pump(
     dev: &mut VirtualDevice,
     s: &mut dyn Port,
     clock: &mut Clock,
     deadline: Option<Instant>,
-    lost: &mut u64,
 ) -> io::Result<()> {
     let mut buf = [0u8; 512];
     let mut wait = Duration::ZERO;
@@ -196,10 +223,12 @@ fn pump(
             Ok(n) => {
                 // The device's clock first: the bytes arrive at its "now"
                 // (the inter-byte timeout is measured on it).
-                let t = clock.tick(dev);
-                send(s, &t, lost)?;
-                let reply = dev.receive(&buf[..n]);
-                send(s, &reply, lost)?;
+                let ticked = clock.tick(dev, Some(&mut *s));
+                dev.push_rx(&buf[..n]);
+                ticked?;
+                dev.serve_link();
+                let mut blocked = false;
+                drain(s, dev.tx(), &mut blocked)?;
             }
             Err(e)
                 if matches!(
@@ -210,13 +239,6 @@ fn pump(
                 ) => {}
             Err(e) => return Err(e),
         }
-        let t = clock.tick(dev);
-        send(s, &t, lost)?;
-    }
-}
-
-fn report_lost(lost: u64) {
-    if lost > 0 {
-        eprintln!("{lost} bytes not sent: the host did not read them");
+        clock.tick(dev, Some(&mut *s))?;
     }
 }

@@ -14,15 +14,23 @@
 //! - transducers whose displacement amplitudes Δu_z, Δu_x follow the DAC's
 //!   with a first-order lag of time constant τ = `lag_periods`/f
 //!   (dA/dt = (A_DAC − A)/τ, advanced exactly per ADC sample);
+//! - or, with any of the resonant flags ([`super::transducers`]), resonant
+//!   transducers: second-order modes (f_r, Q, static gain) driven by the DAC
+//!   voltages, with resonance drift, self-heating, cross-talk and the
+//!   contact's load ([`model_core::board::plant::Resonant`]);
 //! - a drifting friction coefficient μ₀(t) = μ₀ + `mu0_drift`·t (t = device
 //!   time, s; μ₀(t) stops at 0 rather than change sign);
 //! - a stage velocity that is constant (`v0`) or follows a piecewise-linear
 //!   profile v₀(t) read from a CSV file (`t_s,v0_m_s`; held at the end values
 //!   before the first and after the last row);
-//! - ADC noise (uniform ± counts) and an uncalibrated ADC offset.
+//! - ADC noise (uniform ± counts) and an uncalibrated ADC offset;
+//! - motion pickups on each transducer ([`DeviceConfig::pickup_z`],
+//!   `pickup_x`) reading its displacement with the same ADC noise, fed to the
+//!   device's lock-ins (`Status.measured`).
 
 use std::f64::consts::TAU;
 
+use model_core::board::link::{self, RxQueue, TxRing};
 use model_core::board::plant::{HalfDrive, Noise, Plant, SampleConditions};
 use model_core::dds::SineTable;
 use model_core::device::{Contact, Device, DeviceConfig, DriveSetting};
@@ -36,6 +44,8 @@ use crate::args::Real;
 pub const TABLE_N: usize = 1024;
 /// Samples per half-buffer (the firmware's, [`model_core::device::HALF_BUFFER`]).
 pub const HALF: usize = model_core::device::HALF_BUFFER;
+/// Seed of the pickups' noise record (xor'ed into a reseed).
+const PICKUP_SEED: u64 = 0xD1B5_4A32_D192_ED03;
 /// Sub-steps of the plant per ADC sample.
 const SUB: u32 = 32;
 
@@ -88,6 +98,8 @@ pub struct PlantOptions {
     pub mu0_drift: f64,
     /// Stage velocity profile (t s, v₀ m/s), piecewise linear, t strictly increasing.
     pub v0_profile: Option<Vec<(f64, f64)>>,
+    /// Resonant transducers (`None`: ideal ones, with `lag_periods`).
+    pub resonant: Option<model_core::board::plant::ResonantOptions<f64>>,
 }
 
 impl PlantOptions {
@@ -153,6 +165,9 @@ pub struct PlantArgs {
     /// Virtual plant: stage velocity profile, CSV `t_s,v0_m_s` (header line, t strictly increasing), piecewise linear in device time, held outside; replaces the constant velocity
     #[arg(long, value_name = "FILE")]
     pub v0_profile: Option<std::path::PathBuf>,
+    /// The transducers: ideal or resonant.
+    #[command(flatten)]
+    pub transducers: super::transducers::TransducerArgs,
 }
 
 impl PlantArgs {
@@ -184,6 +199,15 @@ impl PlantArgs {
             Some(p) => Some(read_profile(p)?),
             None => None,
         };
+        let cfg = config();
+        let resonant = self
+            .transducers
+            .options((cfg.dac_z.metres_per_code, cfg.dac_x.metres_per_code))?;
+        if resonant.is_some() && self.plant_lag_periods != 0.0 {
+            return Err(CliError::usage(
+                "--plant-lag-periods: is for ideal transducers; a resonant one has its own time constant Q/(pi f_r)",
+            ));
+        }
         Ok(PlantOptions {
             v0,
             noise_counts: noise,
@@ -194,6 +218,7 @@ impl PlantArgs {
             lag_periods: self.plant_lag_periods,
             mu0_drift: self.plant_mu0_drift,
             v0_profile,
+            resonant,
         })
     }
 }
@@ -239,6 +264,19 @@ pub fn read_profile(path: &std::path::Path) -> crate::error::CliResult<Vec<(f64,
     Ok(out)
 }
 
+/// The plant of `opts`: its contact, and resonant transducers updated with
+/// the plant's sub-step (`SUB` per sample).
+fn plant_of(opts: &PlantOptions, cfg: &DeviceConfig) -> Plant<f64> {
+    let mut p = Plant::new(opts.mu0, opts.kz, opts.kx);
+    if let Some(r) = opts.resonant {
+        let h = 1.0 / (cfg.sample_rate_hz * f64::from(SUB));
+        // The options were checked (`TransducerArgs::options`); a bad set
+        // from code leaves the transducers ideal rather than panic.
+        p.resonant = model_core::board::plant::Resonant::new(r, h).ok();
+    }
+    p
+}
+
 /// A virtual device with its plant.
 pub struct VirtualDevice {
     dev: Device<'static, TABLE_N>,
@@ -247,6 +285,10 @@ pub struct VirtualDevice {
     dac: Vec<u32>,
     half: usize,
     rng: Noise,
+    /// The pickups' ADC noise: its own record, so that adding the pickups
+    /// left the forces' noise records (and every result seeded by them) as
+    /// they were.
+    pickup_rng: Noise,
     opts: PlantOptions,
     /// Samples produced since the device was made.
     samples: u64,
@@ -255,6 +297,38 @@ pub struct VirtualDevice {
     fill_lead: usize,
     /// Filled half-buffers not yet simulated, with their half index.
     filled: std::collections::VecDeque<(HalfDrive, usize)>,
+    /// Received bytes not yet served (the firmware's USART queue).
+    rx: Box<RxQueue<{ link::RX_CAPACITY }>>,
+    /// Answers and telemetry not yet on the wire (the firmware's ring).
+    tx: Box<TxRing<{ link::TX_CAPACITY }>>,
+}
+
+/// The virtual device's queues as the firmware's loop sees them.
+struct QueueIo<'a> {
+    rx: &'a mut RxQueue<{ link::RX_CAPACITY }>,
+    tx: &'a mut TxRing<{ link::TX_CAPACITY }>,
+}
+
+impl link::LinkIo for QueueIo<'_> {
+    fn pop_rx(&mut self) -> Option<u8> {
+        self.rx.pop()
+    }
+
+    fn tx_free(&mut self) -> usize {
+        self.tx.free()
+    }
+
+    fn send(&mut self, frame: &[u8]) {
+        // `link::serve` checked the room first: this cannot fail.
+        let _ = self.tx.push_frame(frame);
+    }
+}
+
+/// Moves everything waiting in `tx` into `out`.
+fn drain_all(tx: &mut TxRing<{ link::TX_CAPACITY }>, out: &mut Vec<u8>) {
+    while let Some(b) = tx.pop() {
+        out.push(b);
+    }
 }
 
 impl VirtualDevice {
@@ -276,14 +350,17 @@ impl VirtualDevice {
         let mut v = VirtualDevice {
             dev,
             server: Server::new(info(&cfg)),
-            plant: Plant::new(opts.mu0, opts.kz, opts.kx),
+            plant: plant_of(&opts, &cfg),
             dac: vec![0; HALF],
             half: 0,
             rng: Noise::new(0x9E37_79B9_7F4A_7C15),
+            pickup_rng: Noise::new(PICKUP_SEED),
             opts,
             samples: 0,
             fill_lead: 0,
             filled: std::collections::VecDeque::new(),
+            rx: Box::default(),
+            tx: Box::default(),
         };
         let _ = v.dev.set_drive(DriveSetting {
             freq_hz: 40_000.0,
@@ -321,14 +398,60 @@ impl VirtualDevice {
         }
     }
 
-    /// Feeds received bytes (arriving now, in device time); returns the
-    /// bytes to send back.
+    /// Feeds received bytes (arriving now, in device time) and serves them
+    /// as a host that reads at once would see it: the bytes enter the
+    /// receive queue in pieces that fit, each followed by the firmware's
+    /// loop; returns the answers and telemetry (the whole transmit ring).
+    /// Nothing is dropped (the in-process link has no wire to overrun).
     pub fn receive(&mut self, bytes: &[u8]) -> Vec<u8> {
         let mut out = Vec::new();
-        let now_us = self.now_us();
-        self.server
-            .receive(&mut self.dev, bytes, now_us, |b| out.extend_from_slice(b));
+        for piece in bytes.chunks(link::RX_CAPACITY) {
+            self.push_rx(piece);
+            loop {
+                self.serve_link();
+                drain_all(&mut self.tx, &mut out);
+                if self.rx.is_empty() {
+                    break;
+                }
+            }
+        }
         out
+    }
+
+    /// Bytes arriving from the wire into the receive queue, as the USART
+    /// interrupt puts them there: a byte that does not fit is dropped and
+    /// counted in `Status.rx_overflows` (announced by `RxOverflow`
+    /// telemetry). Returns the number dropped.
+    pub fn push_rx(&mut self, bytes: &[u8]) -> usize {
+        let dropped = bytes.iter().filter(|&&b| self.rx.push(b).is_err()).count();
+        if dropped > 0 {
+            self.dev
+                .count_rx_overflow(u32::try_from(dropped).unwrap_or(u32::MAX));
+        }
+        dropped
+    }
+
+    /// The firmware's main loop ([`link::serve`]) until it has no work: a
+    /// request leaves the receive queue only while the transmit ring has
+    /// room for its answer, and telemetry is sent only while it has room
+    /// for [`link::POLL_FRAMES`] frames.
+    pub fn serve_link(&mut self) {
+        let now_us = self.now_us();
+        let mut io = QueueIo {
+            rx: &mut self.rx,
+            tx: &mut self.tx,
+        };
+        loop {
+            link::serve(&mut self.server, &mut self.dev, &mut io, now_us);
+            if !link::has_work(io.rx.len(), io.tx.free()) {
+                break;
+            }
+        }
+    }
+
+    /// The transmit ring (answers and telemetry waiting for the wire).
+    pub fn tx(&mut self) -> &mut TxRing<{ link::TX_CAPACITY }> {
+        &mut self.tx
     }
 
     /// Device time, µs since the virtual device was made (wrapping): the
@@ -337,35 +460,44 @@ impl VirtualDevice {
         (self.samples as f64 * 1e6 / self.sample_rate()) as u64 as u32
     }
 
-    /// Advances the simulation by whole half-buffers covering `samples`;
-    /// returns telemetry bytes produced meanwhile.
+    /// Advances the simulation by whole half-buffers covering `samples`,
+    /// running the firmware's loop after each; returns the bytes sent
+    /// meanwhile (the transmit ring drained after each half: a host that
+    /// reads at once).
     pub fn advance(&mut self, samples: usize) -> Vec<u8> {
         let mut out = Vec::new();
+        self.advance_with(samples, |tx| drain_all(tx, &mut out));
+        out
+    }
+
+    /// [`VirtualDevice::advance`] with the transmit ring handed to `drain`
+    /// after each half, which takes what its wire accepts (the rest waits).
+    pub fn advance_with(
+        &mut self,
+        samples: usize,
+        mut drain: impl FnMut(&mut TxRing<{ link::TX_CAPACITY }>),
+    ) {
         let halves = samples.div_ceil(HALF).max(1);
         for _ in 0..halves {
             self.step_half();
-            self.server
-                .poll(&mut self.dev, |b| out.extend_from_slice(b));
+            self.serve_link();
+            drain(&mut self.tx);
         }
-        out
     }
 
-    /// Drive stopped and settled, no measurement (nor stream): the plant's
-    /// samples reach nothing, so a server loop may [`VirtualDevice::skip`]
-    /// instead of simulating them.
+    /// Drive stopped and settled, no measurement (nor stream), nothing
+    /// waiting in the link: the plant's samples reach nothing, so a server
+    /// loop may [`VirtualDevice::skip`] instead of simulating them.
     pub fn quiescent(&self) -> bool {
         let s = self.dev.status();
-        !s.running && s.settled && !s.measuring
+        !s.running && s.settled && !s.measuring && self.rx.is_empty()
     }
 
     /// Moves the device clock on by `samples` without simulating the plant
-    /// (for a [`VirtualDevice::quiescent`] device); returns the telemetry due.
-    pub fn skip(&mut self, samples: u64) -> Vec<u8> {
+    /// (for a [`VirtualDevice::quiescent`] device) and runs the loop once.
+    pub fn skip(&mut self, samples: u64) {
         self.samples += samples;
-        let mut out = Vec::new();
-        self.server
-            .poll(&mut self.dev, |b| out.extend_from_slice(b));
-        out
+        self.serve_link();
     }
 
     /// How many half-buffers the DAC fills run ahead of the output: 0 (the
@@ -380,6 +512,7 @@ impl VirtualDevice {
     /// Reseeds the ADC noise (a different, equally likely noise record).
     pub fn set_noise_seed(&mut self, seed: u64) {
         self.rng = Noise::new(seed);
+        self.pickup_rng = Noise::new(seed ^ PICKUP_SEED);
     }
 
     /// Samples per second.
@@ -420,9 +553,10 @@ impl VirtualDevice {
         let t0 = self.samples;
         let offset = self.opts.offset_counts;
         let mut samples = [(0u16, 0u16); HALF];
+        let mut pickups = [(0u16, 0u16); HALF];
         let cfg = *self.dev.config();
         let mut plant = self.plant;
-        plant.run_half::<Libm>(
+        plant.run_half_with_pickups::<Libm>(
             &cfg,
             &d,
             SUB,
@@ -439,9 +573,22 @@ impl VirtualDevice {
                 }
             },
             &mut samples,
+            &mut pickups,
         );
         self.plant = plant;
-        self.dev.adc_block(half, &samples);
+        // The pickups' ADC noise, as the forces' (uniform ± counts, on the
+        // rounded reading, clamped to the ADC's range).
+        let full = f64::from(cfg.adc_full_scale);
+        let amp = self.opts.noise_counts;
+        for p in pickups.iter_mut() {
+            let mut n = |c: u16| {
+                (f64::from(c) + self.pickup_rng.uniform(amp))
+                    .round()
+                    .clamp(0.0, full) as u16
+            };
+            *p = (n(p.0), n(p.1));
+        }
+        self.dev.adc_block_with_pickups(half, &samples, &pickups);
         self.samples += HALF as u64;
     }
 }

@@ -1,5 +1,4 @@
-//! The homogenised model's error, derived (issue 14 §4; replaces the
-//! calibrated constant `C_H = 1` of earlier versions).
+//! The homogenised model's error, derived (no calibrated constant).
 //!
 //! The homogenised body feels `μ(V)·F̄z`, the mean spring force of the
 //! contact driven at the *constant* velocity `V`. The resolved body feels the

@@ -1,4 +1,4 @@
-//! One μ(v) for every contact model (issue 14 §5): `fricctl motion` and
+//! One μ(v) for every contact model: `fricctl motion` and
 //! `fricctl load-line` take the law only through [`Law`], which asks
 //! model-core's [`select::mu_within`] — the function that picks the right
 //! solver for the scene's contact — and nothing else.
@@ -274,10 +274,13 @@ mod tests {
     use model_core::scene::ContactMode;
     use model_core::{exact, Groups};
 
-    /// The flat law is the exact solver's (to its bound), the static band
-    /// its one-sided limits; the lift-off law is the window solver's, unique at 0.
+    /// A wiring check, not an accuracy test: [`Law`] hands each contact to
+    /// its solver (the flat law is the exact solver's, to its bound, the
+    /// static band its one-sided limits; the lift-off law is the window
+    /// solver's, unique at 0; a sphere's is the MDR's). The solvers' accuracy
+    /// is tested against independent computations in `tests/`.
     #[test]
-    fn law_is_the_contacts_solver() {
+    fn wiring_law_dispatches_to_each_contacts_solver() {
         let g = Groups::from_ratio(0.5, 2.0, 0.7).unwrap();
         let flat = Law::of(&Scene::dimensionless(g).unwrap());
         let d = flat.scene().drive();

@@ -1,4 +1,4 @@
-//! A body moved by the vibrated contact (issue 14 §2): the slow dynamics of
+//! A body moved by the vibrated contact: the slow dynamics of
 //! the paper's "substrate subjected to a low-frequency tangential force".
 //!
 //! # Conventions

@@ -153,7 +153,7 @@ pub fn host_mu_of_drive(mu0: &str, freq: &str) -> serde_json::Value {
     ])
 }
 
-/// The acceptance of a fit of `key`: within 2 % of the plant's
+/// The acceptance of a fit of `key`: within 2 % of the plant's
 /// `truth`, and an interval covers it. A 95 % interval misses the truth in
 /// 5 % of runs by design (the noise differs from run to run with the
 /// timing), too often for a test; the check widens the fit's 95 % interval

@@ -142,6 +142,21 @@ impl<const N: usize> TxRing<N> {
         N - self.q.len()
     }
 
+    /// The oldest bytes waiting, as one contiguous run (empty when the ring
+    /// is): for a writer that may take only part of them ([`TxRing::consume`]).
+    pub fn front(&self) -> &[u8] {
+        self.q.as_slices().0
+    }
+
+    /// Drops the `n` oldest bytes (those a writer took from [`TxRing::front`]).
+    pub fn consume(&mut self, n: usize) {
+        for _ in 0..n {
+            if self.q.pop_front().is_none() {
+                break;
+            }
+        }
+    }
+
     /// Nothing left to transmit.
     pub fn is_empty(&self) -> bool {
         self.q.is_empty()

@@ -4,10 +4,13 @@
 //! * [`control`] — the closed loop: μ held at a setpoint by Δu_z (feedforward
 //!   from the f32 inverse model, integral trim, anti-windup, rate limit, lift-off guard);
 //! * [`dds`] — the two phase-locked DAC waveforms (direct digital synthesis);
+//! * [`dma`] — which half of a circular DMA buffer an interrupt hands over,
+//!   and whether its handler was late;
 //! * [`estimator`] — μ from sampled forces (eq. 20) with lock-in harmonics;
 //! * [`device`] — drive settings in physical units, the lift-off guard,
-//!   start/stop ramps, faults, measurement and the model's prediction
-//!   (`config`, `drive`, `measure`, `predict`, `error`);
+//!   start/stop ramps, faults with one path into the safe state, measurement
+//!   and the model's prediction (`config`, `drive`, `fault`, `measure`,
+//!   `predict`, `error`);
 //! * [`protocol`] — the wire format shared by firmware and host
 //!   (`messages`: the wire types and the request → response table;
 //!   `framing`: CRC, COBS, deframing);
@@ -15,6 +18,15 @@
 //!   (idempotent `Measure`, the stream, `Reset`);
 //! * [`link`] — the firmware's serial link: queues, one loop pass, sleeping
 //!   without a lost wake-up;
+//! * [`lockin`] — amplitude and phase of a sampled signal on the DDS's own
+//!   reference, exact over any window (a least-squares fit, no 2f leak);
+//! * [`resonator`] — one transducer mode (f_r, Q, static gain) advanced by
+//!   its exact zero-order-hold update (the building block of the resonant
+//!   plant);
+//! * [`identify`] — one transducer mode's f_r, Q, static gain and phase lag
+//!   fitted to a stepped-sine record (Levenberg–Marquardt on the complex
+//!   response), with confidence intervals and a verdict refusing a poor fit
+//!   by name (no device code: `fricctl device identify` collects and calls it);
 //! * [`plant`] — the simulated analog side (transducers, contact, force
 //!   sensors) of the host's virtual device and of the firmware under QEMU.
 //!
@@ -24,8 +36,12 @@
 pub mod control;
 pub mod dds;
 pub mod device;
+pub mod dma;
 pub mod estimator;
+pub mod identify;
 pub mod link;
+pub mod lockin;
 pub mod plant;
 pub mod protocol;
+pub mod resonator;
 pub mod server;

@@ -5,6 +5,19 @@
 //! for QEMU (`f32`, whose emulated STM32F405 has no DAC, ADC DMA or analog
 //! world: its main loop runs this plant on each DAC half-buffer instead).
 //!
+//! **Transducers.** Ideal ones (the default) displace by the DAC level times
+//! the board's calibration, optionally with a first-order amplitude lag
+//! (below). Resonant ones ([`Resonant`], built on
+//! [`crate::board::resonator::Mode`]) are two second-order modes driven by
+//! the DAC channels' AC voltage ([`DAC_VOLTS_PER_CODE`] per code), each
+//! advanced by its exact zero-order-hold update on every sub-step (the DAC
+//! holds a sample's voltage), with a resonance drift (Hz/s), self-heating
+//! (a shift per squared amplitude, filtered with [`THERMAL_TAU_S`]),
+//! cross-talk between the channels, and the contact's load as damping; the
+//! normal channel's DC offset stays quasi-static through the calibration.
+//! The contact then sees the modes' displacements instead of the ideal
+//! waveforms.
+//!
 //! Per half-buffer of `n` samples the plant sees the DDS channels before and
 //! after the refill ([`HalfDrive`]): the transducers' amplitudes Δu_z, Δu_x,
 //! the offset u_z0 and the phase offsets move linearly between the two
@@ -33,6 +46,7 @@
 
 use crate::board::dds::Channel;
 use crate::board::device::{Device, DeviceConfig};
+use crate::board::resonator::{Mode, ModeError, ModeParams};
 use crate::fixed_step::SpringContact;
 use crate::float::{Float, Math};
 
@@ -118,22 +132,175 @@ pub struct SampleConditions<F> {
     pub counts_x: F,
 }
 
+/// DAC volts per code: 12 bits over V_REF = 3.3 V (RM0090 §14.2: DAC
+/// output = V_REF · DOR / 4095).
+pub const DAC_VOLTS_PER_CODE: f64 = 3.3 / 4095.0;
+
+/// What makes the resonant transducers' resonances move and couple.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ResonantOptions<F> {
+    /// The normal (0) and tangential (1) modes at rest: f_r (Hz), Q, static
+    /// gain (m per volt at the DAC pin).
+    pub modes: [ModeParams<F>; 2],
+    /// Drift of each resonance, Hz/s of device time.
+    pub drift_hz_per_s: [F; 2],
+    /// Thermal shift of each resonance per squared amplitude, Hz/µm²: the
+    /// self-heating of a mode follows its amplitude² with the time constant
+    /// [`THERMAL_TAU_S`].
+    pub thermal_hz_per_um2: F,
+    /// Cross-talk: this fraction of each channel's drive voltage also
+    /// drives the other mode.
+    pub crosstalk: F,
+    /// The contact's load as extra damping: 1/Q_eff = 1/Q + 1/`load_q` (∞ for none).
+    pub load_q: F,
+}
+
+/// Time constant of the transducers' self-heating, s (a Langevin stack's
+/// thermal time is seconds to minutes; one second keeps tests short).
+pub const THERMAL_TAU_S: f64 = 1.0;
+
+/// Resonant transducers: two modes driven by the DAC channels' AC voltage
+/// (the normal channel's DC offset acts quasi-statically through the
+/// calibration, as before).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Resonant<F> {
+    /// The options the modes follow.
+    pub opts: ResonantOptions<F>,
+    /// The normal and tangential modes (state and current update).
+    pub modes: [Mode<F>; 2],
+    /// Device time since the plant started, s.
+    pub time_s: F,
+    /// Each mode's filtered amplitude², µm² (the self-heating).
+    pub heat_um2: [F; 2],
+}
+
+/// Why resonant transducers cannot be formed (a mode's parameter, or a
+/// coupling outside its domain).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ResonantError {
+    /// A mode's parameter (channel 0 normal, 1 tangential).
+    Mode(usize, ModeError),
+    /// A drift, the thermal shift or the cross-talk is not finite, or
+    /// |cross-talk| ≥ 1.
+    Coupling,
+    /// The load's Q must be > 0 (∞ for none).
+    LoadQ,
+}
+
+impl core::fmt::Display for ResonantError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ResonantError::Mode(c, e) => {
+                let ch = if *c == 0 { "normal" } else { "tangential" };
+                write!(f, "{ch} transducer: {e}")
+            }
+            ResonantError::Coupling => f.write_str(
+                "drift and thermal shift must be finite, cross-talk finite with |c| < 1",
+            ),
+            ResonantError::LoadQ => f.write_str("the load's Q must be > 0"),
+        }
+    }
+}
+
+impl<F: Float> Resonant<F> {
+    /// Transducers at rest, updated with sub-steps of `h` s.
+    ///
+    /// # Errors
+    /// [`ResonantError`] naming what is out of its domain.
+    pub fn new(opts: ResonantOptions<F>, h: F) -> Result<Self, ResonantError> {
+        let ok = |x: F| x.is_finite();
+        if !(opts.drift_hz_per_s.iter().all(|&d| ok(d))
+            && ok(opts.thermal_hz_per_um2)
+            && ok(opts.crosstalk)
+            && opts.crosstalk.abs() < F::ONE)
+        {
+            return Err(ResonantError::Coupling);
+        }
+        if opts.load_q.is_nan() || opts.load_q <= F::ZERO {
+            return Err(ResonantError::LoadQ);
+        }
+        let mode = |c: usize| {
+            Mode::new(Self::loaded(&opts, opts.modes[c]), h).map_err(|e| ResonantError::Mode(c, e))
+        };
+        Ok(Resonant {
+            opts,
+            modes: [mode(0)?, mode(1)?],
+            time_s: F::ZERO,
+            heat_um2: [F::ZERO; 2],
+        })
+    }
+
+    /// A mode's parameters with the contact's load: 1/Q_eff = 1/Q + 1/Q_load.
+    fn loaded(opts: &ResonantOptions<F>, p: ModeParams<F>) -> ModeParams<F> {
+        let inv = F::ONE / p.q
+            + if opts.load_q.is_finite() {
+                F::ONE / opts.load_q
+            } else {
+                F::ZERO
+            };
+        ModeParams {
+            q: F::ONE / inv,
+            ..p
+        }
+    }
+
+    /// The modes' parameters now (drift, heat and load applied).
+    pub fn params_now(&self) -> [ModeParams<F>; 2] {
+        core::array::from_fn(|c| {
+            let base = self.opts.modes[c];
+            let shift = self.opts.drift_hz_per_s[c] * self.time_s
+                + self.opts.thermal_hz_per_um2 * self.heat_um2[c];
+            Self::loaded(
+                &self.opts,
+                ModeParams {
+                    resonance_hz: (base.resonance_hz + shift).max(F::ONE),
+                    ..base
+                },
+            )
+        })
+    }
+
+    /// Moves time on by `dt` s (heat filtered toward each mode's amplitude²)
+    /// and retunes the modes for sub-steps of `h` s; a retune that fails
+    /// (a resonance driven below 1 Hz, say) keeps the last update.
+    fn advance(&mut self, dt: F, h: F) {
+        self.time_s += dt;
+        let k = F::ONE - F::from_f64(libm::exp(-dt.to_f64() / THERMAL_TAU_S));
+        let um = F::from_f64(1e6);
+        for c in 0..2 {
+            let m = &self.modes[c];
+            let w = F::TAU * m.params().resonance_hz;
+            let (x, v) = (m.x() * um, m.v() / w * um);
+            self.heat_um2[c] += (x * x + v * v - self.heat_um2[c]) * k;
+        }
+        let now = self.params_now();
+        for (m, p) in self.modes.iter_mut().zip(now) {
+            let _ = m.retune(p, h);
+        }
+    }
+}
+
 /// The plant's state: the true contact and the transducers' amplitudes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Plant<F> {
     /// The true contact (μ₀, k_z, k_x in N/m) and its contact point relative
     /// to the stage at the start of the next half-buffer, m.
     pub contact: SpringContact<F>,
-    /// Transducer amplitudes (Δu_z, Δu_x) now, m.
+    /// Ideal transducers' amplitudes (Δu_z, Δu_x) now, m (unused with
+    /// [`Plant::resonant`]).
     pub amp: (F, F),
+    /// Resonant transducers (`None`: ideal ones, the DAC level times the
+    /// calibration with an optional first-order lag).
+    pub resonant: Option<Resonant<F>>,
 }
 
 impl<F: Float> Plant<F> {
-    /// A plant at rest with the contact `μ₀, k_z, k_x` (N/m).
+    /// A plant at rest with the contact `μ₀, k_z, k_x` (N/m) and ideal transducers.
     pub fn new(mu0: F, kz: F, kx: F) -> Self {
         Plant {
             contact: SpringContact::new(mu0, kz, kx),
             amp: (F::ZERO, F::ZERO),
+            resonant: None,
         }
     }
 
@@ -148,8 +315,26 @@ impl<F: Float> Plant<F> {
         d: &HalfDrive,
         sub: u32,
         keep: F,
+        at: impl FnMut(usize) -> SampleConditions<F>,
+        out: &mut [(u16, u16)],
+    ) {
+        self.run_half_with_pickups::<M>(cfg, d, sub, keep, at, out, &mut []);
+    }
+
+    /// [`Plant::run_half`] that also writes the motion pickups' readings
+    /// `(z, x)` in counts ([`DeviceConfig::pickup_z`], `pickup_x`: the
+    /// transducers' AC displacement at each sample, rounded and clamped like
+    /// the forces) into `pickups` (as many samples as it holds).
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_half_with_pickups<M: Math<F>>(
+        &mut self,
+        cfg: &DeviceConfig,
+        d: &HalfDrive,
+        sub: u32,
+        keep: F,
         mut at: impl FnMut(usize) -> SampleConditions<F>,
         out: &mut [(u16, u16)],
+        pickups: &mut [(u16, u16)],
     ) {
         let n = out.len().max(1);
         let sub = sub.max(1);
@@ -172,6 +357,11 @@ impl<F: Float> Plant<F> {
             self.amp = (duz_a, dux_a);
         }
         let dt = F::ONE / (F::from_f64(cfg.sample_rate_hz) * F::from_u32(sub));
+        let vpc = F::from_f64(DAC_VOLTS_PER_CODE);
+        if let Some(r) = self.resonant.as_mut() {
+            // Drift, heat and load for this half; the modes' update for the sub-step.
+            r.advance(F::from_u32(n as u32) / F::from_f64(cfg.sample_rate_hz), dt);
+        }
         // The sub-step rotation: (sin, cos) of θ advanced by dθ/sub.
         let (sd, cd) = M::sin_cos(F::from_f64(d.dtheta() / f64::from(sub)));
         let rad = F::from_f64(RAD_PER_WORD);
@@ -181,6 +371,13 @@ impl<F: Float> Plant<F> {
         let full = F::from_u32(u32::from(cfg.adc_full_scale));
         // Rounded to the nearest count (ties up) and clamped, all in F.
         let counts = |v: F| (v.max(F::ZERO).min(full) + F::HALF).to_u32() as u16;
+        let (pzg, pzo) = (f(cfg.pickup_z.gain), f(cfg.pickup_z.offset));
+        let (pxg, pxo) = (f(cfg.pickup_x.gain), f(cfg.pickup_x.offset));
+        let mut pick = |i: usize, xz: F, xx: F| {
+            if let Some(p) = pickups.get_mut(i) {
+                *p = (counts(xz / pzg + pzo), counts(xx / pxg + pxo));
+            }
+        };
         // The stage's travel since the start of the half, m.
         let mut travel = F::ZERO;
         for (i, o) in out.iter_mut().enumerate() {
@@ -199,13 +396,36 @@ impl<F: Float> Plant<F> {
             let (mut s1, mut c1) = M::sin_cos(F::from_u32(w.wrapping_add(p1)) * rad);
             let (mut s2, mut c2) = M::sin_cos(F::from_u32(w.wrapping_add(p2)) * rad);
             let uz0 = uz0_a + d_uz0 * F::from_u32(i as u32);
+            let step = c.v0 * dt;
+            if let Some(r) = self.resonant.as_mut() {
+                // The DAC holds each channel's AC voltage over the sample
+                // (its waveform level at this word, the lagged ADC phase as
+                // for ideal transducers); cross-talk mixes the two.
+                let (vz, vx) = ((duz * s1) / mz * vpc, (dux * s2) / mx * vpc);
+                let k = r.opts.crosstalk;
+                let (vz, vx) = (vz + k * vx, vx + k * vz);
+                let [mzd, mxd] = &mut r.modes;
+                pick(i, mzd.x(), mxd.x());
+                let (fx, fz) = self.contact.step(mxd.x() + travel, uz0 + mzd.x());
+                *o = (
+                    counts(fx / xg + xo + c.counts_x),
+                    counts(fz / zg + zo + c.counts_z),
+                );
+                for j in 1..=sub {
+                    let (xz, xx) = (mzd.step(vz), mxd.step(vx));
+                    let x = travel + step * F::from_u32(j);
+                    self.contact.step(xx + x, uz0 + xz);
+                }
+                travel += step * F::from_u32(sub);
+                continue;
+            }
+            pick(i, duz * s1, dux * s2);
             let (fx, fz) = self.contact.step(dux * s2 + travel, uz0 + duz * s1);
             *o = (
                 counts(fx / xg + xo + c.counts_x),
                 counts(fz / zg + zo + c.counts_z),
             );
             // Sub-steps to the next tick, the stage moving on meanwhile.
-            let step = c.v0 * dt;
             for j in 1..=sub {
                 (s1, c1) = (s1 * cd + c1 * sd, c1 * cd - s1 * sd);
                 (s2, c2) = (s2 * cd + c2 * sd, c2 * cd - s2 * sd);

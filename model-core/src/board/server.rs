@@ -64,8 +64,10 @@ pub struct Server {
     stream: Stream,
     last_measure: Option<LastMeasure>,
     telemetry_seq: u32,
-    /// The device's ramp generation last answered with `RampDone`.
-    reported_ramp: u32,
+    /// The device's ramp generation last answered with `RampDone`; `None`
+    /// until the server first meets the device (what the device did before,
+    /// at power-up, is not announced).
+    reported_ramp: Option<u32>,
     last_faults: u32,
     /// `Status::rx_overflows` when last reported.
     reported_overflows: u32,
@@ -82,7 +84,7 @@ impl Server {
             stream: Stream::default(),
             last_measure: None,
             telemetry_seq: 0,
-            reported_ramp: 0,
+            reported_ramp: None,
             last_faults: 0,
             reported_overflows: 0,
             reported_update: 0,
@@ -100,6 +102,7 @@ impl Server {
         now_us: u32,
         mut send: impl FnMut(&[u8]),
     ) {
+        self.meet(dev);
         for &b in bytes {
             let reply = match self.deframer.push(b, now_us) {
                 Deframed::Pending => None,
@@ -137,10 +140,11 @@ impl Server {
         dev: &mut A,
         mut send: impl FnMut(&[u8]),
     ) {
+        self.meet(dev);
         // One RampDone per change of the ramp generation, once settled.
         let (status, ramp) = dev.with(|d| (d.status(), d.ramp_generation()));
-        if status.settled && ramp != self.reported_ramp {
-            self.reported_ramp = ramp;
+        if status.settled && Some(ramp) != self.reported_ramp {
+            self.reported_ramp = Some(ramp);
             self.telemetry(Telemetry::RampDone, &mut send);
         }
         let new = status.faults & !self.last_faults;
@@ -162,6 +166,16 @@ impl Server {
         }
         if let Some(end) = self.stream.ended.take() {
             self.telemetry(Telemetry::StreamStopped(end), &mut send);
+        }
+    }
+
+    /// On the first call (the first bytes received or the first poll): takes
+    /// the device's ramp generation as announced, so that the ramps of
+    /// power-up (the default drive, a watchdog fault latched before the
+    /// link is up) send no `RampDone` — "none is sent at power-up".
+    fn meet<const N: usize, A: DeviceAccess<N>>(&mut self, dev: &mut A) {
+        if self.reported_ramp.is_none() {
+            self.reported_ramp = Some(dev.with(|d| d.ramp_generation()));
         }
     }
 

@@ -108,7 +108,10 @@ pub struct Plan {
 /// [`SCAN_POINTS`] amplitudes, then bisection to the f32 resolution in the
 /// scan cell that straddles μ* nearest `near_m` (the law is taken to be
 /// monotone inside one cell, 1/23 of the range). The reachable range
-/// reported when no cell straddles μ* is the least and greatest scanned μ.
+/// reported when no cell straddles μ* is the least and greatest scanned μ;
+/// the range is closed: a μ* equal to a scanned μ (either end included) is
+/// reached at that amplitude. A zero bound (offset at the top of the DAC
+/// range) leaves the single amplitude 0 and the reach `[μ(0), μ(0)]`.
 /// (A compact search rather than [`crate::model::inverse`]: the firmware's
 /// flash budget.)
 ///
@@ -129,7 +132,8 @@ pub fn plan(
     if !(v0.is_finite() && v0 != 0.0) {
         return Err(ControlError::BadVelocity);
     }
-    if !(base.uz0 > 0.0 && limit_m > 0.0) {
+    // (A NaN bound counts as no offset: the device's lift-off limit is ≥ 0.)
+    if !(base.uz0 > 0.0 && limit_m >= 0.0) {
         return Err(ControlError::NoOffset);
     }
     // Strictly below lift-off (a < 1).
@@ -149,16 +153,33 @@ pub fn plan(
         };
         Ok(exact::mu_over_mu0::<f32, FastF32>(&d, v).map_err(ControlError::Model)? * mu0)
     };
-    let n = SCAN_POINTS;
-    let x_at = |j: usize| hi * j as f32 / (n - 1) as f32;
+    // A zero bound (the offset at the top of the DAC range) leaves one
+    // amplitude, 0: the reach is the single μ there.
+    let n = if hi > 0.0 { SCAN_POINTS } else { 1 };
+    let x_at = |j: usize| {
+        if n > 1 {
+            hi * j as f32 / (n - 1) as f32
+        } else {
+            0.0
+        }
+    };
+    // The reach is reported as the least and greatest μ computed, and the
+    // target is compared with those very f32 values: a target equal to a
+    // reported end is reached (the interval is closed) at the scan point
+    // that gave it.
     let (mut lo_mu, mut hi_mu) = (f32::MAX, f32::MIN);
     let mut best: Option<(f32, f32, f32, f32)> = None; // (xl, gl, xr, gr) nearest near_m
+    let mut hit: Option<f32> = None; // a scan point with μ = μ* exactly, nearest near_m
     let mut prev = (0.0f32, 0.0f32);
     for j in 0..n {
         let x = x_at(j);
-        let g = mu(x)? - target_mu;
-        lo_mu = lo_mu.min(g + target_mu);
-        hi_mu = hi_mu.max(g + target_mu);
+        let m = mu(x)?;
+        let g = m - target_mu;
+        lo_mu = lo_mu.min(m);
+        hi_mu = hi_mu.max(m);
+        if m == target_mu && hit.is_none_or(|h| (x - near_m).abs() < (h - near_m).abs()) {
+            hit = Some(x);
+        }
         if j > 0 && (prev.1 <= 0.0) != (g <= 0.0) {
             let mid = 0.5 * (prev.0 + x);
             let nearer =
@@ -169,11 +190,15 @@ pub fn plan(
         }
         prev = (x, g);
     }
-    let Some((mut xl, gl, mut xr, _)) = best else {
-        return Err(ControlError::OutOfReach {
-            min: lo_mu,
-            max: hi_mu,
-        });
+    let (mut xl, gl, mut xr) = match (best, hit) {
+        (Some((xl, gl, xr, _)), _) => (xl, gl, xr),
+        (None, Some(x)) => (x, 0.0, x),
+        (None, None) => {
+            return Err(ControlError::OutOfReach {
+                min: lo_mu,
+                max: hi_mu,
+            })
+        }
     };
     let left_low = gl <= 0.0;
     for _ in 0..40 {
@@ -191,6 +216,7 @@ pub fn plan(
     // Central difference over 2 % of the range (one-sided at the ends).
     let h = 0.01 * hi;
     let (a, b) = ((x - h).max(0.0), (x + h).min(hi));
+    // NaN for a zero bound (a = b = 0): replaced by the least slope below.
     let mut s = (mu(b)? - mu(a)?) / (b - a);
     let s_min = S_MIN_REL * mu0 / base.uz0;
     if !s.is_finite() || s.abs() < s_min {

@@ -106,8 +106,8 @@ impl<const N: usize> Device<'_, N> {
         if !s.on {
             return Ok(());
         }
-        if self.faults != 0 {
-            return Err(DeviceError::Faulted(self.faults));
+        if self.latch.any() {
+            return Err(DeviceError::Faulted(self.latch.bits()));
         }
         let mu0 = self.contact.mu0;
         let out = |param, min, max| DeviceError::OutOfRange { param, min, max };

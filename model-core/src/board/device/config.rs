@@ -54,6 +54,13 @@ pub struct DeviceConfig {
     pub slew_m_per_s: f32,
     /// Phase slew, rad/s.
     pub slew_rad_per_s: f32,
+    /// ADC calibration of the normal transducer's motion pickup (a pickup
+    /// patch or a vibrometer's output): `gain` m per count, `offset` the
+    /// count at rest. Pin PA6 (ADC12_IN6) on the board.
+    pub pickup_z: Calibration,
+    /// ADC calibration of the tangential transducer's motion pickup, m per
+    /// count. Pin PA7 (ADC12_IN7) on the board.
+    pub pickup_x: Calibration,
     /// ADC sample `k` sees the DAC word `k − lag` (the STM32 DAC moves its
     /// holding register to the output on the trigger and only then requests
     /// the next word by DMA: lag 1). The phase of each ADC sample is shifted
@@ -111,6 +118,15 @@ impl DeviceConfig {
                 offset: 0.0,
             },
             adc_full_scale: 4095,
+            // ±10 µm over the ADC's range around mid-scale (AC-coupled).
+            pickup_z: Calibration {
+                gain: 5e-9,
+                offset: 2048.0,
+            },
+            pickup_x: Calibration {
+                gain: 5e-9,
+                offset: 2048.0,
+            },
             liftoff_margin: 0.05,
             freq_range_hz: (1_000.0, 100_000.0),
             slew_m_per_s: 1e-3,

@@ -1,6 +1,6 @@
 //! Drive settings in physical units → DDS levels: validation in a fixed
 //! order (the first failing check is reported), the lift-off guard, start,
-//! ramped stop, faults with their safe state.
+//! ramped stop (faults and their safe state: `fault`).
 
 use super::config::MAX_PHASE_RAD;
 use super::{in_range, Applied, Device, DeviceError, DriveParam, DriveSetting};
@@ -135,7 +135,8 @@ impl<const N: usize> Device<'_, N> {
     }
 
     /// Sets the drive. While running the DDS ramps to it; while stopped it is
-    /// stored and used at the next start.
+    /// stored and used at the next start (the normal offset is ramped to at
+    /// once, unless a fault is latched: then nothing moves).
     ///
     /// # Errors
     /// [`DeviceError::Faulted`] while running with a latched fault, then
@@ -143,8 +144,8 @@ impl<const N: usize> Device<'_, N> {
     /// `plan`, then [`DeviceError::Busy`] while the closed loop runs (switch
     /// it off first); nothing changes on error.
     pub fn set_drive(&mut self, d: DriveSetting) -> Result<Applied, DeviceError> {
-        if self.faults != 0 && self.running {
-            return Err(DeviceError::Faulted(self.faults));
+        if self.latch.any() && self.running {
+            return Err(DeviceError::Faulted(self.latch.bits()));
         }
         if self.control_on() {
             self.plan(&d)?;
@@ -166,14 +167,17 @@ impl<const N: usize> Device<'_, N> {
         };
         self.refresh_scene();
         self.ramp_generation = self.ramp_generation.wrapping_add(1);
+        self.reset_motion_peak();
         if self.running {
             self.dds.set_level(0, plan.levels[0])?;
             self.dds.set_level(1, plan.levels[1])?;
-        } else {
+        } else if !self.latch.any() {
             // Stopped: the normal offset (preload) is applied, amplitudes stay 0.
             let dc = plan.levels[0].dc;
             self.dds.set_level(0, Level { amp: 0.0, dc })?;
         }
+        // Faulted (and so stopped): only stored; the outputs stay in the
+        // safe state until `reset_faults` and `start`.
         Ok(self.applied)
     }
 
@@ -182,14 +186,15 @@ impl<const N: usize> Device<'_, N> {
     /// # Errors
     /// [`DeviceError::Faulted`] while a fault is latched.
     pub fn start(&mut self) -> Result<(), DeviceError> {
-        if self.faults != 0 {
-            return Err(DeviceError::Faulted(self.faults));
+        if self.latch.any() {
+            return Err(DeviceError::Faulted(self.latch.bits()));
         }
         let plan = self.plan(&self.drive)?;
         self.dds.set_level(0, plan.levels[0])?;
         self.dds.set_level(1, plan.levels[1])?;
         self.running = true;
         self.ramp_generation = self.ramp_generation.wrapping_add(1);
+        self.reset_motion_peak();
         Ok(())
     }
 
@@ -199,21 +204,5 @@ impl<const N: usize> Device<'_, N> {
         self.dds.ramp_down();
         self.running = false;
         self.ramp_generation = self.ramp_generation.wrapping_add(1);
-    }
-
-    /// Latches a fault and enters the safe state: amplitudes and offsets ramp
-    /// to zero displacement.
-    pub fn fault(&mut self, bits: u32) {
-        self.control_off();
-        self.faults |= bits;
-        self.running = false;
-        self.ramp_generation = self.ramp_generation.wrapping_add(1);
-        // The rest levels were accepted by `new`: they cannot fail now.
-        let _ = self.rest_levels();
-    }
-
-    /// Clears latched faults (the drive stays stopped).
-    pub fn reset_faults(&mut self) {
-        self.faults = 0;
     }
 }

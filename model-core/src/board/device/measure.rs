@@ -3,6 +3,7 @@
 
 use super::config::PERIODS_RANGE;
 use super::{faults, Device, DeviceError, DriveParam};
+use crate::board::dma::HalfEvent;
 use crate::board::estimator::{reasons, Estimate};
 
 /// Fills whose start phase and conditions are kept (fill `n` is sampled by
@@ -28,11 +29,41 @@ impl<const N: usize> Device<'_, N> {
         if !self.dds.settled() {
             cond |= reasons::NOT_SETTLED;
         }
-        if self.faults != 0 {
+        if self.latch.any() {
             cond |= reasons::FAULT;
         }
         self.half_conditions[slot] = cond;
         self.dds.fill(buf);
+    }
+
+    /// The DAC interrupt's work: refills the half `ev` names with
+    /// [`Device::fill_dac`] (`buf` is that half only) and, if the handler was
+    /// late ([`HalfEvent::late`]: the DMA output a stale half), latches
+    /// [`faults::DAC_UNDERRUN`] through [`Device::fault`].
+    pub fn dac_half_done(&mut self, ev: HalfEvent, buf: &mut [u32]) {
+        self.fill_dac(ev.half, buf);
+        if ev.late {
+            self.fault(faults::DAC_UNDERRUN);
+        }
+    }
+
+    /// The ADC interrupt's work: if the handler was late
+    /// ([`HalfEvent::late`]), the block before this one was overwritten
+    /// unread: it is counted as missed (so that block `n` stays the output of
+    /// fill `n`) and [`faults::ADC_OVERRUN`] is latched through
+    /// [`Device::fault`]; then `samples` (the half `ev` names) are taken with
+    /// [`Device::adc_block`].
+    pub fn adc_half_done(&mut self, ev: HalfEvent, samples: &[(u16, u16)]) {
+        if ev.late {
+            self.adc_blocks = self.adc_blocks.wrapping_add(1);
+            self.fault(faults::ADC_OVERRUN);
+        }
+        self.adc_block(ev.half, samples);
+    }
+
+    /// ADC blocks taken or missed since power-up (the number of the next).
+    pub fn adc_blocks(&self) -> u32 {
+        self.adc_blocks
     }
 
     /// Takes the ADC samples `(f_x, f_z)` of the DAC half-buffer `_half`
@@ -57,10 +88,10 @@ impl<const N: usize> Device<'_, N> {
             }
             if self.est.push(self.table, acc, x, z) {
                 closed = true;
-                if let Ok(e) = self.est.estimate() {
-                    if e.saturated {
-                        self.faults |= faults::ADC_SATURATED;
-                    }
+                // A railed sample: the contact is pressed too hard (or a
+                // sensor is broken): the safe state, through the one path.
+                if self.est.estimate().is_ok_and(|e| e.saturated) {
+                    self.fault(faults::ADC_SATURATED);
                 }
             }
             acc = acc.wrapping_add(tw);
@@ -76,8 +107,8 @@ impl<const N: usize> Device<'_, N> {
     /// [`PERIODS_RANGE`]; [`DeviceError::Busy`] if one is running or the
     /// closed loop runs (its estimates are the loop's).
     pub fn measure(&mut self, periods: u32) -> Result<(), DeviceError> {
-        if self.faults != 0 {
-            return Err(DeviceError::Faulted(self.faults));
+        if self.latch.any() {
+            return Err(DeviceError::Faulted(self.latch.bits()));
         }
         check_periods(periods)?;
         if self.est.busy() || self.control_on() {

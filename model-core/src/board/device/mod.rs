@@ -3,10 +3,12 @@
 //!
 //! * [`config`] — the board's configuration and the limits it implies;
 //! * `drive` — drive settings in physical units with the transducer
-//!   calibration, the lift-off guard, start / ramped stop, faults with a safe
-//!   state;
+//!   calibration, the lift-off guard, start / ramped stop;
+//! * `fault` — the latched faults and the one path into the safe state
+//!   (every fault source, and where it is raised);
 //! * `measure` — the DAC refill and ADC intake bookkeeping (which drive phase
 //!   each ADC sample belongs to) and the friction measurement;
+//! * `motion` — the transducers' measured motion (the pickups' lock-ins);
 //! * `predict` — the model's prediction for the current drive;
 //! * `closed_loop` — the closed loop's timing (which samples each update
 //!   uses, when its command reaches the DAC);
@@ -23,7 +25,9 @@ mod closed_loop;
 pub mod config;
 mod drive;
 pub mod error;
+mod fault;
 mod measure;
+mod motion;
 mod predict;
 
 pub use closed_loop::MIN_GAIN;
@@ -31,7 +35,9 @@ pub use config::{
     DacCal, DeviceConfig, HALF_BUFFER, MAX_PHASE_RAD, MAX_VELOCITY_M_S, PERIODS_RANGE,
 };
 pub use error::{ConfigError, DeviceError};
+pub use fault::faults;
 pub use measure::check_periods;
+pub use motion::MeasuredDrive;
 pub use predict::{predict, regime};
 
 pub use crate::board::protocol::messages::{
@@ -41,18 +47,6 @@ pub use crate::board::protocol::messages::{
 use crate::board::dds::{Achieved, Dds, Level, SineTable, Slew};
 use crate::board::estimator::Estimator;
 use crate::model::scene::{ContactMode, Scene, SceneError, SceneParams};
-
-/// Latched fault bits.
-pub mod faults {
-    /// An ADC sample hit the rail during a measurement.
-    pub const ADC_SATURATED: u32 = 1 << 0;
-    /// The DAC buffer was refilled late (the DMA read a stale half).
-    pub const DAC_UNDERRUN: u32 = 1 << 1;
-    /// The previous reset was by the watchdog.
-    pub const WATCHDOG_RESET: u32 = 1 << 2;
-    /// An external fault input (e.g. an amplifier alarm).
-    pub const EXTERNAL: u32 = 1 << 3;
-}
 
 /// The device.
 pub struct Device<'t, const N: usize> {
@@ -69,7 +63,7 @@ pub struct Device<'t, const N: usize> {
     /// ten times a prediction: not once per `Predict`).
     scene: Result<Scene<f32>, SceneError>,
     running: bool,
-    faults: u32,
+    latch: fault::Latch,
     rx_overflows: u32,
     est: Estimator,
     /// Accumulator and tuning word at the start of the last fills (by fill
@@ -86,6 +80,8 @@ pub struct Device<'t, const N: usize> {
     fills: u32,
     /// ADC blocks since power-up (the number of the next block).
     adc_blocks: u32,
+    /// The motion pickups' lock-ins and last result.
+    motion: motion::Motion,
 }
 
 /// `x` if finite and in `[min, max]`, else [`DeviceError::OutOfRange`].
@@ -135,7 +131,7 @@ impl<'t, const N: usize> Device<'t, N> {
             allow_liftoff: false,
             scene: Err(SceneError::LiftOff),
             running: false,
-            faults: 0,
+            latch: fault::Latch::new(),
             rx_overflows: 0,
             est,
             half: [(0, 0); measure::FILL_RING],
@@ -144,6 +140,7 @@ impl<'t, const N: usize> Device<'t, N> {
             control: None,
             fills: 0,
             adc_blocks: 0,
+            motion: motion::Motion::default(),
         };
         check_contact(&contact)?;
         d.applied.achieved = d
@@ -208,13 +205,14 @@ impl<'t, const N: usize> Device<'t, N> {
         Status {
             running: self.running,
             settled: self.dds.settled(),
-            faults: self.faults,
+            faults: self.latch.bits(),
             measuring: self.est.busy(),
             rx_overflows: self.rx_overflows,
             out_amp_z_m: ch[0].amp.abs() * z.metres_per_code,
             out_amp_x_m: ch[1].amp.abs() * x.metres_per_code,
             out_offset_z_m: (ch[0].dc - z.zero_code) * z.metres_per_code,
             liftoff_allowed: self.allow_liftoff,
+            measured: self.measured_drive(),
         }
     }
 

@@ -15,7 +15,7 @@ use crate::model::regime::Regime;
 
 /// Protocol version; a frame with another version is answered with
 /// [`WireError::VersionMismatch`].
-pub const PROTOCOL_VERSION: u16 = 3;
+pub const PROTOCOL_VERSION: u16 = 4;
 
 /// The drive as commanded, physical units.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -147,6 +147,27 @@ pub struct Status {
     /// (v3) Drives that lift the contact off are allowed
     /// ([`Request::SetLiftOff`]; `false` at power-up).
     pub liftoff_allowed: bool,
+    /// (v4) The transducers' motion measured by the pickups' lock-ins over
+    /// the last window ([`crate::board::device`]'s `motion`); `None` before
+    /// the first window, or on a board whose pickups are not wired.
+    pub measured: Option<MeasuredDrive>,
+}
+
+/// (v4) The transducers' motion as the pickups measure it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct MeasuredDrive {
+    /// Normal amplitude Δu_z measured, m.
+    pub amp_z_m: f32,
+    /// Tangential amplitude Δu_x measured, m.
+    pub amp_x_m: f32,
+    /// φ between the measured modes, rad in (−π, π] (`device::motion`, eq. M1).
+    pub phase_rad: f32,
+    /// The largest normal amplitude measured since the last accepted
+    /// `SetDrive` or `Start`, m.
+    pub amp_z_peak_m: f32,
+    /// Lock-in windows finished since power-up (a new value: a new window).
+    pub windows: u32,
 }
 
 /// What the device is (answer to [`Request::Hello`]).

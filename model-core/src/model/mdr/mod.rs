@@ -120,13 +120,14 @@
 //! changes that cancel between samples, and changes the sequence does not
 //! show, are left to the adaptive bisection and to the estimate (checked
 //! below, "Cost"); against the brute force over springs all gaps are within
-//! the brute force's own error (≤ 10⁻⁶, `tests/mdr.rs`).
+//! the brute force's own error, itself at most 10× the MDR's bound
+//! (`tests/mdr.rs`, `integration_tests::springs`).
 //!
 //! **Cost.** Each spring is one solve (~0.45 µs: the touch events by
 //! Halley's method, the drive's walk geometry — `liftoff::Shape` — shared
 //! by all springs of one μ). Averaged over 1000 velocities across ±v_c for
-//! three drives (`cargo test -p integration-tests --release --test mdr
-//! cpu_time -- --ignored --nocapture`, idle machine), a sphere's μ took
+//! three drives (`cargo run --release -p model-core --example
+//! mdr_cpu_sweep`, idle machine), a sphere's μ took
 //! 103/104/60 spring solves and 37/44/16 µs of CPU at `tol = 10⁻⁶`,
 //! 142/125/91 and 50/48/28 µs at `10⁻⁸`, 170/150/103 and 58/60/28 µs at
 //! `10⁻⁹` (a = 0.5, b = 0.25, φ = 1; a = 0.5, b = 1, φ = 0.3; a = 1.5,

@@ -1,5 +1,5 @@
-//! The powers of a curved profile's steady state (issue 14 §1 for every
-//! contact): the bed's sum of the springs' powers ([`crate::model::load_line`]).
+//! The powers of a curved profile's steady state (the load line's powers
+//! for every contact): the bed's sum of the springs' powers ([`crate::model::load_line`]).
 //!
 //! Per spring of band offset `d` (eq. M2 of [`super`]), per unit phase and
 //! unit `ξ` (units `k_x W₀ ωW₀`, `k_x = 2G*a₀`):

@@ -1,0 +1,204 @@
+//! The virtual plant's transducers as flags: ideal (the DAC level times the
+//! calibration, today's board assumption) or resonant modes
+//! ([`model_core::board::plant::Resonant`]: f_r, Q, static gain, drift,
+//! self-heating, cross-talk, the contact's load), shared by
+//! `fricctl sim-device`, `fricctl device --sim` and `device control-bench`.
+//!
+//! **Defaults of the resonant plant** (the bench: a Langevin pair
+//! near 20 kHz): normal mode 20 300 Hz, Q 300; tangential 19 700 Hz, Q 200;
+//! static gains a thirtieth of the board's ideal calibration
+//! (`metres_per_code / DAC_VOLTS_PER_CODE / 30`: 8.27e-8 m/V normal,
+//! 4.14e-8 m/V tangential), so that driven at 20 kHz (1.5 % off both
+//! resonances) the amplitudes come out near the calibration (×1.13 and
+//! ×1.07) but the phases lag by 6.4° and 170°: φ between the modes is off
+//! by ≈ 164°, the paper's control variable on the wrong side. No drift,
+//! heating or cross-talk unless asked; the load 1/Q_load = 1/2000.
+//!
+//! Resonant transducers are used when any resonant flag is given (the
+//! ideal ones stay the default until the board commands displacements:
+//! with ideal-transducer control a resonant plant's amplitudes and φ are
+//! simply wrong); `--plant-ideal-transducers` says so explicitly and
+//! refuses the resonant flags.
+
+use model_core::board::plant::{ResonantOptions, DAC_VOLTS_PER_CODE};
+use model_core::board::resonator::ModeParams;
+
+use crate::error::{CliError, CliResult};
+
+/// Default normal resonance, Hz.
+pub const RESONANCE_Z_HZ: f64 = 20_300.0;
+/// Default tangential resonance, Hz.
+pub const RESONANCE_X_HZ: f64 = 19_700.0;
+/// Default normal Q.
+pub const Q_Z: f64 = 300.0;
+/// Default tangential Q.
+pub const Q_X: f64 = 200.0;
+/// Default load: 1/Q_eff = 1/Q + 1/`LOAD_Q`.
+pub const LOAD_Q: f64 = 2000.0;
+
+/// Default static gain of a channel, m/V: a thirtieth of the ideal
+/// calibration `metres_per_code` per DAC volt (module documentation).
+pub fn default_gain(metres_per_code: f32) -> f64 {
+    f64::from(metres_per_code) / DAC_VOLTS_PER_CODE / 30.0
+}
+
+/// The transducer flags.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct TransducerArgs {
+    /// Virtual plant: ideal transducers (displacement = DAC level × calibration; the default for now); refuses the resonant flags
+    #[arg(long)]
+    pub plant_ideal_transducers: bool,
+    /// Virtual plant: resonance of the normal transducer, Hz (resonant plant; default 20300)
+    #[arg(long, value_name = "HZ", allow_hyphen_values = true)]
+    pub plant_resonance_z: Option<f64>,
+    /// Virtual plant: Q of the normal transducer (> 0.5; default 300)
+    #[arg(long, value_name = "Q", allow_hyphen_values = true)]
+    pub plant_q_z: Option<f64>,
+    /// Virtual plant: resonance of the tangential transducer, Hz (default 19700)
+    #[arg(long, value_name = "HZ", allow_hyphen_values = true)]
+    pub plant_resonance_x: Option<f64>,
+    /// Virtual plant: Q of the tangential transducer (> 0.5; default 200)
+    #[arg(long, value_name = "Q", allow_hyphen_values = true)]
+    pub plant_q_x: Option<f64>,
+    /// Virtual plant: static gain of the normal transducer, m per DAC volt (default 8.27e-8)
+    #[arg(long, value_name = "M_PER_V", allow_hyphen_values = true)]
+    pub plant_gain_z: Option<f64>,
+    /// Virtual plant: static gain of the tangential transducer, m per DAC volt (default 4.14e-8)
+    #[arg(long, value_name = "M_PER_V", allow_hyphen_values = true)]
+    pub plant_gain_x: Option<f64>,
+    /// Virtual plant: drift of the normal resonance, Hz per second of device time (default 0)
+    #[arg(long, value_name = "HZ_PER_S", allow_hyphen_values = true)]
+    pub plant_resonance_drift_z: Option<f64>,
+    /// Virtual plant: drift of the tangential resonance, Hz/s (default 0)
+    #[arg(long, value_name = "HZ_PER_S", allow_hyphen_values = true)]
+    pub plant_resonance_drift_x: Option<f64>,
+    /// Virtual plant: self-heating shift of each resonance per squared amplitude, Hz/µm² (thermal time 1 s; default 0)
+    #[arg(long, value_name = "HZ_PER_UM2", allow_hyphen_values = true)]
+    pub plant_thermal_shift: Option<f64>,
+    /// Virtual plant: fraction of each channel's drive that also drives the other transducer (|c| < 1; default 0)
+    #[arg(long, value_name = "FRACTION", allow_hyphen_values = true)]
+    pub plant_crosstalk: Option<f64>,
+    /// Virtual plant: the contact's load as damping, 1/Q_eff = 1/Q + 1/Q_load (> 0, `inf` for none; default 2000)
+    #[arg(long, value_name = "Q", allow_hyphen_values = true)]
+    pub plant_load_q: Option<f64>,
+}
+
+impl TransducerArgs {
+    /// The resonant options, or `None` for ideal transducers, with the
+    /// calibrations `(metres_per_code_z, metres_per_code_x)` for the
+    /// default gains.
+    ///
+    /// # Errors
+    /// One line naming the flag out of its domain, or the ideal flag given
+    /// with resonant ones.
+    pub fn options(&self, cal: (f32, f32)) -> CliResult<Option<ResonantOptions<f64>>> {
+        let given: Vec<&str> = [
+            (self.plant_resonance_z, "--plant-resonance-z"),
+            (self.plant_q_z, "--plant-q-z"),
+            (self.plant_resonance_x, "--plant-resonance-x"),
+            (self.plant_q_x, "--plant-q-x"),
+            (self.plant_gain_z, "--plant-gain-z"),
+            (self.plant_gain_x, "--plant-gain-x"),
+            (self.plant_resonance_drift_z, "--plant-resonance-drift-z"),
+            (self.plant_resonance_drift_x, "--plant-resonance-drift-x"),
+            (self.plant_thermal_shift, "--plant-thermal-shift"),
+            (self.plant_crosstalk, "--plant-crosstalk"),
+            (self.plant_load_q, "--plant-load-q"),
+        ]
+        .iter()
+        .filter(|(v, _)| v.is_some())
+        .map(|(_, n)| *n)
+        .collect();
+        if given.is_empty() {
+            return Ok(None);
+        }
+        if self.plant_ideal_transducers {
+            return Err(CliError::usage(format!(
+                "--plant-ideal-transducers: cannot be used with {} (a resonant plant)",
+                given[0]
+            )));
+        }
+        let pos = |v: f64, name: &str, min: f64| -> CliResult<f64> {
+            if v.is_finite() && v > min {
+                Ok(v)
+            } else {
+                Err(CliError::usage(format!(
+                    "--{name}: must be a finite number > {min} (got {v:e})"
+                )))
+            }
+        };
+        let fin = |v: f64, name: &str| -> CliResult<f64> {
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(CliError::usage(format!(
+                    "--{name}: must be a finite number"
+                )))
+            }
+        };
+        let fz = pos(
+            self.plant_resonance_z.unwrap_or(RESONANCE_Z_HZ),
+            "plant-resonance-z",
+            0.0,
+        )?;
+        let fx = pos(
+            self.plant_resonance_x.unwrap_or(RESONANCE_X_HZ),
+            "plant-resonance-x",
+            0.0,
+        )?;
+        let qz = pos(self.plant_q_z.unwrap_or(Q_Z), "plant-q-z", 0.5)?;
+        let qx = pos(self.plant_q_x.unwrap_or(Q_X), "plant-q-x", 0.5)?;
+        let gz = pos(
+            self.plant_gain_z.unwrap_or(default_gain(cal.0)),
+            "plant-gain-z",
+            0.0,
+        )?;
+        let gx = pos(
+            self.plant_gain_x.unwrap_or(default_gain(cal.1)),
+            "plant-gain-x",
+            0.0,
+        )?;
+        let dz = fin(
+            self.plant_resonance_drift_z.unwrap_or(0.0),
+            "plant-resonance-drift-z",
+        )?;
+        let dx = fin(
+            self.plant_resonance_drift_x.unwrap_or(0.0),
+            "plant-resonance-drift-x",
+        )?;
+        let th = fin(
+            self.plant_thermal_shift.unwrap_or(0.0),
+            "plant-thermal-shift",
+        )?;
+        let ct = fin(self.plant_crosstalk.unwrap_or(0.0), "plant-crosstalk")?;
+        if ct.abs() >= 1.0 {
+            return Err(CliError::usage(format!(
+                "--plant-crosstalk: must be a fraction with |c| < 1 (got {ct:e})"
+            )));
+        }
+        let load_q = self.plant_load_q.unwrap_or(LOAD_Q);
+        if load_q.is_nan() || load_q <= 0.0 {
+            return Err(CliError::usage(format!(
+                "--plant-load-q: must be > 0, or inf for no load (got {load_q:e})"
+            )));
+        }
+        Ok(Some(ResonantOptions {
+            modes: [
+                ModeParams {
+                    resonance_hz: fz,
+                    q: qz,
+                    gain_m_per_v: gz,
+                },
+                ModeParams {
+                    resonance_hz: fx,
+                    q: qx,
+                    gain_m_per_v: gx,
+                },
+            ],
+            drift_hz_per_s: [dz, dx],
+            thermal_hz_per_um2: th,
+            crosstalk: ct,
+            load_q,
+        }))
+    }
+}

@@ -1,0 +1,87 @@
+//! Latched faults and the one path into the safe state.
+//!
+//! Every fault source reaches the board through [`Device::fault`], and only
+//! through it: the latch's bits are private to this module, so no other part
+//! of the device can set one without entering the safe state. The sources:
+//!
+//! | bit | source | where it is raised |
+//! |---|---|---|
+//! | [`faults::ADC_SATURATED`] | a finished estimate saw a sample at an ADC rail | `Device::adc_block` |
+//! | [`faults::DAC_UNDERRUN`] | the DAC refill came a half-buffer late | [`Device::dac_half_done`] |
+//! | [`faults::WATCHDOG_RESET`] | the previous reset was by the watchdog | the firmware at power-up |
+//! | [`faults::EXTERNAL`] | the external fault input (amplifier alarm) | the firmware's input interrupt |
+//! | [`faults::ADC_OVERRUN`] | the ADC intake came a half-buffer late | [`Device::adc_half_done`] |
+//!
+//! **The safe state** ([`Device::fault`]): the closed loop off (its running
+//! estimate aborted), the drive stopped, both channels ramped at the slew
+//! rate to zero displacement (amplitudes 0, the normal offset 0 too), one new
+//! ramp generation (so the server sends exactly one `RampDone` when the ramps
+//! end); `Start`, `Measure`, `SetControl` and (while running) `SetDrive` are
+//! refused with `Faulted(bits)` until [`Device::reset_faults`].
+
+use super::Device;
+
+/// Latched fault bits (the protocol's `Status.faults`, `Fault` telemetry).
+pub mod faults {
+    /// An ADC sample hit the rail during a measurement.
+    pub const ADC_SATURATED: u32 = 1 << 0;
+    /// The DAC buffer was refilled late (the DMA read a stale half).
+    pub const DAC_UNDERRUN: u32 = 1 << 1;
+    /// The previous reset was by the watchdog.
+    pub const WATCHDOG_RESET: u32 = 1 << 2;
+    /// An external fault input (e.g. an amplifier alarm).
+    pub const EXTERNAL: u32 = 1 << 3;
+    /// The ADC intake was late by a half-buffer (a block was overwritten
+    /// before it was read; the drive phase of later samples is unknown).
+    pub const ADC_OVERRUN: u32 = 1 << 4;
+    /// Every bit defined above.
+    pub const ALL: u32 = ADC_SATURATED | DAC_UNDERRUN | WATCHDOG_RESET | EXTERNAL | ADC_OVERRUN;
+}
+
+/// The latched bits; set only by [`Device::fault`], cleared only by
+/// [`Device::reset_faults`] (both in this module).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Latch {
+    bits: u32,
+}
+
+impl Latch {
+    /// Nothing latched.
+    pub(super) const fn new() -> Self {
+        Latch { bits: 0 }
+    }
+
+    /// The latched bits.
+    pub(super) fn bits(self) -> u32 {
+        self.bits
+    }
+
+    /// Any bit latched.
+    pub(super) fn any(self) -> bool {
+        self.bits != 0
+    }
+}
+
+impl<const N: usize> Device<'_, N> {
+    /// Latches `bits` and enters the safe state (module documentation): the
+    /// loop off, the drive stopped, amplitudes and offsets ramped to zero
+    /// displacement, one new ramp generation. The one path by which any
+    /// fault source reaches the board. `bits == 0` changes nothing.
+    pub fn fault(&mut self, bits: u32) {
+        if bits == 0 {
+            return;
+        }
+        self.control_off();
+        self.abort_measurement();
+        self.latch.bits |= bits;
+        self.running = false;
+        self.ramp_generation = self.ramp_generation.wrapping_add(1);
+        // The rest levels were accepted by `new`: they cannot fail now.
+        let _ = self.rest_levels();
+    }
+
+    /// Clears latched faults (the drive stays stopped, at rest).
+    pub fn reset_faults(&mut self) {
+        self.latch.bits = 0;
+    }
+}

@@ -1,0 +1,111 @@
+//! The transducers' measured motion: the two motion pickups (ADC channels
+//! next to the force sensors, [`super::DeviceConfig::pickup_z`], `pickup_x`)
+//! through the lock-in of [`crate::board::lockin`] on the DDS's own phases
+//! of each sample (the same phases the friction estimate uses, ADC lag
+//! included). Each window of whole ADC blocks spanning at least one drive
+//! period ([`WINDOW_SPAN_RAD`]: one 64-sample block from 7.8 kHz up at
+//! 500 kS/s, so every half-buffer at the transducers' frequencies) gives the amplitude and
+//! phase of each mode; the phase between them is the φ the contact sees:
+//! with the drive `u_z = −Δu_z cos θ`, `u_x = Δu_x cos(θ + φ)` (eqs. 1–2),
+//! the pickups read `A_z cos(θ + ψ_z)` and `A_x cos(θ + ψ_x)`, and
+//!
+//! ```text
+//! φ_measured = ψ_x − ψ_z + π   (wrapped to (−π, π])                 (M1)
+//! ```
+//!
+//! which equals φ for ideal transducers and differs by the modes' lag
+//! difference for resonant ones.
+
+use super::Device;
+use crate::board::lockin::LockIn;
+pub use crate::board::protocol::messages::MeasuredDrive;
+use crate::float::FastF32;
+
+/// The least drive phase a window spans, rad: a whole period, where the
+/// fit's regressors are nearly orthogonal and its noise gain near the
+/// textbook `√(2/N)` (a shorter window would be exact too, but its noise
+/// gain grows like 1/span²: `lockin::MIN_SPAN_RAD`).
+pub const WINDOW_SPAN_RAD: f32 = core::f32::consts::TAU;
+
+/// The pickups' lock-ins and the last result.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Motion {
+    lock: [LockIn<f32>; 2],
+    last: Option<MeasuredDrive>,
+    peak_z: f32,
+    windows: u32,
+}
+
+impl<const N: usize> Device<'_, N> {
+    /// [`Device::adc_block`] with the motion pickups' samples `(z, x)` of the
+    /// same ticks (on the board the same DMA transfer: ADC1 and ADC2 scan the
+    /// force and the pickup input of each axis).
+    pub fn adc_block_with_pickups(
+        &mut self,
+        half: usize,
+        forces: &[(u16, u16)],
+        pickups: &[(u16, u16)],
+    ) {
+        self.pickup_block(self.adc_blocks, pickups);
+        self.adc_block(half, forces);
+    }
+
+    /// The pickups' samples of ADC block `block` into the lock-ins; closes a
+    /// window once it spans enough phase.
+    fn pickup_block(&mut self, block: u32, pickups: &[(u16, u16)]) {
+        let slot = block as usize % super::measure::FILL_RING;
+        let (acc0, tw) = self.half[slot];
+        let mut acc = acc0.wrapping_sub(tw.wrapping_mul(self.cfg.adc_lag_samples));
+        let dtheta = (f64::from(tw) * core::f64::consts::TAU / 4_294_967_296.0) as f32;
+        let (cz, cx) = (self.cfg.pickup_z, self.cfg.pickup_x);
+        for &(z, x) in pickups {
+            let (s, c) = (
+                self.table.sin(acc),
+                self.table.sin(acc.wrapping_add(1 << 30)),
+            );
+            let first = self.motion.lock[0].samples() == 0;
+            let step = if first { 0.0 } else { dtheta };
+            let pz = (f32::from(z) - cz.offset) * cz.gain;
+            let px = (f32::from(x) - cx.offset) * cx.gain;
+            self.motion.lock[0].push(c, s, step, pz);
+            self.motion.lock[1].push(c, s, step, px);
+            acc = acc.wrapping_add(tw);
+        }
+        let m = &mut self.motion;
+        if m.lock[0].span_rad() < WINDOW_SPAN_RAD {
+            return;
+        }
+        if let (Ok(z), Ok(x)) = (m.lock[0].solve(), m.lock[1].solve()) {
+            let (az, ax) = (z.amplitude::<FastF32>(), x.amplitude::<FastF32>());
+            let pi = core::f32::consts::PI;
+            let mut phi = x.phase::<FastF32>() - z.phase::<FastF32>() + pi;
+            while phi > pi {
+                phi -= 2.0 * pi;
+            }
+            while phi <= -pi {
+                phi += 2.0 * pi;
+            }
+            m.peak_z = m.peak_z.max(az);
+            m.windows = m.windows.wrapping_add(1);
+            m.last = Some(MeasuredDrive {
+                amp_z_m: az,
+                amp_x_m: ax,
+                phase_rad: phi,
+                amp_z_peak_m: m.peak_z,
+                windows: m.windows,
+            });
+            m.lock[0].reset();
+            m.lock[1].reset();
+        }
+    }
+
+    /// The last window's measured motion (`None` before the first).
+    pub fn measured_drive(&self) -> Option<MeasuredDrive> {
+        self.motion.last
+    }
+
+    /// Starts the peak over again (an accepted `set_drive` or `start`).
+    pub(super) fn reset_motion_peak(&mut self) {
+        self.motion.peak_z = 0.0;
+    }
+}
