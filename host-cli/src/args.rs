@@ -91,6 +91,8 @@ pub struct Real {
     why: Option<&'static str>,
     /// Smallest non-zero and largest magnitude.
     magnitude: (f64, f64),
+    /// `inf` is a value of its own (e.g. "no load"), beyond the magnitude.
+    infinity: bool,
 }
 
 impl Real {
@@ -100,6 +102,7 @@ impl Real {
         hi: End::Open,
         why: None,
         magnitude: (MIN_MAGNITUDE, MAX_MAGNITUDE),
+        infinity: false,
     };
 
     /// `x > 0`.
@@ -155,6 +158,15 @@ impl Real {
         }
     }
 
+    /// Also accepts `inf` (where the flag gives it a meaning of its own,
+    /// such as "none"); `-inf` only if the range admits it.
+    pub const fn or_infinity(self) -> Real {
+        Real {
+            infinity: true,
+            ..self
+        }
+    }
+
     /// The reason of the range, appended to a refusal.
     pub const fn because(self, why: &'static str) -> Real {
         Real {
@@ -204,6 +216,9 @@ impl Real {
             End::Incl(lo) | End::Excl(lo) => lo < 0.0,
         };
         let zero = self.admits(0.0);
+        if self.infinity && x.is_infinite() {
+            return Ok(x);
+        }
         let (min, max) = self.magnitude;
         if a > max {
             let rule = if negatives {

@@ -137,3 +137,56 @@ fn clap_error(e: clap::Error) -> ExitCode {
     eprintln!("error: {msg}");
     ExitCode::from(2)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every numeric flag of every command is read by the project's parsers
+    /// (`args::Real`, `args::Count`): NaN, infinities and subnormal values
+    /// are refused at parse time (`inf` only where a flag gives it a meaning,
+    /// `--plant-load-q`), and a leading `-` reaches the parser.
+    /// (clap's own `f64` parser would accept all of these.)
+    #[test]
+    fn every_numeric_flag_uses_the_checking_parsers() {
+        fn walk(cmd: &clap::Command, path: &str, seen: &mut usize) {
+            for a in cmd.get_arguments() {
+                if !args::is_numeric(a) {
+                    continue;
+                }
+                *seen += 1;
+                assert!(a.is_allow_hyphen_values_set(), "{path} --{:?}", a.get_id());
+                // The flag alone in a command of its own (its relations to
+                // other flags dropped), as `--name value`.
+                let alone = a
+                    .clone()
+                    .required(false)
+                    .requires(clap::builder::Resettable::<clap::Id>::Reset)
+                    .conflicts_with(clap::builder::Resettable::<clap::Id>::Reset)
+                    .required_unless_present(clap::builder::Resettable::<clap::Id>::Reset)
+                    .global(false);
+                let long = a.get_long().unwrap_or_default().to_string();
+                for bad in ["nan", "-inf", "1e-320", "-1e308", "1e308"] {
+                    let r = clap::Command::new("t")
+                        .no_binary_name(true)
+                        .arg(alone.clone())
+                        .try_get_matches_from([format!("--{long}"), bad.to_string()]);
+                    let kind = r.err().map(|e| e.kind());
+                    assert_eq!(
+                        kind,
+                        Some(clap::error::ErrorKind::ValueValidation),
+                        "{path} --{long} accepts {bad}"
+                    );
+                }
+            }
+            for sub in cmd.get_subcommands() {
+                walk(sub, &format!("{path} {}", sub.get_name()), seen);
+            }
+        }
+        let mut cmd = args::numbers_take_hyphens(Cli::command());
+        cmd.build();
+        let mut seen = 0;
+        walk(&cmd, "fricctl", &mut seen);
+        assert!(seen > 150, "{seen} numeric flags");
+    }
+}

@@ -139,6 +139,7 @@ fn compare(c: &Case, inv_nu: f64, mass: f64, tick: &mut dyn FnMut()) -> Point {
             max_periods: 2000,
             relaxation,
             min_steps: 0,
+            budget: u64::MAX,
         },
         tick,
     );
@@ -154,6 +155,7 @@ fn compare(c: &Case, inv_nu: f64, mass: f64, tick: &mut dyn FnMut()) -> Point {
             periods: None,
             max_periods: 2000,
             relaxation,
+            budget: u64::MAX,
         },
         tick,
     );
@@ -563,6 +565,7 @@ fn drift_map(a: &MotionArgs) -> CliResult {
                             max_periods: 10,
                             relaxation: 0.0,
                             min_steps: 0,
+                            budget: u64::MAX,
                         },
                         &mut || {},
                     );

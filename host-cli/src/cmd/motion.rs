@@ -162,11 +162,17 @@ struct Row {
     stuck: u8,
 }
 
-/// Most integration steps one `motion` run may take, in either model and
-/// over all its step doublings and load periods (≈ 30 s of the resolved
-/// model, whose steps cost ≈ 25 ns). A run whose least possible cost exceeds
-/// it is refused before it starts, naming the flag that makes it large.
-const WORK_BUDGET: f64 = 1e9;
+/// Most RK4 steps of the homogenised model in one `motion` run, over all its
+/// step doublings and load periods (≈ 15 s: a step costs up to ≈ 140 ns,
+/// four table look-ups or inversions). A run whose least possible cost
+/// exceeds it is refused before it starts, naming the flag that makes it
+/// large; the step doubling stops before a run that would exceed it
+/// (`Run::stopped_at_work_bound`).
+const HOMOGENISED_BUDGET: f64 = 1e8;
+
+/// Most spring steps (steps × springs) of the resolved model in one run
+/// (≈ 25 s at ≈ 25 ns each), in the same two ways.
+const RESOLVED_BUDGET: f64 = 1e9;
 
 /// An estimate in messages: three significant digits (`2.24e28`).
 fn approx(x: f64) -> String {
@@ -185,6 +191,8 @@ struct WorkPlan {
     kappa: f64,
     /// Load periods of `--duration` (None: until periodic).
     periods: Option<u32>,
+    /// Springs of the resolved model's first bed (1: flat punch).
+    springs: usize,
     /// The first steps per ultrasonic period of the resolved model.
     resolved_start: u64,
 }
@@ -194,7 +202,8 @@ impl WorkPlan {
     /// body on the law (`λ = 2πn̄·max dμ/dV/(m̃ν)` steps, unless the
     /// quasi-static limit takes over) and on the ground spring
     /// (`2π·√(κ/m̃)/ν/2.8` steps; massless: `2πκS/(2.8n̄ν)`), and its least
-    /// work, two step counts over the periods asked, within [`WORK_BUDGET`].
+    /// work, two step counts over the periods asked, within
+    /// [`HOMOGENISED_BUDGET`].
     fn check_homogenised(&self, p: &Problem, law: &MuTable) -> CliResult {
         let max = homogenised::MAX_STEPS as f64;
         let law_steps = if self.mass > 0.0 {
@@ -229,8 +238,13 @@ impl WorkPlan {
             .max(spring_steps);
         let periods = f64::from(self.periods.unwrap_or(2));
         let work = 3.0 * n0 * periods;
-        if work > WORK_BUDGET {
-            return Err(self.too_long(work, "the homogenised model", "--duration"));
+        if work > HOMOGENISED_BUDGET {
+            return Err(self.too_long(
+                work,
+                HOMOGENISED_BUDGET,
+                "the homogenised model",
+                "--duration",
+            ));
         }
         Ok(())
     }
@@ -261,7 +275,8 @@ impl WorkPlan {
     /// the contact's and the spring's stiffness (`π√((1 + κ)/m̃)` steps per
     /// ultrasonic period, at most [`resolved::MAX_STEPS`]), and its least
     /// work (two step counts, `n/ν` steps per load period, three periods or
-    /// those of `--duration`) within [`WORK_BUDGET`].
+    /// those of `--duration`; times the first bed's springs) within
+    /// [`RESOLVED_BUDGET`].
     /// `auto` is the homogenised estimate over `v_ref` when `--method auto`
     /// chose the resolved model (it is named in the refusal).
     fn check_resolved(&self, auto: Option<f64>) -> CliResult {
@@ -287,23 +302,28 @@ impl WorkPlan {
                 resolved::MAX_STEPS
             )));
         }
-        let per_load = self.resolved_start as f64 / self.nu;
+        let per_load = self.resolved_start as f64 / self.nu * self.springs as f64;
         let work = |periods: f64| 3.0 * per_load * periods;
         let asked = work(f64::from(self.periods.unwrap_or(3)));
-        if asked > WORK_BUDGET {
+        if asked > RESOLVED_BUDGET {
             // The duration makes it large only if three periods would do.
-            let flag = if self.periods.is_some() && work(3.0) <= WORK_BUDGET {
+            let flag = if self.periods.is_some() && work(3.0) <= RESOLVED_BUDGET {
                 "--duration"
             } else {
                 "--force-omega"
             };
-            return Err(self.too_long(asked, &subject("the resolved model"), flag));
+            return Err(self.too_long(
+                asked,
+                RESOLVED_BUDGET,
+                &subject("the resolved model"),
+                flag,
+            ));
         }
         Ok(())
     }
 
-    /// The refusal of a run whose least work exceeds [`WORK_BUDGET`].
-    fn too_long(&self, work: f64, subject: &str, flag: &str) -> CliError {
+    /// The refusal of a run whose least work exceeds `budget`.
+    fn too_long(&self, work: f64, budget: f64, subject: &str, flag: &str) -> CliError {
         let how = if flag == "--duration" {
             "give a shorter --duration".to_string()
         } else {
@@ -313,9 +333,9 @@ impl WorkPlan {
             )
         };
         CliError::usage(format!(
-            "{flag}: {subject} takes ≥ {} steps (work bound {}); {how}",
+            "{flag}: {subject} takes ≥ {} steps (work bound {:e}); {how}",
             approx(work),
-            short(WORK_BUDGET)
+            budget
         ))
     }
 }
@@ -409,6 +429,11 @@ impl MotionCmd {
             mass: p.mass,
             kappa: p.kappa,
             periods,
+            springs: if law_fn.exponent().is_some() {
+                resolved::START_SPRINGS
+            } else {
+                1
+            },
             resolved_start: resolved::start_steps(&d),
         };
         if method != MotionMethod::Resolved {
@@ -437,6 +462,7 @@ impl MotionCmd {
             max_periods: MAX_PERIODS,
             relaxation,
             min_steps: plan.spring_steps(&p, &law).ceil() as u64,
+            budget: HOMOGENISED_BUDGET as u64,
         };
         let h_run = homogenised::run(&p, &law, &hs, &mut || {
             tick();
@@ -470,6 +496,7 @@ impl MotionCmd {
                 periods,
                 max_periods: MAX_PERIODS,
                 relaxation,
+                budget: RESOLVED_BUDGET as u64,
             };
             resolved::run(&p, &d, law_fn.exponent(), &s, &mut || {
                 tick();
@@ -593,7 +620,9 @@ impl MotionCmd {
             return Err(CliError::failure(format!(
                 "estimated error {:.3e} v_ref exceeds --tol {tol:e}{}",
                 o.error_estimate_over_v_ref,
-                if use_h && mass > 0.0 {
+                if run.stopped_at_work_bound {
+                    " (the refinement stopped at the work bound)"
+                } else if use_h && mass > 0.0 {
                     " (try --method resolved)"
                 } else {
                     ""

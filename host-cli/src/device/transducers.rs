@@ -23,6 +23,7 @@
 use model_core::board::plant::{ResonantOptions, DAC_VOLTS_PER_CODE};
 use model_core::board::resonator::ModeParams;
 
+use crate::args::Real;
 use crate::error::{CliError, CliResult};
 
 /// Default normal resonance, Hz.
@@ -42,6 +43,11 @@ pub fn default_gain(metres_per_code: f32) -> f64 {
     f64::from(metres_per_code) / DAC_VOLTS_PER_CODE / 30.0
 }
 
+/// The domain of a transducer's Q.
+const Q: Real = Real::ANY
+    .above(0.5)
+    .because("a resonance with Q ≤ 0.5 does not ring");
+
 /// The transducer flags.
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct TransducerArgs {
@@ -49,37 +55,37 @@ pub struct TransducerArgs {
     #[arg(long)]
     pub plant_ideal_transducers: bool,
     /// Virtual plant: resonance of the normal transducer, Hz (resonant plant; default 20300)
-    #[arg(long, value_name = "HZ", allow_hyphen_values = true)]
+    #[arg(long, value_name = "HZ", value_parser = Real::positive())]
     pub plant_resonance_z: Option<f64>,
     /// Virtual plant: Q of the normal transducer (> 0.5; default 300)
-    #[arg(long, value_name = "Q", allow_hyphen_values = true)]
+    #[arg(long, value_name = "Q", value_parser = Q)]
     pub plant_q_z: Option<f64>,
     /// Virtual plant: resonance of the tangential transducer, Hz (default 19700)
-    #[arg(long, value_name = "HZ", allow_hyphen_values = true)]
+    #[arg(long, value_name = "HZ", value_parser = Real::positive())]
     pub plant_resonance_x: Option<f64>,
     /// Virtual plant: Q of the tangential transducer (> 0.5; default 200)
-    #[arg(long, value_name = "Q", allow_hyphen_values = true)]
+    #[arg(long, value_name = "Q", value_parser = Q)]
     pub plant_q_x: Option<f64>,
     /// Virtual plant: static gain of the normal transducer, m per DAC volt (default 8.27e-8)
-    #[arg(long, value_name = "M_PER_V", allow_hyphen_values = true)]
+    #[arg(long, value_name = "M_PER_V", value_parser = Real::positive())]
     pub plant_gain_z: Option<f64>,
     /// Virtual plant: static gain of the tangential transducer, m per DAC volt (default 4.14e-8)
-    #[arg(long, value_name = "M_PER_V", allow_hyphen_values = true)]
+    #[arg(long, value_name = "M_PER_V", value_parser = Real::positive())]
     pub plant_gain_x: Option<f64>,
     /// Virtual plant: drift of the normal resonance, Hz per second of device time (default 0)
-    #[arg(long, value_name = "HZ_PER_S", allow_hyphen_values = true)]
+    #[arg(long, value_name = "HZ_PER_S", value_parser = Real::ANY)]
     pub plant_resonance_drift_z: Option<f64>,
     /// Virtual plant: drift of the tangential resonance, Hz/s (default 0)
-    #[arg(long, value_name = "HZ_PER_S", allow_hyphen_values = true)]
+    #[arg(long, value_name = "HZ_PER_S", value_parser = Real::ANY)]
     pub plant_resonance_drift_x: Option<f64>,
     /// Virtual plant: self-heating shift of each resonance per squared amplitude, Hz/µm² (thermal time 1 s; default 0)
-    #[arg(long, value_name = "HZ_PER_UM2", allow_hyphen_values = true)]
+    #[arg(long, value_name = "HZ_PER_UM2", value_parser = Real::ANY)]
     pub plant_thermal_shift: Option<f64>,
     /// Virtual plant: fraction of each channel's drive that also drives the other transducer (|c| < 1; default 0)
-    #[arg(long, value_name = "FRACTION", allow_hyphen_values = true)]
+    #[arg(long, value_name = "FRACTION", value_parser = Real::ANY.above(-1.0).below(1.0).because("a fraction of the other channel's drive"))]
     pub plant_crosstalk: Option<f64>,
     /// Virtual plant: the contact's load as damping, 1/Q_eff = 1/Q + 1/Q_load (> 0, `inf` for none; default 2000)
-    #[arg(long, value_name = "Q", allow_hyphen_values = true)]
+    #[arg(long, value_name = "Q", value_parser = Real::positive().or_infinity().because("inf for no load"))]
     pub plant_load_q: Option<f64>,
 }
 
@@ -118,70 +124,18 @@ impl TransducerArgs {
                 given[0]
             )));
         }
-        let pos = |v: f64, name: &str, min: f64| -> CliResult<f64> {
-            if v.is_finite() && v > min {
-                Ok(v)
-            } else {
-                Err(CliError::usage(format!(
-                    "--{name}: must be a finite number > {min} (got {v:e})"
-                )))
-            }
-        };
-        let fin = |v: f64, name: &str| -> CliResult<f64> {
-            if v.is_finite() {
-                Ok(v)
-            } else {
-                Err(CliError::usage(format!(
-                    "--{name}: must be a finite number"
-                )))
-            }
-        };
-        let fz = pos(
-            self.plant_resonance_z.unwrap_or(RESONANCE_Z_HZ),
-            "plant-resonance-z",
-            0.0,
-        )?;
-        let fx = pos(
-            self.plant_resonance_x.unwrap_or(RESONANCE_X_HZ),
-            "plant-resonance-x",
-            0.0,
-        )?;
-        let qz = pos(self.plant_q_z.unwrap_or(Q_Z), "plant-q-z", 0.5)?;
-        let qx = pos(self.plant_q_x.unwrap_or(Q_X), "plant-q-x", 0.5)?;
-        let gz = pos(
-            self.plant_gain_z.unwrap_or(default_gain(cal.0)),
-            "plant-gain-z",
-            0.0,
-        )?;
-        let gx = pos(
-            self.plant_gain_x.unwrap_or(default_gain(cal.1)),
-            "plant-gain-x",
-            0.0,
-        )?;
-        let dz = fin(
-            self.plant_resonance_drift_z.unwrap_or(0.0),
-            "plant-resonance-drift-z",
-        )?;
-        let dx = fin(
-            self.plant_resonance_drift_x.unwrap_or(0.0),
-            "plant-resonance-drift-x",
-        )?;
-        let th = fin(
-            self.plant_thermal_shift.unwrap_or(0.0),
-            "plant-thermal-shift",
-        )?;
-        let ct = fin(self.plant_crosstalk.unwrap_or(0.0), "plant-crosstalk")?;
-        if ct.abs() >= 1.0 {
-            return Err(CliError::usage(format!(
-                "--plant-crosstalk: must be a fraction with |c| < 1 (got {ct:e})"
-            )));
-        }
+        // Each value is in its domain (the flags' parsers, `crate::args`).
+        let fz = self.plant_resonance_z.unwrap_or(RESONANCE_Z_HZ);
+        let fx = self.plant_resonance_x.unwrap_or(RESONANCE_X_HZ);
+        let qz = self.plant_q_z.unwrap_or(Q_Z);
+        let qx = self.plant_q_x.unwrap_or(Q_X);
+        let gz = self.plant_gain_z.unwrap_or(default_gain(cal.0));
+        let gx = self.plant_gain_x.unwrap_or(default_gain(cal.1));
+        let dz = self.plant_resonance_drift_z.unwrap_or(0.0);
+        let dx = self.plant_resonance_drift_x.unwrap_or(0.0);
+        let th = self.plant_thermal_shift.unwrap_or(0.0);
+        let ct = self.plant_crosstalk.unwrap_or(0.0);
         let load_q = self.plant_load_q.unwrap_or(LOAD_Q);
-        if load_q.is_nan() || load_q <= 0.0 {
-            return Err(CliError::usage(format!(
-                "--plant-load-q: must be > 0, or inf for no load (got {load_q:e})"
-            )));
-        }
         Ok(Some(ResonantOptions {
             modes: [
                 ModeParams {

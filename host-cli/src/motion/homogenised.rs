@@ -44,6 +44,10 @@ pub struct Settings {
     /// Fewest steps per load period the caller knows the problem needs
     /// (e.g. RK4's stability on a stiff ground spring); 0 for none.
     pub min_steps: u64,
+    /// Most steps of all runs together (`u64::MAX`: no bound): the step
+    /// doubling stops before a run that would exceed it
+    /// ([`Run::stopped_at_work_bound`]).
+    pub budget: u64,
 }
 
 /// Fewest steps per load period.
@@ -309,6 +313,7 @@ fn run_n(
         steps: n,
         springs: 0,
         trajectory: rec.map(|_| Vec::new()).unwrap_or_default(),
+        stopped_at_work_bound: false,
     }
 }
 
@@ -343,13 +348,19 @@ pub fn run(p: &Problem, law: &MuTable, s: &Settings, tick: &mut dyn FnMut()) -> 
         .max((stiff.ceil() as u64).next_power_of_two().min(MAX_STEPS / 2))
         .max(s.min_steps.next_power_of_two().min(MAX_STEPS / 2));
     let mut prev = run_n(p, law, s, n, None, tick);
+    let mut spent = n.saturating_mul(u64::from(prev.periods));
     loop {
         n *= 2;
         let last = n >= MAX_STEPS;
         let mut rec = Recorder::default();
         let mut cur = run_n(p, law, s, n, Some(&mut rec), tick);
+        let work = n.saturating_mul(u64::from(cur.periods));
+        spent = spent.saturating_add(work);
         let halving = (cur.mean_velocity - prev.mean_velocity).abs();
-        if halving <= s.tol || last {
+        // The next run, at twice the steps, would cost about twice this one.
+        let over = spent.saturating_add(work.saturating_mul(2)) > s.budget;
+        if halving <= s.tol || last || over {
+            cur.stopped_at_work_bound = halving > s.tol && !last;
             cur.numerical_error += halving;
             if stiff > 2.5 * n as f64 {
                 // hλ > 2.5, at RK4's stability edge (2.79): no error estimate holds.

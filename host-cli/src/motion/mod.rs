@@ -104,6 +104,10 @@ pub struct Run {
     pub springs: usize,
     /// The recorded trajectory (the last periods).
     pub trajectory: Vec<Sample>,
+    /// The refinement (step doubling, or doubling a curved profile's bed)
+    /// stopped at the settings' work budget before the tolerance was met:
+    /// `numerical_error` is the last refinement's change, above the tolerance.
+    pub stopped_at_work_bound: bool,
 }
 
 /// How far the last load period's state may still be from the periodic
@@ -213,6 +217,7 @@ mod tests {
                 max_periods: 500,
                 relaxation: relaxation_per_period(&p, estimate::inverse_slope(&table)),
                 min_steps: 0,
+                budget: u64::MAX,
             },
             &mut || {},
         );
@@ -225,6 +230,7 @@ mod tests {
                 periods: None,
                 max_periods: 500,
                 relaxation: relaxation_per_period(&p, estimate::inverse_slope(&table)),
+                budget: u64::MAX,
             },
             &mut || {},
         );

@@ -45,6 +45,10 @@ pub struct Settings {
     /// ([`super::relaxation_per_period`]), the least ratio the periodicity
     /// test assumes for the changes still to come.
     pub relaxation: f64,
+    /// Most spring steps (steps × springs) of all runs together
+    /// (`u64::MAX`: no bound): the step and bed doublings stop before a run
+    /// that would exceed it ([`Run::stopped_at_work_bound`]).
+    pub budget: u64,
 }
 
 /// Load periods averaged when ω/Ω is not a whole number.
@@ -236,6 +240,7 @@ fn run_n(
         steps: n,
         springs: bed.springs.len(),
         trajectory: Vec::new(),
+        stopped_at_work_bound: false,
     }
 }
 
@@ -296,15 +301,20 @@ pub fn run(
     tick: &mut dyn FnMut(),
 ) -> Run {
     let Some(ne) = exponent else {
-        return run_bed(p, d, &Bed::flat(), s, tick);
+        return run_bed(p, d, &Bed::flat(), s, s.budget, tick).0;
     };
     let mut count = START_SPRINGS;
-    let mut prev = run_bed(p, d, &Bed::profile(ne, d.a, count), s, tick);
+    let (mut prev, mut spent) = run_bed(p, d, &Bed::profile(ne, d.a, count), s, s.budget, tick);
     loop {
         count *= 2;
-        let mut cur = run_bed(p, d, &Bed::profile(ne, d.a, count), s, tick);
+        let left = s.budget.saturating_sub(spent);
+        let (mut cur, work) = run_bed(p, d, &Bed::profile(ne, d.a, count), s, left, tick);
+        spent = spent.saturating_add(work);
         let diff = (cur.mean_velocity - prev.mean_velocity).abs();
-        if diff <= s.tol || count >= MAX_SPRINGS {
+        // The next bed, twice the springs, would cost about twice this one.
+        let over = spent.saturating_add(work.saturating_mul(2)) > s.budget;
+        if diff <= s.tol || count >= MAX_SPRINGS || over {
+            cur.stopped_at_work_bound |= diff > s.tol && count < MAX_SPRINGS;
             cur.numerical_error += diff;
             cur.springs = count;
             return cur;
@@ -313,20 +323,38 @@ pub fn run(
     }
 }
 
-/// Step halving on one bed.
-fn run_bed(p: &Problem, d: &Drive<f64>, bed: &Bed, s: &Settings, tick: &mut dyn FnMut()) -> Run {
+/// Step halving on one bed, within `budget` spring steps (steps × springs;
+/// the first two runs always run); returns the run and the spring steps spent.
+fn run_bed(
+    p: &Problem,
+    d: &Drive<f64>,
+    bed: &Bed,
+    s: &Settings,
+    budget: u64,
+    tick: &mut dyn FnMut(),
+) -> (Run, u64) {
+    let cost = |n: u64, r: &Run| {
+        steps_per_load_period(p, n)
+            .saturating_mul(u64::from(r.periods))
+            .saturating_mul(bed.springs.len() as u64)
+    };
     let mut n = start_steps(d);
     let mut prev = run_n(p, d, bed, s, n, None, tick);
+    let mut spent = cost(n, &prev);
     loop {
         n *= 2;
         let last = n >= MAX_STEPS;
         let mut rec = Recorder::default();
         let mut cur = run_n(p, d, bed, s, n, Some(&mut rec), tick);
+        let work = cost(n, &cur);
+        spent = spent.saturating_add(work);
         let halving = (cur.mean_velocity - prev.mean_velocity).abs();
-        if halving <= s.tol || last {
+        let over = spent.saturating_add(work.saturating_mul(2)) > budget;
+        if halving <= s.tol || last || over {
+            cur.stopped_at_work_bound = halving > s.tol && !last;
             cur.numerical_error += halving;
             cur.trajectory = rec.finish();
-            return cur;
+            return (cur, spent);
         }
         prev = cur;
     }
