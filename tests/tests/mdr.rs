@@ -602,43 +602,6 @@ fn profile_names_and_kappa() {
     assert!((mdr::mean_contact_radius(2.0, 1.0 / (2.0 * r), d0) - (r * d0).sqrt()).abs() < 1e-18);
 }
 
-/// CPU time per μ of a sphere (this thread's, from
-/// `/proc/thread-self/schedstat`, so other processes on a loaded machine do
-/// not count), 1000 velocities across `(−V_c⁻, V_c⁺)`, at two tolerances.
-/// Ignored by default: `cargo test -p integration-tests --release --test mdr
-/// cpu_time -- --ignored --nocapture`.
-#[test]
-#[ignore = "timing, run on demand"]
-fn cpu_time_per_point() {
-    let cpu_ns = || -> u64 {
-        std::fs::read_to_string("/proc/thread-self/schedstat")
-            .ok()
-            .and_then(|s| s.split_whitespace().next()?.parse().ok())
-            .unwrap_or(0)
-    };
-    for &(a, b, phi) in &[(0.5, 0.25, 1.0), (0.5, 1.0, 0.3), (1.5, 0.7, 2.0)] {
-        let d = Drive::new::<Libm>(a, b, phi);
-        let (cf, cb) = mdr::critical_velocities::<f64, Libm>(&d, &Profile::Sphere).unwrap();
-        for tol in [1e-6, 1e-8, 1e-9] {
-            let n = 1000u32;
-            let mut springs = 0;
-            let mut worst_bound: f64 = 0.0;
-            let c0 = cpu_ns();
-            for i in 0..n {
-                let v = -cb + (cf + cb) * (f64::from(i) + 0.5) / f64::from(n);
-                let r = mdr::mu_over_mu0::<f64, Libm>(&d, &Profile::Sphere, v, tol).unwrap();
-                springs += r.evaluations;
-                worst_bound = worst_bound.max(r.bound);
-            }
-            let us = (cpu_ns() - c0) as f64 / f64::from(n) * 1e-3;
-            println!(
-                "sphere a={a} b={b} phi={phi} tol={tol:e}: {us:.1} µs CPU per point, {} springs per point, worst bound {worst_bound:.1e}",
-                springs / n
-            );
-        }
-    }
-}
-
 /// Continuity of a sphere's μ across `a = 1` (the central spring starts to
 /// lift off). Bound derived here: every spring's band `d − a cos θ` moves by
 /// at most `ε` when `a` goes from `1 − ε` to `1 + ε` (the drive does not
