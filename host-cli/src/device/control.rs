@@ -320,9 +320,10 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
         crate::plot::ext(p)?;
     }
     let cfg = super::sim::config();
-    let resonant = a
-        .transducers
-        .options((cfg.dac_z.metres_per_code, cfg.dac_x.metres_per_code))?;
+    let resonant = a.transducers.options(
+        (cfg.dac_z.metres_per_code, cfg.dac_x.metres_per_code),
+        false,
+    )?;
     let model_mu0 = super::sim::DEFAULT_CONTACT.0;
     // Settle 20 ms, then the events; the velocity step is at its time after settling.
     let settle_s = 0.02;

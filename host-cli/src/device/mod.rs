@@ -3,6 +3,7 @@
 
 pub mod client;
 pub mod control;
+pub mod identify;
 pub mod link;
 pub mod render;
 pub mod serve;
@@ -138,6 +139,8 @@ pub enum DeviceCmd {
     },
     /// List candidate serial ports
     Ports,
+    /// Identify the transducers: a stepped-sine sweep of each channel, a fit of f_r, Q, gain and lag with 95 % intervals, stored on the device (and --out)
+    Identify(identify::IdentifyArgs),
     /// Sweep one drive parameter: per point set the drive, settle, measure, predict; one CSV row each
     Sweep(sweep::SweepArgs),
     /// The closed loop: hold μ at --target-mu at sliding velocity --v0 by adjusting Δu_z; `off`; `status`
@@ -170,6 +173,11 @@ pub enum DriveCmd {
         /// Phase φ, degrees
         #[arg(long, default_value_t = 0.0, value_parser = Real::ANY.single_precision())]
         phase_deg: f64,
+        /// Voltage mode: the DAC calibration is taken to be the displacement
+        /// (no identification needed; on resonant transducers amplitudes and
+        /// φ are then off by the modes' response)
+        #[arg(long)]
+        open_loop: bool,
     },
 }
 
@@ -303,6 +311,10 @@ fn wire_error(e: WireError) -> CliError {
         DriveParam::TargetMu => "--target-mu",
         DriveParam::Gain => "--gain",
         DriveParam::Rate => "--rate",
+        DriveParam::Resonance => "resonance_hz (of the identified transducers)",
+        DriveParam::Quality => "q (of the identified transducers)",
+        DriveParam::TransducerGain => "gain_m_per_v (of the identified transducers)",
+        DriveParam::PhaseLag => "phase_lag_rad (of the identified transducers)",
     };
     match e {
         WireError::OutOfRange { param, min, max } => {
@@ -328,6 +340,11 @@ fn wire_error(e: WireError) -> CliError {
             short(render::f32v(min)),
             short(render::f32v(max))
         )),
+        WireError::NotIdentified => CliError::usage(
+            "the transducers are not identified: run `fricctl device identify` first, or pass \
+             --open-loop (voltage mode)"
+                .to_string(),
+        ),
         WireError::NotRunning => CliError::usage(
             "the drive is not running: `fricctl device start` first".to_string(),
         ),
@@ -434,6 +451,7 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
                     amp_x,
                     offset_z,
                     phase_deg,
+                    open_loop,
                 },
         } => {
             // Each value is a normal f32 number or 0 (the flags' parsers);
@@ -445,6 +463,7 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
                 offset_z_m: *offset_z as f32,
                 phase_rad: phase_deg.to_radians() as f32,
             };
+            identify::select_mode(&mut c, *open_loop)?;
             out(t.json, &drive_report(c.call(Request::SetDrive(d))?)?)
         }
         DeviceCmd::Start => out(
@@ -593,6 +612,7 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
         } => watch::watch(t, c, *periods, *count, csv.as_deref(), *allow_invalid),
         DeviceCmd::Ports => unreachable!("handled above"),
         DeviceCmd::Sweep(a) => sweep::run(&mut c, a, t.json),
+        DeviceCmd::Identify(a) => identify::run(&mut c, a, t.json),
         DeviceCmd::Control(_) => match control_req {
             Some(req) => control::run(&mut c, req, t.json),
             None => unreachable!("checked above"),
@@ -626,6 +646,7 @@ pub(crate) fn unexpected(r: Response) -> CliError {
         Some(Answer::Estimate) => "Estimate",
         Some(Answer::Status) => "Status",
         Some(Answer::Control) => "Control",
+        Some(Answer::Transducers) => "Transducers",
         None => "an error",
     };
     CliError::failure(format!("unexpected answer from the device: {what}"))

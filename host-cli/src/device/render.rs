@@ -235,6 +235,7 @@ pub fn fault_names(bits: u32) -> Vec<String> {
         (WATCHDOG_RESET, "watchdog_reset"),
         (EXTERNAL, "external"),
         (ADC_OVERRUN, "adc_overrun"),
+        (MEASURED_LIFTOFF, "measured_liftoff"),
     ];
     let mut v: Vec<String> = known
         .iter()
@@ -303,7 +304,16 @@ pub fn status(s: &Status) -> Report {
         .row("out_dux", "output dux", f32v(s.out_amp_x_m), "m")
         .row("out_uz0", "output uz0", f32v(s.out_offset_z_m), "m")
         .row("liftoff_allowed", "lift-off allowed", s.liftoff_allowed, "")
+        .row("drive_mode", "drive mode", mode_name(s.mode), "")
         .measured(s.measured.as_ref())
+}
+
+/// The drive mode's name in text and JSON: `open_loop` or `displacement`.
+pub fn mode_name(m: model_core::device::DriveMode) -> &'static str {
+    match m {
+        model_core::device::DriveMode::OpenLoop => "open_loop",
+        model_core::device::DriveMode::Displacement => "displacement",
+    }
 }
 
 impl Report {

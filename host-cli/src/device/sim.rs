@@ -156,7 +156,7 @@ pub struct PlantArgs {
     /// Virtual plant: true k_x, N/m
     #[arg(long, default_value_t = DEFAULT_CONTACT.2, value_parser = PLANT_CONTACT)]
     pub plant_kx: f64,
-    /// Virtual plant: first-order lag of the transducers' displacement amplitudes, time constant in drive periods (0 = none)
+    /// Virtual plant: ideal transducers whose displacement amplitudes follow with a first-order lag, time constant in drive periods (0 = none; non-zero implies ideal transducers)
     #[arg(long, default_value_t = 0.0, value_parser = Real::non_negative().single_precision())]
     pub plant_lag_periods: f64,
     /// Virtual plant: drift of μ0, per second of device time (μ0 stops at 0)
@@ -200,9 +200,12 @@ impl PlantArgs {
             None => None,
         };
         let cfg = config();
-        let resonant = self
-            .transducers
-            .options((cfg.dac_z.metres_per_code, cfg.dac_x.metres_per_code))?;
+        // Resonant by default; a first-order lag is a model of ideal
+        // transducers, so `--plant-lag-periods` alone keeps them ideal.
+        let resonant = self.transducers.options(
+            (cfg.dac_z.metres_per_code, cfg.dac_x.metres_per_code),
+            self.plant_lag_periods == 0.0,
+        )?;
         if resonant.is_some() && self.plant_lag_periods != 0.0 {
             return Err(CliError::usage(
                 "--plant-lag-periods: is for ideal transducers; a resonant one has its own time constant Q/(pi f_r)",

@@ -29,6 +29,10 @@ use crate::model::float::{Libm, Math, Micromath};
 /// Largest DAC code (12 bits).
 pub const DAC_MAX: u16 = 4095;
 
+/// DAC volts per code: 12 bits over V_REF = 3.3 V (RM0090 §14.2: DAC
+/// output = V_REF · DOR / 4095).
+pub const DAC_VOLTS_PER_CODE: f64 = 3.3 / 4095.0;
+
 /// Packs two 12-bit codes into the DHR12RD word: channel 1 in bits 0–11,
 /// channel 2 in bits 16–27.
 #[inline(always)]

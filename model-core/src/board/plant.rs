@@ -132,9 +132,7 @@ pub struct SampleConditions<F> {
     pub counts_x: F,
 }
 
-/// DAC volts per code: 12 bits over V_REF = 3.3 V (RM0090 §14.2: DAC
-/// output = V_REF · DOR / 4095).
-pub const DAC_VOLTS_PER_CODE: f64 = 3.3 / 4095.0;
+pub use crate::board::dds::DAC_VOLTS_PER_CODE;
 
 /// What makes the resonant transducers' resonances move and couple.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -373,7 +373,7 @@ fn run<const N: usize, A: DeviceAccess<N>>(
         }
         Request::Predict { v0 } => {
             // Snapshot the scene, then compute with the device released.
-            let scene = dev.with(|d| d.scene())?;
+            let scene = dev.with(|d| d.prediction_scene())?;
             Response::Prediction {
                 prediction: device::predict(&scene, v0)?,
                 regime: device::regime(&scene)?,
@@ -390,6 +390,15 @@ fn run<const N: usize, A: DeviceAccess<N>>(
             Response::Ok
         }
         Request::GetControl => Response::Control(dev.with(|d| d.control_state())),
+        Request::SetTransducers(t) => {
+            dev.with(|d| d.set_transducers(t))?;
+            Response::Ok
+        }
+        Request::GetTransducers => Response::Transducers(dev.with(|d| d.transducers())),
+        Request::SetDriveMode(m) => {
+            dev.with(|d| d.set_drive_mode(m))?;
+            Response::Ok
+        }
         // Handled with the session state in `Server::handle`: never here.
         Request::Measure { .. }
         | Request::Stream { .. }

@@ -13,6 +13,8 @@ struct Plan {
     levels: [Level; 2],
     /// Phase words of the two channels.
     phases: [u32; 2],
+    /// The frequency changes: the displacement loops' corrections start over.
+    fresh_loops: bool,
 }
 
 impl<const N: usize> Device<'_, N> {
@@ -112,6 +114,29 @@ impl<const N: usize> Device<'_, N> {
             amp: amp_x / x.metres_per_code,
             dc: x.zero_code,
         };
+        // Displacement mode: the identified transducers give the voltages
+        // (`displacement`, eq. D2), checked against the DAC there.
+        let fresh_loops = achieved.tuning_word != self.applied.achieved.tuning_word;
+        let c = if fresh_loops {
+            super::displacement::Loops::default().c
+        } else {
+            self.loops.c
+        };
+        let d_checked = DriveSetting {
+            amp_x_m: amp_x,
+            phase_rad: phase,
+            ..*d
+        };
+        if let Some((levels, phases)) =
+            self.voltage_plan(&d_checked, achieved.freq_hz, [lz.dc, lx.dc], c)?
+        {
+            return Ok(Plan {
+                achieved,
+                levels,
+                phases,
+                fresh_loops,
+            });
+        }
         // Both waveforms must stay inside the DAC range (the normal one by the
         // lift-off guard and offset range, but check both exactly).
         lz.check().map_err(|_| DeviceError::OutOfRange {
@@ -125,13 +150,22 @@ impl<const N: usize> Device<'_, N> {
             max: self.cfg.max_amp_x_m(),
         })?;
         // −cos θ = sin(θ − π/2);  cos(θ + φ) = sin(θ + φ + π/2).
-        let pz = phase_word(-core::f64::consts::FRAC_PI_2);
-        let px = phase_word(f64::from(phase) + core::f64::consts::FRAC_PI_2);
         Ok(Plan {
             achieved,
             levels: [lz, lx],
-            phases: [pz, px],
+            phases: [self.ideal_phase_word(0, d), self.ideal_phase_word(1, d)],
+            fresh_loops,
         })
+    }
+
+    /// The voltage-mode phase word of channel `ch` (0 normal, 1 tangential)
+    /// for drive `d`: `−cos θ = sin(θ − π/2)`, `cos(θ + φ) = sin(θ + φ + π/2)`.
+    pub(super) fn ideal_phase_word(&self, ch: usize, d: &DriveSetting) -> u32 {
+        if ch == 0 {
+            phase_word(-core::f64::consts::FRAC_PI_2)
+        } else {
+            phase_word(f64::from(d.phase_rad) + core::f64::consts::FRAC_PI_2)
+        }
     }
 
     /// Sets the drive. While running the DDS ramps to it; while stopped it is
@@ -157,14 +191,25 @@ impl<const N: usize> Device<'_, N> {
         self.drive = d;
         self.dds.set_phase(0, plan.phases[0]);
         self.dds.set_phase(1, plan.phases[1]);
-        self.applied = Applied {
-            achieved: plan.achieved,
-            phase_rad: phase_rad(
+        // Displacement mode: φ is what the loops hold between the measured
+        // modes, not the phase between the voltages.
+        let phase = if self.displacement_mode() {
+            f64::from(d.phase_rad)
+        } else {
+            phase_rad(
                 plan.phases[1]
                     .wrapping_sub(plan.phases[0])
                     .wrapping_sub(1 << 31),
-            ),
+            )
         };
+        self.applied = Applied {
+            achieved: plan.achieved,
+            phase_rad: phase,
+        };
+        if plan.fresh_loops {
+            self.loops = super::displacement::Loops::default();
+        }
+        self.loops.good = 0;
         self.refresh_scene();
         self.ramp_generation = self.ramp_generation.wrapping_add(1);
         self.reset_motion_peak();
@@ -190,9 +235,14 @@ impl<const N: usize> Device<'_, N> {
             return Err(DeviceError::Faulted(self.latch.bits()));
         }
         let plan = self.plan(&self.drive)?;
+        self.ramp_slew(&plan.levels);
         self.dds.set_level(0, plan.levels[0])?;
         self.dds.set_level(1, plan.levels[1])?;
+        self.dds.set_phase(0, plan.phases[0]);
+        self.dds.set_phase(1, plan.phases[1]);
         self.running = true;
+        self.loops.good = 0;
+        self.loops.avg = None;
         self.ramp_generation = self.ramp_generation.wrapping_add(1);
         self.reset_motion_peak();
         Ok(())

@@ -89,6 +89,8 @@ pub enum DeviceError {
     NotRunning,
     /// The closed loop has no plan for the setpoint.
     Control(ControlError),
+    /// (v5) The displacement mode needs identified transducers.
+    NotIdentified,
 }
 
 impl fmt::Display for DeviceError {
@@ -113,6 +115,7 @@ impl fmt::Display for DeviceError {
             DeviceError::Dds(e) => write!(f, "internal: the DDS refused a validated setting: {e}"),
             DeviceError::NotRunning => f.write_str("the drive is not running (start it first)"),
             DeviceError::Control(e) => write!(f, "closed loop: {e}"),
+            DeviceError::NotIdentified => write!(f, "{}", WireError::NotIdentified),
         }
     }
 }
@@ -142,6 +145,7 @@ impl From<DeviceError> for WireError {
             DeviceError::Estimate(_) => WireError::NotReady,
             DeviceError::Config(_) | DeviceError::Dds(_) => WireError::Internal,
             DeviceError::NotRunning => WireError::NotRunning,
+            DeviceError::NotIdentified => WireError::NotIdentified,
             DeviceError::Control(c) => match c {
                 ControlError::OutOfReach { min, max } => WireError::OutOfReach { min, max },
                 // The device checks the target against ±μ₀ first (an

@@ -11,6 +11,7 @@
 //! | [`faults::WATCHDOG_RESET`] | the previous reset was by the watchdog | the firmware at power-up |
 //! | [`faults::EXTERNAL`] | the external fault input (amplifier alarm) | the firmware's input interrupt |
 //! | [`faults::ADC_OVERRUN`] | the ADC intake came a half-buffer late | [`Device::adc_half_done`] |
+//! | [`faults::MEASURED_LIFTOFF`] | the normal pickup measured Δu_z above u_z0 (lift-off not allowed) | `Device::adc_block_with_pickups` (the motion window) |
 //!
 //! **The safe state** ([`Device::fault`]): the closed loop off (its running
 //! estimate aborted), the drive stopped, both channels ramped at the slew
@@ -34,8 +35,14 @@ pub mod faults {
     /// The ADC intake was late by a half-buffer (a block was overwritten
     /// before it was read; the drive phase of later samples is unknown).
     pub const ADC_OVERRUN: u32 = 1 << 4;
+    /// (v5) The normal pickup measured an amplitude Δu_z above the offset
+    /// u_z0 (the contact lifted off) while lift-off is not allowed: the
+    /// guard on the *measured* motion (the setting's guard keeps a margin
+    /// below u_z0; a resonant transducer can still ring above it).
+    pub const MEASURED_LIFTOFF: u32 = 1 << 5;
     /// Every bit defined above.
-    pub const ALL: u32 = ADC_SATURATED | DAC_UNDERRUN | WATCHDOG_RESET | EXTERNAL | ADC_OVERRUN;
+    pub const ALL: u32 =
+        ADC_SATURATED | DAC_UNDERRUN | WATCHDOG_RESET | EXTERNAL | ADC_OVERRUN | MEASURED_LIFTOFF;
 }
 
 /// The latched bits; set only by [`Device::fault`], cleared only by

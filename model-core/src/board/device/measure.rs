@@ -26,7 +26,7 @@ impl<const N: usize> Device<'_, N> {
         if !self.running {
             cond |= reasons::NOT_RUNNING;
         }
-        if !self.dds.settled() {
+        if !self.drive_settled() {
             cond |= reasons::NOT_SETTLED;
         }
         if self.latch.any() {

@@ -9,6 +9,8 @@
 //! * `measure` — the DAC refill and ADC intake bookkeeping (which drive phase
 //!   each ADC sample belongs to) and the friction measurement;
 //! * `motion` — the transducers' measured motion (the pickups' lock-ins);
+//! * [`displacement`] — the displacement mode: identified transducers as
+//!   feed-forward, a complex loop per channel on the measured motion;
 //! * `predict` — the model's prediction for the current drive;
 //! * `closed_loop` — the closed loop's timing (which samples each update
 //!   uses, when its command reaches the DAC);
@@ -23,6 +25,7 @@
 
 mod closed_loop;
 pub mod config;
+pub mod displacement;
 mod drive;
 pub mod error;
 mod fault;
@@ -41,7 +44,8 @@ pub use motion::MeasuredDrive;
 pub use predict::{predict, regime};
 
 pub use crate::board::protocol::messages::{
-    Applied, Contact, DriveParam, DriveSetting, Prediction, Status,
+    Applied, Contact, DriveMode, DriveParam, DriveSetting, Prediction, Status, TransducerModel,
+    Transducers,
 };
 
 use crate::board::dds::{Achieved, Dds, Level, SineTable, Slew};
@@ -82,6 +86,12 @@ pub struct Device<'t, const N: usize> {
     adc_blocks: u32,
     /// The motion pickups' lock-ins and last result.
     motion: motion::Motion,
+    /// The identified transducers (`SetTransducers`; kept by `Reset`).
+    transducers: Option<Transducers>,
+    /// Voltage or displacement mode.
+    mode: DriveMode,
+    /// The displacement loops.
+    loops: displacement::Loops,
 }
 
 /// `x` if finite and in `[min, max]`, else [`DeviceError::OutOfRange`].
@@ -141,6 +151,9 @@ impl<'t, const N: usize> Device<'t, N> {
             fills: 0,
             adc_blocks: 0,
             motion: motion::Motion::default(),
+            transducers: None,
+            mode: DriveMode::OpenLoop,
+            loops: displacement::Loops::default(),
         };
         check_contact(&contact)?;
         d.applied.achieved = d
@@ -202,7 +215,7 @@ impl<'t, const N: usize> Device<'t, N> {
     pub fn status(&self) -> Status {
         let ch = self.dds.channels();
         let (z, x) = (self.cfg.dac_z, self.cfg.dac_x);
-        Status {
+        let mut s = Status {
             running: self.running,
             settled: self.dds.settled(),
             faults: self.latch.bits(),
@@ -213,7 +226,10 @@ impl<'t, const N: usize> Device<'t, N> {
             out_offset_z_m: (ch[0].dc - z.zero_code) * z.metres_per_code,
             liftoff_allowed: self.allow_liftoff,
             measured: self.measured_drive(),
-        }
+            mode: self.mode,
+        };
+        self.displacement_status(&mut s);
+        s
     }
 
     /// Counts the commands that set new DDS targets (accepted `set_drive`,

@@ -20,6 +20,7 @@ use super::Device;
 use crate::board::lockin::LockIn;
 pub use crate::board::protocol::messages::MeasuredDrive;
 use crate::float::FastF32;
+use num_complex::Complex32 as C;
 
 /// The least drive phase a window spans, rad: a whole period, where the
 /// fit's regressors are nearly orthogonal and its noise gain near the
@@ -75,28 +76,59 @@ impl<const N: usize> Device<'_, N> {
         if m.lock[0].span_rad() < WINDOW_SPAN_RAD {
             return;
         }
-        if let (Ok(z), Ok(x)) = (m.lock[0].solve(), m.lock[1].solve()) {
-            let (az, ax) = (z.amplitude::<FastF32>(), x.amplitude::<FastF32>());
-            let pi = core::f32::consts::PI;
-            let mut phi = x.phase::<FastF32>() - z.phase::<FastF32>() + pi;
-            while phi > pi {
-                phi -= 2.0 * pi;
-            }
-            while phi <= -pi {
-                phi += 2.0 * pi;
-            }
-            m.peak_z = m.peak_z.max(az);
-            m.windows = m.windows.wrapping_add(1);
-            m.last = Some(MeasuredDrive {
-                amp_z_m: az,
-                amp_x_m: ax,
-                phase_rad: phi,
-                amp_z_peak_m: m.peak_z,
-                windows: m.windows,
-            });
-            m.lock[0].reset();
-            m.lock[1].reset();
+        let window_s = m.lock[0].samples() as f32 / self.cfg.sample_rate_hz as f32;
+        let (Ok(z), Ok(x)) = (m.lock[0].solve(), m.lock[1].solve()) else {
+            return;
+        };
+        m.lock[0].reset();
+        m.lock[1].reset();
+        // X = A·e^{jψ} = a − j b (`displacement`'s phasors).
+        let xz = C::new(z.in_phase, -z.quadrature);
+        let xx = C::new(x.in_phase, -x.quadrature);
+        let (az, ax) = (z.amplitude::<FastF32>(), x.amplitude::<FastF32>());
+        let pi = core::f32::consts::PI;
+        let mut phi = x.phase::<FastF32>() - z.phase::<FastF32>() + pi;
+        while phi > pi {
+            phi -= 2.0 * pi;
         }
+        while phi <= -pi {
+            phi += 2.0 * pi;
+        }
+        m.peak_z = m.peak_z.max(az);
+        m.windows = m.windows.wrapping_add(1);
+        let (rz, rx) = (self.response(0, xz), self.response(1, xx));
+        let m = &mut self.motion;
+        m.last = Some(MeasuredDrive {
+            amp_z_m: az,
+            amp_x_m: ax,
+            phase_rad: phi,
+            amp_z_peak_m: m.peak_z,
+            windows: m.windows,
+            response_z_m_per_v: rz,
+            response_x_m_per_v: rx,
+        });
+        // The guard on the measured motion: Δu_z above u_z0 lifts the
+        // contact off (the setting's guard keeps the margin below it).
+        let lifts = az > self.drive.offset_z_m.max(super::displacement::HOLD_FLOOR_M);
+        if lifts && !self.allow_liftoff {
+            self.fault(super::faults::MEASURED_LIFTOFF);
+            return;
+        }
+        self.displacement_step([xz, xx], window_s);
+    }
+
+    /// The measured response `X/U` of channel `ch` (m/V, `[re, im]`) to the
+    /// voltage the DDS outputs now (`None` at zero voltage).
+    fn response(&self, ch: usize, x: C) -> Option<[f32; 2]> {
+        let c = self.dds.channels()[ch];
+        let v = c.amp * crate::board::dds::DAC_VOLTS_PER_CODE as f32;
+        if v == 0.0 {
+            return None;
+        }
+        // U = v·e^{j(p − π/2)} for the wave `dc + amp·sin(θ + p)`.
+        let p = crate::board::dds::phase_rad(c.phase) as f32 - core::f32::consts::FRAC_PI_2;
+        let h = x / C::from_polar(v, p);
+        Some([h.re, h.im])
     }
 
     /// The last window's measured motion (`None` before the first).

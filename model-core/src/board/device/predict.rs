@@ -22,6 +22,41 @@ impl<const N: usize> Device<'_, N> {
         predict(&self.scene()?, v0)
     }
 
+    /// The scene a prediction uses: while the drive runs in displacement
+    /// mode and holds ([`Device::drive_settled`]), the *measured* drive
+    /// (the pickups' Δu_z, Δu_x and φ of the last window, with the setting's
+    /// offset and the DDS frequency); otherwise [`Device::scene`].
+    ///
+    /// # Errors
+    /// [`DeviceError::Scene`].
+    pub fn prediction_scene(&self) -> Result<Scene<f32>, DeviceError> {
+        match self.measured_drive() {
+            Some(m) if self.running && self.displacement_mode() && self.drive_settled() => {
+                let d = self.drive();
+                let mode = if self.allow_liftoff {
+                    crate::model::scene::ContactMode::Intermittent
+                } else {
+                    crate::model::scene::ContactMode::Permanent
+                };
+                Scene::new_with_contact(
+                    crate::model::scene::SceneParams {
+                        mu0: self.contact.mu0,
+                        kz: self.contact.kz,
+                        kx: self.contact.kx,
+                        uz0: d.offset_z_m,
+                        duz: m.amp_z_m,
+                        dux: m.amp_x_m,
+                        omega: (core::f64::consts::TAU * self.applied.achieved.freq_hz) as f32,
+                        phi: m.phase_rad,
+                    },
+                    mode,
+                )
+                .map_err(DeviceError::Scene)
+            }
+            _ => self.scene(),
+        }
+    }
+
     /// The regime of the current drive.
     ///
     /// # Errors

@@ -15,7 +15,7 @@ use crate::model::regime::Regime;
 
 /// Protocol version; a frame with another version is answered with
 /// [`WireError::VersionMismatch`].
-pub const PROTOCOL_VERSION: u16 = 4;
+pub const PROTOCOL_VERSION: u16 = 5;
 
 /// The drive as commanded, physical units.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -69,6 +69,14 @@ pub enum DriveParam {
     Gain,
     /// 9: the closed loop's rate limit.
     Rate,
+    /// 10 (v5): a transducer's resonance f_r.
+    Resonance,
+    /// 11 (v5): a transducer's quality factor Q.
+    Quality,
+    /// 12 (v5): a transducer's static gain.
+    TransducerGain,
+    /// 13 (v5): a transducer's extra phase lag.
+    PhaseLag,
 }
 
 impl DriveParam {
@@ -85,6 +93,10 @@ impl DriveParam {
             DriveParam::TargetMu => "target_mu",
             DriveParam::Gain => "gain",
             DriveParam::Rate => "rate_m_per_s",
+            DriveParam::Resonance => "resonance_hz",
+            DriveParam::Quality => "q",
+            DriveParam::TransducerGain => "gain_m_per_v",
+            DriveParam::PhaseLag => "phase_lag_rad",
         }
     }
 }
@@ -151,6 +163,8 @@ pub struct Status {
     /// the last window ([`crate::board::device`]'s `motion`); `None` before
     /// the first window, or on a board whose pickups are not wired.
     pub measured: Option<MeasuredDrive>,
+    /// (v5) The drive mode in force ([`Request::SetDriveMode`]).
+    pub mode: DriveMode,
 }
 
 /// (v4) The transducers' motion as the pickups measure it.
@@ -168,6 +182,53 @@ pub struct MeasuredDrive {
     pub amp_z_peak_m: f32,
     /// Lock-in windows finished since power-up (a new value: a new window).
     pub windows: u32,
+    /// (v5) The normal mode's measured response to its DAC channel, m/V as
+    /// `[re, im]` of `H = X/U` (eq. 1 of [`crate::board::identify`]: the
+    /// pickup's phasor over the channel's voltage phasor at the window's
+    /// end); `None` while the channel's voltage is zero.
+    pub response_z_m_per_v: Option<[f32; 2]>,
+    /// (v5) The tangential mode's measured response, m/V, as `response_z_m_per_v`.
+    pub response_x_m_per_v: Option<[f32; 2]>,
+}
+
+/// (v5) One transducer mode as identified (eq. 1 of
+/// [`crate::board::identify`]): `H(f) = g·e^{−jθ}/(1 − r² + j r/Q)`, `r = f/f_r`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TransducerModel {
+    /// Resonance f_r, Hz (> 0).
+    pub resonance_hz: f32,
+    /// Quality factor Q (> 1/2).
+    pub q: f32,
+    /// Static gain g, m/V (> 0).
+    pub gain_m_per_v: f32,
+    /// Constant extra lag θ of the chain (pickup, filters), rad.
+    pub phase_lag_rad: f32,
+}
+
+/// (v5) Both transducers as identified (`fricctl device identify`): the
+/// feed-forward of the displacement loops ([`DriveMode::Displacement`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Transducers {
+    /// The normal transducer (DAC channel 1).
+    pub z: TransducerModel,
+    /// The tangential transducer (DAC channel 2).
+    pub x: TransducerModel,
+}
+
+/// (v5) How the device turns a [`DriveSetting`] into DAC voltages.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum DriveMode {
+    /// 0: voltage mode (the power-up state): the DAC calibration
+    /// ([`crate::board::device::DacCal`]) is taken to be the displacement.
+    OpenLoop,
+    /// 1: displacement mode: the identified [`Transducers`] give the
+    /// voltages (feed-forward) and a complex loop per channel on the
+    /// pickups' lock-ins holds the *measured* amplitudes and φ at the
+    /// setting (needs [`Request::SetTransducers`] first).
+    Displacement,
 }
 
 /// What the device is (answer to [`Request::Hello`]).
@@ -263,6 +324,17 @@ pub enum Request {
     SetControl(ControlSetting),
     /// 16 (v3): the closed loop's state.
     GetControl,
+    /// 17 (v5): store the identified transducers (`Some`, validated whole)
+    /// or forget them (`None`; refused with `NotIdentified` while the
+    /// displacement mode is in force). Kept by `Reset`, lost at power-down.
+    SetTransducers(Option<Transducers>),
+    /// 18 (v5): the stored transducers.
+    GetTransducers,
+    /// 19 (v5): switch between voltage and displacement mode
+    /// ([`DriveMode`]); `Displacement` needs stored transducers
+    /// (`NotIdentified`) and re-plans the accepted drive through them
+    /// (its checks as `SetDrive`'s: a refusal changes nothing).
+    SetDriveMode(DriveMode),
 }
 
 /// The closed loop as commanded ([`crate::board::control`]).
@@ -347,6 +419,8 @@ pub enum Answer {
     Status,
     /// [`Response::Control`].
     Control,
+    /// [`Response::Transducers`].
+    Transducers,
 }
 
 /// One row of the request → response table.
@@ -382,6 +456,9 @@ pub const ENDPOINTS: &[Endpoint] = &[
     ep(14, "SetLiftOff", Answer::Ok),
     ep(15, "SetControl", Answer::Control),
     ep(16, "GetControl", Answer::Control),
+    ep(17, "SetTransducers", Answer::Ok),
+    ep(18, "GetTransducers", Answer::Transducers),
+    ep(19, "SetDriveMode", Answer::Ok),
 ];
 
 const fn ep(index: u32, request: &'static str, answer: Answer) -> Endpoint {
@@ -413,6 +490,9 @@ impl Request {
             Request::SetLiftOff { .. } => 14,
             Request::SetControl(_) => 15,
             Request::GetControl => 16,
+            Request::SetTransducers(_) => 17,
+            Request::GetTransducers => 18,
+            Request::SetDriveMode(_) => 19,
         }
     }
 
@@ -455,6 +535,8 @@ pub enum Response {
     Error(WireError),
     /// 8: to `SetControl` / `GetControl`.
     Control(ControlState),
+    /// 9 (v5): to `GetTransducers`.
+    Transducers(Option<Transducers>),
 }
 
 impl Response {
@@ -469,6 +551,7 @@ impl Response {
             Response::Estimate(_) => Answer::Estimate,
             Response::Status(_) => Answer::Status,
             Response::Control(_) => Answer::Control,
+            Response::Transducers(_) => Answer::Transducers,
             Response::Error(_) => return None,
         })
     }
@@ -592,6 +675,9 @@ pub enum WireError {
         /// Greatest reachable μ.
         max: f32,
     },
+    /// 16 (v5): the displacement mode needs identified transducers
+    /// (`SetTransducers`; `fricctl device identify`).
+    NotIdentified,
 }
 
 impl fmt::Display for WireError {
@@ -627,6 +713,9 @@ impl fmt::Display for WireError {
                 f,
                 "target_mu out of the model's reach: mu from {min} to {max} over amp_z_m in [0, lift-off limit]"
             ),
+            WireError::NotIdentified => f.write_str(
+                "the transducers are not identified: run `fricctl device identify` (or drive in voltage mode, --open-loop)",
+            ),
         }
     }
 }
@@ -638,7 +727,7 @@ mod tests {
     use super::*;
 
     /// One request of every variant, in variant order.
-    fn every_request() -> [Request; 17] {
+    fn every_request() -> [Request; 20] {
         let drive = DriveSetting {
             freq_hz: 1e4,
             amp_z_m: 0.0,
@@ -678,6 +767,9 @@ mod tests {
                 rate_m_per_s: 1e-3,
             }),
             Request::GetControl,
+            Request::SetTransducers(None),
+            Request::GetTransducers,
+            Request::SetDriveMode(DriveMode::OpenLoop),
         ]
     }
 

@@ -1,0 +1,414 @@
+//! The displacement mode (`model_core::board::device::displacement`) on
+//! resonant transducers (`plant::Resonant`), checked against the plant's
+//! own state, not the device's lock-in: after each half-buffer the true
+//! motion of each mode is read from its state (x, ẋ) — for a motion
+//! `x = A cos(ωt + ψ)`, `A = √(x² + (ẋ/ω)²)` and `ωt + ψ = atan2(−ẋ/ω, x)` —
+//! so φ between the modes is `ψ_x − ψ_z + π` (eq. M1) with the common time
+//! cancelling.
+//!
+//! Bench: 20 kHz drive (1.5 % off both resonances: 20 300 Hz, Q 300 normal;
+//! 19 700 Hz, Q 200 tangential; contact load Q 2000), Δu_z = 2 µm,
+//! Δu_x = 0.3 µm, u_z0 = 4 µm, φ = 40°, the board's calibrations, pickups
+//! without noise (the ADC's rounding only). The device's model is wrong on
+//! purpose (unless stated): f_r 20 Hz high (normal) and 15 Hz low
+//! (tangential), Q 10 % low, gain 5 % high — a feed-forward error of
+//! ≈ 10 % that only the loop removes.
+//!
+//! Tolerances: the loop holds the smoothed lock-in's phasor within
+//! `HOLD_TOLERANCE` (0.4 %) of the setting; the lock-in's own error on a
+//! noiseless pickup is the rounding to ±½ count (5 nm/count): at most
+//! ½ count / amplitude, 0.13 % of 2 µm and 0.83 % of 0.3 µm for a single
+//! sample, its average over a window's 64 samples smaller by √(64/2) ≈ 5.7
+//! (uniform, independent): 0.15 % at 0.3 µm. So the true amplitude is
+//! within `0.4 % + 3·0.15 %` ≤ 0.85 % of Δu_x and 0.5 % of Δu_z, and φ
+//! within the arcsine of the sum of the two channels' relative errors.
+
+use model_core::board::plant::{HalfDrive, Plant, Resonant, ResonantOptions, SampleConditions};
+use model_core::board::resonator::ModeParams;
+use model_core::dds::SineTable;
+use model_core::device::displacement::{HOLD_TOLERANCE, SMOOTHING_S};
+use model_core::device::{
+    faults, Contact, Device, DeviceConfig, DriveMode, DriveSetting, TransducerModel, Transducers,
+    HALF_BUFFER,
+};
+use model_core::Libm;
+use std::f64::consts::{PI, TAU};
+
+const MU0: f64 = 0.3;
+const SUB: u32 = 4;
+const LOAD_Q: f64 = 2000.0;
+
+fn setting(amp_z: f32) -> DriveSetting {
+    DriveSetting {
+        freq_hz: 20_000.0,
+        amp_z_m: amp_z,
+        amp_x_m: 0.3e-6,
+        offset_z_m: 4e-6,
+        phase_rad: 40f32.to_radians(),
+    }
+}
+
+fn true_modes() -> [ModeParams<f64>; 2] {
+    [
+        ModeParams {
+            resonance_hz: 20_300.0,
+            q: 300.0,
+            gain_m_per_v: 8e-8,
+        },
+        ModeParams {
+            resonance_hz: 19_700.0,
+            q: 200.0,
+            gain_m_per_v: 4e-8,
+        },
+    ]
+}
+
+fn loaded(q: f64) -> f64 {
+    1.0 / (1.0 / q + 1.0 / LOAD_Q)
+}
+
+/// The device's model of a true mode: f_r shifted by `df`, Q and gain scaled.
+fn model_of(m: ModeParams<f64>, df: f64, q_scale: f64, g_scale: f64) -> TransducerModel {
+    TransducerModel {
+        resonance_hz: (m.resonance_hz + df) as f32,
+        q: (loaded(m.q) * q_scale) as f32,
+        gain_m_per_v: (m.gain_m_per_v * g_scale) as f32,
+        // The DAC's hold: half a sample at 20 kHz and 500 kS/s.
+        phase_lag_rad: (PI * 20_000.0 / 500_000.0) as f32,
+    }
+}
+
+fn wrong_model() -> Transducers {
+    let m = true_modes();
+    Transducers {
+        z: model_of(m[0], 20.0, 0.9, 1.05),
+        x: model_of(m[1], -15.0, 0.9, 1.05),
+    }
+}
+
+struct Bench<'t> {
+    cfg: DeviceConfig,
+    dev: Device<'t, 1024>,
+    plant: Plant<f64>,
+    half: usize,
+    halves: usize,
+}
+
+/// The true motion after a half: (A_z, A_x, φ).
+#[derive(Debug, Clone, Copy)]
+struct Truth {
+    amp_z: f64,
+    amp_x: f64,
+    phi: f64,
+}
+
+impl<'t> Bench<'t> {
+    fn new(table: &'t SineTable<1024>, opts: ResonantOptions<f64>, model: Transducers) -> Self {
+        let cfg = DeviceConfig::driver_board(0);
+        let contact = Contact {
+            mu0: MU0 as f32,
+            kz: 1e7,
+            kx: 1e7,
+        };
+        let mut dev = Device::new(cfg, table, contact).unwrap();
+        dev.set_transducers(Some(model)).unwrap();
+        dev.set_drive_mode(DriveMode::Displacement).unwrap();
+        let mut plant = Plant::<f64>::new(MU0, 1e7, 1e7);
+        plant.resonant =
+            Some(Resonant::new(opts, 1.0 / (cfg.sample_rate_hz * f64::from(SUB))).unwrap());
+        Bench {
+            cfg,
+            dev,
+            plant,
+            half: 0,
+            halves: 0,
+        }
+    }
+
+    /// One half-buffer; the true motion at its end.
+    fn step(&mut self) -> Truth {
+        let mut dac = [0u32; HALF_BUFFER];
+        let mut forces = [(0u16, 0u16); HALF_BUFFER];
+        let mut pickups = [(0u16, 0u16); HALF_BUFFER];
+        let d = HalfDrive::fill(&mut self.dev, self.half, &mut dac);
+        self.plant.run_half_with_pickups::<Libm>(
+            &self.cfg,
+            &d,
+            SUB,
+            0.0,
+            |_| SampleConditions {
+                mu0: MU0,
+                v0: 0.004,
+                counts_z: 0.0,
+                counts_x: 0.0,
+            },
+            &mut forces,
+            &mut pickups,
+        );
+        self.dev
+            .adc_block_with_pickups(self.half, &forces, &pickups);
+        self.half ^= 1;
+        self.halves += 1;
+        let w = TAU * self.dev.applied().achieved.freq_hz;
+        let r = self.plant.resonant.as_ref().unwrap();
+        let motion = |k: usize| {
+            let (x, v) = (r.modes[k].x(), r.modes[k].v());
+            ((x * x + (v / w) * (v / w)).sqrt(), (-v / w).atan2(x))
+        };
+        let ((az, pz), (ax, px)) = (motion(0), motion(1));
+        let mut phi = px - pz + PI;
+        while phi > PI {
+            phi -= TAU;
+        }
+        while phi <= -PI {
+            phi += TAU;
+        }
+        Truth {
+            amp_z: az,
+            amp_x: ax,
+            phi,
+        }
+    }
+
+    /// Runs until the device says the drive holds (at most `limit` halves);
+    /// the halves it took and the largest true normal amplitude on the way.
+    fn until_settled(&mut self, limit: usize) -> (usize, f64) {
+        let mut peak = 0.0f64;
+        for k in 1..=limit {
+            let t = self.step();
+            peak = peak.max(t.amp_z);
+            if self.dev.status().settled {
+                return (k, peak);
+            }
+        }
+        panic!("not settled within {limit} halves: {:?}", self.dev.status());
+    }
+
+    fn t_half(&self) -> f64 {
+        HALF_BUFFER as f64 / self.cfg.sample_rate_hz
+    }
+}
+
+fn opts() -> ResonantOptions<f64> {
+    ResonantOptions {
+        modes: true_modes(),
+        drift_hz_per_s: [0.0; 2],
+        thermal_hz_per_um2: 0.0,
+        crosstalk: 0.0,
+        load_q: LOAD_Q,
+    }
+}
+
+/// ½ count of the pickup over `amp` metres, averaged over a window's 64
+/// samples (module docs), three standard deviations.
+fn rounding(amp: f64) -> f64 {
+    3.0 * 0.5 * 5e-9 / amp / (64.0f64 / 2.0).sqrt()
+}
+
+/// The true motion over `n` halves, checked against the setting, from 10
+/// smoothing times (`SMOOTHING_S`, 1 ms) after the call: the status'
+/// smoothed phasor, which the holding test reads, lags the motion by about
+/// one smoothing time while the loop still converges (seen: 0.55 % on Δu_z
+/// at the moment the device first holds, 0.05 % 10 ms later).
+fn check_holds(b: &mut Bench<'_>, s: &DriveSetting, n: usize) {
+    let lag = (10.0 * f64::from(SMOOTHING_S) / b.t_half()).ceil() as usize;
+    for _ in 0..lag {
+        b.step();
+    }
+    let tol = f64::from(HOLD_TOLERANCE);
+    let (ez, ex) = (
+        tol + rounding(f64::from(s.amp_z_m)),
+        tol + rounding(f64::from(s.amp_x_m)),
+    );
+    let ephi = (ez + ex).asin();
+    let (mut worst_z, mut worst_x, mut worst_phi) = (0.0f64, 0.0f64, 0.0f64);
+    for _ in 0..n {
+        let t = b.step();
+        worst_z = worst_z.max((t.amp_z / f64::from(s.amp_z_m) - 1.0).abs());
+        worst_x = worst_x.max((t.amp_x / f64::from(s.amp_x_m) - 1.0).abs());
+        worst_phi = worst_phi.max((t.phi - f64::from(s.phase_rad)).abs());
+        if std::env::var("DEBUG_DISP").is_ok() {
+            let m = b.dev.status().measured.unwrap();
+            eprintln!(
+                "true {:.5e} {:.5e} {:.3} | lock-in {:.5e} {:.5e} {:.3}",
+                t.amp_z,
+                t.amp_x,
+                t.phi.to_degrees(),
+                m.amp_z_m,
+                m.amp_x_m,
+                m.phase_rad.to_degrees()
+            );
+        }
+    }
+    assert!(
+        worst_z <= ez,
+        "Δu_z off by {worst_z:.2e} (allowed {ez:.2e})"
+    );
+    assert!(
+        worst_x <= ex,
+        "Δu_x off by {worst_x:.2e} (allowed {ex:.2e})"
+    );
+    assert!(
+        worst_phi <= ephi,
+        "φ off by {:.3}° (allowed {:.3}°)",
+        worst_phi.to_degrees(),
+        ephi.to_degrees()
+    );
+}
+
+/// Start on the detuned pair with a 10 %-wrong model: the drive holds the
+/// setting (true amplitudes and φ), within a time bounded by the ramp
+/// (`RAMP_TAUS`·τ̂) plus the loop's convergence, and the normal excursion
+/// stays below the lift-off limit on the way.
+#[test]
+fn the_loop_holds_the_measured_drive_despite_a_wrong_model() {
+    let table = SineTable::<1024>::libm();
+    let mut b = Bench::new(&table, opts(), wrong_model());
+    let s = setting(2e-6);
+    b.dev.set_drive(s).unwrap();
+    b.dev.start().unwrap();
+    let (halves, peak) = b.until_settled(20_000);
+    let t_ms = halves as f64 * b.t_half() * 1e3;
+    // τ̂ of the slower (normal) model: Q̂/(π f̂_r).
+    let tau_hat = f64::from(wrong_model().z.q) / (PI * f64::from(wrong_model().z.resonance_hz));
+    // Ramp 4τ̂, then a critically damped loop of time constant 2τ̂
+    // bringing a ≤ 15 % error within 0.4 %: (1 + t/2τ̂)e^{−t/2τ̂} ≤ 0.4/15 at
+    // t = 2τ̂·6.0; with 20 % slack.
+    let bound_ms = 1.2 * (4.0 + 12.0) * tau_hat * 1e3;
+    eprintln!("settled after {t_ms:.1} ms (bound {bound_ms:.1} ms), peak Δu_z {peak:.3e} m");
+    assert!(t_ms <= bound_ms, "{t_ms} ms > {bound_ms} ms");
+    let limit = f64::from(b.cfg.liftoff_limit_m(s.offset_z_m));
+    assert!(peak < limit, "peak {peak:e} ≥ lift-off limit {limit:e}");
+    check_holds(&mut b, &s, 400);
+    assert_eq!(b.dev.status().faults, 0);
+}
+
+/// A setpoint step after the loop has learned the model's error: the new
+/// amplitude is met without learning again (the correction c is kept), in
+/// about the ramp's time, with the excursion bounded by the ramp's ringing
+/// (`RAMP_TAUS` docs: ≤ 2/(|s|·T) of the step).
+#[test]
+fn a_setpoint_step_is_met_in_the_ramp_time() {
+    let table = SineTable::<1024>::libm();
+    let mut b = Bench::new(&table, opts(), wrong_model());
+    b.dev.set_drive(setting(2e-6)).unwrap();
+    b.dev.start().unwrap();
+    let (first, _) = b.until_settled(20_000);
+    check_holds(&mut b, &setting(2e-6), 100);
+    let s = setting(3e-6);
+    b.dev.set_drive(s).unwrap();
+    let (second, peak) = b.until_settled(20_000);
+    eprintln!("first settle {first} halves, after the step {second} halves, peak {peak:e}");
+    assert!(second < first, "{second} ≥ {first}");
+    // Ringing bound of a ramp of T = 4τ̂ (the full amplitude's ramp time,
+    // here used for the 1 µm step at the same slew: T ≥ 4τ̂/3) at the
+    // normal mode's detuning Δω = 2π·300 Hz, τ = Q_eff/(π f_r).
+    let tau = loaded(300.0) / (PI * 20_300.0);
+    let tau_hat = f64::from(wrong_model().z.q) / (PI * f64::from(wrong_model().z.resonance_hz));
+    let s_abs = ((1.0 / tau).powi(2) + (TAU * 300.0).powi(2)).sqrt();
+    let ring = 2.0 / (s_abs * 4.0 * tau_hat / 3.0);
+    let bound = 3e-6 + 1e-6 * ring * 1.1;
+    assert!(peak <= bound, "peak {peak:e} > {bound:e}");
+    check_holds(&mut b, &s, 400);
+}
+
+/// The resonance drifts (−20 Hz/s on the normal mode, the rate of the
+/// issue's bench) and the model's Q is a third too high (τ̂ > τ: the loop
+/// is overdamped, never oscillatory): the loop keeps the true motion on
+/// the setting throughout.
+#[test]
+fn the_loop_follows_a_drifting_resonance_and_a_wrong_q() {
+    let table = SineTable::<1024>::libm();
+    let mut o = opts();
+    o.drift_hz_per_s = [-20.0, 0.0];
+    let m = true_modes();
+    let model = Transducers {
+        z: model_of(m[0], 0.0, 1.33, 1.0),
+        x: model_of(m[1], 0.0, 1.33, 1.0),
+    };
+    let mut b = Bench::new(&table, o, model);
+    let s = setting(2e-6);
+    b.dev.set_drive(s).unwrap();
+    b.dev.start().unwrap();
+    b.until_settled(20_000);
+    // 2 s of drift: 40 Hz, the normal mode's response at 20 kHz grows by
+    // ≈ 15 % (detuning 300 → 260 Hz); per loop time constant 4τ̂ ≈ 22 ms
+    // that is 0.16 %, which the integrator trails by: within tolerance.
+    let halves = (2.0 / b.t_half()) as usize;
+    check_holds(&mut b, &s, halves);
+    assert_eq!(b.dev.status().faults, 0);
+}
+
+/// A model whose gain is half the true one asks for twice the voltage:
+/// the normal mode rises to 4.2 µm, past the 4 µm offset, during the ramp
+/// (before the loop acts), and the guard on the *measured* motion latches
+/// `MEASURED_LIFTOFF`, which brings the drive to the safe state. (2.1 µm
+/// is within the setting's lift-off limit, 3.8 µm, and the model's DAC
+/// range, ≈ 2.18 µm at this gain.)
+#[test]
+fn a_measured_excursion_beyond_the_offset_latches_the_safe_state() {
+    let table = SineTable::<1024>::libm();
+    let m = true_modes();
+    let model = Transducers {
+        z: model_of(m[0], 0.0, 1.0, 0.5),
+        x: model_of(m[1], 0.0, 1.0, 1.0),
+    };
+    let mut b = Bench::new(&table, opts(), model);
+    b.dev.set_drive(setting(2.1e-6)).unwrap();
+    b.dev.start().unwrap();
+    let mut latched_at = None;
+    for k in 0..5_000 {
+        b.step();
+        if b.dev.status().faults != 0 {
+            latched_at = Some(k);
+            break;
+        }
+    }
+    let st = b.dev.status();
+    assert_eq!(
+        st.faults,
+        faults::MEASURED_LIFTOFF,
+        "{st:?} after {latched_at:?}"
+    );
+    assert!(!st.running);
+    // The safe state: the outputs ramp to zero displacement.
+    for _ in 0..5_000 {
+        b.step();
+    }
+    let st = b.dev.status();
+    assert_eq!(
+        (st.out_amp_z_m, st.out_amp_x_m, st.out_offset_z_m),
+        (0.0, 0.0, 0.0)
+    );
+    assert!(b.dev.start().is_err());
+}
+
+/// Without transducers the displacement mode is refused by name, and the
+/// refusal changes nothing.
+#[test]
+fn the_displacement_mode_needs_transducers() {
+    let table = SineTable::<1024>::libm();
+    let cfg = DeviceConfig::driver_board(0);
+    let contact = Contact {
+        mu0: 0.3,
+        kz: 1e7,
+        kx: 1e7,
+    };
+    let mut dev = Device::new(cfg, &table, contact).unwrap();
+    assert_eq!(
+        dev.set_drive_mode(DriveMode::Displacement),
+        Err(model_core::device::DeviceError::NotIdentified)
+    );
+    assert_eq!(dev.drive_mode(), DriveMode::OpenLoop);
+    let bad = TransducerModel {
+        resonance_hz: 20_000.0,
+        q: 0.4,
+        gain_m_per_v: 1e-7,
+        phase_lag_rad: 0.0,
+    };
+    let e = dev
+        .set_transducers(Some(Transducers { z: bad, x: bad }))
+        .unwrap_err();
+    assert!(e.to_string().starts_with("q out of range"), "{e}");
+    assert_eq!(dev.transducers(), None);
+}
