@@ -383,6 +383,7 @@ fn entries() -> Vec<Entry> {
             vec![device(&[
                 "drive",
                 "set",
+                "--open-loop",
                 "--freq",
                 "20000",
                 "--amp-z",
@@ -753,6 +754,7 @@ fn device_state(dir: &Path) -> PathBuf {
             "--sim",
             "drive",
             "set",
+            "--open-loop",
             "--freq",
             "20000",
             "--amp-z",
@@ -1093,7 +1095,15 @@ fn negative_values_are_values() {
     let state = device_state(root.path());
     for amp in [&["--amp-z", "-2e-6"][..], &["--amp-z=-2e-6"][..]] {
         let args = v(&[
-            &["device", "--sim", "drive", "set", "--freq", "20000"],
+            &[
+                "device",
+                "--sim",
+                "drive",
+                "set",
+                "--open-loop",
+                "--freq",
+                "20000",
+            ],
             amp,
             &["--amp-x", "3e-7", "--offset-z", "4e-6"],
         ]);

@@ -876,6 +876,7 @@ fn adc_saturation_reaches_the_safe_state_on_the_firmware() {
         &[
             "drive",
             "set",
+            "--open-loop",
             "--freq",
             "40000",
             "--amp-z",

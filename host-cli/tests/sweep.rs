@@ -354,7 +354,7 @@ fn a_velocity_profile_step_acts_like_the_new_constant_velocity() {
             let o = Command::cargo_bin("fricctl")
                 .unwrap()
                 .env("FRICCTL_SIM_STATE", &state)
-                .args(["device", "--sim", "--json"])
+                .args(["device", "--sim", "--plant-ideal-transducers", "--json"])
                 .args(plant)
                 .args(args)
                 .output()

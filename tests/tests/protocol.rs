@@ -11,7 +11,7 @@ use model_core::protocol::{
 use model_core::server::Server;
 
 /// The protocol version byte of the hand-built frames (docs/protocol.md, "Frame").
-const V: u8 = 4;
+const V: u8 = 5;
 
 fn cfg() -> DeviceConfig {
     integration_tests::board_config_1mhz()
@@ -122,6 +122,22 @@ fn roundtrip_every_request() {
             rate_m_per_s: 1e-3,
         }),
         Request::GetControl,
+        Request::SetTransducers(Some(model_core::protocol::Transducers {
+            z: model_core::protocol::TransducerModel {
+                resonance_hz: 40e3,
+                q: 10.0,
+                gain_m_per_v: 1e-6,
+                phase_lag_rad: 0.1,
+            },
+            x: model_core::protocol::TransducerModel {
+                resonance_hz: 30e3,
+                q: 20.0,
+                gain_m_per_v: 5e-7,
+                phase_lag_rad: -0.2,
+            },
+        })),
+        Request::GetTransducers,
+        Request::SetDriveMode(model_core::protocol::DriveMode::Displacement),
     ];
     assert_eq!(
         reqs.len() as u32,
@@ -295,7 +311,7 @@ fn docs_protocol_examples() {
     let mut out = [0u8; MAX_FRAME];
     let req = encode(
         &Frame {
-            version: 4,
+            version: 5,
             seq: 5,
             body: Body::Request(Request::GetStatus),
         },
@@ -304,7 +320,7 @@ fn docs_protocol_examples() {
     .unwrap();
     assert_eq!(
         req,
-        &[0x03, 0x04, 0x05, 0x06, 0x0b, 0x28, 0x53, 0x3f, 0x3f, 0x00]
+        &[0x03, 0x05, 0x05, 0x06, 0x0b, 0x4d, 0x34, 0x83, 0x87, 0x00]
     );
     let status = model_core::device::Status {
         running: true,
@@ -322,12 +338,15 @@ fn docs_protocol_examples() {
             phase_rad: -2.1,
             amp_z_peak_m: 3.3e-6,
             windows: 7,
+            response_z_m_per_v: Some([1.5e-5, -2.5e-6]),
+            response_x_m_per_v: None,
         }),
+        mode: model_core::protocol::DriveMode::Displacement,
     };
     let mut out = [0u8; MAX_FRAME];
     let resp = encode(
         &Frame {
-            version: 4,
+            version: 5,
             seq: 5,
             body: Body::Response(Response::Status(status)),
         },
@@ -337,10 +356,11 @@ fn docs_protocol_examples() {
     assert_eq!(
         resp,
         &[
-            0x07, 0x04, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x01, 0x0d, 0xbd, 0x37, 0x06, 0x36,
-            0xb0, 0x0f, 0xa1, 0x34, 0xbd, 0x37, 0x86, 0x36, 0x17, 0x01, 0xb6, 0xa3, 0x13, 0x36,
-            0x77, 0xcc, 0xab, 0x34, 0x66, 0x66, 0x06, 0xc0, 0x91, 0x75, 0x5d, 0x36, 0x07, 0xbf,
-            0xc6, 0x57, 0x17, 0x00
+            0x07, 0x05, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x01, 0x0d, 0xbd, 0x37, 0x06, 0x36,
+            0xb0, 0x0f, 0xa1, 0x34, 0xbd, 0x37, 0x86, 0x36, 0x1c, 0x01, 0xb6, 0xa3, 0x13, 0x36,
+            0x77, 0xcc, 0xab, 0x34, 0x66, 0x66, 0x06, 0xc0, 0x91, 0x75, 0x5d, 0x36, 0x07, 0x01,
+            0x82, 0xa8, 0x7b, 0x37, 0xac, 0xc5, 0x27, 0xb6, 0x06, 0x01, 0xce, 0x01, 0xc0, 0x5c,
+            0x00
         ]
     );
 }
@@ -412,8 +432,9 @@ fn receive_overflow_is_announced_once_per_growth() {
 }
 
 // ---------------------------------------------------------------------------
-// Protocol v3, with frames built by hand from docs/protocol.md's tables and an
-// independent CRC-32 (bitwise) and COBS (written here), so a spec error shows.
+// The protocol (v5), with frames built by hand from docs/protocol.md's tables
+// and an independent CRC-32 (bitwise) and COBS (written here), so a spec error
+// shows.
 
 /// CRC-32/ISO-HDLC, bit by bit (reflected polynomial 0xEDB88320).
 fn crc32_by_hand(data: &[u8]) -> u32 {
@@ -921,9 +942,10 @@ fn ramp_done_follows_every_start_and_stop_and_status_shows_the_output() {
     assert_eq!(&st[4..6], [1, 1]);
     assert!((f32_at(&st, 9) - g.amp_z_m).abs() <= 2.0 * f32::EPSILON * g.amp_z_m);
     assert!((f32_at(&st, 13) - g.amp_x_m).abs() <= 2.0 * f32::EPSILON * g.amp_x_m);
-    // v3: liftoff_allowed, false at power-up; v4: the last field, measured,
-    // None (00): this loop feeds the forces only, no motion pickups.
-    assert_eq!((st.len(), st[21], st[22]), (23, 0, 0));
+    // v3: liftoff_allowed, false at power-up; v4: measured, None (00): this
+    // loop feeds the forces only, no motion pickups; v5: the last field, mode,
+    // OpenLoop (00) at power-up.
+    assert_eq!((st.len(), st[21], st[22], st[23]), (24, 0, 0, 0));
     // SetLiftOff (14) {allow: true} → Ok; Status shows it.
     assert_eq!(ask(&mut s, &mut dev, &[V, 10, 0, 14, 1]), [V, 10, 1, 2]);
     assert_eq!(ask(&mut s, &mut dev, &[V, 11, 0, 11])[21], 1);
@@ -952,6 +974,136 @@ fn ramp_done_follows_every_start_and_stop_and_status_shows_the_output() {
         ])
     );
     assert_eq!(ask(&mut s, &mut dev, &[V, 14, 0, 11])[21], 1, "unchanged");
+}
+
+/// A `TransducerModel` on the wire: f_r, Q, g, θ (f32 LE each).
+fn model_bytes(fr: f32, q: f32, g: f32, theta: f32) -> Vec<u8> {
+    [fr, q, g, theta]
+        .iter()
+        .flat_map(|x| x.to_le_bytes())
+        .collect()
+}
+
+/// `SetTransducers(Some{z, x})` (request 17, `01` = Some).
+fn set_transducers_payload(seq: u8, z: &[u8], x: &[u8]) -> Vec<u8> {
+    cat(&[&[V, seq, 0, 17, 1], z, x])
+}
+
+/// `OutOfRange{param, min, max}`: error 7, variant 5.
+fn out_of_range(seq: u8, param: u8, min: f32, max: f32) -> Vec<u8> {
+    cat(&[
+        &[V, seq, 1, 7, 5, param],
+        &min.to_le_bytes(),
+        &max.to_le_bytes(),
+    ])
+}
+
+#[test]
+fn displacement_mode_requests_get_the_spec_answers() {
+    // docs/protocol.md, "The displacement mode": requests 17–19, response 9,
+    // error 16, DriveParam 10–13, check 8 of SetDrive, Status.mode.
+    let t = SineTable::<256>::libm();
+    let mut dev = test_device(&t);
+    let mut s = Server::new(Info::for_config(&cfg(), "virtual", [0, 1, 0]));
+    let tau = std::f32::consts::TAU;
+    // z: f_r = 40 kHz, Q = 10, g = 1 µm/V, θ = 0.1 rad; x: θ at its inclusive limit 2π.
+    let z = model_bytes(40e3, 10.0, 1e-6, 0.1);
+    let x = model_bytes(30e3, 20.0, 5e-7, tau);
+    // Nothing stored at power-up: Transducers(None); the mode needs them: NotIdentified (16).
+    assert_eq!(ask(&mut s, &mut dev, &[V, 1, 0, 18]), [V, 1, 1, 9, 0]);
+    assert_eq!(ask(&mut s, &mut dev, &[V, 2, 0, 19, 1]), [V, 2, 1, 7, 16]);
+    // Validation, z before x, fields in order: the first bad field is named.
+    let bad = [
+        (model_bytes(0.0, 0.5, 1e-6, 0.1), x.clone(), 10, 0.0, 1e7),
+        (z.clone(), model_bytes(30e3, 0.5, 5e-7, 0.0), 11, 0.5, 1e6),
+        (model_bytes(40e3, 10.0, 1.5, 0.1), x.clone(), 12, 0.0, 1.0),
+        (z.clone(), model_bytes(30e3, 20.0, 5e-7, 7.0), 13, -tau, tau),
+    ];
+    for (k, (bz, bx, param, min, max)) in bad.iter().enumerate() {
+        let seq = 3 + k as u8;
+        assert_eq!(
+            ask(&mut s, &mut dev, &set_transducers_payload(seq, bz, bx)),
+            out_of_range(seq, *param, *min, *max)
+        );
+    }
+    // Refused: nothing stored. None in voltage mode: Ok.
+    assert_eq!(ask(&mut s, &mut dev, &[V, 7, 0, 18]), [V, 7, 1, 9, 0]);
+    assert_eq!(ask(&mut s, &mut dev, &[V, 8, 0, 17, 0]), [V, 8, 1, 2]);
+    // Stored and read back as sent.
+    assert_eq!(
+        ask(&mut s, &mut dev, &set_transducers_payload(9, &z, &x)),
+        [V, 9, 1, 2]
+    );
+    assert_eq!(
+        ask(&mut s, &mut dev, &[V, 10, 0, 18]),
+        cat(&[&[V, 10, 1, 9, 1], &z, &x])
+    );
+    // Voltage mode: Δu_z = 3 µm on u_z0 = 4 µm at 20 kHz, φ = 0.3 rad is
+    // accepted; Applied.phase_rad is the phase the DDS words produce, within
+    // one phase step 2π/2³² of φ.
+    let phi = 0.3f32;
+    let r = ask(
+        &mut s,
+        &mut dev,
+        &set_drive_payload(11, 2e4, 3e-6, 0.0, 4e-6, phi),
+    );
+    assert_eq!(&r[..4], [V, 11, 1, 1]);
+    let applied_phase = |r: &[u8]| f64::from_le_bytes(r[r.len() - 8..].try_into().unwrap());
+    let step = std::f64::consts::TAU / 4_294_967_296.0;
+    assert!((applied_phase(&r) - f64::from(phi)).abs() <= step);
+    // Check 8: the voltage the model needs, |D|/|Ĥ(f)| with c = 1, must fit
+    // room = min(dc, 4095 − dc) codes around the normal channel's DC
+    // dc = u_z0 / (2 nm per code) = 2000 codes (zero code 0): at most
+    // m = room·(3.3/4095 V)·|Ĥ| with eq. 1, |Ĥ| = g/√((1 − r²)² + (r/Q)²),
+    // r = 20/40: m ≈ 2.14 µm < 3 µm, so switching the mode is refused with
+    // that OutOfRange{AmpZ, 0, m} and changes nothing.
+    let dc = f64::from(4e-6f32) / f64::from(2e-9f32);
+    let room = dc.min(4095.0 - dc);
+    let ratio: f64 = 2e4 / 4e4;
+    let h = f64::from(1e-6f32) / ((1.0 - ratio * ratio).powi(2) + (ratio / 10.0).powi(2)).sqrt();
+    let m = room * (3.3 / 4095.0) * h;
+    let refused = ask(&mut s, &mut dev, &[V, 12, 0, 19, 1]);
+    assert_eq!(&refused[..6], [V, 12, 1, 7, 5, 1], "{refused:02x?}");
+    assert_eq!((refused.len(), f32_at(&refused, 6)), (14, 0.0));
+    // The device computes m in f32 (≈ 15 roundings of ≤ 2⁻²⁴ each: ≤ 1e-6
+    // relative) at the DDS frequency (within 1e6/2³² Hz of 20 kHz: < 1e-8
+    // relative in |Ĥ|): 2e-6 relative bounds both.
+    let got = f64::from(f32_at(&refused, 10));
+    assert!((got - m).abs() <= 2e-6 * m, "{got} vs {m}");
+    assert_eq!(*ask(&mut s, &mut dev, &[V, 13, 0, 11]).last().unwrap(), 0);
+    // Δu_z = 2 µm fits (1.5 V of the 1.61 V room): the switch is accepted,
+    // Status.mode = Displacement (1, the last byte; measured None here), and
+    // Applied.phase_rad is exactly the setting's φ.
+    let r = ask(
+        &mut s,
+        &mut dev,
+        &set_drive_payload(14, 2e4, 2e-6, 0.0, 4e-6, phi),
+    );
+    assert_eq!(&r[..4], [V, 14, 1, 1]);
+    assert_eq!(ask(&mut s, &mut dev, &[V, 15, 0, 19, 1]), [V, 15, 1, 2]);
+    let st = ask(&mut s, &mut dev, &[V, 16, 0, 11]);
+    assert_eq!((st.len(), st[22], st[23]), (24, 0, 1), "{st:02x?}");
+    let d = ask(&mut s, &mut dev, &[V, 17, 0, 1]);
+    assert_eq!(&d[..4], [V, 17, 1, 1]);
+    assert_eq!(applied_phase(&d), f64::from(phi));
+    // In displacement mode SetDrive itself is refused by check 8, with the same m.
+    assert_eq!(
+        ask(
+            &mut s,
+            &mut dev,
+            &set_drive_payload(18, 2e4, 3e-6, 0.0, 4e-6, phi)
+        )[2..],
+        refused[2..]
+    );
+    // Forgetting the transducers in displacement mode: NotIdentified; the
+    // mode already in force: Ok.
+    assert_eq!(ask(&mut s, &mut dev, &[V, 19, 0, 17, 0]), [V, 19, 1, 7, 16]);
+    assert_eq!(ask(&mut s, &mut dev, &[V, 20, 0, 19, 1]), [V, 20, 1, 2]);
+    // Back to voltage mode, then they can be forgotten.
+    assert_eq!(ask(&mut s, &mut dev, &[V, 21, 0, 19, 0]), [V, 21, 1, 2]);
+    assert_eq!(*ask(&mut s, &mut dev, &[V, 22, 0, 11]).last().unwrap(), 0);
+    assert_eq!(ask(&mut s, &mut dev, &[V, 23, 0, 17, 0]), [V, 23, 1, 2]);
+    assert_eq!(ask(&mut s, &mut dev, &[V, 24, 0, 18]), [V, 24, 1, 9, 0]);
 }
 
 #[test]

@@ -16,12 +16,14 @@ use model_core::protocol::{
     decode, encode, Body, Deframed, Deframer, Frame, Request, CRC, MAX_FRAME, PROTOCOL_VERSION,
 };
 
-/// `drive set` with the devices tests' drive: 20 kHz, Δu_z = 2 µm,
+/// `drive set --open-loop` (voltage mode: the tests' devices have ideal
+/// transducers) with the devices tests' drive: 20 kHz, Δu_z = 2 µm,
 /// Δu_x = 0.3 µm, u_z0 = 4 µm, φ = 40° (the drive of
 /// [`host_mu_of_test_drive`]).
 pub const DRIVE: &[&str] = &[
     "drive",
     "set",
+    "--open-loop",
     "--freq",
     "20000",
     "--amp-z",
@@ -34,8 +36,8 @@ pub const DRIVE: &[&str] = &[
     "40",
 ];
 
-/// `device drive set --freq FREQ --amp-z AMP_Z --amp-x AMP_X --offset-z
-/// OFFSET_Z [--phase-deg PHASE_DEG]` (Hz, m, m, m, degrees).
+/// `device drive set --open-loop --freq FREQ --amp-z AMP_Z --amp-x AMP_X
+/// --offset-z OFFSET_Z [--phase-deg PHASE_DEG]` (Hz, m, m, m, degrees).
 pub fn drive_set<'a>(
     freq: &'a str,
     amp_z: &'a str,
@@ -46,6 +48,7 @@ pub fn drive_set<'a>(
     let mut v = vec![
         "drive",
         "set",
+        "--open-loop",
         "--freq",
         freq,
         "--amp-z",

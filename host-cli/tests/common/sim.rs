@@ -24,7 +24,8 @@ impl Drop for Sim {
     }
 }
 
-/// `sim-device --pty --seconds 120` with the default plant.
+/// `sim-device --pty --seconds 120` with the default plant and ideal
+/// transducers ([`spawn`]).
 pub fn sim() -> Sim {
     sim_with(&[], 120)
 }
@@ -36,13 +37,45 @@ pub fn sim_with(plant: &[&str], seconds: u32) -> Sim {
     s
 }
 
+/// The flags that choose resonant transducers.
+const RESONANT_FLAGS: &[&str] = &[
+    "--plant-resonance-z",
+    "--plant-q-z",
+    "--plant-resonance-x",
+    "--plant-q-x",
+    "--plant-gain-z",
+    "--plant-gain-x",
+    "--plant-resonance-drift-z",
+    "--plant-resonance-drift-x",
+    "--plant-thermal-shift",
+    "--plant-crosstalk",
+    "--plant-load-q",
+];
+
 /// `sim-device ARGS`; [`Sim::path`] is the first line it prints (the pty's
-/// path, or the TCP address with `--tcp`).
+/// path, or the TCP address with `--tcp`). Ideal transducers
+/// (`--plant-ideal-transducers`, the board in voltage mode is then exact)
+/// unless ARGS name a resonant flag or `--resonant-default` (the
+/// virtual device's own default, resonant; not passed on).
 pub fn spawn(args: &[&str]) -> Sim {
+    let resonant = args
+        .iter()
+        .any(|a| RESONANT_FLAGS.contains(a) || *a == "--resonant-default");
+    let args: Vec<&str> = args
+        .iter()
+        .copied()
+        .filter(|a| *a != "--resonant-default")
+        .collect();
+    let ideal: &[&str] = if resonant {
+        &[]
+    } else {
+        &["--plant-ideal-transducers"]
+    };
     let mut child = StdCommand::cargo_bin("fricctl")
         .unwrap()
         .arg("sim-device")
-        .args(args)
+        .args(&args)
+        .args(ideal)
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()

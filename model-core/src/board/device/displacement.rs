@@ -395,7 +395,9 @@ impl<const N: usize> Device<'_, N> {
     /// The smoothed measured phasors of the displacement loop (m), `None`
     /// outside displacement mode or before a window.
     pub(super) fn smoothed_motion(&self) -> Option<[C; 2]> {
-        self.loops.avg.filter(|_| self.displacement_mode())
+        self.loops
+            .avg
+            .filter(|_| self.displacement_mode() && self.running)
     }
 
     /// Fills the v5 fields of a status.

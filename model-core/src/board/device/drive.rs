@@ -210,10 +210,12 @@ impl<const N: usize> Device<'_, N> {
             self.loops = super::displacement::Loops::default();
         }
         self.loops.good = 0;
+        self.loops.avg = None;
         self.refresh_scene();
         self.ramp_generation = self.ramp_generation.wrapping_add(1);
         self.reset_motion_peak();
         if self.running {
+            self.ramp_slew(&plan.levels);
             self.dds.set_level(0, plan.levels[0])?;
             self.dds.set_level(1, plan.levels[1])?;
         } else if !self.latch.any() {
@@ -250,6 +252,8 @@ impl<const N: usize> Device<'_, N> {
 
     /// Stops the drive: amplitudes ramp to zero, the normal offset stays.
     pub fn stop(&mut self) {
+        self.loops.good = 0;
+        self.loops.avg = None;
         self.control_off();
         self.dds.ramp_down();
         self.running = false;

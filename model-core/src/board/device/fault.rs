@@ -83,6 +83,14 @@ impl<const N: usize> Device<'_, N> {
         self.latch.bits |= bits;
         self.running = false;
         self.ramp_generation = self.ramp_generation.wrapping_add(1);
+        // At the board's slew, also in displacement mode (whose ramps are
+        // slower, `displacement::RAMP_TAUS`): a resonant mode whose drive
+        // stops rings down freely, without overshoot.
+        self.loops.good = 0;
+        self.loops.avg = None;
+        if let Ok(s) = Self::slew(&self.cfg) {
+            self.dds.set_slew(s);
+        }
         // The rest levels were accepted by `new`: they cannot fail now.
         let _ = self.rest_levels();
     }

@@ -24,13 +24,15 @@ impl<const N: usize> Device<'_, N> {
 
     /// The scene a prediction uses: while the drive runs in displacement
     /// mode and holds ([`Device::drive_settled`]), the *measured* drive
-    /// (the pickups' Δu_z, Δu_x and φ of the last window, with the setting's
+    /// (the pickups' Δu_z, Δu_x and φ as [`Device::status`] reports them,
+    /// averaged over `displacement::SMOOTHING_S`, with the setting's
     /// offset and the DDS frequency); otherwise [`Device::scene`].
     ///
     /// # Errors
     /// [`DeviceError::Scene`].
     pub fn prediction_scene(&self) -> Result<Scene<f32>, DeviceError> {
-        match self.measured_drive() {
+        // The status' measured drive: smoothed over 1 ms in this mode.
+        match self.status().measured {
             Some(m) if self.running && self.displacement_mode() && self.drive_settled() => {
                 let d = self.drive();
                 let mode = if self.allow_liftoff {
