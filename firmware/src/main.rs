@@ -218,13 +218,24 @@ fn main() -> ! {
         offset_z_m: 0.0,
         phase_rad: 0.0,
     });
-    // Pre-fill both halves before the DMA starts.
+    // Pre-fill both halves before the DMA starts (under QEMU through the
+    // emulated analog side, which then knows what they drive).
+    #[cfg(feature = "qemu")]
+    let mut analog = qemu::Analog::new(cfg);
     // SAFETY: the DMA is not running yet; nothing else aliases the buffers.
     unsafe {
         let buf = &mut *core::ptr::addr_of_mut!(DAC_BUF);
         let (a, b) = buf.split_at_mut(HALF);
-        dev.fill_dac(0, a);
-        dev.fill_dac(1, b);
+        #[cfg(not(feature = "qemu"))]
+        {
+            dev.fill_dac(0, a);
+            dev.fill_dac(1, b);
+        }
+        #[cfg(feature = "qemu")]
+        {
+            analog.prefill(&mut dev, 0, a);
+            analog.prefill(&mut dev, 1, b);
+        }
     }
     let mut server = Server::new(info(&cfg));
     cortex_m::interrupt::free(|cs| DEVICE.borrow(cs).replace(Some(dev)));
@@ -267,8 +278,6 @@ fn main() -> ! {
     );
 
     let mut io = Usart2Link;
-    #[cfg(feature = "qemu")]
-    let mut analog = qemu::Analog::new(cfg);
     loop {
         // Feed the independent watchdog (KR = 0xAAAA, RM0090 §21.4.1).
         dp.IWDG.kr().write(|w| unsafe { w.bits(0xAAAA) });

@@ -23,7 +23,9 @@
 //!
 //! The plant is the true contact, deliberately *not* the device's model
 //! (μ₀ 0.3, k_z = k_x = 10⁷ N/m at power-up): μ₀ = [`PLANT_MU0`],
-//! k_z = k_x = 10⁷ N/m, the stage sliding at [`PLANT_V0`], no transducer lag,
+//! k_z = k_x = 10⁷ N/m, the stage sliding at [`PLANT_V0`], ideal transducers
+//! (with the feature `qemu-resonant` the bench's resonant ones,
+//! `model_core::board::plant::bench`),
 //! ADC noise uniform in ±[`ADC_NOISE_COUNTS`] (as the virtual device's
 //! default), rounded to whole counts. It runs in
 //! `f32` with the FastF32 sine, [`SUB`] sub-steps per sample.
@@ -32,6 +34,8 @@ use core::sync::atomic::{AtomicU32, Ordering};
 
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::exception;
+#[cfg(feature = "qemu-resonant")]
+use model_core::board::plant::ResonantOptions;
 use model_core::board::plant::{HalfDrive, Noise, Plant, SampleConditions};
 use model_core::device::DeviceConfig;
 use model_core::float::FastF32;
@@ -93,20 +97,46 @@ pub struct Analog {
     noise: Noise,
     half: usize,
     cfg: DeviceConfig,
+    /// The two halves filled but not yet output, oldest first: as on the
+    /// board, where the DMA outputs one half while the other waits, and
+    /// `main` fills both before the DMA starts, so ADC block `n` samples
+    /// the output of fill `n` while fill `n + 2` is being made. (Running
+    /// the plant on the fill just made would pair ADC block `n` with fill
+    /// `n + 2`: every phase the device references to its fills — the
+    /// forces' harmonics, the pickups' lock-ins — off by two half-buffers.)
+    pending: [Option<HalfDrive>; 2],
 }
 
 impl Analog {
     /// The plant at rest.
     pub fn new(cfg: DeviceConfig) -> Self {
+        #[allow(unused_mut)]
+        let mut plant = Plant::new(PLANT_MU0, PLANT_K, PLANT_K);
+        // `qemu-resonant`: the bench's resonant transducers, advanced with
+        // the exact update over each sub-step.
+        #[cfg(feature = "qemu-resonant")]
+        {
+            let h = 1.0 / (FS_HZ as f32 * SUB as f32);
+            plant.resonant =
+                model_core::board::plant::Resonant::new(ResonantOptions::bench(&cfg), h).ok();
+        }
         Analog {
-            plant: Plant::new(PLANT_MU0, PLANT_K, PLANT_K),
+            plant,
             dac: [0; HALF],
             samples: [(0, 0); HALF],
             pickups: [(0, 0); HALF],
             noise: Noise::new(0x9E37_79B9_7F4A_7C15),
             half: 0,
             cfg,
+            pending: [None, None],
         }
+    }
+
+    /// `main`'s pre-fill of DAC half `half` before the DMA starts, recorded
+    /// as a half waiting to be output.
+    pub fn prefill(&mut self, dev: &mut crate::Dev, half: usize, buf: &mut [u32]) {
+        let d = HalfDrive::fill(dev, half, buf);
+        self.pending = [self.pending[1], Some(d)];
     }
 
     /// Processes one due half-buffer, if any: DAC refill, plant, ADC block.
@@ -134,13 +164,19 @@ impl Analog {
         let half = self.half;
         self.half ^= 1;
         let dac = &mut self.dac;
-        let Some(d) = cortex_m::interrupt::free(|cs| {
+        let Some(made) = cortex_m::interrupt::free(|cs| {
             DEVICE
                 .borrow(cs)
                 .borrow_mut()
                 .as_mut()
                 .map(|dev| HalfDrive::fill(dev, half, dac))
         }) else {
+            return;
+        };
+        // The half output now is the oldest waiting one (`pending`).
+        let out = self.pending[0];
+        self.pending = [self.pending[1], Some(made)];
+        let Some(d) = out else {
             return;
         };
         // With interrupts enabled: the link stays served meanwhile.

@@ -118,13 +118,34 @@ fn status(c: &mut Client) -> CliResult<Status> {
     }
 }
 
-/// Waits `d` of device time (the in-process device advances while waiting).
-fn wait(c: &mut Client, d: Duration) -> CliResult {
-    let until = Instant::now() + d;
-    while Instant::now() < until {
-        let _ = c.next_telemetry(until.saturating_duration_since(Instant::now()))?;
+/// Waits `d` of *device* time at drive frequency `f_hz`, counted in the
+/// pickups' lock-in windows (`MeasuredDrive::windows`): a window is the
+/// whole 64-sample ADC blocks spanning one drive period,
+/// `⌈f_s/(64 f)⌉·64/f_s` s (`device::motion`). Under QEMU, or on a loaded
+/// machine, device time runs slower than the host's clock: a wall-clock
+/// wait would cut the settling short.
+fn wait(c: &mut Client, d: Duration, f_hz: f64, fs: f64) -> CliResult {
+    let block = 64.0;
+    let window_s = (fs / (block * f_hz)).ceil() * block / fs;
+    let n = (d.as_secs_f64() / window_s).ceil() as u64;
+    let windows = |s: &Status| s.measured.map(|m| u64::from(m.windows));
+    let start = Instant::now();
+    let w0 = windows(&status(c)?);
+    loop {
+        let s = status(c)?;
+        check_faults(&s)?;
+        if let (Some(a), Some(b)) = (w0, windows(&s)) {
+            if b.wrapping_sub(a) & 0xffff_ffff >= n {
+                return Ok(());
+            }
+        }
+        if start.elapsed() > Duration::from_secs(30) + 20 * d {
+            return Err(CliError::failure(
+                "identify: the device's lock-in windows do not advance (are its pickups wired?)",
+            ));
+        }
+        let _ = c.next_telemetry(Duration::from_millis(2))?;
     }
-    Ok(())
 }
 
 /// Waits for the drive's ramps, up to `limit`.
@@ -197,8 +218,10 @@ fn response(c: &mut Client, ch: usize) -> CliResult<(f64, f64)> {
 /// Sweeps channel `ch` over `freqs` at amplitude `amp` (m of the DAC
 /// calibration), appending to `rec`; returns the largest measured
 /// displacement amplitude, m.
+#[allow(clippy::too_many_arguments)]
 fn sweep(
     c: &mut Client,
+    fs: f64,
     base: &DriveSetting,
     ch: usize,
     amp: f32,
@@ -220,7 +243,7 @@ fn sweep(
             expect(c.call(Request::Start)?)?;
             wait_settled(c, Duration::from_secs(10))?;
         }
-        wait(c, settle)?;
+        wait(c, settle, f, fs)?;
         let (re, im) = response(c, ch)?;
         let volts = f64::from(amp) / f64::from(metres_per_code(ch))
             * model_core::board::dds::DAC_VOLTS_PER_CODE;
@@ -387,7 +410,8 @@ fn identify_channel(
     let mut rec = Vec::new();
     let amp0 = (0.01 * bound) as f32;
     let coarse = linspace(from, to, a.points);
-    let peak = sweep(c, base, ch, amp0, &coarse, settle, &mut rec)?;
+    let fs = info.sample_rate_hz;
+    let peak = sweep(c, fs, base, ch, amp0, &coarse, settle, &mut rec)?;
     let k = rec
         .iter()
         .enumerate()
@@ -412,7 +436,7 @@ fn identify_channel(
         a.fine_points,
     );
     expect(c.call(Request::Stop)?)?;
-    sweep(c, base, ch, amp1, &fine, settle, &mut rec)?;
+    sweep(c, fs, base, ch, amp1, &fine, settle, &mut rec)?;
     rec.sort_by(|x, y| x.0.total_cmp(&y.0));
     rec.dedup_by(|x, y| x.0 == y.0);
     let record: Vec<Sample> = rec

@@ -22,27 +22,18 @@
 //! resonant flag is given (its loop does not yet run on the displacement
 //! loops: the issue on tracking and the fast loop).
 
-use model_core::board::plant::{ResonantOptions, DAC_VOLTS_PER_CODE};
+use model_core::board::plant::ResonantOptions;
 use model_core::board::resonator::ModeParams;
 
 use crate::args::Real;
 use crate::error::{CliError, CliResult};
 
-/// Default normal resonance, Hz.
-pub const RESONANCE_Z_HZ: f64 = 20_300.0;
-/// Default tangential resonance, Hz.
-pub const RESONANCE_X_HZ: f64 = 19_700.0;
-/// Default normal Q.
-pub const Q_Z: f64 = 300.0;
-/// Default tangential Q.
-pub const Q_X: f64 = 200.0;
-/// Default load: 1/Q_eff = 1/Q + 1/`LOAD_Q`.
-pub const LOAD_Q: f64 = 2000.0;
+pub use model_core::board::plant::bench::{LOAD_Q, Q_X, Q_Z, RESONANCE_X_HZ, RESONANCE_Z_HZ};
 
 /// Default static gain of a channel, m/V: a thirtieth of the ideal
 /// calibration `metres_per_code` per DAC volt (module documentation).
 pub fn default_gain(metres_per_code: f32) -> f64 {
-    f64::from(metres_per_code) / DAC_VOLTS_PER_CODE / 30.0
+    model_core::board::plant::bench::gain(metres_per_code)
 }
 
 /// The domain of a transducer's Q.

@@ -153,6 +153,59 @@ pub struct ResonantOptions<F> {
     pub load_q: F,
 }
 
+/// The bench's transducers, the default of the virtual device and of the
+/// firmware built for QEMU with `qemu-resonant`: a Langevin pair near
+/// 20 kHz, normal mode 20 300 Hz, Q 300; tangential 19 700 Hz, Q 200;
+/// static gains a thirtieth of the board's ideal calibration per DAC volt
+/// (`metres_per_code / DAC_VOLTS_PER_CODE / 30`), so that driven at 20 kHz
+/// the amplitudes come out near the calibration but the phases lag by ≈ 6°
+/// and ≈ 170°; the contact's load 1/Q_load = 1/2000; no drift, heating or
+/// cross-talk.
+pub mod bench {
+    /// Normal resonance, Hz.
+    pub const RESONANCE_Z_HZ: f64 = 20_300.0;
+    /// Tangential resonance, Hz.
+    pub const RESONANCE_X_HZ: f64 = 19_700.0;
+    /// Normal Q.
+    pub const Q_Z: f64 = 300.0;
+    /// Tangential Q.
+    pub const Q_X: f64 = 200.0;
+    /// The contact's load: 1/Q_eff = 1/Q + 1/`LOAD_Q`.
+    pub const LOAD_Q: f64 = 2000.0;
+    /// Static gain ÷ (ideal calibration per DAC volt).
+    pub const GAIN_FRACTION: f64 = 1.0 / 30.0;
+
+    /// Static gain of a channel with ideal calibration `metres_per_code`, m/V.
+    pub fn gain(metres_per_code: f32) -> f64 {
+        f64::from(metres_per_code) / super::DAC_VOLTS_PER_CODE * GAIN_FRACTION
+    }
+}
+
+impl<F: Float> ResonantOptions<F> {
+    /// The bench's transducers ([`bench`]) for the board configuration `cfg`.
+    pub fn bench(cfg: &DeviceConfig) -> Self {
+        let f = F::from_f64;
+        ResonantOptions {
+            modes: [
+                ModeParams {
+                    resonance_hz: f(bench::RESONANCE_Z_HZ),
+                    q: f(bench::Q_Z),
+                    gain_m_per_v: f(bench::gain(cfg.dac_z.metres_per_code)),
+                },
+                ModeParams {
+                    resonance_hz: f(bench::RESONANCE_X_HZ),
+                    q: f(bench::Q_X),
+                    gain_m_per_v: f(bench::gain(cfg.dac_x.metres_per_code)),
+                },
+            ],
+            drift_hz_per_s: [F::ZERO; 2],
+            thermal_hz_per_um2: F::ZERO,
+            crosstalk: F::ZERO,
+            load_q: f(bench::LOAD_Q),
+        }
+    }
+}
+
 /// Time constant of the transducers' self-heating, s (a Langevin stack's
 /// thermal time is seconds to minutes; one second keeps tests short).
 pub const THERMAL_TAU_S: f64 = 1.0;

@@ -47,8 +47,9 @@
 use num_complex::Complex32 as C;
 
 use super::{Device, DeviceError, DriveParam, DriveSetting, Status};
-use crate::board::dds::{phase_word, Level, DAC_VOLTS_PER_CODE};
+use crate::board::dds::{Achieved, Level, DAC_VOLTS_PER_CODE};
 pub use crate::board::protocol::messages::{DriveMode, TransducerModel, Transducers};
+use crate::float::{FastF32, Math};
 
 /// Largest relative error `|X − D|/|D|` of a held channel: 0.4 %, so the
 /// amplitude is within 0.4 % and φ within 0.23° of the setting per channel
@@ -90,6 +91,9 @@ pub(super) struct Loops {
     /// The smoothed measured phasors (`None` until the first window after
     /// a new setting).
     pub(super) avg: Option<[C; 2]>,
+    /// The models' responses Ĥ at the DDS tuning word `.1` (computed once
+    /// per frequency, not per window).
+    pub(super) model_h: Option<([C; 2], u32)>,
 }
 
 impl Default for Loops {
@@ -99,8 +103,35 @@ impl Default for Loops {
             saturated: [false; 2],
             good: 0,
             avg: None,
+            model_h: None,
         }
     }
+}
+
+/// |c| with the fast f32 backend (the board's: `num-complex`'s own would
+/// call libm's `hypotf`, several times dearer on the M4F).
+pub fn norm(c: C) -> f32 {
+    FastF32::hypot(c.re, c.im)
+}
+
+/// arg c in (−π, π], fast f32 backend.
+pub fn arg(c: C) -> f32 {
+    FastF32::atan2(c.im, c.re)
+}
+
+/// `r·e^{jθ}`, fast f32 backend.
+pub fn polar(r: f32, theta: f32) -> C {
+    let (s, c) = FastF32::sin_cos(theta);
+    C::new(r * c, r * s)
+}
+
+/// The DDS phase word of `rad` in f32 (`(rad/2π mod 1)·2³²`, resolution
+/// 2π/2²⁴ ≈ 4e-7 rad: far below the loops' tolerance; no soft f64 on the M4F).
+pub fn phase_word_f32(rad: f32) -> u32 {
+    let t = rad * (1.0 / core::f32::consts::TAU);
+    let frac = t - libm::floorf(t);
+    // frac ∈ [0, 1]: `as` saturates 2³² to u32::MAX (one word short of 0).
+    (frac * 4_294_967_296.0) as u32
 }
 
 /// The two channels' DDS levels (codes) and phase words of a voltage plan.
@@ -135,23 +166,20 @@ pub fn check_model(m: &TransducerModel) -> Result<(), DeviceError> {
 pub fn model_response(m: &TransducerModel, freq_hz: f32) -> C {
     let r = freq_hz / m.resonance_hz;
     let den = C::new(1.0 - r * r, r / m.q);
-    C::from_polar(m.gain_m_per_v, -m.phase_lag_rad) / den
+    polar(m.gain_m_per_v, -m.phase_lag_rad) / den
 }
 
 /// The setting's displacement phasors (D1), m.
 pub fn setpoint(d: &DriveSetting) -> [C; 2] {
-    [
-        C::new(-d.amp_z_m, 0.0),
-        C::from_polar(d.amp_x_m, d.phase_rad),
-    ]
+    [C::new(-d.amp_z_m, 0.0), polar(d.amp_x_m, d.phase_rad)]
 }
 
 /// The DDS level and phase word of a voltage phasor `u` (V) on a channel
 /// with DC `dc` (codes): `A = |U|/v`, `p = arg U + π/2` (D2's convention).
 fn level_of(u: C, dc: f32) -> (Level, u32) {
     let v = DAC_VOLTS_PER_CODE as f32;
-    let amp = u.norm() / v;
-    let word = phase_word(f64::from(u.arg()) + core::f64::consts::FRAC_PI_2);
+    let amp = norm(u) / v;
+    let word = phase_word_f32(arg(u) + core::f32::consts::FRAC_PI_2);
     (Level { amp, dc }, word)
 }
 
@@ -253,7 +281,7 @@ impl<const N: usize> Device<'_, N> {
     pub(super) fn voltage_plan(
         &self,
         d: &DriveSetting,
-        freq_hz: f64,
+        at: &Achieved,
         dc: [f32; 2],
         c: [C; 2],
     ) -> Result<Option<VoltagePlan>, DeviceError> {
@@ -264,16 +292,17 @@ impl<const N: usize> Device<'_, N> {
             return Ok(None);
         };
         let target = setpoint(d);
+        let h_model = self.model_h_at(&t, at);
         let mut levels = [Level { amp: 0.0, dc: 0.0 }; 2];
         let mut words = [0u32; 2];
-        for (ch, m) in [t.z, t.x].iter().enumerate() {
-            let h = model_response(m, freq_hz as f32) * c[ch];
+        for ch in 0..2 {
+            let h = h_model[ch] * c[ch];
             let (lv, w) = level_of(target[ch] / h, dc[ch]);
             let room = dc[ch].min(f32::from(crate::board::dds::DAC_MAX) - dc[ch]);
             // NaN (a zero model response) fails the comparison: refused.
             let fits = lv.amp <= room;
             if !fits || lv.check().is_err() {
-                let max = room.max(0.0) * DAC_VOLTS_PER_CODE as f32 * h.norm();
+                let max = room.max(0.0) * DAC_VOLTS_PER_CODE as f32 * norm(h);
                 return Err(DeviceError::OutOfRange {
                     param: if ch == 0 {
                         DriveParam::AmpZ
@@ -285,7 +314,7 @@ impl<const N: usize> Device<'_, N> {
                 });
             }
             // A zero displacement keeps the ideal phase (no arg of 0).
-            words[ch] = if target[ch].norm() > 0.0 {
+            words[ch] = if norm(target[ch]) > 0.0 {
                 w
             } else {
                 self.ideal_phase_word(ch, d)
@@ -293,6 +322,18 @@ impl<const N: usize> Device<'_, N> {
             levels[ch] = lv;
         }
         Ok(Some((levels, words)))
+    }
+
+    /// The models' responses Ĥ at the DDS frequency `at` (cached per tuning
+    /// word: the loop's windows reuse them).
+    fn model_h_at(&self, t: &Transducers, at: &Achieved) -> [C; 2] {
+        match self.loops.model_h {
+            Some((h, tw)) if tw == at.tuning_word => h,
+            _ => {
+                let f = at.freq_hz as f32;
+                [model_response(&t.z, f), model_response(&t.x, f)]
+            }
+        }
     }
 
     /// One loop step (D3) at the end of a lock-in window of `window_s`
@@ -313,7 +354,14 @@ impl<const N: usize> Device<'_, N> {
         };
         let d = self.drive;
         let target = setpoint(&d);
-        let freq = self.applied.achieved.freq_hz;
+        let at = self.applied.achieved;
+        if self
+            .loops
+            .model_h
+            .is_none_or(|(_, tw)| tw != at.tuning_word)
+        {
+            self.loops.model_h = Some((self.model_h_at(&t, &at), at.tuning_word));
+        }
         let alpha = (window_s / SMOOTHING_S).min(1.0);
         let avg = match self.loops.avg {
             Some(a) => [a[0] + (x[0] - a[0]) * alpha, a[1] + (x[1] - a[1]) * alpha],
@@ -323,12 +371,12 @@ impl<const N: usize> Device<'_, N> {
         let mut within = true;
         let mut c = self.loops.c;
         for (ch, m) in [t.z, t.x].iter().enumerate() {
-            let dn = target[ch].norm();
+            let dn = norm(target[ch]);
             if dn <= 0.0 {
-                within &= avg[ch].norm() <= HOLD_FLOOR_M;
+                within &= norm(avg[ch]) <= HOLD_FLOOR_M;
                 continue;
             }
-            within &= ((avg[ch] - target[ch]) / target[ch]).norm() <= HOLD_TOLERANCE;
+            within &= norm((avg[ch] - target[ch]) / target[ch]) <= HOLD_TOLERANCE;
             let e = (x[ch] - target[ch]) / target[ch];
             let tau = m.q / (core::f32::consts::PI * m.resonance_hz);
             let k = (window_s / (4.0 * tau)).min(0.5);
@@ -338,7 +386,7 @@ impl<const N: usize> Device<'_, N> {
             self.dds.channels()[0].dc_target,
             self.dds.channels()[1].dc_target,
         ];
-        match self.voltage_plan(&d, freq, dc, c) {
+        match self.voltage_plan(&d, &at, dc, c) {
             Ok(Some((levels, words))) => {
                 self.loops.c = c;
                 self.loops.saturated = [false; 2];
@@ -407,11 +455,11 @@ impl<const N: usize> Device<'_, N> {
         // In displacement mode the amplitudes and φ are the smoothed ones
         // the holding test uses (the peak stays the largest raw window).
         if let (Some(m), Some(a)) = (s.measured.as_mut(), self.smoothed_motion()) {
-            m.amp_z_m = a[0].norm();
-            m.amp_x_m = a[1].norm();
+            m.amp_z_m = norm(a[0]);
+            m.amp_x_m = norm(a[1]);
             // (M1) with ψ = arg X.
             let pi = core::f32::consts::PI;
-            let mut phi = a[1].arg() - a[0].arg() + pi;
+            let mut phi = arg(a[1]) - arg(a[0]) + pi;
             while phi > pi {
                 phi -= 2.0 * pi;
             }

@@ -128,7 +128,7 @@ impl<const N: usize> Device<'_, N> {
             ..*d
         };
         if let Some((levels, phases)) =
-            self.voltage_plan(&d_checked, achieved.freq_hz, [lz.dc, lx.dc], c)?
+            self.voltage_plan(&d_checked, &achieved, [lz.dc, lx.dc], c)?
         {
             return Ok(Plan {
                 achieved,

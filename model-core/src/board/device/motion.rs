@@ -126,8 +126,9 @@ impl<const N: usize> Device<'_, N> {
             return None;
         }
         // U = v·e^{j(p − π/2)} for the wave `dc + amp·sin(θ + p)`.
-        let p = crate::board::dds::phase_rad(c.phase) as f32 - core::f32::consts::FRAC_PI_2;
-        let h = x / C::from_polar(v, p);
+        let p = c.phase as f32 * (core::f32::consts::TAU / 4_294_967_296.0)
+            - core::f32::consts::FRAC_PI_2;
+        let h = x / super::displacement::polar(v, p);
         Some([h.re, h.im])
     }
 
