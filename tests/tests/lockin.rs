@@ -10,12 +10,12 @@ use model_core::board::lockin::{LockIn, LockInError, MIN_SPAN_RAD};
 use model_core::Libm;
 
 /// Samples of d + A cos(θ + ψ) at θ_i = θ0 + i·dθ, into a lock-in.
-fn window(n: usize, dtheta: f64, theta0: f64, d: f64, amp: f64, psi: f64) -> LockIn<f64> {
+fn window(n: usize, dtheta: f64, theta0: f64, d: f64, amp: f64, psi: f64) -> LockIn<f64, 1> {
     let mut l = LockIn::new();
     for i in 0..n {
         let th = theta0 + i as f64 * dtheta;
         let p = d + amp * (th + psi).cos();
-        l.push(th.cos(), th.sin(), if i == 0 { 0.0 } else { dtheta }, p);
+        l.push(th.cos(), th.sin(), if i == 0 { 0.0 } else { dtheta }, [p]);
     }
     l
 }
@@ -33,7 +33,7 @@ fn fit_is_exact_over_windows_of_any_length() {
             let psi = -3.0 + 0.5 * k as f64;
             let theta0 = 0.37 * k as f64;
             let l = window(64, dth, theta0, 2000.0, 300.0, psi);
-            let ph = l.solve().unwrap();
+            let [ph] = l.solve().unwrap();
             let amp = ph.amplitude::<Libm>();
             let dpsi = (ph.phase::<Libm>() - psi + 3.0 * TAU / 2.0).rem_euclid(TAU) - TAU / 2.0;
             // Rounding only: sums of 64 terms of size ≤ 2300 (f64), a 2×2
@@ -85,13 +85,13 @@ fn noise_stays_within_the_least_squares_standard_error() {
     let windows = 2000;
     for w in 0..windows {
         let psi = 0.001 * w as f64;
-        let mut l = LockIn::new();
+        let mut l = LockIn::<f64, 1>::new();
         for i in 0..n {
             let th = 0.1 * w as f64 + i as f64 * dth;
             let p = 2000.0 + amp * (th + psi).cos() + sigma * gauss();
-            l.push(th.cos(), th.sin(), if i == 0 { 0.0 } else { dth }, p);
+            l.push(th.cos(), th.sin(), if i == 0 { 0.0 } else { dth }, [p]);
         }
-        let ph = l.solve().unwrap();
+        let [ph] = l.solve().unwrap();
         e_amp += (ph.amplitude::<Libm>() - amp).powi(2);
         let d = (ph.phase::<Libm>() - psi + 3.0 * TAU / 2.0).rem_euclid(TAU) - TAU / 2.0;
         e_phase += d * d;
@@ -121,6 +121,6 @@ fn too_short_windows_are_refused() {
     assert_eq!(l.solve(), Err(LockInError::ShortWindow));
     // Eight such windows accumulated (368°) are long enough.
     let l = window(8 * 64, dth, 0.0, 1.0, 1.0, 0.3);
-    let ph = l.solve().unwrap();
+    let [ph] = l.solve().unwrap();
     assert!((ph.amplitude::<Libm>() - 1.0).abs() < 1e-9);
 }

@@ -84,23 +84,31 @@ impl<F: Float> Phasor<F> {
     }
 }
 
-/// The sums of (L2) over a window.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct LockIn<F> {
+/// The sums of (L2) over a window, for `K` signals sampled at the same
+/// phases (the reference sums Σc, Σs, Σc², Σs², Σcs are shared: the two
+/// pickups of the board cost one reference, not two).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LockIn<F, const K: usize> {
     n: u32,
     c: F,
     s: F,
     cc: F,
     ss: F,
     cs: F,
-    p: F,
-    pc: F,
-    ps: F,
+    p: [F; K],
+    pc: [F; K],
+    ps: [F; K],
     /// The phase travelled from the window's first sample to its last, rad.
     span: F,
 }
 
-impl<F: Float> LockIn<F> {
+impl<F: Float, const K: usize> Default for LockIn<F, K> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<F: Float, const K: usize> LockIn<F, K> {
     /// An empty window.
     pub fn new() -> Self {
         LockIn {
@@ -110,17 +118,19 @@ impl<F: Float> LockIn<F> {
             cc: F::ZERO,
             ss: F::ZERO,
             cs: F::ZERO,
-            p: F::ZERO,
-            pc: F::ZERO,
-            ps: F::ZERO,
+            p: [F::ZERO; K],
+            pc: [F::ZERO; K],
+            ps: [F::ZERO; K],
             span: F::ZERO,
         }
     }
 
-    /// Adds sample `p` taken at the drive phase whose cosine and sine are
-    /// `(cos θ, sin θ)`; `dtheta` is the phase advanced since the previous
-    /// sample (rad, ≥ 0; the DDS's tuning word), counted into the span.
-    pub fn push(&mut self, cos: F, sin: F, dtheta: F, p: F) {
+    /// Adds the samples `p` (one per signal) taken at the drive phase whose
+    /// cosine and sine are `(cos θ, sin θ)`; `dtheta` is the phase advanced
+    /// since the previous sample (rad, ≥ 0; the DDS's tuning word), counted
+    /// into the span.
+    #[inline]
+    pub fn push(&mut self, cos: F, sin: F, dtheta: F, p: [F; K]) {
         if self.n > 0 {
             self.span += dtheta;
         }
@@ -130,9 +140,11 @@ impl<F: Float> LockIn<F> {
         self.cc += cos * cos;
         self.ss += sin * sin;
         self.cs += cos * sin;
-        self.p += p;
-        self.pc += p * cos;
-        self.ps += p * sin;
+        for k in 0..K {
+            self.p[k] += p[k];
+            self.pc[k] += p[k] * cos;
+            self.ps[k] += p[k] * sin;
+        }
     }
 
     /// Samples in the window.
@@ -145,12 +157,12 @@ impl<F: Float> LockIn<F> {
         self.span
     }
 
-    /// The fit (L1) of the window (Cramer's rule on L2, with the sums
-    /// centred on their means first for conditioning).
+    /// The fit (L1) of each signal over the window (Cramer's rule on L2,
+    /// with the sums centred on their means first for conditioning).
     ///
     /// # Errors
     /// [`LockInError`].
-    pub fn solve(&self) -> Result<Phasor<F>, LockInError> {
+    pub fn solve(&self) -> Result<[Phasor<F>; K], LockInError> {
         if self.n < 3 {
             return Err(LockInError::TooFewSamples);
         }
@@ -159,23 +171,33 @@ impl<F: Float> LockIn<F> {
         }
         let n = F::from_u32(self.n);
         // Eliminate d: the 2×2 system of the centred sums.
-        let (mc, ms, mp) = (self.c / n, self.s / n, self.p / n);
+        let (mc, ms) = (self.c / n, self.s / n);
         let scc = self.cc - self.c * mc;
         let sss = self.ss - self.s * ms;
         let scs = self.cs - self.c * ms;
-        let spc = self.pc - self.p * mc;
-        let sps = self.ps - self.p * ms;
         let det = scc * sss - scs * scs;
         if det.is_nan() || det <= F::ZERO {
             return Err(LockInError::ShortWindow);
         }
-        let a = (spc * sss - sps * scs) / det;
-        let b = (sps * scc - spc * scs) / det;
-        Ok(Phasor {
-            mean: mp - a * mc - b * ms,
-            in_phase: a,
-            quadrature: b,
-        })
+        let inv = F::ONE / det;
+        let mut out = [Phasor {
+            mean: F::ZERO,
+            in_phase: F::ZERO,
+            quadrature: F::ZERO,
+        }; K];
+        for (k, o) in out.iter_mut().enumerate() {
+            let mp = self.p[k] / n;
+            let spc = self.pc[k] - self.p[k] * mc;
+            let sps = self.ps[k] - self.p[k] * ms;
+            let a = (spc * sss - sps * scs) * inv;
+            let b = (sps * scc - spc * scs) * inv;
+            *o = Phasor {
+                mean: mp - a * mc - b * ms,
+                in_phase: a,
+                quadrature: b,
+            };
+        }
+        Ok(out)
     }
 
     /// Empties the window.

@@ -31,7 +31,7 @@ pub const WINDOW_SPAN_RAD: f32 = core::f32::consts::TAU;
 /// The pickups' lock-ins and the last result.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct Motion {
-    lock: [LockIn<f32>; 2],
+    lock: LockIn<f32, 2>,
     last: Option<MeasuredDrive>,
     peak_z: f32,
     windows: u32,
@@ -64,24 +64,20 @@ impl<const N: usize> Device<'_, N> {
                 self.table.sin(acc),
                 self.table.sin(acc.wrapping_add(1 << 30)),
             );
-            let first = self.motion.lock[0].samples() == 0;
-            let step = if first { 0.0 } else { dtheta };
             let pz = (f32::from(z) - cz.offset) * cz.gain;
             let px = (f32::from(x) - cx.offset) * cx.gain;
-            self.motion.lock[0].push(c, s, step, pz);
-            self.motion.lock[1].push(c, s, step, px);
+            self.motion.lock.push(c, s, dtheta, [pz, px]);
             acc = acc.wrapping_add(tw);
         }
         let m = &mut self.motion;
-        if m.lock[0].span_rad() < WINDOW_SPAN_RAD {
+        if m.lock.span_rad() < WINDOW_SPAN_RAD {
             return;
         }
-        let window_s = m.lock[0].samples() as f32 / self.cfg.sample_rate_hz as f32;
-        let (Ok(z), Ok(x)) = (m.lock[0].solve(), m.lock[1].solve()) else {
+        let window_s = m.lock.samples() as f32 / self.cfg.sample_rate_hz as f32;
+        let Ok([z, x]) = m.lock.solve() else {
             return;
         };
-        m.lock[0].reset();
-        m.lock[1].reset();
+        m.lock.reset();
         // X = A·e^{jψ} = a − j b (`displacement`'s phasors).
         let xz = C::new(z.in_phase, -z.quadrature);
         let xx = C::new(x.in_phase, -x.quadrature);
