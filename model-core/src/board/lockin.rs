@@ -140,10 +140,10 @@ impl<F: Float, const K: usize> LockIn<F, K> {
         self.cc += cos * cos;
         self.ss += sin * sin;
         self.cs += cos * sin;
-        for k in 0..K {
-            self.p[k] += p[k];
-            self.pc[k] += p[k] * cos;
-            self.ps[k] += p[k] * sin;
+        for (k, &pk) in p.iter().enumerate() {
+            self.p[k] += pk;
+            self.pc[k] += pk * cos;
+            self.ps[k] += pk * sin;
         }
     }
 
