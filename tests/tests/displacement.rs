@@ -412,3 +412,75 @@ fn the_displacement_mode_needs_transducers() {
     assert!(e.to_string().starts_with("q out of range"), "{e}");
     assert_eq!(dev.transducers(), None);
 }
+
+/// The closed μ loop on top of the displacement loops: its commands of
+/// Δu_z become displacement setpoints (the voltage through the model and
+/// the learned correction), and it holds the measured μ at a setpoint the
+/// device's model reaches — here μ* = the model's μ at Δu_z = 1.5 µm (the
+/// device's contact is the plant's, so the loop should settle near
+/// Δu_z = 1.5 µm, and the *true* normal amplitude there).
+///
+/// Bound: the estimate's error on noiseless forces (ADC rounding only,
+/// 0.02 N and 0.01 N per count against f_z ≈ 40 N, f_x ≈ 4 N: ≈ 1e-3 of μ
+/// per sample, averaged over a 4-period estimate's 100 samples) and the
+/// fixed-step plant's μ error (≈ 10·(1+b)/N², N = 100 sub-steps a period:
+/// 2e-3·μ₀): 1 % of μ; the amplitude follows μ through ∂μ/∂Δu_z, so within
+/// 1 % · μ/(Δu_z·|∂μ/∂Δu_z|) ≈ 3 % of 1.5 µm.
+#[test]
+fn the_mu_loop_runs_on_the_displacement_loops() {
+    use model_core::control;
+    use model_core::protocol::ControlSetting;
+    let table = SineTable::<1024>::libm();
+    let mut b = Bench::new(&table, opts(), wrong_model());
+    b.dev.set_drive(setting(2e-6)).unwrap();
+    b.dev.start().unwrap();
+    b.until_settled(20_000);
+    // The target: the model's μ at Δu_z = 1.5 µm and 4 mm/s.
+    let scene15 = model_core::Scene::new(model_core::SceneParams {
+        mu0: MU0 as f32,
+        kz: 1e7,
+        kx: 1e7,
+        uz0: 4e-6,
+        duz: 1.5e-6,
+        dux: 0.3e-6,
+        omega: (TAU * 20_000.0) as f32,
+        phi: 40f32.to_radians(),
+    })
+    .unwrap();
+    let target = model_core::device::predict(&scene15, 0.004).unwrap().mu;
+    let s = ControlSetting {
+        on: true,
+        target_mu: target,
+        v0_m_s: 0.004,
+        gain: 0.7,
+        periods: 4,
+        rate_m_per_s: 1e-3,
+    };
+    b.dev.check_control(&s, false).unwrap();
+    let (scene, now, limit) = b.dev.control_plan_inputs().unwrap();
+    let plan = control::plan(&scene, s.target_mu, s.v0_m_s, now, limit).unwrap();
+    b.dev.set_control(s, Some(plan)).unwrap();
+    // 0.5 s of loop.
+    let mut last = None;
+    for _ in 0..(0.5 / b.t_half()) as usize {
+        last = Some(b.step());
+    }
+    let st = b.dev.control_state();
+    let t = last.unwrap();
+    eprintln!(
+        "target {target}, measured {}, command {:e}, true Δu_z {:e}, updates {}",
+        st.last.measured_mu, st.last.amp_z_m, t.amp_z, st.last.update
+    );
+    assert!(st.setting.on && st.last.update > 10, "{st:?}");
+    assert!(
+        (st.last.measured_mu / target - 1.0).abs() <= 0.01,
+        "{} vs {target}",
+        st.last.measured_mu
+    );
+    assert!(
+        (t.amp_z / 1.5e-6 - 1.0).abs() <= 0.03,
+        "true Δu_z {:e}",
+        t.amp_z
+    );
+    assert_eq!(b.dev.status().faults, 0);
+}

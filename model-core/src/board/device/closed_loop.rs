@@ -34,7 +34,6 @@ use super::config::MAX_VELOCITY_M_S;
 use super::measure::FILL_RING;
 use super::{Device, DeviceError, DriveParam};
 use crate::board::control::{self, Controller, Gains, Plan};
-use crate::board::dds::Level;
 use crate::board::estimator::reasons;
 use crate::board::protocol::messages::{
     ControlSetting, ControlState, ControlUpdate, CONTROL_MAX_PERIODS,
@@ -224,19 +223,15 @@ impl<const N: usize> Device<'_, N> {
     /// applied is applied now; stopped, it becomes the setting's Δu_z);
     /// aborts the loop's estimate. Nothing if it is off.
     pub fn control_off(&mut self) {
-        let (z, off) = (self.cfg.dac_z, self.drive.offset_z_m);
         if let Some(l) = self.control.as_mut().filter(|l| l.on) {
             l.on = false;
             l.setting.on = false;
             // The last command (reported in `last.amp_z_m`) is the one held:
             // one not yet applied is applied now (ramped, while running).
-            if let Some(u) = l.pending.take() {
-                let lz = Level {
-                    amp: u / z.metres_per_code,
-                    dc: z.zero_code + off / z.metres_per_code,
-                };
+            let pending = l.pending.take();
+            if let Some(u) = pending {
                 // Stopped, it only becomes the setting (applied at `Start`).
-                if !self.running || self.dds.set_level(0, lz).is_ok() {
+                if !self.running || self.command_normal(u) {
                     self.drive.amp_z_m = u;
                 }
             }
@@ -277,24 +272,31 @@ impl<const N: usize> Device<'_, N> {
             self.control_off();
             return;
         }
-        let (z, off) = (self.cfg.dac_z, self.drive.offset_z_m);
-        let Some(l) = self.control.as_mut() else {
+        let Some(pending) = self.control.as_mut().map(|l| l.pending.take()) else {
             return;
         };
-        if let Some(u) = l.pending.take() {
-            let lz = Level {
-                amp: u / z.metres_per_code,
-                dc: z.zero_code + off / z.metres_per_code,
-            };
-            // Inside [0, lift-off limit] by (C3): the DDS accepts it.
-            if self.dds.set_level(0, lz).is_ok() {
+        if let Some(u) = pending {
+            // Inside [0, lift-off limit] by (C3): the DDS accepts it (in
+            // displacement mode unless the voltage leaves the DAC: held).
+            if self.command_normal(u) {
                 self.drive.amp_z_m = u;
             }
         }
         // The command in force, if the normal channel has reached it (a level
         // settled before a fill stays settled through it); NaN while it
         // still ramps at the slew rate: that block's estimate is not fresh.
-        l.at_fill[fill as usize % FILL_RING] = if self.dds.channels()[0].settled() {
+        // In displacement mode "reached" is the measured motion holding the
+        // command (the loops trim the voltages every window, so the DDS
+        // itself is rarely exactly at its targets at a fill).
+        let reached = if self.displacement_mode() {
+            self.drive_settled()
+        } else {
+            self.dds.channels()[0].settled()
+        };
+        let Some(l) = self.control.as_mut() else {
+            return;
+        };
+        l.at_fill[fill as usize % FILL_RING] = if reached {
             self.drive.amp_z_m
         } else {
             f32::NAN

@@ -324,6 +324,37 @@ impl<const N: usize> Device<'_, N> {
         Ok(Some((levels, words)))
     }
 
+    /// The closed μ loop's command Δu_z = `u` (m) on the normal channel:
+    /// in voltage mode its calibration level, in displacement mode the
+    /// voltage of D2 with the loop's learned correction (the displacement
+    /// loop then holds it). `true` when applied (the DAC took it).
+    pub(super) fn command_normal(&mut self, u: f32) -> bool {
+        let (z, off) = (self.cfg.dac_z, self.drive.offset_z_m);
+        let dc = z.zero_code + off / z.metres_per_code;
+        if self.displacement_mode() {
+            let d = DriveSetting {
+                amp_z_m: u,
+                ..self.drive
+            };
+            let at = self.applied.achieved;
+            let dcx = self.dds.channels()[1].dc_target;
+            match self.voltage_plan(&d, &at, [dc, dcx], self.loops.c) {
+                Ok(Some((levels, words))) if self.dds.set_level(0, levels[0]).is_ok() => {
+                    self.dds.set_phase(0, words[0]);
+                    self.loops.good = 0;
+                    true
+                }
+                _ => false,
+            }
+        } else {
+            let lz = Level {
+                amp: u / z.metres_per_code,
+                dc,
+            };
+            self.dds.set_level(0, lz).is_ok()
+        }
+    }
+
     /// The models' responses Ĥ at the DDS frequency `at` (cached per tuning
     /// word: the loop's windows reuse them).
     fn model_h_at(&self, t: &Transducers, at: &Achieved) -> [C; 2] {
