@@ -563,8 +563,14 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             let Response::Estimate(e) = r else {
                 return Err(unexpected(r));
             };
+            // The drive that ran: the pickups' measured motion (the last
+            // window, or in displacement mode its 1 ms average) at the end.
+            let measured = match expect(c.call(Request::GetStatus)?)? {
+                Response::Status(st) => st.measured,
+                other => return Err(unexpected(other)),
+            };
             // The numbers are shown even when invalid; the exit code says so.
-            out(t.json, &render::estimate(&e))?;
+            out(t.json, &render::estimate(&e).measured(measured.as_ref()))?;
             check_valid(&e, *allow_invalid)
         }
         DeviceCmd::Status => match expect(c.call(Request::GetStatus)?)? {

@@ -319,7 +319,7 @@ pub fn mode_name(m: model_core::device::DriveMode) -> &'static str {
 impl Report {
     /// The pickups' measured motion (`Status.measured`), `null` / `-` when
     /// the device has none yet.
-    fn measured(self, m: Option<&model_core::device::MeasuredDrive>) -> Self {
+    pub fn measured(self, m: Option<&model_core::device::MeasuredDrive>) -> Self {
         let v = |f: fn(&model_core::device::MeasuredDrive) -> f64| -> Value {
             m.map_or(Value::Null, |m| Value::from(f(m)))
         };
