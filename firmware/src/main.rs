@@ -73,7 +73,11 @@ fn now_us() -> u32 {
         .load(core::sync::atomic::Ordering::Relaxed)
         .wrapping_mul(HALF as u32 * 1_000_000 / FS_HZ)
 }
-static mut ADC_BUF: [u32; 2 * HALF] = [0; 2 * HALF];
+/// Two 32-bit words per ADC tick (dual regular simultaneous, DMA mode 2,
+/// a scan of two conversions per ADC): word 0 the forces (ADC1 IN0 f_z,
+/// ADC2 IN1 f_x), word 1 the motion pickups (ADC1 IN6 = PA6 normal,
+/// ADC2 IN7 = PA7 tangential).
+static mut ADC_BUF: [u32; 4 * HALF] = [0; 4 * HALF];
 
 type Dev = Device<'static, TABLE_N>;
 static DEVICE: Mutex<RefCell<Option<Dev>>> = Mutex::new(RefCell::new(None));
@@ -179,10 +183,20 @@ fn main() -> ! {
         .apb2enr()
         .modify(|r, w| unsafe { w.bits(r.bits() | (1 << 8) | (1 << 9)) });
 
-    // PA0, PA1, PA4, PA5 analog (MODER = 11); PA2, PA3 alternate function (10), AF7.
+    // PA0, PA1 (forces), PA4, PA5 (DAC), PA6, PA7 (motion pickups) analog
+    // (MODER = 11); PA2, PA3 alternate function (10), AF7.
     dp.GPIOA.moder().modify(|r, w| unsafe {
-        let m = r.bits() & !(0xF0F | (0xF << 4));
-        w.bits(m | 0b11 | (0b11 << 2) | (0b10 << 4) | (0b10 << 6) | (0b11 << 8) | (0b11 << 10))
+        let m = r.bits() & !0xFFFF;
+        w.bits(
+            m | 0b11
+                | (0b11 << 2)
+                | (0b10 << 4)
+                | (0b10 << 6)
+                | (0b11 << 8)
+                | (0b11 << 10)
+                | (0b11 << 12)
+                | (0b11 << 14),
+        )
     });
     dp.GPIOA
         .afrl()
@@ -342,7 +356,8 @@ fn dac_dma(dp: &pac::Peripherals) {
     st.par().write(|w| unsafe { w.bits(dhr12rd) });
     st.m0ar()
         .write(|w| unsafe { w.bits(core::ptr::addr_of!(DAC_BUF) as u32) });
-    st.ndtr().write(|w| unsafe { w.bits((2 * HALF) as u32) });
+    // Two words per tick (forces, pickups), two halves.
+    st.ndtr().write(|w| unsafe { w.bits((4 * HALF) as u32) });
     // CHSEL = 7, PL = high, MSIZE = PSIZE = 32 bit, MINC, CIRC, DIR = memory→peripheral, TCIE, HTIE.
     st.cr().write(|w| unsafe {
         w.bits(
@@ -374,7 +389,8 @@ fn adc_dma(dp: &pac::Peripherals) {
     st.par().write(|w| unsafe { w.bits(0x4001_2308) });
     st.m0ar()
         .write(|w| unsafe { w.bits(core::ptr::addr_of!(ADC_BUF) as u32) });
-    st.ndtr().write(|w| unsafe { w.bits((2 * HALF) as u32) });
+    // Two words per tick (forces, pickups), two halves.
+    st.ndtr().write(|w| unsafe { w.bits((4 * HALF) as u32) });
     // CHSEL = 0, PL = very high, 32 bit both sides, MINC, CIRC, DIR = peripheral→memory, TCIE, HTIE.
     st.cr().write(|w| unsafe {
         w.bits(
@@ -386,13 +402,20 @@ fn adc_dma(dp: &pac::Peripherals) {
     dp.ADC_COMMON
         .ccr()
         .write(|w| unsafe { w.bits((0b01 << 16) | (0b10 << 14) | (1 << 13) | 0b00110) });
-    // One conversion each: SQ1 = IN0 / IN1, 3-cycle sampling (≈ 0.7 µs per conversion).
-    dp.ADC1.sqr1().write(|w| unsafe { w.bits(0) });
-    dp.ADC2.sqr1().write(|w| unsafe { w.bits(0) });
-    dp.ADC1.sqr3().write(|w| unsafe { w.bits(0) });
-    dp.ADC2.sqr3().write(|w| unsafe { w.bits(1) });
+    // A scan of two conversions each (SQR1 L = 1): ADC1 SQ1 = IN0 (f_z),
+    // SQ2 = IN6 (PA6, normal pickup); ADC2 SQ1 = IN1 (f_x), SQ2 = IN7 (PA7,
+    // tangential pickup); 3-cycle sampling: 15 ADC clocks = 0.71 µs per
+    // conversion, 1.43 µs per tick of 2 µs. DMA mode 2 requests one word per
+    // pair of simultaneous conversions (RM0090 §13.9.3): two per tick.
+    dp.ADC1.sqr1().write(|w| unsafe { w.bits(1 << 20) });
+    dp.ADC2.sqr1().write(|w| unsafe { w.bits(1 << 20) });
+    dp.ADC1.sqr3().write(|w| unsafe { w.bits(6 << 5) });
+    dp.ADC2.sqr3().write(|w| unsafe { w.bits(1 | (7 << 5)) });
     dp.ADC1.smpr2().write(|w| unsafe { w.bits(0) });
     dp.ADC2.smpr2().write(|w| unsafe { w.bits(0) });
+    // SCAN (CR1 bit 8) on both.
+    dp.ADC1.cr1().write(|w| unsafe { w.bits(1 << 8) });
+    dp.ADC2.cr1().write(|w| unsafe { w.bits(1 << 8) });
     dp.ADC2.cr2().write(|w| unsafe { w.bits(1) }); // ADON (slave)
                                                    // Master: ADON, EXTEN = rising, EXTSEL = TIM2 TRGO.
     dp.ADC1
@@ -517,7 +540,8 @@ fn DMA1_STREAM5() {
     let (ht, tc) = (isr & (1 << 10) != 0, isr & (1 << 11) != 0); // HTIF5, TCIF5
     dma.hifcr()
         .write(|w| unsafe { w.bits((1 << 10) | (1 << 11) | (1 << 9) | (1 << 8) | (1 << 6)) });
-    let Some(ev) = dma::half_event(ht, tc, ndtr, HALF as u32) else {
+    // Half-buffers of 2·HALF words (forces and pickups of HALF ticks).
+    let Some(ev) = dma::half_event(ht, tc, ndtr, 2 * HALF as u32) else {
         return;
     };
     HALVES.fetch_add(1, core::sync::atomic::Ordering::Relaxed);
@@ -548,13 +572,15 @@ fn DMA2_STREAM0() {
     let ndtr = dma.st(0).ndtr().read().bits();
     let (ht, tc) = (isr & (1 << 4) != 0, isr & (1 << 5) != 0); // HTIF0, TCIF0
     dma.lifcr().write(|w| unsafe { w.bits(0b11_1101) });
-    let Some(ev) = dma::half_event(ht, tc, ndtr, HALF as u32) else {
+    // Half-buffers of 2·HALF words (forces and pickups of HALF ticks).
+    let Some(ev) = dma::half_event(ht, tc, ndtr, 2 * HALF as u32) else {
         return;
     };
     // The DMA wrote the finished half before raising its flag; the acquire
     // fence keeps the reads below after the flag read.
     core::sync::atomic::fence(core::sync::atomic::Ordering::Acquire);
     let mut samples = [(0u16, 0u16); HALF];
+    let mut pickups = [(0u16, 0u16); HALF];
     // SAFETY: a raw pointer to the finished half only (no reference to the
     // buffer the DMA writes into); each word read with `read_volatile`, as
     // memory another bus master owns. The DMA writes the other half for the
@@ -562,18 +588,25 @@ fn DMA2_STREAM0() {
     let first = unsafe {
         core::ptr::addr_of!(ADC_BUF)
             .cast::<u32>()
-            .add(ev.half * HALF)
+            .add(ev.half * 2 * HALF)
     };
-    for (k, s) in samples.iter_mut().enumerate() {
-        let w = unsafe { first.add(k).read_volatile() };
-        // CDR: ADC1 (f_z) in bits 0–15, ADC2 (f_x) in bits 16–31.
-        *s = ((w >> 16) as u16, (w & 0xFFFF) as u16);
+    for (k, (s, p)) in samples.iter_mut().zip(pickups.iter_mut()).enumerate() {
+        let (w0, w1) = unsafe {
+            (
+                first.add(2 * k).read_volatile(),
+                first.add(2 * k + 1).read_volatile(),
+            )
+        };
+        // CDR: ADC1 in bits 0–15, ADC2 in bits 16–31. Word 0: f_z, f_x;
+        // word 1: the normal pickup (IN6), the tangential one (IN7).
+        *s = ((w0 >> 16) as u16, (w0 & 0xFFFF) as u16);
+        *p = ((w1 & 0xFFFF) as u16, (w1 >> 16) as u16);
     }
     cortex_m::interrupt::free(|cs| {
         if let Some(dev) = DEVICE.borrow(cs).borrow_mut().as_mut() {
             // A late handler (both flags) is the fault ADC_OVERRUN, through
             // the device's one fault path.
-            dev.adc_half_done(ev, &samples);
+            dev.adc_half_done_with_pickups(ev, &samples, &pickups);
         }
     });
 }

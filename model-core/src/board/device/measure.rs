@@ -61,6 +61,22 @@ impl<const N: usize> Device<'_, N> {
         self.adc_block(ev.half, samples);
     }
 
+    /// [`Device::adc_half_done`] with the motion pickups' samples `(z, x)`
+    /// of the same ticks ([`Device::adc_block_with_pickups`]): the board's
+    /// ADC interrupt, whose DMA brings forces and pickups together.
+    pub fn adc_half_done_with_pickups(
+        &mut self,
+        ev: HalfEvent,
+        samples: &[(u16, u16)],
+        pickups: &[(u16, u16)],
+    ) {
+        if ev.late {
+            self.adc_blocks = self.adc_blocks.wrapping_add(1);
+            self.fault(faults::ADC_OVERRUN);
+        }
+        self.adc_block_with_pickups(ev.half, samples, pickups);
+    }
+
     /// ADC blocks taken or missed since power-up (the number of the next).
     pub fn adc_blocks(&self) -> u32 {
         self.adc_blocks
