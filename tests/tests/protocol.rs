@@ -1099,6 +1099,12 @@ fn displacement_mode_requests_get_the_spec_answers() {
     // mode already in force: Ok.
     assert_eq!(ask(&mut s, &mut dev, &[V, 19, 0, 17, 0]), [V, 19, 1, 7, 16]);
     assert_eq!(ask(&mut s, &mut dev, &[V, 20, 0, 19, 1]), [V, 20, 1, 2]);
+    // `Reset` (13) keeps the transducers and the mode ("Reset": settings kept):
+    // GetTransducers still answers Some (01 after the response index 9), the
+    // status' last byte (mode) is still 1.
+    assert_eq!(ask(&mut s, &mut dev, &[V, 40, 0, 13]), [V, 40, 1, 2]);
+    assert_eq!(&ask(&mut s, &mut dev, &[V, 41, 0, 18])[..5], [V, 41, 1, 9, 1]);
+    assert_eq!(*ask(&mut s, &mut dev, &[V, 42, 0, 11]).last().unwrap(), 1);
     // Back to voltage mode, then they can be forgotten.
     assert_eq!(ask(&mut s, &mut dev, &[V, 21, 0, 19, 0]), [V, 21, 1, 2]);
     assert_eq!(*ask(&mut s, &mut dev, &[V, 22, 0, 11]).last().unwrap(), 0);
