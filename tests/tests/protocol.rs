@@ -1103,7 +1103,10 @@ fn displacement_mode_requests_get_the_spec_answers() {
     // GetTransducers still answers Some (01 after the response index 9), the
     // status' last byte (mode) is still 1.
     assert_eq!(ask(&mut s, &mut dev, &[V, 40, 0, 13]), [V, 40, 1, 2]);
-    assert_eq!(&ask(&mut s, &mut dev, &[V, 41, 0, 18])[..5], [V, 41, 1, 9, 1]);
+    assert_eq!(
+        &ask(&mut s, &mut dev, &[V, 41, 0, 18])[..5],
+        [V, 41, 1, 9, 1]
+    );
     assert_eq!(*ask(&mut s, &mut dev, &[V, 42, 0, 11]).last().unwrap(), 1);
     // Back to voltage mode, then they can be forgotten.
     assert_eq!(ask(&mut s, &mut dev, &[V, 21, 0, 19, 0]), [V, 21, 1, 2]);
