@@ -4,6 +4,7 @@
 
 use fric_analysis::fit::{self as fitting, FitParam};
 use fric_analysis::load_line as loadline;
+use fric_analysis::motion::simulate::{self, MotionMethod, MotionRequest};
 use fric_analysis::sweep_file::{self, SweepRow};
 use fric_analysis::tune::{self as tuning, Adjust, Maximize, TuneOutcome, TuneRequest};
 use model_core::scene::ContactMode;
@@ -200,4 +201,60 @@ pub fn fit(
         .with("residual_value", arr(value))
         .with("residual_mu", arr(residual_mu))
         .with("residual_std_error", arr(std_error)))
+}
+
+/// A body moved by the vibrated contact (`fricctl motion`): the result and
+/// the trajectory (the last ≤ 50 load periods) as arrays.
+#[pyfunction]
+#[pyo3(signature = (scene, *, mass, force_amp_rel, force_omega, force_offset_rel=0.0, spring=0.0, duration=None, method="auto", tol=1e-3))]
+#[allow(clippy::too_many_arguments)]
+pub fn motion(
+    py: Python<'_>,
+    scene: &Scene,
+    mass: f64,
+    force_amp_rel: f64,
+    force_omega: f64,
+    force_offset_rel: f64,
+    spring: f64,
+    duration: Option<f64>,
+    method: &str,
+    tol: f64,
+) -> PyResult<Record> {
+    let req = MotionRequest {
+        mass,
+        force_amp_rel,
+        force_omega,
+        force_offset_rel,
+        spring,
+        duration,
+        method: MotionMethod::from_name(method).map_err(to_py)?,
+        tol,
+    };
+    let rs = *scene.resolved();
+    let (sim, rows) = py.detach(|| {
+        run(|| {
+            let sim = simulate::simulate(&rs, &req, &mut |_| {})?;
+            let rows = sim.rows(&rs, force_omega);
+            Ok((sim, rows))
+        })
+    })?;
+    let doubtful = sim.doubtful().map(|e| e.msg);
+    if let Some(msg) = &doubtful {
+        warn(py, msg)?;
+    }
+    let col = |f: &dyn Fn(&simulate::Row) -> f64| {
+        PyArray1::from_vec(py, rows.iter().map(f).collect())
+            .into_any()
+            .unbind()
+    };
+    let stuck = PyArray1::from_vec(py, rows.iter().map(|r| r.stuck != 0).collect::<Vec<bool>>())
+        .into_any()
+        .unbind();
+    Ok(Record::of(py, "Motion", &sim.outcome)?
+        .with("doubtful", doubtful.into_pyobject(py)?.into_any().unbind())
+        .with("t", col(&|r| r.t))
+        .with("x", col(&|r| r.x))
+        .with("v", col(&|r| r.v))
+        .with("force", col(&|r| r.force))
+        .with("stuck", stuck))
 }

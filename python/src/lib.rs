@@ -24,5 +24,6 @@ fn fricctl(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(analyses::tune, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::fit, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::load_line, m)?)?;
+    m.add_function(wrap_pyfunction!(analyses::motion, m)?)?;
     Ok(())
 }
