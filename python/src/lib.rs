@@ -25,5 +25,13 @@ fn fricctl(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(analyses::fit, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::load_line, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::motion, m)?)?;
+    m.add_function(wrap_pyfunction!(_panic_for_tests, m)?)?;
     Ok(())
+}
+
+/// A panic inside a computation, for the tests: it must reach Python as
+/// `SolverError`, never as a crash or a `PanicException`.
+#[pyfunction]
+fn _panic_for_tests() -> PyResult<()> {
+    errors::run(|| -> Result<(), fric_analysis::Error> { panic!("deliberate test panic") })
 }
