@@ -42,9 +42,24 @@ def cli():
     return run
 
 
+def short(x):
+    """A number as the CLI's messages write it (Rust `args::short`): the
+    shortest round-trip text, plain within [1e-4, 1e9), else `5e-6`."""
+    import math
+
+    x = float(x)
+    if x == 0.0 or not math.isfinite(x) or 1e-4 <= abs(x) < 1e9:
+        r = repr(x)
+        return r[:-2] if r.endswith(".0") else r
+    m, e = repr(x).split("e") if "e" in repr(x) else (f"{x:e}".split("e"))
+    m = m[:-2] if m.endswith(".0") else m
+    return f"{m}e{int(e)}"
+
+
 def flags(**kw):
-    """Keywords as CLI flags: phi_deg=50 -> ["--phi-deg", "50"]."""
+    """Keywords as CLI flags, numbers as the CLI echoes them: phi_deg=50.0 ->
+    ["--phi-deg", "50"]."""
     out = []
     for k, v in kw.items():
-        out += ["--" + k.replace("_", "-"), repr(v) if isinstance(v, float) else str(v)]
+        out += ["--" + k.replace("_", "-"), short(v) if isinstance(v, float) else str(v)]
     return out

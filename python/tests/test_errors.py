@@ -45,7 +45,7 @@ SCENE_CASES = [
     dict(PAPER, profile="sphere", exponent=2.0),
     dict(PAPER, profile="power", exponent=-1.0),
     dict(PAPER, profile="blob"),
-    dict(PAPER, dux=1.0),  # kx·dux/(mu0·kz·uz0) beyond what f64 resolves
+    dict(PAPER, dux=100.0),  # kx·dux/(mu0·kz·uz0) beyond what f64 resolves
 ]
 
 

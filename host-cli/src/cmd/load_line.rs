@@ -1,23 +1,7 @@
-//! `fricctl load-line`: the contact read as an actuator — stall forces,
-//! no-load velocities, the force–velocity line(s), powers and efficiency
-//! (model-core [`model_core::model::load_line`], whose doc states the sign
-//! conventions and the power balance).
-//!
-//! μ(v) comes through [`crate::motion::law::Law`], the one interface for
-//! every contact model: stall forces, no-load velocities and the output
-//! power `−μ(v)F̄z·v` exist for all of them, and so do the transducers' input
-//! power and the efficiency: the flat punch in permanent contact
-//! ([`load_line::powers`]) and with lift-off ([`load_line::liftoff_powers`]),
-//! closed form; a curved profile as the bed's sum
-//! ([`model_core::mdr::powers::profile_powers`], bound 1e-6).
-//!
-//! A scene may push forward (`μ(0⁺) < 0`: the line `0 < v < v_nl`),
-//! backward (`μ(0⁻) > 0`: `−v_nl' < v < 0`), or neither. The operating
-//! points of maximum power and maximum efficiency are sought over every line
-//! the scene has ([`load_line::best_of`]) and reported with a signed
-//! velocity, the direction, and the contact's force on the body
-//! `−μ(v)F̄z` along `+x` (the external load it holds is `F = μ(v)F̄z`, the
-//! opposite), so that `P_out = force·v ≥ 0` on either line.
+//! `fricctl load-line`: the contact read as an actuator — the flags, the
+//! text, the CSV and the plot of [`fric_analysis::load_line`] (stall forces,
+//! no-load velocities, the force–velocity line(s), powers and efficiency;
+//! its docs state the sign conventions).
 
 mod csv_rows;
 mod plot;

@@ -1,24 +1,6 @@
 //! `fricctl motion`: a body of mass M driven by a slow force over the
-//! vibrated contact (the physics in [`crate::motion`]).
-//!
-//! # Contact models
-//! The law μ(v) comes from [`crate::motion::law::Law`], one interface for
-//! every contact model-core offers (flat punch, lift-off; curved profiles
-//! once they exist): forces are in units of `μ₀F̄z` with `F̄z` the contact's
-//! mean normal force.
-//!
-//! # Method choice (`--method auto`)
-//! The homogenised model replaces the contact by its steady-state law. Its
-//! error `E_h = π²K·reach·S/(2n̄) + N(1 + a)ν/π` (units ωW₀; `reach` 1 for
-//! the flat punch, `N` the arrivals at rest per load period) is derived in
-//! [`crate::motion::estimate`]: `K` bounds the body's acceleration in
-//! ultrasonic units (its ripple within a period against its response time
-//! for `M > 0`; the scale separation `ν·max|dV/dT|` for `M = 0`), `S` is the
-//! law's mean inverse slope; the second term is the stuck body's offset on the
-//! contact's tangential stiffness. The homogenised model always runs first (it is
-//! cheap and gives `K`); `auto` keeps it when `E_h` plus its numerical error
-//! is within `--tol·v_ref`, and runs the resolved one otherwise (`M = 0` is
-//! always homogenised: a massless body has no resolved dynamics).
+//! vibrated contact (the physics and the run in [`crate::motion`],
+//! [`crate::motion::simulate`]): its flags, progress bar, text, CSV and plot.
 
 use std::f64::consts::TAU;
 use std::io::Write;
