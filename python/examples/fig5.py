@@ -31,7 +31,7 @@ ax.axvline(0, color="0.6", lw=0.6)
 ax.set_xlabel("v0 / (ωW0),   W0 = μ0 k_z u_z0 / k_x")
 ax.set_ylabel("μ / μ0")
 ax.set_ylim(-1.1, 1.1)
-ax.set_title(f"Fig. 5: Δu_z/u_z0 = {DUZ_REL}, k_xΔu_x/(μ0 k_z Δu_z) = {RATIO} (exact steady state)")
+ax.set_title(f"Fig. 5: Δu_z/u_z0 = {DUZ_REL:g}, k_xΔu_x/(μ0 k_z Δu_z) = {RATIO:g} (exact steady state)")
 ax.legend(loc="lower right", fontsize=8)
 fig.tight_layout()
 out = sys.argv[1] if len(sys.argv) > 1 else "fig5.png"
