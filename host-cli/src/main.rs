@@ -12,13 +12,14 @@ mod device;
 mod error;
 mod eval;
 mod figures;
-mod fit;
-mod motion;
 mod output;
 mod plot;
 mod scene_args;
 mod sweep;
-mod sweep_file;
+
+// The analysis lives in the library; these paths keep `crate::fit`,
+// `crate::motion` and `crate::sweep_file` for the commands.
+use fric_analysis::{fit, motion, sweep_file};
 
 use std::io::Write;
 use std::process::ExitCode;

@@ -5,7 +5,7 @@ use std::io::Write;
 use clap::Args;
 use model_core::scene::ContactMode;
 
-use crate::args::{short, Real, Short};
+use crate::args::{Real, Short};
 use crate::error::{CliError, CliResult};
 use crate::eval::{
     critical_velocity, from_rel, mean_normal_force_over_kz_uz0, mu_at, MethodArgs, MuOutcome,
@@ -55,14 +55,7 @@ impl MuCmd {
         } else {
             write_text(out, &o, &rs).map_err(stdout_error)?;
         }
-        if o.converged == Some(false) {
-            return Err(CliError::failure(format!(
-                "the fixed-step method did not reach a steady state in {} periods (last period's mu/mu0 = {}, not a result)",
-                o.periods.unwrap_or(0),
-                o.last_mu_over_mu0.map_or("-".to_string(), short)
-            )));
-        }
-        Ok(())
+        o.not_converged().map_or(Ok(()), Err)
     }
 
     /// The velocity (m/s, or ωW0) from `--v0` or `--v-rel`, checked against

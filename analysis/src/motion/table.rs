@@ -33,7 +33,7 @@ const START_CELLS: usize = 64;
 /// Smallest cell, relative to the side's critical velocity.
 const MIN_CELL: f64 = 1e-9;
 /// Most nodes per side (a law needing more is reported, not truncated).
-const MAX_NODES: usize = 200_000;
+pub const MAX_NODES: usize = 200_000;
 
 /// Why a table could not be built.
 #[derive(Debug, Clone, PartialEq)]

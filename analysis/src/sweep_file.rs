@@ -25,7 +25,7 @@ use std::path::Path;
 use model_core::{Scene, SceneParams};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{CliError, CliResult};
+use crate::error::{Error, Result};
 
 /// One measured point of a sweep.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -69,7 +69,7 @@ impl SweepRow {
     ///
     /// # Errors
     /// A one-line usage error naming the row when the drive is not a valid scene.
-    pub fn scene(&self, mu0: f64, kz: f64, kx: f64, line: usize) -> CliResult<Scene<f64>> {
+    pub fn scene(&self, mu0: f64, kz: f64, kx: f64, line: usize) -> Result<Scene<f64>> {
         Scene::new(SceneParams {
             mu0,
             kz,
@@ -80,7 +80,7 @@ impl SweepRow {
             omega: std::f64::consts::TAU * self.freq_hz,
             phi: self.phi_deg.to_radians(),
         })
-        .map_err(|e| CliError::usage(format!("--data: line {line}: {e}")))
+        .map_err(|e| Error::usage(format!("--data: line {line}: {e}")))
     }
 }
 
@@ -88,7 +88,7 @@ impl SweepRow {
 ///
 /// # Errors
 /// A one-line error naming the file and the row for unreadable or malformed data.
-pub fn read(path: &Path) -> CliResult<Vec<SweepRow>> {
+pub fn read(path: &Path) -> Result<Vec<SweepRow>> {
     read_as(path, "data")
 }
 
@@ -96,22 +96,21 @@ pub fn read(path: &Path) -> CliResult<Vec<SweepRow>> {
 ///
 /// # Errors
 /// As [`read`].
-pub fn read_as(path: &Path, flag: &str) -> CliResult<Vec<SweepRow>> {
+pub fn read_as(path: &Path, flag: &str) -> Result<Vec<SweepRow>> {
     if path.is_dir() {
-        return Err(CliError::usage(format!(
+        return Err(Error::usage(format!(
             "--{flag}: {} is a directory",
             path.display()
         )));
     }
     let mut r = csv::Reader::from_path(path)
-        .map_err(|e| CliError::usage(format!("--{flag}: cannot read {}: {e}", path.display())))?;
+        .map_err(|e| Error::usage(format!("--{flag}: cannot read {}: {e}", path.display())))?;
     let mut rows = Vec::new();
     for (i, rec) in r.deserialize::<SweepRow>().enumerate() {
         // Row numbers as a spreadsheet shows them: the header is line 1.
         let line = i + 2;
-        let row = rec.map_err(|e| {
-            CliError::usage(format!("--{flag}: {} line {line}: {e}", path.display()))
-        })?;
+        let row = rec
+            .map_err(|e| Error::usage(format!("--{flag}: {} line {line}: {e}", path.display())))?;
         rows.push(row);
     }
     Ok(rows)

@@ -27,9 +27,9 @@ use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use serde::Serialize;
 use statrs::distribution::{ContinuousCDF, StudentsT};
 
-use crate::args::short;
-use crate::error::{CliError, CliResult};
-use crate::scene_args::domain;
+use crate::error::{Error, Result};
+use crate::numbers::short;
+use crate::scene::domain;
 use crate::sweep_file::SweepRow;
 
 /// A fittable contact parameter.
@@ -54,25 +54,25 @@ impl FitParam {
     ///
     /// # Errors
     /// One line naming `--params` and the allowed names.
-    pub fn parse_list(s: &str) -> CliResult<Vec<FitParam>> {
+    pub fn parse_list(s: &str) -> Result<Vec<FitParam>> {
         let mut out = Vec::new();
         for name in s.split(',').map(str::trim) {
             let p = match name {
                 "mu0" => FitParam::Mu0,
                 "kx_over_kz" => FitParam::KxOverKz,
                 other => {
-                    return Err(CliError::usage(format!(
+                    return Err(Error::usage(format!(
                         "--params: unknown parameter '{other}' (allowed: mu0, kx_over_kz)"
                     )))
                 }
             };
             if out.contains(&p) {
-                return Err(CliError::usage(format!("--params: '{name}' given twice")));
+                return Err(Error::usage(format!("--params: '{name}' given twice")));
             }
             out.push(p);
         }
         if out.is_empty() {
-            return Err(CliError::usage("--params: name at least one parameter"));
+            return Err(Error::usage("--params: name at least one parameter"));
         }
         Ok(out)
     }
@@ -127,7 +127,7 @@ pub struct Residual {
 }
 
 /// μ of the exact solver for `row`'s drive with contact `(mu0, kz, kx)`.
-fn model_mu(row: &SweepRow, mu0: f64, kz: f64, kx: f64, line: usize) -> CliResult<f64> {
+fn model_mu(row: &SweepRow, mu0: f64, kz: f64, kx: f64, line: usize) -> Result<f64> {
     let scene = row.scene(mu0, kz, kx, line)?;
     let sol = exact::solve(&scene, row.v0)
         .map_err(|e| crate::eval::exact_failure(e).with_context(&format!("line {line}")))?;
@@ -139,7 +139,7 @@ fn model_mu(row: &SweepRow, mu0: f64, kz: f64, kx: f64, line: usize) -> CliResul
             ..
         } => {
             if mu_0plus != mu_0minus {
-                return Err(CliError::usage(format!(
+                return Err(Error::usage(format!(
                     "row {line}: v0 = 0 with a static equilibrium has no unique μ (μ(0⁻)/μ0 = {mu_0minus:.6}, μ(0⁺)/μ0 = {mu_0plus:.6}); sweep at a sliding velocity"
                 )));
             }
@@ -158,7 +158,7 @@ struct Problem<'a> {
     logs: [f64; 2],
     kz: f64,
     /// The first failure met while evaluating (reported after the fit).
-    failure: std::cell::RefCell<Option<CliError>>,
+    failure: std::cell::RefCell<Option<Error>>,
 }
 
 impl Problem<'_> {
@@ -245,10 +245,10 @@ fn termination_text(t: &levenberg_marquardt::TerminationReason) -> String {
 /// models, non-finite data) name the problem in one line; a fit that does
 /// not converge or whose parameters are not identifiable from the sweep is
 /// a failure (exit 1).
-pub fn fit(rows: &[SweepRow], which: &[FitParam]) -> CliResult<(FitResult, Vec<Residual>)> {
+pub fn fit(rows: &[SweepRow], which: &[FitParam]) -> Result<(FitResult, Vec<Residual>)> {
     let first = rows
         .first()
-        .ok_or_else(|| CliError::usage("--data: the sweep file has no rows"))?;
+        .ok_or_else(|| Error::usage("--data: the sweep file has no rows"))?;
     // The device model's contact, in the scene's domain (the flags' check).
     for (name, v, d) in [
         ("model_mu0", first.model_mu0, domain::MU0),
@@ -256,7 +256,7 @@ pub fn fit(rows: &[SweepRow], which: &[FitParam]) -> CliResult<(FitResult, Vec<R
         ("model_kx", first.model_kx, domain::KX),
     ] {
         d.check(v, &short(v))
-            .map_err(|r| CliError::usage(format!("--data: line 2: {name} {r}")))?;
+            .map_err(|r| Error::usage(format!("--data: line 2: {name} {r}")))?;
     }
     let (mu0_model, kz, kx_model) = (first.model_mu0, first.model_kz, first.model_kx);
     let used: Vec<(usize, SweepRow)> = rows
@@ -267,7 +267,7 @@ pub fn fit(rows: &[SweepRow], which: &[FitParam]) -> CliResult<(FitResult, Vec<R
         .collect();
     for (line, r) in &used {
         if (r.model_mu0, r.model_kz, r.model_kx) != (mu0_model, kz, kx_model) {
-            return Err(CliError::usage(format!(
+            return Err(Error::usage(format!(
                 "--data: line {line}: the device model changed during the sweep (μ0, kz, kx differ from the first row's)"
             )));
         }
@@ -277,20 +277,20 @@ pub fn fit(rows: &[SweepRow], which: &[FitParam]) -> CliResult<(FitResult, Vec<R
             ("v0", r.v0),
         ] {
             if !v.is_finite() {
-                return Err(CliError::usage(format!(
+                return Err(Error::usage(format!(
                     "--data: line {line}: {name} is not a finite number"
                 )));
             }
         }
         if r.std_error < 0.0 {
-            return Err(CliError::usage(format!(
+            return Err(Error::usage(format!(
                 "--data: line {line}: std_error must be ≥ 0"
             )));
         }
     }
     let k = which.len();
     if used.len() <= k {
-        return Err(CliError::usage(format!(
+        return Err(Error::usage(format!(
             "--data: {} valid row(s) for {k} parameter(s): need at least {}",
             used.len(),
             k + 1
@@ -314,7 +314,7 @@ pub fn fit(rows: &[SweepRow], which: &[FitParam]) -> CliResult<(FitResult, Vec<R
         return Err(e);
     }
     if !report.termination.was_successful() {
-        return Err(CliError::failure(format!(
+        return Err(Error::failure(format!(
             "fit did not converge after {} evaluations: {}",
             report.number_of_evaluations,
             termination_text(&report.termination)
@@ -322,10 +322,10 @@ pub fn fit(rows: &[SweepRow], which: &[FitParam]) -> CliResult<(FitResult, Vec<R
     }
     let r = problem
         .residuals()
-        .ok_or_else(|| CliError::failure("fit: the model failed at the optimum"))?;
+        .ok_or_else(|| Error::failure("fit: the model failed at the optimum"))?;
     let j = problem
         .jacobian()
-        .ok_or_else(|| CliError::failure("fit: the model failed at the optimum"))?;
+        .ok_or_else(|| Error::failure("fit: the model failed at the optimum"))?;
     let chi2 = r.norm_squared();
     let dof = used.len() - k;
     let reduced = chi2 / dof as f64;
@@ -336,7 +336,7 @@ pub fn fit(rows: &[SweepRow], which: &[FitParam]) -> CliResult<(FitResult, Vec<R
         .try_inverse()
         .filter(|c| c.iter().all(|x| x.is_finite()) && (0..k).all(|i| c[(i, i)] > 0.0))
         .ok_or_else(|| {
-            CliError::failure(format!(
+            Error::failure(format!(
                 "fit: {} not identifiable from this sweep (the data do not depend on {})",
                 which
                     .iter()
@@ -348,7 +348,7 @@ pub fn fit(rows: &[SweepRow], which: &[FitParam]) -> CliResult<(FitResult, Vec<R
         })?
         * scale;
     let t = StudentsT::new(0.0, 1.0, dof as f64)
-        .map_err(|e| CliError::failure(format!("fit: Student's t: {e}")))?
+        .map_err(|e| Error::failure(format!("fit: Student's t: {e}")))?
         .inverse_cdf(0.975);
     let mut ci = [[0.0; 2]; 2];
     for (i, slot) in ci.iter_mut().enumerate() {

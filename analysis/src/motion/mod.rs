@@ -31,6 +31,7 @@ pub mod estimate;
 pub mod homogenised;
 pub mod law;
 pub mod resolved;
+pub mod simulate;
 pub mod table;
 
 /// The dimensionless problem.

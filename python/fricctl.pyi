@@ -1,0 +1,277 @@
+"""fricctl: dual-mode (normal + tangential) ultrasonic friction control.
+
+The exact steady-state solver of the Popov & Li single-spring model (and its
+lift-off and curved-profile extensions) from Python. Every number comes from
+the same Rust library as the command-line tool ``fricctl``; every keyword is
+one of its flags with underscores (``--phi-deg`` is ``phi_deg``); every
+refusal is its one-line message, raised as ``ValueError`` (bad input) or
+:class:`SolverError` (a computation that failed).
+
+Units: SI (m, N/m, Hz, m/s), or the paper's dimensionless groups (eqs.
+25/26: ``duz_rel``, ``dux_rel``, ``ratio``), with which μ0 = kz = kx = uz0 =
+ω = 1 and velocities are in units of ωW0 = ω μ0 kz uz0 / kx.
+"""
+
+from os import PathLike
+from typing import Any, Dict, Literal, Mapping, Optional, Sequence, Tuple, Union, overload
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+ArrayLike = npt.ArrayLike
+Method = Literal["auto", "exact", "fixed", "approx"]
+Errors = Literal["raise", "nan"]
+
+class SolverError(RuntimeError):
+    """A solver could not produce a result within its bound (the CLI's exit
+    status 1): the drive is ill-conditioned in f64, a fixed-step run did not
+    reach a steady state, or no method meets the tolerance asked."""
+
+class Record:
+    """A result whose fields are plain attributes, named and in the order of
+    the CLI's ``--json`` keys (same quantities, same units)."""
+
+    def __getattr__(self, name: str) -> Any: ...
+    def to_dict(self) -> Dict[str, Any]:
+        """The fields as a dict, in order."""
+
+class Scene:
+    """A contact, its drive and its profile, checked as the CLI checks its
+    scene flags. Immutable: one Scene may be used from many threads.
+
+    Give either the physical quantities (SI units) or the dimensionless
+    groups.
+
+    Args:
+        mu0: local coefficient of friction μ0 (> 0).
+        kz: normal contact stiffness k_z, N/m (for a curved profile E*).
+        kx: tangential contact stiffness k_x, N/m (for a curved profile G*).
+        uz0: mean indentation u_z0, m.
+        duz: normal oscillation amplitude Δu_z, m (≥ uz0: lift-off once per
+            period, eq. L4).
+        dux: tangential oscillation amplitude Δu_x, m.
+        freq: drive frequency f, Hz (or ``omega``, rad/s).
+        omega: drive angular frequency ω, rad/s.
+        phi_deg: phase φ of the tangential oscillation, degrees (default 0;
+            or ``phi_rad``).
+        phi_rad: phase φ, radians.
+        duz_rel: dimensionless Δu_z/u_z0 (eq. 25).
+        dux_rel: dimensionless k_xΔu_x/(μ0 k_z u_z0) (eq. 25).
+        ratio: dimensionless k_xΔu_x/(μ0 k_z Δu_z) (eq. 26, instead of dux_rel).
+        profile: "flat" (default, the paper's punch), "sphere", "cone" or
+            "power" (method of dimensionality reduction).
+        exponent: n of the power profile f = c·rⁿ (n > 0).
+        scene: a TOML scene file (keys as the keywords); keywords override it.
+        liftoff: admit Δu_z ≥ u_z0 (default True); False refuses it as the
+            permanent-contact commands do.
+
+    Raises:
+        ValueError: a parameter out of its domain, named as its CLI flag
+            (``--mu0: must be > 0 (got -1)``).
+    """
+
+    def __init__(
+        self,
+        *,
+        mu0: Optional[float] = None,
+        kz: Optional[float] = None,
+        kx: Optional[float] = None,
+        uz0: Optional[float] = None,
+        duz: Optional[float] = None,
+        dux: Optional[float] = None,
+        freq: Optional[float] = None,
+        omega: Optional[float] = None,
+        phi_deg: Optional[float] = None,
+        phi_rad: Optional[float] = None,
+        duz_rel: Optional[float] = None,
+        dux_rel: Optional[float] = None,
+        ratio: Optional[float] = None,
+        profile: Optional[Literal["flat", "sphere", "cone", "power"]] = None,
+        exponent: Optional[float] = None,
+        scene: Optional[Union[str, PathLike[str]]] = None,
+        liftoff: bool = True,
+    ) -> None: ...
+    @overload
+    def mu(
+        self,
+        v0: float,
+        method: Method = "auto",
+        tol: Optional[float] = None,
+        steps_per_period: Optional[int] = None,
+        return_bound: Literal[False] = False,
+        errors: Errors = "raise",
+    ) -> float: ...
+    @overload
+    def mu(
+        self,
+        v0: float,
+        method: Method = "auto",
+        tol: Optional[float] = None,
+        steps_per_period: Optional[int] = None,
+        *,
+        return_bound: Literal[True],
+        errors: Errors = "raise",
+    ) -> Tuple[float, float]: ...
+    @overload
+    def mu(
+        self,
+        v0: ArrayLike,
+        method: Method = "auto",
+        tol: Optional[float] = None,
+        steps_per_period: Optional[int] = None,
+        return_bound: bool = False,
+        errors: Errors = "raise",
+    ) -> Any: ...
+    def mu(
+        self,
+        v0: Any,
+        method: Method = "auto",
+        tol: Optional[float] = None,
+        steps_per_period: Optional[int] = None,
+        return_bound: bool = False,
+        errors: Errors = "raise",
+    ) -> Any:
+        """The steady-state coefficient of friction μ = ⟨F_x⟩/⟨F_z⟩ at sliding
+        velocity ``v0`` (m/s; units of ωW0 for a dimensionless scene).
+
+        ``v0`` a number gives a float; any array-like gives an ndarray of the
+        same shape, computed in parallel without the GIL. ``|μ| ≤ μ0``; μ = ±μ0
+        beyond the critical velocities (eq. 8).
+
+        Args:
+            method: "auto" (the cheapest method whose guaranteed bound is
+                within ``tol``: ±μ0 beyond v_c, eq. 21/24, the exact solver),
+                "exact" (the event-driven steady-state solver), "fixed" (the
+                paper's fixed-step scheme, §3), "approx" (eq. 21 or eq. 24).
+            tol: the error bound asked of "auto", in units of μ0.
+            steps_per_period: steps of "fixed" (default 10000).
+            return_bound: also return the guaranteed error bound of each μ
+                (units of μ): a pair (μ, bound).
+            errors: "raise" (default) raises on the first failure; "nan"
+                returns NaN there with a RuntimeWarning (solver failures, and
+                v0 NaN or ±inf).
+
+        At v0 = 0 μ is two-sided (any value in [μ(0⁻), μ(0⁺)] holds the body):
+        NaN with a RuntimeWarning pointing to :meth:`mu_limits` (with lift-off
+        μ(0) is unique and returned).
+
+        Raises:
+            ValueError: a bad argument (``--v0: must be of magnitude ≤ 1e100
+                (got inf)``), the CLI's text; for an array the element's
+                index is appended, ``(at v0[3])``.
+            SolverError: a solver failure, or a ``tol`` no method meets.
+        """
+    def critical_velocity(self) -> Tuple[float, float]:
+        """(forward, backward) critical velocities v_c, v_c' in m/s (eq. 8;
+        the contact window's, eq. L5, with lift-off): beyond them the contact
+        slides through the whole period and μ = ±μ0."""
+    def mu_limits(self) -> Tuple[float, float]:
+        """(μ(0⁻), μ(0⁺)): the limits of μ as v0 → 0 from below and above
+        (the static analysis; equal with lift-off)."""
+    def static_interval(self) -> Optional[Tuple[float, float]]:
+        """The exact static interval of the equilibrium displacement u_x0
+        (lo, hi) in m (``fricctl static``'s interval_lo_m, interval_hi_m);
+        None when it is empty or the contact lifts off. Flat punch only
+        (ValueError for a curved profile)."""
+    def regime(self, v0: float) -> Literal["rest", "stick_slip", "sliding"]:
+        """The contact's state at sliding velocity v0: "rest" (v0 = 0),
+        "stick_slip" (|v0| below the critical velocity of its direction) or
+        "sliding" (|μ| = μ0)."""
+    def classify(self) -> Record:
+        """The scene's regime as ``fricctl classify``: ``regime``
+        (active_control, dynamic_ratchet, actuator), mu_0plus_over_mu0,
+        mu_0minus_over_mu0, vc_forward, vc_backward (m/s), asymmetry
+        (max|μ(v)+μ(−v)|/μ0)."""
+    @property
+    def lifts_off(self) -> bool:
+        """Whether Δu_z ≥ u_z0 (the contact lifts off once per period)."""
+    @property
+    def dimensionless(self) -> bool:
+        """Whether the scene was given by its dimensionless groups."""
+    @property
+    def profile(self) -> str:
+        """flat, sphere, cone or power."""
+    @property
+    def mu0(self) -> float:
+        """μ0."""
+    @property
+    def w0(self) -> float:
+        """W0 = μ0 k_z u_z0/k_x, m: the unit of the tangential amplitude (eq. 25)."""
+    @property
+    def velocity_scale(self) -> float:
+        """ωW0, m/s: the unit of dimensionless velocities."""
+
+def tune(
+    scene: Scene,
+    *,
+    adjust: Literal["duz", "dux", "phase"],
+    target_mu_rel: Optional[float] = None,
+    target_mu: Optional[float] = None,
+    maximize: Optional[Literal["asymmetry", "stall-force"]] = None,
+    v0: Optional[float] = None,
+    max_duz: Optional[float] = None,
+    max_dux: Optional[float] = None,
+    liftoff_margin: float = 0.05,
+) -> Record:
+    """Inverse design (``fricctl tune``): the Δu_z, Δu_x (m) or φ (deg) that
+    attains a target μ at sliding velocity ``v0`` (``target_mu_rel`` = μ/μ0
+    in (−1, 1), or ``target_mu``), or that maximises the ratchet asymmetry or
+    the forward stall force, with every drive keeping Δu_z ≤
+    (1 − liftoff_margin)·u_z0. Permanent-contact flat-punch scenes.
+
+    The result's fields are ``fricctl tune --json``'s keys (duz, dux, phi_deg,
+    mu, residual_over_mu0, error_bound_over_mu0, solutions, …). A residual
+    beyond the solver's bound gives a RuntimeWarning (the CLI's exit 1).
+    """
+
+def fit(
+    data: Union[str, PathLike[str], Mapping[str, ArrayLike], Any],
+    params: Optional[Union[str, Sequence[str]]] = None,
+) -> Record:
+    """Identification (``fricctl fit``): μ0 and k_x/k_z fitted to a measured
+    sweep by weighted least squares with the exact solver, with 95 %
+    intervals (Student t).
+
+    Args:
+        data: a sweep file (``fricctl device sweep --csv``), or its columns as
+            a dict of arrays or a pandas DataFrame: freq_hz (Hz), amp_z,
+            amp_x, offset_z (m), phi_deg (°), v0 (m/s), model_mu0, model_kz,
+            model_kx (the device model's contact), measured_mu; optional
+            std_error (0 = unknown: unweighted), valid (rows with 0 are
+            skipped), value (the swept value, for the residuals).
+        params: "mu0,kx_over_kz" (default), or a list of those names.
+
+    The result's fields are ``fricctl fit --json``'s keys (mu0,
+    mu0_ci95_low, mu0_ci95_high, kx_over_kz, …, chi2, dof), plus the arrays
+    residual_value, residual_mu, residual_std_error.
+    """
+
+def load_line(scene: Scene) -> Record:
+    """The contact as an actuator (``fricctl load-line``): stall forces (N),
+    no-load velocities (m/s), the operating points of maximum power and of
+    maximum efficiency, for any contact (flat, lift-off, curved). Fields:
+    ``fricctl load-line --json``'s keys."""
+
+def motion(
+    scene: Scene,
+    *,
+    mass: float,
+    force_amp_rel: float,
+    force_omega: float,
+    force_offset_rel: float = 0.0,
+    spring: float = 0.0,
+    duration: Optional[float] = None,
+    method: Literal["auto", "homogenised", "resolved"] = "auto",
+    tol: float = 1e-3,
+) -> Record:
+    """A body of mass M (kg) on the vibrated contact under the slow force
+    F(t) = μ0·F̄z·(f0 + f·sin Ωt) (``fricctl motion``): the drift, its error
+    estimate, the stick fraction, and the trajectory of the last ≤ 50 load
+    periods as arrays t (s), x (m), v (m/s), force (N), stuck (bool).
+
+    Fields: ``fricctl motion --json``'s keys, plus those arrays and
+    ``doubtful`` (the CLI's exit-1 message, or None; it is also issued as a
+    RuntimeWarning).
+    """

@@ -1,0 +1,436 @@
+//! `fricctl.Scene`: a checked scene and μ over any array of velocities.
+
+use std::path::PathBuf;
+
+use fric_analysis::eval::{self, Method, MethodArgs, MuOutcome};
+use fric_analysis::numbers::{short, Real};
+use fric_analysis::scene::{self as lib, ProfileInput, ResolvedScene, SceneInput};
+use fric_analysis::Error;
+use model_core::analytic::{CriticalVelocity, StaticFriction};
+use model_core::mdr::Profile;
+use model_core::scene::ContactMode;
+use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use rayon::prelude::*;
+
+use crate::errors::{guard, is_solver_failure, run, to_py, warn};
+use crate::record::Record;
+
+/// A scene: the contact, its drive and its profile, checked as the CLI
+/// checks its scene flags. Immutable, so one Scene may be used from many
+/// threads at once.
+#[pyclass(frozen, module = "fricctl")]
+pub struct Scene {
+    input: SceneInput,
+    rs: ResolvedScene,
+}
+
+/// One point of `mu`: μ and its bound (units of μ), or μ two-sided at rest.
+enum Point {
+    Mu(f64, f64),
+    AtRest,
+}
+
+impl Scene {
+    /// The resolved scene.
+    pub fn resolved(&self) -> &ResolvedScene {
+        &self.rs
+    }
+
+    /// The scene as given (for analyses that resolve it their own way).
+    pub fn input(&self) -> &SceneInput {
+        &self.input
+    }
+
+    /// μ at `v0`, with the CLI's checks of `--v0`.
+    fn point(&self, v0: f64, how: &MethodArgs) -> Result<Point, Error> {
+        lib::check(Real::ANY, v0, "--v0")?;
+        self.rs.velocity(v0, "--v0")?;
+        let o: MuOutcome = eval::mu_at(&self.rs.scene, v0, how)?;
+        if let Some(e) = o.not_converged() {
+            return Err(e);
+        }
+        match (o.mu, o.error_bound_over_mu0) {
+            (Some(m), b) => Ok(Point::Mu(m, b.unwrap_or(f64::NAN) * self.rs.scene.mu0())),
+            (None, _) => Ok(Point::AtRest),
+        }
+    }
+
+    fn how(&self, method: &str, tol: Option<f64>, steps: Option<u32>) -> PyResult<MethodArgs> {
+        let how = MethodArgs {
+            method: Method::from_name(method).map_err(to_py)?,
+            steps_per_period: steps,
+            tol,
+            profile: self.rs.profile,
+        };
+        how.validate().map_err(to_py)?;
+        Ok(how)
+    }
+}
+
+/// The `errors=` policy of `mu`.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum OnError {
+    Raise,
+    Nan,
+}
+
+fn on_error(errors: &str) -> PyResult<OnError> {
+    match errors {
+        "raise" => Ok(OnError::Raise),
+        "nan" => Ok(OnError::Nan),
+        other => Err(PyValueError::new_err(format!(
+            "errors: invalid value '{other}' (one of: raise, nan)"
+        ))),
+    }
+}
+
+const AT_REST: &str = "mu: at v0 = 0 the friction is two-sided (any value between mu(0-) and mu(0+) holds the body at rest): NaN returned; Scene.mu_limits() gives (mu(0-), mu(0+))";
+
+#[pymethods]
+impl Scene {
+    #[new]
+    #[pyo3(signature = (*, mu0=None, kz=None, kx=None, uz0=None, duz=None, dux=None, freq=None, omega=None, phi_deg=None, phi_rad=None, duz_rel=None, dux_rel=None, ratio=None, profile=None, exponent=None, scene=None, liftoff=true))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        mu0: Option<f64>,
+        kz: Option<f64>,
+        kx: Option<f64>,
+        uz0: Option<f64>,
+        duz: Option<f64>,
+        dux: Option<f64>,
+        freq: Option<f64>,
+        omega: Option<f64>,
+        phi_deg: Option<f64>,
+        phi_rad: Option<f64>,
+        duz_rel: Option<f64>,
+        dux_rel: Option<f64>,
+        ratio: Option<f64>,
+        profile: Option<&str>,
+        exponent: Option<f64>,
+        scene: Option<PathBuf>,
+        liftoff: bool,
+    ) -> PyResult<Scene> {
+        let profile = match profile {
+            None => None,
+            Some(name) => Some(lib::ProfileKind::from_name(name).ok_or_else(|| {
+                PyValueError::new_err(format!(
+                    "--profile: invalid value '{name}' (one of: flat, sphere, cone, power)"
+                ))
+            })?),
+        };
+        let input = SceneInput {
+            scene,
+            mu0,
+            kz,
+            kx,
+            uz0,
+            duz,
+            dux,
+            freq,
+            omega,
+            phi_deg,
+            phi_rad,
+            duz_rel,
+            dux_rel,
+            ratio,
+            contact: ProfileInput { profile, exponent },
+        };
+        let mode = if liftoff {
+            ContactMode::Intermittent
+        } else {
+            ContactMode::Permanent
+        };
+        let rs = run(|| input.resolve_with(mode))?;
+        Ok(Scene { input, rs })
+    }
+
+    /// μ at sliding velocity `v0` (m/s; units of ωW0 for a dimensionless
+    /// scene): a float for a number, an ndarray of the same shape for an
+    /// array-like.
+    #[pyo3(signature = (v0, method="auto", tol=None, steps_per_period=None, return_bound=false, errors="raise"))]
+    #[allow(clippy::too_many_arguments)]
+    fn mu(
+        &self,
+        py: Python<'_>,
+        v0: &Bound<'_, PyAny>,
+        method: &str,
+        tol: Option<f64>,
+        steps_per_period: Option<u32>,
+        return_bound: bool,
+        errors: &str,
+    ) -> PyResult<Py<PyAny>> {
+        let how = self.how(method, tol, steps_per_period)?;
+        let policy = on_error(errors)?;
+        let np = py.import("numpy")?;
+        let is_array = v0.is_instance(&np.getattr("ndarray")?)?;
+        if !is_array {
+            if let Ok(x) = v0.extract::<f64>() {
+                let (m, b) = match guard(|| self.point(x, &how)) {
+                    Ok(Point::Mu(m, b)) => (m, b),
+                    Ok(Point::AtRest) => {
+                        warn(py, AT_REST)?;
+                        (f64::NAN, f64::NAN)
+                    }
+                    Err(e) if policy == OnError::Nan && nan_allowed(&e) => {
+                        warn(py, &format!("mu: NaN returned: {}", e.msg))?;
+                        (f64::NAN, f64::NAN)
+                    }
+                    Err(e) => return Err(to_py(e)),
+                };
+                return if return_bound {
+                    Ok((m, b).into_pyobject(py)?.into_any().unbind())
+                } else {
+                    Ok(m.into_pyobject(py)?.into_any().unbind())
+                };
+            }
+        }
+        let arr = np.call_method1("asarray", (v0, np.getattr("float64")?))?;
+        let arr = arr.cast_into::<PyArrayDyn<f64>>()?;
+        let shape: Vec<usize> = arr.shape().to_vec();
+        let xs: Vec<f64> = arr.readonly().as_array().iter().copied().collect();
+        let results: Vec<Result<Point, Error>> = py
+            .detach(|| {
+                guard(|| {
+                    Ok(xs
+                        .par_iter()
+                        .map(|&x| guard(|| self.point(x, &how)))
+                        .collect())
+                })
+            })
+            .map_err(to_py)?;
+        let mut mu = Vec::with_capacity(xs.len());
+        let mut bound = Vec::with_capacity(xs.len());
+        let (mut at_rest, mut failed, mut first_failure) = (0usize, 0usize, None);
+        for (i, r) in results.into_iter().enumerate() {
+            let (m, b) = match r {
+                Ok(Point::Mu(m, b)) => (m, b),
+                Ok(Point::AtRest) => {
+                    at_rest += 1;
+                    (f64::NAN, f64::NAN)
+                }
+                Err(e) if policy == OnError::Nan && nan_allowed(&e) => {
+                    failed += 1;
+                    first_failure.get_or_insert(e.msg);
+                    (f64::NAN, f64::NAN)
+                }
+                Err(e) => {
+                    return Err(to_py(
+                        e.with_context(&format!("v0[{}]", flat_index(&shape, i))),
+                    ))
+                }
+            };
+            mu.push(m);
+            bound.push(b);
+        }
+        if at_rest > 0 {
+            warn(py, &format!("{AT_REST} ({at_rest} point(s))"))?;
+        }
+        if let Some(msg) = first_failure {
+            warn(
+                py,
+                &format!("mu: NaN returned at {failed} point(s); the first: {msg}"),
+            )?;
+        }
+        let to_arr = |v: Vec<f64>| -> PyResult<Py<PyAny>> {
+            let a = numpy::ndarray::ArrayD::from_shape_vec(shape.clone(), v)
+                .map_err(|e| PyValueError::new_err(e.to_string()))?;
+            Ok(numpy::PyArray::from_owned_array(py, a).into_any().unbind())
+        };
+        if return_bound {
+            Ok((to_arr(mu)?, to_arr(bound)?)
+                .into_pyobject(py)?
+                .into_any()
+                .unbind())
+        } else {
+            to_arr(mu)
+        }
+    }
+
+    /// Critical velocities (forward, backward), m/s (eq. 8; eq. L5 of the
+    /// lift-off model when the contact lifts off).
+    fn critical_velocity(&self) -> PyResult<(f64, f64)> {
+        let vc: CriticalVelocity<f64> = run(|| eval::critical_velocity(&self.rs.scene))?;
+        Ok((vc.forward, vc.backward))
+    }
+
+    /// (μ(0⁻), μ(0⁺)): the limits of μ as v0 → 0 from below and above
+    /// (equal when the contact lifts off: the force at rest is unique).
+    fn mu_limits(&self) -> PyResult<(f64, f64)> {
+        let how = self.how("auto", None, None)?;
+        let o = run(|| eval::mu_at(&self.rs.scene, 0.0, &how))?;
+        let mu0 = self.rs.scene.mu0();
+        match (o.mu, o.mu_0minus_over_mu0, o.mu_0plus_over_mu0) {
+            (Some(m), _, _) => Ok((m, m)),
+            (None, Some(lo), Some(hi)) => Ok((lo * mu0, hi * mu0)),
+            _ => Err(to_py(Error::failure(
+                "mu_limits: no limits at rest (internal)",
+            ))),
+        }
+    }
+
+    /// The exact static interval of the equilibrium displacement u_x0, m:
+    /// (lo, hi), or None when it is empty or when the contact lifts off
+    /// (`fricctl static`'s interval_lo_m, interval_hi_m).
+    fn static_interval(&self) -> PyResult<Option<(f64, f64)>> {
+        if self.rs.profile != Profile::Flat {
+            return Err(to_py(Error::usage(format!(
+                "--profile: the static analysis is for the flat punch; for a {} profile `fricctl mu --v0 0` gives mu(0+) and mu(0-)",
+                self.rs.profile.name()
+            ))));
+        }
+        let s = &self.rs.scene;
+        if s.lifts_off() {
+            return Ok(None);
+        }
+        Ok(StaticFriction::of(s).interval_m(s))
+    }
+
+    /// The state of the contact at sliding velocity v0: "rest" (v0 = 0),
+    /// "stick_slip" (0 < |v0| < v_c in its direction) or "sliding" (|v0| ≥ v_c,
+    /// μ = ±μ0).
+    fn regime(&self, v0: f64) -> PyResult<&'static str> {
+        run(|| lib::check(Real::ANY, v0, "--v0"))?;
+        let vc = run(|| eval::critical_velocity(&self.rs.scene))?;
+        Ok(if v0 == 0.0 {
+            "rest"
+        } else if v0.abs() >= vc.for_velocity(v0) {
+            "sliding"
+        } else {
+            "stick_slip"
+        })
+    }
+
+    /// The regime of the scene as `fricctl classify` gives it: active_control,
+    /// dynamic_ratchet or actuator, with the numbers it rests on.
+    fn classify(&self, py: Python<'_>) -> PyResult<Record> {
+        let c = run(|| eval::classify_scene_profile(&self.rs.scene, &self.rs.profile))?;
+        let unit = self.rs.scene.velocity_scale();
+        #[derive(serde::Serialize)]
+        struct Out {
+            regime: &'static str,
+            mu_0plus_over_mu0: f64,
+            mu_0minus_over_mu0: f64,
+            vc_forward: f64,
+            vc_backward: f64,
+            asymmetry: f64,
+        }
+        Record::of(
+            py,
+            "Regime",
+            &Out {
+                regime: c.regime.name(),
+                mu_0plus_over_mu0: c.mu_0plus,
+                mu_0minus_over_mu0: c.mu_0minus,
+                vc_forward: c.c_forward * unit,
+                vc_backward: c.c_backward * unit,
+                asymmetry: c.asymmetry,
+            },
+        )
+    }
+
+    /// Whether the contact lifts off once per period (Δu_z ≥ u_z0).
+    #[getter]
+    fn lifts_off(&self) -> bool {
+        self.rs.scene.lifts_off()
+    }
+
+    /// Whether the scene was given by its dimensionless groups.
+    #[getter]
+    fn dimensionless(&self) -> bool {
+        self.rs.dimensionless
+    }
+
+    /// The contact profile's name: flat, sphere, cone or power.
+    #[getter]
+    fn profile(&self) -> &'static str {
+        self.rs.profile.name()
+    }
+
+    /// μ0.
+    #[getter]
+    fn mu0(&self) -> f64 {
+        self.rs.scene.mu0()
+    }
+
+    /// W0 = μ0 k_z u_z0/k_x, m.
+    #[getter]
+    fn w0(&self) -> f64 {
+        self.rs.scene.w0()
+    }
+
+    /// The velocity unit ωW0, m/s.
+    #[getter]
+    fn velocity_scale(&self) -> f64 {
+        self.rs.scene.velocity_scale()
+    }
+
+    fn __repr__(&self) -> String {
+        let i = &self.input;
+        let mut parts = Vec::new();
+        if let Some(p) = &i.scene {
+            parts.push(format!("scene={:?}", p.display().to_string()));
+        }
+        for (name, x) in [
+            ("mu0", i.mu0),
+            ("kz", i.kz),
+            ("kx", i.kx),
+            ("uz0", i.uz0),
+            ("duz", i.duz),
+            ("dux", i.dux),
+            ("freq", i.freq),
+            ("omega", i.omega),
+            ("phi_deg", i.phi_deg),
+            ("phi_rad", i.phi_rad),
+            ("duz_rel", i.duz_rel),
+            ("dux_rel", i.dux_rel),
+            ("ratio", i.ratio),
+        ] {
+            if let Some(x) = x {
+                parts.push(format!("{name}={}", short(x)));
+            }
+        }
+        if let Some(k) = i.contact.profile {
+            parts.push(format!("profile='{}'", k.name()));
+        }
+        if let Some(n) = i.contact.exponent {
+            parts.push(format!("exponent={}", short(n)));
+        }
+        format!(
+            "Scene({}) # {}{}",
+            parts.join(", "),
+            if self.rs.scene.lifts_off() {
+                "lifts off, "
+            } else {
+                ""
+            },
+            match self.rs.profile {
+                Profile::Flat => "flat punch".to_string(),
+                p => format!("{} profile", p.name()),
+            }
+        )
+    }
+}
+
+/// Whether `errors="nan"` may turn `e` into NaN: solver failures, and
+/// velocities that are not numbers in the domain (NaN, ±inf).
+fn nan_allowed(e: &Error) -> bool {
+    is_solver_failure(e) || e.msg.starts_with("--v0:")
+}
+
+/// The index of the `i`-th element (C order) of an array of `shape`, as text.
+fn flat_index(shape: &[usize], mut i: usize) -> String {
+    if shape.len() <= 1 {
+        return i.to_string();
+    }
+    let mut idx = vec![0; shape.len()];
+    for (k, &n) in shape.iter().enumerate().rev() {
+        idx[k] = i % n.max(1);
+        i /= n.max(1);
+    }
+    idx.iter()
+        .map(|x| x.to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
