@@ -7,7 +7,18 @@
 //! so a PNG is the same on every machine. Axis-aligned rectangles (map cells,
 //! colour bars) are drawn with `shape-rendering="crispEdges"` so that
 //! abutting cells show no anti-aliasing seams.
+//!
+//! **Sub-pixel curves.** plotters hands its backends whole pixels
+//! (`BackendCoord = (i32, i32)`), so a smooth curve drawn through it is a
+//! staircase. Curves (line and dashed series, the maps' reference lines) are
+//! therefore drawn with [`fine_line`]: plotters draws the polyline in a
+//! one-off marker colour (so it keeps its place in the drawing order), and
+//! [`write_chart`] replaces that polyline in the SVG by one through the
+//! points' exact pixel positions (same mapping as plotters, without the
+//! rounding), clipped to the plotting area.
 
+use std::cell::RefCell;
+use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::{Arc, Once};
 
@@ -25,6 +36,264 @@ const FONT_BYTES: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 
 /// PNG pixels per nominal (SVG) pixel.
 pub const PNG_SCALE: f32 = 2.0;
+
+/// From data coordinates of one chart to SVG pixels, without rounding: the
+/// mapping of plotters' `Cartesian2d` (x from the plotting area's left pixel
+/// to its right pixel − 1, y from its bottom pixel − 1 up to its top), on a
+/// linear or a logarithmic axis.
+#[derive(Clone, Copy, Debug)]
+pub struct PixelMap {
+    px: (f64, f64),
+    py: (f64, f64),
+    x: (f64, f64, bool),
+    y: (f64, f64, bool),
+}
+
+impl PixelMap {
+    /// The map of a chart whose plotting area is `area` (as
+    /// `chart.plotting_area()`), axes `x` and `y` (value ranges; `true` for
+    /// a logarithmic axis).
+    pub fn of<DB: DrawingBackend, CT: plotters::coord::CoordTranslate>(
+        area: &DrawingArea<DB, CT>,
+        x: (f64, f64, bool),
+        y: (f64, f64, bool),
+    ) -> Self {
+        let (rx, ry) = area.get_pixel_range();
+        PixelMap {
+            px: (f64::from(rx.start), f64::from(rx.end - 1)),
+            py: (f64::from(ry.end - 1), f64::from(ry.start)),
+            x,
+            y,
+        }
+    }
+
+    fn axis(v: f64, (lo, hi, log): (f64, f64, bool), (p0, p1): (f64, f64)) -> f64 {
+        let t = if log {
+            (v.ln() - lo.ln()) / (hi.ln() - lo.ln())
+        } else {
+            (v - lo) / (hi - lo)
+        };
+        p0 + (p1 - p0) * t
+    }
+
+    /// The pixel position of a data point.
+    pub fn map(&self, (x, y): (f64, f64)) -> (f64, f64) {
+        (
+            Self::axis(x, self.x, self.px),
+            Self::axis(y, self.y, self.py),
+        )
+    }
+
+    /// The plotting area, pixels: (left, top, width, height).
+    fn clip(&self) -> (f64, f64, f64, f64) {
+        (
+            self.px.0,
+            self.py.1,
+            self.px.1 - self.px.0 + 1.0,
+            self.py.0 - self.py.1 + 1.0,
+        )
+    }
+}
+
+/// A curve to be written with exact pixel positions (see the module doc).
+struct FineLine {
+    /// The marker colour plotters drew it in (`#01xxxx`).
+    marker: String,
+    color: RGBColor,
+    width: u32,
+    dash: Option<&'static [u32]>,
+    points: Vec<(f64, f64)>,
+    clip: (f64, f64, f64, f64),
+}
+
+thread_local! {
+    /// The curves of the chart being drawn (emptied by [`write_chart`]).
+    static FINE: RefCell<Vec<FineLine>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Registers the curve through `points` (data coordinates of the chart that
+/// `map` describes) and returns the marker colour to draw it in with
+/// plotters (a `LineSeries` of the same points and `width`).
+pub fn fine_line(
+    map: &PixelMap,
+    points: &[(f64, f64)],
+    color: RGBColor,
+    width: u32,
+    dash: Option<&'static [u32]>,
+) -> RGBColor {
+    FINE.with(|f| {
+        let mut f = f.borrow_mut();
+        let k = f.len();
+        let marker = RGBColor(1, 0x20 + (k >> 8) as u8, (k & 0xff) as u8);
+        f.push(FineLine {
+            marker: format!("#{:02X}{:02X}{:02X}", marker.0, marker.1, marker.2),
+            color,
+            width,
+            dash,
+            points: points.iter().map(|&p| map.map(p)).collect(),
+            clip: map.clip(),
+        });
+        marker
+    })
+}
+
+/// A minus sign (U+2212) for each hyphen-minus of `s` that stands for one:
+/// before a digit or a point, after nothing, a space, a bracket, `=`, `/`,
+/// `(`, or the `e` of an exponent (`1e-3`).
+pub fn minus(s: &str) -> String {
+    let c: Vec<char> = s.chars().collect();
+    let mut out = String::with_capacity(s.len() + 4);
+    for (i, &ch) in c.iter().enumerate() {
+        let next_num = c
+            .get(i + 1)
+            .is_some_and(|n| n.is_ascii_digit() || *n == '.');
+        let prev = if i > 0 { Some(c[i - 1]) } else { None };
+        let exponent = prev == Some('e') && i >= 2 && c[i - 2].is_ascii_digit();
+        let after_sep = prev.is_none_or(|p| " ([{=/,:;≤≥<>…".contains(p));
+        if ch == '-' && next_num && (after_sep || exponent) {
+            out.push('−');
+        } else {
+            out.push(ch);
+        }
+    }
+    out
+}
+
+/// Typesets the text content of an SVG `<text>` element: minus signs
+/// ([`minus`]) and subscripts — `x_{abc}`, `x_ab` (one to three letters,
+/// digits or ±), and `μ0`, `W0`, `v0` as μ₀, W₀, v₀ — as `<tspan>`s shifted
+/// to the baseline's subscript position at 70 % of `size`.
+fn typeset_text(t: &str, size: f64) -> String {
+    let t = minus(t);
+    let c: Vec<char> = t.chars().collect();
+    let sub = |s: &str| {
+        format!(
+            "<tspan baseline-shift=\"-{:.1}\" font-size=\"{:.1}\">{s}</tspan>",
+            0.22 * size,
+            0.7 * size
+        )
+    };
+    let mut out = String::with_capacity(t.len() + 32);
+    let mut i = 0;
+    while i < c.len() {
+        let ch = c[i];
+        let prev_letter = i > 0 && (c[i - 1].is_alphabetic() || c[i - 1] == ')');
+        if ch == '_' && prev_letter {
+            if c.get(i + 1) == Some(&'{') {
+                if let Some(end) = c[i + 2..].iter().position(|&x| x == '}') {
+                    out.push_str(&sub(&c[i + 2..i + 2 + end].iter().collect::<String>()));
+                    i += end + 3;
+                    continue;
+                }
+            }
+            let n = c[i + 1..]
+                .iter()
+                .take_while(|x| x.is_ascii_alphanumeric() || **x == '±')
+                .count();
+            if (1..=3).contains(&n) {
+                out.push_str(&sub(&c[i + 1..i + 1 + n].iter().collect::<String>()));
+                i += n + 1;
+                continue;
+            }
+        }
+        // μ0, W0, v0 as words of their own.
+        if ch == '0'
+            && i > 0
+            && "μWv".contains(c[i - 1])
+            && (i < 2 || !c[i - 2].is_alphanumeric())
+            && c.get(i + 1).is_none_or(|n| !n.is_alphanumeric())
+        {
+            out.push_str(&sub("0"));
+            i += 1;
+            continue;
+        }
+        out.push(ch);
+        i += 1;
+    }
+    out
+}
+
+/// [`typeset_text`] on every `<text>` element of an SVG.
+fn typeset(svg: &str) -> String {
+    let mut out = String::with_capacity(svg.len() + svg.len() / 8);
+    let mut rest = svg;
+    while let Some(open) = rest.find("<text") {
+        let Some(gt) = rest[open..].find('>').map(|g| open + g + 1) else {
+            break;
+        };
+        let Some(close) = rest[gt..].find("</text>").map(|c| gt + c) else {
+            break;
+        };
+        let tag = &rest[open..gt];
+        let size = tag
+            .split("font-size=\"")
+            .nth(1)
+            .and_then(|s| s.split('"').next())
+            .and_then(|s| s.parse::<f64>().ok())
+            .unwrap_or(14.0);
+        out.push_str(&rest[..gt]);
+        out.push_str(&typeset_text(&rest[gt..close], size));
+        rest = &rest[close..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// Replaces each marker-coloured polyline of `svg` by its exact curve.
+fn refine(svg: &str, lines: &[FineLine]) -> String {
+    let mut out = svg.to_string();
+    let mut defs = String::new();
+    for (i, l) in lines.iter().enumerate() {
+        let key = format!("stroke=\"{}\"", l.marker);
+        // plotters may split a series into several polylines: replace each.
+        while let Some(at) = out.find(&key) {
+            let start = out[..at].rfind("<polyline").unwrap_or(at);
+            let end = out[at..].find("/>").map_or(out.len(), |e| at + e + 2);
+            let mut pts = String::new();
+            for (x, y) in &l.points {
+                let _ = write!(pts, "{x:.2},{y:.2} ");
+            }
+            let dash = l
+                .dash
+                .map(|d| {
+                    let d: Vec<String> = d.iter().map(u32::to_string).collect();
+                    format!(" stroke-dasharray=\"{}\"", d.join(" "))
+                })
+                .unwrap_or_default();
+            let new = format!(
+                "<polyline fill=\"none\" stroke=\"#{:02X}{:02X}{:02X}\" stroke-width=\"{}\" stroke-linejoin=\"round\"{dash} clip-path=\"url(#fine{i})\" points=\"{}\"/>",
+                l.color.0,
+                l.color.1,
+                l.color.2,
+                l.width,
+                pts.trim_end()
+            );
+            // Only the first piece carries the curve; further pieces go.
+            let new = if out[..start].contains(&format!("url(#fine{i})")) {
+                String::new()
+            } else {
+                new
+            };
+            out.replace_range(start..end, &new);
+        }
+        let (x, y, w, h) = l.clip;
+        let _ = write!(
+            defs,
+            "<clipPath id=\"fine{i}\"><rect x=\"{x}\" y=\"{y}\" width=\"{w}\" height=\"{h}\"/></clipPath>"
+        );
+    }
+    if !defs.is_empty() {
+        if let Some(p) = out.find('>').filter(|_| out.starts_with("<svg")) {
+            out.insert_str(p + 1, &format!("\n<defs>{defs}</defs>"));
+        } else if let Some(p) = out
+            .find("<svg")
+            .and_then(|s| out[s..].find('>').map(|e| s + e))
+        {
+            out.insert_str(p + 1, &format!("\n<defs>{defs}</defs>"));
+        }
+    }
+    out
+}
 
 /// Registers the embedded font for plotters' text layout (idempotent).
 pub fn init_font() {
@@ -271,11 +540,14 @@ where
         CliError::failure(format!("{}: {what}: {e}", path.display()))
     };
     let mut svg = String::new();
+    FINE.with(|f| f.borrow_mut().clear());
     {
         let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
         draw(&root).map_err(|e| fail("cannot draw", &e))?;
         root.present().map_err(|e| fail("cannot draw", &e))?;
     }
+    let fine = FINE.with(|f| std::mem::take(&mut *f.borrow_mut()));
+    let svg = typeset(&refine(&svg, &fine));
     let svg = svg.replace("<rect ", "<rect shape-rendering=\"crispEdges\" ");
     let bytes = if kind == "svg" {
         svg.into_bytes()
@@ -477,6 +749,48 @@ fn marker_at<C>(marker: Marker, color: RGBColor) -> impl Fn(C) -> MarkerAt<C> {
     }
 }
 
+/// Dash patterns of a regime map's reference lines (dash, gap, …; pixels):
+/// dashed, dotted, dash-dotted.
+const MAP_DASHES: [&[u32]; 3] = [&[9, 5], &[2, 4], &[12, 4, 2, 4]];
+
+/// A legend sample of a black line with a dash pattern, starting at `at`.
+struct DashSample {
+    at: BackendCoord,
+    pattern: &'static [u32],
+}
+
+impl<'a> PointCollection<'a, BackendCoord> for &'a DashSample {
+    type Point = &'a BackendCoord;
+    type IntoIter = std::iter::Once<&'a BackendCoord>;
+    fn point_iter(self) -> Self::IntoIter {
+        std::iter::once(&self.at)
+    }
+}
+
+impl<DB: DrawingBackend> Drawable<DB> for DashSample {
+    fn draw<I: Iterator<Item = BackendCoord>>(
+        &self,
+        mut pos: I,
+        b: &mut DB,
+        _: (u32, u32),
+    ) -> Result<(), DrawingErrorKind<DB::ErrorType>> {
+        let Some((x, y)) = pos.next() else {
+            return Ok(());
+        };
+        let stroke = BLACK.stroke_width(2);
+        let (mut a, mut k) = (x, 0);
+        while a < x + SAMPLE_W {
+            let len = self.pattern[k % self.pattern.len()] as i32;
+            if k % 2 == 0 {
+                b.draw_path([(a, y), ((a + len).min(x + SAMPLE_W), y)], &stroke)?;
+            }
+            a += len;
+            k += 1;
+        }
+        Ok(())
+    }
+}
+
 /// Dash and gap of dashed series, pixels.
 const DASH: (u32, u32) = (7, 5);
 
@@ -606,6 +920,12 @@ where
         .y_label_area_size(70)
         .build_cartesian_2d(xr, yr)?;
     let (lx, ly) = (e.log_x, e.log_y);
+    let pm = PixelMap::of(
+        chart.plotting_area(),
+        (p.x.0, p.x.1, lx),
+        (p.y.0, p.y.1, ly),
+    );
+    let fine = |seg: &[(f64, f64)], c: RGBColor, dash| fine_line(&pm, seg, c, 2, dash);
     let fx = move |v: &f64| if lx { log_axis_tick(*v) } else { tick(*v) };
     let fy = move |v: &f64| if ly { log_axis_tick(*v) } else { tick(*v) };
     chart
@@ -626,17 +946,19 @@ where
         let mut drawn = false;
         for seg in segments(&s.points) {
             let anno = match mark {
-                Mark::Line => chart.draw_series(LineSeries::new(seg, c.stroke_width(2)))?,
+                Mark::Line => {
+                    let k = fine(&seg, c, None);
+                    chart.draw_series(LineSeries::new(seg, k.stroke_width(2)))?
+                }
                 Mark::LineMarkers(m) => {
-                    chart.draw_series(LineSeries::new(seg.clone(), c.stroke_width(2)))?;
+                    let k = fine(&seg, c, None);
+                    chart.draw_series(LineSeries::new(seg.clone(), k.stroke_width(2)))?;
                     chart.draw_series(seg.into_iter().map(marker_at(m, c)))?
                 }
-                Mark::Dashed => chart.draw_series(DashedLineSeries::new(
-                    seg,
-                    DASH.0,
-                    DASH.1,
-                    c.stroke_width(2),
-                ))?,
+                Mark::Dashed => {
+                    let k = fine(&seg, c, Some(&[DASH.0, DASH.1]));
+                    chart.draw_series(LineSeries::new(seg, k.stroke_width(2)))?
+                }
                 Mark::Points | Mark::Markers(_) => {
                     let m = series_marker(mark).unwrap_or(Marker::Circle);
                     chart.draw_series(seg.into_iter().map(marker_at(m, c)))?
@@ -779,6 +1101,7 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
         .x_label_area_size(50)
         .y_label_area_size(66)
         .build_cartesian_2d(x0..x1, y0..y1)?;
+    let pm = PixelMap::of(chart.plotting_area(), (x0, x1, false), (y0, y1, false));
     chart
         .configure_mesh()
         .disable_mesh()
@@ -804,17 +1127,19 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
     }
     let c0 = m.classes[0].1;
     for pts in &m.class0_lines {
-        chart.draw_series(LineSeries::new(pts.clone(), c0.stroke_width(5)))?;
+        let k = fine_line(&pm, pts, c0, 5, None);
+        chart.draw_series(LineSeries::new(pts.clone(), k.stroke_width(5)))?;
     }
-    for (label, pts) in &m.lines {
-        let a = chart.draw_series(DashedLineSeries::new(
-            pts.clone(),
-            DASH.0,
-            DASH.1,
-            BLACK.stroke_width(2),
-        ))?;
+    for (i, (label, pts)) in m.lines.iter().enumerate() {
+        // Each reference line its own dash pattern (the legend shows it).
+        let pattern = MAP_DASHES[i % MAP_DASHES.len()];
+        let k = fine_line(&pm, pts, BLACK, 2, Some(pattern));
+        let a = chart.draw_series(LineSeries::new(pts.clone(), k.stroke_width(2)))?;
         if !label.is_empty() {
-            a.label(label.as_str()).legend(sample(Mark::Dashed, BLACK));
+            a.label(label.as_str()).legend(move |(x, y)| DashSample {
+                at: (x, y),
+                pattern,
+            });
         }
     }
     chart

@@ -1,9 +1,11 @@
 //! The real firmware binary under QEMU (netduinoplus2 = STM32F405), driven
 //! through `fricctl device --tcp` and through hand-built frames on the raw
-//! link. Needs `qemu-system-arm` and the firmware built with
-//! `--features qemu`; `.ci/run` does both and runs
-//! `cargo test -p host-cli --test qemu -- --ignored --test-threads=1` with
-//! `FIRMWARE_ELF` set (one QEMU at a time, so the measured rate is QEMU's).
+//! link. Needs `qemu-system-arm` and the thumbv7em-none-eabihf target. The
+//! firmware ELF is `FIRMWARE_ELF` if set, else the tests build it themselves
+//! (`cargo build --release --features qemu` in `firmware/`, into
+//! `firmware/target/qemu-tests`, so the hardware build is left alone), once.
+//! QEMU runs one at a time whatever `--test-threads` is (a lock), so the
+//! measured rate is QEMU's: `cargo test -p host-cli --test qemu -- --ignored`.
 //!
 //! QEMU's serial runs with `nodelay=on`: without it QEMU writes each byte on
 //! a socket without TCP_NODELAY, and delayed ACKs throttle the link to tens
@@ -31,6 +33,44 @@ use serde_json::Value;
 struct Qemu {
     child: Child,
     port: u16,
+    /// One QEMU at a time (held until this one is dropped).
+    _turn: std::sync::MutexGuard<'static, ()>,
+}
+
+/// Serialises the QEMU runs of this file.
+static QEMU_TURN: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// The firmware ELF: `FIRMWARE_ELF`, or built here once.
+fn firmware_elf() -> String {
+    static ELF: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    ELF.get_or_init(|| {
+        if let Ok(p) = std::env::var("FIRMWARE_ELF") {
+            return p;
+        }
+        let fw = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../firmware");
+        let target = fw.join("target/qemu-tests");
+        eprintln!("building the firmware with --features qemu (FIRMWARE_ELF not set) …");
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let st = StdCommand::new(cargo)
+            .current_dir(&fw)
+            .args(["build", "--release", "--locked", "--features", "qemu", "--bin", "firmware"])
+            .arg("--target-dir")
+            .arg(&target)
+            // The firmware's own toolchain file and config decide the target.
+            .env_remove("RUSTFLAGS")
+            .env_remove("CARGO_TARGET_DIR")
+            .env_remove("CARGO_BUILD_TARGET")
+            .status()
+            .expect("cargo (to build the firmware)");
+        assert!(
+            st.success(),
+            "building the firmware failed (needs `rustup target add thumbv7em-none-eabihf`); or set FIRMWARE_ELF"
+        );
+        let elf = target.join("thumbv7em-none-eabihf/release/firmware");
+        assert!(elf.is_file(), "no firmware at {}", elf.display());
+        elf.display().to_string()
+    })
+    .clone()
 }
 
 impl Drop for Qemu {
@@ -49,8 +89,8 @@ fn free_port() -> u16 {
 }
 
 fn qemu() -> Qemu {
-    let elf = std::env::var("FIRMWARE_ELF")
-        .expect("FIRMWARE_ELF = path of the firmware built with --features qemu");
+    let turn = QEMU_TURN.lock().unwrap_or_else(|e| e.into_inner());
+    let elf = firmware_elf();
     let port = free_port();
     let child = StdCommand::new("qemu-system-arm")
         .args([
@@ -75,7 +115,7 @@ fn qemu() -> Qemu {
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
-        .expect("qemu-system-arm");
+        .expect("qemu-system-arm (apt-get install qemu-system-arm)");
     // Wait until QEMU listens; the first connection starts the guest (wait=on).
     let t = Instant::now();
     while TcpStream::connect(("127.0.0.1", port)).is_err() {
@@ -88,7 +128,11 @@ fn qemu() -> Qemu {
     // The probe connection above was closed; give the firmware time to enable USART2
     // (bytes sent before that are dropped by the emulated USART; the CLI retries anyway).
     std::thread::sleep(Duration::from_millis(300));
-    Qemu { child, port }
+    Qemu {
+        child,
+        port,
+        _turn: turn,
+    }
 }
 
 fn dev(q: &Qemu, args: &[&str]) -> std::process::Output {
@@ -102,7 +146,7 @@ fn dev(q: &Qemu, args: &[&str]) -> std::process::Output {
 }
 
 #[test]
-#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_ELF is set)"]
 fn real_firmware_under_qemu() {
     let q = qemu();
     let o = dev(&q, &["info"]);
@@ -276,7 +320,7 @@ impl RawLink {
 const REQUEST_TIMEOUT: Duration = Duration::from_millis(1000);
 
 #[test]
-#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_ELF is set)"]
 fn ten_thousand_sequential_requests_all_answered_without_retries() {
     let q = qemu();
     let mut link = RawLink::connect(&q);
@@ -330,7 +374,7 @@ fn ten_thousand_sequential_requests_all_answered_without_retries() {
 }
 
 #[test]
-#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_ELF is set)"]
 fn pipelined_requests_no_loss_or_counted_overflow() {
     let q = qemu();
     let mut link = RawLink::connect(&q);
@@ -449,7 +493,7 @@ impl RawLink {
 }
 
 #[test]
-#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_ELF is set)"]
 fn reset_ends_the_stream_and_the_measurement_on_the_firmware() {
     let q = qemu();
     let mut link = RawLink::connect(&q);
@@ -518,7 +562,7 @@ fn control_fields(on: bool, target_mu: f32) -> Vec<u8> {
 }
 
 #[test]
-#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_ELF is set)"]
 fn closed_loop_messages_on_the_firmware() {
     use model_core::select;
     use model_core::{Libm, Scene, SceneParams};
@@ -714,7 +758,7 @@ fn ok(q: &Qemu, args: &[&str]) -> Value {
 /// where the estimator's aliasing bias is ~1e-6: README "Sweeps, fits"),
 /// Δu_z = 2 µm, Δu_x = 0.3 µm, u_z0 = 4 µm, φ = 40°.
 #[test]
-#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_ELF is set)"]
 fn lab_session_on_the_firmware() {
     let q = qemu();
     ok(&q, &drive_set("2000", "2e-6", "3e-7", "4e-6", Some("40")));
@@ -865,7 +909,7 @@ fn lab_session_on_the_firmware() {
 /// every output ramped to 0, one `RampDone`, the stream ended by the
 /// refusal, `Start` refused until `ResetFaults`.
 #[test]
-#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_ELF is set)"]
 fn adc_saturation_reaches_the_safe_state_on_the_firmware() {
     use model_core::device::faults;
     let q = qemu();

@@ -181,6 +181,10 @@ impl LoadLineCmd {
     /// Runs the command.
     pub fn run(self, out: &mut impl Write) -> CliResult {
         let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
+        crate::output::check_outputs(&[
+            (self.plot.as_deref(), "plot"),
+            (self.csv.as_deref(), "csv"),
+        ])?;
         let s = &rs.scene;
         let p = s.params();
         let law = Law::with_profile(s, rs.profile);

@@ -98,6 +98,7 @@ impl MapCmd {
         if let Some(p) = &a.plot {
             crate::plot::ext(p)?;
         }
+        crate::output::check_outputs(&[(a.plot.as_deref(), "plot"), (a.csv.as_deref(), "csv")])?;
         a.how.validate()?;
         if a.plot.is_none() && a.csv.is_none() {
             return Err(CliError::usage(

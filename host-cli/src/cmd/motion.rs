@@ -363,6 +363,10 @@ impl MotionCmd {
         if let Some(p) = &self.plot {
             crate::plot::ext(p)?;
         }
+        crate::output::check_outputs(&[
+            (self.plot.as_deref(), "plot"),
+            (self.csv.as_deref(), "csv"),
+        ])?;
         let load_period = TAU / big_omega;
         let periods = match self.duration {
             None => None,

@@ -21,7 +21,7 @@ use serde::Serialize;
 
 use crate::args::{short, Real, Short};
 use crate::error::{CliError, CliResult};
-use crate::eval::exact_failure;
+use crate::eval::{critical_velocity, exact_failure, from_rel};
 use crate::output::{stdout_error, write_json};
 use crate::scene_args::{check_reach, ResolvedScene, SceneArgs};
 
@@ -61,9 +61,12 @@ pub enum Maximize {
 pub struct TuneCmd {
     #[command(flatten)]
     scene: SceneArgs,
-    /// Sliding velocity v0, m/s (units of ωW0 for a dimensionless scene); needed with a target
-    #[arg(long, value_parser = Real::ANY)]
+    /// Sliding velocity v0, m/s (units of ωW0 for a dimensionless scene); needed with a target (or --v-rel)
+    #[arg(long, value_parser = Real::ANY, conflicts_with = "v_rel")]
     v0: Option<f64>,
+    /// Velocity relative to v_c of the scene as given (before the adjustment): v0 = X·v_c (forward v_c for X > 0, backward for X < 0)
+    #[arg(long, value_parser = Real::ANY, value_name = "X")]
+    v_rel: Option<f64>,
     /// Target μ/μ0, strictly between −1 and 1
     #[arg(long, value_name = "T", value_parser = Real::ANY.above(-1.0).below(1.0).because("mu/mu0 lies strictly inside (−1, 1): |mu| = mu0 is continuous sliding"))]
     target_mu_rel: Option<f64>,
@@ -298,16 +301,24 @@ impl TuneCmd {
         t: f64,
         flag: &str,
     ) -> CliResult {
-        let v0 = self.v0.ok_or_else(|| {
-            CliError::usage("--v0: missing (a target mu is at a sliding velocity)")
-        })?;
+        let (v0, vflag) =
+            match (self.v0, self.v_rel) {
+                (Some(v), None) => (v, "--v0"),
+                (None, Some(x)) => (
+                    from_rel(&critical_velocity(&rs.scene)?, x, "v-rel")?,
+                    "--v-rel",
+                ),
+                _ => return Err(CliError::usage(
+                    "--v0: missing (a target mu is at a sliding velocity; give --v0 or --v-rel)",
+                )),
+            };
         if v0 == 0.0 {
-            return Err(CliError::usage(
-                "--v0: must be != 0 for a target (at rest mu is not unique; see `fricctl static`)",
-            ));
+            return Err(CliError::usage(format!(
+                "{vflag}: must be != 0 for a target (at rest mu is not unique; see `fricctl static`)"
+            )));
         }
         let mu0 = s.scene.mu0();
-        let v = rs.velocity(v0, "--v0")?;
+        let v = rs.velocity(v0, vflag)?;
         let mut scan = vec![0.0; self.scan_points()];
         let r = match inverse::solve_target::<f64, Libm>(&s.problem, v, t, &mut scan) {
             Ok(r) => r,
@@ -358,10 +369,11 @@ impl TuneCmd {
     }
 
     fn maximize(&self, out: &mut impl Write, s: &Setup, m: Maximize) -> CliResult {
-        if self.v0.is_some() {
-            return Err(CliError::usage(
-                "--v0: not used by --maximize (the asymmetry and the stall force are properties of the whole law)",
-            ));
+        if self.v0.is_some() || self.v_rel.is_some() {
+            let flag = if self.v0.is_some() { "--v0" } else { "--v-rel" };
+            return Err(CliError::usage(format!(
+                "{flag}: not used by --maximize (the asymmetry and the stall force are properties of the whole law)"
+            )));
         }
         let objective = match m {
             Maximize::Asymmetry => Objective::Asymmetry,

@@ -125,14 +125,18 @@ impl SweepArgs {
                 "--points: 1 point needs --from equal to --to",
             ));
         }
-        if !self.resume && self.csv.exists() {
-            return Err(CliError::usage(format!(
-                "--csv: {} exists (--resume to continue that sweep, or choose another file)",
-                self.csv.display()
-            )));
+        if !self.resume {
+            if self.csv.exists() && !crate::output::force() {
+                return Err(CliError::usage(format!(
+                    "--csv: {} exists (--resume to continue that sweep, --force to replace it, or choose another file)",
+                    self.csv.display()
+                )));
+            }
+            crate::output::may_write(&self.csv, "csv")?;
         }
         if let Some(p) = &self.plot {
             crate::plot::ext(p)?;
+            crate::output::may_write(p, "plot")?;
         }
         Ok(())
     }
@@ -334,7 +338,9 @@ pub fn run(c: &mut Client, a: &SweepArgs, json: bool) -> CliResult {
     } else {
         Vec::new()
     };
-    let fresh = rows.is_empty() && std::fs::metadata(&a.csv).map_or(true, |m| m.len() == 0);
+    // Without --resume the file is new or replaced (--force): written from the start.
+    let fresh =
+        !a.resume || (rows.is_empty() && std::fs::metadata(&a.csv).map_or(true, |m| m.len() == 0));
     let file = std::fs::OpenOptions::new()
         .create(true)
         .append(!fresh)
