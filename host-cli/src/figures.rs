@@ -433,17 +433,15 @@ fn liftoff_normal(out: &Path) -> CliResult {
         series,
     };
     let extras = Extras {
-        notes: vec![
-            "Δu_x = 0 (φ has no effect)".to_string(),
-            "v0 in units of ωW0, W0 = μ0 k_z u_z0 / k_x".to_string(),
-            "Δu_z ≥ u_z0: μ = ⟨f_x⟩/⟨f_z⟩, ⟨f_z⟩ = k_z⟨u_z⁺⟩".to_string(),
-        ],
-        notes_at: Corner::UpperRight,
+        // The fixed parameters go to the caption: every corner of this
+        // panel holds a curve.
         legend_at: Corner::LowerLeft,
         ..Extras::default()
     };
     let caption = vec![
-        "Below Δu_z/u_z0 = 1: the exact solver (eq. 8: v_c = a ωW0, μ = μ0 above it);          from 1: the lift-off solver (model-core liftoff), continuous at 1."
+        "Δu_x = 0 (φ has no effect); v0 in units of ωW0, W0 = μ0 k_z u_z0 / k_x; for Δu_z ≥ u_z0: μ = ⟨f_x⟩/⟨f_z⟩, ⟨f_z⟩ = k_z⟨u_z⁺⟩."
+            .to_string(),
+        "Below Δu_z/u_z0 = 1: the exact solver (eq. 8: v_c = a ωW0, μ = μ0 above it); from 1: the lift-off solver (model-core liftoff), continuous at 1."
             .to_string(),
     ];
     save(out, "liftoff_normal", &one_panel(panel, extras, caption))

@@ -149,7 +149,7 @@ pub fn minus(s: &str) -> String {
             .is_some_and(|n| n.is_ascii_digit() || *n == '.');
         let prev = if i > 0 { Some(c[i - 1]) } else { None };
         let exponent = prev == Some('e') && i >= 2 && c[i - 2].is_ascii_digit();
-        let after_sep = prev.is_none_or(|p| " ([{=/,:;≤≥<>…".contains(p));
+        let after_sep = prev.is_none_or(|p| p.is_whitespace() || "([{=/,:;≤≥<>…±".contains(p));
         if ch == '-' && next_num && (after_sep || exponent) {
             out.push('−');
         } else {
@@ -200,7 +200,7 @@ fn typeset_text(t: &str, size: f64) -> String {
         if ch == '0'
             && i > 0
             && "μWv".contains(c[i - 1])
-            && (i < 2 || !c[i - 2].is_alphanumeric())
+            && (i < 2 || !c[i - 2].is_ascii_alphanumeric())
             && c.get(i + 1).is_none_or(|n| !n.is_alphanumeric())
         {
             out.push_str(&sub("0"));
@@ -237,6 +237,25 @@ fn typeset(svg: &str) -> String {
     }
     out.push_str(rest);
     out
+}
+
+/// [`fine_line`] for a polyline given in absolute SVG pixels (e.g. the caps
+/// of an error bar), clipped to `map`'s plotting area.
+pub fn fine_pixels(map: &PixelMap, points: &[(f64, f64)], color: RGBColor, width: u32) -> RGBColor {
+    FINE.with(|f| {
+        let mut f = f.borrow_mut();
+        let k = f.len();
+        let marker = RGBColor(1, 0x20 + (k >> 8) as u8, (k & 0xff) as u8);
+        f.push(FineLine {
+            marker: format!("#{:02X}{:02X}{:02X}", marker.0, marker.1, marker.2),
+            color,
+            width,
+            dash: None,
+            points: points.to_vec(),
+            clip: map.clip(),
+        });
+        marker
+    })
 }
 
 /// Replaces each marker-coloured polyline of `svg` by its exact curve.
@@ -404,6 +423,8 @@ pub struct Extras {
     pub log_y: bool,
     /// Text beside points (data coordinates), e.g. a parameter value per point.
     pub labels: Vec<((f64, f64), String)>,
+    /// Vertical error bars: (x, low y, high y, colour index).
+    pub error_bars: Vec<(f64, f64, f64, usize)>,
 }
 
 impl Default for Extras {
@@ -415,6 +436,7 @@ impl Default for Extras {
             log_x: false,
             log_y: false,
             labels: Vec::new(),
+            error_bars: Vec::new(),
         }
     }
 }
@@ -802,15 +824,6 @@ fn series_marker(mark: Mark) -> Option<Marker> {
     }
 }
 
-fn position(c: Corner) -> SeriesLabelPosition {
-    match c {
-        Corner::UpperLeft => SeriesLabelPosition::UpperLeft,
-        Corner::UpperRight => SeriesLabelPosition::UpperRight,
-        Corner::LowerLeft => SeriesLabelPosition::LowerLeft,
-        Corner::LowerRight => SeriesLabelPosition::LowerRight,
-    }
-}
-
 const CAPTION_LINE: i32 = 22;
 const LEGEND_LINE: i32 = 24;
 
@@ -939,13 +952,26 @@ where
         .light_line_style(RGBColor(238, 238, 238))
         .bold_line_style(RGBColor(210, 210, 210))
         .draw()?;
-    let mut any_label = false;
+    // Error bars first (under the points): x, low end, high end, colour index.
+    for &(x, lo, hi, ci) in &e.error_bars {
+        let k = fine_line(&pm, &[(x, lo), (x, hi)], color(ci), 1, None);
+        chart.draw_series(LineSeries::new([(x, lo), (x, hi)], k.stroke_width(1)))?;
+        for y in [lo, hi] {
+            let (px, py) = pm.map((x, y));
+            let cap = [(px - 4.0, py), (px + 4.0, py)];
+            let k = fine_pixels(&pm, &cap, color(ci), 1);
+            chart
+                .plotting_area()
+                .strip_coord_spec()
+                .draw(&PathElement::new(vec![(0, 0), (1, 0)], k.stroke_width(1)))?;
+        }
+    }
+    let any_label = p.series.iter().any(|s| !s.label.is_empty());
     for s in &p.series {
         let c = color(s.color);
         let mark = s.mark;
-        let mut drawn = false;
         for seg in segments(&s.points) {
-            let anno = match mark {
+            match mark {
                 Mark::Line => {
                     let k = fine(&seg, c, None);
                     chart.draw_series(LineSeries::new(seg, k.stroke_width(2)))?
@@ -964,19 +990,6 @@ where
                     chart.draw_series(seg.into_iter().map(marker_at(m, c)))?
                 }
             };
-            if !drawn && !s.label.is_empty() {
-                anno.label(s.label.as_str()).legend(sample(mark, c));
-                any_label = true;
-            }
-            drawn = true;
-        }
-        if !drawn && !s.label.is_empty() {
-            // A legend-only entry (no points).
-            chart
-                .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
-                .label(s.label.as_str())
-                .legend(sample(mark, c));
-            any_label = true;
         }
     }
     let label_font = ("sans-serif", 13).into_font();
@@ -985,34 +998,169 @@ where
             EmptyElement::at(*at) + Text::new(text.clone(), (6, -16), label_font.clone()),
         ))?;
     }
+    // The legend and the notes: framed boxes placed where no data is (the
+    // preferred corner first, then the others), so that no box hides a point.
+    let area = chart.plotting_area().strip_coord_spec();
+    let (rx, ry) = area.get_pixel_range();
+    let dots = occupied(p, &pm, (rx.start, ry.start));
+    let dims = (rx.end - rx.start, ry.end - ry.start);
+    let mut taken = Vec::new();
     if any_label {
-        chart
-            .configure_series_labels()
-            .position(position(e.legend_at))
-            .legend_area_size(SAMPLE_W + 10)
-            .background_style(WHITE.mix(0.9))
-            .border_style(RGBColor(160, 160, 160))
-            .label_font(("sans-serif", 14))
-            .draw()?;
+        let entries: Vec<&Series> = p.series.iter().filter(|s| !s.label.is_empty()).collect();
+        let size = legend_size(&area, &entries);
+        let at = place(dims, size, e.legend_at, &taken, &dots);
+        draw_legend(&area, &entries, at, size)?;
+        taken.push((at, size));
     }
     if !e.notes.is_empty() {
-        draw_notes(
-            &chart.plotting_area().strip_coord_spec(),
-            &e.notes,
-            e.notes_at,
-        )?;
+        let size = notes_size(&area, &e.notes);
+        let at = place(dims, size, e.notes_at, &taken, &dots);
+        draw_notes(&area, &e.notes, at, size)?;
     }
     Ok(())
 }
 
-/// Lines of text in a framed box at a corner of `area`.
-fn draw_notes<DB: DrawingBackend>(
+/// Pixels (relative to the plotting area's corner `origin`) that the panel's
+/// data cover: every point, and along lines every 3 px between points.
+fn occupied(p: &Panel, pm: &PixelMap, origin: (i32, i32)) -> Vec<(f64, f64)> {
+    let (ox, oy) = (f64::from(origin.0), f64::from(origin.1));
+    let mut out = Vec::new();
+    for s in &p.series {
+        let line = matches!(s.mark, Mark::Line | Mark::Dashed | Mark::LineMarkers(_));
+        for seg in segments(&s.points) {
+            let px: Vec<(f64, f64)> = seg
+                .iter()
+                .map(|&q| pm.map(q))
+                .map(|(x, y)| (x - ox, y - oy))
+                .collect();
+            for (i, &a) in px.iter().enumerate() {
+                out.push(a);
+                if let (true, Some(&b)) = (line, px.get(i + 1)) {
+                    let d = ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt();
+                    let n = (d / 3.0).ceil().min(2000.0) as usize;
+                    for k in 1..n {
+                        let t = k as f64 / n as f64;
+                        out.push((a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1)));
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The top-left corner of a `size` box in a `dims` area: the first of the
+/// preferred corner, the other corners and the edges' midpoints where no
+/// point of `dots` (with a 4 px margin) and no `taken` box lies; if there
+/// is none, the candidate covering the fewest points.
+fn place(
+    dims: (i32, i32),
+    size: (i32, i32),
+    preferred: Corner,
+    taken: &[((i32, i32), (i32, i32))],
+    dots: &[(f64, f64)],
+) -> (i32, i32) {
+    let (aw, ah) = dims;
+    let (w, h) = size;
+    let m = 8;
+    let corner = |c: Corner| match c {
+        Corner::UpperLeft => (m, m),
+        Corner::UpperRight => (aw - w - m, m),
+        Corner::LowerLeft => (m, ah - h - m),
+        Corner::LowerRight => (aw - w - m, ah - h - m),
+    };
+    let mut cands = vec![corner(preferred)];
+    for c in [
+        Corner::UpperLeft,
+        Corner::UpperRight,
+        Corner::LowerRight,
+        Corner::LowerLeft,
+    ] {
+        cands.push(corner(c));
+    }
+    cands.extend([
+        ((aw - w) / 2, m),
+        ((aw - w) / 2, ah - h - m),
+        (m, (ah - h) / 2),
+        (aw - w - m, (ah - h) / 2),
+    ]);
+    let overlaps = |(x, y): (i32, i32)| {
+        taken.iter().any(|&((tx, ty), (tw, th))| {
+            x < tx + tw + 4 && tx < x + w + 4 && y < ty + th + 4 && ty < y + h + 4
+        })
+    };
+    let covered = |(x, y): (i32, i32)| {
+        let (x0, y0, x1, y1) = (
+            f64::from(x - 4),
+            f64::from(y - 4),
+            f64::from(x + w + 4),
+            f64::from(y + h + 4),
+        );
+        dots.iter()
+            .filter(|&&(px, py)| px >= x0 && px <= x1 && py >= y0 && py <= y1)
+            .count()
+    };
+    let free: Vec<(i32, i32)> = cands.iter().copied().filter(|&c| !overlaps(c)).collect();
+    free.iter()
+        .copied()
+        .find(|&c| covered(c) == 0)
+        .or_else(|| free.iter().copied().min_by_key(|&c| covered(c)))
+        .unwrap_or(cands[0])
+}
+
+/// Legend rows, pixels.
+const LEGEND_ROW: i32 = 20;
+
+fn legend_size<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
-    notes: &[String],
-    at: Corner,
-) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    entries: &[&Series],
+) -> (i32, i32) {
     let font = TextStyle::from(("sans-serif", 14).into_font());
-    let line = 19;
+    let text = entries
+        .iter()
+        .map(|s| {
+            area.estimate_text_size(&s.label, &font)
+                .map_or(8 * s.label.chars().count() as i32, |(w, _)| w as i32)
+        })
+        .max()
+        .unwrap_or(0);
+    (text + SAMPLE_W + 26, LEGEND_ROW * entries.len() as i32 + 8)
+}
+
+/// A framed legend at `at` (top-left, relative to `area`): each entry's
+/// sample (line, dashes, marker as drawn) and label.
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[&Series],
+    (x0, y0): (i32, i32),
+    (w, h): (i32, i32),
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    area.draw(&Rectangle::new(
+        [(x0, y0), (x0 + w, y0 + h)],
+        WHITE.mix(0.9).filled(),
+    ))?;
+    area.draw(&Rectangle::new(
+        [(x0, y0), (x0 + w, y0 + h)],
+        RGBColor(160, 160, 160),
+    ))?;
+    let font = ("sans-serif", 14).into_font();
+    for (i, s) in entries.iter().enumerate() {
+        let y = y0 + 4 + LEGEND_ROW * i as i32 + LEGEND_ROW / 2;
+        area.draw(&sample(s.mark, color(s.color))((x0 + 8, y)))?;
+        area.draw(&Text::new(
+            s.label.as_str(),
+            (x0 + 8 + SAMPLE_W + 8, y),
+            font.color(&BLACK).pos(text_pos_left_center()),
+        ))?;
+    }
+    Ok(())
+}
+
+/// Notes lines, pixels.
+const NOTES_LINE: i32 = 19;
+
+fn notes_size<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, notes: &[String]) -> (i32, i32) {
+    let font = TextStyle::from(("sans-serif", 14).into_font());
     let width = notes
         .iter()
         .map(|n| {
@@ -1022,15 +1170,18 @@ fn draw_notes<DB: DrawingBackend>(
         .max()
         .unwrap_or(0)
         + 16;
-    let height = line * notes.len() as i32 + 10;
-    let (aw, ah) = area.dim_in_pixel();
-    let (aw, ah) = (aw as i32, ah as i32);
-    let (x0, y0) = match at {
-        Corner::UpperLeft => (8, 8),
-        Corner::UpperRight => (aw - width - 8, 8),
-        Corner::LowerLeft => (8, ah - height - 8),
-        Corner::LowerRight => (aw - width - 8, ah - height - 8),
-    };
+    (width, NOTES_LINE * notes.len() as i32 + 10)
+}
+
+/// Lines of text in a framed box of `size` at `(x0, y0)` of `area`.
+fn draw_notes<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    notes: &[String],
+    (x0, y0): (i32, i32),
+    (width, height): (i32, i32),
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let font = TextStyle::from(("sans-serif", 14).into_font());
+    let line = NOTES_LINE;
     area.draw(&Rectangle::new(
         [(x0, y0), (x0 + width, y0 + height)],
         WHITE.mix(0.9).filled(),
@@ -1090,6 +1241,10 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
     m: &RegimeMap,
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     root.fill(&WHITE)?;
+    // The map fills its plotting area: the legend goes under it.
+    let (_, h) = root.dim_in_pixel();
+    let (root, foot) = root.split_vertically(h as i32 - 40);
+    let root = &root;
     let (hx, hy) = (half_step(&m.xs), half_step(&m.ys));
     let x0 = m.xs.first().copied().unwrap_or(0.0) - hx;
     let x1 = m.xs.last().copied().unwrap_or(1.0) + hx;
@@ -1118,38 +1273,49 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
         let c = m.classes[usize::from(k.min(2))].1;
         Rectangle::new([(x - hx, y - hy), (x + hx, y + hy)], c.filled())
     }))?;
-    // Legend entries for the classes (drawn as invisible series with a legend).
-    for (name, c) in m.classes {
-        chart
-            .draw_series(std::iter::empty::<Rectangle<(f64, f64)>>())?
-            .label(name)
-            .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 16, y + 6)], c.filled()));
-    }
     let c0 = m.classes[0].1;
     for pts in &m.class0_lines {
         let k = fine_line(&pm, pts, c0, 5, None);
         chart.draw_series(LineSeries::new(pts.clone(), k.stroke_width(5)))?;
     }
-    for (i, (label, pts)) in m.lines.iter().enumerate() {
+    for (i, (_, pts)) in m.lines.iter().enumerate() {
         // Each reference line its own dash pattern (the legend shows it).
         let pattern = MAP_DASHES[i % MAP_DASHES.len()];
         let k = fine_line(&pm, pts, BLACK, 2, Some(pattern));
-        let a = chart.draw_series(LineSeries::new(pts.clone(), k.stroke_width(2)))?;
-        if !label.is_empty() {
-            a.label(label.as_str()).legend(move |(x, y)| DashSample {
-                at: (x, y),
-                pattern,
-            });
-        }
+        chart.draw_series(LineSeries::new(pts.clone(), k.stroke_width(2)))?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .legend_area_size(SAMPLE_W + 10)
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 14))
-        .draw()?;
+    // The legend, one row under the map: the classes, then the lines.
+    let font = TextStyle::from(("sans-serif", 14).into_font());
+    let text_w = |s: &str| {
+        foot.estimate_text_size(s, &font)
+            .map_or(8 * s.chars().count() as i32, |(w, _)| w as i32)
+    };
+    let (mut x, y) = (16, 20);
+    for (name, c) in m.classes {
+        foot.draw(&Rectangle::new([(x, y - 6), (x + 16, y + 6)], c.filled()))?;
+        foot.draw(&Text::new(
+            name,
+            (x + 22, y),
+            font.color(&BLACK).pos(text_pos_left_center()),
+        ))?;
+        x += 22 + text_w(name) + 24;
+    }
+    for (i, (label, _)) in m.lines.iter().enumerate() {
+        if label.is_empty() {
+            continue;
+        }
+        let pattern = MAP_DASHES[i % MAP_DASHES.len()];
+        foot.draw(&DashSample {
+            at: (x, y),
+            pattern,
+        })?;
+        foot.draw(&Text::new(
+            label.as_str(),
+            (x + SAMPLE_W + 6, y),
+            font.color(&BLACK).pos(text_pos_left_center()),
+        ))?;
+        x += SAMPLE_W + 6 + text_w(label) + 24;
+    }
     Ok(())
 }
 
@@ -1183,12 +1349,58 @@ pub struct HeatMap {
     pub log_y: bool,
     /// Cells, row-major over `ys` then `xs`.
     pub cells: Vec<Heat>,
-    /// Colour range of the values.
+    /// Colour range of the values ([`heat_range`]: from the data).
     pub range: (f64, f64),
+    /// Signed data: a diverging colour map (blue, white at 0, red) over a
+    /// range symmetric about 0, instead of viridis.
+    pub diverging: bool,
     /// Label of the colour bar.
     pub value_label: String,
     /// Named classes with their colours (legend).
     pub classes: Vec<(String, RGBColor)>,
+}
+
+/// The colour range of heat-map values, from the data: the values' least and
+/// greatest (for `diverging`, ±their largest magnitude, so that 0 is white),
+/// widened to a tenth of a unit if they are all equal; `None` if no cell
+/// holds a value.
+pub fn heat_range(cells: &[Heat], diverging: bool) -> Option<(f64, f64)> {
+    let vals = cells.iter().filter_map(|h| match h {
+        Heat::Value(v) if v.is_finite() => Some(*v),
+        _ => None,
+    });
+    let (lo, hi) = vals.fold(None, |acc: Option<(f64, f64)>, v| {
+        Some(acc.map_or((v, v), |(a, b)| (a.min(v), b.max(v))))
+    })?;
+    let (lo, hi) = if diverging {
+        let m = lo.abs().max(hi.abs());
+        (-m, m)
+    } else {
+        (lo, hi)
+    };
+    Some(if hi > lo {
+        (lo, hi)
+    } else {
+        (lo - 0.05, hi + 0.05)
+    })
+}
+
+/// A diverging colour map (ColorBrewer RdBu, reversed): blue at 0, white at
+/// 0.5, red at 1.
+fn diverging(t: f64) -> RGBColor {
+    const STOPS: [(f64, f64, f64); 5] = [
+        (33.0, 102.0, 172.0),
+        (146.0, 197.0, 222.0),
+        (247.0, 247.0, 247.0),
+        (244.0, 165.0, 130.0),
+        (178.0, 24.0, 43.0),
+    ];
+    let x = t.clamp(0.0, 1.0) * 4.0;
+    let i = (x.floor() as usize).min(3);
+    let f = x - i as f64;
+    let (a, b) = (STOPS[i], STOPS[i + 1]);
+    let mix = |p: f64, q: f64| (p + (q - p) * f).round() as u8;
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
 }
 
 fn viridis(t: f64) -> RGBColor {
@@ -1247,34 +1459,32 @@ fn draw_heat<DB: DrawingBackend>(
     let nx = m.xs.len().max(1);
     let (lo, hi) = m.range;
     let span = if hi > lo { hi - lo } else { 1.0 };
+    let cmap = if m.diverging { diverging } else { viridis };
     chart.draw_series(m.cells.iter().enumerate().map(|(i, h)| {
         let (x, y) = (m.xs[i % nx], m.ys[i / nx]);
         let c = match *h {
-            Heat::Value(v) => viridis((v - lo) / span),
+            Heat::Value(v) => cmap((v - lo) / span),
             Heat::Class(k) => m.classes.get(k).map(|c| c.1).unwrap_or(RGBColor(0, 0, 0)),
         };
         Rectangle::new([(x - hx, y - hy), (x + hx, y + hy)], c.filled())
     }))?;
-    for (name, c) in &m.classes {
-        let c = *c;
-        chart
-            .draw_series(std::iter::empty::<Rectangle<(f64, f64)>>())?
-            .label(name.as_str())
-            .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 16, y + 6)], c.filled()));
-    }
-    if !m.classes.is_empty() {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 13))
-            .draw()?;
+    // The classes' swatches under the colour bar (not over the cells).
+    let (_, bh) = bar.dim_in_pixel();
+    let class_rows = 18 * m.classes.len() as i32;
+    let font = TextStyle::from(("sans-serif", 12).into_font());
+    for (i, (name, c)) in m.classes.iter().enumerate() {
+        let y = bh as i32 - 12 - class_rows + 18 * i as i32 + 9;
+        bar.draw(&Rectangle::new([(4, y - 6), (18, y + 6)], c.filled()))?;
+        bar.draw(&Text::new(
+            name.as_str(),
+            (22, y),
+            font.color(&BLACK).pos(text_pos_left_center()),
+        ))?;
     }
     // Colour bar.
     let mut cb = ChartBuilder::on(&bar)
         .margin_top(40)
-        .margin_bottom(62)
+        .margin_bottom(62 + class_rows)
         .margin_right(8)
         .y_label_area_size(48)
         .caption(&m.value_label, ("sans-serif", 13))
@@ -1291,7 +1501,7 @@ fn draw_heat<DB: DrawingBackend>(
         let b = lo + span * (i + 1) as f64 / steps as f64;
         Rectangle::new(
             [(0.0, a), (1.0, b)],
-            viridis(i as f64 / (steps - 1) as f64).filled(),
+            cmap(i as f64 / (steps - 1) as f64).filled(),
         )
     }))?;
     Ok(())
@@ -1307,6 +1517,42 @@ mod tests {
         assert_eq!(log_axis_tick(100.0), "100");
         assert_eq!(log_axis_tick(1e-9), "1e-9");
         assert_eq!(log_axis_tick(2e-9), "2e-9");
+    }
+
+    /// The colour range follows the data (issue 27: a fixed 0 … −17 scale
+    /// drew data between −6 and −9 in one colour).
+    #[test]
+    fn heat_range_follows_the_data() {
+        let cells = [
+            Heat::Value(-6.2),
+            Heat::Class(0),
+            Heat::Value(-8.9),
+            Heat::Value(-7.0),
+        ];
+        assert_eq!(heat_range(&cells, false), Some((-8.9, -6.2)));
+        assert_eq!(heat_range(&cells, true), Some((-8.9, 8.9)));
+        assert_eq!(heat_range(&[Heat::Value(2.0)], false), Some((1.95, 2.05)));
+        assert_eq!(heat_range(&[Heat::Class(1)], false), None);
+        // White at the centre of the diverging map, blue and red at the ends.
+        assert_eq!(diverging(0.5), RGBColor(247, 247, 247));
+        assert_eq!(diverging(0.0), RGBColor(33, 102, 172));
+        assert_eq!(diverging(1.0), RGBColor(178, 24, 43));
+    }
+
+    #[test]
+    fn minus_signs_and_subscripts_are_typeset() {
+        assert_eq!(
+            minus("-0.5 and 1e-3, lift-off, x-1"),
+            "−0.5 and 1e−3, lift-off, x-1"
+        );
+        let t = typeset_text("μ0 k_z u_z0, v_{c±}", 10.0);
+        assert!(t.starts_with("μ<tspan"), "{t}");
+        assert!(
+            t.contains(">z0</tspan>") && t.contains(">c±</tspan>") && !t.contains('_'),
+            "{t}"
+        );
+        // Words with an underscore longer than three characters stay.
+        assert_eq!(typeset_text("not_settled", 10.0), "not_settled");
     }
 
     #[test]

@@ -405,6 +405,23 @@ fn style(method: &str) -> (usize, Marker) {
     }
 }
 
+/// How a method's points are drawn: a step-size family (fixed-step, lift-off
+/// stepping) as markers joined in order of cost, so that each family stays
+/// visible where its points overlap another's; single points as markers.
+fn mark_of(method: &str, marker: Marker) -> Mark {
+    if method.starts_with("fixed") || method.starts_with("lift-off") {
+        Mark::LineMarkers(marker)
+    } else {
+        Mark::Markers(marker)
+    }
+}
+
+/// Points sorted by cost (time), for a joined family.
+fn by_time(mut v: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
+    v.sort_by(|a, b| a.1.total_cmp(&b.1));
+    v
+}
+
 /// The methods in legend order, with their legend text.
 const LEGEND: &[(&str, &str)] = &[
     (
@@ -466,8 +483,8 @@ fn render(path: &Path, all: &[Point]) -> CliResult {
                 .collect();
             series.push(Series {
                 label: String::new(),
-                points,
-                mark: Mark::Markers(marker),
+                points: by_time(points),
+                mark: mark_of(m, marker),
                 color,
             });
         }
@@ -517,12 +534,13 @@ fn render(path: &Path, all: &[Point]) -> CliResult {
                 let (color, marker) = style(m);
                 Series {
                     label: String::new(),
-                    points: pts
-                        .iter()
-                        .filter(|p| p.method == m)
-                        .map(|p| (p.error.unwrap_or(1.0).max(ERROR_FLOOR), p.time_s))
-                        .collect(),
-                    mark: Mark::Markers(marker),
+                    points: by_time(
+                        pts.iter()
+                            .filter(|p| p.method == m)
+                            .map(|p| (p.error.unwrap_or(1.0).max(ERROR_FLOOR), p.time_s))
+                            .collect(),
+                    ),
+                    mark: mark_of(m, marker),
                     color,
                 }
             })
@@ -555,7 +573,7 @@ fn render(path: &Path, all: &[Point]) -> CliResult {
             Series {
                 label: text.to_string(),
                 points: Vec::new(),
-                mark: Mark::Markers(marker),
+                mark: mark_of(m, marker),
                 color,
             }
         })
