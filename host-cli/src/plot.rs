@@ -201,7 +201,8 @@ fn typeset_text(t: &str, size: f64) -> String {
             && i > 0
             && "μWv".contains(c[i - 1])
             && (i < 2 || !c[i - 2].is_ascii_alphanumeric())
-            && c.get(i + 1).is_none_or(|n| !n.is_alphanumeric())
+            && c.get(i + 1)
+                .is_none_or(|n| !n.is_alphanumeric() || (c[i - 1] == 'μ' && !n.is_ascii_digit()))
         {
             out.push_str(&sub("0"));
             i += 1;
@@ -1278,9 +1279,14 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
         let k = fine_line(&pm, pts, c0, 5, None);
         chart.draw_series(LineSeries::new(pts.clone(), k.stroke_width(5)))?;
     }
+    // Each labelled reference line its own dash pattern (the legend shows
+    // it); an unlabelled line continues the labelled one before it.
+    let pattern_of = |i: usize| {
+        let k = m.lines[..=i].iter().filter(|(l, _)| !l.is_empty()).count();
+        MAP_DASHES[k.saturating_sub(1) % MAP_DASHES.len()]
+    };
     for (i, (_, pts)) in m.lines.iter().enumerate() {
-        // Each reference line its own dash pattern (the legend shows it).
-        let pattern = MAP_DASHES[i % MAP_DASHES.len()];
+        let pattern = pattern_of(i);
         let k = fine_line(&pm, pts, BLACK, 2, Some(pattern));
         chart.draw_series(LineSeries::new(pts.clone(), k.stroke_width(2)))?;
     }
@@ -1304,7 +1310,7 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
         if label.is_empty() {
             continue;
         }
-        let pattern = MAP_DASHES[i % MAP_DASHES.len()];
+        let pattern = pattern_of(i);
         foot.draw(&DashSample {
             at: (x, y),
             pattern,
@@ -1481,13 +1487,25 @@ fn draw_heat<DB: DrawingBackend>(
             font.color(&BLACK).pos(text_pos_left_center()),
         ))?;
     }
-    // Colour bar.
+    // Colour bar, its label above it (a parenthesis on a line of its own:
+    // the column is narrow).
+    let (head, tail) = match m.value_label.split_once(" (") {
+        Some((h, t)) => (h.to_string(), format!("({t}")),
+        None => (m.value_label.clone(), String::new()),
+    };
+    let label_font = TextStyle::from(("sans-serif", 13).into_font());
+    for (k, line) in [head, tail].iter().enumerate() {
+        bar.draw(&Text::new(
+            line.as_str(),
+            (4, 10 + 17 * k as i32),
+            label_font.color(&BLACK),
+        ))?;
+    }
     let mut cb = ChartBuilder::on(&bar)
-        .margin_top(40)
+        .margin_top(52)
         .margin_bottom(62 + class_rows)
         .margin_right(8)
         .y_label_area_size(48)
-        .caption(&m.value_label, ("sans-serif", 13))
         .build_cartesian_2d(0.0..1.0, lo..lo + span)?;
     cb.configure_mesh()
         .disable_mesh()

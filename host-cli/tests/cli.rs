@@ -233,6 +233,8 @@ fn curve_writes_csv_and_plot_files() {
                 csv.to_str().unwrap(),
                 "--plot",
                 plot.to_str().unwrap(),
+                // The second run replaces the first one's CSV (output-files policy).
+                "--force",
             ])
             .assert()
             .success()

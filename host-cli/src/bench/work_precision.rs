@@ -408,18 +408,27 @@ fn style(method: &str) -> (usize, Marker) {
 /// How a method's points are drawn: a step-size family (fixed-step, lift-off
 /// stepping) as markers joined in order of cost, so that each family stays
 /// visible where its points overlap another's; single points as markers.
-fn mark_of(method: &str, marker: Marker) -> Mark {
-    if method.starts_with("fixed") || method.starts_with("lift-off") {
-        Mark::LineMarkers(marker)
-    } else {
-        Mark::Markers(marker)
-    }
+///
+/// (Joining the fixed-step families was tried for issue 27: the timings'
+/// noise makes every joined family a zigzag that hides more than it shows,
+/// so the families stay markers until small multiples replace this panel.)
+fn mark_of(_method: &str, marker: Marker) -> Mark {
+    Mark::Markers(marker)
 }
 
-/// Points sorted by cost (time), for a joined family.
-fn by_time(mut v: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
-    v.sort_by(|a, b| a.1.total_cmp(&b.1));
-    v
+/// A method's (error, time) points in order of steps per period (the
+/// family's convergence path; points without a step count keep their order).
+fn by_steps<'a>(pts: impl Iterator<Item = &'a &'a Point>) -> Vec<(f64, f64)> {
+    let mut v: Vec<(u32, (f64, f64))> = pts
+        .map(|p| {
+            (
+                p.steps.unwrap_or(0),
+                (p.error.unwrap_or(1.0).max(ERROR_FLOOR), p.time_s),
+            )
+        })
+        .collect();
+    v.sort_by_key(|q| q.0);
+    v.into_iter().map(|q| q.1).collect()
 }
 
 /// The methods in legend order, with their legend text.
@@ -476,14 +485,13 @@ fn render(path: &Path, all: &[Point]) -> CliResult {
         let mut series = Vec::new();
         for &(m, _) in LEGEND {
             let (color, marker) = style(m);
-            let points: Vec<(f64, f64)> = pts
-                .iter()
-                .filter(|p| p.method == m || (m == "eq. 21" && p.method == "eq. 24"))
-                .map(|p| (p.error.unwrap_or(1.0).max(ERROR_FLOOR), p.time_s))
-                .collect();
+            let points = by_steps(
+                pts.iter()
+                    .filter(|p| p.method == m || (m == "eq. 21" && p.method == "eq. 24")),
+            );
             series.push(Series {
                 label: String::new(),
-                points: by_time(points),
+                points,
                 mark: mark_of(m, marker),
                 color,
             });
@@ -534,12 +542,7 @@ fn render(path: &Path, all: &[Point]) -> CliResult {
                 let (color, marker) = style(m);
                 Series {
                     label: String::new(),
-                    points: by_time(
-                        pts.iter()
-                            .filter(|p| p.method == m)
-                            .map(|p| (p.error.unwrap_or(1.0).max(ERROR_FLOOR), p.time_s))
-                            .collect(),
-                    ),
+                    points: by_steps(pts.iter().filter(|p| p.method == m)),
                     mark: mark_of(m, marker),
                     color,
                 }
