@@ -623,6 +623,8 @@ fn watch_after_watch_on_the_same_link() {
     let s = sim();
     ok_json(&s, DRIVE);
     ok_json(&s, &["start"]);
+    // `measure` waits for the ramps: the watches then see a settled drive.
+    ok_json(&s, &["measure", "--periods", "100"]);
     for i in 0..5 {
         let o = dev(&s, &["watch", "--periods", "100", "--count", "1"]);
         assert!(

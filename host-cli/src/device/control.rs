@@ -318,6 +318,7 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
     // Every value is in its domain (the flags' parsers).
     if let Some(p) = &a.plot {
         crate::plot::ext(p)?;
+        crate::output::may_write(p, "plot")?;
     }
     let cfg = super::sim::config();
     let resonant = a

@@ -743,7 +743,9 @@ fn wait_settled(c: &mut Client, interrupted: &std::sync::atomic::AtomicBool) -> 
                 return Ok(());
             }
         }
-        if !said {
+        // Said only for a wait a person notices (the ramps of a small
+        // change take milliseconds).
+        if !said && start.elapsed() > Duration::from_millis(500) {
             eprintln!("waiting for the ramps to settle (--no-wait measures at once)");
             said = true;
         }
