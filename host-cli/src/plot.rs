@@ -1054,11 +1054,14 @@ fn occupied(p: &Panel, pm: &PixelMap, origin: (i32, i32)) -> Vec<(f64, f64)> {
 /// preferred corner, the other corners and the edges' midpoints where no
 /// point of `dots` (with a 4 px margin) and no `taken` box lies; if there
 /// is none, the candidate covering the fewest points.
+/// A box: top-left corner and size, pixels.
+type PixelBox = ((i32, i32), (i32, i32));
+
 fn place(
     dims: (i32, i32),
     size: (i32, i32),
     preferred: Corner,
-    taken: &[((i32, i32), (i32, i32))],
+    taken: &[PixelBox],
     dots: &[(f64, f64)],
 ) -> (i32, i32) {
     let (aw, ah) = dims;
