@@ -211,12 +211,15 @@ def tune(
     target_mu: Optional[float] = None,
     maximize: Optional[Literal["asymmetry", "stall-force"]] = None,
     v0: Optional[float] = None,
+    v_rel: Optional[float] = None,
     max_duz: Optional[float] = None,
     max_dux: Optional[float] = None,
     liftoff_margin: float = 0.05,
 ) -> Record:
     """Inverse design (``fricctl tune``): the Δu_z, Δu_x (m) or φ (deg) that
-    attains a target μ at sliding velocity ``v0`` (``target_mu_rel`` = μ/μ0
+    attains a target μ at sliding velocity ``v0`` (m/s), or ``v_rel`` times the
+    scene's critical velocity v_c as given (forward for v_rel > 0, backward
+    for v_rel < 0) (``target_mu_rel`` = μ/μ0
     in (−1, 1), or ``target_mu``), or that maximises the ratchet asymmetry or
     the forward stall force, with every drive keeping Δu_z ≤
     (1 − liftoff_margin)·u_z0. Permanent-contact flat-punch scenes.

@@ -17,7 +17,7 @@ use model_core::{Libm, Scene};
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::eval::exact_failure;
+use crate::eval::{critical_velocity, exact_failure, from_rel};
 use crate::numbers::{short, Real};
 use crate::scene::{check, check_reach, ResolvedScene};
 
@@ -95,8 +95,12 @@ impl Maximize {
 /// A tune request: the CLI's flags of `fricctl tune` besides the scene.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TuneRequest {
-    /// Sliding velocity v0, m/s (units of ωW0 for a dimensionless scene); needed with a target.
+    /// Sliding velocity v0, m/s (units of ωW0 for a dimensionless scene); needed with a target
+    /// (or `v_rel`).
     pub v0: Option<f64>,
+    /// The velocity relative to v_c of the scene as given (before the adjustment):
+    /// v0 = X·v_c (forward v_c for X > 0, backward for X < 0); instead of `v0`.
+    pub v_rel: Option<f64>,
     /// Target μ/μ0, strictly between −1 and 1.
     pub target_mu_rel: Option<f64>,
     /// Target μ, strictly between −μ0 and μ0.
@@ -268,6 +272,9 @@ impl TuneRequest {
         if let Some(v) = self.v0 {
             check(any, v, "--v0")?;
         }
+        if let Some(x) = self.v_rel {
+            check(any, x, "--v-rel")?;
+        }
         if let Some(t) = self.target_mu_rel {
             check(TARGET_MU_REL, t, "--target-mu-rel")?;
         }
@@ -367,16 +374,29 @@ impl TuneRequest {
     }
 
     fn target(&self, s: &Setup, rs: &ResolvedScene, t: f64, flag: &str) -> Result<TargetOut> {
-        let v0 = self
-            .v0
-            .ok_or_else(|| Error::usage("--v0: missing (a target mu is at a sliding velocity)"))?;
+        let (v0, vflag) =
+            match (self.v0, self.v_rel) {
+                (Some(v), None) => (v, "--v0"),
+                (None, Some(x)) => (
+                    from_rel(&critical_velocity(&rs.scene)?, x, "v-rel")?,
+                    "--v-rel",
+                ),
+                (Some(_), Some(_)) => {
+                    return Err(Error::usage(
+                        "--v-rel: give the velocity once (--v0 or --v-rel)",
+                    ))
+                }
+                (None, None) => return Err(Error::usage(
+                    "--v0: missing (a target mu is at a sliding velocity; give --v0 or --v-rel)",
+                )),
+            };
         if v0 == 0.0 {
-            return Err(Error::usage(
-                "--v0: must be != 0 for a target (at rest mu is not unique; see `fricctl static`)",
-            ));
+            return Err(Error::usage(format!(
+                "{vflag}: must be != 0 for a target (at rest mu is not unique; see `fricctl static`)"
+            )));
         }
         let mu0 = s.scene.mu0();
-        let v = rs.velocity(v0, "--v0")?;
+        let v = rs.velocity(v0, vflag)?;
         let mut scan = vec![0.0; self.scan_points()];
         let r = match inverse::solve_target::<f64, Libm>(&s.problem, v, t, &mut scan) {
             Ok(r) => r,
@@ -427,10 +447,11 @@ impl TuneRequest {
     }
 
     fn maximize(&self, s: &Setup, m: Maximize) -> Result<MaximizeOut> {
-        if self.v0.is_some() {
-            return Err(Error::usage(
-                "--v0: not used by --maximize (the asymmetry and the stall force are properties of the whole law)",
-            ));
+        if self.v0.is_some() || self.v_rel.is_some() {
+            let flag = if self.v0.is_some() { "--v0" } else { "--v-rel" };
+            return Err(Error::usage(format!(
+                "{flag}: not used by --maximize (the asymmetry and the stall force are properties of the whole law)"
+            )));
         }
         let objective = match m {
             Maximize::Asymmetry => Objective::Asymmetry,

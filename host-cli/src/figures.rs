@@ -267,26 +267,18 @@ fn fig4(out: &Path) -> CliResult {
     save(out, "fig4", &f)
 }
 
-/// Notes for a Figs. 5–7 panel: the fixed parameters, and at φ = 90° without
-/// a static equilibrium why the law is not the paper's symmetric one.
-fn dual_notes(a: f64, ratio: f64, phi: f64, cl: &Classification<f64>) -> Vec<String> {
-    let mut notes = vec![
-        format!("Δu_z/u_z0 = {a}, φ = {:.0}°", phi.to_degrees()),
-        format!("{RATIO_NAME} = {ratio}"),
-    ];
-    if (phi - PI / 2.0).abs() < 1e-12 && !cl.statics.exists() {
-        notes.push("Differs from the paper (symmetric at φ = 90°):".to_string());
-        notes.push(format!(
-            "c = c' = {:.3} > 1 → no static equilibrium;",
-            cl.c_forward
-        ));
-        notes.push(format!(
-            "net force at rest μ(0±)/μ0 = {:.4} → {}",
-            cl.mu_0plus,
+/// The caption remark of a Figs. 5–7 panel: at φ = 90° without a static
+/// equilibrium, why the law is not the paper's symmetric one.
+fn dual_remark(phi: f64, cl: &Classification<f64>) -> Option<String> {
+    ((phi - PI / 2.0).abs() < 1e-12 && !cl.statics.exists()).then(|| {
+        format!(
+            "φ = 90° differs from the paper (symmetric there): c = c′ = {:.3} > 1, so no static equilibrium; \
+             net force at rest μ(0±)/μ_{{0}} = {} → {}.",
+            cl.c_forward,
+            crate::plot::minus(&format!("{:.4}", cl.mu_0plus)),
             cl.regime.name().replace('_', " ")
-        ));
-    }
-    notes
+        )
+    })
 }
 
 /// Figs. 5–7: Δu_z/u_z0 = 0.5, ratio 1, 2, 0.5, phases 0 … π; velocity in ωW0.
@@ -298,6 +290,8 @@ fn figs5_7(out: &Path) -> CliResult {
         let vmax = 1.25 * (a + b);
         let vs = linspace(-vmax, vmax, 801);
         let mut panels = Vec::new();
+        let mut all = Vec::new();
+        let mut remarks = Vec::new();
         for (i, &phi) in phases.iter().enumerate() {
             let s = scene(a, b, phi)?;
             let d = s.drive();
@@ -326,32 +320,64 @@ fn figs5_7(out: &Path) -> CliResult {
                 y: (-1.1, 1.1),
                 series: vec![Series {
                     label: String::new(),
-                    points: pts,
+                    points: pts.clone(),
                     mark: Mark::Line,
                     color: i,
                 }],
             };
-            let extras = Extras {
-                notes: dual_notes(a, ratio, phi, &cl),
-                notes_at: Corner::UpperLeft,
-                ..Extras::default()
-            };
-            panels.push((panel, extras));
+            // The fixed parameters are in the caption and the phase in the
+            // title: no box over the data; a remark goes to the caption.
+            remarks.extend(dual_remark(phi, &cl));
+            panels.push((panel, Extras::default()));
+            all.push(Series {
+                label: format!("φ = {:.0}°", phi.to_degrees()),
+                points: pts,
+                mark: Mark::Line,
+                color: i,
+            });
         }
+        // The sixth panel: the five phases together (legend where no curve
+        // runs: v > 0 with μ < 0 holds no point of these laws... see below).
+        let legend_at = if all
+            .iter()
+            .flat_map(|s| &s.points)
+            .any(|&(v, m)| v > 0.3 * vmax && m < -0.2)
+        {
+            Corner::UpperLeft
+        } else {
+            Corner::LowerRight
+        };
+        panels.push((
+            Panel {
+                title: format!("Fig. {fig}: the five phases together"),
+                x_label: "v_{0} / (ωW_{0})".to_string(),
+                y_label: MU_AXIS.to_string(),
+                x: (-vmax, vmax),
+                y: (-1.1, 1.1),
+                series: all,
+            },
+            Extras {
+                legend_at,
+                ..Extras::default()
+            },
+        ));
         let f = Figure {
             panels,
             rows: 2,
             cols: 3,
             size: (1800, 1080),
             legend: Vec::new(),
-            caption: vec![
+            caption: [
                 format!(
-                    "Fig. {fig}: Δu_z/u_z0 = {a}, {RATIO_NAME} = {ratio}; exact solver. \
-                     Regime from the exact classification (fricctl classify)."
+                    "Fig. {fig}: Δu_{{z}}/u_{{z0}} = {a}, {RATIO_NAME} = {ratio}; exact solver; \
+                     W_{{0}} = μ_{{0}}k_{{z}}u_{{z0}}/k_{{x}}. Regime from the exact classification (fricctl classify)."
                 ),
-                "c, c' = v_c±/(ωW0) (eq. 8); a static equilibrium exists iff c + c' ≤ 2."
+                "c, c′ = v_{c±}/(ωW_{0}) (eq. 8); a static equilibrium exists iff c + c′ ≤ 2."
                     .to_string(),
-            ],
+            ]
+            .into_iter()
+            .chain(remarks)
+            .collect(),
         };
         save(out, &format!("fig{fig}"), &f)?;
     }
@@ -407,17 +433,15 @@ fn liftoff_normal(out: &Path) -> CliResult {
         series,
     };
     let extras = Extras {
-        notes: vec![
-            "Δu_x = 0 (φ has no effect)".to_string(),
-            "v0 in units of ωW0, W0 = μ0 k_z u_z0 / k_x".to_string(),
-            "Δu_z ≥ u_z0: μ = ⟨f_x⟩/⟨f_z⟩, ⟨f_z⟩ = k_z⟨u_z⁺⟩".to_string(),
-        ],
-        notes_at: Corner::UpperRight,
+        // The fixed parameters go to the caption: every corner of this
+        // panel holds a curve.
         legend_at: Corner::LowerLeft,
         ..Extras::default()
     };
     let caption = vec![
-        "Below Δu_z/u_z0 = 1: the exact solver (eq. 8: v_c = a ωW0, μ = μ0 above it);          from 1: the lift-off solver (model-core liftoff), continuous at 1."
+        "Δu_x = 0 (φ has no effect); v0 in units of ωW0, W0 = μ0 k_z u_z0 / k_x; for Δu_z ≥ u_z0: μ = ⟨f_x⟩/⟨f_z⟩, ⟨f_z⟩ = k_z⟨u_z⁺⟩."
+            .to_string(),
+        "Below Δu_z/u_z0 = 1: the exact solver (eq. 8: v_c = a ωW0, μ = μ0 above it); from 1: the lift-off solver (model-core liftoff), continuous at 1."
             .to_string(),
     ];
     save(out, "liftoff_normal", &one_panel(panel, extras, caption))

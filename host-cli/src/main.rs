@@ -32,6 +32,9 @@ use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 #[derive(Parser, Debug)]
 #[command(name = "fricctl", version, about, long_about = None, after_help = EXIT_STATUS)]
 struct Cli {
+    /// Replace output files that exist (--csv, --out FILE, --plot); without it such a file is refused before any work
+    #[arg(long, global = true)]
+    force: bool,
     #[command(subcommand)]
     cmd: Command,
 }
@@ -93,6 +96,7 @@ fn main() -> ExitCode {
         Ok(c) => c,
         Err(e) => return clap_error(e),
     };
+    output::set_force(cli.force);
     let mut out = std::io::stdout();
     let r = match cli.cmd {
         Command::Mu(c) => c.run(&mut out),

@@ -1,9 +1,16 @@
 //! Writing results: JSON documents, CSV rows (always whole rows), and files
 //! that appear only when complete (written to a temporary file in the same
 //! directory, then renamed).
+//!
+//! The overwrite policy, the same for every file named by a flag (`--csv`,
+//! `--out FILE`): an existing file is refused, before any work, unless
+//! `--force` is given; with `--force` it is replaced and stderr says so.
+//! A new file gets the mode `File::create` would give it (0666 less the
+//! umask); a replaced file keeps its mode.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use serde::Serialize;
 use tempfile::NamedTempFile;
@@ -35,6 +42,61 @@ pub fn csv_bytes<T: Serialize>(rows: &[T], header: bool) -> CliResult<Vec<u8>> {
         .map_err(|e| CliError::failure(format!("CSV: {e}")))
 }
 
+/// `--force` (a flag of every command, set once by `main`).
+static FORCE: AtomicBool = AtomicBool::new(false);
+
+/// Sets the overwrite policy from `--force`.
+pub fn set_force(force: bool) {
+    FORCE.store(force, Ordering::SeqCst);
+}
+
+/// Whether an existing output file may be replaced (`--force`).
+pub fn force() -> bool {
+    FORCE.load(Ordering::SeqCst)
+}
+
+/// The overwrite policy for one output file: `Ok(())` if `path` does not
+/// exist, or exists and `--force` is given (stderr then says that it will be
+/// replaced); a usage error naming `--flag` if it exists without `--force`.
+/// Commands call this before they compute, so that a refusal costs nothing.
+pub fn may_write(path: &Path, flag: &str) -> CliResult {
+    if refused(path, flag)? {
+        eprintln!(
+            "--{flag}: {} exists; replacing it (--force)",
+            path.display()
+        );
+    }
+    Ok(())
+}
+
+/// `Ok(true)` if `path` exists and may be replaced, `Ok(false)` if it does
+/// not exist, the policy's error if it exists without `--force`.
+fn refused(path: &Path, flag: &str) -> CliResult<bool> {
+    let exists = std::fs::symlink_metadata(path).is_ok();
+    if exists && !force() {
+        return Err(CliError::usage(format!(
+            "--{flag}: {} exists (give --force to replace it, or choose another file)",
+            path.display()
+        )));
+    }
+    Ok(exists)
+}
+
+/// [`may_write`] for each named output (`None`: not asked for).
+pub fn check_outputs(files: &[(Option<&Path>, &str)]) -> CliResult {
+    for (p, flag) in files {
+        if let Some(p) = p {
+            refused(p, flag)?;
+        }
+    }
+    for (p, flag) in files {
+        if let Some(p) = p {
+            may_write(p, flag)?;
+        }
+    }
+    Ok(())
+}
+
 /// A file that appears under its name only when [`AtomicFile::commit`]
 /// succeeds: until then the bytes go to a temporary file in the same
 /// directory (removed if the program stops first), so an interrupted run
@@ -47,24 +109,36 @@ pub struct AtomicFile {
 
 impl AtomicFile {
     /// Starts the file `path`; `flag` (e.g. `csv`) names it in errors.
+    /// Follows the overwrite policy (the command has called [`may_write`]
+    /// before its work; this only repeats the refusal).
     pub fn create(path: &Path, flag: &'static str) -> CliResult<Self> {
+        refused(path, flag)?;
         let dir = match path.parent() {
             Some(d) if !d.as_os_str().is_empty() => d,
             _ => Path::new("."),
         };
-        let tmp = tempfile::Builder::new()
-            .prefix(".fricctl-")
-            .suffix(".part")
-            .tempfile_in(dir)
-            .map_err(|e| {
-                // Name the user's file, not the temporary one next to it.
-                let why = if dir.is_dir() {
-                    e.kind().to_string()
-                } else {
-                    format!("no directory {}", dir.display())
-                };
-                CliError::failure(format!("--{flag}: cannot create {}: {why}", path.display()))
-            })?;
+        let mut b = tempfile::Builder::new();
+        b.prefix(".fricctl-").suffix(".part");
+        // Not tempfile's private 0600: the mode an ordinary `File::create`
+        // gives (0666 less the umask, applied by the kernel at creation).
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            b.permissions(std::fs::Permissions::from_mode(0o666));
+        }
+        let tmp = b.tempfile_in(dir).map_err(|e| {
+            // Name the user's file, not the temporary one next to it.
+            let why = if dir.is_dir() {
+                e.kind().to_string()
+            } else {
+                format!("no directory {}", dir.display())
+            };
+            CliError::failure(format!("--{flag}: cannot create {}: {why}", path.display()))
+        })?;
+        // A replaced file keeps its mode.
+        if let Ok(m) = std::fs::metadata(path) {
+            let _ = std::fs::set_permissions(tmp.path(), m.permissions());
+        }
         Ok(AtomicFile {
             tmp,
             path: path.to_path_buf(),

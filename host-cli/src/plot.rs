@@ -7,7 +7,18 @@
 //! so a PNG is the same on every machine. Axis-aligned rectangles (map cells,
 //! colour bars) are drawn with `shape-rendering="crispEdges"` so that
 //! abutting cells show no anti-aliasing seams.
+//!
+//! **Sub-pixel curves.** plotters hands its backends whole pixels
+//! (`BackendCoord = (i32, i32)`), so a smooth curve drawn through it is a
+//! staircase. Curves (line and dashed series, the maps' reference lines) are
+//! therefore drawn with [`fine_line`]: plotters draws the polyline in a
+//! one-off marker colour (so it keeps its place in the drawing order), and
+//! [`write_chart`] replaces that polyline in the SVG by one through the
+//! points' exact pixel positions (same mapping as plotters, without the
+//! rounding), clipped to the plotting area.
 
+use std::cell::RefCell;
+use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::{Arc, Once};
 
@@ -25,6 +36,284 @@ const FONT_BYTES: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 
 /// PNG pixels per nominal (SVG) pixel.
 pub const PNG_SCALE: f32 = 2.0;
+
+/// From data coordinates of one chart to SVG pixels, without rounding: the
+/// mapping of plotters' `Cartesian2d` (x from the plotting area's left pixel
+/// to its right pixel − 1, y from its bottom pixel − 1 up to its top), on a
+/// linear or a logarithmic axis.
+#[derive(Clone, Copy, Debug)]
+pub struct PixelMap {
+    px: (f64, f64),
+    py: (f64, f64),
+    x: (f64, f64, bool),
+    y: (f64, f64, bool),
+}
+
+impl PixelMap {
+    /// The map of a chart whose plotting area is `area` (as
+    /// `chart.plotting_area()`), axes `x` and `y` (value ranges; `true` for
+    /// a logarithmic axis).
+    pub fn of<DB: DrawingBackend, CT: plotters::coord::CoordTranslate>(
+        area: &DrawingArea<DB, CT>,
+        x: (f64, f64, bool),
+        y: (f64, f64, bool),
+    ) -> Self {
+        let (rx, ry) = area.get_pixel_range();
+        PixelMap {
+            px: (f64::from(rx.start), f64::from(rx.end - 1)),
+            py: (f64::from(ry.end - 1), f64::from(ry.start)),
+            x,
+            y,
+        }
+    }
+
+    fn axis(v: f64, (lo, hi, log): (f64, f64, bool), (p0, p1): (f64, f64)) -> f64 {
+        let t = if log {
+            (v.ln() - lo.ln()) / (hi.ln() - lo.ln())
+        } else {
+            (v - lo) / (hi - lo)
+        };
+        p0 + (p1 - p0) * t
+    }
+
+    /// The pixel position of a data point.
+    pub fn map(&self, (x, y): (f64, f64)) -> (f64, f64) {
+        (
+            Self::axis(x, self.x, self.px),
+            Self::axis(y, self.y, self.py),
+        )
+    }
+
+    /// The plotting area, pixels: (left, top, width, height).
+    fn clip(&self) -> (f64, f64, f64, f64) {
+        (
+            self.px.0,
+            self.py.1,
+            self.px.1 - self.px.0 + 1.0,
+            self.py.0 - self.py.1 + 1.0,
+        )
+    }
+}
+
+/// A curve to be written with exact pixel positions (see the module doc).
+struct FineLine {
+    /// The marker colour plotters drew it in (`#01xxxx`).
+    marker: String,
+    color: RGBColor,
+    width: u32,
+    dash: Option<&'static [u32]>,
+    points: Vec<(f64, f64)>,
+    clip: (f64, f64, f64, f64),
+}
+
+thread_local! {
+    /// The curves of the chart being drawn (emptied by [`write_chart`]).
+    static FINE: RefCell<Vec<FineLine>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Registers the curve through `points` (data coordinates of the chart that
+/// `map` describes) and returns the marker colour to draw it in with
+/// plotters (a `LineSeries` of the same points and `width`).
+pub fn fine_line(
+    map: &PixelMap,
+    points: &[(f64, f64)],
+    color: RGBColor,
+    width: u32,
+    dash: Option<&'static [u32]>,
+) -> RGBColor {
+    FINE.with(|f| {
+        let mut f = f.borrow_mut();
+        let k = f.len();
+        let marker = RGBColor(1, 0x20 + (k >> 8) as u8, (k & 0xff) as u8);
+        f.push(FineLine {
+            marker: format!("#{:02X}{:02X}{:02X}", marker.0, marker.1, marker.2),
+            color,
+            width,
+            dash,
+            points: points.iter().map(|&p| map.map(p)).collect(),
+            clip: map.clip(),
+        });
+        marker
+    })
+}
+
+/// A minus sign (U+2212) for each hyphen-minus of `s` that stands for one:
+/// before a digit or a point, after nothing, a space, a bracket, `=`, `/`,
+/// `(`, or the `e` of an exponent (`1e-3`).
+pub fn minus(s: &str) -> String {
+    let c: Vec<char> = s.chars().collect();
+    let mut out = String::with_capacity(s.len() + 4);
+    for (i, &ch) in c.iter().enumerate() {
+        let next_num = c
+            .get(i + 1)
+            .is_some_and(|n| n.is_ascii_digit() || *n == '.');
+        let prev = if i > 0 { Some(c[i - 1]) } else { None };
+        let exponent = prev == Some('e') && i >= 2 && c[i - 2].is_ascii_digit();
+        let after_sep = prev.is_none_or(|p| p.is_whitespace() || "([{=/,:;≤≥<>…±".contains(p));
+        if ch == '-' && next_num && (after_sep || exponent) {
+            out.push('−');
+        } else {
+            out.push(ch);
+        }
+    }
+    out
+}
+
+/// Typesets the text content of an SVG `<text>` element: minus signs
+/// ([`minus`]) and subscripts — `x_{abc}`, `x_ab` (one to three letters,
+/// digits or ±), and `μ0`, `W0`, `v0` as μ₀, W₀, v₀ — as `<tspan>`s shifted
+/// to the baseline's subscript position at 70 % of `size`.
+fn typeset_text(t: &str, size: f64) -> String {
+    let t = minus(t);
+    let c: Vec<char> = t.chars().collect();
+    let sub = |s: &str| {
+        format!(
+            "<tspan baseline-shift=\"-{:.1}\" font-size=\"{:.1}\">{s}</tspan>",
+            0.22 * size,
+            0.7 * size
+        )
+    };
+    let mut out = String::with_capacity(t.len() + 32);
+    let mut i = 0;
+    while i < c.len() {
+        let ch = c[i];
+        let prev_letter = i > 0 && (c[i - 1].is_alphabetic() || c[i - 1] == ')');
+        if ch == '_' && prev_letter {
+            if c.get(i + 1) == Some(&'{') {
+                if let Some(end) = c[i + 2..].iter().position(|&x| x == '}') {
+                    out.push_str(&sub(&c[i + 2..i + 2 + end].iter().collect::<String>()));
+                    i += end + 3;
+                    continue;
+                }
+            }
+            let n = c[i + 1..]
+                .iter()
+                .take_while(|x| x.is_ascii_alphanumeric() || **x == '±')
+                .count();
+            if (1..=3).contains(&n) {
+                out.push_str(&sub(&c[i + 1..i + 1 + n].iter().collect::<String>()));
+                i += n + 1;
+                continue;
+            }
+        }
+        // μ0, W0, v0 as words of their own.
+        if ch == '0'
+            && i > 0
+            && "μWv".contains(c[i - 1])
+            && (i < 2 || !c[i - 2].is_ascii_alphanumeric())
+            && c.get(i + 1)
+                .is_none_or(|n| !n.is_alphanumeric() || (c[i - 1] == 'μ' && !n.is_ascii_digit()))
+        {
+            out.push_str(&sub("0"));
+            i += 1;
+            continue;
+        }
+        out.push(ch);
+        i += 1;
+    }
+    out
+}
+
+/// [`typeset_text`] on every `<text>` element of an SVG.
+fn typeset(svg: &str) -> String {
+    let mut out = String::with_capacity(svg.len() + svg.len() / 8);
+    let mut rest = svg;
+    while let Some(open) = rest.find("<text") {
+        let Some(gt) = rest[open..].find('>').map(|g| open + g + 1) else {
+            break;
+        };
+        let Some(close) = rest[gt..].find("</text>").map(|c| gt + c) else {
+            break;
+        };
+        let tag = &rest[open..gt];
+        let size = tag
+            .split("font-size=\"")
+            .nth(1)
+            .and_then(|s| s.split('"').next())
+            .and_then(|s| s.parse::<f64>().ok())
+            .unwrap_or(14.0);
+        out.push_str(&rest[..gt]);
+        out.push_str(&typeset_text(&rest[gt..close], size));
+        rest = &rest[close..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// [`fine_line`] for a polyline given in absolute SVG pixels (e.g. the caps
+/// of an error bar), clipped to `map`'s plotting area.
+pub fn fine_pixels(map: &PixelMap, points: &[(f64, f64)], color: RGBColor, width: u32) -> RGBColor {
+    FINE.with(|f| {
+        let mut f = f.borrow_mut();
+        let k = f.len();
+        let marker = RGBColor(1, 0x20 + (k >> 8) as u8, (k & 0xff) as u8);
+        f.push(FineLine {
+            marker: format!("#{:02X}{:02X}{:02X}", marker.0, marker.1, marker.2),
+            color,
+            width,
+            dash: None,
+            points: points.to_vec(),
+            clip: map.clip(),
+        });
+        marker
+    })
+}
+
+/// Replaces each marker-coloured polyline of `svg` by its exact curve.
+fn refine(svg: &str, lines: &[FineLine]) -> String {
+    let mut out = svg.to_string();
+    let mut defs = String::new();
+    for (i, l) in lines.iter().enumerate() {
+        let key = format!("stroke=\"{}\"", l.marker);
+        // plotters may split a series into several polylines: replace each.
+        while let Some(at) = out.find(&key) {
+            let start = out[..at].rfind("<polyline").unwrap_or(at);
+            let end = out[at..].find("/>").map_or(out.len(), |e| at + e + 2);
+            let mut pts = String::new();
+            for (x, y) in &l.points {
+                let _ = write!(pts, "{x:.2},{y:.2} ");
+            }
+            let dash = l
+                .dash
+                .map(|d| {
+                    let d: Vec<String> = d.iter().map(u32::to_string).collect();
+                    format!(" stroke-dasharray=\"{}\"", d.join(" "))
+                })
+                .unwrap_or_default();
+            let new = format!(
+                "<polyline fill=\"none\" stroke=\"#{:02X}{:02X}{:02X}\" stroke-width=\"{}\" stroke-linejoin=\"round\"{dash} clip-path=\"url(#fine{i})\" points=\"{}\"/>",
+                l.color.0,
+                l.color.1,
+                l.color.2,
+                l.width,
+                pts.trim_end()
+            );
+            // Only the first piece carries the curve; further pieces go.
+            let new = if out[..start].contains(&format!("url(#fine{i})")) {
+                String::new()
+            } else {
+                new
+            };
+            out.replace_range(start..end, &new);
+        }
+        let (x, y, w, h) = l.clip;
+        let _ = write!(
+            defs,
+            "<clipPath id=\"fine{i}\"><rect x=\"{x}\" y=\"{y}\" width=\"{w}\" height=\"{h}\"/></clipPath>"
+        );
+    }
+    if !defs.is_empty() {
+        if let Some(p) = out.find('>').filter(|_| out.starts_with("<svg")) {
+            out.insert_str(p + 1, &format!("\n<defs>{defs}</defs>"));
+        } else if let Some(p) = out
+            .find("<svg")
+            .and_then(|s| out[s..].find('>').map(|e| s + e))
+        {
+            out.insert_str(p + 1, &format!("\n<defs>{defs}</defs>"));
+        }
+    }
+    out
+}
 
 /// Registers the embedded font for plotters' text layout (idempotent).
 pub fn init_font() {
@@ -135,6 +424,8 @@ pub struct Extras {
     pub log_y: bool,
     /// Text beside points (data coordinates), e.g. a parameter value per point.
     pub labels: Vec<((f64, f64), String)>,
+    /// Vertical error bars: (x, low y, high y, colour index).
+    pub error_bars: Vec<(f64, f64, f64, usize)>,
 }
 
 impl Default for Extras {
@@ -146,6 +437,7 @@ impl Default for Extras {
             log_x: false,
             log_y: false,
             labels: Vec::new(),
+            error_bars: Vec::new(),
         }
     }
 }
@@ -271,11 +563,14 @@ where
         CliError::failure(format!("{}: {what}: {e}", path.display()))
     };
     let mut svg = String::new();
+    FINE.with(|f| f.borrow_mut().clear());
     {
         let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
         draw(&root).map_err(|e| fail("cannot draw", &e))?;
         root.present().map_err(|e| fail("cannot draw", &e))?;
     }
+    let fine = FINE.with(|f| std::mem::take(&mut *f.borrow_mut()));
+    let svg = typeset(&refine(&svg, &fine));
     let svg = svg.replace("<rect ", "<rect shape-rendering=\"crispEdges\" ");
     let bytes = if kind == "svg" {
         svg.into_bytes()
@@ -477,6 +772,48 @@ fn marker_at<C>(marker: Marker, color: RGBColor) -> impl Fn(C) -> MarkerAt<C> {
     }
 }
 
+/// Dash patterns of a regime map's reference lines (dash, gap, …; pixels):
+/// dashed, dotted, dash-dotted.
+const MAP_DASHES: [&[u32]; 3] = [&[9, 5], &[2, 4], &[12, 4, 2, 4]];
+
+/// A legend sample of a black line with a dash pattern, starting at `at`.
+struct DashSample {
+    at: BackendCoord,
+    pattern: &'static [u32],
+}
+
+impl<'a> PointCollection<'a, BackendCoord> for &'a DashSample {
+    type Point = &'a BackendCoord;
+    type IntoIter = std::iter::Once<&'a BackendCoord>;
+    fn point_iter(self) -> Self::IntoIter {
+        std::iter::once(&self.at)
+    }
+}
+
+impl<DB: DrawingBackend> Drawable<DB> for DashSample {
+    fn draw<I: Iterator<Item = BackendCoord>>(
+        &self,
+        mut pos: I,
+        b: &mut DB,
+        _: (u32, u32),
+    ) -> Result<(), DrawingErrorKind<DB::ErrorType>> {
+        let Some((x, y)) = pos.next() else {
+            return Ok(());
+        };
+        let stroke = BLACK.stroke_width(2);
+        let (mut a, mut k) = (x, 0);
+        while a < x + SAMPLE_W {
+            let len = self.pattern[k % self.pattern.len()] as i32;
+            if k % 2 == 0 {
+                b.draw_path([(a, y), ((a + len).min(x + SAMPLE_W), y)], &stroke)?;
+            }
+            a += len;
+            k += 1;
+        }
+        Ok(())
+    }
+}
+
 /// Dash and gap of dashed series, pixels.
 const DASH: (u32, u32) = (7, 5);
 
@@ -485,15 +822,6 @@ fn series_marker(mark: Mark) -> Option<Marker> {
         Mark::Points => Some(Marker::Circle),
         Mark::Markers(m) | Mark::LineMarkers(m) => Some(m),
         Mark::Line | Mark::Dashed => None,
-    }
-}
-
-fn position(c: Corner) -> SeriesLabelPosition {
-    match c {
-        Corner::UpperLeft => SeriesLabelPosition::UpperLeft,
-        Corner::UpperRight => SeriesLabelPosition::UpperRight,
-        Corner::LowerLeft => SeriesLabelPosition::LowerLeft,
-        Corner::LowerRight => SeriesLabelPosition::LowerRight,
     }
 }
 
@@ -606,6 +934,12 @@ where
         .y_label_area_size(70)
         .build_cartesian_2d(xr, yr)?;
     let (lx, ly) = (e.log_x, e.log_y);
+    let pm = PixelMap::of(
+        chart.plotting_area(),
+        (p.x.0, p.x.1, lx),
+        (p.y.0, p.y.1, ly),
+    );
+    let fine = |seg: &[(f64, f64)], c: RGBColor, dash| fine_line(&pm, seg, c, 2, dash);
     let fx = move |v: &f64| if lx { log_axis_tick(*v) } else { tick(*v) };
     let fy = move |v: &f64| if ly { log_axis_tick(*v) } else { tick(*v) };
     chart
@@ -619,42 +953,44 @@ where
         .light_line_style(RGBColor(238, 238, 238))
         .bold_line_style(RGBColor(210, 210, 210))
         .draw()?;
-    let mut any_label = false;
+    // Error bars first (under the points): x, low end, high end, colour index.
+    for &(x, lo, hi, ci) in &e.error_bars {
+        let k = fine_line(&pm, &[(x, lo), (x, hi)], color(ci), 1, None);
+        chart.draw_series(LineSeries::new([(x, lo), (x, hi)], k.stroke_width(1)))?;
+        for y in [lo, hi] {
+            let (px, py) = pm.map((x, y));
+            let cap = [(px - 4.0, py), (px + 4.0, py)];
+            let k = fine_pixels(&pm, &cap, color(ci), 1);
+            chart
+                .plotting_area()
+                .strip_coord_spec()
+                .draw(&PathElement::new(vec![(0, 0), (1, 0)], k.stroke_width(1)))?;
+        }
+    }
+    let any_label = p.series.iter().any(|s| !s.label.is_empty());
     for s in &p.series {
         let c = color(s.color);
         let mark = s.mark;
-        let mut drawn = false;
         for seg in segments(&s.points) {
-            let anno = match mark {
-                Mark::Line => chart.draw_series(LineSeries::new(seg, c.stroke_width(2)))?,
+            match mark {
+                Mark::Line => {
+                    let k = fine(&seg, c, None);
+                    chart.draw_series(LineSeries::new(seg, k.stroke_width(2)))?
+                }
                 Mark::LineMarkers(m) => {
-                    chart.draw_series(LineSeries::new(seg.clone(), c.stroke_width(2)))?;
+                    let k = fine(&seg, c, None);
+                    chart.draw_series(LineSeries::new(seg.clone(), k.stroke_width(2)))?;
                     chart.draw_series(seg.into_iter().map(marker_at(m, c)))?
                 }
-                Mark::Dashed => chart.draw_series(DashedLineSeries::new(
-                    seg,
-                    DASH.0,
-                    DASH.1,
-                    c.stroke_width(2),
-                ))?,
+                Mark::Dashed => {
+                    let k = fine(&seg, c, Some(&[DASH.0, DASH.1]));
+                    chart.draw_series(LineSeries::new(seg, k.stroke_width(2)))?
+                }
                 Mark::Points | Mark::Markers(_) => {
                     let m = series_marker(mark).unwrap_or(Marker::Circle);
                     chart.draw_series(seg.into_iter().map(marker_at(m, c)))?
                 }
             };
-            if !drawn && !s.label.is_empty() {
-                anno.label(s.label.as_str()).legend(sample(mark, c));
-                any_label = true;
-            }
-            drawn = true;
-        }
-        if !drawn && !s.label.is_empty() {
-            // A legend-only entry (no points).
-            chart
-                .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())?
-                .label(s.label.as_str())
-                .legend(sample(mark, c));
-            any_label = true;
         }
     }
     let label_font = ("sans-serif", 13).into_font();
@@ -663,34 +999,172 @@ where
             EmptyElement::at(*at) + Text::new(text.clone(), (6, -16), label_font.clone()),
         ))?;
     }
+    // The legend and the notes: framed boxes placed where no data is (the
+    // preferred corner first, then the others), so that no box hides a point.
+    let area = chart.plotting_area().strip_coord_spec();
+    let (rx, ry) = area.get_pixel_range();
+    let dots = occupied(p, &pm, (rx.start, ry.start));
+    let dims = (rx.end - rx.start, ry.end - ry.start);
+    let mut taken = Vec::new();
     if any_label {
-        chart
-            .configure_series_labels()
-            .position(position(e.legend_at))
-            .legend_area_size(SAMPLE_W + 10)
-            .background_style(WHITE.mix(0.9))
-            .border_style(RGBColor(160, 160, 160))
-            .label_font(("sans-serif", 14))
-            .draw()?;
+        let entries: Vec<&Series> = p.series.iter().filter(|s| !s.label.is_empty()).collect();
+        let size = legend_size(&area, &entries);
+        let at = place(dims, size, e.legend_at, &taken, &dots);
+        draw_legend(&area, &entries, at, size)?;
+        taken.push((at, size));
     }
     if !e.notes.is_empty() {
-        draw_notes(
-            &chart.plotting_area().strip_coord_spec(),
-            &e.notes,
-            e.notes_at,
-        )?;
+        let size = notes_size(&area, &e.notes);
+        let at = place(dims, size, e.notes_at, &taken, &dots);
+        draw_notes(&area, &e.notes, at, size)?;
     }
     Ok(())
 }
 
-/// Lines of text in a framed box at a corner of `area`.
-fn draw_notes<DB: DrawingBackend>(
+/// Pixels (relative to the plotting area's corner `origin`) that the panel's
+/// data cover: every point, and along lines every 3 px between points.
+fn occupied(p: &Panel, pm: &PixelMap, origin: (i32, i32)) -> Vec<(f64, f64)> {
+    let (ox, oy) = (f64::from(origin.0), f64::from(origin.1));
+    let mut out = Vec::new();
+    for s in &p.series {
+        let line = matches!(s.mark, Mark::Line | Mark::Dashed | Mark::LineMarkers(_));
+        for seg in segments(&s.points) {
+            let px: Vec<(f64, f64)> = seg
+                .iter()
+                .map(|&q| pm.map(q))
+                .map(|(x, y)| (x - ox, y - oy))
+                .collect();
+            for (i, &a) in px.iter().enumerate() {
+                out.push(a);
+                if let (true, Some(&b)) = (line, px.get(i + 1)) {
+                    let d = ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt();
+                    let n = (d / 3.0).ceil().min(2000.0) as usize;
+                    for k in 1..n {
+                        let t = k as f64 / n as f64;
+                        out.push((a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1)));
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The top-left corner of a `size` box in a `dims` area: the first of the
+/// preferred corner, the other corners and the edges' midpoints where no
+/// point of `dots` (with a 4 px margin) and no `taken` box lies; if there
+/// is none, the candidate covering the fewest points.
+/// A box: top-left corner and size, pixels.
+type PixelBox = ((i32, i32), (i32, i32));
+
+fn place(
+    dims: (i32, i32),
+    size: (i32, i32),
+    preferred: Corner,
+    taken: &[PixelBox],
+    dots: &[(f64, f64)],
+) -> (i32, i32) {
+    let (aw, ah) = dims;
+    let (w, h) = size;
+    let m = 8;
+    let corner = |c: Corner| match c {
+        Corner::UpperLeft => (m, m),
+        Corner::UpperRight => (aw - w - m, m),
+        Corner::LowerLeft => (m, ah - h - m),
+        Corner::LowerRight => (aw - w - m, ah - h - m),
+    };
+    let mut cands = vec![corner(preferred)];
+    for c in [
+        Corner::UpperLeft,
+        Corner::UpperRight,
+        Corner::LowerRight,
+        Corner::LowerLeft,
+    ] {
+        cands.push(corner(c));
+    }
+    cands.extend([
+        ((aw - w) / 2, m),
+        ((aw - w) / 2, ah - h - m),
+        (m, (ah - h) / 2),
+        (aw - w - m, (ah - h) / 2),
+    ]);
+    let overlaps = |(x, y): (i32, i32)| {
+        taken.iter().any(|&((tx, ty), (tw, th))| {
+            x < tx + tw + 4 && tx < x + w + 4 && y < ty + th + 4 && ty < y + h + 4
+        })
+    };
+    let covered = |(x, y): (i32, i32)| {
+        let (x0, y0, x1, y1) = (
+            f64::from(x - 4),
+            f64::from(y - 4),
+            f64::from(x + w + 4),
+            f64::from(y + h + 4),
+        );
+        dots.iter()
+            .filter(|&&(px, py)| px >= x0 && px <= x1 && py >= y0 && py <= y1)
+            .count()
+    };
+    let free: Vec<(i32, i32)> = cands.iter().copied().filter(|&c| !overlaps(c)).collect();
+    free.iter()
+        .copied()
+        .find(|&c| covered(c) == 0)
+        .or_else(|| free.iter().copied().min_by_key(|&c| covered(c)))
+        .unwrap_or(cands[0])
+}
+
+/// Legend rows, pixels.
+const LEGEND_ROW: i32 = 20;
+
+fn legend_size<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
-    notes: &[String],
-    at: Corner,
-) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    entries: &[&Series],
+) -> (i32, i32) {
     let font = TextStyle::from(("sans-serif", 14).into_font());
-    let line = 19;
+    let text = entries
+        .iter()
+        .map(|s| {
+            area.estimate_text_size(&s.label, &font)
+                .map_or(8 * s.label.chars().count() as i32, |(w, _)| w as i32)
+        })
+        .max()
+        .unwrap_or(0);
+    (text + SAMPLE_W + 26, LEGEND_ROW * entries.len() as i32 + 8)
+}
+
+/// A framed legend at `at` (top-left, relative to `area`): each entry's
+/// sample (line, dashes, marker as drawn) and label.
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[&Series],
+    (x0, y0): (i32, i32),
+    (w, h): (i32, i32),
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    area.draw(&Rectangle::new(
+        [(x0, y0), (x0 + w, y0 + h)],
+        WHITE.mix(0.9).filled(),
+    ))?;
+    area.draw(&Rectangle::new(
+        [(x0, y0), (x0 + w, y0 + h)],
+        RGBColor(160, 160, 160),
+    ))?;
+    let font = ("sans-serif", 14).into_font();
+    for (i, s) in entries.iter().enumerate() {
+        let y = y0 + 4 + LEGEND_ROW * i as i32 + LEGEND_ROW / 2;
+        area.draw(&sample(s.mark, color(s.color))((x0 + 8, y)))?;
+        area.draw(&Text::new(
+            s.label.as_str(),
+            (x0 + 8 + SAMPLE_W + 8, y),
+            font.color(&BLACK).pos(text_pos_left_center()),
+        ))?;
+    }
+    Ok(())
+}
+
+/// Notes lines, pixels.
+const NOTES_LINE: i32 = 19;
+
+fn notes_size<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, notes: &[String]) -> (i32, i32) {
+    let font = TextStyle::from(("sans-serif", 14).into_font());
     let width = notes
         .iter()
         .map(|n| {
@@ -700,15 +1174,18 @@ fn draw_notes<DB: DrawingBackend>(
         .max()
         .unwrap_or(0)
         + 16;
-    let height = line * notes.len() as i32 + 10;
-    let (aw, ah) = area.dim_in_pixel();
-    let (aw, ah) = (aw as i32, ah as i32);
-    let (x0, y0) = match at {
-        Corner::UpperLeft => (8, 8),
-        Corner::UpperRight => (aw - width - 8, 8),
-        Corner::LowerLeft => (8, ah - height - 8),
-        Corner::LowerRight => (aw - width - 8, ah - height - 8),
-    };
+    (width, NOTES_LINE * notes.len() as i32 + 10)
+}
+
+/// Lines of text in a framed box of `size` at `(x0, y0)` of `area`.
+fn draw_notes<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    notes: &[String],
+    (x0, y0): (i32, i32),
+    (width, height): (i32, i32),
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let font = TextStyle::from(("sans-serif", 14).into_font());
+    let line = NOTES_LINE;
     area.draw(&Rectangle::new(
         [(x0, y0), (x0 + width, y0 + height)],
         WHITE.mix(0.9).filled(),
@@ -768,6 +1245,10 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
     m: &RegimeMap,
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     root.fill(&WHITE)?;
+    // The map fills its plotting area: the legend goes under it.
+    let (_, h) = root.dim_in_pixel();
+    let (root, foot) = root.split_vertically(h as i32 - 40);
+    let root = &root;
     let (hx, hy) = (half_step(&m.xs), half_step(&m.ys));
     let x0 = m.xs.first().copied().unwrap_or(0.0) - hx;
     let x1 = m.xs.last().copied().unwrap_or(1.0) + hx;
@@ -779,6 +1260,7 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
         .x_label_area_size(50)
         .y_label_area_size(66)
         .build_cartesian_2d(x0..x1, y0..y1)?;
+    let pm = PixelMap::of(chart.plotting_area(), (x0, x1, false), (y0, y1, false));
     chart
         .configure_mesh()
         .disable_mesh()
@@ -795,36 +1277,54 @@ fn draw_map<'a, DB: DrawingBackend + 'a>(
         let c = m.classes[usize::from(k.min(2))].1;
         Rectangle::new([(x - hx, y - hy), (x + hx, y + hy)], c.filled())
     }))?;
-    // Legend entries for the classes (drawn as invisible series with a legend).
-    for (name, c) in m.classes {
-        chart
-            .draw_series(std::iter::empty::<Rectangle<(f64, f64)>>())?
-            .label(name)
-            .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 16, y + 6)], c.filled()));
-    }
     let c0 = m.classes[0].1;
     for pts in &m.class0_lines {
-        chart.draw_series(LineSeries::new(pts.clone(), c0.stroke_width(5)))?;
+        let k = fine_line(&pm, pts, c0, 5, None);
+        chart.draw_series(LineSeries::new(pts.clone(), k.stroke_width(5)))?;
     }
-    for (label, pts) in &m.lines {
-        let a = chart.draw_series(DashedLineSeries::new(
-            pts.clone(),
-            DASH.0,
-            DASH.1,
-            BLACK.stroke_width(2),
+    // Each labelled reference line its own dash pattern (the legend shows
+    // it); an unlabelled line continues the labelled one before it.
+    let pattern_of = |i: usize| {
+        let k = m.lines[..=i].iter().filter(|(l, _)| !l.is_empty()).count();
+        MAP_DASHES[k.saturating_sub(1) % MAP_DASHES.len()]
+    };
+    for (i, (_, pts)) in m.lines.iter().enumerate() {
+        let pattern = pattern_of(i);
+        let k = fine_line(&pm, pts, BLACK, 2, Some(pattern));
+        chart.draw_series(LineSeries::new(pts.clone(), k.stroke_width(2)))?;
+    }
+    // The legend, one row under the map: the classes, then the lines.
+    let font = TextStyle::from(("sans-serif", 14).into_font());
+    let text_w = |s: &str| {
+        foot.estimate_text_size(s, &font)
+            .map_or(8 * s.chars().count() as i32, |(w, _)| w as i32)
+    };
+    let (mut x, y) = (16, 20);
+    for (name, c) in m.classes {
+        foot.draw(&Rectangle::new([(x, y - 6), (x + 16, y + 6)], c.filled()))?;
+        foot.draw(&Text::new(
+            name,
+            (x + 22, y),
+            font.color(&BLACK).pos(text_pos_left_center()),
         ))?;
-        if !label.is_empty() {
-            a.label(label.as_str()).legend(sample(Mark::Dashed, BLACK));
-        }
+        x += 22 + text_w(name) + 24;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .legend_area_size(SAMPLE_W + 10)
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .label_font(("sans-serif", 14))
-        .draw()?;
+    for (i, (label, _)) in m.lines.iter().enumerate() {
+        if label.is_empty() {
+            continue;
+        }
+        let pattern = pattern_of(i);
+        foot.draw(&DashSample {
+            at: (x, y),
+            pattern,
+        })?;
+        foot.draw(&Text::new(
+            label.as_str(),
+            (x + SAMPLE_W + 6, y),
+            font.color(&BLACK).pos(text_pos_left_center()),
+        ))?;
+        x += SAMPLE_W + 6 + text_w(label) + 24;
+    }
     Ok(())
 }
 
@@ -858,12 +1358,58 @@ pub struct HeatMap {
     pub log_y: bool,
     /// Cells, row-major over `ys` then `xs`.
     pub cells: Vec<Heat>,
-    /// Colour range of the values.
+    /// Colour range of the values ([`heat_range`]: from the data).
     pub range: (f64, f64),
+    /// Signed data: a diverging colour map (blue, white at 0, red) over a
+    /// range symmetric about 0, instead of viridis.
+    pub diverging: bool,
     /// Label of the colour bar.
     pub value_label: String,
     /// Named classes with their colours (legend).
     pub classes: Vec<(String, RGBColor)>,
+}
+
+/// The colour range of heat-map values, from the data: the values' least and
+/// greatest (for `diverging`, ±their largest magnitude, so that 0 is white),
+/// widened to a tenth of a unit if they are all equal; `None` if no cell
+/// holds a value.
+pub fn heat_range(cells: &[Heat], diverging: bool) -> Option<(f64, f64)> {
+    let vals = cells.iter().filter_map(|h| match h {
+        Heat::Value(v) if v.is_finite() => Some(*v),
+        _ => None,
+    });
+    let (lo, hi) = vals.fold(None, |acc: Option<(f64, f64)>, v| {
+        Some(acc.map_or((v, v), |(a, b)| (a.min(v), b.max(v))))
+    })?;
+    let (lo, hi) = if diverging {
+        let m = lo.abs().max(hi.abs());
+        (-m, m)
+    } else {
+        (lo, hi)
+    };
+    Some(if hi > lo {
+        (lo, hi)
+    } else {
+        (lo - 0.05, hi + 0.05)
+    })
+}
+
+/// A diverging colour map (ColorBrewer RdBu, reversed): blue at 0, white at
+/// 0.5, red at 1.
+fn diverging(t: f64) -> RGBColor {
+    const STOPS: [(f64, f64, f64); 5] = [
+        (33.0, 102.0, 172.0),
+        (146.0, 197.0, 222.0),
+        (247.0, 247.0, 247.0),
+        (244.0, 165.0, 130.0),
+        (178.0, 24.0, 43.0),
+    ];
+    let x = t.clamp(0.0, 1.0) * 4.0;
+    let i = (x.floor() as usize).min(3);
+    let f = x - i as f64;
+    let (a, b) = (STOPS[i], STOPS[i + 1]);
+    let mix = |p: f64, q: f64| (p + (q - p) * f).round() as u8;
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
 }
 
 fn viridis(t: f64) -> RGBColor {
@@ -922,37 +1468,47 @@ fn draw_heat<DB: DrawingBackend>(
     let nx = m.xs.len().max(1);
     let (lo, hi) = m.range;
     let span = if hi > lo { hi - lo } else { 1.0 };
+    let cmap = if m.diverging { diverging } else { viridis };
     chart.draw_series(m.cells.iter().enumerate().map(|(i, h)| {
         let (x, y) = (m.xs[i % nx], m.ys[i / nx]);
         let c = match *h {
-            Heat::Value(v) => viridis((v - lo) / span),
+            Heat::Value(v) => cmap((v - lo) / span),
             Heat::Class(k) => m.classes.get(k).map(|c| c.1).unwrap_or(RGBColor(0, 0, 0)),
         };
         Rectangle::new([(x - hx, y - hy), (x + hx, y + hy)], c.filled())
     }))?;
-    for (name, c) in &m.classes {
-        let c = *c;
-        chart
-            .draw_series(std::iter::empty::<Rectangle<(f64, f64)>>())?
-            .label(name.as_str())
-            .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 16, y + 6)], c.filled()));
+    // The classes' swatches under the colour bar (not over the cells).
+    let (_, bh) = bar.dim_in_pixel();
+    let class_rows = 18 * m.classes.len() as i32;
+    let font = TextStyle::from(("sans-serif", 12).into_font());
+    for (i, (name, c)) in m.classes.iter().enumerate() {
+        let y = bh as i32 - 12 - class_rows + 18 * i as i32 + 9;
+        bar.draw(&Rectangle::new([(4, y - 6), (18, y + 6)], c.filled()))?;
+        bar.draw(&Text::new(
+            name.as_str(),
+            (22, y),
+            font.color(&BLACK).pos(text_pos_left_center()),
+        ))?;
     }
-    if !m.classes.is_empty() {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 13))
-            .draw()?;
+    // Colour bar, its label above it (a parenthesis on a line of its own:
+    // the column is narrow).
+    let (head, tail) = match m.value_label.split_once(" (") {
+        Some((h, t)) => (h.to_string(), format!("({t}")),
+        None => (m.value_label.clone(), String::new()),
+    };
+    let label_font = TextStyle::from(("sans-serif", 13).into_font());
+    for (k, line) in [head, tail].iter().enumerate() {
+        bar.draw(&Text::new(
+            line.as_str(),
+            (4, 10 + 17 * k as i32),
+            label_font.color(&BLACK),
+        ))?;
     }
-    // Colour bar.
     let mut cb = ChartBuilder::on(&bar)
-        .margin_top(40)
-        .margin_bottom(62)
+        .margin_top(52)
+        .margin_bottom(62 + class_rows)
         .margin_right(8)
         .y_label_area_size(48)
-        .caption(&m.value_label, ("sans-serif", 13))
         .build_cartesian_2d(0.0..1.0, lo..lo + span)?;
     cb.configure_mesh()
         .disable_mesh()
@@ -966,7 +1522,7 @@ fn draw_heat<DB: DrawingBackend>(
         let b = lo + span * (i + 1) as f64 / steps as f64;
         Rectangle::new(
             [(0.0, a), (1.0, b)],
-            viridis(i as f64 / (steps - 1) as f64).filled(),
+            cmap(i as f64 / (steps - 1) as f64).filled(),
         )
     }))?;
     Ok(())
@@ -982,6 +1538,42 @@ mod tests {
         assert_eq!(log_axis_tick(100.0), "100");
         assert_eq!(log_axis_tick(1e-9), "1e-9");
         assert_eq!(log_axis_tick(2e-9), "2e-9");
+    }
+
+    /// The colour range follows the data (issue 27: a fixed 0 … −17 scale
+    /// drew data between −6 and −9 in one colour).
+    #[test]
+    fn heat_range_follows_the_data() {
+        let cells = [
+            Heat::Value(-6.2),
+            Heat::Class(0),
+            Heat::Value(-8.9),
+            Heat::Value(-7.0),
+        ];
+        assert_eq!(heat_range(&cells, false), Some((-8.9, -6.2)));
+        assert_eq!(heat_range(&cells, true), Some((-8.9, 8.9)));
+        assert_eq!(heat_range(&[Heat::Value(2.0)], false), Some((1.95, 2.05)));
+        assert_eq!(heat_range(&[Heat::Class(1)], false), None);
+        // White at the centre of the diverging map, blue and red at the ends.
+        assert_eq!(diverging(0.5), RGBColor(247, 247, 247));
+        assert_eq!(diverging(0.0), RGBColor(33, 102, 172));
+        assert_eq!(diverging(1.0), RGBColor(178, 24, 43));
+    }
+
+    #[test]
+    fn minus_signs_and_subscripts_are_typeset() {
+        assert_eq!(
+            minus("-0.5 and 1e-3, lift-off, x-1"),
+            "−0.5 and 1e−3, lift-off, x-1"
+        );
+        let t = typeset_text("μ0 k_z u_z0, v_{c±}", 10.0);
+        assert!(t.starts_with("μ<tspan"), "{t}");
+        assert!(
+            t.contains(">z0</tspan>") && t.contains(">c±</tspan>") && !t.contains('_'),
+            "{t}"
+        );
+        // Words with an underscore longer than three characters stay.
+        assert_eq!(typeset_text("not_settled", 10.0), "not_settled");
     }
 
     #[test]

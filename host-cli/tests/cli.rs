@@ -233,6 +233,8 @@ fn curve_writes_csv_and_plot_files() {
                 csv.to_str().unwrap(),
                 "--plot",
                 plot.to_str().unwrap(),
+                // The second run replaces the first one's CSV (output-files policy).
+                "--force",
             ])
             .assert()
             .success()
@@ -401,8 +403,93 @@ fn figures_are_written() {
         "profiles",
         "regime_map",
     ] {
-        check_svg(&dir.path().join(format!("{name}.svg")));
+        let svg = dir.path().join(format!("{name}.svg"));
+        check_svg(&svg);
         check_png(&dir.path().join(format!("{name}.png")));
+        let text = std::fs::read_to_string(&svg).unwrap();
+        curves_have_sub_pixel_coordinates(name, &text);
+        frames_cover_no_data(name, &text);
+    }
+}
+
+/// The value of attribute `key` in one SVG tag.
+fn attr<'a>(tag: &'a str, key: &str) -> Option<&'a str> {
+    let at = tag.find(&format!(" {key}=\""))? + key.len() + 3;
+    tag[at..].split('"').next()
+}
+
+/// The tags `<name …>` of an SVG document.
+fn tags<'a>(svg: &'a str, name: &str) -> Vec<&'a str> {
+    svg.match_indices(&format!("<{name} "))
+        .map(|(i, _)| &svg[i..i + svg[i..].find('>').unwrap()])
+        .collect()
+}
+
+fn polyline_points(tag: &str) -> Vec<(f64, f64)> {
+    attr(tag, "points")
+        .unwrap_or("")
+        .split_whitespace()
+        .map(|p| {
+            let (x, y) = p.split_once(',').unwrap();
+            (x.parse().unwrap(), y.parse().unwrap())
+        })
+        .collect()
+}
+
+/// Issue 27: plotters writes whole pixels, so a smooth curve drawn through it
+/// is a staircase. Every polyline of more than 5 points (a curve, not an
+/// axis, a tick or a legend sample) has coordinates off the pixel grid.
+fn curves_have_sub_pixel_coordinates(name: &str, svg: &str) {
+    let curves: Vec<&str> = tags(svg, "polyline")
+        .into_iter()
+        .filter(|t| polyline_points(t).len() > 5)
+        .collect();
+    assert!(!curves.is_empty(), "{name}: no curve");
+    for t in curves {
+        let pts = polyline_points(t);
+        let fractional = pts
+            .iter()
+            .filter(|(x, y)| x.fract() != 0.0 || y.fract() != 0.0)
+            .count();
+        assert!(
+            fractional * 2 > pts.len(),
+            "{name}: a curve of {} points with integer coordinates ({fractional} fractional)",
+            pts.len()
+        );
+    }
+}
+
+/// Issue 27: legend and notes frames (grey, #A0A0A0) lie where no data is:
+/// no curve point (sub-pixel polylines) and no marker centre strictly
+/// inside a frame (1 px margin for the frame's own line).
+fn frames_cover_no_data(name: &str, svg: &str) {
+    let num = |t: &str, k: &str| attr(t, k).unwrap().parse::<f64>().unwrap();
+    let frames: Vec<(f64, f64, f64, f64)> = tags(svg, "rect")
+        .into_iter()
+        .filter(|t| attr(t, "stroke") == Some("#A0A0A0"))
+        .map(|t| (num(t, "x"), num(t, "y"), num(t, "width"), num(t, "height")))
+        .collect();
+    let mut data: Vec<(f64, f64)> = tags(svg, "polyline")
+        .into_iter()
+        .filter(|t| t.contains("clip-path"))
+        .flat_map(polyline_points)
+        .collect();
+    data.extend(
+        tags(svg, "circle")
+            .into_iter()
+            .map(|t| (num(t, "cx"), num(t, "cy"))),
+    );
+    for &(x, y, w, h) in &frames {
+        for &(px, py) in &data {
+            let inside = px > x + 1.0 && px < x + w - 1.0 && py > y + 1.0 && py < y + h - 1.0;
+            // A legend's own samples sit inside its frame: those are circles
+            // at the sample column (x + 8 + 14), not data.
+            let sample = (px - (x + 8.0 + 14.0)).abs() < 1.0;
+            assert!(
+                !inside || sample,
+                "{name}: point ({px}, {py}) under the frame at ({x}, {y}) {w}×{h}"
+            );
+        }
     }
 }
 

@@ -403,7 +403,8 @@ fn curve_and_map_across_lift_off() {
         "--res",
         "4",
         "--plot",
-        png.to_str().unwrap(),
+        // A file of its own: the μ map's plot exists (output-files policy).
+        dir.path().join("regimes.png").to_str().unwrap(),
     ]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.starts_with("16 cells: "), "{err}");

@@ -634,6 +634,53 @@ fn measure_over_the_pty_flat_json_and_invalid_exit() {
     );
 }
 
+/// Issue 27: `watch` right after another `watch` on the same pty. The first
+/// one's `StreamStopped` (sent just after the answer to its stop) and any
+/// late estimate of its stream stay unread on the link; the next session
+/// drops what arrived before its own stream's `Ok` instead of reading it as
+/// its own end. Five in a row, each with one estimate.
+#[test]
+fn watch_after_watch_on_the_same_link() {
+    let s = sim();
+    ok_json(&s, DRIVE);
+    ok_json(&s, &["start"]);
+    // `measure` waits for the ramps: the watches then see a settled drive.
+    ok_json(&s, &["measure", "--periods", "100"]);
+    for i in 0..5 {
+        let o = dev(&s, &["watch", "--periods", "100", "--count", "1"]);
+        assert!(
+            o.status.success(),
+            "watch {i}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["periods"], 100, "watch {i}");
+    }
+    // And a measure after them is not Busy.
+    assert_eq!(ok_json(&s, &["measure", "--periods", "100"])["valid"], true);
+}
+
+/// Issue 27: `measure` right after `start` (or a new drive) waits for the
+/// ramps and measures the settled drive; `--no-wait` measures at once. (The
+/// virtual device's ramps take about 2 ms — Δu_z = 2 µm at the board's slew
+/// of 1 mm/s — so a new process rarely meets them; under QEMU it did.)
+#[test]
+fn measure_waits_for_the_ramps_unless_no_wait() {
+    let s = sim();
+    ok_json(&s, DRIVE);
+    for _ in 0..3 {
+        ok_json(&s, &["stop"]);
+        ok_json(&s, &["start"]);
+        let e = ok_json(&s, &["measure", "--periods", "200"]);
+        assert_eq!(e["valid"], true, "{e}");
+    }
+    let o = dev(&s, &["measure", "--periods", "200", "--no-wait"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("waiting for the ramps"), "{err}");
+    let e: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(e["periods"], 200);
+}
+
 fn stream_status(s: &Sim) -> Value {
     ok_json(s, &["status"])
 }

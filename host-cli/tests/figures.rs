@@ -99,6 +99,9 @@ fn unwritable_plot_file_is_one_line() {
             "20",
             "--plot",
             target.to_str().unwrap(),
+            // Past the overwrite policy (the name exists, as a directory),
+            // to the write itself.
+            "--force",
         ],
         1,
     );

@@ -41,7 +41,8 @@ fn motion(scene: &[String], extra: &[&str]) -> Value {
         .arg("motion")
         .args(scene)
         .args(extra)
-        .arg("--json")
+        // A --csv may exist from the probe run of `tol_that_succeeds`.
+        .args(["--json", "--force"])
         .output()
         .unwrap();
     assert!(

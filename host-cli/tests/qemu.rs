@@ -1,9 +1,11 @@
 //! The real firmware binary under QEMU (netduinoplus2 = STM32F405), driven
 //! through `fricctl device --tcp` and through hand-built frames on the raw
-//! link. Needs `qemu-system-arm` and the firmware built with
-//! `--features qemu`; `.ci/run` does both and runs
-//! `cargo test -p host-cli --test qemu -- --ignored --test-threads=1` with
-//! `FIRMWARE_ELF` set (one QEMU at a time, so the measured rate is QEMU's).
+//! link. Needs `qemu-system-arm` and the thumbv7em-none-eabihf target. The
+//! firmware ELF is `FIRMWARE_ELF` if set, else the tests build it themselves
+//! (`cargo build --release --features qemu` in `firmware/`, into
+//! `firmware/target/qemu-tests`, so the hardware build is left alone), once.
+//! QEMU runs one at a time whatever `--test-threads` is (a lock), so the
+//! measured rate is QEMU's: `cargo test -p host-cli --test qemu -- --ignored`.
 //!
 //! QEMU's serial runs with `nodelay=on`: without it QEMU writes each byte on
 //! a socket without TCP_NODELAY, and delayed ACKs throttle the link to tens
@@ -31,6 +33,60 @@ use serde_json::Value;
 struct Qemu {
     child: Child,
     port: u16,
+    /// One QEMU at a time (held until this one is dropped).
+    _turn: std::sync::MutexGuard<'static, ()>,
+}
+
+/// Serialises the QEMU runs of this file.
+static QEMU_TURN: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// The firmware ELF built with `feature` (`qemu`: ideal transducers in its
+/// plant; `qemu-resonant`: the bench's resonant ones): the environment
+/// variable `var` if set (`FIRMWARE_ELF`, `FIRMWARE_RESONANT_ELF`), else built
+/// here once per feature, into `firmware/target/qemu-tests/FEATURE`.
+fn firmware_elf(var: &str, feature: &str) -> String {
+    static ELFS: std::sync::Mutex<Vec<(String, String)>> = std::sync::Mutex::new(Vec::new());
+    let mut elfs = ELFS.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((_, e)) = elfs.iter().find(|(f, _)| f == feature) {
+        return e.clone();
+    }
+    let elf = match std::env::var(var) {
+        Ok(p) => p,
+        Err(_) => {
+            let fw = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../firmware");
+            let target = fw.join("target/qemu-tests").join(feature);
+            eprintln!("building the firmware with --features {feature} ({var} not set) …");
+            let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+            let st = StdCommand::new(cargo)
+                .current_dir(&fw)
+                .args([
+                    "build",
+                    "--release",
+                    "--locked",
+                    "--features",
+                    feature,
+                    "--bin",
+                    "firmware",
+                ])
+                .arg("--target-dir")
+                .arg(&target)
+                // The firmware's own toolchain file and config decide the target.
+                .env_remove("RUSTFLAGS")
+                .env_remove("CARGO_TARGET_DIR")
+                .env_remove("CARGO_BUILD_TARGET")
+                .status()
+                .expect("cargo (to build the firmware)");
+            assert!(
+                st.success(),
+                "building the firmware failed (needs `rustup target add thumbv7em-none-eabihf`); or set {var}"
+            );
+            let elf = target.join("thumbv7em-none-eabihf/release/firmware");
+            assert!(elf.is_file(), "no firmware at {}", elf.display());
+            elf.display().to_string()
+        }
+    };
+    elfs.push((feature.to_string(), elf.clone()));
+    elf
 }
 
 impl Drop for Qemu {
@@ -49,14 +105,13 @@ fn free_port() -> u16 {
 }
 
 fn qemu() -> Qemu {
-    qemu_elf(
-        std::env::var("FIRMWARE_ELF")
-            .expect("FIRMWARE_ELF = path of the firmware built with --features qemu"),
-    )
+    qemu_with("FIRMWARE_ELF", "qemu")
 }
 
-/// QEMU running the firmware `elf` (its serial on a free TCP port).
-fn qemu_elf(elf: String) -> Qemu {
+/// QEMU running the firmware built with `feature` ([`firmware_elf`]).
+fn qemu_with(var: &str, feature: &str) -> Qemu {
+    let turn = QEMU_TURN.lock().unwrap_or_else(|e| e.into_inner());
+    let elf = firmware_elf(var, feature);
     let port = free_port();
     let child = StdCommand::new("qemu-system-arm")
         .args([
@@ -81,7 +136,7 @@ fn qemu_elf(elf: String) -> Qemu {
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
-        .expect("qemu-system-arm");
+        .expect("qemu-system-arm (apt-get install qemu-system-arm)");
     // Wait until QEMU listens; the first connection starts the guest (wait=on).
     let t = Instant::now();
     while TcpStream::connect(("127.0.0.1", port)).is_err() {
@@ -94,7 +149,11 @@ fn qemu_elf(elf: String) -> Qemu {
     // The probe connection above was closed; give the firmware time to enable USART2
     // (bytes sent before that are dropped by the emulated USART; the CLI retries anyway).
     std::thread::sleep(Duration::from_millis(300));
-    Qemu { child, port }
+    Qemu {
+        child,
+        port,
+        _turn: turn,
+    }
 }
 
 fn dev(q: &Qemu, args: &[&str]) -> std::process::Output {
@@ -108,7 +167,7 @@ fn dev(q: &Qemu, args: &[&str]) -> std::process::Output {
 }
 
 #[test]
-#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_ELF is set)"]
 fn real_firmware_under_qemu() {
     let q = qemu();
     let o = dev(&q, &["info"]);
@@ -282,7 +341,7 @@ impl RawLink {
 const REQUEST_TIMEOUT: Duration = Duration::from_millis(1000);
 
 #[test]
-#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_ELF is set)"]
 fn ten_thousand_sequential_requests_all_answered_without_retries() {
     let q = qemu();
     let mut link = RawLink::connect(&q);
@@ -336,7 +395,7 @@ fn ten_thousand_sequential_requests_all_answered_without_retries() {
 }
 
 #[test]
-#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_ELF is set)"]
 fn pipelined_requests_no_loss_or_counted_overflow() {
     let q = qemu();
     let mut link = RawLink::connect(&q);
@@ -455,7 +514,7 @@ impl RawLink {
 }
 
 #[test]
-#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_ELF is set)"]
 fn reset_ends_the_stream_and_the_measurement_on_the_firmware() {
     let q = qemu();
     let mut link = RawLink::connect(&q);
@@ -524,7 +583,7 @@ fn control_fields(on: bool, target_mu: f32) -> Vec<u8> {
 }
 
 #[test]
-#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_ELF is set)"]
 fn closed_loop_messages_on_the_firmware() {
     use model_core::select;
     use model_core::{Libm, Scene, SceneParams};
@@ -720,7 +779,7 @@ fn ok(q: &Qemu, args: &[&str]) -> Value {
 /// where the estimator's aliasing bias is ~1e-6: README "Sweeps, fits"),
 /// Δu_z = 2 µm, Δu_x = 0.3 µm, u_z0 = 4 µm, φ = 40°.
 #[test]
-#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_ELF is set)"]
 fn lab_session_on_the_firmware() {
     let q = qemu();
     ok(&q, &drive_set("2000", "2e-6", "3e-7", "4e-6", Some("40")));
@@ -871,7 +930,7 @@ fn lab_session_on_the_firmware() {
 /// every output ramped to 0, one `RampDone`, the stream ended by the
 /// refusal, `Start` refused until `ResetFaults`.
 #[test]
-#[ignore = "needs qemu-system-arm and FIRMWARE_ELF (run by .ci/run)"]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_ELF is set)"]
 fn adc_saturation_reaches_the_safe_state_on_the_firmware() {
     use model_core::device::faults;
     let q = qemu();
@@ -976,7 +1035,7 @@ fn adc_saturation_reaches_the_safe_state_on_the_firmware() {
 }
 
 /// The resonant bench under QEMU (the firmware built with `--features
-/// qemu-resonant`, `FIRMWARE_RESONANT_ELF`: the bench's modes, 20 300 Hz
+/// qemu-resonant`, `FIRMWARE_RESONANT_ELF` or built here: the bench's modes, 20 300 Hz
 /// Q 300 and 19 700 Hz Q 200 with the contact's load Q 2000, in the
 /// firmware's own f32 plant): `identify` finds both resonances within
 /// 0.1 % and both (loaded) Q within 10 %; the displacement mode then holds
@@ -985,11 +1044,9 @@ fn adc_saturation_reaches_the_safe_state_on_the_firmware() {
 /// the normal peak stays below the lift-off limit — the virtual device's
 /// session (`tests/device.rs`, `identify_then_…`) on the firmware.
 #[test]
-#[ignore = "needs qemu-system-arm and FIRMWARE_RESONANT_ELF (run by .ci/run)"]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_RESONANT_ELF is set)"]
 fn identify_and_the_displacement_mode_on_the_firmware() {
-    let q = qemu_elf(std::env::var("FIRMWARE_RESONANT_ELF").expect(
-        "FIRMWARE_RESONANT_ELF = path of the firmware built with --features qemu-resonant",
-    ));
+    let q = qemu_with("FIRMWARE_RESONANT_ELF", "qemu-resonant");
     ok(&q, &drive_set("20000", "0", "0", "4e-6", None));
     let t0 = Instant::now();
     let id = ok(&q, &["identify"]);

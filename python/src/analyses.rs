@@ -19,7 +19,7 @@ use crate::scene::Scene;
 
 /// Inverse design (`fricctl tune`).
 #[pyfunction]
-#[pyo3(signature = (scene, *, adjust, target_mu_rel=None, target_mu=None, maximize=None, v0=None, max_duz=None, max_dux=None, liftoff_margin=tuning::DEFAULT_LIFTOFF_MARGIN))]
+#[pyo3(signature = (scene, *, adjust, target_mu_rel=None, target_mu=None, maximize=None, v0=None, v_rel=None, max_duz=None, max_dux=None, liftoff_margin=tuning::DEFAULT_LIFTOFF_MARGIN))]
 #[allow(clippy::too_many_arguments)]
 pub fn tune(
     py: Python<'_>,
@@ -29,12 +29,14 @@ pub fn tune(
     target_mu: Option<f64>,
     maximize: Option<&str>,
     v0: Option<f64>,
+    v_rel: Option<f64>,
     max_duz: Option<f64>,
     max_dux: Option<f64>,
     liftoff_margin: f64,
 ) -> PyResult<Record> {
     let req = TuneRequest {
         v0,
+        v_rel,
         target_mu_rel,
         target_mu,
         maximize: maximize

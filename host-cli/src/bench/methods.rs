@@ -385,8 +385,9 @@ fn method_color(method: &str) -> usize {
     }
 }
 
-/// A bar per case × method: time per point on a log axis, with the method,
-/// its cost relative to the case's first row and the mix that answered.
+/// A dot per case × method: time per point on a log axis (a dot, not a bar:
+/// a log axis has no zero for a bar to start from), with the method, its cost
+/// relative to the case's first row and the mix that answered.
 fn chart(path: &std::path::Path, rows: &[Timing]) -> CliResult {
     use plotters::prelude::*;
     use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -440,10 +441,12 @@ fn chart(path: &std::path::Path, rows: &[Timing]) -> CliResult {
                 let v = t.per_point();
                 let base = *first.get_or_insert(v);
                 let c = color(method_color(&t.method));
-                chart.draw_series(std::iter::once(Rectangle::new(
-                    [(lo, y - 0.32), (v, y + 0.32)],
-                    c.filled(),
+                // A thin guide from the axis to the dot, then the dot.
+                chart.draw_series(std::iter::once(PathElement::new(
+                    vec![(lo, y), (v, y)],
+                    RGBColor(215, 215, 215).stroke_width(1),
                 )))?;
+                chart.draw_series(std::iter::once(Circle::new((v, y), 6, c.filled())))?;
                 chart.draw_series(std::iter::once(Text::new(
                     format!(
                         "{}: {} per point (×{}), {} points; {}",
@@ -453,7 +456,7 @@ fn chart(path: &std::path::Path, rows: &[Timing]) -> CliResult {
                         t.points,
                         t.mix
                     ),
-                    (v * 1.25, y),
+                    (v * 1.6, y),
                     text.clone(),
                 )))?;
                 y -= 1.0;

@@ -472,18 +472,17 @@ fn error_cost_figure(rows: &[(&str, String, Point)], inv: &[f64], responses: &[f
             1,
         ),
     ];
+    // One label per ω/Ω, on the homogenised point only: the two series' labels
+    // collided where their points are close (the resolved points follow in
+    // the same order of ω/Ω, left to right).
     let labels: Vec<((f64, f64), String)> = pts
         .iter()
-        .flat_map(|p| {
-            let t = format!("{:.0e}", p.inv_nu);
-            [
-                ((p.h_time, p.rel()), t.clone()),
-                ((p.r_time, p.r_numerical / p.r.abs()), t),
-            ]
-        })
+        .map(|p| ((p.h_time, p.rel()), format!("{:.0e}", p.inv_nu)))
         .collect();
     let panel_c = Panel {
-        title: "(c) error against wall time, flat, MωΩ/k_x = 1 (labels: ω/Ω)".into(),
+        title:
+            "(c) error against wall time, flat, MωΩ/k_x = 1 (labels: ω/Ω of the homogenised runs)"
+                .into(),
         x_label: "wall time, s".into(),
         y_label: "relative error of the drift".into(),
         x: log_range(sc.iter().flat_map(|s| s.points.iter().map(|p| p.0))),
@@ -497,6 +496,7 @@ fn error_cost_figure(rows: &[(&str, String, Point)], inv: &[f64], responses: &[f
         log_x: true,
         log_y: true,
         labels,
+        error_bars: Vec::new(),
     };
     Figure {
         panels: vec![
@@ -601,9 +601,10 @@ fn drift_map(a: &MotionArgs) -> CliResult {
         ys: lr,
         log_x: false,
         log_y: true,
+        range: crate::plot::heat_range(&cells, true).unwrap_or((lo, hi)),
         cells,
-        range: (lo, hi),
-        value_label: "mean velocity, ωW0".into(),
+        diverging: true,
+        value_label: "mean velocity, ωW0 (signed; white = 0)".into(),
         classes,
     };
     let path = a.out.join("motion_drift_map.png");
@@ -698,7 +699,7 @@ fn load_lines(out: &Path) -> CliResult {
     };
     let fig = Figure {
         panels: vec![
-            panel("force–velocity line", "load −μ/μ0, units μ0F̄z", fmax, sf),
+            panel("force–velocity line", "load held −μ(v)F̄z, in μ0F̄z", fmax, sf),
             panel(
                 "output power P_out = −μ(v)F̄z·v",
                 "P_out, μ0F̄z·ωW0",

@@ -232,6 +232,7 @@ fn map(
     let csv_path = a.out.join(format!("{}.csv", p.name));
     std::fs::write(&csv_path, csv)
         .map_err(|e| CliError::failure(format!("{}: {e}", csv_path.display())))?;
+    let range = crate::plot::heat_range(&cells, false).unwrap_or((-17.0, 0.0));
     let m = HeatMap {
         title: p.title.clone(),
         x_label: p.x_label.to_string(),
@@ -240,9 +241,15 @@ fn map(
         ys,
         log_x: p.log_x,
         log_y: p.log_y,
+        range,
         cells,
-        range: (-17.0, 0.0),
-        value_label: "log10 |Δμ|/μ0".to_string(),
+        diverging: false,
+        // The colour range is the data's, stated on the bar.
+        value_label: format!(
+            "log10 |Δμ|/μ0 ({} … {})",
+            crate::plot::minus(&format!("{:.1}", range.0)),
+            crate::plot::minus(&format!("{:.1}", range.1))
+        ),
         classes,
     };
     let png = a.out.join(format!("{}.png", p.name));

@@ -405,6 +405,32 @@ fn style(method: &str) -> (usize, Marker) {
     }
 }
 
+/// How a method's points are drawn: a step-size family (fixed-step, lift-off
+/// stepping) as markers joined in order of cost, so that each family stays
+/// visible where its points overlap another's; single points as markers.
+///
+/// (Joining the fixed-step families was tried for issue 27: the timings'
+/// noise makes every joined family a zigzag that hides more than it shows,
+/// so the families stay markers until small multiples replace this panel.)
+fn mark_of(_method: &str, marker: Marker) -> Mark {
+    Mark::Markers(marker)
+}
+
+/// A method's (error, time) points in order of steps per period (the
+/// family's convergence path; points without a step count keep their order).
+fn by_steps<'a>(pts: impl Iterator<Item = &'a &'a Point>) -> Vec<(f64, f64)> {
+    let mut v: Vec<(u32, (f64, f64))> = pts
+        .map(|p| {
+            (
+                p.steps.unwrap_or(0),
+                (p.error.unwrap_or(1.0).max(ERROR_FLOOR), p.time_s),
+            )
+        })
+        .collect();
+    v.sort_by_key(|q| q.0);
+    v.into_iter().map(|q| q.1).collect()
+}
+
 /// The methods in legend order, with their legend text.
 const LEGEND: &[(&str, &str)] = &[
     (
@@ -459,15 +485,14 @@ fn render(path: &Path, all: &[Point]) -> CliResult {
         let mut series = Vec::new();
         for &(m, _) in LEGEND {
             let (color, marker) = style(m);
-            let points: Vec<(f64, f64)> = pts
-                .iter()
-                .filter(|p| p.method == m || (m == "eq. 21" && p.method == "eq. 24"))
-                .map(|p| (p.error.unwrap_or(1.0).max(ERROR_FLOOR), p.time_s))
-                .collect();
+            let points = by_steps(
+                pts.iter()
+                    .filter(|p| p.method == m || (m == "eq. 21" && p.method == "eq. 24")),
+            );
             series.push(Series {
                 label: String::new(),
                 points,
-                mark: Mark::Markers(marker),
+                mark: mark_of(m, marker),
                 color,
             });
         }
@@ -517,12 +542,8 @@ fn render(path: &Path, all: &[Point]) -> CliResult {
                 let (color, marker) = style(m);
                 Series {
                     label: String::new(),
-                    points: pts
-                        .iter()
-                        .filter(|p| p.method == m)
-                        .map(|p| (p.error.unwrap_or(1.0).max(ERROR_FLOOR), p.time_s))
-                        .collect(),
-                    mark: Mark::Markers(marker),
+                    points: by_steps(pts.iter().filter(|p| p.method == m)),
+                    mark: mark_of(m, marker),
                     color,
                 }
             })
@@ -555,7 +576,7 @@ fn render(path: &Path, all: &[Point]) -> CliResult {
             Series {
                 label: text.to_string(),
                 points: Vec::new(),
-                mark: Mark::Markers(marker),
+                mark: mark_of(m, marker),
                 color,
             }
         })

@@ -83,6 +83,10 @@ impl CurveCmd {
         if let Some(p) = &self.plot {
             crate::plot::ext(p)?;
         }
+        crate::output::check_outputs(&[
+            (self.plot.as_deref(), "plot"),
+            (self.csv.as_deref(), "csv"),
+        ])?;
         let vc = critical_velocity(&rs.scene)?;
         let axis = match (
             self.v_min.zip(self.v_max),

@@ -36,6 +36,10 @@ impl FitCmd {
     /// Runs the command.
     pub fn run(self, out: &mut impl Write) -> CliResult {
         let which = FitParam::parse_list(&self.params)?;
+        crate::output::check_outputs(&[
+            (self.out.as_deref(), "out"),
+            (self.plot.as_deref(), "plot"),
+        ])?;
         let rows = sweep_file::read(&self.data)?;
         let (r, residuals) = fit(&rows, &which)?;
         if let Some(p) = &self.out {

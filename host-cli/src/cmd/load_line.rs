@@ -42,6 +42,10 @@ impl LoadLineCmd {
     /// Runs the command.
     pub fn run(self, out: &mut impl Write) -> CliResult {
         let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
+        crate::output::check_outputs(&[
+            (self.plot.as_deref(), "plot"),
+            (self.csv.as_deref(), "csv"),
+        ])?;
         let an = load_line::analyse(&rs)?;
         let (law, line, units, fz) = (&an.law, &an.line, &an.units, an.fz);
         let (best_p, best_e) = (an.best_power, an.best_efficiency);

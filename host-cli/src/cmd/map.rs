@@ -98,6 +98,7 @@ impl MapCmd {
         if let Some(p) = &a.plot {
             crate::plot::ext(p)?;
         }
+        crate::output::check_outputs(&[(a.plot.as_deref(), "plot"), (a.csv.as_deref(), "csv")])?;
         a.how.validate()?;
         if a.plot.is_none() && a.csv.is_none() {
             return Err(CliError::usage(
@@ -252,12 +253,10 @@ fn run_mu_map(a: &MapCmd, x: f64, r: &Range, phi: &Range) -> CliResult {
         ys: ratios,
         log_x: false,
         log_y: false,
+        // Signed μ/μ0 of both signs: diverging, white at 0.
+        diverging: lo < 0.0 && hi > 0.0,
+        range: crate::plot::heat_range(&heat, lo < 0.0 && hi > 0.0).unwrap_or((lo - 0.5, lo + 0.5)),
         cells: heat,
-        range: if lo < hi {
-            (lo, hi)
-        } else {
-            (lo - 0.5, lo + 0.5)
-        },
         value_label: "μ/μ0".to_string(),
         classes: if cells.iter().any(|c| c.mu_over_mu0.is_none()) {
             vec![("not converged".to_string(), RGBColor(200, 0, 0))]

@@ -44,9 +44,12 @@ pub enum Maximize {
 pub struct TuneCmd {
     #[command(flatten)]
     scene: SceneArgs,
-    /// Sliding velocity v0, m/s (units of ωW0 for a dimensionless scene); needed with a target
-    #[arg(long, value_parser = Real::ANY)]
+    /// Sliding velocity v0, m/s (units of ωW0 for a dimensionless scene); needed with a target (or --v-rel)
+    #[arg(long, value_parser = Real::ANY, conflicts_with = "v_rel")]
     v0: Option<f64>,
+    /// Velocity relative to v_c of the scene as given (before the adjustment): v0 = X·v_c (forward v_c for X > 0, backward for X < 0)
+    #[arg(long, value_parser = Real::ANY, value_name = "X")]
+    v_rel: Option<f64>,
     /// Target μ/μ0, strictly between −1 and 1
     #[arg(long, value_name = "T", value_parser = Real(tune::TARGET_MU_REL))]
     target_mu_rel: Option<f64>,
@@ -83,6 +86,7 @@ impl TuneCmd {
     fn request(&self) -> TuneRequest {
         TuneRequest {
             v0: self.v0,
+            v_rel: self.v_rel,
             target_mu_rel: self.target_mu_rel,
             target_mu: self.target_mu,
             maximize: self.maximize.map(|m| match m {

@@ -80,6 +80,18 @@ impl Client {
         )))
     }
 
+    /// Forgets the telemetry received so far. The link is in order, so every
+    /// telemetry frame read before the response to a request was sent before
+    /// the device handled that request: called right after the request that
+    /// starts a session (`Stream { on: true }`), it drops what belongs to an
+    /// earlier session on the same link — the previous `watch`'s
+    /// `StreamStopped`, a late estimate of its stream. Returns how many.
+    pub fn discard_telemetry(&mut self) -> usize {
+        let n = self.telemetry.len();
+        self.telemetry.clear();
+        n
+    }
+
     /// Waits up to `timeout` for one telemetry frame.
     pub fn next_telemetry(
         &mut self,

@@ -318,6 +318,7 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
     // Every value is in its domain (the flags' parsers).
     if let Some(p) = &a.plot {
         crate::plot::ext(p)?;
+        crate::output::may_write(p, "plot")?;
     }
     let cfg = super::sim::config();
     let resonant = a.transducers.options(
@@ -587,13 +588,9 @@ fn chart(
         y_label: "μ".into(),
         x,
         y: (0.04, 0.17),
+        // The estimates first, the setpoint over them: its line stays
+        // visible where the markers sit on it.
         series: vec![
-            Series {
-                label: "μ* setpoint".into(),
-                points: setp,
-                mark: Mark::Line,
-                color: 1,
-            },
             Series {
                 label: "±2 % band".into(),
                 points: band(0.02),
@@ -609,8 +606,14 @@ fn chart(
             Series {
                 label: format!("μ estimate ({} periods/update)", o.periods),
                 points: meas,
-                mark: Mark::LineMarkers(crate::plot::Marker::Circle),
+                mark: Mark::LineMarkers(crate::plot::Marker::Ring),
                 color: 0,
+            },
+            Series {
+                label: "μ* setpoint".into(),
+                points: setp,
+                mark: Mark::Line,
+                color: 1,
             },
         ],
     };

@@ -97,6 +97,10 @@ pub enum DeviceCmd {
         /// ramping, saturated, too few periods, fault)
         #[arg(long)]
         allow_invalid: bool,
+        /// Measure at once, without waiting for the ramps to settle (a
+        /// measurement during a ramp is marked `not_settled`, not valid)
+        #[arg(long)]
+        no_wait: bool,
     },
     /// Status and latched faults
     Status,
@@ -508,6 +512,7 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
         DeviceCmd::Measure {
             periods,
             allow_invalid,
+            no_wait,
         } => {
             // Ctrl-C (or SIGTERM, SIGHUP) while the device measures aborts the
             // measurement on the device with `Reset` (the protocol's one request
@@ -523,6 +528,9 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             };
             let window_s = f64::from(*periods) / f.max(1.0);
             let limit = Duration::from_secs_f64(4.0 * window_s + 10.0);
+            if !*no_wait {
+                wait_settled(&mut c, &interrupted)?;
+            }
             expect(c.call(Request::Measure { periods: *periods })?)?;
             // Wait for the window to close (the virtual device advances while we wait).
             let start = Instant::now();
@@ -740,5 +748,43 @@ pub fn serve(a: &SimArgs) -> CliResult {
         serve::serve_tcp(&mut dev, l, deadline)
     } else {
         Err(CliError::usage("--pty: give --pty or --tcp ADDR"))
+    }
+}
+
+/// The longest wait of `measure` for the ramps to settle (a full-scale ramp
+/// at the slowest slew rate the device accepts takes well under this).
+const SETTLE_LIMIT: Duration = Duration::from_secs(60);
+
+/// Waits until the device's ramps have settled (`Status::settled`), so that
+/// `measure` right after `start` or `drive set` measures the drive it was
+/// given; stderr says that it waits. Ctrl-C ends the wait (nothing to undo).
+fn wait_settled(c: &mut Client, interrupted: &std::sync::atomic::AtomicBool) -> CliResult {
+    let start = Instant::now();
+    let mut said = false;
+    loop {
+        if let Response::Status(s) = expect(c.call(Request::GetStatus)?)? {
+            if s.settled {
+                if said {
+                    eprintln!("ramps settled after {:.1} s", start.elapsed().as_secs_f64());
+                }
+                return Ok(());
+            }
+        }
+        // Said only for a wait a person notices (the ramps of a small
+        // change take milliseconds).
+        if !said && start.elapsed() > Duration::from_millis(500) {
+            eprintln!("waiting for the ramps to settle (--no-wait measures at once)");
+            said = true;
+        }
+        if interrupted.load(std::sync::atomic::Ordering::SeqCst) {
+            return Err(CliError::failure("interrupted while waiting for the ramps"));
+        }
+        if start.elapsed() > SETTLE_LIMIT {
+            return Err(CliError::failure(format!(
+                "the ramps did not settle within {} s (`fricctl device status` shows the drive)",
+                SETTLE_LIMIT.as_secs()
+            )));
+        }
+        let _ = c.next_telemetry(Duration::from_millis(20))?;
     }
 }

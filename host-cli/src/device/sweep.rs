@@ -20,7 +20,7 @@ use super::render::reason_names;
 use super::{expect, unexpected};
 use crate::args::{short, Count, Real};
 use crate::error::{CliError, CliResult};
-use crate::plot::{render_panels, Mark, Panel, Series};
+use crate::plot::{Mark, Panel, Series};
 use crate::sweep_file::{self, SweepRow};
 
 /// The drive parameter a sweep steps.
@@ -125,14 +125,18 @@ impl SweepArgs {
                 "--points: 1 point needs --from equal to --to",
             ));
         }
-        if !self.resume && self.csv.exists() {
-            return Err(CliError::usage(format!(
-                "--csv: {} exists (--resume to continue that sweep, or choose another file)",
-                self.csv.display()
-            )));
+        if !self.resume {
+            if self.csv.exists() && !crate::output::force() {
+                return Err(CliError::usage(format!(
+                    "--csv: {} exists (--resume to continue that sweep, --force to replace it, or choose another file)",
+                    self.csv.display()
+                )));
+            }
+            crate::output::may_write(&self.csv, "csv")?;
         }
         if let Some(p) = &self.plot {
             crate::plot::ext(p)?;
+            crate::output::may_write(p, "plot")?;
         }
         Ok(())
     }
@@ -334,7 +338,9 @@ pub fn run(c: &mut Client, a: &SweepArgs, json: bool) -> CliResult {
     } else {
         Vec::new()
     };
-    let fresh = rows.is_empty() && std::fs::metadata(&a.csv).map_or(true, |m| m.len() == 0);
+    // Without --resume the file is new or replaced (--force): written from the start.
+    let fresh =
+        !a.resume || (rows.is_empty() && std::fs::metadata(&a.csv).map_or(true, |m| m.len() == 0));
     let file = std::fs::OpenOptions::new()
         .create(true)
         .append(!fresh)
@@ -561,11 +567,12 @@ fn plot(path: &Path, a: &SweepArgs, rows: &[SweepRow]) -> CliResult {
     let (mut ylo, mut yhi) = (f64::INFINITY, f64::NEG_INFINITY);
     for r in rows.iter().filter(|r| r.measured_mu.is_finite()) {
         meas.push((r.value, r.measured_mu));
-        bars.extend([
-            (r.value, r.measured_mu - r.std_error),
-            (r.value, r.measured_mu + r.std_error),
-            (r.value, f64::NAN),
-        ]);
+        bars.push((
+            r.value,
+            r.measured_mu - r.std_error,
+            r.measured_mu + r.std_error,
+            0,
+        ));
         pred.push((r.value, r.predicted_mu));
         xlo = xlo.min(r.value);
         xhi = xhi.max(r.value);
@@ -604,28 +611,40 @@ fn plot(path: &Path, a: &SweepArgs, rows: &[SweepRow]) -> CliResult {
         ),
         x: (xlo - xpad, xhi + xpad),
         y: (ylo - ypad, yhi + ypad),
+        // Points only: a line through the swept values would draw a curve
+        // that was neither measured nor computed between them.
         series: vec![
             Series {
-                label: "predicted μ (device model)".into(),
+                label: "predicted μ at the swept values (device model)".into(),
                 points: pred,
-                mark: Mark::Line,
+                mark: Mark::Markers(crate::plot::Marker::OpenDiamond),
                 color: 1,
             },
             Series {
-                label: "measured μ".into(),
+                label: "measured μ, ±1 standard error".into(),
                 points: meas,
                 mark: Mark::Points,
                 color: 0,
             },
-            Series {
-                label: "±1 standard error".into(),
-                points: bars,
-                mark: Mark::Line,
-                color: 0,
-            },
         ],
     };
-    render_panels(path, &[panel], 1, 1, (1100, 650))
+    crate::plot::render_figure(
+        path,
+        &crate::plot::Figure {
+            panels: vec![(
+                panel,
+                crate::plot::Extras {
+                    error_bars: bars,
+                    ..crate::plot::Extras::default()
+                },
+            )],
+            rows: 1,
+            cols: 1,
+            size: (1100, 650),
+            legend: Vec::new(),
+            caption: Vec::new(),
+        },
+    )
 }
 
 /// μ0, k_z, k_x for `scene set`: from the flags, or from the JSON that

@@ -55,6 +55,8 @@ pub fn watch(
     // The CSV exists with its header before the first request.
     let mut file = match csv {
         Some(p) => {
+            // The overwrite policy of every output file (`--force`).
+            crate::output::may_write(p, "csv")?;
             let mut f = std::fs::File::create(p)
                 .map_err(|e| CliError::failure(format!("--csv: {}: {e}", p.display())))?;
             f.write_all(format!("{CSV_HEADER}\n").as_bytes())
@@ -72,6 +74,9 @@ pub fn watch(
         }
     }
     expect(c.call(Request::Stream { on: true, periods })?)?;
+    // What came before the stream's `Ok` is an earlier session's (its
+    // `StreamStopped`, a late estimate): not this stream's.
+    c.discard_telemetry();
     let end = stream_loop(t, &mut c, periods, count, &mut file, allow_invalid, &stop);
     // Stop the stream on every exit path (a failed stop is said, not hidden).
     let stopped = c.call(Request::Stream { on: false, periods });
@@ -231,6 +236,7 @@ fn reconnect(t: &Target, periods: u32, stop: &AtomicBool) -> CliResult<Client> {
         }
         if let Ok(mut c) = open(t) {
             if c.call(Request::Stream { on: true, periods }).is_ok() {
+                c.discard_telemetry();
                 eprintln!("reconnected to {}", c.describe());
                 return Ok(c);
             }
