@@ -1334,6 +1334,13 @@ fn identify_then_the_displacement_mode_holds_the_setting() {
     ok_json(&s, &drive_set("20000", "0", "0", "4e-6", None));
     let dir = tempfile::tempdir().unwrap();
     let (out, plot) = (dir.path().join("id.json"), dir.path().join("bode.png"));
+    // The overwrite policy, before any sweep: an existing --out is refused.
+    std::fs::write(&out, "keep").unwrap();
+    let o = dev(&s, &["identify", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--out"));
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "keep");
+    std::fs::remove_file(&out).unwrap();
     let id = ok_json(
         &s,
         &[

@@ -275,6 +275,11 @@ fn linspace(a: f64, b: f64, n: u32) -> Vec<f64> {
 /// One line: bad span, a running drive, a fault during the sweep, a fit
 /// refused by name (nothing stored then).
 pub fn run(c: &mut Client, a: &IdentifyArgs, json: bool) -> CliResult {
+    // The overwrite policy, before the sweep (docs/guide/output-files.md).
+    if let Some(p) = &a.plot {
+        crate::plot::ext(p)?;
+    }
+    crate::output::check_outputs(&[(a.out.as_deref(), "out"), (a.plot.as_deref(), "plot")])?;
     let info = match expect(c.call(Request::Hello)?)? {
         Response::Info(i) => i,
         other => return Err(unexpected(other)),
@@ -592,6 +597,13 @@ fn bode(path: &std::path::Path, results: &[Channel], (from, to): (f64, f64)) -> 
             .y_desc("arg H (unwrapped), deg")
             .x_label_formatter(&|v| format!("{v:.0}"))
             .draw()?;
+        // Curves through exact pixel positions (`plot::fine_line`: plotters
+        // itself rounds to whole pixels, a staircase when zoomed).
+        let (ylo, yhi) = (low_mag / 2.0, top_mag * 20.0);
+        let pm_mag =
+            crate::plot::PixelMap::of(mag.plotting_area(), (from, to, false), (ylo, yhi, true));
+        let pm_ph =
+            crate::plot::PixelMap::of(ph.plotting_area(), (from, to, false), (-225.0, 45.0, false));
         for (i, ch) in results.iter().enumerate() {
             let col = crate::plot::color(i);
             let pts: Vec<(f64, f64)> = ch
@@ -618,23 +630,23 @@ fn bode(path: &std::path::Path, results: &[Channel], (from, to): (f64, f64)) -> 
             if let Ok(f) = &ch.fit {
                 let model: Vec<(f64, f64)> = xs.iter().map(|&x| f.model.response(x)).collect();
                 let mph = phases(&model);
-                mag.draw_series(LineSeries::new(
-                    xs.iter()
-                        .zip(&model)
-                        .map(|(&x, &(re, im))| (x, mag_of(re, im))),
-                    col.stroke_width(2),
-                ))?
-                .label(format!(
-                    "{} fit: f_r {:.1} Hz, Q {:.0}, g {:.3e} m/V",
-                    ch.name, f.resonance_hz.value, f.q.value, f.gain_m_per_v.value
-                ))
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], col.stroke_width(2))
-                });
-                ph.draw_series(LineSeries::new(
-                    xs.iter().copied().zip(mph),
-                    col.stroke_width(2),
-                ))?;
+                let mag_pts: Vec<(f64, f64)> = xs
+                    .iter()
+                    .zip(&model)
+                    .map(|(&x, &(re, im))| (x, mag_of(re, im)))
+                    .collect();
+                let k = crate::plot::fine_line(&pm_mag, &mag_pts, col, 2, None);
+                mag.draw_series(LineSeries::new(mag_pts, k.stroke_width(2)))?
+                    .label(format!(
+                        "{} fit: f_r {:.1} Hz, Q {:.0}, g {:.3e} m/V",
+                        ch.name, f.resonance_hz.value, f.q.value, f.gain_m_per_v.value
+                    ))
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], col.stroke_width(2))
+                    });
+                let ph_pts: Vec<(f64, f64)> = xs.iter().copied().zip(mph).collect();
+                let k = crate::plot::fine_line(&pm_ph, &ph_pts, col, 2, None);
+                ph.draw_series(LineSeries::new(ph_pts, k.stroke_width(2)))?;
             }
         }
         mag.configure_series_labels()
