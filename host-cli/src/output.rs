@@ -72,6 +72,11 @@ pub fn may_write(path: &Path, flag: &str) -> CliResult {
 /// `Ok(true)` if `path` exists and may be replaced, `Ok(false)` if it does
 /// not exist, the policy's error if it exists without `--force`.
 fn refused(path: &Path, flag: &str) -> CliResult<bool> {
+    // Only an existing regular file is "overwritten": a device, FIFO or
+    // socket (`/dev/null`, `/dev/stdout`, a pipe) is written to as such.
+    if special(path) {
+        return Ok(false);
+    }
     let exists = std::fs::symlink_metadata(path).is_ok();
     if exists && !force() {
         return Err(CliError::usage(format!(
@@ -97,14 +102,31 @@ pub fn check_outputs(files: &[(Option<&Path>, &str)]) -> CliResult {
     Ok(())
 }
 
+/// Whether `path` (followed through symlinks) exists and is not a regular
+/// file or directory: a character or block device, a FIFO, a socket.
+fn special(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir())
+}
+
 /// A file that appears under its name only when [`AtomicFile::commit`]
 /// succeeds: until then the bytes go to a temporary file in the same
 /// directory (removed if the program stops first), so an interrupted run
-/// never leaves a truncated file.
+/// never leaves a truncated file. A path that is a device, FIFO or socket
+/// (`--csv /dev/null`, a pipe) is written to directly: renaming a temporary
+/// file over it would replace the device node itself (as root, `/dev/null`
+/// became a regular file that way).
 pub struct AtomicFile {
-    tmp: NamedTempFile,
+    out: Target,
     path: PathBuf,
     flag: &'static str,
+}
+
+/// Where an [`AtomicFile`]'s bytes go.
+enum Target {
+    /// A temporary file renamed to the name at the end.
+    Temp(NamedTempFile),
+    /// A device, FIFO or socket, written to as it is.
+    Special(std::fs::File),
 }
 
 impl AtomicFile {
@@ -113,6 +135,17 @@ impl AtomicFile {
     /// before its work; this only repeats the refusal).
     pub fn create(path: &Path, flag: &'static str) -> CliResult<Self> {
         refused(path, flag)?;
+        if special(path) {
+            let f = std::fs::OpenOptions::new()
+                .write(true)
+                .open(path)
+                .map_err(|e| CliError::failure(format!("--{flag}: {}: {e}", path.display())))?;
+            return Ok(AtomicFile {
+                out: Target::Special(f),
+                path: path.to_path_buf(),
+                flag,
+            });
+        }
         let dir = match path.parent() {
             Some(d) if !d.as_os_str().is_empty() => d,
             _ => Path::new("."),
@@ -140,7 +173,7 @@ impl AtomicFile {
             let _ = std::fs::set_permissions(tmp.path(), m.permissions());
         }
         Ok(AtomicFile {
-            tmp,
+            out: Target::Temp(tmp),
             path: path.to_path_buf(),
             flag,
         })
@@ -148,20 +181,30 @@ impl AtomicFile {
 
     /// Appends bytes.
     pub fn write_all(&mut self, bytes: &[u8]) -> CliResult {
-        self.tmp.write_all(bytes).map_err(|e| self.error(e))
+        let r = match &mut self.out {
+            Target::Temp(t) => t.write_all(bytes),
+            Target::Special(f) => f.write_all(bytes),
+        };
+        r.map_err(|e| self.error(e))
     }
 
-    /// Flushes and renames the file to its name.
+    /// Flushes and renames the file to its name (a device: flushes).
     pub fn commit(mut self) -> CliResult {
-        self.tmp.flush().map_err(|e| self.error(e))?;
+        let r = match &mut self.out {
+            Target::Temp(t) => t.flush(),
+            Target::Special(f) => f.flush(),
+        };
+        r.map_err(|e| self.error(e))?;
         let (flag, path) = (self.flag, self.path.clone());
-        self.tmp.persist(&path).map_err(|e| {
-            CliError::failure(format!(
-                "--{flag}: cannot write {}: {}",
-                path.display(),
-                e.error
-            ))
-        })?;
+        if let Target::Temp(t) = self.out {
+            t.persist(&path).map_err(|e| {
+                CliError::failure(format!(
+                    "--{flag}: cannot write {}: {}",
+                    path.display(),
+                    e.error
+                ))
+            })?;
+        }
         Ok(())
     }
 

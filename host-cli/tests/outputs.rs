@@ -255,3 +255,39 @@ fn tune_takes_the_velocity_relative_to_v_c() {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+/// A device is written to, not replaced: `--csv /dev/null` (the speed
+/// benchmark's) succeeds without `--force`, and `/dev/null` is still the
+/// character device afterwards. (Renaming the temporary file over it used
+/// to turn `/dev/null` into a regular file when run as root.)
+#[test]
+fn a_device_is_written_to_not_replaced() {
+    use std::os::unix::fs::FileTypeExt;
+    let o = assert_cmd::Command::cargo_bin("fricctl")
+        .unwrap()
+        .args([
+            "curve",
+            "--duz-rel",
+            "0.5",
+            "--ratio",
+            "2",
+            "--phi-deg",
+            "45",
+            "--v-rel-min",
+            "-1",
+            "--v-rel-max",
+            "1",
+            "--points",
+            "11",
+            "--csv",
+            "/dev/null",
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m = std::fs::metadata("/dev/null").unwrap();
+    assert!(
+        m.file_type().is_char_device(),
+        "/dev/null is no longer a device"
+    );
+}

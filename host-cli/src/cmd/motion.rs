@@ -77,6 +77,10 @@ impl MotionCmd {
         if let Some(p) = &self.plot {
             crate::plot::ext(p)?;
         }
+        crate::output::check_outputs(&[
+            (self.plot.as_deref(), "plot"),
+            (self.csv.as_deref(), "csv"),
+        ])?;
         let req = MotionRequest {
             mass: self.mass,
             force_amp_rel: self.force_amp_rel,
