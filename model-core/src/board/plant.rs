@@ -182,7 +182,7 @@ pub mod bench {
 }
 
 impl<F: Float> ResonantOptions<F> {
-    /// The bench's transducers ([`bench`]) for the board configuration `cfg`.
+    /// The bench's transducers ([`bench`](mod@bench)) for the board configuration `cfg`.
     pub fn bench(cfg: &DeviceConfig) -> Self {
         let f = F::from_f64;
         ResonantOptions {
