@@ -355,6 +355,7 @@ fn main() -> ! {
                     after: *dds.channels(),
                     acc0: dds.accumulator(),
                     tw: dds.tuning_word(),
+                    slew: dds.slew(),
                 };
                 let cfg = device::DeviceConfig::driver_board(1);
                 let mut plant = Plant::<f32>::new(0.24, 1e7, 1e7);

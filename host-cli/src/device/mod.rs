@@ -319,6 +319,7 @@ fn wire_error(e: WireError) -> CliError {
         DriveParam::Quality => "q (of the identified transducers)",
         DriveParam::TransducerGain => "gain_m_per_v (of the identified transducers)",
         DriveParam::PhaseLag => "phase_lag_rad (of the identified transducers)",
+        DriveParam::Headroom => "--headroom",
     };
     match e {
         WireError::OutOfRange { param, min, max } => {

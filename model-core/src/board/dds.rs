@@ -393,7 +393,14 @@ impl<'t, const N: usize> Dds<'t, N> {
         Ok(a)
     }
 
-    /// The current tuning word.
+    /// Sets the tuning word directly (phase-continuous: the accumulator
+    /// runs on), for a frequency the caller keeps inside `(0, f_s/2)`
+    /// (the resonance tracking's small steps).
+    pub fn set_tuning_word(&mut self, tw: u32) {
+        self.tw = tw;
+    }
+
+    /// The tuning word (phase increment per sample).
     pub fn tuning_word(&self) -> u32 {
         self.tw
     }
@@ -415,6 +422,11 @@ impl<'t, const N: usize> Dds<'t, N> {
     pub fn set_phase(&mut self, ch: usize, word: u32) -> f64 {
         self.ch[ch & 1].phase_target = word;
         phase_rad(word)
+    }
+
+    /// The slew limits in force.
+    pub fn slew(&self) -> Slew {
+        self.slew
     }
 
     /// Sets the slew limits.

@@ -64,6 +64,10 @@ pub struct HalfDrive {
     pub acc0: u32,
     /// Tuning word (phase increment per sample).
     pub tw: u32,
+    /// The DDS's slew limits during the fill (the resonant transducers
+    /// follow the channels' per-sample ramps exactly: each sample's
+    /// amplitude and phase are the DDS's own, `Dds::fill`).
+    pub slew: crate::board::dds::Slew,
 }
 
 impl HalfDrive {
@@ -79,7 +83,27 @@ impl HalfDrive {
             after: *dev.dds().channels(),
             acc0,
             tw,
+            slew: dev.dds().slew(),
         }
+    }
+
+    /// Channel `c`'s amplitude (codes) and phase offset (word) at sample
+    /// `i` of the half, as the DDS outputs it: the state before the fill
+    /// moved `i` slew steps towards the fill's targets (`Dds::fill` writes a
+    /// sample, then steps; the targets are the ones `after` holds).
+    pub fn channel_at(&self, c: usize, i: usize) -> (f32, u32) {
+        let (b, a) = (self.before[c], self.after[c]);
+        let n = i as f32;
+        let da = (a.amp_target - b.amp).clamp(
+            -self.slew.amp_per_sample * n,
+            self.slew.amp_per_sample * n,
+        );
+        let dp = a.phase_target.wrapping_sub(b.phase) as i32 as i64;
+        let lim = i64::from(self.slew.phase_per_sample.min(i32::MAX as u32)) * i as i64;
+        (
+            b.amp + da,
+            b.phase.wrapping_add(dp.clamp(-lim, lim) as i32 as u32),
+        )
     }
 
     /// Drive phase advance per sample, radians.
@@ -451,8 +475,13 @@ impl<F: Float> Plant<F> {
             if let Some(r) = self.resonant.as_mut() {
                 // The DAC holds each channel's AC voltage over the sample
                 // (its waveform level at this word, the lagged ADC phase as
-                // for ideal transducers); cross-talk mixes the two.
-                let (vz, vx) = ((duz * s1) / mz * vpc, (dux * s2) / mx * vpc);
+                // for ideal transducers; amplitude and phase the DDS's own
+                // at this sample); cross-talk mixes the two.
+                let (a1, q1) = d.channel_at(0, i);
+                let (a2, q2) = d.channel_at(1, i);
+                let (s1, _) = M::sin_cos(F::from_u32(w.wrapping_add(q1)) * rad);
+                let (s2, _) = M::sin_cos(F::from_u32(w.wrapping_add(q2)) * rad);
+                let (vz, vx) = (f(a1) * s1 * vpc, f(a2) * s2 * vpc);
                 let k = r.opts.crosstalk;
                 let (vz, vx) = (vz + k * vx, vx + k * vz);
                 let [mzd, mxd] = &mut r.modes;

@@ -399,6 +399,10 @@ fn run<const N: usize, A: DeviceAccess<N>>(
             dev.with(|d| d.set_drive_mode(m))?;
             Response::Ok
         }
+        Request::SetDisplacementOptions(o) => {
+            dev.with(|d| d.set_displacement_options(o))?;
+            Response::Ok
+        }
         // Handled with the session state in `Server::handle`: never here.
         Request::Measure { .. }
         | Request::Stream { .. }

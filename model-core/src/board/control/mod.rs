@@ -305,6 +305,17 @@ impl Controller {
         self.step(self.integral_m, dt_s)
     }
 
+    /// The last command could not be applied (the actuator refused it):
+    /// the command goes back to `applied_m`, the amplitude in force, and
+    /// the trim with it (`I = u − u_ff`: back-calculation, no windup); the
+    /// output is marked saturated.
+    pub fn refused(&mut self, applied_m: f32) -> Output {
+        self.command_m = applied_m;
+        self.integral_m = applied_m - self.plan.feedforward_m;
+        self.saturated = true;
+        self.output()
+    }
+
     /// One update with the measured μ̂ (eqs. C1–C4); `dt_s` is the time since
     /// the last command was applied, s.
     pub fn update(&mut self, measured_mu: f32, dt_s: f32) -> Output {

@@ -277,19 +277,30 @@ impl<const N: usize> Device<'_, N> {
         };
         if let Some(u) = pending {
             // Inside [0, lift-off limit] by (C3): the DDS accepts it (in
-            // displacement mode unless the voltage leaves the DAC: held).
+            // displacement mode unless its steady voltage leaves the DAC:
+            // then the controller goes back to the amplitude in force, its
+            // trim with it — anti-windup — and the update says so).
             if self.command_normal(u) {
                 self.drive.amp_z_m = u;
+            } else {
+                let now = self.drive.amp_z_m;
+                if let Some(l) = self.control.as_mut() {
+                    let out = l.ctl.refused(now);
+                    l.last.amp_z_m = out.command_m;
+                    l.last.integral_m = out.integral_m;
+                    l.last.saturated = true;
+                }
             }
         }
         // The command in force, if the normal channel has reached it (a level
         // settled before a fill stays settled through it); NaN while it
         // still ramps at the slew rate: that block's estimate is not fresh.
-        // In displacement mode "reached" is the measured motion holding the
-        // command (the loops trim the voltages every window, so the DDS
-        // itself is rarely exactly at its targets at a fill).
+        // In displacement mode "reached" is the model's envelope at the
+        // command (`displacement`, D4–D5: the dead-beat fills reach it
+        // within the headroom; the measurement corrects the model through c,
+        // so the model's envelope is the motion up to c's residual).
         let reached = if self.displacement_mode() {
-            self.drive_settled()
+            self.model_reached()
         } else {
             self.dds.channels()[0].settled()
         };

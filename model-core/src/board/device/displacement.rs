@@ -41,14 +41,55 @@
 //! the windows with [`SMOOTHING_S`], as the status reports it in this
 //! mode, so a single noisy window neither makes nor breaks it).
 //!
-//! **Ramps.** A change of voltage rings in a detuned mode; a new setting's
-//! voltage ramps over [`RAMP_TAUS`] envelope time constants (bound there).
+//! **Transitions** (v6, eqs. D4–D6). Each mode's complex envelope (the
+//! phasor in the frame of the drive, at the drive frequency ω) obeys, for a
+//! voltage `U` held over a DAC fill of `T` seconds (the rotating-frame form
+//! of the mode's equation, exact for the positive-frequency pole):
+//!
+//! ```text
+//! (D4)  X(t + T) = p·X(t) + (1 − p)·H·U,   p = e^{sT},  s = −1/τ̂ + j(ω̂_r − ω)
+//! (D5)  U* = (D − p·X̂) / ((1 − p)·Ĥc),     |U| ≤ h·max(|D/Ĥc|, |D_prev/Ĥc|)
+//! (D6)  X̄ = Ĥc·U + (X̂ − Ĥc·U)·(p − 1)/(sT)      (the mean over the fill)
+//! ```
+//!
+//! The device keeps the model's envelope `X̂` of each mode (D4 with Ĥc,
+//! advanced at every fill with the voltage it commands) and commands the
+//! dead-beat voltage U* of D5, which reaches the setting `D` at the end of
+//! the fill; when `|U*|` exceeds the bound (the headroom `h` of
+//! [`DisplacementOptions`] times the larger of the old and new settings'
+//! steady voltages, and the DAC's room) its magnitude is cut and its
+//! phase kept: the time-optimal approach for a first-order envelope. Then
+//! `X̂_{k+1} = p·X̂_k + λ(D − p·X̂_k)` with `λ ∈ (0, 1]`, a point of the segment
+//! from `p·X̂_k` to `D`: `|X̂|` never exceeds `max(|X̂_0|, |D|)` at a fill's
+//! end, so the model's normal excursion never passes the larger of the old
+//! and new amplitudes — no overshoot above the lift-off guard, whatever the
+//! headroom, up to the model's error (which `c` removes). With `h = 1`
+//! there is no overdrive: a step is approached as `1 − e^{−t/τ}`. The DDS
+//! jumps to each fill's voltage (its slew is one sample in this mode): the
+//! voltage is piecewise constant over fills, as D4 assumes.
+//!
+//! **Correction by the measurement.** A window of the pickups' lock-in
+//! covers one ADC block, the output of one fill: it is compared with that
+//! fill's mean model envelope X̄ (D6), so `c ← c·(1 + k(X − X̄)/X̄)` (D3 with
+//! X̄ in place of D: the same in the steady state, and right during a
+//! transition too, since a gain error scales the whole response). `|c|`
+//! stays in `[1/C_MAX, C_MAX]` (beyond, the channel is `saturated`: the
+//! model no longer describes the transducer and c is held), so the voltage
+//! never exceeds `h·C_MAX` times the identified model's steady voltage.
+//!
+//! **An open pickup.** A driven channel whose model envelope exceeds
+//! [`OPEN_FLOOR_M`] while its pickup reads less than [`OPEN_FRACTION`] of
+//! it for [`OPEN_WINDOWS`] windows in a row latches
+//! [`super::faults::PICKUP_OPEN`] (the safe state).
 
 use num_complex::Complex32 as C;
 
 use super::{Device, DeviceError, DriveParam, DriveSetting, Status};
 use crate::board::dds::{Achieved, Level, DAC_VOLTS_PER_CODE};
-pub use crate::board::protocol::messages::{DriveMode, TransducerModel, Transducers};
+pub use crate::board::protocol::messages::{
+    DisplacementOptions, DriveMode, Track, TransducerModel, Transducers, DEFAULT_HEADROOM,
+    MAX_HEADROOM,
+};
 use crate::float::{FastF32, Math};
 
 /// Largest relative error `|X − D|/|D|` of a held channel: 0.4 %, so the
@@ -63,48 +104,111 @@ pub const HOLD_WINDOWS: u8 = 4;
 /// (cross-talk of the other channel and the pickup's noise: a few counts).
 pub const HOLD_FLOOR_M: f32 = 2e-8;
 
-/// Envelope time constants τ̂ a displacement-mode start or change of
-/// setting lasts: the voltage ramps from 0 to its full amplitude over
-/// `RAMP_TAUS·τ̂` (the slower mode's). A ramp of duration T into a mode
-/// detuned by Δω leaves a ringing of relative size
-/// `|1 − e^{sT}|/|sT| ≤ 2/(|s|·T)`, `s = −1/τ + jΔω` (the response to a
-/// linear ramp, minus the ramp): ≈ 50 % for the DDS's own 2 ms at 300 Hz
-/// detuning, ≤ 2/RAMP_TAUS·τ/T… ≈ 7 % over 4τ (τ 4 ms, 300 Hz), and never
-/// more than 2/RAMP_TAUS = 50 % of the step on resonance (Δω = 0, where the
-/// envelope rises monotonically: no ringing at all).
-pub const RAMP_TAUS: f32 = 4.0;
+/// The correction's bound: `|c|` in `[1/C_MAX, C_MAX]` (the transducer
+/// within a factor of 2 of its identified model; beyond it the loop holds).
+pub const C_MAX: f32 = 2.0;
+
+/// The model's envelope counts as steady for a window (the correction c
+/// learns from it) when its mean over the fill is within this fraction of
+/// `Ĥc·U`, the steady envelope of the fill's voltage; otherwise the window
+/// corrects the envelope itself (the observer, D7).
+pub const STEADY_FRACTION: f32 = 0.02;
+
+/// The observer's gain (D7): the fraction of a transition window's error
+/// taken into the model's envelope.
+pub const OBSERVER_GAIN: f32 = 0.5;
+
+/// An open pickup: the model's envelope above this, m …
+pub const OPEN_FLOOR_M: f32 = 1e-7;
+/// … while the pickup reads less than this fraction of it …
+pub const OPEN_FRACTION: f32 = 0.1;
+/// … for this many windows in a row (≈ 1 ms at 20 kHz).
+pub const OPEN_WINDOWS: u8 = 8;
 
 /// The motion's smoothing time for the status and the holding test, s: an
 /// exponential average of the windows' phasors (one window every 128 µs at
 /// 20 kHz: the noise falls by ≈ √(2·1 ms/128 µs) ≈ 4).
 pub const SMOOTHING_S: f32 = 1e-3;
 
+/// The model's responses and envelope dynamics at one DDS frequency
+/// (and tracked resonance): computed once per change, not per fill.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct ModelAt {
+    /// DDS tuning word and tracked resonance (f32 bits) they hold for.
+    key: (u32, u32),
+    /// Ĥ of each channel, m/V.
+    pub(super) h: [C; 2],
+    /// `p = e^{sT}` of D4 for one fill.
+    pub(super) p: [C; 2],
+    /// `(p − 1)/(sT)` of D6.
+    pub(super) mean: [C; 2],
+}
+
 /// The displacement loops' state.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Loops {
     /// The correction c of each channel (D2, D3).
     pub(super) c: [C; 2],
-    /// The correction would leave the DAC range (held).
+    /// The correction left its bound or the voltage the DAC (held).
     pub(super) saturated: [bool; 2],
     /// Windows in a row within the tolerance.
     pub(super) good: u8,
     /// The smoothed measured phasors (`None` until the first window after
     /// a new setting).
     pub(super) avg: Option<[C; 2]>,
-    /// The models' responses Ĥ at the DDS tuning word `.1` (computed once
-    /// per frequency, not per window).
-    pub(super) model_h: Option<([C; 2], u32)>,
+    /// The model at the DDS frequency.
+    pub(super) model: Option<ModelAt>,
+    /// The model's envelope X̂ of each mode at the start of the next fill, m.
+    pub(super) env: [C; 2],
+    /// The setting the last fill aimed at (D), m.
+    pub(super) last_d: [C; 2],
+    /// The steady voltage of the setting before it, V (the braking bound).
+    pub(super) u_prev: [f32; 2],
+    /// Per fill (modulo `FILL_RING`): the mean model envelope X̄ (D6) and
+    /// the voltage phasor of each channel.
+    pub(super) at_fill: [([C; 2], [C; 2]); super::measure::FILL_RING],
+    /// Per fill: the channel was in a transition (its voltage cut to the
+    /// bound, or a new setting within the last fills).
+    pub(super) moving: [[bool; 2]; super::measure::FILL_RING],
+    /// Fills since each channel's setting last changed (saturating).
+    pub(super) since_change: [u8; 2],
+    /// Windows in a row with an open pickup's symptom, per channel.
+    pub(super) open: [u8; 2],
 }
 
 impl Default for Loops {
     fn default() -> Self {
+        let z = [C::new(0.0, 0.0); 2];
         Loops {
             c: [C::new(1.0, 0.0); 2],
             saturated: [false; 2],
             good: 0,
             avg: None,
-            model_h: None,
+            model: None,
+            env: z,
+            last_d: z,
+            u_prev: [0.0; 2],
+            at_fill: [(z, z); super::measure::FILL_RING],
+            moving: [[false; 2]; super::measure::FILL_RING],
+            since_change: [u8::MAX; 2],
+            open: [0; 2],
         }
+    }
+}
+
+impl Loops {
+    /// The motion starts over from rest (a start: the model's envelope 0).
+    pub(super) fn restart(&mut self) {
+        let z = [C::new(0.0, 0.0); 2];
+        self.env = z;
+        self.last_d = z;
+        self.u_prev = [0.0; 2];
+        self.at_fill = [(z, z); super::measure::FILL_RING];
+        self.moving = [[false; 2]; super::measure::FILL_RING];
+        self.since_change = [0; 2];
+        self.open = [0; 2];
+        self.good = 0;
+        self.avg = None;
     }
 }
 
@@ -325,9 +429,10 @@ impl<const N: usize> Device<'_, N> {
     }
 
     /// The closed μ loop's command Δu_z = `u` (m) on the normal channel:
-    /// in voltage mode its calibration level, in displacement mode the
-    /// voltage of D2 with the loop's learned correction (the displacement
-    /// loop then holds it). `true` when applied (the DAC took it).
+    /// in voltage mode its calibration level, in displacement mode a new
+    /// setting of the normal mode (its steady voltage checked against the
+    /// DAC; the fills' dead-beat voltages D5 then reach it). `true` when
+    /// applied.
     pub(super) fn command_normal(&mut self, u: f32) -> bool {
         let (z, off) = (self.cfg.dac_z, self.drive.offset_z_m);
         let dc = z.zero_code + off / z.metres_per_code;
@@ -338,14 +443,14 @@ impl<const N: usize> Device<'_, N> {
             };
             let at = self.applied.achieved;
             let dcx = self.dds.channels()[1].dc_target;
-            match self.voltage_plan(&d, &at, [dc, dcx], self.loops.c) {
-                Ok(Some((levels, words))) if self.dds.set_level(0, levels[0]).is_ok() => {
-                    self.dds.set_phase(0, words[0]);
-                    self.loops.good = 0;
-                    true
-                }
-                _ => false,
+            let ok = matches!(
+                self.voltage_plan(&d, &at, [dc, dcx], self.loops.c),
+                Ok(Some(_))
+            );
+            if ok {
+                self.loops.good = 0;
             }
+            ok
         } else {
             let lz = Level {
                 amp: u / z.metres_per_code,
@@ -355,28 +460,140 @@ impl<const N: usize> Device<'_, N> {
         }
     }
 
-    /// The models' responses Ĥ at the DDS frequency `at` (cached per tuning
-    /// word: the loop's windows reuse them).
+    /// The models' responses Ĥ at the DDS frequency `at` (the tracked
+    /// channel's model centred on the tracked resonance), from the cache
+    /// when it holds for them.
     fn model_h_at(&self, t: &Transducers, at: &Achieved) -> [C; 2] {
-        match self.loops.model_h {
-            Some((h, tw)) if tw == at.tuning_word => h,
+        let key = (at.tuning_word, self.tracker.resonance_bits());
+        match self.loops.model {
+            Some(m) if m.key == key => m.h,
             _ => {
                 let f = at.freq_hz as f32;
-                [model_response(&t.z, f), model_response(&t.x, f)]
+                let [mz, mx] = self.tracker.models(t);
+                [model_response(&mz, f), model_response(&mx, f)]
             }
         }
     }
 
-    /// One loop step (D3) at the end of a lock-in window of `window_s`
-    /// seconds that measured the phasors `x` (m): updates the corrections,
-    /// applies the new voltages, counts the windows within tolerance.
-    pub(super) fn displacement_step(&mut self, x: [C; 2], window_s: f32) {
-        if !self.displacement_mode() || !self.running || self.latch.any() {
-            self.loops.good = 0;
+    /// The model at the DDS frequency (cached), for fills of `n` samples.
+    fn model_at(&mut self, t: &Transducers, n: usize) -> ModelAt {
+        let at = self.applied.achieved;
+        let key = (at.tuning_word, self.tracker.resonance_bits());
+        if let Some(m) = self.loops.model.filter(|m| m.key == key) {
+            return m;
+        }
+        let f = at.freq_hz as f32;
+        let tf = n as f32 / self.cfg.sample_rate_hz as f32;
+        let models = self.tracker.models(t);
+        let mut m = ModelAt {
+            key,
+            h: [C::new(0.0, 0.0); 2],
+            p: [C::new(0.0, 0.0); 2],
+            mean: [C::new(0.0, 0.0); 2],
+        };
+        for (ch, md) in models.iter().enumerate() {
+            m.h[ch] = model_response(md, f);
+            let tau = md.q / (core::f32::consts::PI * md.resonance_hz);
+            let dw = core::f32::consts::TAU * (md.resonance_hz - f);
+            let st = C::new(-tf / tau, dw * tf);
+            m.p[ch] = polar(libm::expf(st.re), st.im);
+            m.mean[ch] = (m.p[ch] - C::new(1.0, 0.0)) / st;
+        }
+        self.loops.model = Some(m);
+        m
+    }
+
+    /// The dead-beat voltages of one DAC fill of `n` samples (D4–D6): sets
+    /// both channels' DDS levels and phases and records the fill's model
+    /// envelope and voltage under `fill`. Nothing outside displacement mode,
+    /// while stopped or faulted.
+    pub(super) fn displacement_fill(&mut self, fill: u32, n: usize) {
+        if !self.displacement_mode() || !self.running || self.latch.any() || n == 0 {
             return;
         }
-        if !self.dds.settled() {
-            // A ramp (start, new setting) is under way: wait for its end.
+        let Some(t) = self.transducers else {
+            return;
+        };
+        let m = self.model_at(&t, n);
+        let d = setpoint(&self.drive);
+        let v = DAC_VOLTS_PER_CODE as f32;
+        let one = C::new(1.0, 0.0);
+        let h_room = self.options.headroom;
+        let mut rec = ([C::new(0.0, 0.0); 2], [C::new(0.0, 0.0); 2]);
+        let mut moving = [false; 2];
+        #[allow(clippy::needless_range_loop)] // ch indexes six arrays
+        for ch in 0..2 {
+            let hc = m.h[ch] * self.loops.c[ch];
+            if d[ch] != self.loops.last_d[ch] {
+                self.loops.u_prev[ch] = norm(self.loops.last_d[ch] / hc);
+                self.loops.last_d[ch] = d[ch];
+                self.loops.since_change[ch] = 0;
+            } else {
+                self.loops.since_change[ch] = self.loops.since_change[ch].saturating_add(1);
+            }
+            let env = self.loops.env[ch];
+            let (p, q) = (m.p[ch], one - m.p[ch]);
+            let mut u = (d[ch] - p * env) / (q * hc);
+            let chn = self.dds.channels()[ch];
+            let dc = chn.dc_target;
+            // The DAC's room around the DC, less a part in 10⁴ (the level's
+            // own check must pass after the f32 round trip).
+            let room = dc.min(f32::from(crate::board::dds::DAC_MAX) - dc).max(0.0) * v * 0.9999;
+            let bound = (h_room * norm(d[ch] / hc).max(self.loops.u_prev[ch])).min(room);
+            let un = norm(u);
+            let cut = un > bound || un.is_nan();
+            moving[ch] = cut || usize::from(self.loops.since_change[ch]) < super::measure::FILL_RING;
+            if cut {
+                // Beyond the bound (or not finite): the magnitude cut, the
+                // phase kept (NaN: no drive).
+                u = if un.is_finite() && un > 0.0 {
+                    u * (bound / un)
+                } else {
+                    C::new(0.0, 0.0)
+                };
+            }
+            let (lv, word) = level_of(u, dc);
+            if self.dds.set_level(ch, lv).is_ok() {
+                if norm(u) > 0.0 {
+                    self.dds.set_phase(ch, word);
+                }
+            } else {
+                // Not taken (cannot happen within the room): the model
+                // advances with the voltage in force.
+                u = self.loops.at_fill[(fill.wrapping_sub(1)) as usize % super::measure::FILL_RING].1[ch];
+            }
+            let w = hc * u;
+            rec.0[ch] = w + (env - w) * m.mean[ch];
+            rec.1[ch] = u;
+            self.loops.env[ch] = p * env + q * w;
+        }
+        self.loops.at_fill[fill as usize % super::measure::FILL_RING] = rec;
+        self.loops.moving[fill as usize % super::measure::FILL_RING] = moving;
+    }
+
+    /// The model's envelopes reach the setting (each driven channel within
+    /// [`HOLD_TOLERANCE`], an undriven one below [`HOLD_FLOOR_M`]): a
+    /// command is in force as far as the model knows (the closed μ loop's
+    /// "reached").
+    pub(super) fn model_reached(&self) -> bool {
+        let d = setpoint(&self.drive);
+        (0..2).all(|ch| {
+            let dn = norm(d[ch]);
+            let e = norm(self.loops.env[ch] - d[ch]);
+            if dn > 0.0 {
+                e <= HOLD_TOLERANCE * dn && self.loops.last_d[ch] == d[ch]
+            } else {
+                e <= HOLD_FLOOR_M
+            }
+        })
+    }
+
+    /// One window (the lock-in's phasors `x`, m, over `window_s` seconds,
+    /// the output of fill `block`): the corrections c (D3 against the
+    /// fill's model envelope), the open-pickup check, the tracking, the
+    /// holding count.
+    pub(super) fn displacement_step(&mut self, block: u32, x: [C; 2], window_s: f32) {
+        if !self.displacement_mode() || !self.running || self.latch.any() {
             self.loops.good = 0;
             return;
         }
@@ -385,14 +602,7 @@ impl<const N: usize> Device<'_, N> {
         };
         let d = self.drive;
         let target = setpoint(&d);
-        let at = self.applied.achieved;
-        if self
-            .loops
-            .model_h
-            .is_none_or(|(_, tw)| tw != at.tuning_word)
-        {
-            self.loops.model_h = Some((self.model_h_at(&t, &at), at.tuning_word));
-        }
+        let (mean, u_fill) = self.loops.at_fill[block as usize % super::measure::FILL_RING];
         let alpha = (window_s / SMOOTHING_S).min(1.0);
         let avg = match self.loops.avg {
             Some(a) => [a[0] + (x[0] - a[0]) * alpha, a[1] + (x[1] - a[1]) * alpha],
@@ -400,41 +610,81 @@ impl<const N: usize> Device<'_, N> {
         };
         self.loops.avg = Some(avg);
         let mut within = true;
-        let mut c = self.loops.c;
-        for (ch, m) in [t.z, t.x].iter().enumerate() {
+        let models = self.tracker.models(&t);
+        let moving = self.loops.moving[block as usize % super::measure::FILL_RING];
+        for (ch, m) in models.iter().enumerate() {
             let dn = norm(target[ch]);
-            if dn <= 0.0 {
-                within &= norm(avg[ch]) <= HOLD_FLOOR_M;
+            within &= if dn > 0.0 {
+                norm((avg[ch] - target[ch]) / target[ch]) <= HOLD_TOLERANCE
+            } else {
+                norm(avg[ch]) <= HOLD_FLOOR_M
+            };
+            let mn = norm(mean[ch]);
+            // An open pickup: the model says the mode moves, the pickup not.
+            if mn > OPEN_FLOOR_M && norm(x[ch]) < OPEN_FRACTION * mn {
+                self.loops.open[ch] = self.loops.open[ch].saturating_add(1);
+                if self.loops.open[ch] >= OPEN_WINDOWS {
+                    self.fault(super::faults::PICKUP_OPEN);
+                    return;
+                }
                 continue;
             }
-            within &= norm((avg[ch] - target[ch]) / target[ch]) <= HOLD_TOLERANCE;
-            let e = (x[ch] - target[ch]) / target[ch];
+            self.loops.open[ch] = 0;
+            // D3 against the fill's mean envelope, from a twentieth of the
+            // setting up (below, the window's noise dominates); a window of
+            // a transition also corrects the model's envelope (D7: its
+            // error then holds the model's dynamics error too, τ̂ and ω̂_r,
+            // which the dead-beat fills would otherwise leave to die out
+            // with the mode's own τ).
+            if dn <= 0.0 || mn < 0.05 * dn {
+                continue;
+            }
+            if moving[ch] {
+                self.observe(ch, block, x[ch] - mean[ch]);
+            }
+            let e = (x[ch] - mean[ch]) / mean[ch];
             let tau = m.q / (core::f32::consts::PI * m.resonance_hz);
             let k = (window_s / (4.0 * tau)).min(0.5);
-            c[ch] *= C::new(1.0, 0.0) + e * k;
-        }
-        let dc = [
-            self.dds.channels()[0].dc_target,
-            self.dds.channels()[1].dc_target,
-        ];
-        match self.voltage_plan(&d, &at, dc, c) {
-            Ok(Some((levels, words))) => {
-                self.loops.c = c;
-                self.loops.saturated = [false; 2];
-                for ch in 0..2 {
-                    // Validated by `voltage_plan`: neither fails.
-                    let _ = self.dds.set_level(ch, levels[ch]);
-                    self.dds.set_phase(ch, words[ch]);
-                }
+            let c = self.loops.c[ch] * (C::new(1.0, 0.0) + e * k);
+            let cn = norm(c);
+            if (1.0 / C_MAX..=C_MAX).contains(&cn) {
+                self.loops.c[ch] = c;
+                self.loops.saturated[ch] = false;
+            } else {
+                self.loops.saturated[ch] = true;
             }
-            // Beyond the DAC: hold c (anti-windup).
-            _ => self.loops.saturated = [true; 2],
         }
+        self.tracking_step(&t, x, mean, u_fill, window_s);
         self.loops.good = if within {
             self.loops.good.saturating_add(1)
         } else {
             0
         };
+    }
+
+    /// TEMP debug.
+    pub fn debug_loops(&self) -> ([C; 2], [C; 2]) {
+        (self.loops.env, self.loops.c)
+    }
+
+    /// The observer of a transition (D7): the model's envelope moves by
+    /// [`OBSERVER_GAIN`] of the error `err` that fill `block`'s window
+    /// measured, carried to now (and to the later fills' records) through
+    /// the mode's free decay `p` per fill.
+    fn observe(&mut self, ch: usize, block: u32, err: C) {
+        let Some(m) = self.loops.model else {
+            return;
+        };
+        let p = m.p[ch];
+        let mut corr = err * OBSERVER_GAIN;
+        let ring = super::measure::FILL_RING as u32;
+        let ahead = self.fills.wrapping_sub(block).min(ring);
+        for k in 1..ahead {
+            corr *= p;
+            let slot = block.wrapping_add(k) as usize % super::measure::FILL_RING;
+            self.loops.at_fill[slot].0[ch] += corr;
+        }
+        self.loops.env[ch] += corr * p;
     }
 
     /// Whether the drive holds its setting: in displacement mode the
@@ -448,27 +698,54 @@ impl<const N: usize> Device<'_, N> {
         }
     }
 
-    /// The DDS's amplitude slew for a new setting with levels `levels`
-    /// (codes): in displacement mode the full amplitude over
-    /// `RAMP_TAUS·τ̂` ([`RAMP_TAUS`]), never faster than the board's slew;
+    /// The DDS's slew for a new setting: in displacement mode one sample
+    /// for any change (the fills' voltages are D5's, piecewise constant),
     /// in voltage mode the board's slew.
-    pub(super) fn ramp_slew(&mut self, levels: &[Level; 2]) {
+    pub(super) fn ramp_slew(&mut self) {
         let Ok(base) = Self::slew(&self.cfg) else {
             return;
         };
-        let mut slew = base;
-        if let Some(t) = self
-            .transducers
-            .filter(|_| self.mode == DriveMode::Displacement)
-        {
-            let tau = |m: &TransducerModel| m.q / (core::f32::consts::PI * m.resonance_hz);
-            let n = RAMP_TAUS * tau(&t.z).max(tau(&t.x)) * self.cfg.sample_rate_hz as f32;
-            let amp = levels[0].amp.abs().max(levels[1].amp.abs());
-            if n > 1.0 && amp > 0.0 {
-                slew.amp_per_sample = (amp / n).min(base.amp_per_sample);
-            }
+        if self.displacement_mode() {
+            self.dds.set_slew(crate::board::dds::Slew {
+                amp_per_sample: f32::from(crate::board::dds::DAC_MAX),
+                dc_per_sample: base.dc_per_sample,
+                phase_per_sample: 1 << 31,
+            });
+        } else {
+            self.dds.set_slew(base);
         }
-        self.dds.set_slew(slew);
+    }
+
+    /// Sets the displacement mode's options (tracking, headroom), validated
+    /// whole.
+    ///
+    /// # Errors
+    /// [`DeviceError::OutOfRange`] naming [`DriveParam::Headroom`] outside
+    /// `[1, MAX_HEADROOM]`; [`DeviceError::NotIdentified`] for tracking
+    /// without stored transducers. Nothing changes on error.
+    pub fn set_displacement_options(&mut self, o: DisplacementOptions) -> Result<(), DeviceError> {
+        let h = o.headroom;
+        if !(h.is_finite() && (1.0..=MAX_HEADROOM).contains(&h)) {
+            return Err(DeviceError::OutOfRange {
+                param: DriveParam::Headroom,
+                min: 1.0,
+                max: MAX_HEADROOM,
+            });
+        }
+        if o.track != Track::None && self.transducers.is_none() {
+            return Err(DeviceError::NotIdentified);
+        }
+        if o.track != self.options.track {
+            self.tracker = super::tracking::Tracker::default();
+            self.loops.model = None;
+        }
+        self.options = o;
+        Ok(())
+    }
+
+    /// The displacement mode's options in force.
+    pub fn displacement_options(&self) -> DisplacementOptions {
+        self.options
     }
 
     /// The smoothed measured phasors of the displacement loop (m), `None`
@@ -479,10 +756,14 @@ impl<const N: usize> Device<'_, N> {
             .filter(|_| self.displacement_mode() && self.running)
     }
 
-    /// Fills the v5 fields of a status.
+    /// Fills the v5 and v6 fields of a status.
     pub(super) fn displacement_status(&self, s: &mut Status) {
         s.mode = self.mode;
         s.settled = self.drive_settled();
+        s.frequency_hz = self.applied.achieved.freq_hz as f32;
+        s.options = self.options;
+        s.tracking_error_hz = self.tracker.error_hz.filter(|_| self.tracking_active());
+        s.locked = self.tracker.locked && self.tracking_active();
         // In displacement mode the amplitudes and φ are the smoothed ones
         // the holding test uses (the peak stays the largest raw window).
         if let (Some(m), Some(a)) = (s.measured.as_mut(), self.smoothed_motion()) {

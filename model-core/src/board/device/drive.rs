@@ -105,7 +105,15 @@ impl<const N: usize> Device<'_, N> {
             MAX_PHASE_RAD,
             DriveParam::Phase,
         )?;
-        let achieved = self.dds.plan_frequency(d.freq_hz).map_err(|_| freq_err)?;
+        // While tracking, the same setting frequency keeps the tracked one.
+        let achieved = if self.options.track != super::Track::None
+            && self.running
+            && d.freq_hz == self.drive.freq_hz
+        {
+            self.applied.achieved
+        } else {
+            self.dds.plan_frequency(d.freq_hz).map_err(|_| freq_err)?
+        };
         let lz = Level {
             amp: d.amp_z_m / z.metres_per_code,
             dc: z.zero_code + off / z.metres_per_code,
@@ -187,7 +195,10 @@ impl<const N: usize> Device<'_, N> {
         }
         let plan = self.plan(&d)?;
         // The plan validated everything the DDS checks: none of these fail.
-        self.dds.set_frequency(d.freq_hz)?;
+        if plan.achieved.tuning_word != self.dds.tuning_word() {
+            self.dds.set_frequency(d.freq_hz)?;
+            self.tracker = super::tracking::Tracker::default();
+        }
         self.drive = d;
         self.dds.set_phase(0, plan.phases[0]);
         self.dds.set_phase(1, plan.phases[1]);
@@ -215,7 +226,7 @@ impl<const N: usize> Device<'_, N> {
         self.ramp_generation = self.ramp_generation.wrapping_add(1);
         self.reset_motion_peak();
         if self.running {
-            self.ramp_slew(&plan.levels);
+            self.ramp_slew();
             self.dds.set_level(0, plan.levels[0])?;
             self.dds.set_level(1, plan.levels[1])?;
         } else if !self.latch.any() {
@@ -237,14 +248,15 @@ impl<const N: usize> Device<'_, N> {
             return Err(DeviceError::Faulted(self.latch.bits()));
         }
         let plan = self.plan(&self.drive)?;
-        self.ramp_slew(&plan.levels);
+        self.ramp_slew();
         self.dds.set_level(0, plan.levels[0])?;
         self.dds.set_level(1, plan.levels[1])?;
         self.dds.set_phase(0, plan.phases[0]);
         self.dds.set_phase(1, plan.phases[1]);
         self.running = true;
-        self.loops.good = 0;
-        self.loops.avg = None;
+        self.loops.restart();
+        self.tracker = super::tracking::Tracker::default();
+        self.loops.model = None;
         self.ramp_generation = self.ramp_generation.wrapping_add(1);
         self.reset_motion_peak();
         Ok(())

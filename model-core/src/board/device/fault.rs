@@ -12,6 +12,8 @@
 //! | [`faults::EXTERNAL`] | the external fault input (amplifier alarm) | the firmware's input interrupt |
 //! | [`faults::ADC_OVERRUN`] | the ADC intake came a half-buffer late | [`Device::adc_half_done`] |
 //! | [`faults::MEASURED_LIFTOFF`] | the normal pickup measured Δu_z above u_z0 (lift-off not allowed) | `Device::adc_block_with_pickups` (the motion window) |
+//! | [`faults::LOSS_OF_LOCK`] | the resonance tracking lost (or never found) its lock | the motion window (`tracking`) |
+//! | [`faults::PICKUP_OPEN`] | a driven channel's pickup reads nothing | the motion window (`displacement`) |
 //!
 //! **The safe state** ([`Device::fault`]): the closed loop off (its running
 //! estimate aborted), the drive stopped, both channels ramped at the slew
@@ -40,9 +42,22 @@ pub mod faults {
     /// guard on the *measured* motion (the setting's guard keeps a margin
     /// below u_z0; a resonant transducer can still ring above it).
     pub const MEASURED_LIFTOFF: u32 = 1 << 5;
+    /// (v6) The resonance tracking lost its lock (or never locked, or the
+    /// resonance left the tracking range): the drive would otherwise go on
+    /// off resonance.
+    pub const LOSS_OF_LOCK: u32 = 1 << 6;
+    /// (v6) A driven channel's pickup reads nothing (an open wire): its
+    /// measured amplitude stayed below a tenth of the model's while driven.
+    pub const PICKUP_OPEN: u32 = 1 << 7;
     /// Every bit defined above.
-    pub const ALL: u32 =
-        ADC_SATURATED | DAC_UNDERRUN | WATCHDOG_RESET | EXTERNAL | ADC_OVERRUN | MEASURED_LIFTOFF;
+    pub const ALL: u32 = ADC_SATURATED
+        | DAC_UNDERRUN
+        | WATCHDOG_RESET
+        | EXTERNAL
+        | ADC_OVERRUN
+        | MEASURED_LIFTOFF
+        | LOSS_OF_LOCK
+        | PICKUP_OPEN;
 }
 
 /// The latched bits; set only by [`Device::fault`], cleared only by
@@ -83,11 +98,13 @@ impl<const N: usize> Device<'_, N> {
         self.latch.bits |= bits;
         self.running = false;
         self.ramp_generation = self.ramp_generation.wrapping_add(1);
-        // At the board's slew, also in displacement mode (whose ramps are
-        // slower, `displacement::RAMP_TAUS`): a resonant mode whose drive
-        // stops rings down freely, without overshoot.
+        // At the board's slew, also in displacement mode (whose fills jump
+        // to D5's voltages): a resonant mode whose drive ramps down rings
+        // down with it, without overshoot. The tracking lets go.
         self.loops.good = 0;
         self.loops.avg = None;
+        self.tracker = super::tracking::Tracker::default();
+        self.loops.model = None;
         if let Ok(s) = Self::slew(&self.cfg) {
             self.dds.set_slew(s);
         }

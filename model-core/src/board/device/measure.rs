@@ -18,6 +18,7 @@ impl<const N: usize> Device<'_, N> {
         let fill = self.fills;
         self.fills = fill.wrapping_add(1);
         self.control_fill(fill);
+        self.displacement_fill(fill, buf.len());
         let slot = fill as usize % FILL_RING;
         self.half[slot] = (self.dds.accumulator(), self.dds.tuning_word());
         // Settled before the fill stays settled through it (targets change

@@ -10,7 +10,9 @@
 //!   each ADC sample belongs to) and the friction measurement;
 //! * `motion` — the transducers' measured motion (the pickups' lock-ins);
 //! * [`displacement`] — the displacement mode: identified transducers as
-//!   feed-forward, a complex loop per channel on the measured motion;
+//!   feed-forward, dead-beat transitions within a voltage headroom, a
+//!   complex loop per channel on the measured motion;
+//! * [`tracking`] — the resonance tracking (a PLL on one mode's phase);
 //! * `predict` — the model's prediction for the current drive;
 //! * `closed_loop` — the closed loop's timing (which samples each update
 //!   uses, when its command reaches the DAC);
@@ -32,6 +34,7 @@ mod fault;
 mod measure;
 mod motion;
 mod predict;
+pub mod tracking;
 
 pub use closed_loop::MIN_GAIN;
 pub use config::{
@@ -44,8 +47,8 @@ pub use motion::MeasuredDrive;
 pub use predict::{predict, regime};
 
 pub use crate::board::protocol::messages::{
-    Applied, Contact, DriveMode, DriveParam, DriveSetting, Prediction, Status, TransducerModel,
-    Transducers,
+    Applied, Contact, DisplacementOptions, DriveMode, DriveParam, DriveSetting, Prediction,
+    Status, Track, TransducerModel, Transducers,
 };
 
 use crate::board::dds::{Achieved, Dds, Level, SineTable, Slew};
@@ -92,6 +95,10 @@ pub struct Device<'t, const N: usize> {
     mode: DriveMode,
     /// The displacement loops.
     loops: displacement::Loops,
+    /// (v6) Tracking and headroom.
+    options: displacement::DisplacementOptions,
+    /// (v6) The resonance tracking.
+    tracker: tracking::Tracker,
 }
 
 /// `x` if finite and in `[min, max]`, else [`DeviceError::OutOfRange`].
@@ -154,6 +161,8 @@ impl<'t, const N: usize> Device<'t, N> {
             transducers: None,
             mode: DriveMode::OpenLoop,
             loops: displacement::Loops::default(),
+            options: displacement::DisplacementOptions::default(),
+            tracker: tracking::Tracker::default(),
         };
         check_contact(&contact)?;
         d.applied.achieved = d
@@ -227,6 +236,10 @@ impl<'t, const N: usize> Device<'t, N> {
             liftoff_allowed: self.allow_liftoff,
             measured: self.measured_drive(),
             mode: self.mode,
+            frequency_hz: 0.0,
+            options: self.options,
+            tracking_error_hz: None,
+            locked: false,
         };
         self.displacement_status(&mut s);
         s

@@ -110,7 +110,7 @@ impl<const N: usize> Device<'_, N> {
             self.fault(super::faults::MEASURED_LIFTOFF);
             return;
         }
-        self.displacement_step([xz, xx], window_s);
+        self.displacement_step(block, [xz, xx], window_s);
     }
 
     /// The measured response `X/U` of channel `ch` (m/V, `[re, im]`) to the

@@ -15,7 +15,7 @@ use crate::model::regime::Regime;
 
 /// Protocol version; a frame with another version is answered with
 /// [`WireError::VersionMismatch`].
-pub const PROTOCOL_VERSION: u16 = 5;
+pub const PROTOCOL_VERSION: u16 = 6;
 
 /// The drive as commanded, physical units.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -77,6 +77,9 @@ pub enum DriveParam {
     TransducerGain,
     /// 13 (v5): a transducer's extra phase lag.
     PhaseLag,
+    /// 14 (v6): the displacement loop's voltage headroom
+    /// ([`DisplacementOptions::headroom`]).
+    Headroom,
 }
 
 impl DriveParam {
@@ -97,6 +100,7 @@ impl DriveParam {
             DriveParam::Quality => "q",
             DriveParam::TransducerGain => "gain_m_per_v",
             DriveParam::PhaseLag => "phase_lag_rad",
+            DriveParam::Headroom => "headroom",
         }
     }
 }
@@ -165,6 +169,55 @@ pub struct Status {
     pub measured: Option<MeasuredDrive>,
     /// (v5) The drive mode in force ([`Request::SetDriveMode`]).
     pub mode: DriveMode,
+    /// (v6) The DDS frequency now, Hz (the setting's, or where the
+    /// resonance tracking has moved it).
+    pub frequency_hz: f32,
+    /// (v6) The displacement mode's options in force.
+    pub options: DisplacementOptions,
+    /// (v6) While tracking: the measured resonance of the tracked mode minus
+    /// the drive frequency, Hz (signed); `None` when not tracking or before
+    /// the first usable window.
+    pub tracking_error_hz: Option<f32>,
+    /// (v6) The tracking is locked (`false` when not tracking).
+    pub locked: bool,
+}
+
+/// (v6) Which transducer's resonance the drive frequency follows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Track {
+    /// 0: no tracking: the drive frequency is the setting's.
+    None,
+    /// 1: the normal transducer.
+    Z,
+    /// 2: the tangential transducer.
+    X,
+}
+
+/// (v6) The displacement mode's options ([`Request::SetDisplacementOptions`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DisplacementOptions {
+    /// Resonance tracking (`Track::None` at power-up).
+    pub track: Track,
+    /// The voltage bound during a transition, in units of the identified
+    /// model's steady-state voltage, in `[1, MAX_HEADROOM]` (1: no
+    /// overdrive; [`DEFAULT_HEADROOM`] at power-up).
+    pub headroom: f32,
+}
+
+/// (v6) The headroom at power-up.
+pub const DEFAULT_HEADROOM: f32 = 2.0;
+/// (v6) The largest headroom accepted.
+pub const MAX_HEADROOM: f32 = 8.0;
+
+impl Default for DisplacementOptions {
+    fn default() -> Self {
+        DisplacementOptions {
+            track: Track::None,
+            headroom: DEFAULT_HEADROOM,
+        }
+    }
 }
 
 /// (v4) The transducers' motion as the pickups measure it.
@@ -335,6 +388,10 @@ pub enum Request {
     /// (`NotIdentified`) and re-plans the accepted drive through them
     /// (its checks as `SetDrive`'s: a refusal changes nothing).
     SetDriveMode(DriveMode),
+    /// 20 (v6): the displacement mode's options (tracking, headroom);
+    /// validated whole, a refusal changes nothing. Tracking needs stored
+    /// transducers (`NotIdentified`).
+    SetDisplacementOptions(DisplacementOptions),
 }
 
 /// The closed loop as commanded ([`crate::board::control`]).
@@ -459,6 +516,7 @@ pub const ENDPOINTS: &[Endpoint] = &[
     ep(17, "SetTransducers", Answer::Ok),
     ep(18, "GetTransducers", Answer::Transducers),
     ep(19, "SetDriveMode", Answer::Ok),
+    ep(20, "SetDisplacementOptions", Answer::Ok),
 ];
 
 const fn ep(index: u32, request: &'static str, answer: Answer) -> Endpoint {
@@ -493,6 +551,7 @@ impl Request {
             Request::SetTransducers(_) => 17,
             Request::GetTransducers => 18,
             Request::SetDriveMode(_) => 19,
+            Request::SetDisplacementOptions(_) => 20,
         }
     }
 
@@ -727,7 +786,7 @@ mod tests {
     use super::*;
 
     /// One request of every variant, in variant order.
-    fn every_request() -> [Request; 20] {
+    fn every_request() -> [Request; 21] {
         let drive = DriveSetting {
             freq_hz: 1e4,
             amp_z_m: 0.0,
@@ -770,6 +829,7 @@ mod tests {
             Request::SetTransducers(None),
             Request::GetTransducers,
             Request::SetDriveMode(DriveMode::OpenLoop),
+            Request::SetDisplacementOptions(DisplacementOptions::default()),
         ]
     }
 
