@@ -7,7 +7,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use clap::Args;
-use model_core::device::DriveSetting;
+use model_core::device::{DisplacementOptions, DriveMode, DriveSetting, Track};
 use model_core::protocol::{
     decode, encode, Body, ControlSetting, ControlState, ControlUpdate, Deframed, Deframer, Frame,
     Request, Response, Telemetry, MAX_FRAME, PROTOCOL_VERSION,
@@ -54,6 +54,10 @@ pub struct ControlArgs {
     /// Rate limit of the commanded Δu_z, m/s (at most the board's slew, 1e-3)
     #[arg(long, default_value_t = DEFAULT_RATE, value_parser = Real::positive().single_precision())]
     pub rate: f64,
+    /// The displacement loop's headroom while the loop runs (displacement
+    /// mode; the tracking in force is kept)
+    #[arg(long, value_name = "H", value_parser = Real::ANY.at_least(1.0).at_most(8.0).because("1 is no overdrive").single_precision())]
+    pub headroom: Option<f64>,
 }
 
 impl ControlArgs {
@@ -97,8 +101,21 @@ impl ControlArgs {
     }
 }
 
-/// `fricctl device control …` on a connected device.
-pub fn run(c: &mut Client, req: Request, json: bool) -> CliResult {
+/// `fricctl device control …` on a connected device (`--headroom` first,
+/// keeping the tracking in force).
+pub fn run(c: &mut Client, req: Request, a: &ControlArgs, json: bool) -> CliResult {
+    if let Some(h) = a.headroom {
+        let st = match expect(c.call(Request::GetStatus)?)? {
+            Response::Status(s) => s,
+            other => return Err(unexpected(other)),
+        };
+        expect(c.call(Request::SetDisplacementOptions(
+            model_core::device::DisplacementOptions {
+                headroom: h as f32,
+                ..st.options
+            },
+        ))?)?;
+    }
     match expect(c.call(req)?)? {
         Response::Control(s) => out(json, &render::control(&s)),
         other => Err(unexpected(other)),
@@ -117,8 +134,9 @@ pub struct BenchArgs {
     /// Transducer amplitude lag of the plant, drive periods
     #[arg(long, default_value_t = 2.0, value_parser = Real::non_negative())]
     pub lag_periods: f64,
-    /// Drift of the plant's μ0, per second of device time
-    #[arg(long, default_value_t = -0.5, value_parser = Real::ANY)]
+    /// Drift of the plant's μ0, per second of device time (the bench's
+    /// disturbance is a step of μ0, at the third event)
+    #[arg(long, default_value_t = 0.0, value_parser = Real::ANY)]
     pub drift: f64,
     /// ADC noise, ± counts
     #[arg(long, default_value_t = 2.0, value_parser = super::sim::NOISE_COUNTS)]
@@ -137,9 +155,13 @@ pub struct BenchArgs {
     /// Seed of the plant's ADC noise (0: the virtual device's default record)
     #[arg(long, default_value_t = 0, value_parser = Count::<u64>::at_least(0))]
     pub seed: u64,
-    /// The transducers (ideal, with --lag-periods, or resonant).
+    /// The transducers (resonant by default; ideal with
+    /// --plant-ideal-transducers, then with --lag-periods).
     #[command(flatten)]
     pub transducers: super::transducers::TransducerArgs,
+    /// The displacement loop's headroom (resonant transducers).
+    #[command(flatten)]
+    pub headroom: super::HeadroomArg,
 }
 
 /// The bench's fixed drive and schedule (device time).
@@ -160,8 +182,16 @@ pub mod scenario {
     pub const V1: f64 = 0.006;
     /// Setpoint at switch-on, then after the setpoint step.
     pub const TARGETS: (f32, f32) = (0.10, 0.13);
-    /// Loop on, setpoint step, velocity step, end: ms after the drive has settled.
-    pub const EVENTS_MS: [f64; 4] = [0.0, 15.0, 30.0, 45.0];
+    /// The setpoints on resonant transducers (driven at the normal mode's
+    /// resonance, ≈ 20 kHz: half the ideal bench's frequency doubles b and
+    /// the tangential reduction alone leaves μ near 0.13, out of reach).
+    pub const TARGETS_RESONANT: (f32, f32) = (0.08, 0.10);
+    /// Loop on, setpoint step, disturbance, velocity step, end: ms after
+    /// the drive has settled (on resonant transducers each segment lasts
+    /// at least 8 τ).
+    pub const EVENTS_MS: [f64; 5] = [0.0, 15.0, 30.0, 45.0, 60.0];
+    /// The disturbance: the plant's μ0 multiplied by this.
+    pub const MU0_STEP: f64 = 0.9;
     /// Duration of the velocity ramp, ms.
     pub const V_RAMP_MS: f64 = 0.1;
 }
@@ -169,7 +199,8 @@ pub mod scenario {
 /// One event's response.
 #[derive(Serialize, Debug, Clone)]
 pub struct Response2 {
-    /// `switch_on`, `setpoint_step` or `velocity_step`.
+    /// `switch_on`, `setpoint_step`, `disturbance` (μ0 × `MU0_STEP`) or
+    /// `velocity_step`.
     pub event: &'static str,
     /// Setpoint after the event.
     pub target_mu: f64,
@@ -177,8 +208,15 @@ pub struct Response2 {
     pub duz_feedforward: f64,
     /// The model's gain ∂μ/∂Δu_z there, 1/m.
     pub slope_per_m: f64,
+    /// The event's step in μ: the setpoint's change, the first measured
+    /// error at switch-on, the largest error after the disturbance or the
+    /// velocity step.
+    pub step: f64,
+    /// The settling band: 2 % of the step, or 3 standard errors of the
+    /// estimates (median over the segment) if wider.
+    pub band: f64,
     /// Updates from the event to the first one after which every estimate
-    /// stays within 2 % of the setpoint (until the next event); None: never.
+    /// stays within the band (until the next event); None: never.
     pub settle_updates: Option<u32>,
     /// The same as device time, drive periods (to the end of the half-buffer
     /// in which that update ran).
@@ -188,6 +226,8 @@ pub struct Response2 {
     /// Largest excursion past the setpoint in the direction of the step,
     /// relative to the step (setpoint step only), %.
     pub overshoot_pct: Option<f64>,
+    /// The same as a fraction of the step (setpoint step only).
+    pub overshoot: Option<f64>,
     /// Mean of μ̂ − μ* over the last half of the segment.
     pub steady_error: f64,
     /// RMS of μ̂ − μ* over the last half of the segment.
@@ -199,6 +239,15 @@ pub struct Response2 {
 /// The bench's result (`--json`).
 #[derive(Serialize, Debug)]
 pub struct BenchOut {
+    /// `resonant` or `ideal` transducers.
+    pub transducers: &'static str,
+    /// The slower transducer's τ = Q/(π f_r), ms (0 for ideal ones).
+    pub tau_ms: f64,
+    /// The drive frequency, Hz (the normal mode's resonance on resonant
+    /// transducers).
+    pub freq_hz: f64,
+    /// The displacement loop's headroom (resonant transducers).
+    pub headroom: f64,
     /// Plant μ0 / model μ0.
     pub mu0_ratio: f64,
     /// Plant lag, periods.
@@ -223,8 +272,13 @@ pub struct BenchOut {
     pub max_duz: f64,
     /// The lift-off limit, m.
     pub liftoff_limit: f64,
-    /// Commands above the limit (must be 0).
-    pub commands_above_limit: u32,
+    /// Samples whose true normal excursion (the plant's transducer, every
+    /// sample) exceeded the lift-off limit (must be 0).
+    pub commands_above_limit: u64,
+    /// Commanded Δu_z above the limit (must be 0).
+    pub commanded_above_limit: u32,
+    /// The largest true normal excursion over the run, m.
+    pub max_excursion_m: f64,
     /// Updates with the rate limit or a bound active.
     pub saturated_updates: u32,
     /// Per event.
@@ -240,6 +294,9 @@ struct Bench {
     samples: u64,
     /// (device time s, update).
     log: Vec<(f64, ControlUpdate)>,
+    /// Per half-buffer: (device time s, normal voltage amplitude V, true
+    /// normal excursion m).
+    trace: Vec<(f64, f64, f64)>,
     deframer: Deframer,
 }
 
@@ -288,8 +345,26 @@ impl Bench {
             let tel = self.dev.advance(HALF);
             self.samples += HALF as u64;
             let t = self.t();
+            let volts = f64::from(self.dev.device().dds().channels()[0].amp)
+                * model_core::dds::DAC_VOLTS_PER_CODE;
+            self.trace
+                .push((t, volts, self.dev.plant().peak_excursion_m));
+            if std::env::var("DBG_TRACE").is_ok() {
+                let st = self.dev.device().status();
+                eprintln!(
+                    "{:.3} ms V {volts:.4} exc {:.4e} drive {:.4e} meas {:?} settled {}",
+                    t * 1e3,
+                    self.dev.plant().peak_excursion_m,
+                    self.dev.device().drive().amp_z_m,
+                    st.measured.map(|m| (m.amp_z_m, m.amp_x_m, m.phase_rad.to_degrees())),
+                    st.settled
+                );
+            }
             for fr in self.frames(&tel) {
                 if let Body::Telemetry(Telemetry::Control(u)) = fr.body {
+                    if std::env::var("DBG_BENCH").is_ok() {
+                        eprintln!("{:.3} ms {:?}", t * 1e3, u);
+                    }
                     self.log.push((t, u));
                 }
             }
@@ -323,12 +398,29 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
     let cfg = super::sim::config();
     let resonant = a.transducers.options(
         (cfg.dac_z.metres_per_code, cfg.dac_x.metres_per_code),
-        false,
+        true,
     )?;
+    // On resonant transducers: the drive at the normal mode's resonance,
+    // times scaled by the slower mode's τ = Q/(π f_r) (the plant's Q).
+    let tau_s = resonant.as_ref().map_or(0.0, |r| {
+        r.modes
+            .iter()
+            .map(|m| m.q / (std::f64::consts::PI * m.resonance_hz))
+            .fold(0.0, f64::max)
+    });
+    let freq_hz = resonant
+        .as_ref()
+        .map_or(FREQ_HZ, |r| r.modes[0].resonance_hz);
+    let seg_ms = |k: usize| (EVENTS_MS[k + 1] - EVENTS_MS[k]).max(8.0 * tau_s * 1e3);
     let model_mu0 = super::sim::DEFAULT_CONTACT.0;
-    // Settle 20 ms, then the events; the velocity step is at its time after settling.
-    let settle_s = 0.02;
-    let t_v = settle_s + EVENTS_MS[2] * 1e-3;
+    // Settle 20 ms (or 10 τ), then the events: each at the end of the
+    // segment before it (device time).
+    let settle_s = 0.02f64.max(10.0 * tau_s);
+    let mut t_at = vec![settle_s];
+    for k in 0..4 {
+        t_at.push(t_at[k] + seg_ms(k) * 1e-3);
+    }
+    let (t_d, t_v) = (t_at[2], t_at[3]);
     let opts = PlantOptions {
         v0: V0,
         noise_counts: a.noise,
@@ -339,6 +431,7 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
         lag_periods: a.lag_periods,
         mu0_drift: a.drift,
         v0_profile: Some(vec![(t_v, V0), (t_v + V_RAMP_MS * 1e-3, V1)]),
+        mu0_steps: vec![(t_d, MU0_STEP)],
         resonant,
     };
     let mut b = Bench {
@@ -346,14 +439,27 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
         seq: 0,
         samples: 0,
         log: Vec::new(),
+        trace: Vec::new(),
         deframer: Deframer::default(),
     };
     b.dev.set_fill_lead(a.fill_lead);
     if a.seed != 0 {
         b.dev.set_noise_seed(a.seed);
     }
+    b.dev.plant_mut().excursion_limit_m = f64::from(cfg.liftoff_limit_m(OFFSET_Z_M));
+    if let Some(r) = &resonant {
+        // The model an exact identification finds (see the docs).
+        expect(b.call(Request::SetTransducers(Some(
+            r.identified(cfg.sample_rate_hz),
+        )))?)?;
+        expect(b.call(Request::SetDriveMode(DriveMode::Displacement))?)?;
+        expect(b.call(Request::SetDisplacementOptions(DisplacementOptions {
+            track: Track::None,
+            headroom: a.headroom.headroom as f32,
+        }))?)?;
+    }
     let drive = DriveSetting {
-        freq_hz: FREQ_HZ,
+        freq_hz: freq_hz,
         amp_z_m: AMP_Z0_M,
         amp_x_m: AMP_X_M,
         offset_z_m: OFFSET_Z_M,
@@ -372,40 +478,58 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
     };
     let mut t_events = Vec::new();
     let mut states = Vec::new();
-    for (i, target) in [TARGETS.0, TARGETS.1].into_iter().enumerate() {
+    let targets = if resonant.is_some() {
+        TARGETS_RESONANT
+    } else {
+        TARGETS
+    };
+    for (i, target) in [targets.0, targets.1].into_iter().enumerate() {
         t_events.push(b.t());
         match expect(b.call(Request::SetControl(setting(target)))?)? {
             Response::Control(s) => states.push(s),
             other => return Err(unexpected(other)),
         }
-        b.run_ms(EVENTS_MS[i + 1] - EVENTS_MS[i]);
+        b.run_ms(seg_ms(i));
     }
-    // The velocity step happens in the plant at t_v (device time).
+    // The disturbance and the velocity step happen in the plant (device time).
+    t_events.push(t_d);
     t_events.push(t_v);
-    b.run_ms((t_v + (EVENTS_MS[3] - EVENTS_MS[2]) * 1e-3 - b.t()) * 1e3);
+    b.run_ms((t_at[4] - b.t()) * 1e3);
     let t_end = b.t();
     expect(b.call(Request::SetControl(ControlSetting {
         on: false,
-        ..setting(TARGETS.1)
+        ..setting(targets.1)
     }))?)?;
     let limit = f64::from(states[0].limit_m);
     let period_s = 1.0 / FREQ_HZ;
-    let names = ["switch_on", "setpoint_step", "velocity_step"];
-    let targets = [TARGETS.0, TARGETS.1, TARGETS.1];
+    let names = ["switch_on", "setpoint_step", "disturbance", "velocity_step"];
+    let pair = targets;
+    let targets = [pair.0, pair.1, pair.1, pair.1];
     let mut events = Vec::new();
-    for k in 0..3 {
-        let (t0, t1) = (t_events[k], if k < 2 { t_events[k + 1] } else { t_end });
+    for k in 0..4 {
+        let (t0, t1) = (t_events[k], if k < 3 { t_events[k + 1] } else { t_end });
         let seg: Vec<&(f64, ControlUpdate)> =
             b.log.iter().filter(|(t, _)| *t > t0 && *t <= t1).collect();
         let target = f64::from(targets[k]);
         let err = |u: &ControlUpdate| f64::from(u.measured_mu) - target;
-        // The first update after which all stay within 2 %.
+        // The step the event asks the loop to make: the setpoint's change,
+        // the error the loop first measures at switch-on, the largest error
+        // the velocity step causes.
+        let step = match k {
+            0 => seg.first().map_or(0.0, |(_, u)| err(u).abs()),
+            1 => (target - f64::from(targets[0])).abs(),
+            _ => seg.iter().map(|(_, u)| err(u).abs()).fold(0.0, f64::max),
+        };
+        // Settled: within 2 % of the step, or within three standard errors
+        // of the estimates (the device's own, median over the segment) when
+        // that is wider: no single estimate resolves less.
+        let mut se: Vec<f64> = seg.iter().map(|(_, u)| f64::from(u.std_error)).collect();
+        se.sort_by(f64::total_cmp);
+        let sigma = se.get(se.len() / 2).copied().unwrap_or(0.0);
+        let band = (0.02 * step).max(3.0 * sigma);
         let mut settle = None;
         for (i, _) in seg.iter().enumerate() {
-            if seg[i..]
-                .iter()
-                .all(|(_, u)| err(u).abs() <= 0.02 * target.abs())
-            {
+            if seg[i..].iter().all(|(_, u)| err(u).abs() <= band) {
                 settle = Some(i);
                 break;
             }
@@ -427,12 +551,15 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
         events.push(Response2 {
             event: names[k],
             target_mu: target,
+            step,
+            band,
             duz_feedforward: f64::from(states[k.min(1)].feedforward_m),
             slope_per_m: f64::from(states[k.min(1)].slope_per_m),
             settle_updates: settle.map(|i| i as u32 + 1),
             settle_periods: settle_s.map(|s| s / period_s),
             settle_ms: settle_s.map(|s| s * 1e3),
             overshoot_pct: overshoot,
+            overshoot: overshoot.map(|p| p / 100.0),
             steady_error: mean,
             steady_rms: rms,
             peak_error_pct: 100.0 * peak / target.abs(),
@@ -444,6 +571,14 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
         .map(|(_, u)| f64::from(u.amp_z_m))
         .fold(0.0, f64::max);
     let o = BenchOut {
+        transducers: if resonant.is_some() {
+            "resonant"
+        } else {
+            "ideal"
+        },
+        tau_ms: tau_s * 1e3,
+        freq_hz,
+        headroom: a.headroom.headroom,
         mu0_ratio: a.mu0_ratio,
         lag_periods: a.lag_periods,
         drift_per_s: a.drift,
@@ -456,17 +591,19 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
         updates: b.log.last().map_or(0, |(_, u)| u.update),
         max_duz,
         liftoff_limit: limit,
-        commands_above_limit: b
+        commands_above_limit: b.dev.plant().samples_above,
+        commanded_above_limit: b
             .log
             .iter()
             .filter(|(_, u)| f64::from(u.amp_z_m) > limit)
             .count() as u32,
+        max_excursion_m: b.trace.iter().map(|r| r.2).fold(0.0, f64::max),
         saturated_updates: b.log.iter().filter(|(_, u)| u.saturated).count() as u32,
         events,
         plot: a.plot.as_ref().map(|p| p.display().to_string()),
     };
     if let Some(p) = &a.plot {
-        chart(p, &b.log, &t_events, t_end, &states, &o, model_mu0)?;
+        chart(p, &b.log, &b.trace, &t_events, t_end, &states, &o, model_mu0, pair)?;
     }
     let mut w = std::io::stdout().lock();
     let r = if json {
@@ -479,7 +616,9 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
         write_text(&mut w, &o)
     };
     r.map_err(crate::output::stdout_error)?;
-    let bad = o.commands_above_limit > 0 || o.events.iter().any(|e| e.settle_updates.is_none());
+    let bad = o.commands_above_limit > 0
+        || o.commanded_above_limit > 0
+        || o.events.iter().any(|e| e.settle_updates.is_none());
     if bad {
         return Err(CliError::failure(
             "the loop did not settle within 2 % after every event, or a command exceeded the lift-off limit",
@@ -530,16 +669,20 @@ fn write_text(w: &mut impl Write, o: &BenchOut) -> std::io::Result<()> {
 }
 
 #[allow(clippy::too_many_arguments)]
+#[allow(clippy::too_many_arguments)]
 fn chart(
     path: &std::path::Path,
     log: &[(f64, ControlUpdate)],
+    trace: &[(f64, f64, f64)],
     t_events: &[f64],
     t_end: f64,
     states: &[ControlState],
     o: &BenchOut,
     model_mu0: f64,
+    targets: (f32, f32),
 ) -> CliResult {
     use scenario::*;
+    let resonant = o.transducers == "resonant";
     let t0 = t_events[0] - 0.002;
     let ms = |t: f64| (t - t0) * 1e3;
     let x = (0.0, ms(t_end));
@@ -548,19 +691,19 @@ fn chart(
         .map(|(t, u)| (ms(*t), f64::from(u.measured_mu)))
         .collect();
     let setp: Vec<(f64, f64)> = {
-        let mut v = vec![(ms(t_events[0]), f64::from(TARGETS.0))];
-        v.push((ms(t_events[1]), f64::from(TARGETS.0)));
-        v.push((ms(t_events[1]), f64::from(TARGETS.1)));
-        v.push((ms(t_end), f64::from(TARGETS.1)));
+        let mut v = vec![(ms(t_events[0]), f64::from(targets.0))];
+        v.push((ms(t_events[1]), f64::from(targets.0)));
+        v.push((ms(t_events[1]), f64::from(targets.1)));
+        v.push((ms(t_end), f64::from(targets.1)));
         v
     };
     let band = |s: f64| -> Vec<(f64, f64)> {
         vec![
-            (ms(t_events[0]), f64::from(TARGETS.0) * (1.0 + s)),
-            (ms(t_events[1]), f64::from(TARGETS.0) * (1.0 + s)),
+            (ms(t_events[0]), f64::from(targets.0) * (1.0 + s)),
+            (ms(t_events[1]), f64::from(targets.0) * (1.0 + s)),
             (ms(t_events[1]), f64::NAN),
-            (ms(t_events[1]), f64::from(TARGETS.1) * (1.0 + s)),
-            (ms(t_end), f64::from(TARGETS.1) * (1.0 + s)),
+            (ms(t_events[1]), f64::from(targets.1) * (1.0 + s)),
+            (ms(t_end), f64::from(targets.1) * (1.0 + s)),
         ]
     };
     let cmd: Vec<(f64, f64)> = log
@@ -575,19 +718,20 @@ fn chart(
     ];
     let lim = vec![(x.0, o.liftoff_limit * 1e6), (x.1, o.liftoff_limit * 1e6)];
     let events_note = format!(
-        "events: loop on at {:.1} ms, setpoint step at {:.1} ms, v0 {}→{} mm/s at {:.1} ms",
+        "events: loop on at {:.1} ms, setpoint step at {:.1} ms, μ0 × {MU0_STEP} at {:.1} ms, v0 {}→{} mm/s at {:.1} ms",
         ms(t_events[0]),
         ms(t_events[1]),
+        ms(t_events[2]),
         V0 * 1e3,
         V1 * 1e3,
-        ms(t_events[2])
+        ms(t_events[3])
     );
     let p1 = Panel {
         title: "Closed loop on the mismatched virtual plant: μ".into(),
         x_label: "device time, ms".into(),
         y_label: "μ".into(),
         x,
-        y: (0.04, 0.17),
+        y: if resonant { (0.03, 0.14) } else { (0.04, 0.17) },
         // The estimates first, the setpoint over them: its line stays
         // visible where the markers sit on it.
         series: vec![
@@ -637,6 +781,12 @@ fn chart(
                 color: 4,
             },
             Series {
+                label: "true normal excursion (plant)".into(),
+                points: trace.iter().map(|r| (ms(r.0), r.2 * 1e6)).collect(),
+                mark: Mark::Line,
+                color: 2,
+            },
+            Series {
                 label: "lift-off limit (1 − 0.05)·u_z0".into(),
                 points: lim,
                 mark: Mark::Line,
@@ -644,16 +794,38 @@ fn chart(
             },
         ],
     };
+    let vmax = trace.iter().map(|r| r.1).fold(0.0, f64::max);
+    let p3 = Panel {
+        title: "Normal channel's voltage (DAC amplitude)".into(),
+        x_label: "device time, ms".into(),
+        y_label: "voltage amplitude, V".into(),
+        x,
+        y: (0.0, (vmax * 1.15).max(1e-3)),
+        series: vec![Series {
+            label: format!("voltage (headroom {} × steady)", o.headroom),
+            points: trace.iter().map(|r| (ms(r.0), r.1)).collect(),
+            mark: Mark::Line,
+            color: 0,
+        }],
+    };
+    let plant_note = if resonant {
+        format!(
+            "resonant transducers, slower τ = Q/(π f_r) = {:.2} ms; model: exact identification",
+            o.tau_ms
+        )
+    } else {
+        format!("ideal transducers, lag {} periods", o.lag_periods)
+    };
     let notes = vec![
         format!(
-            "plant μ0 = {:.3} (model {model_mu0}), lag {} periods, drift {} /s, ADC noise ±{} counts",
+            "plant μ0 = {:.3} (model {model_mu0}), {plant_note}, μ0 drift {} /s, ADC noise ±{} counts",
             model_mu0 * o.mu0_ratio,
-            o.lag_periods,
             o.drift_per_s,
             o.noise_counts
         ),
         format!(
-            "drive 40 kHz, u_z0 = 4 µm, Δu_x = 0.3 µm, φ = 40°, k_z = k_x = 1e7 N/m; loop v0 = {} mm/s, κ = {}",
+            "drive {:.0} Hz, u_z0 = 4 µm, Δu_x = 0.3 µm, φ = 40°, k_z = k_x = 1e7 N/m; loop v0 = {} mm/s, κ = {}",
+            o.freq_hz,
             V0 * 1e3,
             o.gain
         ),
@@ -677,10 +849,17 @@ fn chart(
                     ..Extras::default()
                 },
             ),
+            (
+                p3,
+                Extras {
+                    legend_at: Corner::UpperRight,
+                    ..Extras::default()
+                },
+            ),
         ],
-        rows: 2,
+        rows: 3,
         cols: 1,
-        size: (1200, 900),
+        size: (1200, 1250),
         legend: Vec::new(),
         caption: vec![format!(
             "fricctl device control-bench --fill-lead {}: settling to 2 % after the setpoint step {} periods ({} ms); DAC fills {} half-buffers of {} samples ahead",

@@ -182,7 +182,44 @@ pub enum DriveCmd {
         /// φ are then off by the modes' response)
         #[arg(long)]
         open_loop: bool,
+        /// Resonance tracking: the drive frequency follows this transducer's
+        /// resonance (a PLL on its measured phase); `none` keeps --freq
+        #[arg(long, value_enum, default_value_t = TrackArg::None)]
+        track: TrackArg,
+        #[command(flatten)]
+        headroom: HeadroomArg,
     },
+}
+
+/// `--track z|x|none`.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TrackArg {
+    /// No tracking.
+    None,
+    /// The normal transducer.
+    Z,
+    /// The tangential transducer.
+    X,
+}
+
+impl From<TrackArg> for model_core::device::Track {
+    fn from(t: TrackArg) -> Self {
+        match t {
+            TrackArg::None => model_core::device::Track::None,
+            TrackArg::Z => model_core::device::Track::Z,
+            TrackArg::X => model_core::device::Track::X,
+        }
+    }
+}
+
+/// `--headroom H` of `drive set`, `control` and `control-bench`.
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct HeadroomArg {
+    /// Voltage headroom of the displacement loop's transitions: the voltage
+    /// may reach H times the identified model's steady-state voltage
+    /// (1 = no overdrive; at most 8)
+    #[arg(long, value_name = "H", default_value_t = f64::from(model_core::device::displacement::DEFAULT_HEADROOM), value_parser = Real::ANY.at_least(1.0).at_most(8.0).because("1 is no overdrive").single_precision())]
+    pub headroom: f64,
 }
 
 /// `scene get|set`.
@@ -457,6 +494,8 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
                     offset_z,
                     phase_deg,
                     open_loop,
+                    track,
+                    headroom,
                 },
         } => {
             // Each value is a normal f32 number or 0 (the flags' parsers);
@@ -468,7 +507,20 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
                 offset_z_m: *offset_z as f32,
                 phase_rad: phase_deg.to_radians() as f32,
             };
+            if *open_loop && *track != TrackArg::None {
+                return Err(CliError::usage(
+                    "--track: needs the displacement mode (identified transducers), not --open-loop",
+                ));
+            }
             identify::select_mode(&mut c, *open_loop)?;
+            if !*open_loop {
+                expect(c.call(Request::SetDisplacementOptions(
+                    model_core::device::DisplacementOptions {
+                        track: (*track).into(),
+                        headroom: headroom.headroom as f32,
+                    },
+                ))?)?;
+            }
             out(t.json, &drive_report(c.call(Request::SetDrive(d))?)?)
         }
         DeviceCmd::Start => out(
@@ -628,8 +680,8 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
         DeviceCmd::Ports => unreachable!("handled above"),
         DeviceCmd::Sweep(a) => sweep::run(&mut c, a, t.json),
         DeviceCmd::Identify(a) => identify::run(&mut c, a, t.json),
-        DeviceCmd::Control(_) => match control_req {
-            Some(req) => control::run(&mut c, req, t.json),
+        DeviceCmd::Control(a) => match control_req {
+            Some(req) => control::run(&mut c, req, a, t.json),
             None => unreachable!("checked above"),
         },
         DeviceCmd::ControlBench(_) => unreachable!("handled above"),

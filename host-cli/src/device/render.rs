@@ -236,6 +236,8 @@ pub fn fault_names(bits: u32) -> Vec<String> {
         (EXTERNAL, "external"),
         (ADC_OVERRUN, "adc_overrun"),
         (MEASURED_LIFTOFF, "measured_liftoff"),
+        (LOSS_OF_LOCK, "loss_of_lock"),
+        (PICKUP_OPEN, "pickup_open"),
     ];
     let mut v: Vec<String> = known
         .iter()
@@ -305,7 +307,27 @@ pub fn status(s: &Status) -> Report {
         .row("out_uz0", "output uz0", f32v(s.out_offset_z_m), "m")
         .row("liftoff_allowed", "lift-off allowed", s.liftoff_allowed, "")
         .row("drive_mode", "drive mode", mode_name(s.mode), "")
+        .row("frequency_hz", "frequency", f32v(s.frequency_hz), "Hz")
+        .row("track", "tracking", track_name(s.options.track), "")
+        .row(
+            "tracking_error_hz",
+            "tracking error",
+            s.tracking_error_hz
+                .map_or(Value::Null, |e| Value::from(f32v(e))),
+            "Hz",
+        )
+        .row("locked", "locked", s.locked, "")
+        .row("headroom", "headroom", f32v(s.options.headroom), "x steady")
         .measured(s.measured.as_ref())
+}
+
+/// The tracked transducer's name in text and JSON: `none`, `z` or `x`.
+pub fn track_name(t: model_core::device::Track) -> &'static str {
+    match t {
+        model_core::device::Track::None => "none",
+        model_core::device::Track::Z => "z",
+        model_core::device::Track::X => "x",
+    }
 }
 
 /// The drive mode's name in text and JSON: `open_loop` or `displacement`.

@@ -98,6 +98,9 @@ pub struct PlantOptions {
     pub mu0_drift: f64,
     /// Stage velocity profile (t s, v₀ m/s), piecewise linear, t strictly increasing.
     pub v0_profile: Option<Vec<(f64, f64)>>,
+    /// Steps of μ₀: from device time `t` s on, μ₀ is multiplied by the
+    /// factor (a disturbance of the bench; empty for none).
+    pub mu0_steps: Vec<(f64, f64)>,
     /// Resonant transducers (`None`: ideal ones, with `lag_periods`).
     pub resonant: Option<model_core::board::plant::ResonantOptions<f64>>,
 }
@@ -124,7 +127,13 @@ impl PlantOptions {
 
     /// μ₀ at device time `t` s (eq. of the module doc; not below 0).
     pub fn mu0_at(&self, t: f64) -> f64 {
-        (self.mu0 + self.mu0_drift * t).max(0.0)
+        let f: f64 = self
+            .mu0_steps
+            .iter()
+            .filter(|(ts, _)| t >= *ts)
+            .map(|(_, k)| k)
+            .product();
+        ((self.mu0 + self.mu0_drift * t) * f).max(0.0)
     }
 }
 
@@ -220,6 +229,7 @@ impl PlantArgs {
             kx: self.plant_kx,
             lag_periods: self.plant_lag_periods,
             mu0_drift: self.plant_mu0_drift,
+            mu0_steps: Vec::new(),
             v0_profile,
             resonant,
         })
@@ -516,6 +526,21 @@ impl VirtualDevice {
     pub fn set_noise_seed(&mut self, seed: u64) {
         self.rng = Noise::new(seed);
         self.pickup_rng = Noise::new(seed ^ PICKUP_SEED);
+    }
+
+    /// The device (read-only: the bench's view of its DDS and status).
+    pub fn device(&self) -> &Device<'static, TABLE_N> {
+        &self.dev
+    }
+
+    /// The plant (the bench's view of the true motion).
+    pub fn plant(&self) -> &Plant<f64> {
+        &self.plant
+    }
+
+    /// The plant, to set a bench's excursion limit.
+    pub fn plant_mut(&mut self) -> &mut Plant<f64> {
+        &mut self.plant
     }
 
     /// Samples per second.

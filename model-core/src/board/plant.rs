@@ -230,6 +230,28 @@ impl<F: Float> ResonantOptions<F> {
     }
 }
 
+impl<F: Float> ResonantOptions<F> {
+    /// What an exact identification of these transducers at rest finds
+    /// (`fricctl device identify`'s model, eq. 1 of
+    /// [`crate::board::identify`]): each mode's resonance, its Q with the
+    /// contact's load, its static gain, and the phase lag of the DAC's
+    /// hold, half a sample at the resonance (`θ = π f_r/f_s`); drift and
+    /// heating are not in it.
+    pub fn identified(&self, sample_rate_hz: f64) -> crate::board::device::Transducers {
+        let m = |c: usize| {
+            let p = Resonant::loaded(self, self.modes[c]);
+            let f = p.resonance_hz.to_f64();
+            crate::board::device::TransducerModel {
+                resonance_hz: f as f32,
+                q: p.q.to_f64() as f32,
+                gain_m_per_v: p.gain_m_per_v.to_f64() as f32,
+                phase_lag_rad: (core::f64::consts::PI * f / sample_rate_hz) as f32,
+            }
+        };
+        crate::board::device::Transducers { z: m(0), x: m(1) }
+    }
+}
+
 /// Time constant of the transducers' self-heating, s (a Langevin stack's
 /// thermal time is seconds to minutes; one second keeps tests short).
 pub const THERMAL_TAU_S: f64 = 1.0;
@@ -367,6 +389,15 @@ pub struct Plant<F> {
     /// Resonant transducers (`None`: ideal ones, the DAC level times the
     /// calibration with an optional first-order lag).
     pub resonant: Option<Resonant<F>>,
+    /// A normal excursion limit, m (∞ by default): samples whose normal AC
+    /// displacement `|u_z − u_z0|` exceeds it are counted in
+    /// [`Plant::samples_above`] (a bench's check of the lift-off guard on
+    /// the true motion, at every sample).
+    pub excursion_limit_m: F,
+    /// Samples whose normal excursion exceeded [`Plant::excursion_limit_m`].
+    pub samples_above: u64,
+    /// The largest normal excursion of the last half-buffer, m.
+    pub peak_excursion_m: F,
 }
 
 impl<F: Float> Plant<F> {
@@ -376,6 +407,9 @@ impl<F: Float> Plant<F> {
             contact: SpringContact::new(mu0, kz, kx),
             amp: (F::ZERO, F::ZERO),
             resonant: None,
+            excursion_limit_m: F::from_f64(f64::INFINITY),
+            samples_above: 0,
+            peak_excursion_m: F::ZERO,
         }
     }
 
@@ -455,6 +489,16 @@ impl<F: Float> Plant<F> {
         };
         // The stage's travel since the start of the half, m.
         let mut travel = F::ZERO;
+        let mut peak = F::ZERO;
+        let limit = self.excursion_limit_m;
+        let mut above = 0u64;
+        let mut excursion = |e: F| {
+            let e = e.abs();
+            peak = peak.max(e);
+            if e > limit {
+                above += 1;
+            }
+        };
         for (i, o) in out.iter_mut().enumerate() {
             let c = at(i);
             self.contact.mu0 = c.mu0;
@@ -486,6 +530,7 @@ impl<F: Float> Plant<F> {
                 let (vz, vx) = (vz + k * vx, vx + k * vz);
                 let [mzd, mxd] = &mut r.modes;
                 pick(i, mzd.x(), mxd.x());
+                excursion(mzd.x());
                 let (fx, fz) = self.contact.step(mxd.x() + travel, uz0 + mzd.x());
                 *o = (
                     counts(fx / xg + xo + c.counts_x),
@@ -500,6 +545,7 @@ impl<F: Float> Plant<F> {
                 continue;
             }
             pick(i, duz * s1, dux * s2);
+            excursion(duz * s1);
             let (fx, fz) = self.contact.step(dux * s2 + travel, uz0 + duz * s1);
             *o = (
                 counts(fx / xg + xo + c.counts_x),
@@ -520,5 +566,7 @@ impl<F: Float> Plant<F> {
         }
         // Into the frame of the next half's start.
         self.contact.uxc -= travel;
+        self.peak_excursion_m = peak;
+        self.samples_above += above;
     }
 }
