@@ -60,6 +60,7 @@ const NOT_NUMERIC: &[&str] = &[
     "params",
     "from-fit",
     "v0-profile",
+    "track",
 ];
 
 /// The one-line messages of exit 1 that are a computation's stated verdict

@@ -176,7 +176,18 @@ impl<'t> Bench<'t> {
         let mut peak = 0.0f64;
         for k in 1..=limit {
             let t = self.step();
-            if std::env::var("DBG2").is_ok() && k % 250 == 0 { let (e, c) = self.dev.debug_loops(); eprintln!("k {k} true {:.5e} env {:.5e} {:.4} |c| {:.4} argc {:.4} meas {:?}", t.amp_z, e[0].norm(), e[0].arg(), c[0].norm(), c[0].arg(), self.dev.status().measured.map(|m| m.amp_z_m)); }
+            if std::env::var("DBG2").is_ok() && k % 250 == 0 {
+                let (e, c) = self.dev.debug_loops();
+                eprintln!(
+                    "k {k} true {:.5e} env {:.5e} {:.4} |c| {:.4} argc {:.4} meas {:?}",
+                    t.amp_z,
+                    e[0].norm(),
+                    e[0].arg(),
+                    c[0].norm(),
+                    c[0].arg(),
+                    self.dev.status().measured.map(|m| m.amp_z_m)
+                );
+            }
             peak = peak.max(t.amp_z);
             if self.dev.status().settled {
                 return (k, peak);
@@ -493,12 +504,28 @@ fn scratch_step_peaks() {
     let table = SineTable::<1024>::libm();
     let m = true_modes();
     let only = std::env::var("ONLY").is_ok();
-    for (name, model) in [("exact", Transducers { z: model_of(m[0], 0.0, 1.0, 1.0), x: model_of(m[1], 0.0, 1.0, 1.0) }), ("wrong", wrong_model())] {
+    for (name, model) in [
+        (
+            "exact",
+            Transducers {
+                z: model_of(m[0], 0.0, 1.0, 1.0),
+                x: model_of(m[1], 0.0, 1.0, 1.0),
+            },
+        ),
+        ("wrong", wrong_model()),
+    ] {
         for h in [1.0f32, 2.0, 4.0] {
             for f in [20_000.0, 20_300.0] {
-                if only && !(name == "wrong" && h == 1.0 && f == 20_300.0) { continue; }
+                if only && !(name == "wrong" && h == 1.0 && f == 20_300.0) {
+                    continue;
+                }
                 let mut b = Bench::new(&table, opts(), model);
-                b.dev.set_displacement_options(DisplacementOptions { track: model_core::device::Track::None, headroom: h }).unwrap();
+                b.dev
+                    .set_displacement_options(DisplacementOptions {
+                        track: model_core::device::Track::None,
+                        headroom: h,
+                    })
+                    .unwrap();
                 let mut s0 = setting(2e-6);
                 s0.freq_hz = f;
                 b.dev.set_drive(s0).unwrap();
@@ -509,8 +536,33 @@ fn scratch_step_peaks() {
                 s.freq_hz = f;
                 b.dev.set_drive(s).unwrap();
                 // time to 2 % of the step on the truth
-                let mut peak = 0.0f64; let mut t2 = None;
-                for k in 1..2000 { let t = b.step(); if std::env::var("DBG").is_ok() && k < 40 && f == 20_000.0 && h == 2.0 && name == "exact" { let (e, c) = b.dev.debug_loops(); eprintln!("k {k} true {:.4e} env {:.4e} |c| {:.4} argc {:.4} meas {:?}", t.amp_z, e[0].norm(), c[0].norm(), c[0].arg(), b.dev.status().measured.map(|m| m.amp_z_m)); } peak = peak.max(t.amp_z); if (t.amp_z - 3e-6).abs() > 0.02e-6 { t2 = None } else if t2.is_none() { t2 = Some(k) } }
+                let mut peak = 0.0f64;
+                let mut t2 = None;
+                for k in 1..2000 {
+                    let t = b.step();
+                    if std::env::var("DBG").is_ok()
+                        && k < 40
+                        && f == 20_000.0
+                        && h == 2.0
+                        && name == "exact"
+                    {
+                        let (e, c) = b.dev.debug_loops();
+                        eprintln!(
+                            "k {k} true {:.4e} env {:.4e} |c| {:.4} argc {:.4} meas {:?}",
+                            t.amp_z,
+                            e[0].norm(),
+                            c[0].norm(),
+                            c[0].arg(),
+                            b.dev.status().measured.map(|m| m.amp_z_m)
+                        );
+                    }
+                    peak = peak.max(t.amp_z);
+                    if (t.amp_z - 3e-6).abs() > 0.02e-6 {
+                        t2 = None
+                    } else if t2.is_none() {
+                        t2 = Some(k)
+                    }
+                }
                 eprintln!("{name} h {h} f {f}: first {first} p0 {p0:.3e} step peak {peak:.4e} t2% {:?} ms", t2.map(|k| k as f64 * b.t_half()*1e3));
             }
         }
@@ -525,9 +577,17 @@ fn scratch_tracking() {
     let m = true_modes();
     let mut o = opts();
     o.drift_hz_per_s = [-20.0, 0.0];
-    let model = Transducers { z: model_of(m[0], 0.0, 1.0, 1.0), x: model_of(m[1], 0.0, 1.0, 1.0) };
+    let model = Transducers {
+        z: model_of(m[0], 0.0, 1.0, 1.0),
+        x: model_of(m[1], 0.0, 1.0, 1.0),
+    };
     let mut b = Bench::new(&table, o, model);
-    b.dev.set_displacement_options(DisplacementOptions { track: Track::Z, headroom: 2.0 }).unwrap();
+    b.dev
+        .set_displacement_options(DisplacementOptions {
+            track: Track::Z,
+            headroom: 2.0,
+        })
+        .unwrap();
     let mut s0 = setting(2e-6);
     s0.freq_hz = 20_300.0;
     b.dev.set_drive(s0).unwrap();
@@ -536,11 +596,24 @@ fn scratch_tracking() {
     for k in 1..=(5.0 / b.t_half()) as usize {
         let t = b.step();
         let st = b.dev.status();
-        if st.locked && lock_at.is_none() { lock_at = Some(k as f64 * b.t_half() * 1e3); }
+        if st.locked && lock_at.is_none() {
+            lock_at = Some(k as f64 * b.t_half() * 1e3);
+        }
         if k % 2000 == 0 || st.faults != 0 {
             let fr = 20_300.0 - 20.0 * k as f64 * b.t_half();
-            eprintln!("t {:.3} s f {:.2} true fr {:.2} err {:?} locked {} true amp {:.4e} faults {}", k as f64 * b.t_half(), st.frequency_hz, fr, st.tracking_error_hz, st.locked, t.amp_z, st.faults);
-            if st.faults != 0 { break; }
+            eprintln!(
+                "t {:.3} s f {:.2} true fr {:.2} err {:?} locked {} true amp {:.4e} faults {}",
+                k as f64 * b.t_half(),
+                st.frequency_hz,
+                fr,
+                st.tracking_error_hz,
+                st.locked,
+                t.amp_z,
+                st.faults
+            );
+            if st.faults != 0 {
+                break;
+            }
         }
     }
     eprintln!("lock at {lock_at:?} ms");

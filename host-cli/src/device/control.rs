@@ -356,7 +356,8 @@ impl Bench {
                     t * 1e3,
                     self.dev.plant().peak_excursion_m,
                     self.dev.device().drive().amp_z_m,
-                    st.measured.map(|m| (m.amp_z_m, m.amp_x_m, m.phase_rad.to_degrees())),
+                    st.measured
+                        .map(|m| (m.amp_z_m, m.amp_x_m, m.phase_rad.to_degrees())),
                     st.settled
                 );
             }
@@ -396,10 +397,9 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
         crate::output::may_write(p, "plot")?;
     }
     let cfg = super::sim::config();
-    let resonant = a.transducers.options(
-        (cfg.dac_z.metres_per_code, cfg.dac_x.metres_per_code),
-        true,
-    )?;
+    let resonant = a
+        .transducers
+        .options((cfg.dac_z.metres_per_code, cfg.dac_x.metres_per_code), true)?;
     // On resonant transducers: the drive at the normal mode's resonance,
     // times scaled by the slower mode's τ = Q/(π f_r) (the plant's Q).
     let tau_s = resonant.as_ref().map_or(0.0, |r| {
@@ -411,6 +411,9 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
     let freq_hz = resonant
         .as_ref()
         .map_or(FREQ_HZ, |r| r.modes[0].resonance_hz);
+    if let Some(r) = &resonant {
+        check_bench_plant(r, &cfg, tau_s)?;
+    }
     let seg_ms = |k: usize| (EVENTS_MS[k + 1] - EVENTS_MS[k]).max(8.0 * tau_s * 1e3);
     let model_mu0 = super::sim::DEFAULT_CONTACT.0;
     // Settle 20 ms (or 10 τ), then the events: each at the end of the
@@ -603,7 +606,9 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
         plot: a.plot.as_ref().map(|p| p.display().to_string()),
     };
     if let Some(p) = &a.plot {
-        chart(p, &b.log, &b.trace, &t_events, t_end, &states, &o, model_mu0, pair)?;
+        chart(
+            p, &b.log, &b.trace, &t_events, t_end, &states, &o, model_mu0, pair,
+        )?;
     }
     let mut w = std::io::stdout().lock();
     let r = if json {
@@ -623,6 +628,60 @@ fn bench_run(a: &BenchArgs, json: bool) -> CliResult {
         return Err(CliError::failure(
             "the loop did not settle within 2 % after every event, or a command exceeded the lift-off limit",
         ));
+    }
+    Ok(())
+}
+
+/// The longest τ the bench runs (its segments last 8 τ each): 50 ms,
+/// Q ≈ 3 000 at 20 kHz.
+pub const MAX_BENCH_TAU_S: f64 = 0.05;
+
+/// The resonant plant's modes as the device must hold them (the bench
+/// stores their exact identification): each in the model's domain and the
+/// drive frequency inside the board's range, named by flag.
+fn check_bench_plant(
+    r: &model_core::board::plant::ResonantOptions<f64>,
+    cfg: &model_core::device::DeviceConfig,
+    tau_s: f64,
+) -> CliResult {
+    let t = r.identified(cfg.sample_rate_hz);
+    for (m, ch) in [(t.z, "z"), (t.x, "x")] {
+        if let Err(model_core::device::DeviceError::OutOfRange { param, min, max }) =
+            model_core::device::displacement::check_model(&m)
+        {
+            let flag = match param {
+                model_core::device::DriveParam::Resonance => "resonance",
+                model_core::device::DriveParam::Quality => "q",
+                model_core::device::DriveParam::TransducerGain => "gain",
+                _ => "resonance",
+            };
+            return Err(CliError::usage(format!(
+                "--plant-{flag}-{ch}: outside what the device's transducer model holds ([{}, {}])",
+                crate::args::short(f64::from(min)),
+                crate::args::short(f64::from(max))
+            )));
+        }
+    }
+    let f = r.modes[0].resonance_hz;
+    let (lo, hi) = cfg.freq_range_hz;
+    if !(lo..=hi).contains(&f) {
+        return Err(CliError::usage(format!(
+            "--plant-resonance-z: the bench drives at it, so it must be within the board's range [{lo}, {hi}] Hz",
+        )));
+    }
+    if tau_s > MAX_BENCH_TAU_S {
+        let tau = |m: &model_core::board::resonator::ModeParams<f64>| {
+            m.q / (std::f64::consts::PI * m.resonance_hz)
+        };
+        let ch = if tau(&r.modes[0]) >= tau(&r.modes[1]) {
+            "z"
+        } else {
+            "x"
+        };
+        return Err(CliError::usage(format!(
+            "--plant-q-{ch}: τ = Q/(π f_r) = {:.3e} s exceeds the bench's {MAX_BENCH_TAU_S} s (each segment lasts 8 τ)",
+            tau_s
+        )));
     }
     Ok(())
 }

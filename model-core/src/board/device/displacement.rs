@@ -542,7 +542,8 @@ impl<const N: usize> Device<'_, N> {
             let bound = (h_room * norm(d[ch] / hc).max(self.loops.u_prev[ch])).min(room);
             let un = norm(u);
             let cut = un > bound || un.is_nan();
-            moving[ch] = cut || usize::from(self.loops.since_change[ch]) < super::measure::FILL_RING;
+            moving[ch] =
+                cut || usize::from(self.loops.since_change[ch]) < super::measure::FILL_RING;
             if cut {
                 // Beyond the bound (or not finite): the magnitude cut, the
                 // phase kept (NaN: no drive).
@@ -560,7 +561,8 @@ impl<const N: usize> Device<'_, N> {
             } else {
                 // Not taken (cannot happen within the room): the model
                 // advances with the voltage in force.
-                u = self.loops.at_fill[(fill.wrapping_sub(1)) as usize % super::measure::FILL_RING].1[ch];
+                u = self.loops.at_fill[(fill.wrapping_sub(1)) as usize % super::measure::FILL_RING]
+                    .1[ch];
             }
             let w = hc * u;
             rec.0[ch] = w + (env - w) * m.mean[ch];

@@ -47,8 +47,8 @@ pub use motion::MeasuredDrive;
 pub use predict::{predict, regime};
 
 pub use crate::board::protocol::messages::{
-    Applied, Contact, DisplacementOptions, DriveMode, DriveParam, DriveSetting, Prediction,
-    Status, Track, TransducerModel, Transducers,
+    Applied, Contact, DisplacementOptions, DriveMode, DriveParam, DriveSetting, Prediction, Status,
+    Track, TransducerModel, Transducers,
 };
 
 use crate::board::dds::{Achieved, Dds, Level, SineTable, Slew};

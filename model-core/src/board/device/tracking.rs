@@ -39,9 +39,9 @@
 use num_complex::Complex32 as C;
 
 use super::displacement::{arg, norm, HOLD_FLOOR_M, STEADY_FRACTION};
-use crate::float::{FastF32, Math};
 use super::{Device, TransducerModel, Transducers};
 pub use crate::board::protocol::messages::Track;
+use crate::float::{FastF32, Math};
 
 /// The tracked frequency stays within this fraction of the identified
 /// resonance (±2 %: six half-power bandwidths at Q 300).
@@ -145,7 +145,8 @@ impl<const N: usize> Device<'_, N> {
         let lo = id.resonance_hz * (1.0 - TRACK_RANGE);
         let hi = id.resonance_hz * (1.0 + TRACK_RANGE);
         let (cfg_lo, cfg_hi) = self.cfg.freq_range_hz;
-        let in_range = |g: f32| g >= lo && g <= hi && f64::from(g) >= cfg_lo && f64::from(g) <= cfg_hi;
+        let in_range =
+            |g: f32| g >= lo && g <= hi && f64::from(g) >= cfg_lo && f64::from(g) <= cfg_hi;
         let Some(fr) = estimate.filter(|&g| in_range(g)) else {
             self.tracker.error_hz = None;
             self.lock_bad();
