@@ -390,11 +390,9 @@ fn critical_velocity_is_the_flat_punchs() {
 /// At rest: with `a ≥ 1` μ(0) is unique and the limits agree; with `a < 1`
 /// [`mdr::mu_over_mu0`] refuses and the limits bracket the law near 0. The
 /// limits (their own code path, the springs' limits at rest) against the
-/// moving law: μ(±V) at V, 2V, 4V with V = 10⁻⁶ give μ(0±) by the two-point
-/// extrapolation `E₁ = 2μ(V) − μ(2V)` (the law is smooth on each side of 0),
-/// whose remainder is `(E₁ − E₂)/3`, `E₂ = 2μ(2V) − μ(4V)`. Tolerance: that
-/// estimate, the runs' bounds times their weights (2 + 1 in E₁,
-/// (2 + 3 + 1)/3 in the remainder), and the limit's bound.
+/// moving law: μ(±V) at V, 2V, 4V with V = 10⁻⁶ give μ(0±) by two-point
+/// extrapolation ([`integration_tests::limit_by_extrapolation`], whose
+/// allowance is derived there), plus the limit's bound.
 #[test]
 fn limits_at_rest() {
     for &(a, b, phi, _) in &SCENES {
@@ -412,19 +410,17 @@ fn limits_at_rest() {
         }
         for (limit, sign) in [(plus, 1.0), (minus, -1.0)] {
             let v = sign * 1e-6;
-            let r1 = mdr64(Profile::Sphere, a, b, phi, v, 1e-9);
-            let r2 = mdr64(Profile::Sphere, a, b, phi, 2.0 * v, 1e-9);
-            let r4 = mdr64(Profile::Sphere, a, b, phi, 4.0 * v, 1e-9);
-            let e1 = 2.0 * r1.mu_over_mu0 - r2.mu_over_mu0;
-            let e2 = 2.0 * r2.mu_over_mu0 - r4.mu_over_mu0;
-            let allowed = (e1 - e2).abs() / 3.0
-                + (2.0 * r1.bound + r2.bound)
-                + (2.0 * r1.bound + 3.0 * r2.bound + r4.bound) / 3.0
-                + limit.bound;
+            let at = |k: f64| {
+                let r = mdr64(Profile::Sphere, a, b, phi, k * v, 1e-9);
+                (r.mu_over_mu0, r.bound)
+            };
+            let (e1, allowance) =
+                integration_tests::limit_by_extrapolation([at(1.0), at(2.0), at(4.0)]);
+            let allowed = allowance + limit.bound;
             println!(
                 "a={a} side {sign}: limit {} extrapolated {e1} (allowed {allowed:.1e}; μ(V) − limit {:.2e})",
                 limit.mu_over_mu0,
-                r1.mu_over_mu0 - limit.mu_over_mu0
+                at(1.0).0 - limit.mu_over_mu0
             );
             assert!(
                 (e1 - limit.mu_over_mu0).abs() <= allowed,
