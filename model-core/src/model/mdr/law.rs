@@ -21,6 +21,27 @@ pub(crate) fn check<T: Float>(d: &Drive<T>, p: &Profile<T>) -> Result<(), MdrErr
     Ok(())
 }
 
+/// [`check`] for an answer at velocity `v` to tolerance `tol`: `v` finite,
+/// `tol` finite and positive, and `v ≠ 0` where μ(0) is two-sided (`a < 1`).
+pub(crate) fn check_moving<T: Float>(
+    d: &Drive<T>,
+    p: &Profile<T>,
+    v: T,
+    tol: T,
+) -> Result<(), MdrError> {
+    check(d, p)?;
+    if !v.is_finite() {
+        return Err(MdrError::BadVelocity);
+    }
+    if !(tol.is_finite() && tol > T::ZERO) {
+        return Err(MdrError::BadTolerance);
+    }
+    if v == T::ZERO && d.a < T::ONE {
+        return Err(MdrError::AtRest);
+    }
+    Ok(())
+}
+
 /// One spring of the foundation at band offset `d` (eq. M2) and velocity
 /// `v ≥ 0` (forward convention; the quadrature mirrors `v < 0` before it
 /// gets here): `(⟨s⟩, ⟨w⁺⟩)` over a period, units of `W₀` and `d₀` (eqs. M3,
@@ -139,16 +160,7 @@ pub fn mu_over_mu0<T: Float, M: Math<T>>(
     v: T,
     tol: T,
 ) -> Result<MdrResult<T>, MdrError> {
-    check(d, p)?;
-    if !v.is_finite() {
-        return Err(MdrError::BadVelocity);
-    }
-    if !(tol.is_finite() && tol > T::ZERO) {
-        return Err(MdrError::BadTolerance);
-    }
-    if v == T::ZERO && d.a < T::ONE {
-        return Err(MdrError::AtRest);
-    }
+    check_moving(d, p, v, tol)?;
     let Some(n) = p.exponent() else {
         return flat::<T, M>(d, v, tol);
     };

@@ -157,7 +157,7 @@ pub(crate) mod spring;
 
 pub use bound::{solver_bound, solver_bound_at_rest, SAFETY, SPRING_PRECISION};
 pub use error::{MdrError, MdrResult};
-pub(crate) use law::check;
+pub(crate) use law::check_moving;
 pub use law::{
     critical_velocities, limits_at_zero, mean_normal_force, mu_over_mu0, spring_means,
     spring_means_at_rest,
