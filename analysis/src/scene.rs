@@ -85,7 +85,8 @@ impl ProfileInput {
         let from_file = match file_profile {
             Some(name) => Some(ProfileKind::from_name(name).ok_or_else(|| {
                 Error::usage(format!(
-                    "--scene: profile = \"{name}\" is not one of flat, sphere, cone, power"
+                    "--scene: profile = \"{name}\" is not one of {}",
+                    ProfileKind::NAMES.join(", ")
                 ))
             })?),
             None => None,
@@ -140,14 +141,24 @@ impl ProfileKind {
         .find(|k| k.name().eq_ignore_ascii_case(name))
     }
 
+    /// The kind a `--profile` value names, or the one-line refusal naming
+    /// the flag and the values it takes (Python's `Scene(profile=…)`; the
+    /// CLI's parser gives the same line).
+    pub fn from_flag(name: &str) -> Result<ProfileKind> {
+        ProfileKind::from_name(name).ok_or_else(|| {
+            Error::usage(format!(
+                "--profile: invalid value '{name}' (one of: {})",
+                ProfileKind::NAMES.join(", ")
+            ))
+        })
+    }
+
+    /// Every kind's name, in the CLI's order.
+    pub const NAMES: [&'static str; 4] = ["flat", "sphere", "cone", "power"];
+
     /// Its name, as the CLI's `--profile` value.
     pub fn name(self) -> &'static str {
-        match self {
-            ProfileKind::Flat => "flat",
-            ProfileKind::Sphere => "sphere",
-            ProfileKind::Cone => "cone",
-            ProfileKind::Power => "power",
-        }
+        ProfileKind::NAMES[self as usize]
     }
 }
 

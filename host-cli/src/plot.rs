@@ -1540,8 +1540,8 @@ mod tests {
         assert_eq!(log_axis_tick(2e-9), "2e-9");
     }
 
-    /// The colour range follows the data (issue 27: a fixed 0 … −17 scale
-    /// drew data between −6 and −9 in one colour).
+    /// The colour range follows the data (a fixed 0 … −17 scale drew data
+    /// between −6 and −9 in one colour).
     #[test]
     fn heat_range_follows_the_data() {
         let cells = [

@@ -283,8 +283,16 @@ fn static_json() {
         st.paper_eq19_backward,
         1e-15
     ));
-    for k in ["vc_forward", "vc_backward"] {
-        assert!(v[k].as_f64().unwrap() > 0.0);
+    // Eq. 8 from the scene's parameters: v_c = ωW₀|b e^{iφ} ± a|,
+    // W₀ = μ₀(k_z/k_x)u_z0, a = Δu_z/u_z0, b = Δu_x/W₀ (a few roundings).
+    let p = *phys_scene().params();
+    let w0 = p.mu0 * p.kz / p.kx * p.uz0;
+    let (a, b) = (p.duz / p.uz0, p.dux / w0);
+    for (k, sign) in [("vc_forward", 1.0), ("vc_backward", -1.0)] {
+        let c = (b * p.phi.cos() + sign * a).hypot(b * p.phi.sin());
+        let want = p.omega * w0 * c;
+        let got = v[k].as_f64().unwrap();
+        assert!(close(got, want, 1e-14), "{k}: {got} vs eq. 8 {want}");
     }
 }
 

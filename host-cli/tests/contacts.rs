@@ -629,7 +629,35 @@ fn classify_and_curve_with_a_profile() {
     assert!(c["static_exists"].is_null());
     assert!(c["rule_of_thumb"].is_null());
     let (p, m) = (f(&c, "mu_0plus_over_mu0"), f(&c, "mu_0minus_over_mu0"));
-    assert!(p > 0.0 && (p + m).abs() <= 1e-9, "{p} {m}");
+    // Closed form at b = 0, V → 0⁺: a permanent spring (d > a) is the flat
+    // punch scaled by d with b/d = 0, so ⟨s⟩ = d·(1 − a/d) = d − a; an
+    // intermittent one lands at s = 0 and the drive does not move it, ⟨s⟩ = 0.
+    // N = ∫₀^{ξ_a} (1 − ξ² − a) dξ = (2/3)(1 − a)^{3/2}; D = ∫⟨w⁺⟩ dξ with each
+    // spring's ⟨w⁺⟩ = (d(π − θ_c) + a sin θ_c)/π (cos θ_c = d/a) by the
+    // midpoint rule (2·10⁵ cells: error below 10⁻¹¹). Allowed: the command's
+    // tolerance (`eval::PROFILE_TOL`) plus that.
+    let a = 0.5f64;
+    let xi_max = (1.0 + a).sqrt();
+    let cells = 200_000;
+    let den: f64 = (0..cells)
+        .map(|i| {
+            let xi = (f64::from(i) + 0.5) * xi_max / f64::from(cells);
+            let d = 1.0 - xi * xi;
+            let band = if d >= a {
+                d
+            } else {
+                let tc = (d / a).acos();
+                (d * (PI - tc) + a * tc.sin()) / PI
+            };
+            band * xi_max / f64::from(cells)
+        })
+        .sum();
+    let closed = 2.0 / 3.0 * (1.0 - a).powf(1.5) / den;
+    assert!(
+        (p - closed).abs() <= fric_analysis::eval::PROFILE_TOL + 1e-11,
+        "mu(0+) {p} vs closed form {closed}"
+    );
+    assert!((p + m).abs() <= 1e-9, "{p} {m}");
     assert!(f(&c, "asymmetry") <= 1e-9);
     // A curve through v0 = 0 with a < 1: two rows there, μ(0−) then μ(0+).
     let dir = tempfile::tempdir().unwrap();

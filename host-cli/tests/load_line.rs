@@ -691,13 +691,12 @@ fn load_line_of_every_contact() {
     let stall = o["stall_force_over_mu0_fz"].as_f64().unwrap();
     let brute = |v: f64, tol: f64| springs::mu(2.0, a, b, phi, v, tol, 1 << 14);
     let v = 1e-5;
-    let (b1, b2, b4) = (brute(v, 1e-8), brute(2.0 * v, 1e-8), brute(4.0 * v, 1e-8));
-    let e1 = 2.0 * b1.mu - b2.mu;
-    let e2 = 2.0 * b2.mu - b4.mu;
-    let allowed = (e1 - e2).abs() / 3.0
-        + (2.0 * b1.err + b2.err)
-        + (2.0 * b1.err + 3.0 * b2.err + b4.err) / 3.0
-        + plus.bound;
+    let at = |k: f64| {
+        let b = brute(k * v, 1e-8);
+        (b.mu, b.err)
+    };
+    let (e1, allowance) = integration_tests::limit_by_extrapolation([at(1.0), at(2.0), at(4.0)]);
+    let allowed = allowance + plus.bound;
     assert!(
         (stall + e1).abs() <= allowed,
         "sphere stall force {stall} vs brute-force −μ(0⁺) {} (allowed {allowed:e})",

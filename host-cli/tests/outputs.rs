@@ -1,4 +1,4 @@
-//! Output files (issue 27): every file named by a flag (`--csv`, `--out FILE`,
+//! Output files: every file named by a flag (`--csv`, `--out FILE`,
 //! `--plot`) follows one overwrite policy — an existing file is refused
 //! before any work unless `--force`, which replaces it and says so — and a
 //! file written by temp-and-rename gets the mode `File::create` would give

@@ -114,11 +114,7 @@ impl Scene {
     ) -> PyResult<Scene> {
         let profile = match profile {
             None => None,
-            Some(name) => Some(lib::ProfileKind::from_name(name).ok_or_else(|| {
-                PyValueError::new_err(format!(
-                    "--profile: invalid value '{name}' (one of: flat, sphere, cone, power)"
-                ))
-            })?),
+            Some(name) => Some(lib::ProfileKind::from_flag(name).map_err(to_py)?),
         };
         let input = SceneInput {
             scene,

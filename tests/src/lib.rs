@@ -243,3 +243,16 @@ pub fn lockin_error_gain(n: usize, dtheta: f64) -> f64 {
     }
     worst
 }
+
+/// A law's one-sided limit at 0 from its values at `V`, `2V`, `4V`, each
+/// with its error: `(E₁, allowance)`. `E₁ = 2μ(V) − μ(2V)` removes the
+/// linear term (the law is smooth on each side of 0); its remainder is
+/// estimated as `(E₁ − E₂)/3`, `E₂ = 2μ(2V) − μ(4V)`; the values' errors
+/// enter with their weights (2 + 1 in `E₁`, (2 + 3 + 1)/3 in the remainder).
+pub fn limit_by_extrapolation(at: [(f64, f64); 3]) -> (f64, f64) {
+    let [(m1, e1), (m2, e2), (m4, e4)] = at;
+    let x1 = 2.0 * m1 - m2;
+    let x2 = 2.0 * m2 - m4;
+    let allowance = (x1 - x2).abs() / 3.0 + (2.0 * e1 + e2) + (2.0 * e1 + 3.0 * e2 + e4) / 3.0;
+    (x1, allowance)
+}

@@ -293,10 +293,12 @@ fn extreme_si_magnitudes() {
         dux_rel: 0.3,
         phi: 1.0,
     };
-    let reference = {
-        let d = Scene::dimensionless(g).unwrap().drive();
-        exact64(&d, 0.3 * d.c_forward::<Libm>())
-    };
+    let d_ref = Scene::dimensionless(g).unwrap().drive();
+    let reference = exact64(&d_ref, 0.3 * d_ref.c_forward::<Libm>());
+    // Each run within its stated bound of the truth (the groups are the same
+    // to rounding, far below it): two bounds apart at most.
+    let bound64 = exact::error_bound::<f64, Libm>(&d_ref);
+    let bound32 = |s: &Scene<f32>| f64::from(exact::error_bound::<f32, Libm>(&s.drive())) + bound64;
     let params = |uz0: f64, kz: f64, kx: f64| {
         let w0 = 0.3 * kz / kx * uz0;
         SceneParams {
@@ -317,7 +319,10 @@ fn extreme_si_magnitudes() {
     // µm and GPa/m, and extremes that f64 still represents.
     for (uz0, kz) in [(1e-6, 1e9), (1e-12, 1e15), (1e-200, 1e200), (1e150, 1e-100)] {
         let s = Scene::new(params(uz0, kz, 1e9)).unwrap();
-        assert!((mu_of(&s) - reference).abs() <= 2e-9, "uz0={uz0} kz={kz}");
+        assert!(
+            (mu_of(&s) - reference).abs() <= 2.0 * bound64,
+            "uz0={uz0} kz={kz}"
+        );
     }
     let to32 = |p: SceneParams<f64>| SceneParams {
         mu0: p.mu0 as f32,
@@ -333,7 +338,7 @@ fn extreme_si_magnitudes() {
     let s = Scene::new(to32(params(1e-6, 1e9, 1e9))).unwrap();
     let vc = model_core::analytic::CriticalVelocity::of(&s).forward;
     let m = exact::solve(&s, 0.3 * vc).unwrap().mu_over_mu0().unwrap();
-    assert!((f64::from(m) - reference).abs() <= 2e-6);
+    assert!((f64::from(m) - reference).abs() <= bound32(&s));
     // f32 subnormal u_z0 (1e-41 m): refused, not silently wrong.
     assert_eq!(
         Scene::new(to32(params(1e-41, 1e9, 1e9))).err(),
@@ -345,7 +350,7 @@ fn extreme_si_magnitudes() {
     let vc = model_core::analytic::CriticalVelocity::of(&s).forward;
     let m = exact::solve(&s, 0.3 * vc).unwrap().mu_over_mu0().unwrap();
     assert!(
-        (f64::from(m) - reference).abs() <= 2e-6,
+        (f64::from(m) - reference).abs() <= bound32(&s),
         "{m} vs {reference}"
     );
     // W₀ itself below the f32 range: refused.
@@ -355,12 +360,77 @@ fn extreme_si_magnitudes() {
     ));
 }
 
+/// The micromath backend's error constants (`model::float` docs, measured
+/// over every f32 of their ranges): `sin`/`cos` absolute, `sqrt` relative,
+/// `asin` and `atan2` in rad.
+const MICRO_SIN_COS: f64 = 1.1e-3;
+const MICRO_SQRT: f64 = 6.2e-2;
+const MICRO_ASIN: f64 = 1.9e-2;
+const MICRO_ATAN2: f64 = 2.9e-3;
+
+/// Where micromath may lose the event walk: an upper bound on how far its
+/// event phases can move at drive `d`, velocity `v`, given the f64 steady
+/// state's arcs. Two sources:
+///
+/// * the critical phases `ψ ± asin(V/c)`: `c = hypot(…)` errs by the
+///   `sqrt`'s 6.2 % (relative), so `V/c` by `x·6.6 %` (`1/(1 − 0.062)`),
+///   which moves `asin` by up to `asin(x(1 + 0.066)) − asin(x)` (unbounded
+///   as `x → 1`: `None`), plus `asin`'s own `1.9·10⁻²` and `atan2`'s
+///   `2.9·10⁻³`;
+/// * each touch (a stick reaching a band at `θ*`): the gap `h = s ∓ w` is
+///   computed with `sin`/`cos` errors, `ε_h ≤ 1.1·10⁻³·(1 + a + b + |V|·2π)`
+///   plus the phase errors above times `|h'|`, so the root moves by at most
+///   `min(ε_h/|h'|, √(2ε_h/|h''|))` (`h' = V − b sin(θ* + φ) ∓ a sin θ*`,
+///   `h'' = −b cos(θ* + φ) ∓ a cos θ*`; the second where the touch is
+///   nearly tangential).
+fn micromath_phase_error(
+    d: &model_core::Drive<f64>,
+    v: f64,
+    arcs: &[exact::Arc<f64>],
+) -> Option<f64> {
+    let x = v / d.c_forward::<Libm>();
+    let moved = x / (1.0 - MICRO_SQRT);
+    if moved >= 1.0 {
+        return None;
+    }
+    let critical = moved.asin() - x.asin() + MICRO_ASIN + MICRO_ATAN2;
+    let (a, b) = (d.a, d.b);
+    let phi = d.bs.atan2(d.bc);
+    let eps_h = MICRO_SIN_COS * (1.0 + a + b + v.abs() * std::f64::consts::TAU);
+    let mut touch: f64 = 0.0;
+    for arc in arcs.iter().filter(|r| r.kind != exact::ArcKind::Stick) {
+        let sign = if arc.kind == exact::ArcKind::SlipForward {
+            1.0
+        } else {
+            -1.0
+        };
+        let t = arc.start;
+        let h1 = (v - b * (t + phi).sin() - sign * a * t.sin()).abs();
+        let h2 = (-b * (t + phi).cos() - sign * a * t.cos()).abs();
+        let e = eps_h + critical * h1;
+        touch = touch.max((e / h1).min((2.0 * e / h2).sqrt()));
+    }
+    Some(critical + touch)
+}
+
 /// The micromath backend: a number within its (large) stated bound, or an
-/// explicit `Inconsistent` near v_c; never outside, never another refusal.
+/// explicit `Inconsistent` where the walk's phases are uncertain by more
+/// than a stick or slip arc lasts; never outside, never another refusal.
+///
+/// A refusal is legitimate only where micromath's event phases can move by
+/// more than half the shortest arc of the f64 steady state (events then
+/// swap or vanish: [`micromath_phase_error`]; `None` where `V/c` is within
+/// the `sqrt`'s error of 1), or where `1 − |μ|` is within micromath's stated
+/// bound (the walk's final check `|μ| ≤ 1 + 10³ε` then may fail: seen at
+/// `v/v_c ≈ 0.89–0.92`). Every refusal must be such a case, so the count is
+/// bounded by the number of drawn cases in that region (both printed: 69 and
+/// 761 at this seed), not by a measured cap (before: `≤ 69` and
+/// `v/v_c ≥ 0.6`, what was seen).
 #[test]
 fn micromath_within_its_bound_or_explicit() {
     let mut rng = integration_tests::Rng::new(11);
     let mut failures = 0;
+    let mut may_refuse = 0;
     for _ in 0..2000 {
         let (a, b, phi) = (
             rng.range(0.0, 0.99),
@@ -370,32 +440,35 @@ fn micromath_within_its_bound_or_explicit() {
         let x = rng.range(0.001, 0.999);
         let d = d64(a, b, phi);
         let v = x * d.c_forward::<Libm>();
+        let (_, arcs) = exact::steady_state::<f64, Libm>(&d, v).unwrap();
+        let shortest = arcs
+            .iter()
+            .map(|r| r.end - r.start)
+            .fold(f64::INFINITY, f64::min);
         let dm = Drive::new::<Micromath>(a as f32, b as f32, phi as f32);
+        let bound = f64::from(exact::error_bound::<f32, Micromath>(&dm));
+        let near_one = 1.0 - exact64(&d, v).abs() <= bound;
+        let walk = micromath_phase_error(&d, v, &arcs).is_none_or(|e| 2.0 * e >= shortest);
+        let uncertain = near_one || walk;
+        may_refuse += u32::from(uncertain);
         match exact::mu_over_mu0::<f32, Micromath>(&dm, v as f32) {
             Ok(m) => {
-                let allowed = f64::from(exact::error_bound::<f32, Micromath>(&dm))
-                    + exact::error_bound::<f64, Libm>(&d);
+                let allowed = bound + exact::error_bound::<f64, Libm>(&d);
                 let e = exact64(&d, v);
                 assert!((f64::from(m) - e).abs() <= allowed, "a={a} b={b} x={x}");
             }
             Err(ExactError::Inconsistent) => {
-                // The only legitimate refusal (documented: micromath near v_c,
-                // where the stick windows are short against its sqrt/asin
-                // errors of 6.2 % / 1.9e-2 rad). Measured: every one at
-                // v/v_c ≥ 0.89 except one at 0.68 (a = 0.984, near lift-off);
-                // the test allows v/v_c ≥ 0.6 and nothing else.
                 assert!(
-                    x >= 0.6,
-                    "Inconsistent far from v_c: a={a} b={b} φ={phi} x={x}"
+                    uncertain,
+                    "Inconsistent where the phases are certain: a={a} b={b} φ={phi} x={x}, shortest arc {shortest:.3e}, phase error {:?}",
+                    micromath_phase_error(&d, v, &arcs)
                 );
                 failures += 1;
             }
             Err(e) => panic!("illegitimate refusal {e:?} (a={a} b={b} x={x})"),
         }
     }
-    println!("micromath: {failures} of 2000 refused (Inconsistent)");
-    // Regression bound: 69 of 2000 measured at this seed.
-    assert!(failures <= 69, "{failures} Inconsistent");
+    println!("micromath: {failures} of 2000 refused (Inconsistent), {may_refuse} in the uncertain region");
 }
 
 // ------------------------------------------------------------ randomised

@@ -215,7 +215,7 @@ fn approx(x: f64) -> String {
 }
 
 /// What the run will cost and whether its integrators can resolve it,
-/// estimated before it starts (the work bound of issue 28): each refusal
+/// estimated before it starts (the work bound): each refusal
 /// names the flag that makes the run large or unresolvable.
 struct WorkPlan {
     /// `ν = Ω/ω`.

@@ -107,8 +107,9 @@ pub fn mu(n_exp: f64, a: f64, b: f64, phi: f64, v: f64, springs: u32, n: u32) ->
     num / den
 }
 
-/// The brute force with its error estimate, `(B(4M, N), allowance)` (as the
-/// tests' `brute_with_error`): over the springs the midpoint rule converges
+/// The brute force with its error estimate, `(B(4M, N), allowance)` (the
+/// tests' reference, `integration_tests::springs`, is refined further: events
+/// sub-stepped, Richardson in N, adaptive panels): over the springs the midpoint rule converges
 /// like `h²` with an erratic constant (a kink of `⟨s⟩(ξ)` inside a cell), so
 /// no Richardson step is taken; `B(4M, N)`'s spring error is taken as the
 /// larger of the last two changes `|B(M) − B(2M)|`, `|B(2M) − B(4M)|` (true

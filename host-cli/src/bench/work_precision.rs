@@ -409,7 +409,7 @@ fn style(method: &str) -> (usize, Marker) {
 /// stepping) as markers joined in order of cost, so that each family stays
 /// visible where its points overlap another's; single points as markers.
 ///
-/// (Joining the fixed-step families was tried for issue 27: the timings'
+/// (Joining the fixed-step families was tried: the timings'
 /// noise makes every joined family a zigzag that hides more than it shows,
 /// so the families stay markers until small multiples replace this panel.)
 fn mark_of(_method: &str, marker: Marker) -> Mark {

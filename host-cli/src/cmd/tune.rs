@@ -285,7 +285,7 @@ mod tests {
         }
     }
 
-    /// Issue 24 §9: the "doubtful residual" path (never observed with the
+    /// The "doubtful residual" path (never observed with the
     /// exact solver) prints the result and exits 1 with one line; a residual
     /// within the bound exits 0.
     #[test]

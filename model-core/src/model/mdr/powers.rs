@@ -96,17 +96,8 @@ pub fn profile_powers<T: Float, M: Math<T>>(
     v: T,
     tol: T,
 ) -> Result<ProfilePowers<T>, MdrError> {
-    super::check(d, p)?;
-    if !v.is_finite() {
-        return Err(MdrError::BadVelocity);
-    }
-    if !(tol.is_finite() && tol > T::ZERO) {
-        return Err(MdrError::BadTolerance);
-    }
+    super::check_moving(d, p, v, tol)?;
     let a = d.a;
-    if v == T::ZERO && a < T::ONE {
-        return Err(MdrError::AtRest);
-    }
     let Some(n) = p.exponent() else {
         return flat::<T, M>(d, v);
     };
