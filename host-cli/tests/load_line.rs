@@ -780,6 +780,87 @@ fn load_line_of_every_contact() {
     );
 }
 
+/// A scene whose efficiency has no interior maximum reports the stall limit,
+/// not a point a hair from v = 0: lift-off at a = 1.5, b/a = 1/2, φ = 0 (it
+/// sticks through the whole window at V = 0, so the loss vanishes faster than
+/// the output: η → 1, docs/guide/load-line.md). Against the brute force of
+/// one spring (no model-core solver): a 64-point scan over (0, v_nl) falls
+/// from its first point on (each step within the two errors), the reported
+/// η is at least every scanned value, and it equals the limit V → 0,
+/// Richardson-extrapolated from V = h, 2h (h = v_nl/4096; remainder the
+/// next difference's size) — within that and the errors. The point itself:
+/// velocity and powers 0, the force the stall force. The Fig. 6 scene at
+/// φ = 0 and 180° (η → 0.5 at stall, falling along the line) is flagged too;
+/// at φ = 45° and 135° the maximum is inside the line (on the law's kink)
+/// and is not.
+#[test]
+fn load_line_efficiency_maximum_at_stall_is_the_limit() {
+    let o = json(&dimensionless("1.5", "0.5", "0"));
+    assert_eq!(o["max_efficiency_at_stall"], true, "{o}");
+    assert_eq!(o["velocity_at_max_efficiency"].as_f64(), Some(0.0));
+    for k in [
+        "output_power_at_max_efficiency",
+        "input_power_at_max_efficiency",
+        "friction_power_at_max_efficiency",
+    ] {
+        assert_eq!(o[k].as_f64(), Some(0.0), "{k}");
+    }
+    assert_eq!(
+        o["force_at_max_efficiency_over_mu0_fz"],
+        o["stall_force_over_mu0_fz"]
+    );
+    let eta = o["max_efficiency"].as_f64().unwrap();
+    let vnl = o["no_load_velocity"].as_f64().unwrap();
+    let (a, b, phi) = (1.5, 0.75, 0.0);
+    let scan: Vec<(f64, f64)> = (1..64)
+        .map(|i| {
+            let (e, _, err, _) = flat_liftoff_brute(a, b, phi, vnl * f64::from(i) / 64.0, 1 << 12);
+            (e, err)
+        })
+        .collect();
+    for (i, w) in scan.windows(2).enumerate() {
+        assert!(
+            w[1].0 <= w[0].0 + w[0].1 + w[1].1,
+            "brute-force η rises from point {} to {}: {} → {}",
+            i + 1,
+            i + 2,
+            w[0].0,
+            w[1].0
+        );
+    }
+    for &(e, err) in &scan {
+        assert!(
+            eta >= e - err - 1e-8,
+            "reported η {eta} below the scan's {e}"
+        );
+    }
+    let h = vnl / 4096.0;
+    let n = 1 << 17;
+    let (e1, _, r1, _) = flat_liftoff_brute(a, b, phi, h, n);
+    let (e2, _, r2, _) = flat_liftoff_brute(a, b, phi, 2.0 * h, n);
+    let (e3, _, r3, _) = flat_liftoff_brute(a, b, phi, 3.0 * h, n);
+    let limit = 2.0 * e1 - e2;
+    let remainder = (e1 - 2.0 * e2 + e3).abs();
+    let allowed = remainder + 2.0 * r1 + r2 + r3 + 1e-8;
+    eprintln!("lift-off φ = 0: reported η {eta}, brute-force limit {limit} (allowed {allowed:e}; η(h) = {e1}, η(2h) = {e2}, η(3h) = {e3})");
+    assert!(
+        (eta - limit).abs() <= allowed,
+        "reported η {eta} vs the brute force's limit {limit} (allowed {allowed:e})"
+    );
+    for (phi_deg, at_stall) in [("0", true), ("45", false), ("135", false), ("180", true)] {
+        let o = json(&dimensionless("0.5", "2", phi_deg));
+        assert_eq!(
+            o["max_efficiency_at_stall"], at_stall,
+            "φ = {phi_deg}°: {o}"
+        );
+        if at_stall {
+            assert_eq!(o["velocity_at_max_efficiency"].as_f64(), Some(0.0));
+        } else {
+            assert!(o["output_power_at_max_efficiency"].as_f64().unwrap() > 0.0);
+        }
+    }
+}
+
 /// The reported maximum `eta` (error `err`) against a brute-force scan
 /// `(η, error)` with spacing `h`: at least every scanned value (each to both
 /// errors), and at most the scan's maximum plus the scan's Lipschitz bound
