@@ -179,9 +179,13 @@ fn load_line_mirror_symmetry_from_the_command_line() {
             // comparisons differently: the two ends lie within about one
             // final bracket of each other (seen: 1.2 brackets), allowed
             // two, times the objective's slope there (from the library over
-            // 1e-7·v_line; f64, a < 1).
+            // 1e-7·v_line; f64, a < 1). Such an efficiency is reported as
+            // the stall limit (`max_efficiency_at_stall`, velocity 0): its
+            // value is still the objective at the search's end, so the same
+            // slack holds, with the slope taken there.
             let v = n(&f, &format!("velocity_at_{k}")).abs();
-            let line = if n(&f, &format!("velocity_at_{k}")) > 0.0 {
+            let forward = f[format!("direction_at_{k}")] == "forward";
+            let line = if forward {
                 n(&f, "no_load_velocity")
             } else {
                 n(&f, "no_load_velocity_backward")
@@ -195,7 +199,7 @@ fn load_line_mirror_symmetry_from_the_command_line() {
                 );
                 let d =
                     model_core::Drive::new::<model_core::Libm>(a, b, f64::from(phi).to_radians());
-                let sign = n(&f, &format!("velocity_at_{k}")).signum();
+                let sign = if forward { 1.0 } else { -1.0 };
                 let eta = |x: f64| {
                     let p =
                         model_core::model::load_line::powers::<f64, model_core::Libm>(&d, sign * x)
@@ -207,6 +211,7 @@ fn load_line_mirror_symmetry_from_the_command_line() {
                     }
                 };
                 let h = 1e-7 * line;
+                let v = v.max(h);
                 let slope = (eta(v + h) - eta(v)).abs() / h;
                 2.0 * slope * 1e-9 * line
             } else {
@@ -229,9 +234,27 @@ fn load_line_mirror_symmetry_from_the_command_line() {
             "backward" => "forward",
             other => panic!("direction {other}"),
         };
+        assert_eq!(
+            f["max_efficiency_at_stall"], g["max_efficiency_at_stall"],
+            "φ = {phi}°"
+        );
         for at in ["max_power", "max_efficiency"] {
             let dir = format!("direction_at_{at}");
             assert_eq!(g[&dir], swapped(&f[&dir]), "φ = {phi}°");
+            if at == "max_efficiency" && f["max_efficiency_at_stall"] == true {
+                // The stall limit on both lines: velocity 0, the stall forces mirrored.
+                assert_eq!(n(&f, "velocity_at_max_efficiency"), 0.0);
+                assert_eq!(n(&g, "velocity_at_max_efficiency"), 0.0);
+                let (ff, fg) = (
+                    n(&f, "force_at_max_efficiency_over_mu0_fz"),
+                    n(&g, "force_at_max_efficiency_over_mu0_fz"),
+                );
+                assert!(
+                    ff * fg < 0.0 && (ff + fg).abs() <= 1e-12,
+                    "φ = {phi}°: stall forces {ff}, {fg}"
+                );
+                continue;
+            }
             for k in [
                 format!("velocity_at_{at}"),
                 format!("force_at_{at}_over_mu0_fz"),
@@ -393,6 +416,12 @@ fn load_line_energy_balance_at_the_operating_points() {
             } else {
                 n("max_efficiency")
             };
+            if at == "max_efficiency" && o["max_efficiency_at_stall"] == true {
+                // The limit at stall (tested against the brute force in
+                // `load_line_efficiency_maximum_at_stall_is_the_limit`): no power there.
+                assert_eq!((p_out, p_in, p_f, v), (0.0, 0.0, 0.0, 0.0), "{at}");
+                continue;
+            }
             assert!((eta - p_out / p_in).abs() <= 1e-12, "{at}: η {eta}");
         }
     }
