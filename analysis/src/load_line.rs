@@ -65,8 +65,14 @@ pub struct LoadLineOut {
     pub friction_power_at_max_power: f64,
     /// Efficiency P_out/P_in there.
     pub efficiency_at_max_power: f64,
-    /// Largest efficiency P_out/P_in over both lines (0 when it pushes neither way).
+    /// Largest efficiency P_out/P_in over both lines (0 when it pushes neither way);
+    /// with `max_efficiency_at_stall` its limit as v → 0 (the supremum, not attained).
     pub max_efficiency: f64,
+    /// Whether the efficiency has no interior maximum: it is largest in the
+    /// limit v → 0 at stall, where no power is delivered (the point's velocity
+    /// and powers are then 0, its force the stall force). E.g. the flat punch
+    /// at φ = 0, a = 0.5, b/a = 2: η → 0.5 as v → 0, decreasing along the line.
+    pub max_efficiency_at_stall: bool,
     /// forward | backward | none.
     pub direction_at_max_efficiency: &'static str,
     /// Signed velocity of the maximum efficiency point.
@@ -162,6 +168,14 @@ impl Units {
 /// One sample of a load line: dimensionless velocity (signed) and powers.
 pub type Sample = (f64, load_line::Powers<f64>);
 
+/// A maximum-efficiency point closer to stall than this fraction of its
+/// line's no-load velocity is the stall limit: [`best_of`]'s search brackets
+/// a maximum in the first of its 64 cells down to 1e-6 of the cell
+/// (1.6e-8·v_nl) and converges there only when the efficiency keeps rising
+/// towards v → 0; an interior maximum this close to stall would be at no
+/// plotted or printed resolution anyway.
+pub const STALL_LIMIT: f64 = 1e-6;
+
 /// A computed load line: the summary, and what plotting and sampling need.
 pub struct Analysis {
     /// The summary.
@@ -172,8 +186,14 @@ pub struct Analysis {
     pub line: load_line::LoadLine<f64>,
     /// The maximum-power point (None when the scene pushes neither way).
     pub best_power: Option<OperatingPoint<f64>>,
-    /// The maximum-efficiency point.
+    /// The maximum-efficiency point (as found, at a velocity ≤ [`STALL_LIMIT`]·v_nl
+    /// when `out.max_efficiency_at_stall`).
     pub best_efficiency: Option<OperatingPoint<f64>>,
+    /// The maximum-power point in output units.
+    pub power_point: Point,
+    /// The maximum-efficiency point in output units (the stall limit when
+    /// `out.max_efficiency_at_stall`).
+    pub efficiency_point: Point,
     /// The output units.
     pub units: Units,
     /// Mean normal force F̄z (N, or units of kz·uz0).
@@ -213,7 +233,33 @@ pub fn analyse(rs: &ResolvedScene) -> Result<Analysis> {
     .map_err(fail)?;
     let best_p = best_of(&line, Objective::Power, |v| law.powers(v)).map_err(fail)?;
     let best_e = best_of(&line, Objective::Efficiency, |v| law.powers(v)).map_err(fail)?;
-    let (mp, me) = (units.point(best_p), units.point(best_e));
+    let (mp, mut me) = (units.point(best_p), units.point(best_e));
+    // No interior maximum: report the stall limit (velocity and powers 0, the
+    // stall force; η its limit, to the search's O(1e-8·v_nl) in velocity).
+    let at_stall = best_e.is_some_and(|o| {
+        let vnl = if o.v > 0.0 {
+            line.no_load_forward
+        } else {
+            line.no_load_backward
+        };
+        o.v.abs() <= STALL_LIMIT * vnl
+    });
+    if at_stall {
+        let stall = if me.v > 0.0 {
+            line.stall_forward
+        } else {
+            -line.stall_backward
+        };
+        me = Point {
+            v: 0.0,
+            force_rel: stall,
+            force: stall * force_scale,
+            p_out: 0.0,
+            p_in: 0.0,
+            p_friction: 0.0,
+            ..me
+        };
+    }
     let pushes = match (line.no_load_forward > 0.0, line.no_load_backward > 0.0) {
         (true, true) => "both",
         (true, false) => "forward",
@@ -238,6 +284,7 @@ pub fn analyse(rs: &ResolvedScene) -> Result<Analysis> {
         friction_power_at_max_power: mp.p_friction,
         efficiency_at_max_power: mp.efficiency,
         max_efficiency: me.efficiency,
+        max_efficiency_at_stall: at_stall,
         direction_at_max_efficiency: me.direction,
         velocity_at_max_efficiency: me.v,
         force_at_max_efficiency_over_mu0_fz: me.force_rel,
@@ -257,6 +304,8 @@ pub fn analyse(rs: &ResolvedScene) -> Result<Analysis> {
         line,
         best_power: best_p,
         best_efficiency: best_e,
+        power_point: mp,
+        efficiency_point: me,
         units,
         fz,
     })

@@ -386,34 +386,23 @@ pub fn run(a: &WpArgs) -> CliResult {
     Ok(())
 }
 
-/// Colour (palette index) and marker of a method: one of each per method.
-fn style(method: &str) -> (usize, Marker) {
+/// The marker of a method: distinct within each panel of [`PANELS`].
+fn marker(method: &str) -> Marker {
     match method {
-        "exact f64" => (6, Marker::Diamond),
-        "exact f32" => (0, Marker::Circle),
-        "exact f32 micromath" => (5, Marker::Ring),
-        "eq. 21" | "eq. 24" => (2, Marker::Square),
-        "fixed f64 from rest" => (1, Marker::Triangle),
-        "fixed f64 warm" => (4, Marker::OpenTriangle),
-        "fixed f32 from rest" => (3, Marker::OpenSquare),
-        "fixed f32 warm" => (8, Marker::Cross),
-        "lift-off stepping f64" => (9, Marker::Triangle),
-        "MDR f64" => (2, Marker::Diamond),
-        "MDR f32" => (0, Marker::Square),
-        "brute force over springs" => (8, Marker::Triangle),
-        _ => (9, Marker::OpenDiamond),
+        "exact f64" => Marker::Diamond,
+        "exact f32" => Marker::Circle,
+        "exact f32 micromath" => Marker::Ring,
+        "eq. 21" | "eq. 24" => Marker::Square,
+        "fixed f64 from rest" => Marker::Triangle,
+        "fixed f64 warm" => Marker::OpenTriangle,
+        "fixed f32 from rest" => Marker::OpenSquare,
+        "fixed f32 warm" => Marker::Cross,
+        "lift-off stepping f64" => Marker::Triangle,
+        "MDR f64" => Marker::Diamond,
+        "MDR f32" => Marker::Square,
+        "brute force over springs" => Marker::Triangle,
+        _ => Marker::OpenDiamond,
     }
-}
-
-/// How a method's points are drawn: a step-size family (fixed-step, lift-off
-/// stepping) as markers joined in order of cost, so that each family stays
-/// visible where its points overlap another's; single points as markers.
-///
-/// (Joining the fixed-step families was tried: the timings'
-/// noise makes every joined family a zigzag that hides more than it shows,
-/// so the families stay markers until small multiples replace this panel.)
-fn mark_of(_method: &str, marker: Marker) -> Mark {
-    Mark::Markers(marker)
 }
 
 /// A method's (error, time) points in order of steps per period (the
@@ -463,45 +452,88 @@ const LEGEND: &[(&str, &str)] = &[
 /// Errors below this are drawn at it (log axis).
 const ERROR_FLOOR: f64 = 1e-17;
 
+/// The small multiples: one panel per method family (shared axes), so that
+/// no method hides another; in a panel the marker tells the method and the
+/// colour the scene.
+const PANELS: &[(&str, &[&str])] = &[
+    (
+        "exact solver (f64, f32, f32 micromath) and eq. (21) / (24)",
+        &["exact f64", "exact f32", "exact f32 micromath", "eq. 21"],
+    ),
+    ("fixed-step f64 from rest", &["fixed f64 from rest"]),
+    ("fixed-step f64 warm-started", &["fixed f64 warm"]),
+    ("fixed-step f32 from rest", &["fixed f32 from rest"]),
+    ("fixed-step f32 warm-started", &["fixed f32 warm"]),
+    ("fixed-step f32, micromath set-up", &["fixed f32 micromath"]),
+    (
+        "lift-off stepping f64, exact landing (flat punch, a ≥ 1)",
+        &["lift-off stepping f64"],
+    ),
+    (
+        "sphere: MDR f64, MDR f32, brute force over springs",
+        &["MDR f64", "MDR f32", "brute force over springs"],
+    ),
+];
+
+/// Palette index of the single scenes (in `SCENES` order); the planes
+/// across lift-off share `ACROSS_COLOR`.
+const SCENE_COLORS: [usize; 8] = [0, 1, 2, 3, 4, 5, 9, 8];
+const ACROSS_COLOR: usize = 6;
+
+/// The colour of a point's scene.
+fn scene_color(scene: &str) -> usize {
+    SCENES
+        .iter()
+        .position(|s| s.0 == scene)
+        .map_or(ACROSS_COLOR, |i| SCENE_COLORS[i])
+}
+
+/// Whether point `p` belongs to the legend's method `m` (eq. 21 and eq. 24
+/// share one entry).
+fn is_method(p: &Point, m: &str) -> bool {
+    p.method == m || (m == "eq. 21" && p.method == "eq. 24")
+}
+
 fn render(path: &Path, all: &[Point]) -> CliResult {
+    let drawn: Vec<&Point> = all.iter().filter(|p| p.error.is_some()).collect();
+    // Shared axes: every panel spans every point.
+    let tmin = drawn
+        .iter()
+        .map(|p| p.time_s)
+        .fold(f64::INFINITY, f64::min)
+        .max(1e-9)
+        / 2.0;
+    let tmax = drawn
+        .iter()
+        .map(|p| p.time_s)
+        .fold(0.0f64, f64::max)
+        .max(tmin * 10.0)
+        * 2.0;
+    let colors: Vec<usize> = SCENE_COLORS.iter().copied().chain([ACROSS_COLOR]).collect();
     let mut panels = Vec::new();
-    for &(name, a, b, phi, x) in SCENES {
-        let pts: Vec<&Point> = all
-            .iter()
-            .filter(|p| p.scene == name && p.error.is_some())
-            .collect();
-        let tmin = pts
-            .iter()
-            .map(|p| p.time_s)
-            .fold(f64::INFINITY, f64::min)
-            .max(1e-9)
-            / 2.0;
-        let tmax = pts
-            .iter()
-            .map(|p| p.time_s)
-            .fold(0.0f64, f64::max)
-            .max(tmin * 10.0)
-            * 2.0;
+    for &(title, methods) in PANELS {
         let mut series = Vec::new();
-        for &(m, _) in LEGEND {
-            let (color, marker) = style(m);
-            let points = by_steps(
-                pts.iter()
-                    .filter(|p| p.method == m || (m == "eq. 21" && p.method == "eq. 24")),
-            );
-            series.push(Series {
-                label: String::new(),
-                points,
-                mark: mark_of(m, marker),
-                color,
-            });
+        for &m in methods {
+            let marker = marker(m);
+            for &c in &colors {
+                let points = by_steps(
+                    drawn
+                        .iter()
+                        .filter(|p| is_method(p, m) && scene_color(p.scene) == c),
+                );
+                if !points.is_empty() {
+                    series.push(Series {
+                        label: String::new(),
+                        points,
+                        mark: Mark::Markers(marker),
+                        color: c,
+                    });
+                }
+            }
         }
         panels.push((
             Panel {
-                title: format!(
-                    "{name}: a = {a}, b = {b}, φ = {:.1}°, v0/v_c = {x}",
-                    phi.to_degrees()
-                ),
+                title: title.to_string(),
                 x_label: "|μ − μ_ref| / μ0".to_string(),
                 y_label: "time per μ, s".to_string(),
                 x: (ERROR_FLOOR, 1.0),
@@ -515,92 +547,65 @@ fn render(path: &Path, all: &[Point]) -> CliResult {
             },
         ));
     }
+    // Legend: the scenes as colour swatches, then the methods as black markers.
     let (b, phi, x) = across_lift_off::DRIVE;
-    for (names, what) in [
-        (across_lift_off::FLAT, "flat punch"),
-        (across_lift_off::SPHERE, "sphere (MDR)"),
-    ] {
-        let pts: Vec<&Point> = all
-            .iter()
-            .filter(|p| names.iter().any(|n| n.0 == p.scene) && p.error.is_some())
-            .collect();
-        let tmin = pts
-            .iter()
-            .map(|p| p.time_s)
-            .fold(f64::INFINITY, f64::min)
-            .max(1e-9)
-            / 2.0;
-        let tmax = pts
-            .iter()
-            .map(|p| p.time_s)
-            .fold(0.0f64, f64::max)
-            .max(tmin * 10.0)
-            * 2.0;
-        let series = LEGEND
-            .iter()
-            .map(|&(m, _)| {
-                let (color, marker) = style(m);
-                Series {
-                    label: String::new(),
-                    points: by_steps(pts.iter().filter(|p| p.method == m)),
-                    mark: mark_of(m, marker),
-                    color,
-                }
-            })
-            .collect();
-        let a_list: Vec<String> = names.iter().map(|n| format!("{}", n.1)).collect();
-        panels.push((
-            Panel {
-                title: format!(
-                    "{what} across lift-off: a = {}; b = {b}, φ = {:.1}°, v0/v_c = {x}",
-                    a_list.join(", "),
-                    phi.to_degrees()
-                ),
-                x_label: "|μ − μ_ref| / μ0".to_string(),
-                y_label: "time per μ, s".to_string(),
-                x: (ERROR_FLOOR, 1.0),
-                y: (tmin, tmax),
-                series,
-            },
-            Extras {
-                log_x: true,
-                log_y: true,
-                ..Extras::default()
-            },
-        ));
-    }
-    let legend = LEGEND
+    let mut legend: Vec<Series> = SCENES
         .iter()
-        .map(|&(m, text)| {
-            let (color, marker) = style(m);
-            Series {
-                label: text.to_string(),
-                points: Vec::new(),
-                mark: mark_of(m, marker),
-                color,
-            }
+        .zip(SCENE_COLORS)
+        .map(|(&(name, a, b, phi, x), c)| Series {
+            label: format!(
+                "{name}: a = {a}, b = {b}, φ = {:.1}°, v0/v_c = {x}",
+                phi.to_degrees()
+            ),
+            points: Vec::new(),
+            mark: Mark::Line,
+            color: c,
         })
         .collect();
+    let a_of = |names: &[(&str, f64)]| {
+        names
+            .iter()
+            .map(|n| format!("{}", n.1))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    legend.push(Series {
+        label: format!(
+            "across lift-off: flat punch a = {}, sphere a = {}; b = {b}, φ = {:.1}°, v0/v_c = {x}",
+            a_of(across_lift_off::FLAT),
+            a_of(across_lift_off::SPHERE),
+            phi.to_degrees()
+        ),
+        points: Vec::new(),
+        mark: Mark::Line,
+        color: ACROSS_COLOR,
+    });
+    legend.extend(LEGEND.iter().map(|&(m, text)| Series {
+        label: text.to_string(),
+        points: Vec::new(),
+        mark: Mark::Markers(marker(m)),
+        color: 6,
+    }));
     let f = Figure {
         panels,
-        rows: 5,
+        rows: 4,
         cols: 2,
         size: (1800, 2150),
         legend,
         caption: vec![
-            "a = Δu_z/u_z0, b = k_xΔu_x/(μ0 k_z u_z0) (eq. 25). μ_ref: the exact solver in f64 \
-             (libm) at the same scene and velocity, which agrees with the paper's fixed-step \
-             scheme (Richardson, N = 65 536) to < 1e-9."
+            "One panel per method family, shared axes; marker: the method, colour: the scene. \
+             a = Δu_z/u_z0, b = k_xΔu_x/(μ0 k_z u_z0) (eq. 25)."
                 .to_string(),
-            "Across lift-off (last row): flat punch against the exact f64 solver (the lift-off \
-             solver from a = 1), fixed-step / lift-off stepping at N = 8 … 65 536 (one per octave)."
+            "μ_ref: the exact solver in f64 (libm) at the same scene and velocity, which agrees \
+             with the paper's fixed-step scheme (Richardson, N = 65 536) to < 1e-9; across \
+             lift-off the flat punch against the exact f64 solver (the lift-off solver from a = 1)."
                 .to_string(),
             "Sphere against the MDR f64 at twice its per-spring bound, itself checked to lie within \
              its bound plus the error estimate of a brute force over springs ((M, N) = (48, 1024))."
                 .to_string(),
-            "Fixed-step: one point per N = 8 … 65 536 steps per period (4 per octave); \
-             refusals (TooFewSteps, PrecisionLimit) are not drawn. Time: minimum over \
-             repeated batches after a warm-up, this host."
+            "Fixed-step: one point per N = 8 … 65 536 steps per period (4 per octave; across \
+             lift-off one per octave); refusals (TooFewSteps, PrecisionLimit) are not drawn. \
+             Time: minimum over repeated batches after a warm-up, this host."
                 .to_string(),
         ],
     };

@@ -49,7 +49,7 @@ impl LoadLineCmd {
         let an = load_line::analyse(&rs)?;
         let (law, line, units, fz) = (&an.law, &an.line, &an.units, an.fz);
         let (best_p, best_e) = (an.best_power, an.best_efficiency);
-        let (mp, me) = (units.point(best_p), units.point(best_e));
+        let (mp, me) = (an.power_point, an.efficiency_point);
         let o = &an.out;
         let pushes = o.pushes;
         let fail = |e: LawError| CliError::failure(e.to_string());
@@ -77,7 +77,8 @@ impl LoadLineCmd {
                 if let Some(path) = &self.plot {
                     let scene = plot::SceneText::of(law, &rs, fz);
                     let marks = [(best_p, "maximum power"), (best_e, "maximum efficiency")];
-                    match plot::plot(path, &samples, line, &marks, units, &scene) {
+                    let stall = o.max_efficiency_at_stall.then_some(o.max_efficiency);
+                    match plot::plot(path, &samples, line, &marks, stall, units, &scene) {
                         Ok(()) => eprintln!("wrote {}", path.display()),
                         Err(e) => file_error = file_error.or(Some(e)),
                     }
@@ -191,5 +192,13 @@ fn write_text(
         "efficiency P_out/P_in",
         format!("{:.6}", mp.efficiency),
         format!("{:.6}", me.efficiency),
-    )
+    )?;
+    if o.max_efficiency_at_stall {
+        writeln!(
+            out,
+            "max efficiency: no interior maximum; η rises towards stall, {:.6} its limit as v → 0 (no power there)",
+            o.max_efficiency
+        )?;
+    }
+    Ok(())
 }

@@ -66,12 +66,16 @@ impl SceneText {
     }
 }
 
-/// Renders the figure to `path` (`.svg` or `.png`).
+/// Renders the figure to `path` (`.svg` or `.png`). `stall`: the
+/// efficiency's limit at stall when it has no interior maximum (the second
+/// mark is then drawn open at v = 0, the stall force, zero power and that
+/// limit, and labelled as a limit).
 pub(super) fn plot(
     path: &Path,
     lines: &[Vec<Sample>],
     line: &LoadLine<f64>,
     marks: &[(Option<OperatingPoint<f64>>, &str); 2],
+    stall: Option<f64>,
     u: &Units,
     scene: &SceneText,
 ) -> CliResult {
@@ -115,15 +119,33 @@ pub(super) fn plot(
     let pmax = finite_max(&[&pin, &pout, &pf]);
     let emax = finite_max(&[&eta]);
     // The operating points, in each panel.
-    let point = |o: &OperatingPoint<f64>, which: usize| {
+    let point = |o: &OperatingPoint<f64>, which: usize, k: usize| {
         let xv = o.v * u.velocity;
-        match which {
-            0 => (xv, o.force * u.force),
-            1 => (xv, o.powers.output * u.power),
-            _ => (xv, o.powers.efficiency()),
+        match (stall.filter(|_| k == 1), which) {
+            // The stall limit: v → 0 on the point's line.
+            (Some(_), 0) => (
+                0.0,
+                if o.v > 0.0 {
+                    line.stall_forward
+                } else {
+                    -line.stall_backward
+                } * u.force,
+            ),
+            (Some(_), 1) => (0.0, 0.0),
+            (Some(eta), _) => (0.0, eta),
+            (None, 0) => (xv, o.force * u.force),
+            (None, 1) => (xv, o.powers.output * u.power),
+            (None, _) => (xv, o.powers.efficiency()),
         }
     };
-    let markers = [Marker::Circle, Marker::Diamond];
+    let markers = [
+        Marker::Circle,
+        if stall.is_some() {
+            Marker::Ring
+        } else {
+            Marker::Diamond
+        },
+    ];
     let mark_series = |which: usize| -> Vec<Series> {
         marks
             .iter()
@@ -132,7 +154,7 @@ pub(super) fn plot(
             .filter_map(|(k, ((o, _), m))| {
                 o.as_ref().map(|o| Series {
                     label: String::new(),
-                    points: vec![point(o, which)],
+                    points: vec![point(o, which, k)],
                     mark: Mark::Markers(m),
                     color: 6 + 3 * k,
                 })
@@ -215,11 +237,13 @@ pub(super) fn plot(
     for (k, ((o, name), m)) in marks.iter().zip(markers).enumerate() {
         if let Some(o) = o {
             let dir = if o.v > 0.0 { "forward" } else { "backward" };
-            legend.push(legend_entry(
-                &format!("{name} ({dir}, v = {:.4e} {vu})", o.v * u.velocity),
-                Mark::Markers(m),
-                6 + 3 * k,
-            ));
+            let label = match stall.filter(|_| k == 1) {
+                Some(eta) => format!(
+                    "{name}: none inside the line; η → {eta:.4} at stall (v → 0, no power; {dir})"
+                ),
+                None => format!("{name} ({dir}, v = {:.4e} {vu})", o.v * u.velocity),
+            };
+            legend.push(legend_entry(&label, Mark::Markers(m), 6 + 3 * k));
         }
     }
     let fig = Figure {
