@@ -778,6 +778,13 @@ pub fn serve(a: &SimArgs) -> CliResult {
         check_host_port(addr)?;
     }
     let mut dev = VirtualDevice::new(plant);
+    // Ctrl-C, SIGTERM or SIGHUP end the server (exit 130), also when the
+    // shell that started it ignores SIGINT (a background job): the handler
+    // is installed explicitly, not inherited.
+    let _ = ctrlc::set_handler(|| {
+        eprintln!("interrupted: virtual device stopped");
+        std::process::exit(130);
+    });
     let deadline = a
         .seconds
         .map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0)));
