@@ -2,6 +2,7 @@
 //! reference computations (none of them calls the code path it checks).
 #![deny(missing_docs)]
 
+pub mod resonant;
 pub mod springs;
 pub mod wire;
 

@@ -1,0 +1,207 @@
+//! Resonance tracking (`model_core::board::device::tracking`, eqs. T1–T3)
+//! on resonant transducers, checked against the plant's own resonance
+//! (`ResonantOptions` with drift: `f_r(t) = f_r0 + ḟ·t` exactly) and the
+//! true motion (`integration_tests::resonant`).
+//!
+//! The normal mode here: 20 100 Hz, Q 300 (loaded Q_eff 260.9),
+//! τ = Q_eff/(π f_r) = 4.13 ms, half-power half-band f_r/(2Q_eff) = 38.5 Hz.
+//! The device's model is the exact identification at rest.
+//!
+//! Lag bound of a drift: T3 is an integrator of time constant `2τ̂`; the
+//! detector sees the phase through the mode's own lag τ, so a ramp ḟ is
+//! followed `ḟ·(2τ̂ + τ)` behind (0.25 Hz at −20 Hz/s), plus the detector's
+//! noise (noiseless pickups here: the ADC's rounding).
+
+use integration_tests::resonant::{loaded, model_of, opts, setting, Bench};
+use model_core::board::resonator::ModeParams;
+use model_core::dds::SineTable;
+use model_core::device::{
+    faults, Contact, Device, DeviceConfig, DeviceError, DisplacementOptions, DriveParam, Track,
+    Transducers,
+};
+
+const F_R: f64 = 20_100.0;
+
+fn modes() -> [ModeParams<f64>; 2] {
+    let mut m = integration_tests::resonant::true_modes();
+    m[0].resonance_hz = F_R;
+    m
+}
+
+fn tau() -> f64 {
+    loaded(300.0) / (std::f64::consts::PI * F_R)
+}
+
+/// A bench whose normal resonance drifts by `drift` Hz/s, driven at
+/// `freq` Hz with tracking on the normal mode.
+fn tracking_bench(table: &SineTable<1024>, drift: f64, freq: f64) -> Bench<'_> {
+    let mut o = opts();
+    o.modes = modes();
+    o.drift_hz_per_s = [drift, 0.0];
+    let m = modes();
+    let model = Transducers {
+        z: model_of(m[0], 0.0, 1.0, 1.0),
+        x: model_of(m[1], 0.0, 1.0, 1.0),
+    };
+    let mut b = Bench::new(table, o, model);
+    b.dev
+        .set_displacement_options(DisplacementOptions {
+            track: Track::Z,
+            headroom: 2.0,
+        })
+        .unwrap();
+    let mut s = setting(2e-6);
+    s.freq_hz = freq;
+    b.dev.set_drive(s).unwrap();
+    b.dev.start().unwrap();
+    b
+}
+
+/// The bench: −20 Hz/s for 5 s from 20 100 Hz. Locked, the device's
+/// own tracking error within 0.2 % of f, the DDS within the lag bound of
+/// the true resonance (module docs), the true amplitude held.
+#[test]
+fn tracking_follows_a_drifting_resonance() {
+    let table = SineTable::<1024>::libm();
+    let drift = -20.0;
+    let mut b = tracking_bench(&table, drift, F_R);
+    let halves = (5.0 / b.t_half()) as usize;
+    let mut lock_at = None;
+    let mut worst_after = 0.0f64;
+    let mut worst_amp = 0.0f64;
+    let lag = drift.abs() * (2.0 * tau() + tau());
+    for k in 1..=halves {
+        let t = b.step();
+        let st = b.dev.status();
+        assert_eq!(st.faults, 0, "{st:?}");
+        if st.locked && lock_at.is_none() {
+            lock_at = Some(k as f64 * b.t_half());
+        }
+        // From 1 s on (the lag's steady state after any start transient).
+        if k as f64 * b.t_half() > 1.0 {
+            let f_r = F_R + drift * k as f64 * b.t_half();
+            worst_after = worst_after.max((f64::from(st.frequency_hz) - f_r).abs());
+            worst_amp = worst_amp.max((t.amp_z / 2e-6 - 1.0).abs());
+        }
+    }
+    let st = b.dev.status();
+    let err = st.tracking_error_hz.unwrap();
+    eprintln!(
+        "lock after {:.2} ms; DDS − f_r worst {worst_after:.3} Hz (bound {lag:.3}); device error {err:.3} Hz; amplitude worst {worst_amp:.2e}",
+        lock_at.unwrap() * 1e3
+    );
+    assert!(st.locked);
+    assert!(f64::from(err.abs()) <= 0.002 * f64::from(st.frequency_hz));
+    // The lag bound, with the frequency word's resolution (1.2e-4 Hz) and a
+    // 20 % allowance for the detector's rounding noise.
+    assert!(worst_after <= 1.2 * lag, "{worst_after} Hz > {lag} Hz");
+    // The displacement loop holds the amplitude within its tolerance and the
+    // pickups' rounding (`displacement` tests: 0.5 % at 2 µm).
+    assert!(worst_amp <= 0.005, "{worst_amp}");
+}
+
+/// Started three half-bands below the resonance (115 Hz): the lock comes
+/// within a bound derived from T3 — the error decays as e^{−t/2τ̂} from
+/// 115 Hz to the half band (38.5 Hz) in 2τ̂·ln 3 = 2.2 τ̂, then
+/// `LOCK_WINDOWS` windows in the band; with the start's own transient
+/// (the mode rising, ≈ τ) and ζ ≈ 0.7's ringing, 8 τ̂ bounds it (33 ms).
+#[test]
+fn tracking_locks_from_three_half_bands_off() {
+    let table = SineTable::<1024>::libm();
+    let off = 3.0 * F_R / (2.0 * loaded(300.0));
+    let mut b = tracking_bench(&table, 0.0, F_R - off);
+    let mut lock_at = None;
+    for k in 1..=(0.1 / b.t_half()) as usize {
+        b.step();
+        if b.dev.status().locked {
+            lock_at = Some(k as f64 * b.t_half());
+            break;
+        }
+    }
+    let t = lock_at.expect("no lock within 100 ms");
+    eprintln!("lock after {:.2} ms from {off:.1} Hz off", t * 1e3);
+    assert!(t <= 8.0 * tau(), "{t} s > {} s", 8.0 * tau());
+    // And the frequency is on the resonance soon after (T3 settles).
+    for _ in 0..(0.05 / b.t_half()) as usize {
+        b.step();
+    }
+    let f = f64::from(b.dev.status().frequency_hz);
+    assert!((f - F_R).abs() <= 0.5, "{f} Hz");
+}
+
+/// A resonance that runs away (−5 000 Hz/s): the tracking follows with a
+/// lag ḟ·3τ = 62 Hz, inside the loss threshold (the full band, 77 Hz), until
+/// the resonance leaves the ±2 % tracking range after 402/5000 s = 80 ms;
+/// then the lock is lost within `LOSS_WINDOWS` windows, the fault latches
+/// alone and the drive goes to the safe state. Meanwhile the voltage never
+/// exceeded the identified model's bound `h·C_MAX·|D/Ĥ(f)|` at the
+/// frequency that ran.
+#[test]
+fn a_lost_lock_goes_to_the_safe_state() {
+    use model_core::device::displacement::{model_response, C_MAX};
+    let table = SineTable::<1024>::libm();
+    let mut b = tracking_bench(&table, -5_000.0, F_R);
+    let model = b.dev.transducers().unwrap();
+    let mut latched = None;
+    let mut worst = 0.0f64;
+    for k in 1..=(0.5 / b.t_half()) as usize {
+        b.step();
+        let st = b.dev.status();
+        if st.faults != 0 {
+            latched = Some(k);
+            break;
+        }
+        let ch = b.dev.dds().channels()[0];
+        let v = f64::from(ch.amp) * model_core::dds::DAC_VOLTS_PER_CODE;
+        let h = model_response(&model.z, st.frequency_hz).norm();
+        let bound = 2.0 * f64::from(C_MAX) * 2e-6 / f64::from(h);
+        worst = worst.max(v / bound);
+    }
+    let st = b.dev.status();
+    eprintln!("latched after {latched:?} halves; voltage at most {worst:.3} of the bound");
+    assert_eq!(st.faults, faults::LOSS_OF_LOCK, "{st:?}");
+    let t = latched.unwrap() as f64 * b.t_half();
+    let exit = 0.02 * F_R / 5_000.0;
+    let loss = f64::from(model_core::device::tracking::LOSS_WINDOWS) * b.t_half();
+    assert!(t <= exit + loss + b.t_half(), "latched at {t} s");
+    assert!(!st.running && !st.locked);
+    assert!(worst <= 1.0, "{worst}");
+    assert!(b.dev.start().is_err());
+}
+
+/// The options are validated whole: tracking needs transducers, the
+/// headroom lies in [1, 8]; a refusal changes nothing.
+#[test]
+fn options_are_refused_by_name() {
+    let table = SineTable::<1024>::libm();
+    let mut dev = Device::new(
+        DeviceConfig::driver_board(0),
+        &table,
+        Contact {
+            mu0: 0.3,
+            kz: 1e7,
+            kx: 1e7,
+        },
+    )
+    .unwrap();
+    let before = dev.displacement_options();
+    assert_eq!(
+        dev.set_displacement_options(DisplacementOptions {
+            track: Track::Z,
+            headroom: 2.0
+        }),
+        Err(DeviceError::NotIdentified)
+    );
+    for h in [0.5f32, 8.5, f32::NAN, f32::INFINITY] {
+        match dev.set_displacement_options(DisplacementOptions {
+            track: Track::None,
+            headroom: h,
+        }) {
+            Err(DeviceError::OutOfRange { param, min, max }) => {
+                assert_eq!((param, min, max), (DriveParam::Headroom, 1.0, 8.0));
+            }
+            other => panic!("{h}: {other:?}"),
+        }
+    }
+    assert_eq!(dev.displacement_options(), before);
+}
