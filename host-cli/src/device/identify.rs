@@ -16,12 +16,17 @@
 //!    DAC); a fine pass of `--fine-points` over ±2 coarse steps around the
 //!    coarse peak.
 //!
-//! At each frequency the mode is left `--settle-ms` (default five envelope
-//! time constants of a Q-[`Q_MAX`] mode, `5·Q/(π f)`: the transient after a
-//! step of frequency is then below e⁻⁵ = 0.7 % of the step's change), then
-//! the device's measured response `X/U` (`Status.measured`) of
-//! [`WINDOWS_PER_POINT`] successive lock-in windows is averaged. The points
-//! of both passes are fitted together.
+//! At each frequency the mode is left `--settle-ms`, then the device's
+//! measured response `X/U` (`Status.measured`) of [`WINDOWS_PER_POINT`]
+//! successive lock-in windows is averaged. The coarse pass settles for five
+//! envelope time constants of a Q-[`Q_MAX`] mode, `5·Q/(π f)` (the transient
+//! after a step of frequency is then below e⁻⁵ = 0.7 % of the step's
+//! change); the fine pass for [`FINE_SETTLE_TAUS`] time constants of the
+//! coarse pass's own fit (never longer than the coarse settling), unless
+//! `--settle-ms` is given. Only the fine pass is fitted: a resonance that
+//! drifts (heating, preload) moves between the passes, and the fine pass,
+//! four times shorter at Q ≈ 300, sees the least of it (at −20 Hz/s, 12 Hz
+//! over its 0.6 s; the tracking, `drive set --track`, follows the rest).
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -43,6 +48,9 @@ pub const PEAK_FRACTION: f64 = 0.25;
 
 /// The Q the default settling time allows for (`5·Q_MAX/(π f)`).
 pub const Q_MAX: f64 = 1000.0;
+
+/// The fine pass's settling, in envelope time constants of the coarse fit.
+pub const FINE_SETTLE_TAUS: f64 = 8.0;
 
 /// Lock-in windows averaged per point.
 pub const WINDOWS_PER_POINT: u32 = 8;
@@ -440,24 +448,37 @@ fn identify_channel(
         (f_pk + 2.0 * step).min(to),
         a.fine_points,
     );
+    // The fine pass settles for FINE_SETTLE_TAUS of the coarse fit's τ̂.
+    let fine_settle = match (a.settle_ms, fitid::fit(&samples(&rec), None, &FitConfig::DEFAULT)) {
+        (None, Ok(f)) => {
+            let tau = f.model.q / (std::f64::consts::PI * f.model.resonance_hz);
+            Duration::from_secs_f64(FINE_SETTLE_TAUS * tau).min(settle)
+        }
+        _ => settle,
+    };
     expect(c.call(Request::Stop)?)?;
-    sweep(c, fs, base, ch, amp1, &fine, settle, &mut rec)?;
+    let mut rec = Vec::new();
+    sweep(c, fs, base, ch, amp1, &fine, fine_settle, &mut rec)?;
     rec.sort_by(|x, y| x.0.total_cmp(&y.0));
     rec.dedup_by(|x, y| x.0 == y.0);
-    let record: Vec<Sample> = rec
-        .iter()
-        .map(|&(f, re, im, _)| Sample {
-            freq_hz: f,
-            re_m_per_v: re,
-            im_m_per_v: im,
-        })
-        .collect();
+    let record = samples(&rec);
     let fit = fitid::fit(&record, None, &FitConfig::DEFAULT);
     Ok(Channel {
         name: if ch == 0 { "normal" } else { "tangential" },
         record,
         fit,
     })
+}
+
+/// A sweep's record as the fit's samples.
+fn samples(rec: &[(f64, f64, f64, f64)]) -> Vec<Sample> {
+    rec.iter()
+        .map(|&(f, re, im, _)| Sample {
+            freq_hz: f,
+            re_m_per_v: re,
+            im_m_per_v: im,
+        })
+        .collect()
 }
 
 /// JSON keys and text labels of one channel's rows (normal, tangential).
