@@ -98,6 +98,161 @@ fn id(x: f32) -> f32 {
     x
 }
 
+/// The pickups' lock-ins and the displacement loop (protocol v5):
+/// one 64-sample ADC half-buffer at 20 kHz (one lock-in window
+/// per half: fit of both pickups, amplitude and φ, the loop's
+/// step D3 and its new voltages), minus the same half without
+/// the pickups (the force intake alone).
+fn displacement_costs(table: &model_core::dds::SineTable<1024>, empty: u32, per_insn: f32) {
+    use model_core::device::{
+        Contact, Device, DeviceConfig, DisplacementOptions, DriveMode, DriveSetting, Track,
+        TransducerModel, Transducers,
+    };
+    let cfg = DeviceConfig::driver_board(1);
+    let contact = Contact {
+        mu0: 0.3,
+        kz: 1e7,
+        kx: 1e7,
+    };
+    if let Ok(mut dev) = Device::new(cfg, table, contact) {
+        let m = |f: f32, q: f32, g: f32| TransducerModel {
+            resonance_hz: f,
+            q,
+            gain_m_per_v: g,
+            phase_lag_rad: 0.126,
+        };
+        let _ = dev.set_transducers(Some(Transducers {
+            z: m(20_300.0, 261.0, 8.27e-8),
+            x: m(19_700.0, 182.0, 4.14e-8),
+        }));
+        let _ = dev.set_drive_mode(DriveMode::Displacement);
+        let _ = dev.set_drive(DriveSetting {
+            freq_hz: 20_000.0,
+            amp_z_m: 2e-6,
+            amp_x_m: 3e-7,
+            offset_z_m: 4e-6,
+            phase_rad: 0.7,
+        });
+        let _ = dev.start();
+        let mut dac = [0u32; 64];
+        let forces = [(2048u16, 2048u16); 64];
+        // Pickups reading ≈ 2 µm and 0.3 µm at 20 kHz (0.04 cycle per sample).
+        let mut pick = [(0u16, 0u16); 64];
+        for (i, p) in pick.iter_mut().enumerate() {
+            let (sn, cs) = FastF32::sin_cos(core::f32::consts::TAU * 0.04 * i as f32);
+            *p = ((2048.0 + 400.0 * cs) as u16, (2048.0 + 60.0 * sn) as u16);
+        }
+        // Past the start's ramp (4τ ≈ 16 ms = 125 halves): the loop runs.
+        for _ in 0..300 {
+            dev.fill_dac(0, &mut dac);
+            dev.adc_block_with_pickups(0, &forces, &pick);
+        }
+        dev.fill_dac(0, &mut dac);
+        let plain = ticks(|| dev.adc_block(0, &forces)).saturating_sub(empty);
+        dev.fill_dac(0, &mut dac);
+        let with = ticks(|| dev.adc_block_with_pickups(0, &forces, &pick)).saturating_sub(empty);
+        let st = dev.status();
+        let insn = (with.saturating_sub(plain) as f32 / per_insn) as u32;
+        hprintln!(
+            "pickups' lock-ins + displacement loop (64 samples, one window, running {}, faults {}): {} instructions per half-buffer = {}% of 0.128 ms at 168 MHz",
+            st.running,
+            st.faults,
+            insn,
+            insn as f32 * 100.0 / 21_504.0
+        );
+        // The split: at 5 kHz a window spans two blocks, so every
+        // other block only accumulates (per-sample cost), the
+        // next also solves and steps the loop (per-window cost).
+        // (Amplitudes the DAC reaches so far below resonance.)
+        let _ = dev.set_drive(DriveSetting {
+            freq_hz: 5_000.0,
+            amp_z_m: 1e-7,
+            amp_x_m: 3e-8,
+            offset_z_m: 4e-6,
+            phase_rad: 0.7,
+        });
+        for _ in 0..600 {
+            dev.fill_dac(0, &mut dac);
+            dev.adc_block_with_pickups(0, &forces, &pick);
+        }
+        let (mut acc, mut close) = (u32::MAX, u32::MAX);
+        for _ in 0..4 {
+            dev.fill_dac(0, &mut dac);
+            let plain = ticks(|| dev.adc_block(0, &forces));
+            dev.fill_dac(0, &mut dac);
+            let w0 = dev.measured_drive().map_or(0, |m| m.windows);
+            let t = ticks(|| dev.adc_block_with_pickups(0, &forces, &pick));
+            let w1 = dev.measured_drive().map_or(0, |m| m.windows);
+            let t = t.saturating_sub(plain);
+            if w1 == w0 {
+                acc = acc.min(t);
+            } else {
+                close = close.min(t);
+            }
+        }
+        hprintln!(
+            "  of which: accumulating 64 samples {} instructions ({} per sample); closing a window (fit, guard, loop step D3, new voltages) {} more",
+            (acc as f32 / per_insn) as u32,
+            (acc as f32 / per_insn / 64.0) as u32,
+            (close.saturating_sub(acc) as f32 / per_insn) as u32
+        );
+
+        // v6: the dead-beat fill (D4–D6: both channels' voltages from the
+        // model's envelope) against a voltage-mode fill, and a window's
+        // close with the resonance tracking (T1–T3) against one without.
+        let _ = dev.set_drive(DriveSetting {
+            freq_hz: 20_000.0,
+            amp_z_m: 2e-6,
+            amp_x_m: 3e-7,
+            offset_z_m: 4e-6,
+            phase_rad: 0.7,
+        });
+        for _ in 0..300 {
+            dev.fill_dac(0, &mut dac);
+            dev.adc_block_with_pickups(0, &forces, &pick);
+        }
+        let mut fill_disp = u32::MAX;
+        for _ in 0..4 {
+            fill_disp = fill_disp.min(ticks(|| dev.fill_dac(0, &mut dac)));
+            dev.adc_block_with_pickups(0, &forces, &pick);
+        }
+        let close_plain = {
+            dev.fill_dac(0, &mut dac);
+            ticks(|| dev.adc_block_with_pickups(0, &forces, &pick))
+        };
+        let _ = dev.set_displacement_options(DisplacementOptions {
+            track: Track::Z,
+            headroom: 2.0,
+        });
+        let mut close_track = u32::MAX;
+        for _ in 0..4 {
+            dev.fill_dac(0, &mut dac);
+            close_track = close_track.min(ticks(|| dev.adc_block_with_pickups(0, &forces, &pick)));
+        }
+        let tracked = dev.status().options.track == Track::Z;
+        let _ = dev.set_drive_mode(DriveMode::OpenLoop);
+        // The voltage mode's ramps to its levels first (a settled fill).
+        for _ in 0..4000 {
+            if dev.dds().settled() {
+                break;
+            }
+            dev.fill_dac(0, &mut dac);
+        }
+        let mut fill_volt = u32::MAX;
+        for _ in 0..4 {
+            fill_volt = fill_volt.min(ticks(|| dev.fill_dac(0, &mut dac)));
+            dev.adc_block_with_pickups(0, &forces, &pick);
+        }
+        hprintln!(
+            "dead-beat fill (D4–D6, both channels): {} instructions per half-buffer more than a settled voltage-mode fill ({}); tracking step (T1–T3, on {}): {} instructions per window",
+            (fill_disp.saturating_sub(fill_volt) as f32 / per_insn) as u32,
+            dev.dds().settled(),
+            tracked,
+            (close_track.saturating_sub(close_plain) as f32 / per_insn) as i32
+        );
+    }
+}
+
 #[entry]
 fn main() -> ! {
     let Some(cp) = cortex_m::Peripherals::take() else {
@@ -382,107 +537,7 @@ fn main() -> ! {
                     (t as f32 / per_insn / 256.0) as u32
                 );
             }
-            // The pickups' lock-ins and the displacement loop (protocol v5):
-            // one 64-sample ADC half-buffer at 20 kHz (one lock-in window
-            // per half: fit of both pickups, amplitude and φ, the loop's
-            // step D3 and its new voltages), minus the same half without
-            // the pickups (the force intake alone).
-            {
-                use model_core::device::{
-                    Contact, Device, DeviceConfig, DriveMode, DriveSetting, TransducerModel,
-                    Transducers,
-                };
-                let cfg = DeviceConfig::driver_board(1);
-                let contact = Contact {
-                    mu0: 0.3,
-                    kz: 1e7,
-                    kx: 1e7,
-                };
-                if let Ok(mut dev) = Device::new(cfg, table, contact) {
-                    let m = |f: f32, q: f32, g: f32| TransducerModel {
-                        resonance_hz: f,
-                        q,
-                        gain_m_per_v: g,
-                        phase_lag_rad: 0.126,
-                    };
-                    let _ = dev.set_transducers(Some(Transducers {
-                        z: m(20_300.0, 261.0, 8.27e-8),
-                        x: m(19_700.0, 182.0, 4.14e-8),
-                    }));
-                    let _ = dev.set_drive_mode(DriveMode::Displacement);
-                    let _ = dev.set_drive(DriveSetting {
-                        freq_hz: 20_000.0,
-                        amp_z_m: 2e-6,
-                        amp_x_m: 3e-7,
-                        offset_z_m: 4e-6,
-                        phase_rad: 0.7,
-                    });
-                    let _ = dev.start();
-                    let mut dac = [0u32; 64];
-                    let forces = [(2048u16, 2048u16); 64];
-                    // Pickups reading ≈ 2 µm and 0.3 µm at 20 kHz (0.04 cycle per sample).
-                    let mut pick = [(0u16, 0u16); 64];
-                    for (i, p) in pick.iter_mut().enumerate() {
-                        let (sn, cs) = FastF32::sin_cos(core::f32::consts::TAU * 0.04 * i as f32);
-                        *p = ((2048.0 + 400.0 * cs) as u16, (2048.0 + 60.0 * sn) as u16);
-                    }
-                    // Past the start's ramp (4τ ≈ 16 ms = 125 halves): the loop runs.
-                    for _ in 0..300 {
-                        dev.fill_dac(0, &mut dac);
-                        dev.adc_block_with_pickups(0, &forces, &pick);
-                    }
-                    dev.fill_dac(0, &mut dac);
-                    let plain = ticks(|| dev.adc_block(0, &forces)).saturating_sub(empty);
-                    dev.fill_dac(0, &mut dac);
-                    let with = ticks(|| dev.adc_block_with_pickups(0, &forces, &pick))
-                        .saturating_sub(empty);
-                    let st = dev.status();
-                    let insn = (with.saturating_sub(plain) as f32 / per_insn) as u32;
-                    hprintln!(
-                        "pickups' lock-ins + displacement loop (64 samples, one window, running {}, faults {}): {} instructions per half-buffer = {}% of 0.128 ms at 168 MHz",
-                        st.running,
-                        st.faults,
-                        insn,
-                        insn as f32 * 100.0 / 21_504.0
-                    );
-                    // The split: at 5 kHz a window spans two blocks, so every
-                    // other block only accumulates (per-sample cost), the
-                    // next also solves and steps the loop (per-window cost).
-                    // (Amplitudes the DAC reaches so far below resonance.)
-                    let _ = dev.set_drive(DriveSetting {
-                        freq_hz: 5_000.0,
-                        amp_z_m: 1e-7,
-                        amp_x_m: 3e-8,
-                        offset_z_m: 4e-6,
-                        phase_rad: 0.7,
-                    });
-                    for _ in 0..600 {
-                        dev.fill_dac(0, &mut dac);
-                        dev.adc_block_with_pickups(0, &forces, &pick);
-                    }
-                    let (mut acc, mut close) = (u32::MAX, u32::MAX);
-                    for _ in 0..4 {
-                        dev.fill_dac(0, &mut dac);
-                        let plain = ticks(|| dev.adc_block(0, &forces));
-                        dev.fill_dac(0, &mut dac);
-                        let w0 = dev.measured_drive().map_or(0, |m| m.windows);
-                        let t = ticks(|| dev.adc_block_with_pickups(0, &forces, &pick));
-                        let w1 = dev.measured_drive().map_or(0, |m| m.windows);
-                        let t = t.saturating_sub(plain);
-                        if w1 == w0 {
-                            acc = acc.min(t);
-                        } else {
-                            close = close.min(t);
-                        }
-                    }
-                    hprintln!(
-                        "  of which: accumulating 64 samples {} instructions ({} per sample); closing a window (fit, guard, loop step D3, new voltages) {} more",
-                        (acc as f32 / per_insn) as u32,
-                        (acc as f32 / per_insn / 64.0) as u32,
-                        (close.saturating_sub(acc) as f32 / per_insn) as u32
-                    );
-                }
-            }
+            displacement_costs(table, empty, per_insn);
             dds.set_interp(model_core::dds::Interp::Nearest);
             let t = ticks(|| dds.fill(&mut buf)).saturating_sub(empty);
             hprintln!(

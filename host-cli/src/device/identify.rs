@@ -449,7 +449,10 @@ fn identify_channel(
         a.fine_points,
     );
     // The fine pass settles for FINE_SETTLE_TAUS of the coarse fit's τ̂.
-    let fine_settle = match (a.settle_ms, fitid::fit(&samples(&rec), None, &FitConfig::DEFAULT)) {
+    let fine_settle = match (
+        a.settle_ms,
+        fitid::fit(&samples(&rec), None, &FitConfig::DEFAULT),
+    ) {
         (None, Ok(f)) => {
             let tau = f.model.q / (std::f64::consts::PI * f.model.resonance_hz);
             Duration::from_secs_f64(FINE_SETTLE_TAUS * tau).min(settle)

@@ -95,7 +95,8 @@ impl HalfDrive {
         let (b, a) = (self.before[c], self.after[c]);
         let n = i as f32;
         let da = (a.amp_target - b.amp)
-            .clamp(-self.slew.amp_per_sample * n, self.slew.amp_per_sample * n);
+            .max(-self.slew.amp_per_sample * n)
+            .min(self.slew.amp_per_sample * n);
         let dp = a.phase_target.wrapping_sub(b.phase) as i32 as i64;
         let lim = i64::from(self.slew.phase_per_sample.min(i32::MAX as u32)) * i as i64;
         (

@@ -160,7 +160,9 @@ impl<const N: usize> Device<'_, N> {
         // T3 on the DDS: the tuning word moves by k·e (phase-continuous).
         let fs = self.cfg.sample_rate_hz as f32;
         let words_per_hz = 4_294_967_296.0 / fs;
-        let f_new = (f + k * e).clamp(lo, hi);
+        // max/min, not `clamp`: its assertion would pull float formatting
+        // into the firmware (lo < hi here).
+        let f_new = (f + k * e).max(lo).min(hi);
         let dtw = ((f_new - f) * words_per_hz) as i32;
         if dtw != 0 {
             let tw = self.applied.achieved.tuning_word.wrapping_add(dtw as u32);
