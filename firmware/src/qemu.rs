@@ -25,7 +25,8 @@
 //! (μ₀ 0.3, k_z = k_x = 10⁷ N/m at power-up): μ₀ = [`PLANT_MU0`],
 //! k_z = k_x = 10⁷ N/m, the stage sliding at [`PLANT_V0`], ideal transducers
 //! (with the feature `qemu-resonant` the bench's resonant ones,
-//! `model_core::board::plant::bench`),
+//! `model_core::board::plant::bench`; with `qemu-drift` its normal mode at
+//! 20 100 Hz drifting by −20 Hz/s),
 //! ADC noise uniform in ±[`ADC_NOISE_COUNTS`] (as the virtual device's
 //! default), rounded to whole counts. It runs in
 //! `f32` with the FastF32 sine, [`SUB`] sub-steps per sample.
@@ -39,6 +40,13 @@ use model_core::board::plant::ResonantOptions;
 use model_core::board::plant::{HalfDrive, Noise, Plant, SampleConditions};
 use model_core::device::DeviceConfig;
 use model_core::float::FastF32;
+
+/// `qemu-drift`: the normal resonance at power-up, Hz.
+#[cfg(feature = "qemu-drift")]
+const DRIFT_RESONANCE_Z_HZ: f32 = 20_100.0;
+/// `qemu-drift`: its drift, Hz per second of device time.
+#[cfg(feature = "qemu-drift")]
+const DRIFT_HZ_PER_S: f32 = -20.0;
 
 use crate::{DEVICE, FS_HZ, HALF, HALVES};
 
@@ -117,8 +125,15 @@ impl Analog {
         #[cfg(feature = "qemu-resonant")]
         {
             let h = 1.0 / (FS_HZ as f32 * SUB as f32);
-            plant.resonant =
-                model_core::board::plant::Resonant::new(ResonantOptions::bench(&cfg), h).ok();
+            #[allow(unused_mut)]
+            let mut opts = ResonantOptions::bench(&cfg);
+            // `qemu-drift`: the tracking bench's normal mode, drifting.
+            #[cfg(feature = "qemu-drift")]
+            {
+                opts.modes[0].resonance_hz = DRIFT_RESONANCE_Z_HZ;
+                opts.drift_hz_per_s[0] = DRIFT_HZ_PER_S;
+            }
+            plant.resonant = model_core::board::plant::Resonant::new(opts, h).ok();
         }
         Analog {
             plant,

@@ -1100,3 +1100,94 @@ fn identify_and_the_displacement_mode_on_the_firmware() {
     eprintln!("measure {m}, predict {p}");
     assert!((m / p - 1.0).abs() <= 0.02, "measure {m} vs predict {p}");
 }
+
+/// Issue 25's tracking scenario on the firmware (`--features qemu-drift`:
+/// the normal resonance at 20 100 Hz drifting by −20 Hz per second of
+/// device time): `identify` under the drift, `drive set --freq 20100 …
+/// --track z`, `start`; the tracking locks and then follows 100 Hz of drift
+/// (5 s of device time, read from the frequency it tracks: the drift is
+/// exact), during which every status shows the lock and `|tracking_error_hz|`
+/// within 0.2 % of the frequency (the issue's bound); `measure`
+/// agrees with `predict` within 2 % (the estimator's noise at 4 000
+/// periods is ≈ 0.1 %, the device's f32 model a part in 10⁵).
+#[test]
+#[ignore = "needs qemu-system-arm; run with --ignored"]
+fn tracking_on_the_firmware() {
+    let q = qemu_with("FIRMWARE_DRIFT_ELF", "qemu-drift");
+    ok(&q, &drive_set("20100", "0", "0", "4e-6", None));
+    let t0 = Instant::now();
+    let id = ok(&q, &["identify"]);
+    let f_id = id["resonance_z_hz"].as_f64().unwrap();
+    eprintln!(
+        "identify under QEMU with drift: {:.1} s, f_r {f_id} Hz",
+        t0.elapsed().as_secs_f64()
+    );
+    // The resonance moved during identify (device time), never upwards.
+    assert!(f_id < 20_100.0 && f_id > 19_900.0, "{id}");
+    ok(
+        &q,
+        &[
+            "scene", "set", "--mu0", "0.24", "--kz", "1e7", "--kx", "1e7",
+        ],
+    );
+    ok(
+        &q,
+        &[
+            "drive",
+            "set",
+            "--freq",
+            "20100",
+            "--amp-z",
+            "2e-6",
+            "--amp-x",
+            "3e-7",
+            "--offset-z",
+            "4e-6",
+            "--phase-deg",
+            "40",
+            "--track",
+            "z",
+        ],
+    );
+    ok(&q, &["start"]);
+    let t = Instant::now();
+    let f_lock = loop {
+        let st = ok(&q, &["status"]);
+        assert_eq!(st["faults"], serde_json::json!([]), "{st}");
+        if st["locked"] == true {
+            eprintln!("locked after {:.1} s wall: {st}", t.elapsed().as_secs_f64());
+            break st["frequency_hz"].as_f64().unwrap();
+        }
+        assert!(t.elapsed() < Duration::from_secs(60), "no lock: {st}");
+        std::thread::sleep(Duration::from_millis(200));
+    };
+    let t = Instant::now();
+    loop {
+        let st = ok(&q, &["status"]);
+        assert_eq!(st["faults"], serde_json::json!([]), "{st}");
+        assert_eq!(st["locked"], true, "{st}");
+        let f = st["frequency_hz"].as_f64().unwrap();
+        let e = st["tracking_error_hz"].as_f64().unwrap();
+        assert!(e.abs() <= 0.002 * f, "{st}");
+        if f <= f_lock - 100.0 {
+            eprintln!(
+                "followed 100 Hz in {:.1} s wall: {st}",
+                t.elapsed().as_secs_f64()
+            );
+            break;
+        }
+        assert!(
+            t.elapsed() < Duration::from_secs(180),
+            "drift not followed: {st}"
+        );
+        std::thread::sleep(Duration::from_millis(500));
+    }
+    let m = ok(&q, &["measure", "--periods", "4000"])["mu"]
+        .as_f64()
+        .unwrap();
+    let p = ok(&q, &["predict", "--v0", "0.004"])["mu"]
+        .as_f64()
+        .unwrap();
+    eprintln!("measure {m}, predict {p}");
+    assert!((m / p - 1.0).abs() <= 0.02, "measure {m} vs predict {p}");
+}
