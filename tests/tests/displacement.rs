@@ -323,3 +323,105 @@ fn the_mu_loop_runs_on_the_displacement_loops() {
     );
     assert_eq!(b.dev.status().faults, 0);
 }
+
+/// Anti-windup of the closed μ loop on the displacement loops: driven far
+/// below the normal resonance the DAC reaches only a small Δu_z (the
+/// model's largest displacement there, which `set_drive` names in its
+/// refusal); a setpoint that needs more makes the loop command past it.
+/// Each refused command puts the controller back on the amplitude in force
+/// (`Controller::refused`, its trim with it), is reported (`saturated`), and
+/// the loop goes on updating — it neither stalls nor winds up: once the
+/// setpoint is reachable again it settles as from a fresh start (within
+/// 1 % of μ*, the bound of `the_mu_loop_runs_on_the_displacement_loops`).
+#[test]
+fn the_mu_loop_holds_a_command_the_dac_cannot_take() {
+    use model_core::control;
+    use model_core::device::DeviceError;
+    use model_core::protocol::ControlSetting;
+    let table = SineTable::<1024>::libm();
+    let m = true_modes();
+    let exact = Transducers {
+        z: model_of(m[0], 0.0, 1.0, 1.0),
+        x: model_of(m[1], 0.0, 1.0, 1.0),
+    };
+    let mut b = Bench::new(&table, opts(), exact);
+    // The frequency where the model's largest Δu_z is about 1.5 µm.
+    let mut s = setting(3e-6);
+    let mut reach = 0.0f32;
+    for f in (12_000..20_000).rev().step_by(100) {
+        s.freq_hz = f64::from(f);
+        match b.dev.set_drive(s) {
+            Err(DeviceError::OutOfRange { max, .. }) if max < 1.5e-6 => {
+                reach = max;
+                break;
+            }
+            _ => {}
+        }
+    }
+    assert!(reach > 0.5e-6, "no frequency found: {reach}");
+    s.amp_z_m = 0.5 * reach;
+    b.dev.set_drive(s).unwrap();
+    b.dev.start().unwrap();
+    b.until_settled(40_000);
+    let scene_at = |duz: f32| {
+        model_core::Scene::new(model_core::SceneParams {
+            mu0: MU0 as f32,
+            kz: 1e7,
+            kx: 1e7,
+            uz0: 4e-6,
+            duz,
+            dux: 0.3e-6,
+            omega: (TAU * s.freq_hz) as f32,
+            phi: 40f32.to_radians(),
+        })
+        .unwrap()
+    };
+    let mu_at = |duz: f32| {
+        model_core::device::predict(&scene_at(duz), 0.004)
+            .unwrap()
+            .mu
+    };
+    let run = |b: &mut Bench<'_>, target: f32, secs: f64| {
+        let c = ControlSetting {
+            on: true,
+            target_mu: target,
+            v0_m_s: 0.004,
+            gain: 0.7,
+            periods: 4,
+            rate_m_per_s: 1e-3,
+        };
+        let (scene, now, limit) = b.dev.control_plan_inputs().unwrap();
+        let plan = control::plan(&scene, c.target_mu, c.v0_m_s, now, limit).unwrap();
+        b.dev.set_control(c, Some(plan)).unwrap();
+        let (mut saturated, mut max_cmd) = (0u32, 0.0f32);
+        let mut seen = 0;
+        for _ in 0..(secs / b.t_half()) as usize {
+            b.step();
+            let st = b.dev.control_state();
+            if st.last.update != seen {
+                seen = st.last.update;
+                saturated += u32::from(st.last.saturated);
+                max_cmd = max_cmd.max(b.dev.drive().amp_z_m);
+            }
+        }
+        (b.dev.control_state(), saturated, max_cmd)
+    };
+    // Out of reach: the setpoint of Δu_z = 1.5·reach.
+    let (st, saturated, max_cmd) = run(&mut b, mu_at(1.5 * reach), 0.2);
+    eprintln!(
+        "reach {reach:e} at {} Hz: updates {}, saturated {saturated}, largest applied {max_cmd:e}",
+        s.freq_hz, st.last.update
+    );
+    assert!(st.last.update > 50, "the loop stalled: {st:?}");
+    assert!(saturated > 0, "{st:?}");
+    assert!(max_cmd <= reach, "{max_cmd:e} applied beyond {reach:e}");
+    assert_eq!(b.dev.status().faults, 0);
+    // Reachable again: no wound-up trim to unwind.
+    let target = mu_at(0.6 * reach);
+    let (st, _, _) = run(&mut b, target, 0.2);
+    assert!(
+        (st.last.measured_mu / target - 1.0).abs() <= 0.01,
+        "{} vs {target}",
+        st.last.measured_mu
+    );
+}

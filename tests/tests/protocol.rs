@@ -138,6 +138,10 @@ fn roundtrip_every_request() {
         })),
         Request::GetTransducers,
         Request::SetDriveMode(model_core::protocol::DriveMode::Displacement),
+        Request::SetDisplacementOptions(model_core::protocol::DisplacementOptions {
+            track: model_core::protocol::Track::X,
+            headroom: 3.5,
+        }),
     ];
     assert_eq!(
         reqs.len() as u32,

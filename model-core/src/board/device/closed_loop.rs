@@ -149,7 +149,12 @@ impl<const N: usize> Device<'_, N> {
     pub fn control_plan_inputs(
         &self,
     ) -> Result<(crate::model::scene::Scene<f32>, f32, f32), DeviceError> {
-        let scene = self.scene()?;
+        // While tracking, at the frequency that runs.
+        let scene = if self.tracking_active() {
+            self.form_scene().map_err(DeviceError::Scene)?
+        } else {
+            self.scene()?
+        };
         let limit = self
             .cfg
             .liftoff_limit_m(self.drive.offset_z_m)

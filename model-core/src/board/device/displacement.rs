@@ -197,12 +197,14 @@ impl Default for Loops {
 }
 
 impl Loops {
-    /// The motion starts over from rest (a start: the model's envelope 0).
-    pub(super) fn restart(&mut self) {
+    /// The model starts over from the motion `x` the pickups measured last
+    /// (m; at rest after a stop, moving after a mode switch while running),
+    /// with the voltages `u` (V) in force as the braking bound's reference.
+    pub(super) fn restart(&mut self, x: [C; 2], u: [f32; 2]) {
         let z = [C::new(0.0, 0.0); 2];
-        self.env = z;
-        self.last_d = z;
-        self.u_prev = [0.0; 2];
+        self.env = x;
+        self.last_d = x;
+        self.u_prev = u;
         self.at_fill = [(z, z); super::measure::FILL_RING];
         self.moving = [[false; 2]; super::measure::FILL_RING];
         self.since_change = [0; 2];
@@ -321,7 +323,7 @@ impl<const N: usize> Device<'_, N> {
                 if self.mode == DriveMode::Displacement {
                     let old = (self.transducers, self.loops);
                     self.transducers = Some(t);
-                    self.loops = Loops::default();
+                    self.loops = self.fresh_loops();
                     if let Err(e) = self.replan() {
                         (self.transducers, self.loops) = old;
                         return Err(e);
@@ -360,12 +362,31 @@ impl<const N: usize> Device<'_, N> {
         }
         let old = (self.mode, self.loops);
         self.mode = mode;
-        self.loops = Loops::default();
+        self.loops = self.fresh_loops();
         if let Err(e) = self.replan() {
             (self.mode, self.loops) = old;
             return Err(e);
         }
         Ok(())
+    }
+
+    /// Loops that start from the motion in force: the model's envelope at
+    /// the pickups' last phasors and the braking bound at the voltages the
+    /// DDS outputs (a switch of mode or model while running must not
+    /// overdrive a transducer that already moves).
+    pub(super) fn fresh_loops(&self) -> Loops {
+        let mut l = Loops::default();
+        if self.running {
+            l.restart(self.motion_phasors(), self.output_volts());
+        }
+        l
+    }
+
+    /// The voltage amplitude each DDS channel outputs now, V.
+    pub(super) fn output_volts(&self) -> [f32; 2] {
+        let v = DAC_VOLTS_PER_CODE as f32;
+        let ch = self.dds.channels();
+        [ch[0].amp.abs() * v, ch[1].amp.abs() * v]
     }
 
     /// Plans the accepted drive again and applies it as `set_drive` would.
@@ -662,11 +683,6 @@ impl<const N: usize> Device<'_, N> {
         } else {
             0
         };
-    }
-
-    /// TEMP debug.
-    pub fn debug_loops(&self) -> ([C; 2], [C; 2]) {
-        (self.loops.env, self.loops.c)
     }
 
     /// The observer of a transition (D7): the model's envelope moves by

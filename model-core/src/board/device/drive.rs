@@ -218,7 +218,7 @@ impl<const N: usize> Device<'_, N> {
             phase_rad: phase,
         };
         if plan.fresh_loops {
-            self.loops = super::displacement::Loops::default();
+            self.loops = self.fresh_loops();
         }
         self.loops.good = 0;
         self.loops.avg = None;
@@ -253,8 +253,8 @@ impl<const N: usize> Device<'_, N> {
         self.dds.set_level(1, plan.levels[1])?;
         self.dds.set_phase(0, plan.phases[0]);
         self.dds.set_phase(1, plan.phases[1]);
+        self.loops.restart(self.motion_phasors(), self.output_volts());
         self.running = true;
-        self.loops.restart();
         self.tracker = super::tracking::Tracker::default();
         self.loops.model = None;
         self.ramp_generation = self.ramp_generation.wrapping_add(1);

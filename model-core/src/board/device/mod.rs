@@ -308,7 +308,7 @@ impl<'t, const N: usize> Device<'t, N> {
         self.scene = self.form_scene();
     }
 
-    fn form_scene(&self) -> Result<Scene<f32>, SceneError> {
+    pub(super) fn form_scene(&self) -> Result<Scene<f32>, SceneError> {
         let d = &self.drive;
         let mode = if self.allow_liftoff {
             ContactMode::Intermittent

@@ -33,6 +33,8 @@ pub const WINDOW_SPAN_RAD: f32 = core::f32::consts::TAU;
 pub(super) struct Motion {
     lock: LockIn<f32, 2>,
     last: Option<MeasuredDrive>,
+    /// The last window's phasors `X = A·e^{jψ}` of each mode, m.
+    phasors: [C; 2],
     peak_z: f32,
     windows: u32,
 }
@@ -93,6 +95,7 @@ impl<const N: usize> Device<'_, N> {
         m.peak_z = m.peak_z.max(az);
         m.windows = m.windows.wrapping_add(1);
         let (rz, rx) = (self.response(0, xz), self.response(1, xx));
+        self.motion.phasors = [xz, xx];
         let m = &mut self.motion;
         m.last = Some(MeasuredDrive {
             amp_z_m: az,
@@ -126,6 +129,11 @@ impl<const N: usize> Device<'_, N> {
             - core::f32::consts::FRAC_PI_2;
         let h = x / super::displacement::polar(v, p);
         Some([h.re, h.im])
+    }
+
+    /// The last window's phasors of the two modes, m (0 before the first).
+    pub(super) fn motion_phasors(&self) -> [C; 2] {
+        self.motion.phasors
     }
 
     /// The last window's measured motion (`None` before the first).

@@ -55,6 +55,9 @@ impl<const N: usize> Device<'_, N> {
                 )
                 .map_err(DeviceError::Scene)
             }
+            // While tracking, the scene at the frequency that runs (the
+            // cached one holds the setting's).
+            _ if self.tracking_active() => self.form_scene().map_err(DeviceError::Scene),
             _ => self.scene(),
         }
     }
