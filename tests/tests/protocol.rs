@@ -11,7 +11,7 @@ use model_core::protocol::{
 use model_core::server::Server;
 
 /// The protocol version byte of the hand-built frames (docs/protocol.md, "Frame").
-const V: u8 = 5;
+const V: u8 = 6;
 
 fn cfg() -> DeviceConfig {
     integration_tests::board_config_1mhz()
@@ -958,7 +958,15 @@ fn ramp_done_follows_every_start_and_stop_and_status_shows_the_output() {
     // v3: liftoff_allowed, false at power-up; v4: measured, None (00): this
     // loop feeds the forces only, no motion pickups; v5: the last field, mode,
     // OpenLoop (00) at power-up.
-    assert_eq!((st.len(), st[21], st[22], st[23]), (24, 0, 0, 0));
+    assert_eq!((st.len(), st[21], st[22], st[23]), (35, 0, 0, 0));
+    // v6: frequency_hz (f32), the DDS's: the setting to its resolution
+    // f_s/2^32 = 2.3e-4 Hz and f32 rounding (half an ulp of 4e4: 2e-3 Hz);
+    // options {track: None (00), headroom 2.0}; tracking_error_hz None (00);
+    // locked false (00).
+    assert!((f64::from(f32_at(&st, 24)) - g.freq_hz).abs() <= 1e6 / 2f64.powi(32) + 2e-3);
+    assert_eq!(st[28], 0);
+    assert_eq!(f32_at(&st, 29), 2.0);
+    assert_eq!((st[33], st[34]), (0, 0));
     // SetLiftOff (14) {allow: true} → Ok; Status shows it.
     assert_eq!(ask(&mut s, &mut dev, &[V, 10, 0, 14, 1]), [V, 10, 1, 2]);
     assert_eq!(ask(&mut s, &mut dev, &[V, 11, 0, 11])[21], 1);
@@ -1025,6 +1033,25 @@ fn displacement_mode_requests_get_the_spec_answers() {
     // Nothing stored at power-up: Transducers(None); the mode needs them: NotIdentified (16).
     assert_eq!(ask(&mut s, &mut dev, &[V, 1, 0, 18]), [V, 1, 1, 9, 0]);
     assert_eq!(ask(&mut s, &mut dev, &[V, 2, 0, 19, 1]), [V, 2, 1, 7, 16]);
+    // v6, request 20 SetDisplacementOptions {track, headroom f32}: tracking
+    // needs the transducers (NotIdentified); a headroom outside [1, 8] is
+    // OutOfRange{Headroom (14), 1, 8}, NaN too; both leave the options as
+    // they were (Status: track 00 at byte 28, headroom 2.0 at 29).
+    let opts = |seq: u8, track: u8, h: f32| cat(&[&[V, seq, 0, 20, track], &h.to_le_bytes()]);
+    assert_eq!(ask(&mut s, &mut dev, &opts(30, 1, 2.0)), [V, 30, 1, 7, 16]);
+    for (seq, h) in [(31u8, 0.99f32), (32, 8.01), (33, f32::NAN)] {
+        assert_eq!(
+            ask(&mut s, &mut dev, &opts(seq, 0, h)),
+            out_of_range(seq, 14, 1.0, 8.0)
+        );
+    }
+    let st = ask(&mut s, &mut dev, &[V, 34, 0, 11]);
+    assert_eq!((st[28], f32_at(&st, 29)), (0, 2.0));
+    // Headroom 1 and 8 (inclusive) without tracking: Ok, shown by Status.
+    assert_eq!(ask(&mut s, &mut dev, &opts(35, 0, 8.0)), [V, 35, 1, 2]);
+    assert_eq!(ask(&mut s, &mut dev, &opts(36, 0, 1.0)), [V, 36, 1, 2]);
+    assert_eq!(f32_at(&ask(&mut s, &mut dev, &[V, 37, 0, 11]), 29), 1.0);
+    assert_eq!(ask(&mut s, &mut dev, &opts(38, 0, 2.0)), [V, 38, 1, 2]);
     // Validation, z before x, fields in order: the first bad field is named.
     let bad = [
         (model_bytes(0.0, 0.5, 1e-6, 0.1), x.clone(), 10, 0.0, 1e7),
@@ -1083,9 +1110,9 @@ fn displacement_mode_requests_get_the_spec_answers() {
     // relative in |Ĥ|): 2e-6 relative bounds both.
     let got = f64::from(f32_at(&refused, 10));
     assert!((got - m).abs() <= 2e-6 * m, "{got} vs {m}");
-    assert_eq!(*ask(&mut s, &mut dev, &[V, 13, 0, 11]).last().unwrap(), 0);
+    assert_eq!(ask(&mut s, &mut dev, &[V, 13, 0, 11])[23], 0);
     // Δu_z = 2 µm fits (1.5 V of the 1.61 V room): the switch is accepted,
-    // Status.mode = Displacement (1, the last byte; measured None here), and
+    // Status.mode = Displacement (1, byte 23; measured None here), and
     // Applied.phase_rad is exactly the setting's φ.
     let r = ask(
         &mut s,
@@ -1095,7 +1122,7 @@ fn displacement_mode_requests_get_the_spec_answers() {
     assert_eq!(&r[..4], [V, 14, 1, 1]);
     assert_eq!(ask(&mut s, &mut dev, &[V, 15, 0, 19, 1]), [V, 15, 1, 2]);
     let st = ask(&mut s, &mut dev, &[V, 16, 0, 11]);
-    assert_eq!((st.len(), st[22], st[23]), (24, 0, 1), "{st:02x?}");
+    assert_eq!((st.len(), st[22], st[23]), (35, 0, 1), "{st:02x?}");
     let d = ask(&mut s, &mut dev, &[V, 17, 0, 1]);
     assert_eq!(&d[..4], [V, 17, 1, 1]);
     assert_eq!(applied_phase(&d), f64::from(phi));
@@ -1114,16 +1141,16 @@ fn displacement_mode_requests_get_the_spec_answers() {
     assert_eq!(ask(&mut s, &mut dev, &[V, 20, 0, 19, 1]), [V, 20, 1, 2]);
     // `Reset` (13) keeps the transducers and the mode ("Reset": settings kept):
     // GetTransducers still answers Some (01 after the response index 9), the
-    // status' last byte (mode) is still 1.
+    // status' mode (byte 23) is still 1.
     assert_eq!(ask(&mut s, &mut dev, &[V, 40, 0, 13]), [V, 40, 1, 2]);
     assert_eq!(
         &ask(&mut s, &mut dev, &[V, 41, 0, 18])[..5],
         [V, 41, 1, 9, 1]
     );
-    assert_eq!(*ask(&mut s, &mut dev, &[V, 42, 0, 11]).last().unwrap(), 1);
+    assert_eq!(ask(&mut s, &mut dev, &[V, 42, 0, 11])[23], 1);
     // Back to voltage mode, then they can be forgotten.
     assert_eq!(ask(&mut s, &mut dev, &[V, 21, 0, 19, 0]), [V, 21, 1, 2]);
-    assert_eq!(*ask(&mut s, &mut dev, &[V, 22, 0, 11]).last().unwrap(), 0);
+    assert_eq!(ask(&mut s, &mut dev, &[V, 22, 0, 11])[23], 0);
     assert_eq!(ask(&mut s, &mut dev, &[V, 23, 0, 17, 0]), [V, 23, 1, 2]);
     assert_eq!(ask(&mut s, &mut dev, &[V, 24, 0, 18]), [V, 24, 1, 9, 0]);
 }
