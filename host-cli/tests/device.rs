@@ -18,6 +18,9 @@ use model_core::protocol::{Body, Frame, Request, Response, WireError, PROTOCOL_V
 use serde_json::Value;
 use serialport::SerialPort;
 
+/// The protocol version byte of the frames written by hand (docs/protocol.md, "Frame").
+const V: u8 = 6;
+
 /// How far the virtual device's measured μ may be from its prediction (both
 /// absolute μ) for [`DRIVE`] at the sim's stage velocity 4 mm/s, with the
 /// contact μ₀ = 0.3, k_z = k_x = 10⁷ N/m: a = 0.5, b = k_xΔu_x/(μ₀k_z u_z0) = 0.25,
@@ -317,7 +320,7 @@ fn ask(p: &mut dyn SerialPort, payload: &[u8]) -> Frame {
 
 /// `GetStatus` (index 11) with seq `seq`, written from the spec.
 fn raw_status(p: &mut dyn SerialPort, seq: u8) -> model_core::device::Status {
-    match ask(p, &[5, seq, 0, 11]).body {
+    match ask(p, &[V, seq, 0, 11]).body {
         Body::Response(Response::Status(st)) => st,
         other => panic!("{other:?}"),
     }
@@ -330,11 +333,11 @@ fn a_retried_measure_gets_the_same_answer_and_reset_ends_everything() {
     let mut p = raw_port(&s);
     let p = &mut *p;
     // Start (index 3); the ramps take ≈ 45 ms of device time.
-    assert_eq!(ask(p, &[5, 30, 0, 3]).body, Body::Response(Response::Ok));
+    assert_eq!(ask(p, &[V, 30, 0, 3]).body, Body::Response(Response::Ok));
     std::thread::sleep(Duration::from_millis(300));
-    // Measure{periods: 20000} with seq 40, written from the spec: version 05,
+    // Measure{periods: 20000} with seq 40, written from the spec: version 06,
     // seq 28 (40), Body::Request 00, Request::Measure 08, periods varint a0 9c 01.
-    let measure_40 = [5, 40, 0, 8, 0xa0, 0x9c, 0x01];
+    let measure_40 = [V, 40, 0, 8, 0xa0, 0x9c, 0x01];
     let f = ask(p, &measure_40);
     assert_eq!((f.seq, f.body), (40, Body::Response(Response::Ok)));
     // The retry (same seq) while it runs: the same answer, not Busy.
@@ -342,17 +345,17 @@ fn a_retried_measure_gets_the_same_answer_and_reset_ends_everything() {
     assert_eq!((f.seq, f.body), (40, Body::Response(Response::Ok)));
     assert!(raw_status(p, 43).measuring);
     // A new seq while it runs: Busy.
-    let f = ask(p, &[5, 41, 0, 8, 0xa0, 0x9c, 0x01]);
+    let f = ask(p, &[V, 41, 0, 8, 0xa0, 0x9c, 0x01]);
     assert_eq!((f.seq, err_of(&f)), (41, WireError::Busy));
     // Reset (index 13): ends the measurement and stops the drive.
-    let f = ask(p, &[5, 42, 0, 13]);
+    let f = ask(p, &[V, 42, 0, 13]);
     assert_eq!((f.seq, f.body), (42, Body::Response(Response::Ok)));
     let st = raw_status(p, 44);
     assert!(!st.measuring && !st.running, "{st:?}");
     // A measurement that finished: its retry starts nothing.
-    assert_eq!(ask(p, &[5, 45, 0, 3]).body, Body::Response(Response::Ok));
+    assert_eq!(ask(p, &[V, 45, 0, 3]).body, Body::Response(Response::Ok));
     std::thread::sleep(Duration::from_millis(300));
-    let measure_50 = [5, 50, 0, 8, 0xc8, 0x01]; // 200 periods = 10 ms
+    let measure_50 = [V, 50, 0, 8, 0xc8, 0x01]; // 200 periods = 10 ms
     assert_eq!(ask(p, &measure_50).body, Body::Response(Response::Ok));
     std::thread::sleep(Duration::from_millis(500));
     assert!(!raw_status(p, 51).measuring);
@@ -458,6 +461,11 @@ const MEASURE_KEYS: &[&str] = &[
     "amp_z_peak_m",
 ];
 const STATUS_KEYS: &[&str] = &[
+    "frequency_hz",
+    "track",
+    "headroom",
+    "tracking_error_hz",
+    "locked",
     "running",
     "settled",
     "measuring",
@@ -789,11 +797,11 @@ fn the_virtual_device_survives_a_host_that_stops_reading() {
     ok_json(&s, &["start"]);
     std::thread::sleep(Duration::from_millis(300));
     let mut p = raw_port(&s);
-    // Stream{on: true, periods: 20} (index 10), from the spec: version 05, seq 60,
+    // Stream{on: true, periods: 20} (index 10), from the spec: version 06, seq 60,
     // Body::Request 00, Stream 0a, bool 01, varint 14. 20 periods = 1 ms of
     // device time: ~70-byte estimates fill the pty's few-kB buffer well within
     // the 3 s nobody reads here (the old device exited when a write timed out).
-    p.write_all(&common::raw_frame(&[5, 60, 0, 0x0a, 1, 0x14]))
+    p.write_all(&common::raw_frame(&[V, 60, 0, 0x0a, 1, 0x14]))
         .unwrap();
     std::thread::sleep(Duration::from_secs(3));
     assert!(
