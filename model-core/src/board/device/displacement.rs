@@ -77,6 +77,23 @@
 //! model no longer describes the transducer and c is held), so the voltage
 //! never exceeds `h·C_MAX` times the identified model's steady voltage.
 //!
+//! **The pole the correction places** (D8). The dead-beat step D5 is
+//! exact only with the true pole `s'`; computed with `s`, a fill leaves the
+//! error times `1 − s'/s`, which exceeds 1 in magnitude once the resonance
+//! has moved more than a half band `f_r/(2Q)` from where the model puts it
+//! (a drifting transducer without tracking: the loop would ring up to the
+//! lift-off fault). Near resonance a mode answers `H ∝ −1/s` in the frame
+//! of the drive, so the learned `c = H/Ĥ` is `s/s'` for a moved resonance,
+//! and a gain error times a real factor. The fills therefore use the pole of
+//! the model's decay rate whose angle the phase of c moves:
+//!
+//! ```text
+//! (D8)  s'T = Re(sT)·w / Re(w),   w = sT·c̄      (sT while Re(w) ≥ 0)
+//! ```
+//!
+//! exact for a moved resonance (`c = s/s'` gives `s'`), unchanged by a gain
+//! error (c real gives `s`); `p` and D6's mean follow it at every fill.
+//!
 //! **An open pickup.** A driven channel whose model envelope exceeds
 //! [`OPEN_FLOOR_M`] while its pickup reads less than [`OPEN_FRACTION`] of
 //! it for [`OPEN_WINDOWS`] windows in a row latches
@@ -138,10 +155,28 @@ pub(super) struct ModelAt {
     key: (u32, u32),
     /// Ĥ of each channel, m/V.
     pub(super) h: [C; 2],
-    /// `p = e^{sT}` of D4 for one fill.
+    /// `sT` of D4 for one fill, the model's own pole.
+    st: [C; 2],
+    /// `p = e^{sT}` of D4 for one fill, with the pole the correction c
+    /// places (D8; set at each fill).
     pub(super) p: [C; 2],
-    /// `(p − 1)/(sT)` of D6.
+    /// `(p − 1)/(sT)` of D6, with the same pole.
     pub(super) mean: [C; 2],
+}
+
+/// The pole a correction `c` implies (D8): with `sT` the model's pole
+/// over a fill, the pole of the same decay rate whose angle the phase of c
+/// moves, `Re(sT)·w/Re(w)`, `w = sT·c̄`; the model's own pole when that
+/// angle leaves the stable half-plane. Returns `(p, (p − 1)/(s'T))`.
+fn pole_of(st: C, c: C) -> (C, C) {
+    let w = st * c.conj();
+    let se = if w.re < 0.0 && (w.re * st.re).is_finite() {
+        w * (st.re / w.re)
+    } else {
+        st
+    };
+    let p = polar(libm::expf(se.re), se.im);
+    (p, (p - C::new(1.0, 0.0)) / se)
 }
 
 /// The displacement loops' state.
@@ -509,6 +544,7 @@ impl<const N: usize> Device<'_, N> {
         let mut m = ModelAt {
             key,
             h: [C::new(0.0, 0.0); 2],
+            st: [C::new(0.0, 0.0); 2],
             p: [C::new(0.0, 0.0); 2],
             mean: [C::new(0.0, 0.0); 2],
         };
@@ -517,8 +553,8 @@ impl<const N: usize> Device<'_, N> {
             let tau = md.q / (core::f32::consts::PI * md.resonance_hz);
             let dw = core::f32::consts::TAU * (md.resonance_hz - f);
             let st = C::new(-tf / tau, dw * tf);
-            m.p[ch] = polar(libm::expf(st.re), st.im);
-            m.mean[ch] = (m.p[ch] - C::new(1.0, 0.0)) / st;
+            m.st[ch] = st;
+            (m.p[ch], m.mean[ch]) = pole_of(st, C::new(1.0, 0.0));
         }
         self.loops.model = Some(m);
         m
@@ -535,7 +571,13 @@ impl<const N: usize> Device<'_, N> {
         let Some(t) = self.transducers else {
             return;
         };
-        let m = self.model_at(&t, n);
+        let mut m = self.model_at(&t, n);
+        // D8: the envelope's pole where the learned c places it (the
+        // observer's propagation uses the same, through the cache).
+        for ch in 0..2 {
+            (m.p[ch], m.mean[ch]) = pole_of(m.st[ch], self.loops.c[ch]);
+        }
+        self.loops.model = Some(m);
         let d = setpoint(&self.drive);
         let v = DAC_VOLTS_PER_CODE as f32;
         let one = C::new(1.0, 0.0);

@@ -253,7 +253,8 @@ impl<const N: usize> Device<'_, N> {
         self.dds.set_level(1, plan.levels[1])?;
         self.dds.set_phase(0, plan.phases[0]);
         self.dds.set_phase(1, plan.phases[1]);
-        self.loops.restart(self.motion_phasors(), self.output_volts());
+        self.loops
+            .restart(self.motion_phasors(), self.output_volts());
         self.running = true;
         self.tracker = super::tracking::Tracker::default();
         self.loops.model = None;
