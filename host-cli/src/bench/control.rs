@@ -264,7 +264,8 @@ fn files(out: &Path) -> [PathBuf; 5] {
 pub fn run(a: &ControlArgs) -> CliResult {
     prepare_out_dir(&a.out)?;
     let paths = files(&a.out);
-    let named: Vec<(Option<&Path>, &str)> = paths.iter().map(|p| (Some(p.as_path()), "out")).collect();
+    let named: Vec<(Option<&Path>, &str)> =
+        paths.iter().map(|p| (Some(p.as_path()), "out")).collect();
     crate::output::check_outputs(&named)?;
     let g = grid(a.quick);
     let hold = if a.quick { QUICK_HOLD_S } else { HOLD_S };
@@ -327,7 +328,9 @@ pub fn run(a: &ControlArgs) -> CliResult {
             short(hold),
         ]
         .into();
-        bar.set_message(format!("drift {rate} Hz/s, tracking {track}, hold {hold} s"));
+        bar.set_message(format!(
+            "drift {rate} Hz/s, tracking {track}, hold {hold} s"
+        ));
         let out = bench_out(&bench_args(&flags)?, false)?;
         bar.println(format!(
             "drift {rate} Hz/s, tracking {track}: hold {:.2} s, mu error rms {}, lock {} ms, faults [{}], {:.1} s",
@@ -360,7 +363,12 @@ fn settles(o: &BenchOut) -> String {
         .join(" / ")
 }
 
-fn write_outputs(a: &ControlArgs, paths: &[PathBuf; 5], runs: &[GridRun], drift: &[DriftRun]) -> CliResult {
+fn write_outputs(
+    a: &ControlArgs,
+    paths: &[PathBuf; 5],
+    runs: &[GridRun],
+    drift: &[DriftRun],
+) -> CliResult {
     let cmd = format!(
         "fricctl bench control --out {}{}",
         a.out.display(),
@@ -490,26 +498,39 @@ fn figure(runs: &[GridRun], cmd: &str) -> Figure {
     };
     let mut series = Vec::new();
     let mut ys = Vec::new();
-    let mut missing = 0;
+    // Events that never settled: (τ, headroom's style, event index), drawn
+    // with the event's marker in a band at the top, one row per event;
+    // their line breaks there (NaN).
+    let mut never: Vec<(f64, usize, usize)> = Vec::new();
     // Headroom 1 (no overdrive): colour 0, filled markers; any other: colour
     // 1, open markers (the legend says so).
     let style = |h: f64| usize::from(h != 1.0);
     for &h in &heads {
         let hi = style(h);
-        for (name, marker, _) in EVENTS {
+        for (k, (name, marker, _)) in EVENTS.into_iter().enumerate() {
             let mut pts: Vec<(f64, f64)> = Vec::new();
             for r in runs.iter().filter(|r| r.headroom == h) {
-                match r.out.events.iter().find(|e| e.event == name).and_then(|e| e.settle_ms) {
-                    Some(s) => pts.push((r.out.tau_ms, s)),
-                    None => missing += 1,
+                let s = r
+                    .out
+                    .events
+                    .iter()
+                    .find(|e| e.event == name)
+                    .and_then(|e| e.settle_ms);
+                if s.is_none() {
+                    never.push((r.out.tau_ms, hi, k));
                 }
+                pts.push((r.out.tau_ms, s.unwrap_or(f64::NAN)));
             }
             pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-            ys.extend(pts.iter().map(|p| p.1));
+            ys.extend(pts.iter().map(|p| p.1).filter(|y| y.is_finite()));
             series.push(Series {
                 label: String::new(),
                 points: pts,
-                mark: if hi == 0 { Mark::LineMarkers(marker) } else { Mark::LineMarkers(open(marker)) },
+                mark: if hi == 0 {
+                    Mark::LineMarkers(marker)
+                } else {
+                    Mark::LineMarkers(open(marker))
+                },
                 color: hi,
             });
         }
@@ -519,8 +540,45 @@ fn figure(runs: &[GridRun], cmd: &str) -> Figure {
     let hi = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
     // The data with a margin (the 2.5 ms and τ = 5 ms lines inside).
     // (Whole decades: the log axis's minor grid stays regular.)
-    let x = (decade_below(lo(&taus).min(5.0) / 1.2), decade_above(hi(&taus).max(5.0) * 1.2));
-    let y = (decade_below(lo(&ys).min(2.5) / 1.2), decade_above(hi(&ys).max(x.1) * 1.2));
+    let x = (
+        decade_below(lo(&taus).min(5.0) / 1.2),
+        decade_above(hi(&taus).max(5.0) * 1.2),
+    );
+    // With events that never settled, room above the data for their band
+    // (a separator at y_top/4.2, rows at y_top/1.4/1.3^k, k = 0…3).
+    let room = if never.is_empty() { 1.2 } else { 4.5 };
+    let y = (
+        decade_below(lo(&ys).min(2.5) / 1.2),
+        decade_above(hi(&ys).max(x.1) * room),
+    );
+    let sep = y.1 / 4.2;
+    let mut labels = Vec::new();
+    if !never.is_empty() {
+        series.push(Series {
+            label: String::new(),
+            points: vec![(x.0, sep), (x.1, sep)],
+            mark: Mark::Line,
+            color: 8,
+        });
+        labels.push((
+            (x.0 * 1.15, sep * 1.12),
+            "never settled (above this line; one row per event)".to_string(),
+        ));
+    }
+    for hs in [0, 1] {
+        for (k, (_, marker, _)) in EVENTS.into_iter().enumerate() {
+            series.push(Series {
+                label: String::new(),
+                points: never
+                    .iter()
+                    .filter(|n| n.1 == hs && n.2 == k)
+                    .map(|n| (n.0, y.1 / 1.4 / 1.3f64.powi(k as i32)))
+                    .collect(),
+                mark: Mark::Markers(if hs == 0 { marker } else { open(marker) }),
+                color: hs,
+            });
+        }
+    }
     series.push(Series {
         label: String::new(),
         points: vec![(x.0, x.0), (x.1, x.1)],
@@ -607,8 +665,11 @@ fn figure(runs: &[GridRun], cmd: &str) -> Figure {
         "Fixed: plant μ0 = 0.24 (model 0.3); ADC noise ±2 counts; κ = 0.7; 4 drive periods per update; DAC fills 2 half-buffers ahead;".into(),
         "u_z0 = 4 µm, Δu_x = 0.3 µm, φ = 40°; v0 = 4 mm/s (step to 6 mm/s); setpoints μ* = 0.08, then 0.10; disturbance μ0 × 0.9.".into(),
     ];
-    if missing > 0 {
-        caption.push(format!("{missing} event(s) that never settled are not drawn."));
+    if !never.is_empty() {
+        caption.push(format!(
+            "{} event(s) never settled within their segment (≥ 15 ms and ≥ 8 τ): their markers above the grey line (one row per event); lines break there.",
+            never.len()
+        ));
     }
     Figure {
         panels: vec![(
@@ -624,6 +685,7 @@ fn figure(runs: &[GridRun], cmd: &str) -> Figure {
                 log_x: true,
                 log_y: true,
                 legend_at: Corner::UpperLeft,
+                labels,
                 ..Extras::default()
             },
         )],

@@ -980,8 +980,10 @@ fn write_text(w: &mut impl Write, o: &BenchOut) -> std::io::Result<()> {
             "hold {:.3} s of {} s: mu error rms {}, max {}",
             o.hold_run_s,
             o.hold_s,
-            o.hold_mu_error_rms.map_or("-".into(), |x| format!("{x:.2e}")),
-            o.hold_mu_error_max.map_or("-".into(), |x| format!("{x:.2e}")),
+            o.hold_mu_error_rms
+                .map_or("-".into(), |x| format!("{x:.2e}")),
+            o.hold_mu_error_max
+                .map_or("-".into(), |x| format!("{x:.2e}")),
         )?;
     }
     if o.track != "none" {
@@ -1013,7 +1015,6 @@ fn write_text(w: &mut impl Write, o: &BenchOut) -> std::io::Result<()> {
     )
 }
 
-#[allow(clippy::too_many_arguments)]
 #[allow(clippy::too_many_arguments)]
 fn chart(
     path: &std::path::Path,
