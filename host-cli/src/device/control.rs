@@ -663,7 +663,7 @@ fn bench_run(a: &BenchArgs, progress: bool) -> CliResult<BenchOut> {
                 Some(s) => states.push(s),
                 None => {
                     return Err(CliError::failure(format!(
-                        "the device latched {} before the loop was switched on ({:.3} s of device time)",
+                        "the loop did not settle: the device latched {} before the loop was switched on ({:.3} s of device time)",
                         super::render::fault_names(b.faults.0).join(", "),
                         b.faults.1
                     )))
@@ -989,13 +989,18 @@ fn write_text(w: &mut impl Write, o: &BenchOut) -> std::io::Result<()> {
     if o.track != "none" {
         writeln!(
             w,
-            "tracking {}: locked after {} ms; |tracking error| after the lock at most {} Hz, |f - true f_r| at most {} Hz; at the end f = {:.2} Hz, true f_r = {}, locked {}",
+            "tracking {}: locked after {} ms; after the lock |tracking error| <= {} Hz, |f - true f_r| <= {} Hz",
             o.track,
             opt(o.lock_ms, 2),
             opt(o.tracking_error_max_hz, 3),
             opt(o.true_offset_max_hz, 3),
+        )?;
+        writeln!(
+            w,
+            "at the end: f = {:.2} Hz, true f_r = {}, locked {}",
             o.frequency_end_hz,
-            o.resonance_z_end_hz.map_or("-".into(), |f| format!("{f:.2} Hz")),
+            o.resonance_z_end_hz
+                .map_or("-".into(), |f| format!("{f:.2} Hz")),
             o.locked
         )?;
     }
@@ -1009,7 +1014,11 @@ fn write_text(w: &mut impl Write, o: &BenchOut) -> std::io::Result<()> {
     }
     writeln!(
         w,
-        "settling: to within 2 % of the step (or 3 x the estimates' scatter if wider), every later estimate too; time to the end of the half-buffer of that update (drive {:.0} Hz at the start: 1 period = {:.2} µs; periods count the drive's own frequency)",
+        "settling: to within 2 % of the step (or 3 x the estimates' scatter if wider), every later estimate too;"
+    )?;
+    writeln!(
+        w,
+        "time to the end of the half-buffer of that update (drive {:.0} Hz at the start: 1 period = {:.2} µs)",
         o.freq_hz,
         1e6 / o.freq_hz
     )
