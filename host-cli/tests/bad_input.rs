@@ -72,6 +72,7 @@ const VERDICTS: &[&str] = &[
     "error: doubtful: ",
     "error: invalid estimate ",
     "error: the loop did not settle",
+    "error: the run ended at ",
 ];
 
 /// Longest line allowed on stdout or stderr.

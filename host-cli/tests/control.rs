@@ -158,25 +158,29 @@ fn device_tune_maximize_applies_the_phase_and_takes_json_where_a_user_puts_it() 
     assert_eq!(err.trim(), "error: device tune: --adjust: missing");
 }
 
-/// `device control-bench` (in process, device time, fixed noise seed, so the
-/// numbers are reproducible): on the board's pipeline (fill lead 2,
-/// 64-sample half-buffers) with the plant 20 % off the model, lagging 2
-/// periods, drifting and noisy, every event settles to the 2 % band, the
-/// setpoint step within 2 ms without overshooting the band, and
-/// no command exceeds the lift-off limit.
+/// `device control-bench --plant-ideal-transducers` (in process, device
+/// time, fixed noise seed, so the numbers are reproducible): the ideal
+/// pipeline (40 kHz, fill lead 2, 64-sample half-buffers) with the plant
+/// 20 % off the model, lagging 2 periods and noisy; the disturbance is the
+/// μ0 step of the third event (μ0 × 0.9). Every event settles to the band
+/// (2 % of its step), the setpoint step within the cadence's bound
+/// ([`check_step_timing`]) without overshooting the setpoint's 2 %, and no
+/// command exceeds the lift-off limit.
 #[test]
-fn control_bench_settles_within_2_ms_on_the_board_pipeline() {
-    let out = common::cli::json(&["device", "control-bench", "--json"]);
+fn control_bench_settles_within_the_cadence_on_the_board_pipeline() {
+    let out = common::cli::json(&[
+        "device",
+        "control-bench",
+        "--plant-ideal-transducers",
+        "--json",
+    ]);
     // The scenario the numbers stand for (a changed default must not make it easier).
+    assert_eq!(out["transducers"], "ideal", "{out}");
     assert_eq!(out["fill_lead"], 2);
     assert_eq!(out["half_buffer_samples"], 64);
     assert_eq!(
-        (&out["mu0_ratio"], &out["lag_periods"], &out["drift_per_s"]),
-        (
-            &serde_json::json!(0.8),
-            &serde_json::json!(2.0),
-            &serde_json::json!(-0.5)
-        ),
+        (&out["mu0_ratio"], &out["lag_periods"]),
+        (&serde_json::json!(0.8), &serde_json::json!(2.0)),
         "{out}"
     );
     assert_eq!(out["noise_counts"], 2.0, "{out}");
@@ -186,7 +190,7 @@ fn control_bench_settles_within_2_ms_on_the_board_pipeline() {
         "{out}"
     );
     let events = out["events"].as_array().unwrap();
-    assert_eq!(events.len(), 3);
+    assert_eq!(events.len(), 4);
     // Each event's segment lasts 15 ms (scenario::EVENTS_MS); settling must
     // leave at least 10 updates (10 × 3 half-buffers of 128 µs = 3.84 ms) of
     // the segment inside the band, so "settled" is not the segment's last update.
@@ -198,7 +202,7 @@ fn control_bench_settles_within_2_ms_on_the_board_pipeline() {
     assert_eq!(step["event"], "setpoint_step");
     check_step_timing(&out, step);
     // Overshoot relative to the step 0.10 → 0.13 (f32 setpoints): none past
-    // the 2 % band of 0.13, i.e. 0.02·0.13/0.03 of the step.
+    // 2 % of the setpoint 0.13, i.e. 0.02·0.13/0.03 of the step.
     let (a, b) = (f64::from(0.10f32), f64::from(0.13f32));
     let band_pct = 100.0 * 0.02 * b / (b - a);
     assert!(step["overshoot_pct"].as_f64().unwrap() < band_pct, "{step}");
@@ -206,8 +210,8 @@ fn control_bench_settles_within_2_ms_on_the_board_pipeline() {
 
 /// The same over 8 other noise records (`--seed 1..=8`): the step response
 /// is not one lucky record. Every run must settle the setpoint step within
-/// the derived limit ([`check_step_timing`]) with no overshoot past the band
-/// and no command above the lift-off limit.
+/// the derived limit ([`check_step_timing`]) with no overshoot past the
+/// setpoint's 2 % and no command above the lift-off limit.
 #[test]
 fn control_bench_step_response_holds_across_noise_records() {
     let mut worst: f64 = 0.0;
@@ -215,6 +219,7 @@ fn control_bench_step_response_holds_across_noise_records() {
         let out = common::cli::json(&[
             "device",
             "control-bench",
+            "--plant-ideal-transducers",
             "--json",
             "--seed",
             &seed.to_string(),
@@ -238,18 +243,19 @@ fn control_bench_step_response_holds_across_noise_records() {
 ///
 /// * Updates happen at block closes: the settling instant is a whole number
 ///   of half-buffers after the event (the events fall on block boundaries).
+/// * The band: 2 % of the step (0.0006 for 0.10 → 0.13), the estimates'
+///   scatter (≈ 4e-5 at ±2 counts, three times it 1.3e-4) being smaller.
 /// * The count: the first update's estimate predates the new command (error
-///   the whole step, 23 % of the target: not settled), the second follows the
-///   feedforward, and with the plant's gain g within 20 % of the model's the
-///   error after it is ≤ 0.2 of the step (4.6 % of the target) and each
-///   correction multiplies it by |1 − κg| ≤ 1 − 0.7·0.8 = 0.44: within 2 %
-///   after one more. So 2 ≤ updates ≤ 3.
-/// * The time of the third update: ≤ 1 half-buffer to the first block close,
-///   then per later update 3 (dead time) + ⌈ramp⌉ + 1 (a fresh block)
-///   half-buffers, the ramps being the feedforward's change over the slew
-///   rate (3.3 half-buffers here) and at most 0.2κ times that for the
-///   correction: 1 + 8 + 5 = 14 half-buffers, 1.792 ms (below the 2 ms the
-///   loop is specified to settle in).
+///   the whole step: not settled), the second follows the feedforward, and
+///   with the plant's gain g within 20 % of the model's the error after it
+///   is ≤ 0.2 of the step and each correction multiplies it by
+///   |1 − κg| ≤ 1 − 0.7·0.8 = 0.44: 0.088, 0.039, 0.017 ≤ 0.02 of the step
+///   after three more. So 2 ≤ updates ≤ 5.
+/// * The time of the fifth update: ≤ 1 half-buffer to the first block
+///   close, then per later update 3 (dead time) + ⌈ramp⌉ + 1 (a fresh
+///   block) half-buffers, the ramps being the feedforward's change over the
+///   slew rate (3.3 half-buffers here) and at most 0.2κ times that for each
+///   correction: 1 + 8 + 3 × 5 = 24 half-buffers, 3.072 ms.
 fn check_step_timing(out: &Value, step: &Value) -> f64 {
     const HALF_MS: f64 = 0.128;
     let ms = step["settle_ms"]
@@ -262,8 +268,14 @@ fn check_step_timing(out: &Value, step: &Value) -> f64 {
         "settled {ms} ms after the step: not at a block close"
     );
     assert!(
-        (2..=3).contains(&updates),
+        (2..=5).contains(&updates),
         "settled after {updates} updates: {step}"
+    );
+    // The band is the step's 2 % (the scatter's three times is below it).
+    let (lo, hi) = (f64::from(0.10f32), f64::from(0.13f32));
+    assert!(
+        (step["band"].as_f64().unwrap() - 0.02 * (hi - lo)).abs() < 1e-9,
+        "{step}"
     );
     let events = out["events"].as_array().unwrap();
     let ff_change = (events[1]["duz_feedforward"].as_f64().unwrap()
@@ -271,14 +283,155 @@ fn check_step_timing(out: &Value, step: &Value) -> f64 {
     .abs();
     let rate = 1e-3; // m/s, the driver board's slew (fricctl device control --rate default)
     let ramp1 = (ff_change / rate * 1e3 / HALF_MS).ceil();
-    // The correction: κ times the error after the feedforward (≤ 0.2 of the
-    // step) over the model's slope, i.e. ≤ 0.2κ times the feedforward's change.
+    // Each correction: κ times the error before it (≤ 0.2 of the step) over
+    // the model's slope, i.e. ≤ 0.2κ times the feedforward's change.
     let ramp2 = (0.2 * out["gain"].as_f64().unwrap() * ff_change / rate * 1e3 / HALF_MS).ceil();
-    let limit = HALF_MS * (1.0 + (3.0 + ramp1 + 1.0) + (3.0 + ramp2 + 1.0));
-    assert!(limit < 2.0, "derived limit {limit} ms");
+    let limit = HALF_MS * (1.0 + (3.0 + ramp1 + 1.0) + 3.0 * (3.0 + ramp2 + 1.0));
     assert!(
         ms <= limit,
         "setpoint step settled in {ms} ms, beyond the cadence's {limit} ms"
     );
     ms
+}
+
+/// The done-when, on the default resonant transducers (normal mode
+/// 20 300 Hz, Q 300; tangential 19 700 Hz, Q 200) with the displacement
+/// loop's headroom 2: the setpoint step settles within τ = Q/(π f_r) of the
+/// slower mode (300/(π·20 300) = 4.704 ms) and, τ being ≤ 5 ms, within
+/// 2.5 ms; no sample of the true normal excursion exceeds the lift-off
+/// limit. The thresholds are the issue's own; the band is the bench's (2 %
+/// of the step, or 3 × the estimates' scatter if wider).
+#[test]
+fn resonant_setpoint_step_settles_within_tau_and_2_5_ms() {
+    let out = common::cli::json(&[
+        "device",
+        "control-bench",
+        "--plant-q-z",
+        "300",
+        "--plant-q-x",
+        "200",
+        "--headroom",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(out["transducers"], "resonant", "{out}");
+    assert_eq!(out["headroom"], 2.0, "{out}");
+    let tau = num(&out, "tau_ms");
+    // f64 arithmetic of the same formula: within 1e-9 ms.
+    assert!(
+        (tau - 300.0 / (std::f64::consts::PI * 20_300.0) * 1e3).abs() < 1e-9,
+        "{tau}"
+    );
+    assert_eq!(out["commands_above_limit"], 0, "{out}");
+    let step = &out["events"][1];
+    assert_eq!(step["event"], "setpoint_step");
+    let ms = step["settle_ms"]
+        .as_f64()
+        .expect("the setpoint step settles");
+    assert!(ms < tau, "setpoint step settled in {ms} ms, τ = {tau} ms");
+    if tau <= 5.0 {
+        assert!(
+            ms < 2.5,
+            "setpoint step settled in {ms} ms (τ = {tau} ms ≤ 5)"
+        );
+    }
+}
+
+/// Tracking the normal mode (`--track z`) on a resonance drifting
+/// −20 Hz/s, held 2 s after the events: locked (from the start, within the
+/// acquisition), no fault, and the drive frequency within the PLL's drift
+/// lag of the true resonance over the hold. The lag
+/// (`model_core::board::device::tracking`, T3; tests/tests/tracking.rs):
+/// ḟ·(2τ̂ + τ), τ = Q_eff/(π f_r) with the contact's load
+/// (1/Q_eff = 1/300 + 1/2000: Q_eff = 260.87, τ = 4.090 ms at 20 300 Hz;
+/// the exact identification: τ̂ = τ): 20·3·4.090 ms = 0.245 Hz; with the
+/// tracking test's 20 % allowance for the detector's rounding (ADC noise
+/// off here, as there), 0.295 Hz. The device's own tracking error stays
+/// inside the lock band f_r/(2Q̂) = 38.9 Hz (it is locked at the end).
+#[test]
+fn tracking_follows_a_drifting_resonance_in_the_bench() {
+    let out = common::cli::json(&[
+        "device",
+        "control-bench",
+        "--plant-resonance-drift-z",
+        "-20",
+        "--track",
+        "z",
+        "--noise",
+        "0",
+        "--hold-s",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(out["track"], "z", "{out}");
+    assert_eq!(out["faults"], serde_json::json!([]), "{out}");
+    assert_eq!(out["locked"], true, "{out}");
+    assert!((num(&out, "hold_run_s") - 2.0).abs() < 1e-3, "{out}");
+    // Lock within the acquisition limit, ACQUIRE_TAUS = 40 τ̂ = 164 ms.
+    let lock = num(&out, "lock_ms");
+    assert!(lock > 0.0 && lock < 40.0 * 4.090, "{out}");
+    let q_eff = 1.0 / (1.0 / 300.0 + 1.0 / 2000.0);
+    let tau_s = q_eff / (std::f64::consts::PI * 20_300.0);
+    let lag = 20.0 * 3.0 * tau_s;
+    let off = num(&out, "true_offset_max_hz");
+    assert!(
+        off <= 1.2 * lag,
+        "|f − f_r| up to {off} Hz > 1.2 × {lag} Hz"
+    );
+    let e = num(&out, "tracking_error_max_hz");
+    assert!(e <= 20_300.0 / (2.0 * q_eff), "{out}");
+    // The resonance moved ḟ·t: the drive followed it to within the lag.
+    let f_end = num(&out, "frequency_end_hz");
+    let r_end = num(&out, "resonance_z_end_hz");
+    assert!((f_end - r_end).abs() <= 1.2 * lag, "{f_end} vs {r_end}");
+    assert!(r_end < 20_300.0 - 20.0 * 2.0, "{r_end}");
+}
+
+/// `bench control --quick --out DIR` writes its five files (the CSVs with
+/// their columns and one row per run and event / per drift run, the JSONs
+/// with the runs' commands, the PNG), and a second run without --force
+/// refuses to replace them (exit 2, naming --out).
+#[test]
+fn bench_control_quick_writes_its_files() {
+    let dir = std::env::temp_dir().join(format!("fricctl-bench-control-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let d = dir.to_str().unwrap();
+    common::cli::run_ok(&["bench", "control", "--quick", "--out", d]);
+    let grid = common::cli::csv_rows(&dir.join("control_grid.csv"));
+    // --quick: Q 100 and 300 at 20 kHz, headroom 2; four events each.
+    assert_eq!(grid.len(), 2 * 4);
+    for r in &grid {
+        assert_eq!(r.num("headroom"), 2.0, "{r}");
+        assert_eq!(r.num("commands_above_limit"), 0.0, "{r}");
+        assert!(r.num("tau_ms") > 0.0, "{r}");
+    }
+    let drift = common::cli::csv_rows(&dir.join("control_drift.csv"));
+    // Two drift rates, tracking off and on.
+    assert_eq!(drift.len(), 4);
+    assert_eq!(
+        drift.iter().map(|r| r.get("track")).collect::<Vec<_>>(),
+        ["none", "z", "none", "z"]
+    );
+    let j: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("control_grid.json")).unwrap())
+            .unwrap();
+    assert_eq!(j["runs"].as_array().unwrap().len(), 2);
+    assert!(j["runs"][0]["command"]
+        .as_str()
+        .unwrap()
+        .starts_with("fricctl device control-bench --plant-q-z 100"));
+    let j: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("control_drift.json")).unwrap())
+            .unwrap();
+    assert_eq!(j["runs"].as_array().unwrap().len(), 4);
+    let png = std::fs::read(dir.join("settle_vs_tau.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    let o = common::cli::fricctl()
+        .args(["bench", "control", "--quick", "--out", d])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--out") && err.contains("--force"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

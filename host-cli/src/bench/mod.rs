@@ -8,6 +8,9 @@
 //! * [`dac`] — the DAC waveform path: spectral purity against time per sample;
 //! * [`motion`] — the slow dynamics: homogenised against resolved over scale
 //!   separation and mass, the drift map, the Fig. 6 load lines;
+//! * [`control`] — the board's closed μ loop on resonant transducers: settling
+//!   against Q, resonance and headroom, and a drifting plant with and without
+//!   resonance tracking;
 //! * [`point`] — the measured point both work-precision modules produce.
 
 use std::time::Instant;
@@ -17,6 +20,7 @@ use clap::Subcommand;
 use crate::error::CliResult;
 
 pub mod across_lift_off;
+pub mod control;
 pub mod dac;
 pub mod methods;
 pub mod motion;
@@ -38,6 +42,8 @@ pub enum BenchCmd {
     Dac(dac::DacArgs),
     /// Slow dynamics: homogenised vs resolved error against cost, drift map, Fig. 6 load lines (CSV + PNG)
     Motion(motion::MotionArgs),
+    /// The closed μ loop on resonant transducers: settling vs Q, resonance, headroom; drift with and without tracking (CSV + JSON + PNG)
+    Control(control::ControlArgs),
 }
 
 /// Runs a bench.
@@ -48,6 +54,7 @@ pub fn run(cmd: &BenchCmd) -> CliResult {
         BenchCmd::Stability(a) => stability::run(a),
         BenchCmd::Dac(a) => dac::run(a),
         BenchCmd::Motion(a) => motion::run(a),
+        BenchCmd::Control(a) => control::run(a),
     }
 }
 

@@ -18,9 +18,9 @@
 //! --sim`): users test against the default, and the board now identifies
 //! its transducers (`device identify`) and commands displacements.
 //! `--plant-ideal-transducers` gives the ideal ones (and refuses the
-//! resonant flags). `device control-bench` keeps ideal transducers unless a
-//! resonant flag is given (its loop does not yet run on the displacement
-//! loops: the issue on tracking and the fast loop).
+//! resonant flags). `device control-bench` is resonant by default too (its
+//! loop runs on the displacement loops; `--plant-ideal-transducers` for the
+//! ideal pipeline).
 
 use model_core::board::plant::ResonantOptions;
 use model_core::board::resonator::ModeParams;
