@@ -30,6 +30,24 @@ fn closed_loop_over_a_pty() {
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("not running"), "{err}");
+    // With --headroom the options go first; the refusal puts them back (a
+    // refused command changes nothing): the status still shows the power-up
+    // headroom 2 (DEFAULT_HEADROOM).
+    let o = dev(
+        &s,
+        &[
+            "control",
+            "--target-mu",
+            "0.1",
+            "--v0",
+            "0.004",
+            "--headroom",
+            "3",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not running"));
+    assert_eq!(num(&ok_json(&s, &["status"]), "headroom"), 2.0);
     ok_json(&s, &drive_set("40000", "2e-6", "3e-7", "4e-6", Some("40")));
     ok_json(&s, &["start"]);
     std::thread::sleep(Duration::from_millis(300));

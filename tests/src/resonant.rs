@@ -70,6 +70,14 @@ pub fn model_of(m: ModeParams<f64>, df: f64, q_scale: f64, g_scale: f64) -> Tran
     }
 }
 
+/// The exact model of modes `m` (an exact identification at rest).
+pub fn exact_model(m: [ModeParams<f64>; 2]) -> Transducers {
+    Transducers {
+        z: model_of(m[0], 0.0, 1.0, 1.0),
+        x: model_of(m[1], 0.0, 1.0, 1.0),
+    }
+}
+
 /// The plant's options: the true modes, no drift, heating or cross-talk.
 pub fn opts() -> ResonantOptions<f64> {
     ResonantOptions {

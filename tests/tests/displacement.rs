@@ -23,7 +23,7 @@
 //! within `0.4 % + 3·0.15 %` ≤ 0.85 % of Δu_x and 0.5 % of Δu_z, and φ
 //! within the arcsine of the sum of the two channels' relative errors.
 
-use integration_tests::resonant::{model_of, opts, setting, true_modes, Bench, MU0};
+use integration_tests::resonant::{exact_model, model_of, opts, setting, true_modes, Bench, MU0};
 use model_core::dds::SineTable;
 use model_core::device::displacement::{HOLD_TOLERANCE, SMOOTHING_S};
 use model_core::device::{
@@ -340,10 +340,7 @@ fn the_mu_loop_holds_a_command_the_dac_cannot_take() {
     use model_core::protocol::ControlSetting;
     let table = SineTable::<1024>::libm();
     let m = true_modes();
-    let exact = Transducers {
-        z: model_of(m[0], 0.0, 1.0, 1.0),
-        x: model_of(m[1], 0.0, 1.0, 1.0),
-    };
+    let exact = exact_model(m);
     let mut b = Bench::new(&table, opts(), exact);
     // The frequency where the model's largest Δu_z is about 1.5 µm.
     let mut s = setting(3e-6);

@@ -22,17 +22,14 @@
 //! counter-rotating pole: a relative term of order 1/(2Q_eff) (0.19 %) of the
 //! swing the voltage drives, `h·A₁ − A₀`.
 
-use integration_tests::resonant::{loaded, model_of, opts, setting, true_modes, Bench};
+use integration_tests::resonant::{exact_model, loaded, opts, setting, true_modes, Bench};
 use model_core::dds::SineTable;
 use model_core::device::{faults, DisplacementOptions, Track, Transducers};
 
 /// The exact model of the bench's transducers (an exact identification).
 fn exact() -> Transducers {
     let m = true_modes();
-    Transducers {
-        z: model_of(m[0], 0.0, 1.0, 1.0),
-        x: model_of(m[1], 0.0, 1.0, 1.0),
-    }
+    exact_model(m)
 }
 
 /// τ of the normal mode with its load, s.

@@ -12,12 +12,11 @@
 //! followed `ḟ·(2τ̂ + τ)` behind (0.25 Hz at −20 Hz/s), plus the detector's
 //! noise (noiseless pickups here: the ADC's rounding).
 
-use integration_tests::resonant::{loaded, model_of, opts, setting, Bench};
+use integration_tests::resonant::{exact_model, loaded, opts, setting, Bench};
 use model_core::board::resonator::ModeParams;
 use model_core::dds::SineTable;
 use model_core::device::{
     faults, Contact, Device, DeviceConfig, DeviceError, DisplacementOptions, DriveParam, Track,
-    Transducers,
 };
 
 const F_R: f64 = 20_100.0;
@@ -39,10 +38,7 @@ fn tracking_bench(table: &SineTable<1024>, drift: f64, freq: f64) -> Bench<'_> {
     o.modes = modes();
     o.drift_hz_per_s = [drift, 0.0];
     let m = modes();
-    let model = Transducers {
-        z: model_of(m[0], 0.0, 1.0, 1.0),
-        x: model_of(m[1], 0.0, 1.0, 1.0),
-    };
+    let model = exact_model(m);
     let mut b = Bench::new(table, o, model);
     b.dev
         .set_displacement_options(DisplacementOptions {
@@ -220,7 +216,6 @@ fn options_are_refused_by_name() {
 /// settling band, 2 % of the setpoint.
 #[test]
 fn a_drifting_resonance_without_tracking_never_lifts_off() {
-    use integration_tests::resonant::{model_of, opts};
     use model_core::protocol::ControlSetting;
     let table = SineTable::<1024>::libm();
     let mut o = opts();
@@ -228,10 +223,7 @@ fn a_drifting_resonance_without_tracking_never_lifts_off() {
     o.drift_hz_per_s = [-20.0, 0.0];
     o.thermal_hz_per_um2 = -5.0;
     let m = modes();
-    let model = Transducers {
-        z: model_of(m[0], 0.0, 1.0, 1.0),
-        x: model_of(m[1], 0.0, 1.0, 1.0),
-    };
+    let model = exact_model(m);
     let mut b = Bench::new(&table, o, model);
     let mut s = setting(2e-6);
     s.freq_hz = F_R;

@@ -348,7 +348,28 @@ pub fn run(a: &ControlArgs) -> CliResult {
         });
     }
     bar.finish_and_clear();
-    write_outputs(a, &paths, &runs, &drift)
+    write_outputs(a, &paths, &runs, &drift)?;
+    // Events that never settle and faults that end a drift run are
+    // measurements (the files and the figure show them); a sample of the
+    // true normal excursion above the lift-off limit is a safety failure.
+    let above: Vec<&str> = runs
+        .iter()
+        .map(|r| (&r.command, r.out.commands_above_limit))
+        .chain(
+            drift
+                .iter()
+                .map(|d| (&d.command, d.out.commands_above_limit)),
+        )
+        .filter(|(_, n)| *n > 0)
+        .map(|(c, _)| c.as_str())
+        .collect();
+    match above.first() {
+        None => Ok(()),
+        Some(first) => Err(CliError::failure(format!(
+            "bench control: {} run(s) put samples of the true normal excursion above the lift-off limit (first: {first})",
+            above.len()
+        ))),
+    }
 }
 
 fn short(x: f64) -> String {

@@ -102,8 +102,10 @@ impl ControlArgs {
 }
 
 /// `fricctl device control …` on a connected device (`--headroom` first,
-/// keeping the tracking in force).
+/// keeping the tracking in force; put back if the device refuses the
+/// control request, so that a refused command changes nothing).
 pub fn run(c: &mut Client, req: Request, a: &ControlArgs, json: bool) -> CliResult {
+    let mut before = None;
     if let Some(h) = a.headroom {
         let st = match expect(c.call(Request::GetStatus)?)? {
             Response::Status(s) => s,
@@ -115,10 +117,24 @@ pub fn run(c: &mut Client, req: Request, a: &ControlArgs, json: bool) -> CliResu
                 ..st.options
             },
         ))?)?;
+        before = Some(st.options);
     }
-    match expect(c.call(req)?)? {
-        Response::Control(s) => out(json, &render::control(&s)),
-        other => Err(unexpected(other)),
+    match c.call(req).and_then(expect) {
+        Ok(Response::Control(s)) => out(json, &render::control(&s)),
+        Ok(other) => Err(unexpected(other)),
+        Err(e) => {
+            if let Some(o) = before {
+                // The refusal is the error reported; a failure to restore
+                // is named after it.
+                if let Err(r) = c.call(Request::SetDisplacementOptions(o)).and_then(expect) {
+                    return Err(CliError::failure(format!(
+                        "{e}; and the headroom could not be put back to {}: {r}",
+                        o.headroom
+                    )));
+                }
+            }
+            Err(e)
+        }
     }
 }
 
