@@ -243,6 +243,8 @@ pub fn is_numeric(a: &clap::Arg) -> bool {
             TypeId::of::<u32>(),
             TypeId::of::<u64>(),
             TypeId::of::<usize>(),
+            // `--periods auto|N` of `device control` and `control-bench`.
+            TypeId::of::<crate::device::control::Periods>(),
         ]
         .iter()
         .any(|id| t == *id)

@@ -4,13 +4,17 @@
 //! update `k − 1`), as the device runs it.
 //!
 //! **The bound the settling is checked against.** With the command
-//! `u_{k+1} = u_k + κ·e_k/s` (eq. C1, no rate or bound active) and the plant
-//! `μ_k = μ_p(u_k)`, the mean value theorem gives exactly
-//! `e_{k+1} = (1 − κ·ρ(ξ_k))·e_k` with `ρ = s_p(ξ)/s`, the plant's slope at some
-//! `ξ_k` between `u_k` and `u_{k+1}` over the model's `s`. If `0 < κρ ≤ 1` on
-//! the interval between the start and the solution the iterates stay in it
-//! and `|e_k| ≤ q^k·|e_0|`, `q = max(1 − κρ)` over it. `ρ` is bounded here by
-//! the plant's finite differences on a fine grid of that interval
+//! `u_{k+1} = u_k + κ·e_k/(ρ̂_k·s)` (eq. C1 with the learned gain, no rate or
+//! bound active) and the plant `μ_k = μ_p(u_k)`, the mean value theorem gives
+//! exactly `e_{k+1} = (1 − κ·ρ(ξ_k)/ρ̂_k)·e_k` with `ρ = s_p(ξ)/s`, the
+//! plant's slope at some `ξ_k` between `u_k` and `u_{k+1}` over the model's
+//! `s`. ρ̂ (C6) is a weighted mean of its start, 1, and of secants of the
+//! plant, each (mean value theorem again, before the clamp of C5) a value
+//! of ρ on the interval the iterates visit: ρ̂ lies between
+//! `min(1, ρ_lo)` and `max(1, ρ_hi)`. If `κ·ρ_hi/min(1, ρ_lo) ≤ 1` the
+//! iterates stay in the interval between the start and the solution and
+//! `|e_k| ≤ q^k·|e_0|`, `q = 1 − κ·ρ_lo/max(1, ρ_hi)`. `ρ` is bounded here
+//! by the plant's finite differences on a fine grid of that interval
 //! (independent of the controller), widened by 5 % for the grid.
 
 use model_core::control::{self, Controller, Gains, Plan};
@@ -108,10 +112,15 @@ fn settles_within_the_derived_bound_with_20_percent_mismatch() {
         let (rlo, rhi) = rho_range(mu0_plant, u_start, u_star, f64::from(p.slope_per_m));
         let k = f64::from(kappa);
         assert!(
-            rlo > 0.0 && k * rhi <= 1.0,
+            rlo > 0.0 && k * rhi / rlo.min(1.0) <= 1.0,
             "monotone regime: ρ in [{rlo}, {rhi}]"
         );
-        let q = 1.0 - k * rlo;
+        let q = 1.0 - k * rlo / rhi.max(1.0);
+        let learned = f64::from(ctl.plant_gain());
+        assert!(
+            (rlo.min(1.0)..=rhi.max(1.0)).contains(&learned),
+            "ρ̂ {learned} outside [min(1, {rlo}), max(1, {rhi})]"
+        );
         let e0 = (mus[0] - target).abs();
         // Updates until q^k·e0 ≤ 2 % of the target; +1 for the dead time (the
         // first measurement is of the starting command), +1 for f32 rounding.
@@ -218,12 +227,122 @@ fn switching_is_bumpless() {
         assert_eq!(ctl.output().command_m, now);
         assert_eq!(ctl.output().integral_m, now - p.feedforward_m);
     }
-    // A setpoint change keeps the learned trim: the command moves to u_ff' + I.
+    // A setpoint change keeps the learned trim and gain: the command moves
+    // from u_ff + I by the model's step over ρ̂ (C7).
     let mut ctl = Controller::new(p, gains, 2e-6);
     let _ = run(&mut ctl, 0.24, 30, 0.5e-3);
-    let trim = ctl.output().integral_m;
+    let (trim, rho) = (ctl.output().integral_m, ctl.plant_gain());
+    let before = ctl.output().command_m;
+    assert_eq!(before, p.feedforward_m + trim);
     let p2 = plan(0.12, 1.2e-6);
     let out = ctl.retarget(p2, gains, 1.0);
-    assert_eq!(out.integral_m, trim);
-    assert_eq!(out.command_m, p2.feedforward_m + trim);
+    let want = f64::from(before) + f64::from(p2.feedforward_m - p.feedforward_m) / f64::from(rho);
+    // f32 arithmetic of C7: a few ulps of 2 µm.
+    assert!(
+        (f64::from(out.command_m) - want).abs() <= 1e-12,
+        "{} vs {want}",
+        out.command_m
+    );
+    assert_eq!(ctl.plant_gain(), rho, "a retarget learns nothing");
+}
+
+/// The plant's μ0 20 % below the model's: ρ ≈ 0.6…0.8 on the way. A large
+/// step teaches the loop the plant's gain (C5–C6): ρ̂ ends within the
+/// plant's slopes over the interval visited, up to the share of the prior
+/// (ρ̂ = 1) left in the weighted mean, at most `P₀/w` with `P₀ = (0.01·μ₀)²`
+/// and `w` the largest secant's weight `(s·Δu)²` (here ≥ 0.02²: ≤ 0.06 of
+/// `|1 − ρ|`). The next setpoint step then settles at the rate the learned
+/// gain gives, `q = max |1 − κρ/ρ̂|` over the plant's ρ, checked against the
+/// plant's own finite differences.
+#[test]
+fn learns_the_plant_gain_and_then_settles_at_its_rate() {
+    let mu0_plant = 0.24;
+    let gains = Gains {
+        kappa: 0.95,
+        rate_m_per_s: 1.0,
+    };
+    // From 3 µm (μ ≈ 0.03) to μ* = 0.10: a step of ≈ 0.07.
+    let p = plan(0.10, 3e-6);
+    let mut ctl = Controller::new(p, gains, 3e-6);
+    let (us, _) = run(&mut ctl, mu0_plant, 20, 1e-3);
+    let s = f64::from(p.slope_per_m);
+    let umin = us.iter().copied().fold(3e-6, f64::min);
+    let (rlo, rhi) = rho_range(mu0_plant, umin, 3e-6, s);
+    let rho = f64::from(ctl.plant_gain());
+    let prior = (0.01 * MODEL_MU0 / 0.02f64).powi(2);
+    let slack = prior * (1.0 - rlo).abs().max((1.0 - rhi).abs());
+    assert!(
+        rho >= rlo - slack && rho <= rhi + slack,
+        "ρ̂ {rho} outside [{rlo}, {rhi}] ± {slack}"
+    );
+    assert!(rho < 0.9, "learned nothing: ρ̂ {rho}");
+    // The next step, 0.10 → 0.12, with the learned gain.
+    let p2 = plan(0.12, 1.5e-6);
+    ctl.retarget(p2, gains, 1.0);
+    let rho = f64::from(ctl.plant_gain());
+    let (us, mus) = run(&mut ctl, mu0_plant, 12, 1e-3);
+    let (a, b) = (
+        us.iter().copied().fold(f64::MAX, f64::min),
+        us.iter().copied().fold(0.0, f64::max),
+    );
+    let (rlo, rhi) = rho_range(mu0_plant, a, b, f64::from(p2.slope_per_m));
+    let k = f64::from(gains.kappa);
+    // Every later secant lies in [rlo, rhi] too: ρ̂ stays in the hull of
+    // its value now and that range.
+    let (hlo, hhi) = (rho.min(rlo), rho.max(rhi));
+    let q = (1.0 - k * rlo / hhi).abs().max((1.0 - k * rhi / hlo).abs());
+    assert!(q < 0.5, "q {q} (ρ in [{rlo}, {rhi}], ρ̂ in [{hlo}, {hhi}])");
+    let e0 = (mus[0] - 0.12).abs();
+    let settled = mus
+        .iter()
+        .position(|m| (m - 0.12).abs() <= 0.02 * 0.02)
+        .expect("settles");
+    // Updates until q^k·e0 ≤ 2 % of the step (0.02), +1 for the first
+    // measurement (of the retarget's command), +1 for f32 rounding.
+    let bound = if e0 <= 0.0004 {
+        1
+    } else {
+        ((0.0004 / e0).ln() / q.ln()).ceil() as usize + 2
+    };
+    assert!(
+        settled <= bound,
+        "settled after {settled} updates, bound {bound} (q {q:.3}, e0 {e0:.2e})"
+    );
+}
+
+/// A step of the plant's μ0 caught half-way by a window is not taken for
+/// gain: the pair after a change of μ̂ without a change of command is not
+/// learned from (C5). Taken, its secant would be
+/// `ρ − (1 − f)·d/(s·Δu)` with `f` the share of the step the first window
+/// saw and `d` the step: far below the plant's ρ (here negative, clamped
+/// to 1/4). ρ̂ must stay within the hull of the two plants' slopes.
+#[test]
+fn a_disturbance_is_not_learned_as_gain() {
+    let gains = Gains {
+        kappa: 0.95,
+        rate_m_per_s: 1.0,
+    };
+    let p = plan(0.10, 2e-6);
+    let mut ctl = Controller::new(p, gains, 2e-6);
+    let (us, _) = run(&mut ctl, 0.24, 30, 1e-3);
+    let s = f64::from(p.slope_per_m);
+    // μ0 0.24 → 0.216 (× 0.9); the first window after it sees half.
+    let mut u = *us.last().unwrap();
+    let half = 0.5 * (plant(0.24, u) + plant(0.216, u));
+    u = f64::from(ctl.update(half as f32, 1e-3).command_m);
+    let (us2, _) = run(&mut ctl, 0.216, 20, 1e-3);
+    let lo = us2.iter().copied().fold(u, f64::min);
+    let hi = us.iter().copied().fold(u, f64::max);
+    let (a_lo, a_hi) = rho_range(0.24, lo, hi, s);
+    let (b_lo, b_hi) = rho_range(0.216, lo, hi, s);
+    let rho = f64::from(ctl.plant_gain());
+    assert!(
+        rho >= a_lo.min(b_lo) && rho <= a_hi.max(b_hi),
+        "ρ̂ {rho} outside [{}, {}]",
+        a_lo.min(b_lo),
+        a_hi.max(b_hi)
+    );
+    // And the loop is back at the target within 2 %.
+    let m = plant(0.216, f64::from(ctl.output().command_m));
+    assert!((m - 0.10).abs() <= 0.002, "μ {m}");
 }

@@ -262,3 +262,75 @@ fn std_error_matches_the_closed_form_for_white_noise() {
     assert!(!r.valid());
     assert!(r.std_error > 0.0);
 }
+
+/// Short windows at a non-integer number of samples per period: the
+/// fractional edges (module docs of `model_core::estimator`) make the
+/// window exactly `P` periods long.
+///
+/// **The bound.** For a force `B·cos(θ + c)` the weighted sum over the
+/// window `[a, a + P·T)` (sample time, `T = f_s/f` samples per period, the
+/// boundaries `ε₀`, `ε_e` of a sample before the wraps) is, in closed form,
+/// `z·I(ε₀, ε_e, ω)`, `|z| = B`, with `ω = 2π/T` and
+///
+/// `I = ε₀e^{jω(ε₀−1)} + (e^{jω(ε_e−1)} − e^{jωε₀})/(e^{jω} − 1) + (1 − ε_e)e^{jω(ε_e−1)}`
+///
+/// whose series is `I = (jω/2)·(ε₀(ε₀ − 1) − ε_e(ε_e − 1)) + ω²·p/12 + O(ω³)`
+/// with `|p| ≤ 1.64` on `[0, 1]²`, so `|I| ≤ ω/8 + ω²/4` (the first
+/// term is at most `1/4·ω/2`; `ω²/4` covers the second with room for the
+/// rest at `ω ≤ 0.52`). The mean of the force is off by at most
+/// `B·(ω/8 + ω²/4)/(P·T)`, plus 0.5 count of rounding. Without the edges
+/// (whole samples) it is off by up to `B/(P·T)` (a missing or extra sample
+/// at the wrap, where `cos` is largest): `1/(ω/8 + ω²/4)` = 8 to 40 times
+/// the bound's first part at these rates. 450 windows from random phases.
+#[test]
+fn short_windows_span_exact_periods_at_non_integer_samples_per_period() {
+    let table = SineTable::<1024>::libm();
+    let unit = Calibration {
+        gain: 1.0,
+        offset: 0.0,
+    };
+    let mut rng = Rng::new(7);
+    // Counts: f_z = 2000 + 1000 cos θ, f_x = 500 + 400 cos(θ + 0.3).
+    let (z0, za, x0, xa) = (2000.0, 1000.0, 500.0, 400.0);
+    let mut worst = 0.0f64;
+    for spp in [24.876_f64, 12.34, 40.7] {
+        let tw = (4_294_967_296.0 / spp) as u32;
+        let t = 4_294_967_296.0 / f64::from(tw);
+        let w = TAU / t;
+        for periods in [1u32, 2, 4] {
+            let p = f64::from(periods);
+            let e = |b: f64| b * (w / 8.0 + w * w / 4.0) / (p * t) + 0.5;
+            let (ex, ez) = (e(xa), e(za));
+            let mu_true = x0 / z0;
+            // μ = (x0 + δx)/(z0 + δz): |μ − x0/z0| ≤ (ex + μ·ez)/(z0 − ez).
+            let bound = (ex + mu_true * ez) / (z0 - ez);
+            for _ in 0..50 {
+                let mut est = Estimator::new(unit, unit, FULL).unwrap();
+                est.start(periods).unwrap();
+                let mut acc: u32 = (rng.uniform() * 4_294_967_296.0) as u32;
+                let mut got = None;
+                for _ in 0..(periods as usize + 3) * (t as usize + 2) {
+                    let th = phase_rad(acc);
+                    let z = (z0 + za * th.cos()).round() as u16;
+                    let x = (x0 + xa * (th + 0.3).cos()).round() as u16;
+                    if est.push(&table, acc, x, z) {
+                        got = Some(est.estimate().unwrap());
+                        break;
+                    }
+                    acc = acc.wrapping_add(tw);
+                }
+                let r = got.expect("window closed");
+                let err = (f64::from(r.mu) - mu_true).abs();
+                worst = worst.max(err / bound);
+                assert!(
+                    err <= bound,
+                    "{spp} samples/period, {periods} periods: mu {} vs {mu_true}, bound {bound:.2e}",
+                    r.mu
+                );
+                // The edges do not change the whole samples counted.
+                assert!((f64::from(r.samples) - p * t).abs() <= 1.0);
+            }
+        }
+    }
+    println!("largest error / bound: {worst:.3}");
+}

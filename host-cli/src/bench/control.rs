@@ -8,9 +8,11 @@
 //!   tangential one below it in the defaults' ratio 19 700 / 20 300 (2.96 %
 //!   below); headroom 1 (no overdrive) and 2. Every run is `device
 //!   control-bench` with these flags and its defaults otherwise (plant μ0
-//!   20 % below the model, ±2 counts ADC noise, κ 0.7, 4 periods per
-//!   update, fills 2 half-buffers ahead): per run and event the settling
-//!   time, overshoot, τ and the samples above the lift-off limit.
+//!   20 % below the model, ±2 counts ADC noise, κ 0.95, `--periods auto`,
+//!   fills 2 half-buffers ahead), once per noise record (`--seeds`, seed 0
+//!   the default record): per grid point and event the median and the
+//!   largest settling time over the records, the median overshoot, τ and
+//!   the samples above the lift-off limit of all the runs.
 //! * **Drift** (`control_drift.csv`, `.json`): the default transducers
 //!   (20 300 Hz, Q 300; 19 700 Hz, Q 200), the normal resonance drifting
 //!   ([`DRIFTS_HZ_PER_S`]) and both self-heating [`THERMAL_HZ_PER_UM2`], the
@@ -45,6 +47,11 @@ pub struct ControlArgs {
     /// The reduced grid and a short hold (checks the files, not the numbers)
     #[arg(long)]
     pub quick: bool,
+    /// Noise records per grid point (seeds 0 … N − 1 of `device
+    /// control-bench --seed`): the grid reports the median and the largest
+    /// settling time over them. 1 … 100
+    #[arg(long, default_value_t = 5, value_parser = crate::args::Count::<u32>::at_least(1).at_most(100, "a record runs in 0.01–0.5 s"))]
+    pub seeds: u32,
 }
 
 /// Q of the normal mode in the grid (the tangential mode's: two thirds).
@@ -108,13 +115,60 @@ pub struct GridRun {
     pub resonance_x_hz: f64,
     /// Headroom.
     pub headroom: f64,
-    /// The command that reproduces it.
+    /// The command that reproduces it (seed 0; `--seed S` for the others).
     pub command: String,
-    /// Its result.
+    /// Its result (seed 0).
     pub out: BenchOut,
+    /// The results of every seed, 0 first.
+    pub seeds: Vec<BenchOut>,
 }
 
-/// One row of `control_grid.csv` (a run's event).
+impl GridRun {
+    /// The settling times of `event` over the seeds, ms (None: never).
+    fn settles(&self, event: &str) -> Vec<Option<f64>> {
+        self.seeds
+            .iter()
+            .map(|o| {
+                o.events
+                    .iter()
+                    .find(|e| e.event == event)
+                    .and_then(|e| e.settle_ms)
+            })
+            .collect()
+    }
+
+    /// The median settling time of `event` over the seeds (a run that
+    /// never settled counts as longer than any that did; None if the
+    /// median is one of those), ms.
+    pub fn median_settle(&self, event: &str) -> Option<f64> {
+        let mut v: Vec<f64> = self
+            .settles(event)
+            .into_iter()
+            .map(|s| s.unwrap_or(f64::INFINITY))
+            .collect();
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        if n == 0 {
+            return None;
+        }
+        let m = if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            0.5 * (v[n / 2 - 1] + v[n / 2])
+        };
+        m.is_finite().then_some(m)
+    }
+
+    /// The largest settling time of `event` over the seeds (None if one
+    /// never settled), ms.
+    pub fn max_settle(&self, event: &str) -> Option<f64> {
+        self.settles(event)
+            .into_iter()
+            .try_fold(0.0f64, |m, s| s.map(|s| m.max(s)))
+    }
+}
+
+/// One row of `control_grid.csv` (a grid point's event over its seeds).
 #[derive(Serialize, Debug, Clone)]
 pub struct GridRow {
     /// Q of the normal mode.
@@ -133,25 +187,32 @@ pub struct GridRow {
     pub tau_eff_ms: f64,
     /// The event.
     pub event: &'static str,
-    /// Settling time, ms (empty: never settled).
+    /// Noise records run (seeds 0 … seeds − 1).
+    pub seeds: u32,
+    /// Median settling time over the seeds, ms (empty: the median run
+    /// never settled).
     pub settle_ms: Option<f64>,
-    /// Settling time, drive periods.
+    /// Largest settling time over the seeds, ms (empty: one never settled).
+    pub settle_ms_max: Option<f64>,
+    /// Settling time of seed 0, drive periods.
     pub settle_periods: Option<f64>,
-    /// Settling time over τ.
+    /// Median settling time over τ.
     pub settle_over_tau: Option<f64>,
-    /// Overshoot as a fraction of the step (setpoint step only).
+    /// Overshoot as a fraction of the step, largest over the seeds
+    /// (setpoint step only).
     pub overshoot: Option<f64>,
-    /// The settling band, absolute μ.
+    /// The settling band of seed 0, absolute μ.
     pub band: f64,
-    /// RMS of μ̂ − μ* over the segment's last half.
+    /// RMS of μ̂ − μ* over the segment's last half (seed 0).
     pub steady_rms: f64,
-    /// Samples whose true normal excursion exceeded the lift-off limit (the run's).
+    /// Samples whose true normal excursion exceeded the lift-off limit, over
+    /// all the seeds' runs.
     pub commands_above_limit: u64,
-    /// The largest true normal excursion of the run, m.
+    /// The largest true normal excursion of the runs, m.
     pub max_excursion_m: f64,
-    /// Faults that ended the run (`;`-separated).
+    /// Faults that ended a run (`;`-separated, seed 0).
     pub faults: String,
-    /// Wall-clock time of the run on this host, s.
+    /// Wall-clock time of the runs on this host, s (all seeds).
     pub wall_s: f64,
 }
 
@@ -223,7 +284,8 @@ struct GridJsonRun<'a> {
     resonance_x_hz: f64,
     headroom: f64,
     command: &'a str,
-    result: &'a BenchOut,
+    /// One result per seed (0 first; `--seed S` reproduces seed S).
+    results: &'a [BenchOut],
 }
 
 /// The grid of the run (`quick`: the reduced one), as `(q_z, f_z, h)`.
@@ -269,6 +331,7 @@ pub fn run(a: &ControlArgs) -> CliResult {
     crate::output::check_outputs(&named)?;
     let g = grid(a.quick);
     let hold = if a.quick { QUICK_HOLD_S } else { HOLD_S };
+    let n_seeds = if a.quick { 1 } else { a.seeds };
     let bar = indicatif::ProgressBar::new((g.len() + 2 * DRIFTS_HZ_PER_S.len()) as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
@@ -293,24 +356,38 @@ pub fn run(a: &ControlArgs) -> CliResult {
         ]
         .into();
         bar.set_message(format!("Q {q}, {f} Hz, headroom {h}"));
-        let out = bench_out(&bench_args(&flags)?, false)?;
-        bar.println(format!(
-            "Q {q:>5}, f_r {f:>6} Hz, headroom {h}: tau {:.2} ms, settle (ms) {}, above limit {}, {:.1} s",
-            out.tau_ms,
-            settles(&out),
-            out.commands_above_limit,
-            out.wall_s
-        ));
-        bar.inc(1);
-        runs.push(GridRun {
+        let mut seeds = Vec::new();
+        for seed in 0..n_seeds {
+            let mut argv = flags.clone();
+            argv.extend(["--seed".to_string(), seed.to_string()]);
+            seeds.push(bench_out(&bench_args(&argv)?, false)?);
+        }
+        let run = GridRun {
             q_z: q,
             q_x: qx,
             resonance_z_hz: f,
             resonance_x_hz: fx,
             headroom: h,
             command: format!("fricctl device control-bench {} --json", flags.join(" ")),
-            out,
-        });
+            out: seeds[0].clone(),
+            seeds,
+        };
+        let med = |e: &str| {
+            run.median_settle(e)
+                .map_or("never".into(), |s| format!("{s:.2}"))
+        };
+        bar.println(format!(
+            "Q {q:>5}, f_r {f:>6} Hz, headroom {h}: tau {:.2} ms, median settle over {n_seeds} (ms) {} / {} / {} / {}, above limit {}, {:.1} s",
+            run.out.tau_ms,
+            med("switch_on"),
+            med("setpoint_step"),
+            med("disturbance"),
+            med("velocity_step"),
+            run.seeds.iter().map(|o| o.commands_above_limit).sum::<u64>(),
+            run.seeds.iter().map(|o| o.wall_s).sum::<f64>()
+        ));
+        bar.inc(1);
+        runs.push(run);
     }
     let mut drift = Vec::new();
     for (rate, track) in DRIFTS_HZ_PER_S
@@ -354,7 +431,12 @@ pub fn run(a: &ControlArgs) -> CliResult {
     // true normal excursion above the lift-off limit is a safety failure.
     let above: Vec<&str> = runs
         .iter()
-        .map(|r| (&r.command, r.out.commands_above_limit))
+        .map(|r| {
+            (
+                &r.command,
+                r.seeds.iter().map(|o| o.commands_above_limit).sum::<u64>(),
+            )
+        })
         .chain(
             drift
                 .iter()
@@ -393,7 +475,13 @@ fn write_outputs(
     let cmd = format!(
         "fricctl bench control --out {}{}",
         a.out.display(),
-        if a.quick { " --quick" } else { "" }
+        if a.quick {
+            " --quick".to_string()
+        } else if a.seeds != 5 {
+            format!(" --seeds {}", a.seeds)
+        } else {
+            String::new()
+        }
     );
     let mut rows = Vec::new();
     for r in runs {
@@ -402,6 +490,17 @@ fn write_outputs(
             .max(load(r.q_x) / (std::f64::consts::PI * r.resonance_x_hz))
             * 1e3;
         for e in &r.out.events {
+            let settle = r.median_settle(e.event);
+            let overshoot = r
+                .seeds
+                .iter()
+                .filter_map(|o| {
+                    o.events
+                        .iter()
+                        .find(|x| x.event == e.event)
+                        .and_then(|x| x.overshoot)
+                })
+                .reduce(f64::max);
             rows.push(GridRow {
                 q_z: r.q_z,
                 q_x: r.q_x,
@@ -411,16 +510,22 @@ fn write_outputs(
                 tau_ms: r.out.tau_ms,
                 tau_eff_ms,
                 event: e.event,
-                settle_ms: e.settle_ms,
+                seeds: r.seeds.len() as u32,
+                settle_ms: settle,
+                settle_ms_max: r.max_settle(e.event),
                 settle_periods: e.settle_periods,
-                settle_over_tau: e.settle_ms.map(|s| s / r.out.tau_ms),
-                overshoot: e.overshoot,
+                settle_over_tau: settle.map(|s| s / r.out.tau_ms),
+                overshoot,
                 band: e.band,
                 steady_rms: e.steady_rms,
-                commands_above_limit: r.out.commands_above_limit,
-                max_excursion_m: r.out.max_excursion_m,
+                commands_above_limit: r.seeds.iter().map(|o| o.commands_above_limit).sum(),
+                max_excursion_m: r
+                    .seeds
+                    .iter()
+                    .map(|o| o.max_excursion_m)
+                    .fold(0.0, f64::max),
                 faults: r.out.faults.join(";"),
-                wall_s: r.out.wall_s,
+                wall_s: r.seeds.iter().map(|o| o.wall_s).sum(),
             });
         }
     }
@@ -436,7 +541,7 @@ fn write_outputs(
                 resonance_x_hz: r.resonance_x_hz,
                 headroom: r.headroom,
                 command: &r.command,
-                result: &r.out,
+                results: &r.seeds,
             })
             .collect(),
     };
@@ -531,12 +636,7 @@ fn figure(runs: &[GridRun], cmd: &str) -> Figure {
         for (k, (name, marker, _)) in EVENTS.into_iter().enumerate() {
             let mut pts: Vec<(f64, f64)> = Vec::new();
             for r in runs.iter().filter(|r| r.headroom == h) {
-                let s = r
-                    .out
-                    .events
-                    .iter()
-                    .find(|e| e.event == name)
-                    .and_then(|e| e.settle_ms);
+                let s = r.median_settle(name);
                 if s.is_none() {
                     never.push((r.out.tau_ms, hi, k));
                 }
@@ -670,7 +770,10 @@ fn figure(runs: &[GridRun], cmd: &str) -> Figure {
         f.iter().map(|f| format!("{:.0} kHz", f / 1e3)).collect()
     };
     let mut caption = vec![
-        format!("{cmd}: one `device control-bench` run per point."),
+        format!(
+            "{cmd}: per point the median over {} noise records of `device control-bench`.",
+            runs.first().map_or(1, |r| r.seeds.len())
+        ),
         format!(
             "Grid: Q_z ∈ {{{}}}, Q_x = 2/3 Q_z; normal resonance f_r ∈ {{{}}}, tangential {:.2} % below; headroom ∈ {{{}}}; the drive at the normal resonance.",
             qs.join(", "),
@@ -682,9 +785,10 @@ fn figure(runs: &[GridRun], cmd: &str) -> Figure {
             "τ = Q/(π f_r) of the slower (normal) mode with the unloaded Q (the contact's load, Q_load = {}, shortens it).",
             short(load_q())
         ),
-        "Settled: every later estimate within 2 % of the step (or 3 × the estimates' own scatter in the run if wider); time to the end of that update's 128 µs half-buffer.".into(),
-        "Fixed: plant μ0 = 0.24 (model 0.3); ADC noise ±2 counts; κ = 0.7; 4 drive periods per update; DAC fills 2 half-buffers ahead;".into(),
-        "u_z0 = 4 µm, Δu_x = 0.3 µm, φ = 40°; v0 = 4 mm/s (step to 6 mm/s); setpoints μ* = 0.08, then 0.10; disturbance μ0 × 0.9.".into(),
+        "Settled: every later estimate within 2 % of the step (or 4 × the estimates' scatter in the event's segment if wider); time to the end of that update's 128 µs half-buffer.".into(),
+        "Fixed: plant μ0 = 0.24 (model 0.3); ADC noise ±2 counts; κ = 0.95 with the plant's gain learned; DAC fills 2 half-buffers ahead;".into(),
+        "drive periods per update: as many as fit a 64-sample half-buffer (1 at 20 kHz, 4 at 40 kHz); u_z0 = 4 µm, Δu_x = 0.3 µm, φ = 40°;".into(),
+        "v0 = 4 mm/s (step to 6 mm/s); setpoints μ* = 0.08, then 0.10; disturbance μ0 × 0.9.".into(),
     ];
     if !never.is_empty() {
         caption.push(format!(

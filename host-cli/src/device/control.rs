@@ -22,13 +22,54 @@ use crate::args::{Count, Real};
 use crate::error::{CliError, CliResult};
 use crate::plot::{render_figure, Corner, Extras, Figure, Mark, Panel, Series};
 
-/// Default κ (fraction of the error removed per update).
-pub const DEFAULT_GAIN: f64 = 0.7;
+/// Default κ (fraction of the error removed per update, with the plant's
+/// gain learned: eqs. C5–C7 of `model_core::control`).
+pub const DEFAULT_GAIN: f64 = 0.95;
 /// The loop gain's domain: a fraction of the error removed per update.
 const GAIN: Real = Real::ANY.at_least(0.01).at_most(1.0);
 
-/// Default drive periods per update.
-pub const DEFAULT_PERIODS: u32 = 4;
+/// Drive periods per update: a number, or as many as fit one half-buffer
+/// at the drive frequency (`auto`, the default).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Periods {
+    /// `model_core::device::periods_in_half_buffer` at the drive frequency.
+    Auto,
+    /// This many, 1 … `CONTROL_MAX_PERIODS`.
+    Fixed(u32),
+}
+
+impl Periods {
+    /// The periods at `freq_hz` with `sample_rate_hz`.
+    pub fn at(self, freq_hz: f64, sample_rate_hz: f64) -> u32 {
+        match self {
+            Periods::Auto => model_core::device::periods_in_half_buffer(freq_hz, sample_rate_hz),
+            Periods::Fixed(n) => n,
+        }
+    }
+}
+
+impl std::fmt::Display for Periods {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Periods::Auto => f.write_str("auto"),
+            Periods::Fixed(n) => write!(f, "{n}"),
+        }
+    }
+}
+
+/// `--periods`: `auto` or a whole number ≥ 1 (the device refuses more
+/// than `CONTROL_MAX_PERIODS` by name).
+pub fn parse_periods(s: &str) -> Result<Periods, crate::args::Refused> {
+    if s == "auto" {
+        return Ok(Periods::Auto);
+    }
+    if s.trim().parse::<f64>().is_err() {
+        return Err(crate::args::Refused(format!(
+            "'{s}' is neither `auto` nor a number"
+        )));
+    }
+    Count::<u32>::at_least(1).parse(s).map(Periods::Fixed)
+}
 /// Default rate limit of the commanded Δu_z, m/s (the driver board's slew).
 pub const DEFAULT_RATE: f64 = 1e-3;
 
@@ -48,9 +89,11 @@ pub struct ControlArgs {
     /// κ: fraction of the error removed per update, in [0.01, 1]
     #[arg(long, default_value_t = DEFAULT_GAIN, value_parser = GAIN)]
     pub gain: f64,
-    /// Drive periods per estimate (one update each), 1 … 10 000
-    #[arg(long, default_value_t = DEFAULT_PERIODS, value_parser = Count::<u32>::at_least(1))]
-    pub periods: u32,
+    /// Drive periods per estimate (one update each), 1 … 10 000, or `auto`:
+    /// as many as fit one DAC half-buffer at the drive frequency (1 at
+    /// 20 kHz, 4 at 40 kHz), the shortest update interval
+    #[arg(long, default_value = "auto", value_parser = parse_periods)]
+    pub periods: Periods,
     /// Rate limit of the commanded Δu_z, m/s (at most the board's slew, 1e-3)
     #[arg(long, default_value_t = DEFAULT_RATE, value_parser = Real::positive().single_precision())]
     pub rate: f64,
@@ -74,7 +117,7 @@ impl ControlArgs {
                     target_mu: 0.0,
                     v0_m_s: 0.0,
                     gain: self.gain as f32,
-                    periods: self.periods,
+                    periods: 1,
                     rate_m_per_s: self.rate as f32,
                 }))
             }
@@ -95,7 +138,11 @@ impl ControlArgs {
             target_mu: target as f32,
             v0_m_s: v0 as f32,
             gain: self.gain as f32,
-            periods: self.periods,
+            // `auto` is resolved on the device's frequency by `run`.
+            periods: match self.periods {
+                Periods::Fixed(n) => n,
+                Periods::Auto => 1,
+            },
             rate_m_per_s: self.rate as f32,
         }))
     }
@@ -105,6 +152,20 @@ impl ControlArgs {
 /// keeping the tracking in force; put back if the device refuses the
 /// control request, so that a refused command changes nothing).
 pub fn run(c: &mut Client, req: Request, a: &ControlArgs, json: bool) -> CliResult {
+    let mut req = req;
+    if let (Request::SetControl(s), Periods::Auto) = (&mut req, a.periods) {
+        if s.on {
+            let fs = match expect(c.call(Request::Hello)?)? {
+                Response::Info(i) => i.sample_rate_hz,
+                other => return Err(unexpected(other)),
+            };
+            let f = match expect(c.call(Request::GetStatus)?)? {
+                Response::Status(st) => f64::from(st.frequency_hz),
+                other => return Err(unexpected(other)),
+            };
+            s.periods = a.periods.at(f, fs);
+        }
+    }
     let mut before = None;
     if let Some(h) = a.headroom {
         let st = match expect(c.call(Request::GetStatus)?)? {
@@ -160,9 +221,9 @@ pub struct BenchArgs {
     /// κ of the loop, in [0.01, 1]
     #[arg(long, default_value_t = DEFAULT_GAIN, value_parser = GAIN)]
     pub gain: f64,
-    /// Drive periods per update
-    #[arg(long, default_value_t = DEFAULT_PERIODS, value_parser = Count::<u32>::at_least(1))]
-    pub periods: u32,
+    /// Drive periods per update, or `auto` (as `device control`)
+    #[arg(long, default_value = "auto", value_parser = parse_periods)]
+    pub periods: Periods,
     /// Half-buffers the DAC fills run ahead of the output: 2 as on the board
     /// (a command reaches the output 2 half-buffers after the next), 0 for
     /// the fastest possible pipeline (at most 16)
@@ -584,6 +645,7 @@ fn bench_run(a: &BenchArgs, progress: bool) -> CliResult<BenchOut> {
     if let Some(r) = &resonant {
         check_bench_plant(r, &cfg, tau_s)?;
     }
+    let periods = a.periods.at(freq_hz, cfg.sample_rate_hz);
     let seg_ms = |k: usize| (EVENTS_MS[k + 1] - EVENTS_MS[k]).max(8.0 * tau_s * 1e3);
     let model_mu0 = super::sim::DEFAULT_CONTACT.0;
     // Settle 20 ms (or 10 τ), then the events: each at the end of the
@@ -660,7 +722,7 @@ fn bench_run(a: &BenchArgs, progress: bool) -> CliResult<BenchOut> {
         target_mu: target,
         v0_m_s: V0 as f32,
         gain: a.gain as f32,
-        periods: a.periods,
+        periods,
         rate_m_per_s: DEFAULT_RATE as f32,
     };
     let mut t_events = Vec::new();
@@ -723,8 +785,8 @@ fn bench_run(a: &BenchArgs, progress: bool) -> CliResult<BenchOut> {
     // error (median, reported per event) can overstate it many times over
     // (40 kHz: 12.5 samples per period) and would widen the band to a
     // large part of the step.
-    let scatter = (0..4)
-        .filter_map(|k| {
+    let scatters: Vec<Option<f64>> = (0..4)
+        .map(|k| {
             let (t0, t1) = (t_events[k], if k < 3 { t_events[k + 1] } else { t_end });
             let seg: Vec<f64> = b
                 .log
@@ -739,8 +801,9 @@ fn bench_run(a: &BenchArgs, progress: bool) -> CliResult<BenchOut> {
                 (tail.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
             })
         })
-        .fold(f64::INFINITY, f64::min);
-    let scatter = if scatter.is_finite() { scatter } else { 0.0 };
+        .collect();
+    let least = scatters.iter().flatten().copied().fold(f64::INFINITY, f64::min);
+    let least = if least.is_finite() { least } else { 0.0 };
     for k in 0..4 {
         let (t0, t1) = (t_events[k], if k < 3 { t_events[k + 1] } else { t_end });
         let seg: Vec<&(f64, ControlUpdate)> =
@@ -761,7 +824,8 @@ fn bench_run(a: &BenchArgs, progress: bool) -> CliResult<BenchOut> {
         let mut se: Vec<f64> = seg.iter().map(|(_, u)| f64::from(u.std_error)).collect();
         se.sort_by(f64::total_cmp);
         let std_error = se.get(se.len() / 2).copied().unwrap_or(0.0);
-        let band = (0.02 * step).max(3.0 * scatter);
+        let scatter = scatters[k].unwrap_or(least);
+        let band = (0.02 * step).max(4.0 * scatter);
         let mut settle = None;
         for (i, _) in seg.iter().enumerate() {
             if seg[i..].iter().all(|(_, u)| err(u).abs() <= band) {
@@ -853,7 +917,7 @@ fn bench_run(a: &BenchArgs, progress: bool) -> CliResult<BenchOut> {
         drift_per_s: a.drift,
         noise_counts: a.noise,
         gain: a.gain,
-        periods: a.periods,
+        periods,
         half_buffer_samples: HALF,
         fill_lead: a.fill_lead,
         noise_seed: a.seed,

@@ -8,8 +8,24 @@
 //! blocks of 256 samples added into `f32` totals (rounding grows with the
 //! number of blocks, not of samples). The window opens at the
 //! first accumulator wrap after [`Estimator::start`] and closes at the `n`-th
-//! wrap after that, so it spans exactly `n` drive periods up to one sample at
-//! each end — also for a non-integer number of samples per period.
+//! wrap after that.
+//!
+//! **Fractional edges.** Sample `k` stands for the interval `[k, k+1)` of
+//! sample time. A wrap seen at sample `i` with accumulator `φ_i` and
+//! increment `tw` happened `ε = φ_i/tw ∈ [0, 1)` samples before it, inside
+//! the interval of sample `i − 1`: that sample counts `ε` after the boundary
+//! and `1 − ε` before it. The window therefore takes sample `i₀ − 1` with
+//! weight `ε₀` at its start, gives sample `i_e − 1` weight `1 − ε_e` at its
+//! end, and splits the sample before each inner wrap between the two
+//! batches it straddles, so that it spans exactly `n` drive periods (the
+//! rectangle rule on the exact interval) also for a non-integer number of
+//! samples per period. Without the edges, a window of whole samples is up to
+//! one sample longer or shorter than `n` periods, and the mean of a force
+//! that oscillates with amplitude `A` is off by up to `A/N` (`N` samples):
+//! at 20.1 kHz (24.9 samples per period) and one period, ≈ 2 % of μ. With
+//! a whole number of samples per period every `ε` is the same and the
+//! weights add back to the whole-sample window. The integer sums stay
+//! exact; the edge corrections are `f32` (a few per window).
 //!
 //! **Quality.** Each estimate carries `reasons` (bit flags, [`reasons`]; the
 //! estimate is valid iff none is set) and the standard error of μ from the
@@ -151,6 +167,13 @@ struct Sums {
     block: u32,
     /// Per batch: samples, Σ raw x, Σ raw z.
     batch: [(u32, u64, u64); BATCHES],
+    /// The fractional edges (module docs): weight, Σ raw x, Σ raw z added
+    /// to the window's totals …
+    edge: [f32; 3],
+    /// … and the lock-in totals …
+    edge_h: [f32; 4],
+    /// … and per batch.
+    edge_b: [[f32; 3]; BATCHES],
 }
 
 impl Default for Sums {
@@ -163,6 +186,9 @@ impl Default for Sums {
             tx: [0.0; 4],
             block: 0,
             batch: [(0, 0, 0); BATCHES],
+            edge: [0.0; 3],
+            edge_h: [0.0; 4],
+            edge_b: [[0.0; 3]; BATCHES],
         }
     }
 }
@@ -179,6 +205,8 @@ pub struct Estimator {
     wraps: u32,
     saturated: bool,
     last_phase: u32,
+    /// The last sample pushed (raw x, z): the one a wrap splits.
+    last_sample: (u16, u16),
     /// Reasons that hold for the samples now being pushed ([`Estimator::set_conditions`]).
     conditions: u32,
     /// Reasons collected over the window.
@@ -220,6 +248,7 @@ impl Estimator {
             wraps: 0,
             saturated: false,
             last_phase: 0,
+            last_sample: (0, 0),
             conditions: 0,
             reasons: 0,
             batch: 0,
@@ -279,7 +308,15 @@ impl Estimator {
         z: u16,
     ) -> bool {
         let wrapped = phase < self.last_phase;
+        // ε of the module docs: how far past the boundary this sample is.
+        let eps = if wrapped {
+            phase as f32 / phase.wrapping_sub(self.last_phase).max(1) as f32
+        } else {
+            0.0
+        };
+        let (last_phase, prev) = (self.last_phase, self.last_sample);
         self.last_phase = phase;
+        self.last_sample = (x, z);
         match self.state {
             State::Idle | State::Done => return false,
             State::WaitingForWrap => {
@@ -287,21 +324,37 @@ impl Estimator {
                     return false;
                 }
                 self.state = State::Running;
+                // The sample before: ε of it is inside the window (batch 0).
+                self.edge(0, eps, prev, last_phase, table);
             }
             State::Running => {
                 if wrapped {
                     self.wraps += 1;
+                    let old = self.batch;
                     if self.wraps == self.periods {
+                        // The sample before: ε of it is past the end.
+                        self.edge(old, -eps, prev, last_phase, table);
                         self.flush_block();
                         self.state = State::Done;
                         return true;
                     }
                     // Period k of P goes to batch ⌊k·B/P⌋ (k·B ≤ 3.2e7: no overflow).
                     self.batch = (self.wraps as usize * BATCHES) / self.periods as usize;
+                    if self.batch != old {
+                        // ε of the sample before belongs to the new batch.
+                        let b = &mut self.sums.edge_b;
+                        let (wx, wz) = (eps * f32::from(prev.0), eps * f32::from(prev.1));
+                        b[old][0] -= eps;
+                        b[old][1] -= wx;
+                        b[old][2] -= wz;
+                        b[self.batch][0] += eps;
+                        b[self.batch][1] += wx;
+                        b[self.batch][2] += wz;
+                    }
                 }
             }
         }
-        if x == 0 || z == 0 || x >= self.full_scale || z >= self.full_scale {
+        if self.railed(x, z) {
             self.saturated = true;
         }
         self.reasons |= self.conditions;
@@ -327,6 +380,41 @@ impl Estimator {
         false
     }
 
+    /// A sample at an ADC rail (0 or full scale) on either channel.
+    #[inline]
+    pub fn railed(&self, x: u16, z: u16) -> bool {
+        x == 0 || z == 0 || x >= self.full_scale || z >= self.full_scale
+    }
+
+    /// Adds `w` (±ε) of sample `prev` (raw x, z; taken at `phase`) to the
+    /// window's totals, its lock-in and batch `b`.
+    fn edge<const N: usize>(
+        &mut self,
+        b: usize,
+        w: f32,
+        prev: (u16, u16),
+        phase: u32,
+        table: &SineTable<N>,
+    ) {
+        if w == 0.0 {
+            return;
+        }
+        let (x, z) = (w * f32::from(prev.0), w * f32::from(prev.1));
+        let s = &mut self.sums;
+        s.edge[0] += w;
+        s.edge[1] += x;
+        s.edge[2] += z;
+        let sn = table.sin(phase);
+        let cs = table.sin(phase.wrapping_add(1 << 30));
+        s.edge_h[0] += x * cs;
+        s.edge_h[1] += x * sn;
+        s.edge_h[2] += z * cs;
+        s.edge_h[3] += z * sn;
+        s.edge_b[b][0] += w;
+        s.edge_b[b][1] += x;
+        s.edge_b[b][2] += z;
+    }
+
     fn flush_block(&mut self) {
         let s = &mut self.sums;
         for i in 0..4 {
@@ -346,9 +434,10 @@ impl Estimator {
             return Err(EstimateError::NotReady);
         }
         let s = &self.sums;
-        let n = s.n as f64;
-        let mean_x = s.raw_x as f64 / n;
-        let mean_z = s.raw_z as f64 / n;
+        // The window's weight and sums with its fractional edges.
+        let n = s.n as f64 + f64::from(s.edge[0]);
+        let mean_x = (s.raw_x as f64 + f64::from(s.edge[1])) / n;
+        let mean_z = (s.raw_z as f64 + f64::from(s.edge[2])) / n;
         let fx = f64::from(self.cal_x.gain) * (mean_x - f64::from(self.cal_x.offset));
         let fz = f64::from(self.cal_z.gain) * (mean_z - f64::from(self.cal_z.offset));
         if fz.is_nan() || fz <= 0.0 {
@@ -379,8 +468,8 @@ impl Estimator {
             mu: mu as f32,
             fx_mean: fx as f32,
             fz_mean: fz as f32,
-            fx_h1: h(s.tx[0], s.tx[1], self.cal_x.gain),
-            fz_h1: h(s.tx[2], s.tx[3], self.cal_z.gain),
+            fx_h1: h(s.tx[0] + s.edge_h[0], s.tx[1] + s.edge_h[1], self.cal_x.gain),
+            fz_h1: h(s.tx[2] + s.edge_h[2], s.tx[3] + s.edge_h[3], self.cal_z.gain),
             samples: s.n,
             periods: self.periods,
             saturated: self.saturated,
@@ -395,10 +484,11 @@ impl Estimator {
         let (gx, ox) = (f64::from(self.cal_x.gain), f64::from(self.cal_x.offset));
         let (gz, oz) = (f64::from(self.cal_z.gain), f64::from(self.cal_z.offset));
         let (mut used, mut sum_z, mut sum_sq) = (0u32, 0.0f64, 0.0f64);
-        for &(n, rx, rz) in self.sums.batch.iter().filter(|b| b.0 > 0) {
-            let n = f64::from(n);
-            let xb = gx * (rx as f64 - n * ox);
-            let zb = gz * (rz as f64 - n * oz);
+        let edges = self.sums.edge_b.iter();
+        for (&(n, rx, rz), e) in self.sums.batch.iter().zip(edges).filter(|b| b.0 .0 > 0) {
+            let n = f64::from(n) + f64::from(e[0]);
+            let xb = gx * (rx as f64 + f64::from(e[1]) - n * ox);
+            let zb = gz * (rz as f64 + f64::from(e[2]) - n * oz);
             used += 1;
             sum_z += zb;
             sum_sq += (xb - mu * zb) * (xb - mu * zb);

@@ -17,24 +17,49 @@
 //! **Integral trim** (every update `k`, [`Controller::update`]): with the
 //! measured `μ̂_k` and the error `e_k = μ* − μ̂_k`,
 //!
-//! `I⁺ = I_k + κ·e_k/s`,  `v_k = u_ff + I⁺`                          (C1)
+//! `I⁺ = I_k + κ·e_k/(ρ̂·s)`,  `v_k = u_ff + I⁺`                     (C1)
 //!
 //! `u_k = clamp(v_k, u_{k−1} − r·Δt_k, u_{k−1} + r·Δt_k)`  (rate limit r, m/s)   (C2)
 //!
 //! `u_k ← clamp(u_k, 0, u_max)`,  `u_max` = the lift-off limit `(1 − margin)·u_z0` (C3)
 //!
-//! `I_{k+1} = u_k − u_ff` if (C3) clamped (back-calculation: the trim never
-//! holds more than the bound), `I_k` if only (C2) limited (conditional
-//! integration: no error is integrated while the command ramps), else `I⁺`. (C4)
+//! `I_{k+1} = u_k − u_ff` if (C2) or (C3) changed the command
+//! (back-calculation: the trim holds the command applied, never more than
+//! the bound nor a step the rate limit did not take), else `I⁺`.     (C4)
 //!
-//! κ ∈ (0, 1] is the fraction of the error removed per update if the model's
-//! gain were the plant's; a plant gain `s_p = ρ·s` gives the error recursion
-//! `e_{k+1} = (1 − κρ)·e_k` (stable for `0 < κρ < 2`, monotone for `κρ ≤ 1`).
-//! A μ₀ mismatch of 20 % is ρ ≈ 0.8…1.25.
+//! (C4 once kept `I_k` while only the rate limit acted, so that estimates
+//! taken mid-ramp integrated nothing; since an update only ever sees an
+//! estimate of the command in force ([`crate::board::device`], "Dead
+//! time"), that made the next update undo the ramp's step: from 2 µm with
+//! a 0.26 µm step allowed, 2.0 → 1.74 → 1.87 → 1.62 µm where the plant
+//! needed 1.6.)
+//!
+//! κ ∈ (0, 1] is the fraction of the error removed per update if the plant's
+//! gain were `ρ̂·s`; a plant gain `s_p = ρ·s` gives the error recursion
+//! `e_{k+1} = (1 − κρ/ρ̂)·e_k` (stable for `0 < κρ/ρ̂ < 2`, monotone for
+//! `κρ/ρ̂ ≤ 1`). A μ₀ mismatch of 20 % is ρ ≈ 0.6…1.25 on the bench.
+//!
+//! **The plant's gain, learned** (C5–C6). ρ̂ (1 at switch-on) is learned
+//! from the secants between successive updates: with the commands `u_{k−1}`,
+//! `u_k` in force when `μ̂_{k−1}`, `μ̂_k` were measured and `Δ = s·(u_k − u_{k−1})`
+//! (the model's change of μ), a pair with `|Δ| ≥ LEARN_MIN_REL·μ₀` gives
+//!
+//! `r_k = clamp((μ̂_k − μ̂_{k−1})/Δ, RHO_MIN, RHO_MAX)`,  weight `w = Δ²`  (C5)
+//!
+//! `P ← λ·P + w`,  `ρ̂ ← ρ̂ + (w/P)·(r_k − ρ̂)`   (λ = [`FORGET`]; recursive least squares)   (C6)
+//!
+//! so a large step (a setpoint change) outweighs the small corrections of
+//! the steady state, whose secants are mostly the estimates' noise. A
+//! disturbance (a step of the plant's μ₀, of the velocity) would pass for
+//! gain if its secant were taken: a pair without a command change
+//! (`|Δ| < LEARN_MIN_REL·μ₀`) whose μ̂ moved by more than that marks the next
+//! pair as *disturbed*, and it is not learned from (the disturbance may
+//! have been caught half-way by the window; the pair after it is whole).
 //!
 //! **Switching.** On: `I₀ = u_now − u_ff`, so the first command is the
 //! present amplitude (bumpless). A new setpoint keeps `I` (the learned
-//! mismatch) and moves to `u_ff' + I` at the rate limit. Off: the last
+//! mismatch) and ρ̂, and moves by the model's step scaled by the learned gain,
+//! to `u_ff + I + (u_ff' − u_ff)/ρ̂`, at the rate limit (C7). Off: the last
 //! command stays applied ([`crate::board::device`] keeps it as the drive's
 //! Δu_z). The guard (C3) is a hard constraint: no command exceeds `u_max`.
 
@@ -50,6 +75,21 @@ pub const SCAN_POINTS: usize = 24;
 /// Smallest `|∂(μ/μ₀)/∂(Δu_z/u_z0)|` the trim uses (a target at an extremum
 /// of the law gets this gain instead of an unbounded one).
 pub const S_MIN_REL: f32 = 0.05;
+
+/// A secant is learned from when the model's change of μ over it is at
+/// least this fraction of μ₀ (C5): 0.003 at μ₀ = 0.3, ≥ 40 times the
+/// estimates' scatter on the bench (≤ 7e-5 with 4 periods), so one secant's
+/// noise is a few % of ρ.
+pub const LEARN_MIN_REL: f32 = 0.01;
+
+/// Least ρ a secant gives (C5).
+pub const RHO_MIN: f32 = 0.25;
+
+/// Greatest ρ a secant gives (C5).
+pub const RHO_MAX: f32 = 4.0;
+
+/// λ of C6: the weight of the past per learned secant.
+pub const FORGET: f32 = 0.5;
 
 /// Why a setpoint has no plan.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -100,6 +140,8 @@ pub struct Plan {
     pub slope_per_m: f32,
     /// The bound `u_max` of the command (lift-off limit), m.
     pub limit_m: f32,
+    /// The model's μ₀ (the scale of C5's threshold).
+    pub mu0: f32,
 }
 
 /// The feedforward and the gain for target μ* at velocity `v0` (m/s) on the
@@ -227,6 +269,7 @@ pub fn plan(
         feedforward_m: x,
         slope_per_m: s,
         limit_m,
+        mu0,
     })
 }
 
@@ -252,7 +295,57 @@ pub struct Output {
     pub saturated: bool,
 }
 
-/// The loop's state (eqs. C1–C4).
+/// The learning of the plant's gain (C5–C6).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+struct Learn {
+    /// ρ̂.
+    rho: f32,
+    /// P of C6.
+    weight: f32,
+    /// The last update's command in force and its μ̂.
+    last: Option<(f32, f32)>,
+    /// The last pair moved μ̂ without a command change: the next pair is
+    /// not learned from.
+    disturbed: bool,
+}
+
+impl Learn {
+    fn new(mu0: f32) -> Self {
+        let w0 = LEARN_MIN_REL * mu0;
+        Learn {
+            rho: 1.0,
+            weight: w0 * w0,
+            last: None,
+            disturbed: false,
+        }
+    }
+
+    /// One measurement `mu` with the command `u` in force (C5, C6).
+    fn push(&mut self, u: f32, mu: f32, slope: f32, mu0: f32) {
+        let min = LEARN_MIN_REL * mu0;
+        if let Some((u0, m0)) = self.last {
+            let d = slope * (u - u0);
+            let dm = mu - m0;
+            if !(d.is_finite() && dm.is_finite()) {
+                self.disturbed = false;
+            } else if d.abs() >= min {
+                if !self.disturbed {
+                    let r = clamp(dm / d, RHO_MIN, RHO_MAX);
+                    let w = d * d;
+                    self.weight = FORGET * self.weight + w;
+                    self.rho += w / self.weight * (r - self.rho);
+                }
+                self.disturbed = false;
+            } else {
+                self.disturbed = (dm - self.rho * d).abs() >= min;
+            }
+        }
+        self.last = Some((u, mu));
+    }
+}
+
+/// The loop's state (eqs. C1–C7).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Controller {
@@ -261,6 +354,7 @@ pub struct Controller {
     integral_m: f32,
     command_m: f32,
     saturated: bool,
+    learn: Learn,
 }
 
 impl Controller {
@@ -275,7 +369,13 @@ impl Controller {
             integral_m: u - plan.feedforward_m,
             command_m: u,
             saturated: u != now_m,
+            learn: Learn::new(plan.mu0),
         }
+    }
+
+    /// ρ̂, the plant's gain over the model's learned so far (C6; 1 at first).
+    pub fn plant_gain(&self) -> f32 {
+        self.learn.rho
     }
 
     /// The plan.
@@ -297,12 +397,20 @@ impl Controller {
         }
     }
 
-    /// A new setpoint (and gains): the trim is kept; the command moves towards
-    /// `u_ff' + I` by at most `r·dt_s` now (eqs. C2–C4 with `e = 0`).
+    /// A new setpoint (and gains): the trim and ρ̂ are kept; the command
+    /// moves towards `u_ff + I + (u_ff' − u_ff)/ρ̂` (C7) by at most `r·dt_s`
+    /// now (eqs. C2–C4 with `e = 0`).
     pub fn retarget(&mut self, plan: Plan, gains: Gains, dt_s: f32) -> Output {
+        let (old, i) = (self.plan.feedforward_m, self.integral_m);
+        let moved = (plan.feedforward_m - old) / self.learn.rho;
+        let i = if moved.is_finite() {
+            old + i + moved - plan.feedforward_m
+        } else {
+            i
+        };
         self.plan = plan;
         self.gains = gains;
-        self.step(self.integral_m, dt_s)
+        self.step(i, dt_s)
     }
 
     /// The last command could not be applied (the actuator refused it):
@@ -316,11 +424,15 @@ impl Controller {
         self.output()
     }
 
-    /// One update with the measured μ̂ (eqs. C1–C4); `dt_s` is the time since
-    /// the last command was applied, s.
+    /// One update with the measured μ̂ of the command in force (eqs. C5–C6,
+    /// then C1–C4 with the gain `κ/(ρ̂·s)`); `dt_s` is the time since the
+    /// last command was applied, s.
     pub fn update(&mut self, measured_mu: f32, dt_s: f32) -> Output {
-        let e = self.plan.target_mu - measured_mu;
-        let di = self.gains.kappa * e / self.plan.slope_per_m;
+        let p = self.plan;
+        self.learn
+            .push(self.command_m, measured_mu, p.slope_per_m, p.mu0);
+        let e = p.target_mu - measured_mu;
+        let di = self.gains.kappa * e / (p.slope_per_m * self.learn.rho);
         if !di.is_finite() {
             // A non-finite estimate: hold.
             return self.output();
@@ -334,10 +446,8 @@ impl Controller {
         let step = (self.gains.rate_m_per_s * dt_s).max(0.0);
         let ramped = clamp(v, self.command_m - step, self.command_m + step);
         let u = clamp(ramped, 0.0, self.plan.limit_m);
-        self.integral_m = if u != ramped {
+        self.integral_m = if u != v {
             u - self.plan.feedforward_m
-        } else if ramped != v {
-            self.integral_m
         } else {
             i
         };

@@ -6,21 +6,25 @@
 //! — on the board the two DMA buffers of one timer, in the virtual device
 //! the same order. A command is applied at the next fill after its update (a
 //! DDS level change, ramped at the slew rate, without a new ramp
-//! generation), and the command in force at each fill is recorded. Every
-//! ADC block (from the first fill with the loop on) gets one estimate over
-//! its *last* `periods` drive periods (the slew ramp and the plant's
-//! transient have the rest of the block to pass; all of the block and more
-//! if they do not fit), and one update when it closes.
+//! generation), and the command in force at each fill is recorded. An
+//! estimate covers the *last* `periods` drive periods of a block (the slew
+//! ramp and the plant's transient have the rest of the block to pass), or
+//! of the `k` blocks they need when they do not fit in one (at 20 kHz,
+//! 4 periods + 1 for the wait for a period start are 125 samples: two
+//! 64-sample blocks); one update follows when it closes.
 //!
 //! **Dead time.** On the board block `n` is handled after fill `n + 2` (the
 //! DAC's refill of the same boundary runs first), so a command computed from
 //! block `n` reaches the output at fill `n + 3`; in the virtual device (by
-//! default) at fill `n + 1`. An estimate is used only if its block's fill
-//! had the latest command with the normal channel's amplitude already at it
-//! (`u_n = u_latest`, not ramping at the slew rate: "fresh"); estimates of
-//! blocks still running an older command, or ramping towards the new one,
-//! are dropped, so no update acts on an error its predecessor already
-//! corrected. The update interval is therefore at least one half-buffer in
+//! default) at fill `n + 1`. An estimate is used only if *every* block it
+//! covers had the latest command with the normal channel's amplitude
+//! already at it (`u_n = u_latest`, not ramping at the slew rate nor in a
+//! dead-beat transition: "fresh"); it opens only in a fresh block, and is
+//! dropped if a block it covers is not, so no update acts on an error its
+//! predecessor already corrected, nor on a transition's partial response.
+//! (Checking only the block where a two-block estimate closed let the
+//! transition block in at 20 kHz: the estimate saw ≈ 85 % of a step's
+//! response, and the loop's effective gain fell by as much.) The update interval is therefore at least one half-buffer in
 //! the virtual device and three on the board (3 × 128 µs with
 //! [`super::HALF_BUFFER`] = 64), longer while a large change ramps (1 µm per
 //! ms): with 128 µs blocks, estimates taken mid-ramp made the integral
@@ -55,12 +59,52 @@ pub(super) struct Loop {
     /// The command in force at the last fills, by fill number modulo
     /// [`FILL_RING`] (eq. C5).
     at_fill: [f32; FILL_RING],
+    /// A block of the open estimate ran an older command, or one still
+    /// being reached: the estimate is not used.
+    spoiled: bool,
     /// Samples since the last update.
     samples_since: u32,
     /// Samples between the last two updates (the retarget's rate-limit
     /// interval: one update's worth of travel).
     interval: u32,
     last: ControlUpdate,
+}
+
+/// Samples a loop estimate of `periods` drive periods may need at DDS
+/// tuning word `tw` (> 0): the periods and one more for the wait for a
+/// period start, `(periods + 1)·2³²/tw`, + 2 for the rounding.
+pub fn estimate_samples(periods: u32, tw: u32) -> u64 {
+    (u64::from(periods) + 1) * (1u64 << 32) / u64::from(tw.max(1)) + 2
+}
+
+/// The most drive periods whose loop estimate fits one half-buffer of
+/// [`super::HALF_BUFFER`] samples at `freq_hz` and `sample_rate_hz` ([`estimate_samples`]),
+/// at least 1 (the host's `--periods auto`): at 500 kHz, 1 at 20 kHz and
+/// 4 at 40 kHz. A window that fits one half-buffer keeps the update
+/// interval at its least, 4 half-buffers on the board (3 of dead time and
+/// one of transition); one that needs two adds a half-buffer to every
+/// update (at 20 kHz, 4 periods: 0.64 ms instead of 0.512 ms).
+pub fn periods_in_half_buffer(freq_hz: f64, sample_rate_hz: f64) -> u32 {
+    let tw = freq_hz / sample_rate_hz * 4_294_967_296.0;
+    if !(tw >= 1.0 && tw < 4_294_967_296.0) {
+        return 1;
+    }
+    let tw = tw as u32;
+    let len = super::HALF_BUFFER as u64;
+    let mut p = 1;
+    while p < CONTROL_MAX_PERIODS && estimate_samples(p + 1, tw) <= len {
+        p += 1;
+    }
+    p
+}
+
+impl Loop {
+    /// Block (fill) `block` ran the latest command, reached, and no newer
+    /// one waits.
+    fn fresh(&self, block: u32) -> bool {
+        self.at_fill[block as usize % FILL_RING] == self.ctl.output().command_m
+            && self.pending.is_none()
+    }
 }
 
 /// The state reported when the loop never ran.
@@ -215,6 +259,7 @@ impl<const N: usize> Device<'_, N> {
                     pending: Some(out.command_m),
                     first_fill: self.fills,
                     at_fill: [out.command_m; FILL_RING],
+                    spoiled: false,
                     samples_since: 0,
                     interval: 0,
                     last,
@@ -320,24 +365,29 @@ impl<const N: usize> Device<'_, N> {
     }
 
     /// Before ADC block `block` of `len` samples is pushed: where the loop's
-    /// estimate of this block starts (the sample index): as late as lets its
-    /// `periods` (+ 1 for the wait for a period start) close inside the
-    /// block, or at index 0 if they do not fit. None before the loop's first
-    /// fill or while the last estimate is still open.
+    /// estimate starts in it (the sample index), if one starts here. It
+    /// needs `periods` drive periods (+ 1 for the wait for a period start):
+    /// `k` blocks if they do not fit in one, and it starts as late as lets
+    /// them close at the end of the `k`-th block (at index 0 … `len − 1`
+    /// of this one). None before the loop's first fill, while the last
+    /// estimate is still open, or while this block does not run the latest
+    /// command, reached (an estimate opened there would be dropped, and
+    /// would keep the estimator from the first block that does).
     pub(super) fn control_block_start(&mut self, block: u32, len: usize) -> Option<usize> {
         let tw = self.dds.tuning_word();
         let l = self.control.as_ref().filter(|l| l.on)?;
-        if (block.wrapping_sub(l.first_fill) as i32) < 0 || self.est.busy() {
+        if (block.wrapping_sub(l.first_fill) as i32) < 0 || self.est.busy() || !l.fresh(block) {
             return None;
         }
-        // Samples of periods + 1 drive periods, rounded up (tw > 0 while running).
-        let need = (u64::from(l.setting.periods) + 1) * (1u64 << 32) / u64::from(tw.max(1)) + 2;
-        Some(len.saturating_sub(usize::try_from(need).unwrap_or(usize::MAX)))
+        let (len, need) = (len.max(1) as u64, estimate_samples(l.setting.periods, tw));
+        let blocks = need.div_ceil(len);
+        usize::try_from(blocks * len - need).ok()
     }
 
     /// Opens the loop's estimate (at the index [`Device::control_block_start`] gave).
     pub(super) fn control_open(&mut self) {
-        if let Some(l) = self.control.as_ref().filter(|l| l.on) {
+        if let Some(l) = self.control.as_mut().filter(|l| l.on) {
+            l.spoiled = false;
             let _ = self.est.start(l.setting.periods);
         }
     }
@@ -351,6 +401,10 @@ impl<const N: usize> Device<'_, N> {
             return;
         };
         l.samples_since = l.samples_since.saturating_add(samples as u32);
+        // Every block the estimate covers must run the latest command.
+        if (closed || self.est.busy()) && !l.fresh(block) {
+            l.spoiled = true;
+        }
         if !closed {
             return;
         }
@@ -359,9 +413,9 @@ impl<const N: usize> Device<'_, N> {
         };
         let unusable = reasons::SATURATED | reasons::FAULT | reasons::NOT_RUNNING;
         let held = e.reasons & unusable != 0 || !e.mu.is_finite();
-        let latest = l.ctl.output().command_m;
-        if l.at_fill[block as usize % FILL_RING] != latest || l.pending.is_some() {
-            // A block of an older command (dead time): not used.
+        if l.spoiled {
+            // A block of an older command (dead time), or of the
+            // transition to the latest: not used.
             return;
         }
         let out = if held {

@@ -36,7 +36,7 @@ mod motion;
 mod predict;
 pub mod tracking;
 
-pub use closed_loop::MIN_GAIN;
+pub use closed_loop::{estimate_samples, periods_in_half_buffer, MIN_GAIN};
 pub use config::{
     DacCal, DeviceConfig, HALF_BUFFER, MAX_PHASE_RAD, MAX_VELOCITY_M_S, PERIODS_RANGE,
 };
