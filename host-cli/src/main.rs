@@ -63,8 +63,9 @@ enum Command {
     Device {
         #[command(flatten)]
         target: device::Target,
+        // Boxed: the device commands' flags are the largest of any command.
         #[command(subcommand)]
-        cmd: device::DeviceCmd,
+        cmd: Box<device::DeviceCmd>,
     },
     /// Speed against accuracy: work-precision, methods, stability, dac
     Bench {

@@ -468,8 +468,16 @@ impl Estimator {
             mu: mu as f32,
             fx_mean: fx as f32,
             fz_mean: fz as f32,
-            fx_h1: h(s.tx[0] + s.edge_h[0], s.tx[1] + s.edge_h[1], self.cal_x.gain),
-            fz_h1: h(s.tx[2] + s.edge_h[2], s.tx[3] + s.edge_h[3], self.cal_z.gain),
+            fx_h1: h(
+                s.tx[0] + s.edge_h[0],
+                s.tx[1] + s.edge_h[1],
+                self.cal_x.gain,
+            ),
+            fz_h1: h(
+                s.tx[2] + s.edge_h[2],
+                s.tx[3] + s.edge_h[3],
+                self.cal_z.gain,
+            ),
             samples: s.n,
             periods: self.periods,
             saturated: self.saturated,

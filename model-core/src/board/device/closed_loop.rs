@@ -86,7 +86,7 @@ pub fn estimate_samples(periods: u32, tw: u32) -> u64 {
 /// update (at 20 kHz, 4 periods: 0.64 ms instead of 0.512 ms).
 pub fn periods_in_half_buffer(freq_hz: f64, sample_rate_hz: f64) -> u32 {
     let tw = freq_hz / sample_rate_hz * 4_294_967_296.0;
-    if !(tw >= 1.0 && tw < 4_294_967_296.0) {
+    if !(1.0..4_294_967_296.0).contains(&tw) {
         return 1;
     }
     let tw = tw as u32;
