@@ -24,8 +24,9 @@
 //! predecessor already corrected, nor on a transition's partial response.
 //! (Checking only the block where a two-block estimate closed let the
 //! transition block in at 20 kHz: the estimate saw ≈ 85 % of a step's
-//! response, and the loop's effective gain fell by as much.) The update interval is therefore at least one half-buffer in
-//! the virtual device and three on the board (3 × 128 µs with
+//! response, and the loop's effective gain fell by as much.) The update
+//! interval is therefore at least one half-buffer in the virtual device
+//! and three on the board (3 × 128 µs with
 //! [`super::HALF_BUFFER`] = 64), longer while a large change ramps (1 µm per
 //! ms): with 128 µs blocks, estimates taken mid-ramp made the integral
 //! overshoot a setpoint step by 24 % (`fricctl device control-bench`).
