@@ -247,13 +247,24 @@ fn switching_is_bumpless() {
 }
 
 /// The plant's μ0 20 % below the model's: ρ ≈ 0.6…0.8 on the way. A large
-/// step teaches the loop the plant's gain (C5–C6): ρ̂ ends within the
-/// plant's slopes over the interval visited, up to the share of the prior
-/// (ρ̂ = 1) left in the weighted mean, at most `P₀/w` with `P₀ = (0.01·μ₀)²`
-/// and `w` the largest secant's weight `(s·Δu)²` (here ≥ 0.02²: ≤ 0.06 of
-/// `|1 − ρ|`). The next setpoint step then settles at the rate the learned
-/// gain gives, `q = max |1 − κρ/ρ̂|` over the plant's ρ, checked against the
-/// plant's own finite differences.
+/// step teaches the loop the plant's gain (C5–C6).
+///
+/// **What ρ̂ may be.** Within one plan a secant is `Δμ_p/(s·Δu)`, by the mean
+/// value theorem a value of ρ = s_p/s on the interval visited, in
+/// `[ρ_lo, ρ_hi]` (the plant's finite differences, as above). C5's cap keeps a
+/// secant between ρ̂ and itself, and C6 moves ρ̂ towards it, so ρ̂ stays in the
+/// hull of its start and the secants. While the cap is not active (checked:
+/// `ρ_lo ≥ max(1, ρ_hi)/2`, `ρ_hi ≤ 2·min(1, ρ_lo)`) C6 is exactly the weighted
+/// mean of the prior 1 (weight λᵏP₀, `P₀ = (0.01·μ₀)²`) and the secants (their
+/// Δ²): the prior's share is at most `P₀/Δ₁²` with Δ₁ the first secant's.
+/// So ρ̂ is within `[ρ_lo, ρ_hi]` widened by `P₀/Δ₁²·max|1 − ρ|`.
+///
+/// **The next setpoint.** The pair across the retarget has its ends on the
+/// two plans (C5: `m = μ* + s·(u − u_ff)` on each), its secant `r_x` computed
+/// here from the plant; the later pairs lie on the new plan, in `[ρ'_lo, ρ'_hi]`
+/// over the commands visited. ρ̂ stays in the hull of its value at the
+/// retarget, `r_x` and that range, and the error falls by at least
+/// `q = max |1 − κρ/ρ̂|` per update over ρ and ρ̂ in those ranges.
 #[test]
 fn learns_the_plant_gain_and_then_settles_at_its_rate() {
     let mu0_plant = 0.24;
@@ -261,36 +272,53 @@ fn learns_the_plant_gain_and_then_settles_at_its_rate() {
         kappa: 0.95,
         rate_m_per_s: 1.0,
     };
+    let k = f64::from(gains.kappa);
     // From 3 µm (μ ≈ 0.03) to μ* = 0.10: a step of ≈ 0.07.
     let p = plan(0.10, 3e-6);
     let mut ctl = Controller::new(p, gains, 3e-6);
     let (us, _) = run(&mut ctl, mu0_plant, 20, 1e-3);
     let s = f64::from(p.slope_per_m);
-    let umin = us.iter().copied().fold(3e-6, f64::min);
-    let (rlo, rhi) = rho_range(mu0_plant, umin, 3e-6, s);
+    let (umin, umax) = (
+        us.iter().copied().fold(3e-6, f64::min),
+        us.iter().copied().fold(3e-6, f64::max),
+    );
+    let (rlo, rhi) = rho_range(mu0_plant, umin, umax, s);
+    assert!(rlo >= rhi.max(1.0) / 2.0 && rhi <= 2.0 * rlo.min(1.0));
+    let d1 = (s * (us[0] - 3e-6)).abs();
+    let p0 = (0.01 * MODEL_MU0).powi(2);
+    assert!(d1 * d1 > p0, "first secant Δ {d1}");
+    let slack = p0 / (d1 * d1) * (1.0 - rlo).abs().max((1.0 - rhi).abs());
     let rho = f64::from(ctl.plant_gain());
-    let prior = (0.01 * MODEL_MU0 / 0.02f64).powi(2);
-    let slack = prior * (1.0 - rlo).abs().max((1.0 - rhi).abs());
     assert!(
         rho >= rlo - slack && rho <= rhi + slack,
         "ρ̂ {rho} outside [{rlo}, {rhi}] ± {slack}"
     );
-    assert!(rho < 0.9, "learned nothing: ρ̂ {rho}");
-    // The next step, 0.10 → 0.12, with the learned gain.
+    // It learned: the whole allowed range is below 0.9 (ρ̂ started at 1).
+    assert!(rhi + slack < 0.9, "[{rlo}, {rhi}] ± {slack}");
+    // The next step, 0.10 → 0.12, with the learned gain. The last pair of
+    // the first plan: the command measured last (us[18]) and its μ.
+    let u_last = us[18];
+    let m_last = f64::from(p.target_mu) + s * (u_last - f64::from(p.feedforward_m));
     let p2 = plan(0.12, 1.5e-6);
-    ctl.retarget(p2, gains, 1.0);
+    let s2 = f64::from(p2.slope_per_m);
+    let u_r = f64::from(ctl.retarget(p2, gains, 1.0).command_m);
     let rho = f64::from(ctl.plant_gain());
-    let (us, mus) = run(&mut ctl, mu0_plant, 12, 1e-3);
+    let m_r = f64::from(p2.target_mu) + s2 * (u_r - f64::from(p2.feedforward_m));
+    let r_x = (plant(mu0_plant, u_r) - plant(mu0_plant, u_last)) / (m_r - m_last);
+    let (us2, mus) = run(&mut ctl, mu0_plant, 12, 1e-3);
     let (a, b) = (
-        us.iter().copied().fold(f64::MAX, f64::min),
-        us.iter().copied().fold(0.0, f64::max),
+        us2.iter().copied().fold(u_r, f64::min),
+        us2.iter().copied().fold(u_r, f64::max),
     );
-    let (rlo, rhi) = rho_range(mu0_plant, a, b, f64::from(p2.slope_per_m));
-    let k = f64::from(gains.kappa);
-    // Every later secant lies in [rlo, rhi] too: ρ̂ stays in the hull of
-    // its value now and that range.
-    let (hlo, hhi) = (rho.min(rlo), rho.max(rhi));
+    let (rlo, rhi) = rho_range(mu0_plant, a, b, s2);
+    let (hlo, hhi) = (rho.min(rlo).min(r_x), rho.max(rhi).max(r_x));
+    let learned = f64::from(ctl.plant_gain());
+    assert!(
+        (hlo..=hhi).contains(&learned),
+        "ρ̂ {learned} outside [{hlo}, {hhi}]"
+    );
     let q = (1.0 - k * rlo / hhi).abs().max((1.0 - k * rhi / hlo).abs());
+    // The bound below is only worth checking if it is a real contraction.
     assert!(q < 0.5, "q {q} (ρ in [{rlo}, {rhi}], ρ̂ in [{hlo}, {hhi}])");
     let e0 = (mus[0] - 0.12).abs();
     let settled = mus
@@ -311,11 +339,14 @@ fn learns_the_plant_gain_and_then_settles_at_its_rate() {
 }
 
 /// A step of the plant's μ0 caught half-way by a window is not taken for
-/// gain: the pair after a change of μ̂ without a change of command is not
-/// learned from (C5). Taken, its secant would be
-/// `ρ − (1 − f)·d/(s·Δu)` with `f` the share of the step the first window
-/// saw and `d` the step: far below the plant's ρ (here negative, clamped
-/// to 1/4). ρ̂ must stay within the hull of the two plants' slopes.
+/// gain (C5): the pair from the last steady estimate to the half-way one has
+/// no command change but a change of μ̂ beyond the learned response, so the
+/// pair after it is not learned from. Taken, its secant would be
+/// `ρ − (1 − f)·d/Δ` with `f` the share of the step the first window saw, `d`
+/// the step and Δ the model's change of μ over the correction: far from the
+/// plant's ρ. So ρ̂ is exactly (bitwise) unchanged over both pairs, and after
+/// them stays within the hull of the two plants' slopes over the commands
+/// visited.
 #[test]
 fn a_disturbance_is_not_learned_as_gain() {
     let gains = Gains {
@@ -328,20 +359,21 @@ fn a_disturbance_is_not_learned_as_gain() {
     let s = f64::from(p.slope_per_m);
     // μ0 0.24 → 0.216 (× 0.9); the first window after it sees half.
     let mut u = *us.last().unwrap();
+    let before = ctl.plant_gain();
     let half = 0.5 * (plant(0.24, u) + plant(0.216, u));
     u = f64::from(ctl.update(half as f32, 1e-3).command_m);
+    assert_eq!(ctl.plant_gain(), before, "learned from the half-way pair");
+    // The next estimate sees the whole step and the correction: not learned.
+    u = f64::from(ctl.update(plant(0.216, u) as f32, 1e-3).command_m);
+    assert_eq!(ctl.plant_gain(), before, "learned from the disturbed pair");
     let (us2, _) = run(&mut ctl, 0.216, 20, 1e-3);
-    let lo = us2.iter().copied().fold(u, f64::min);
-    let hi = us.iter().copied().fold(u, f64::max);
+    let lo = us2.iter().chain(&us).copied().fold(u.min(2e-6), f64::min);
+    let hi = us2.iter().chain(&us).copied().fold(u.max(2e-6), f64::max);
     let (a_lo, a_hi) = rho_range(0.24, lo, hi, s);
     let (b_lo, b_hi) = rho_range(0.216, lo, hi, s);
     let rho = f64::from(ctl.plant_gain());
-    assert!(
-        rho >= a_lo.min(b_lo) && rho <= a_hi.max(b_hi),
-        "ρ̂ {rho} outside [{}, {}]",
-        a_lo.min(b_lo),
-        a_hi.max(b_hi)
-    );
+    let (hlo, hhi) = (a_lo.min(b_lo).min(1.0), a_hi.max(b_hi).max(1.0));
+    assert!((hlo..=hhi).contains(&rho), "ρ̂ {rho} outside [{hlo}, {hhi}]");
     // And the loop is back at the target within 2 %.
     let m = plant(0.216, f64::from(ctl.output().command_m));
     assert!((m - 0.10).abs() <= 0.002, "μ {m}");

@@ -275,9 +275,9 @@ fn std_error_matches_the_closed_form_for_white_noise() {
 /// `I = ε₀e^{jω(ε₀−1)} + (e^{jω(ε_e−1)} − e^{jωε₀})/(e^{jω} − 1) + (1 − ε_e)e^{jω(ε_e−1)}`
 ///
 /// whose series is `I = (jω/2)·(ε₀(ε₀ − 1) − ε_e(ε_e − 1)) + ω²·p/12 + O(ω³)`
-/// with `|p| ≤ 1.64` on `[0, 1]²`, so `|I| ≤ ω/8 + ω²/4` (the first
-/// term is at most `1/4·ω/2`; `ω²/4` covers the second with room for the
-/// rest at `ω ≤ 0.52`). The mean of the force is off by at most
+/// with `|p| ≤ 0.82` on `[0, 1]²`, so `|I| ≤ ω/8 + ω²/4` (the first
+/// term is at most `1/4·ω/2`; `ω²/4` covers the second, `0.07·ω²`, with room
+/// for the rest at `ω ≤ 0.52`). The mean of the force is off by at most
 /// `B·(ω/8 + ω²/4)/(P·T)`, plus 0.5 count of rounding. Without the edges
 /// (whole samples) it is off by up to `B/(P·T)` (a missing or extra sample
 /// at the wrap, where `cos` is largest): `1/(ω/8 + ω²/4)` = 8 to 40 times

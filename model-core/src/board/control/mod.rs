@@ -40,26 +40,35 @@
 //! `κρ/ρ̂ ≤ 1`). A μ₀ mismatch of 20 % is ρ ≈ 0.6…1.25 on the bench.
 //!
 //! **The plant's gain, learned** (C5–C6). ρ̂ (1 at switch-on) is learned
-//! from the secants between successive updates: with the commands `u_{k−1}`,
-//! `u_k` in force when `μ̂_{k−1}`, `μ̂_k` were measured and `Δ = s·(u_k − u_{k−1})`
-//! (the model's change of μ), a pair with `|Δ| ≥ LEARN_MIN_REL·μ₀` gives
+//! from the secants between successive updates. With the command `u_k` in
+//! force when `μ̂_k` was measured, the model's μ there, linearised about the
+//! plan in force, is `m_k = μ* + s·(u_k − u_ff)`, and `Δ = m_k − m_{k−1}`
+//! (`s·(u_k − u_{k−1})` within one plan; across a new setpoint each end
+//! with its own plan). A pair with `|Δ| ≥ LEARN_MIN_REL·μ₀` and
+//! `r = (μ̂_k − μ̂_{k−1})/Δ > 0` gives
 //!
-//! `r_k = clamp((μ̂_k − μ̂_{k−1})/Δ, RHO_MIN, RHO_MAX)`,  weight `w = Δ²`  (C5)
+//! `r_k = clamp(r, max(RHO_MIN, ρ̂/2), min(RHO_MAX, 2ρ̂))`,  weight `w = Δ²`  (C5)
 //!
 //! `P ← λ·P + w`,  `ρ̂ ← ρ̂ + (w/P)·(r_k − ρ̂)`   (λ = [`FORGET`]; recursive least squares)   (C6)
 //!
 //! so a large step (a setpoint change) outweighs the small corrections of
 //! the steady state, whose secants are mostly the estimates' noise. A
-//! disturbance (a step of the plant's μ₀, of the velocity) would pass for
-//! gain if its secant were taken: a pair without a command change
-//! (`|Δ| < LEARN_MIN_REL·μ₀`) whose μ̂ moved by more than that marks the next
-//! pair as *disturbed*, and it is not learned from (the disturbance may
-//! have been caught half-way by the window; the pair after it is whole).
+//! secant of the wrong sign (`r ≤ 0`: μ̂ moved against the command, a
+//! disturbance) is not a gain and is not learned from, and one secant
+//! moves ρ̂ by at most a factor of 2, so no single pair can raise the loop
+//! gain `κ/ρ̂` beyond twice its value. A disturbance (a step of the plant's
+//! μ₀, of the velocity) would pass for gain if its secant were taken: a
+//! pair without a command change (`|Δ| < LEARN_MIN_REL·μ₀`) whose μ̂ moved
+//! by more than that beyond the learned response (`|μ̂_k − μ̂_{k−1} − ρ̂Δ| ≥
+//! LEARN_MIN_REL·μ₀`) marks the next pair as *disturbed*, and it is not
+//! learned from (the disturbance may have been caught half-way by the
+//! window; the pair after it is whole).
 //!
 //! **Switching.** On: `I₀ = u_now − u_ff`, so the first command is the
 //! present amplitude (bumpless). A new setpoint keeps `I` (the learned
 //! mismatch) and ρ̂, and moves by the model's step scaled by the learned gain,
-//! to `u_ff + I + (u_ff' − u_ff)/ρ̂`, at the rate limit (C7). Off: the last
+//! towards `u_ff + I + (u_ff' − u_ff)/ρ̂` (C7); if the rate limit cuts the
+//! move, the trim keeps the command reached (C4) and C1 does the rest. Off: the last
 //! command stays applied ([`crate::board::device`] keeps it as the drive's
 //! Δu_z). The guard (C3) is a hard constraint: no command exceeds `u_max`.
 
@@ -303,7 +312,7 @@ struct Learn {
     rho: f32,
     /// P of C6.
     weight: f32,
-    /// The last update's command in force and its μ̂.
+    /// The last update's model μ `m` at the command in force (C5) and its μ̂.
     last: Option<(f32, f32)>,
     /// The last pair moved μ̂ without a command change: the next pair is
     /// not learned from.
@@ -321,17 +330,22 @@ impl Learn {
         }
     }
 
-    /// One measurement `mu` with the command `u` in force (C5, C6).
-    fn push(&mut self, u: f32, mu: f32, slope: f32, mu0: f32) {
+    /// One measurement `mu` where the model, linearised about the plan in
+    /// force, says `model_mu` (C5, C6).
+    fn push(&mut self, model_mu: f32, mu: f32, mu0: f32) {
         let min = LEARN_MIN_REL * mu0;
-        if let Some((u0, m0)) = self.last {
-            let d = slope * (u - u0);
-            let dm = mu - m0;
+        if let Some((m0, mu_0)) = self.last {
+            let d = model_mu - m0;
+            let dm = mu - mu_0;
             if !(d.is_finite() && dm.is_finite()) {
-                self.disturbed = false;
+                // Nothing to judge the next pair by: it is not learned from.
+                self.disturbed = true;
             } else if d.abs() >= min {
-                if !self.disturbed {
-                    let r = clamp(dm / d, RHO_MIN, RHO_MAX);
+                let r = dm / d;
+                if !self.disturbed && r > 0.0 {
+                    let lo = RHO_MIN.max(0.5 * self.rho);
+                    let hi = RHO_MAX.min(2.0 * self.rho);
+                    let r = clamp(r, lo, hi);
                     let w = d * d;
                     self.weight = FORGET * self.weight + w;
                     self.rho += w / self.weight * (r - self.rho);
@@ -341,7 +355,7 @@ impl Learn {
                 self.disturbed = (dm - self.rho * d).abs() >= min;
             }
         }
-        self.last = Some((u, mu));
+        self.last = Some((model_mu, mu));
     }
 }
 
@@ -429,8 +443,8 @@ impl Controller {
     /// last command was applied, s.
     pub fn update(&mut self, measured_mu: f32, dt_s: f32) -> Output {
         let p = self.plan;
-        self.learn
-            .push(self.command_m, measured_mu, p.slope_per_m, p.mu0);
+        let model_mu = p.target_mu + p.slope_per_m * (self.command_m - p.feedforward_m);
+        self.learn.push(model_mu, measured_mu, p.mu0);
         let e = p.target_mu - measured_mu;
         let di = self.gains.kappa * e / (p.slope_per_m * self.learn.rho);
         if !di.is_finite() {

@@ -402,9 +402,15 @@ impl<const N: usize> Device<'_, N> {
             return;
         };
         l.samples_since = l.samples_since.saturating_add(samples as u32);
-        // Every block the estimate covers must run the latest command.
+        // Every block the estimate covers must run the latest command; one
+        // that did not spoils it: aborted at once, so that the next fresh
+        // block can open a new one (the railed-sample check covers the gap:
+        // `measure.rs`).
         if (closed || self.est.busy()) && !l.fresh(block) {
             l.spoiled = true;
+            if !closed {
+                self.est.abort();
+            }
         }
         if !closed {
             return;

@@ -100,14 +100,15 @@ impl<const N: usize> Device<'_, N> {
         self.est.set_conditions(self.half_conditions[slot]);
         let mut closed = false;
         // The closed loop's estimates leave gaps (the dead time, the
-        // transitions: `closed_loop.rs`); a railed sample in a gap latches
-        // the fault all the same, as if an estimate had seen it.
+        // transitions, the wait for a period start, the sample that closes
+        // a window: `closed_loop.rs`); while it runs every sample is
+        // checked, and a railed one latches the fault at once.
         let loop_on = self.control_on();
         for (i, &(x, z)) in samples.iter().enumerate() {
             if open_at == Some(i) {
                 self.control_open();
             }
-            if loop_on && !self.est.busy() && self.est.railed(x, z) {
+            if loop_on && self.est.railed(x, z) {
                 self.fault(faults::ADC_SATURATED);
             }
             if self.est.push(self.table, acc, x, z) {
