@@ -19,10 +19,22 @@ fn run(
     table: &SineTable<1024>,
     tw: u32,
     periods: u32,
+    f: impl FnMut(f64) -> (u16, u16),
+) -> model_core::estimator::Estimate {
+    run_from(est, table, tw, periods, 12345, f)
+}
+
+/// As [`run`], with the accumulator starting at `acc0`.
+fn run_from(
+    est: &mut Estimator,
+    table: &SineTable<1024>,
+    tw: u32,
+    periods: u32,
+    acc0: u32,
     mut f: impl FnMut(f64) -> (u16, u16),
 ) -> model_core::estimator::Estimate {
     est.start(periods).unwrap();
-    let mut acc: u32 = 12345;
+    let mut acc: u32 = acc0;
     for _ in 0..(periods as u64 + 3) * (4_294_967_296 / tw as u64 + 2) {
         let (x, z) = f(phase_rad(acc));
         if est.push(table, acc, x, z) {
@@ -306,20 +318,12 @@ fn short_windows_span_exact_periods_at_non_integer_samples_per_period() {
             let bound = (ex + mu_true * ez) / (z0 - ez);
             for _ in 0..50 {
                 let mut est = Estimator::new(unit, unit, FULL).unwrap();
-                est.start(periods).unwrap();
-                let mut acc: u32 = (rng.uniform() * 4_294_967_296.0) as u32;
-                let mut got = None;
-                for _ in 0..(periods as usize + 3) * (t as usize + 2) {
-                    let th = phase_rad(acc);
+                let acc0 = (rng.uniform() * 4_294_967_296.0) as u32;
+                let r = run_from(&mut est, &table, tw, periods, acc0, |th| {
                     let z = (z0 + za * th.cos()).round() as u16;
                     let x = (x0 + xa * (th + 0.3).cos()).round() as u16;
-                    if est.push(&table, acc, x, z) {
-                        got = Some(est.estimate().unwrap());
-                        break;
-                    }
-                    acc = acc.wrapping_add(tw);
-                }
-                let r = got.expect("window closed");
+                    (x, z)
+                });
                 let err = (f64::from(r.mu) - mu_true).abs();
                 worst = worst.max(err / bound);
                 assert!(
