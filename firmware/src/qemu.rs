@@ -48,7 +48,7 @@ const DRIFT_RESONANCE_Z_HZ: f32 = 20_100.0;
 #[cfg(feature = "qemu-drift")]
 const DRIFT_HZ_PER_S: f32 = -20.0;
 
-use crate::{DEVICE, FS_HZ, HALF, HALVES};
+use crate::{ADC_BLOCKS, DEVICE, FS_HZ, HALF, HALVES};
 
 /// The plant's true friction coefficient (the device's model says 0.3 until
 /// `scene set` changes it).
@@ -166,8 +166,8 @@ impl Analog {
         // its DC level and the samples reach nothing, so neither the refill
         // nor the plant is run (the emulator idles) — only device time moves
         // on. (The board refills regardless; its DMA costs no CPU.)
-        let quiescent = cortex_m::interrupt::free(|cs| {
-            DEVICE.borrow(cs).borrow().as_ref().is_none_or(|dev| {
+        let quiescent = DEVICE.lock(|d| {
+            d.as_ref().is_none_or(|dev| {
                 let s = dev.status();
                 !s.running && s.settled && !s.measuring
             })
@@ -179,13 +179,8 @@ impl Analog {
         let half = self.half;
         self.half ^= 1;
         let dac = &mut self.dac;
-        let Some(made) = cortex_m::interrupt::free(|cs| {
-            DEVICE
-                .borrow(cs)
-                .borrow_mut()
-                .as_mut()
-                .map(|dev| HalfDrive::fill(dev, half, dac))
-        }) else {
+        let Some(made) = DEVICE.lock(|d| d.as_mut().map(|dev| HalfDrive::fill(dev, half, dac)))
+        else {
             return;
         };
         // The half output now is the oldest waiting one (`pending`).
@@ -197,11 +192,8 @@ impl Analog {
         // With interrupts enabled: the link stays served meanwhile.
         self.run_plant(&d);
         let (samples, pickups) = (&self.samples, &self.pickups);
-        cortex_m::interrupt::free(|cs| {
-            if let Some(dev) = DEVICE.borrow(cs).borrow_mut().as_mut() {
-                dev.adc_block_with_pickups(half, samples, pickups);
-            }
-        });
+        ADC_BLOCKS.fetch_add(1, Ordering::Relaxed);
+        crate::with_device(|dev| dev.adc_block_with_pickups(half, samples, pickups));
     }
 
     fn run_plant(&mut self, d: &HalfDrive) {

@@ -995,8 +995,13 @@ fn the_pickups_are_sampled_15_adc_clocks_after_the_forces() {
     assert_eq!(sampling::ADC_CLOCK_HZ, 21_000_000);
     assert_eq!(sampling::CONVERSION_CYCLES, 15);
     assert_eq!(sampling::PICKUP_DELAY_NS, 714);
-    let _ = watchdog::KEY_FEED;
-    let _ = nvic::PRIO_BITS;
+    // The delay the device corrects is this scan's (one fact, two crates).
+    let scan = f64::from(sampling::CONVERSION_CYCLES) / f64::from(sampling::ADC_CLOCK_HZ);
+    assert_eq!(model_core::device::config::PICKUP_DELAY_S, scan);
+    assert_eq!(
+        model_core::device::DeviceConfig::driver_board(1).pickup_delay_s,
+        scan
+    );
 }
 
 /// Defect 5, alone: read right after the pull-up is switched on (no clock
