@@ -86,6 +86,25 @@ impl Prepared {
         self.clock.clocks
     }
 
+    /// For an emulator without RCC, DMA or DAC (QEMU's STM32F405): the HSI,
+    /// nothing set up, nothing measured.
+    pub fn without_hardware() -> Prepared {
+        Prepared {
+            clock: ClockOutcome {
+                clocks: Clocks::HSI,
+                ready: false,
+                hse_hz: None,
+                sysclk_hz: None,
+                latency_ok: false,
+                prefetch: false,
+            },
+            dma_setup: None,
+            fault_input_active: false,
+            watchdog_reset: false,
+            adc: None,
+        }
+    }
+
     /// Whether the sample clock can start (clocks and DMA set up).
     pub fn can_sample(&self) -> bool {
         self.adc.is_some() && self.dma_setup == Some(true)
