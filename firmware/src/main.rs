@@ -323,7 +323,9 @@ fn main() -> ! {
         );
         #[cfg(feature = "qemu")]
         let adc = adc.max(dac);
-        if live.check(dac, adc) || !prepared.can_sample() {
+        // A board that never started its streams (a failed self-test) has
+        // nothing to watch: it is fed, and stays in its safe state.
+        if live.check(dac, adc) || !prepared.sampling {
             hardware::watchdog::feed(&r);
         }
         // Requests in, answers and telemetry into the transmit ring; never waits.

@@ -77,6 +77,8 @@ pub struct Prepared {
     pub fault_input_active: bool,
     /// The last reset was the watchdog's.
     pub watchdog_reset: bool,
+    /// [`start_sampling`] started the sample clock.
+    pub sampling: bool,
     adc: Option<AdcReady>,
 }
 
@@ -101,6 +103,7 @@ impl Prepared {
             dma_setup: None,
             fault_input_active: false,
             watchdog_reset: false,
+            sampling: false,
             adc: None,
         }
     }
@@ -149,6 +152,7 @@ pub fn prepare(
         dma_setup: None,
         fault_input_active: false,
         watchdog_reset,
+        sampling: false,
         adc: None,
     };
     if clock.ready && clock.clocks == Clocks::PLL {
@@ -194,6 +198,7 @@ pub fn start_sampling(
     match p.adc.take() {
         Some(ready) => {
             sampling::start_sample_clock(r, ready);
+            p.sampling = true;
             observe(Step::SampleClockStarted, r);
             true
         }

@@ -872,6 +872,7 @@ fn a_wrong_crystal_keeps_the_core_on_the_hsi() {
     assert_eq!(f.tim2.get(rm::TIM_CR1) & 1, 0, "no sample clock");
     assert_eq!(f.usart2.get(rm::USART_BRR), 139, "16 MHz / 115200 = 138.9");
     assert!(!run.prepared.can_sample());
+    assert!(!run.prepared.sampling);
     let t = self_test::report(&self_test::Findings {
         clock: run.prepared.clock,
         dma_setup: run.prepared.dma_setup,
