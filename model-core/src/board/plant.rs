@@ -39,14 +39,21 @@
 //! subtracting the travel from it step by step would round it systematically). Sample `i` is taken at the phase of DAC word
 //! `i − adc_lag_samples` ([`DeviceConfig::adc_lag_samples`]), converted by
 //! the ADC calibrations (counts = F/gain + offset, rounded, clamped to
-//! 0…full scale); then the plant advances to the next tick in `sub`
-//! sub-steps (the paper's scheme on a finer grid: its μ error is
+//! 0…full scale); the motion pickups of sample `i` are taken
+//! [`DeviceConfig::pickup_delay_s`] = δ later, as the board's ADCs convert
+//! them (0 ≤ δ < one sample, as the device requires): ideal transducers at
+//! the drive phase advanced by `ω·δ` (the closed form, by a rotation formed
+//! once per half), resonant ones by the mode's exact zero-order-hold update
+//! over δ with the sample's held voltage ([`Mode::update_for`], formed once
+//! per half after the retune) applied to a copy of the state (δ = 0 samples
+//! at the force's instant, bitwise as before); then the plant advances to
+//! the next tick in `sub` sub-steps (the paper's scheme on a finer grid: its μ error is
 //! ≈ 10·(1+b)/N² for N = `sub`·f_s/f steps per period, the fixed-step bound
 //! of [`crate::fixed_step::error_bound`]).
 
 use crate::board::dds::Channel;
 use crate::board::device::{Device, DeviceConfig};
-use crate::board::resonator::{Mode, ModeError, ModeParams};
+use crate::board::resonator::{HoldUpdate, Mode, ModeError, ModeParams};
 use crate::fixed_step::SpringContact;
 use crate::float::{Float, Math};
 
@@ -431,8 +438,9 @@ impl<F: Float> Plant<F> {
 
     /// [`Plant::run_half`] that also writes the motion pickups' readings
     /// `(z, x)` in counts ([`DeviceConfig::pickup_z`], `pickup_x`: the
-    /// transducers' AC displacement at each sample, rounded and clamped like
-    /// the forces) into `pickups` (as many samples as it holds).
+    /// transducers' AC displacement [`DeviceConfig::pickup_delay_s`] after
+    /// each sample's forces, rounded and clamped like the forces) into
+    /// `pickups` (as many samples as it holds).
     #[allow(clippy::too_many_arguments)]
     pub fn run_half_with_pickups<M: Math<F>>(
         &mut self,
@@ -470,6 +478,23 @@ impl<F: Float> Plant<F> {
             // Drift, heat and load for this half; the modes' update for the sub-step.
             r.advance(F::from_u32(n as u32) / F::from_f64(cfg.sample_rate_hz), dt);
         }
+        // The pickups δ after the forces (module docs): the drive's phase
+        // advance over δ for ideal transducers, the modes' exact update over
+        // δ (the sample's voltage held) for resonant ones.
+        let delay = cfg.pickup_delay_s;
+        let delayed = !pickups.is_empty() && delay.is_finite() && delay > 0.0;
+        let turn =
+            delayed.then(|| M::sin_cos(F::from_f64(d.dtheta() * delay * cfg.sample_rate_hz)));
+        let ahead: Option<[HoldUpdate<F>; 2]> = match self.resonant.as_ref() {
+            Some(r) if delayed => {
+                let h = F::from_f64(delay);
+                match (r.modes[0].update_for(h), r.modes[1].update_for(h)) {
+                    (Ok(uz), Ok(ux)) => Some([uz, ux]),
+                    _ => None,
+                }
+            }
+            _ => None,
+        };
         // The sub-step rotation: (sin, cos) of θ advanced by dθ/sub.
         let (sd, cd) = M::sin_cos(F::from_f64(d.dtheta() / f64::from(sub)));
         let rad = F::from_f64(RAD_PER_WORD);
@@ -528,7 +553,10 @@ impl<F: Float> Plant<F> {
                 let k = r.opts.crosstalk;
                 let (vz, vx) = (vz + k * vx, vx + k * vz);
                 let [mzd, mxd] = &mut r.modes;
-                pick(i, mzd.x(), mxd.x());
+                match &ahead {
+                    Some([uz, ux]) => pick(i, mzd.x_after(uz, vz), mxd.x_after(ux, vx)),
+                    None => pick(i, mzd.x(), mxd.x()),
+                }
                 excursion(mzd.x());
                 let (fx, fz) = self.contact.step(mxd.x() + travel, uz0 + mzd.x());
                 *o = (
@@ -543,7 +571,11 @@ impl<F: Float> Plant<F> {
                 travel += step * F::from_u32(sub);
                 continue;
             }
-            pick(i, duz * s1, dux * s2);
+            match turn {
+                // sin(α + ωδ) = sin α cos ωδ + cos α sin ωδ.
+                Some((sw, cw)) => pick(i, duz * (s1 * cw + c1 * sw), dux * (s2 * cw + c2 * sw)),
+                None => pick(i, duz * s1, dux * s2),
+            }
             excursion(duz * s1);
             let (fx, fz) = self.contact.step(dux * s2 + travel, uz0 + duz * s1);
             *o = (

@@ -30,7 +30,10 @@
 //! damped with the mode). [`Mode::new`] computes `Φ` and `Γ` once, in
 //! `f64` with libm whatever `F` is (so an `f32` plant carries coefficients
 //! rounded once); a step costs four multiplications and four additions per
-//! state.
+//! state. [`Mode::update_for`] forms the same exact update for any other
+//! step length, [`Mode::x_after`] applies it without moving the state: the
+//! plant's motion pickups sample a mode a fixed delay after the sample's
+//! start, within the held sample ([`crate::board::plant`]).
 
 use crate::float::{Float, Math};
 
@@ -91,14 +94,58 @@ impl<F: Float> ModeParams<F> {
     }
 }
 
-/// A mode with its exact one-step update for the step `h`.
+/// The exact zero-order-hold update of a mode over one step `h`:
+/// `(x, v) ← Φ (x, v) + Γ u` with `Φ = e^{Ah}`, `Γ = (I − Φ)(g, 0)ᵀ` (module
+/// docs), for the mode's parameters when it was formed.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Mode<F> {
-    params: ModeParams<F>,
+pub struct HoldUpdate<F> {
     /// Φ = e^{Ah}, row-major.
     phi: [[F; 2]; 2],
     /// Γ = (I − Φ)(g, 0)ᵀ.
     gamma: [F; 2],
+}
+
+impl<F: Float> HoldUpdate<F> {
+    /// The update over `h` seconds for the parameters `p` (already checked),
+    /// in `f64` with libm, rounded once to `F`.
+    fn of(p: &ModeParams<F>, h: F) -> Self {
+        let h = h.to_f64();
+        let wr = core::f64::consts::TAU * p.resonance_hz.to_f64();
+        let zeta = 0.5 / p.q.to_f64();
+        let sigma = zeta * wr;
+        let wd = wr * libm::sqrt(1.0 - zeta * zeta);
+        let (s, c) = libm::sincos(wd * h);
+        let e = libm::exp(-sigma * h);
+        let phi = [
+            [e * (c + sigma / wd * s), e * s / wd],
+            [-e * wr * wr / wd * s, e * (c - sigma / wd * s)],
+        ];
+        let g = p.gain_m_per_v.to_f64();
+        let f = F::from_f64;
+        HoldUpdate {
+            gamma: [f((1.0 - phi[0][0]) * g), f(-phi[1][0] * g)],
+            phi: [[f(phi[0][0]), f(phi[0][1])], [f(phi[1][0]), f(phi[1][1])]],
+        }
+    }
+
+    /// The state `(x, v)` after the step from `(x, v)` with the drive `u`
+    /// (V) held over it.
+    #[inline]
+    pub fn apply(&self, x: F, v: F, u: F) -> (F, F) {
+        let [[a, b], [c, d]] = self.phi;
+        (
+            a * x + b * v + self.gamma[0] * u,
+            c * x + d * v + self.gamma[1] * u,
+        )
+    }
+}
+
+/// A mode with its exact one-step update for the step `h`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Mode<F> {
+    params: ModeParams<F>,
+    /// The update over one step `h`.
+    update: HoldUpdate<F>,
     /// Displacement, m.
     x: F,
     /// Velocity, m/s.
@@ -123,36 +170,35 @@ impl<F: Float> Mode<F> {
         if !(h.is_finite() && h > F::ZERO) {
             return Err(ModeError::Step);
         }
-        let mut m = Mode {
+        Ok(Mode {
             params: p,
-            phi: [[F::ONE, F::ZERO], [F::ZERO, F::ONE]],
-            gamma: [F::ZERO, F::ZERO],
+            update: HoldUpdate::of(&p, h),
             x: F::ZERO,
             v: F::ZERO,
-        };
-        m.set_step(h);
-        Ok(m)
+        })
     }
 
-    /// Recomputes Φ and Γ for the step `h` (and the current parameters), in
-    /// `f64`.
-    fn set_step(&mut self, h: F) {
-        let p = self.params;
-        let h = h.to_f64();
-        let wr = core::f64::consts::TAU * p.resonance_hz.to_f64();
-        let zeta = 0.5 / p.q.to_f64();
-        let sigma = zeta * wr;
-        let wd = wr * libm::sqrt(1.0 - zeta * zeta);
-        let (s, c) = libm::sincos(wd * h);
-        let e = libm::exp(-sigma * h);
-        let phi = [
-            [e * (c + sigma / wd * s), e * s / wd],
-            [-e * wr * wr / wd * s, e * (c - sigma / wd * s)],
-        ];
-        let g = p.gain_m_per_v.to_f64();
-        let f = F::from_f64;
-        self.gamma = [f((1.0 - phi[0][0]) * g), f(-phi[1][0] * g)];
-        self.phi = [[f(phi[0][0]), f(phi[0][1])], [f(phi[1][0]), f(phi[1][1])]];
+    /// The exact update over a step of `h` seconds (any length, e.g. a
+    /// fraction of the sub-step: the plant's pickups sample a mode a fixed
+    /// delay after the sample's start) for the current parameters. Compute
+    /// it once and apply it with [`Mode::x_after`] (it costs what a retune
+    /// does: a `sincos` and an `exp` in `f64`).
+    ///
+    /// # Errors
+    /// [`ModeError::Step`] unless `h` is finite and > 0.
+    pub fn update_for(&self, h: F) -> Result<HoldUpdate<F>, ModeError> {
+        if !(h.is_finite() && h > F::ZERO) {
+            return Err(ModeError::Step);
+        }
+        Ok(HoldUpdate::of(&self.params, h))
+    }
+
+    /// The displacement (m) the mode would reach from its current state
+    /// after the update `u` with the drive `volts` held over it; the state
+    /// is not changed (a look ahead within the current step).
+    #[inline]
+    pub fn x_after(&self, u: &HoldUpdate<F>, volts: F) -> F {
+        u.apply(self.x, self.v, volts).0
     }
 
     /// Changes f_r, Q and the gain keeping the state (drift, thermal shift,
@@ -163,8 +209,7 @@ impl<F: Float> Mode<F> {
     pub fn retune(&mut self, p: ModeParams<F>, h: F) -> Result<(), ModeError> {
         let fresh = Mode::<F>::new(p, h)?;
         self.params = fresh.params;
-        self.phi = fresh.phi;
-        self.gamma = fresh.gamma;
+        self.update = fresh.update;
         Ok(())
     }
 
@@ -192,9 +237,7 @@ impl<F: Float> Mode<F> {
     /// One step with the drive `u` (V) held over it; returns the new
     /// displacement, m.
     pub fn step(&mut self, u: F) -> F {
-        let [[a, b], [c, d]] = self.phi;
-        let x = a * self.x + b * self.v + self.gamma[0] * u;
-        let v = c * self.x + d * self.v + self.gamma[1] * u;
+        let (x, v) = self.update.apply(self.x, self.v, u);
         self.x = x;
         self.v = v;
         x

@@ -2,6 +2,7 @@
 //! (ADC) calibrations, lift-off margin, frequency range, slew rates — and the
 //! limits that follow from it, each written once here.
 
+use super::error::ConfigError;
 use crate::board::dds::DAC_MAX;
 use crate::board::estimator::Calibration;
 use crate::board::protocol::framing::BYTE_TIMEOUT_US;
@@ -66,7 +67,25 @@ pub struct DeviceConfig {
     /// the next word by DMA: lag 1). The phase of each ADC sample is shifted
     /// accordingly.
     pub adc_lag_samples: u32,
+    /// How long after a sample's force conversion its motion pickups are
+    /// converted, s (0 ≤ δ < one sample period). On the board ADC1 and ADC2
+    /// run in dual regular-simultaneous mode, each scanning two inputs per
+    /// trigger (ADC1: IN0 normal force, then IN6 normal pickup; ADC2: IN1
+    /// tangential force, then IN7 tangential pickup), so each pickup is
+    /// converted one conversion after its force: (SMP + 12) ADC clocks /
+    /// f_ADC (RM0090 §13.5: sampling time plus 12 cycles of successive
+    /// approximation), with SMP = 3 cycles at f_ADC = 21 MHz
+    /// ([`PICKUP_DELAY_S`] = 15/21 MHz = 0.714 µs, 0.357 of a 2 µs sample
+    /// at 500 kS/s: 10.3° of a 40 kHz drive). The device demodulates each
+    /// pickup sample at its own instant, the force sample's drive phase
+    /// advanced by δ ([`DeviceConfig::pickup_reference_word`]), and the
+    /// simulated plant samples the pickups δ after the forces.
+    pub pickup_delay_s: f64,
 }
+
+/// The driver board's pickup delay ([`DeviceConfig::pickup_delay_s`]):
+/// (3 + 12) ADC clocks at 21 MHz (PCLK2 84 MHz / 4), s.
+pub const PICKUP_DELAY_S: f64 = 15.0 / 21e6;
 
 /// Samples per DAC/ADC half-buffer of the driver board (and of the virtual
 /// device, which runs the same pipeline): 64 = 128 µs at 500 kS/s. The DMA
@@ -97,7 +116,9 @@ impl DeviceConfig {
     /// with a board's measured values. `adc_lag_samples` is 1 on the chip (the
     /// DAC moves its holding register to the output on the trigger, the ADC
     /// converts on the same trigger) and 0 for a plant that samples at the
-    /// drive phase of the sample itself.
+    /// drive phase of the sample itself. The pickups are converted
+    /// [`PICKUP_DELAY_S`] after the forces (the ADCs' scan order, on the chip
+    /// and in the simulated plant alike).
     pub const fn driver_board(adc_lag_samples: u32) -> Self {
         DeviceConfig {
             sample_rate_hz: 500_000.0,
@@ -132,6 +153,54 @@ impl DeviceConfig {
             slew_m_per_s: 1e-3,
             slew_rad_per_s: 100.0,
             adc_lag_samples,
+            pickup_delay_s: PICKUP_DELAY_S,
+        }
+    }
+
+    /// The DDS accumulator word of the drive phase at which ADC sample 0 of
+    /// a block was taken (the forces): the block's fill started at
+    /// accumulator `acc0` with tuning word `tw`, and the ADC sees the DAC
+    /// word `adc_lag_samples` earlier. Sample `k` is `k·tw` words on.
+    pub fn adc_reference_word(&self, acc0: u32, tw: u32) -> u32 {
+        acc0.wrapping_sub(tw.wrapping_mul(self.adc_lag_samples))
+    }
+
+    /// The drive's phase advance over the pickups' delay, in accumulator
+    /// words: `tw·δ·f_s` (the DDS advances `tw` words per sample), rounded
+    /// to the nearest word (½ word = 7.3e-10 rad). 0 for a delay that is not
+    /// finite or not > 0 ([`DeviceConfig::check_pickup_delay`] refuses the
+    /// non-finite and the negative ones).
+    pub fn pickup_delay_words(&self, tw: u32) -> u32 {
+        let samples = self.pickup_delay_s * self.sample_rate_hz;
+        if !(samples.is_finite() && samples > 0.0) {
+            return 0;
+        }
+        // tw < 2³² and δ·f_s < 1: in u32 range; `as` saturates otherwise.
+        (f64::from(tw) * samples + 0.5) as u32
+    }
+
+    /// The accumulator word of the drive phase at which the pickups of ADC
+    /// sample 0 of a block were taken: [`DeviceConfig::adc_reference_word`]
+    /// advanced by [`DeviceConfig::pickup_delay_words`]. Everything that
+    /// demodulates the pickups starts its reference here (sample `k` is
+    /// `k·tw` words on).
+    pub fn pickup_reference_word(&self, acc0: u32, tw: u32) -> u32 {
+        self.adc_reference_word(acc0, tw)
+            .wrapping_add(self.pickup_delay_words(tw))
+    }
+
+    /// Checks [`DeviceConfig::pickup_delay_s`]: finite, ≥ 0 and below one
+    /// sample period `1/sample_rate_hz` (a pickup converted a whole sample
+    /// late would belong to the next sample).
+    ///
+    /// # Errors
+    /// [`ConfigError::PickupDelay`].
+    pub fn check_pickup_delay(&self) -> Result<(), ConfigError> {
+        let d = self.pickup_delay_s;
+        if d.is_finite() && d >= 0.0 && d * self.sample_rate_hz < 1.0 {
+            Ok(())
+        } else {
+            Err(ConfigError::PickupDelay)
         }
     }
 

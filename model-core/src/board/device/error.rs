@@ -27,6 +27,8 @@ pub enum ConfigError {
     AdcCal,
     /// `freq_range_hz` empty, not finite, or not below Nyquist.
     FreqRange,
+    /// `pickup_delay_s` not finite, negative, or not below one sample period.
+    PickupDelay,
 }
 
 impl fmt::Display for ConfigError {
@@ -41,6 +43,9 @@ impl fmt::Display for ConfigError {
             ConfigError::AdcCal => "an ADC calibration needs a finite, non-zero gain",
             ConfigError::FreqRange => {
                 "freq_range_hz must be a finite, non-empty range below half the sample rate"
+            }
+            ConfigError::PickupDelay => {
+                "pickup_delay_s must be finite, >= 0 and below one sample period"
             }
         })
     }

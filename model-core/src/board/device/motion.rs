@@ -1,9 +1,13 @@
 //! The transducers' measured motion: the two motion pickups (ADC channels
 //! next to the force sensors, [`super::DeviceConfig::pickup_z`], `pickup_x`)
 //! through the lock-in of [`crate::board::lockin`] on the DDS's own phases
-//! of each sample (the same phases the friction estimate uses, ADC lag
-//! included). Each window of whole ADC blocks spanning at least one drive
-//! period ([`WINDOW_SPAN_RAD`]: one 64-sample block from 7.8 kHz up at
+//! of each sample (the phases the friction estimate uses, ADC lag included,
+//! advanced by the drive's phase over the pickups' conversion delay δ,
+//! [`super::DeviceConfig::pickup_delay_s`]: the ADCs convert each pickup
+//! 0.714 µs after its force, 10.3° of a 40 kHz drive; demodulated at the
+//! force's phase, every measured response would lead the true one by ω·δ,
+//! which cancels in φ only). Each window of whole ADC blocks spanning at
+//! least one drive period ([`WINDOW_SPAN_RAD`]: one 64-sample block from 7.8 kHz up at
 //! 500 kS/s, so every half-buffer at the transducers' frequencies) gives the amplitude and
 //! phase of each mode; the phase between them is the φ the contact sees:
 //! with the drive `u_z = −Δu_z cos θ`, `u_x = Δu_x cos(θ + φ)` (eqs. 1–2),
@@ -58,7 +62,10 @@ impl<const N: usize> Device<'_, N> {
     fn pickup_block(&mut self, block: u32, pickups: &[(u16, u16)]) {
         let slot = block as usize % super::measure::FILL_RING;
         let (acc0, tw) = self.half[slot];
-        let mut acc = acc0.wrapping_sub(tw.wrapping_mul(self.cfg.adc_lag_samples));
+        // Each pickup sample at its own instant: δ after its force sample
+        // (`DeviceConfig::pickup_delay_s`), so the reference starts that
+        // much further on (one rounding per block; the rest in words).
+        let mut acc = self.cfg.pickup_reference_word(acc0, tw);
         let dtheta = (f64::from(tw) * core::f64::consts::TAU / 4_294_967_296.0) as f32;
         let (cz, cx) = (self.cfg.pickup_z, self.cfg.pickup_x);
         for &(z, x) in pickups {
