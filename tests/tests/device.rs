@@ -561,8 +561,9 @@ fn with_liftoff_allowed_predict_uses_the_liftoff_model() {
 
 #[test]
 fn the_prediction_follows_every_change_of_contact_drive_and_liftoff_setting() {
-    // The device forms its scene when one of them changes (not per Predict):
-    // each change must show in the next prediction. Reference: the f64 exact
+    // The device takes its scene's parameters when one of them changes (the
+    // scene is formed from them per Predict, outside the device's critical
+    // section): each change must show in the next prediction. Reference: the f64 exact
     // solver on the changed scene; 1e-5 as in prediction_in_f32_matches_the_f64_model.
     let t = SineTable::<256>::libm();
     let mut d = Device::new(cfg(), &t, CONTACT).unwrap();

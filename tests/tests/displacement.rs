@@ -296,7 +296,8 @@ fn the_mu_loop_runs_on_the_displacement_loops() {
         rate_m_per_s: 1e-3,
     };
     b.dev.check_control(&s, false).unwrap();
-    let (scene, now, limit) = b.dev.control_plan_inputs().unwrap();
+    let (inputs, now, limit) = b.dev.control_plan_inputs();
+    let scene = inputs.scene().unwrap();
     let plan = control::plan(&scene, s.target_mu, s.v0_m_s, now, limit).unwrap();
     b.dev.set_control(s, Some(plan)).unwrap();
     // 0.5 s of loop.
@@ -387,7 +388,8 @@ fn the_mu_loop_holds_a_command_the_dac_cannot_take() {
             periods: 4,
             rate_m_per_s: 1e-3,
         };
-        let (scene, now, limit) = b.dev.control_plan_inputs().unwrap();
+        let (inputs, now, limit) = b.dev.control_plan_inputs();
+        let scene = inputs.scene().unwrap();
         let plan = control::plan(&scene, c.target_mu, c.v0_m_s, now, limit).unwrap();
         b.dev.set_control(c, Some(plan)).unwrap();
         let (mut saturated, mut max_cmd) = (0u32, 0.0f32);

@@ -211,7 +211,8 @@ fn a_two_half_buffer_estimate_never_covers_the_transition() {
     let mut b = held_at(&table, 2.0, 1.7e-6);
     let tw = b.dev.applied().achieved.tuning_word;
     assert!(estimate_samples(4, tw) > HALF_BUFFER as u64);
-    let (scene, _, limit) = b.dev.control_plan_inputs().unwrap();
+    let (inputs, _, limit) = b.dev.control_plan_inputs();
+    let scene = inputs.scene().unwrap();
     let mu_at = |duz: f32| {
         let mut p = *scene.params();
         p.duz = duz;

@@ -240,7 +240,8 @@ fn a_drifting_resonance_without_tracking_never_lifts_off() {
         periods: 4,
         rate_m_per_s: 1e-3,
     };
-    let (scene, now, limit) = b.dev.control_plan_inputs().unwrap();
+    let (inputs, now, limit) = b.dev.control_plan_inputs();
+    let scene = inputs.scene().unwrap();
     let plan = model_core::control::plan(&scene, c.target_mu, c.v0_m_s, now, limit).unwrap();
     b.dev.set_control(c, Some(plan)).unwrap();
     let limit = f64::from((1.0f32 - 0.05) * 4e-6);

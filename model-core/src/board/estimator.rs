@@ -193,6 +193,37 @@ impl Default for Sums {
     }
 }
 
+impl Sums {
+    /// Zeroes the sums in place, field by field (the pattern names every
+    /// field). `*self = Sums::default()` built the 1.2 KB on the stack and
+    /// copied it: ≈ 2 700 instructions on the Cortex-M4F at `opt-level =
+    /// "z"`, inside the critical section of a `Measure` or a stream's poll.
+    fn clear(&mut self) {
+        let Sums {
+            n,
+            raw_x,
+            raw_z,
+            bx,
+            tx,
+            block,
+            batch,
+            edge,
+            edge_h,
+            edge_b,
+        } = self;
+        *n = 0;
+        *raw_x = 0;
+        *raw_z = 0;
+        bx.fill(0.0);
+        tx.fill(0.0);
+        *block = 0;
+        batch.fill((0, 0, 0));
+        edge.fill(0.0);
+        edge_h.fill(0.0);
+        edge_b.fill([0.0; 3]);
+    }
+}
+
 /// Accumulates samples into an estimate over `periods` drive periods.
 #[derive(Debug, Clone)]
 pub struct Estimator {
@@ -265,7 +296,7 @@ impl Estimator {
         }
         self.periods = periods;
         self.state = State::WaitingForWrap;
-        self.sums = Sums::default();
+        self.sums.clear();
         self.wraps = 0;
         self.saturated = false;
         self.reasons = 0;

@@ -26,8 +26,12 @@ use crate::board::protocol::{
 };
 
 /// Access to the device for the server: on the host a plain `&mut Device`;
-/// in the firmware a critical section around each call, so that long model
-/// computations ([`Request::Predict`]) run on a snapshot with interrupts on.
+/// in the firmware a critical section around each call (the DMA handlers
+/// masked: a closure longer than a half-buffer makes them late). So every
+/// closure here is short: the model's work runs on copies with the device
+/// released — `Predict` and `SetControl` copy the scene's parameters and
+/// form the scene outside, `GetEstimate` and the stream copy the estimator
+/// (`firmware/src/bin/predict_cost.rs` times each closure on the M4F).
 pub trait DeviceAccess<const N: usize> {
     /// Runs `f` on the device.
     fn with<R>(&mut self, f: impl FnOnce(&mut Device<'_, N>) -> R) -> R;
@@ -191,7 +195,9 @@ impl Server {
         };
         let measuring = dev.with(|d| d.status().measuring);
         if self.stream.measuring && !measuring {
-            if let Ok(e) = dev.with(|d| d.estimate()) {
+            // A copy of the finished window, its estimate computed with the
+            // device released.
+            if let Ok(e) = device::estimate(&dev.with(|d| d.estimator().clone())) {
                 self.telemetry(Telemetry::Estimate(e), &mut *send);
             }
             self.stream.measuring = false;
@@ -291,8 +297,9 @@ impl Server {
         answer
     }
 
-    /// `SetControl`: checked, planned on a snapshot of the scene with the
-    /// device released (the inverse search is slow), then installed.
+    /// `SetControl`: checked, planned on a scene formed from a copy of its
+    /// parameters with the device released (the scene and the inverse search
+    /// are slow), then installed.
     fn set_control<const N: usize, A: DeviceAccess<N>>(
         &mut self,
         dev: &mut A,
@@ -300,10 +307,9 @@ impl Server {
     ) -> Result<Response, WireError> {
         let busy = self.stream.periods.is_some();
         let plan = if s.on {
-            let (scene, now, limit) = dev.with(|d| {
-                d.check_control(&s, busy)?;
-                d.control_plan_inputs()
-            })?;
+            let (inputs, now, limit) =
+                dev.with(|d| d.check_control(&s, busy).map(|()| d.control_plan_inputs()))?;
+            let scene = inputs.scene()?;
             let p = control::plan(&scene, s.target_mu, s.v0_m_s, now, limit)
                 .map_err(device::DeviceError::Control)?;
             Some(p)
@@ -372,14 +378,19 @@ fn run<const N: usize, A: DeviceAccess<N>>(
             Response::Ok
         }
         Request::Predict { v0 } => {
-            // Snapshot the scene, then compute with the device released.
-            let scene = dev.with(|d| d.prediction_scene())?;
+            // Copy the scene's parameters, then form it and compute with the
+            // device released.
+            let scene = dev.with(|d| d.prediction_inputs()).scene()?;
             Response::Prediction {
                 prediction: device::predict(&scene, v0)?,
                 regime: device::regime(&scene)?,
             }
         }
-        Request::GetEstimate => Response::Estimate(dev.with(|d| d.estimate())?),
+        Request::GetEstimate => {
+            // A copy of the window; the estimate with the device released.
+            let est = dev.with(|d| d.estimator().clone());
+            Response::Estimate(device::estimate(&est)?)
+        }
         Request::GetStatus => Response::Status(dev.with(|d| d.status())),
         Request::ResetFaults => {
             dev.with(|d| d.reset_faults());

@@ -185,20 +185,17 @@ impl<const N: usize> Device<'_, N> {
         Ok(())
     }
 
-    /// The plan of an accepted setting: the model's feedforward and gain
-    /// (slow: the inverse search, see [`control::plan`]; the server runs it
-    /// on a scene snapshot outside the device's critical section).
-    ///
-    /// # Errors
-    /// [`DeviceError::Scene`], [`DeviceError::Control`].
-    pub fn control_plan_inputs(
-        &self,
-    ) -> Result<(crate::model::scene::Scene<f32>, f32, f32), DeviceError> {
-        // While tracking, at the frequency that runs.
+    /// What the plan of an accepted setting needs (the model's feedforward
+    /// and gain, [`control::plan`]: slow, the inverse search): the scene's
+    /// parameters (while tracking, at the frequency that runs), the Δu_z
+    /// commanded now and the largest Δu_z the loop may command. Copies: the
+    /// server forms the scene ([`super::SceneInputs::scene`]) and plans with
+    /// the device released.
+    pub fn control_plan_inputs(&self) -> (super::SceneInputs, f32, f32) {
         let scene = if self.tracking_active() {
-            self.form_scene().map_err(DeviceError::Scene)?
+            self.live_scene_inputs()
         } else {
-            self.scene()?
+            self.scene_inputs()
         };
         let limit = self
             .cfg
@@ -208,7 +205,7 @@ impl<const N: usize> Device<'_, N> {
             .control
             .filter(|l| l.on)
             .map_or(self.drive.amp_z_m, |l| l.ctl.output().command_m);
-        Ok((scene, now, limit))
+        (scene, now, limit)
     }
 
     /// Switches the loop on with `plan` (or retargets a running loop), after

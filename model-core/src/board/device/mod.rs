@@ -42,7 +42,7 @@ pub use config::{
 };
 pub use error::{ConfigError, DeviceError};
 pub use fault::faults;
-pub use measure::check_periods;
+pub use measure::{check_periods, estimate};
 pub use motion::MeasuredDrive;
 pub use predict::{predict, regime};
 
@@ -53,7 +53,7 @@ pub use crate::board::protocol::messages::{
 
 use crate::board::dds::{Achieved, Dds, Level, SineTable, Slew};
 use crate::board::estimator::Estimator;
-use crate::model::scene::{ContactMode, Scene, SceneError, SceneParams};
+use crate::model::scene::{self, ContactMode, Scene, SceneParams};
 
 /// The device.
 pub struct Device<'t, const N: usize> {
@@ -65,10 +65,10 @@ pub struct Device<'t, const N: usize> {
     contact: Contact,
     /// Drives above the lift-off limit are accepted (`SetLiftOff`).
     allow_liftoff: bool,
-    /// The scene of the contact with the accepted drive, formed whenever one
-    /// of them changes (`Scene::new` costs ≈ 22 000 instructions on the M4F,
-    /// ten times a prediction: not once per `Predict`).
-    scene: Result<Scene<f32>, SceneError>,
+    /// The scene parameters of the contact with the accepted drive, taken
+    /// whenever one of them changes (a copy: the scene itself is formed
+    /// where it is used, outside the critical sections of the firmware).
+    scene: SceneInputs,
     running: bool,
     latch: fault::Latch,
     rx_overflows: u32,
@@ -146,7 +146,7 @@ impl<'t, const N: usize> Device<'t, N> {
             },
             contact,
             allow_liftoff: false,
-            scene: Err(SceneError::LiftOff),
+            scene: SceneInputs::UNSET,
             running: false,
             latch: fault::Latch::new(),
             rx_overflows: 0,
@@ -292,42 +292,95 @@ impl<'t, const N: usize> Device<'t, N> {
         Ok(())
     }
 
-    /// The scene of the contact with the accepted drive (f32): an
-    /// intermittent contact ([`ContactMode::Intermittent`]) while lift-off is
-    /// allowed, else a permanent one.
+    /// The scene parameters of the contact with the accepted drive (f32) and
+    /// its contact mode: intermittent ([`ContactMode::Intermittent`]) while
+    /// lift-off is allowed, else permanent. A copy, taken when the drive, the
+    /// contact or the lift-off setting changed: what the server takes out of
+    /// the device's critical section to form the scene with the device
+    /// released ([`SceneInputs::scene`]).
+    pub fn scene_inputs(&self) -> SceneInputs {
+        self.scene
+    }
+
+    /// The scene of the contact with the accepted drive (f32), formed from
+    /// [`Device::scene_inputs`] on each call (`Scene::new`: validation, W₀,
+    /// libm's `sincosf` of φ — thousands of instructions on the Cortex-M4F;
+    /// a convenience for host code, not for a critical section).
     ///
     /// # Errors
     /// [`DeviceError::Scene`] (e.g. zero offset).
     pub fn scene(&self) -> Result<Scene<f32>, DeviceError> {
-        self.scene.map_err(DeviceError::Scene)
+        self.scene.scene()
     }
 
-    /// Forms [`Device::scene`] anew: after every change of the drive, its
-    /// applied frequency and phase, the contact or the lift-off setting.
+    /// Takes [`Device::scene_inputs`] anew: after every change of the drive,
+    /// its applied frequency and phase, the contact or the lift-off setting.
     pub(super) fn refresh_scene(&mut self) {
-        self.scene = self.form_scene();
+        self.scene = self.live_scene_inputs();
     }
 
-    pub(super) fn form_scene(&self) -> Result<Scene<f32>, SceneError> {
+    /// The scene parameters of the contact with the accepted drive at the
+    /// frequency and phase the DDS applies now (while tracking, the tracked
+    /// frequency; [`Device::scene_inputs`] holds the one of the last change).
+    pub(super) fn live_scene_inputs(&self) -> SceneInputs {
         let d = &self.drive;
-        let mode = if self.allow_liftoff {
+        self.scene_inputs_with(SceneParams {
+            mu0: self.contact.mu0,
+            kz: self.contact.kz,
+            kx: self.contact.kx,
+            uz0: d.offset_z_m,
+            duz: d.amp_z_m,
+            dux: d.amp_x_m,
+            omega: (core::f64::consts::TAU * self.applied.achieved.freq_hz) as f32,
+            phi: self.applied.phase_rad as f32,
+        })
+    }
+
+    /// `params` with the contact mode of the lift-off setting.
+    pub(super) fn scene_inputs_with(&self, params: SceneParams<f32>) -> SceneInputs {
+        let contact = if self.allow_liftoff {
             ContactMode::Intermittent
         } else {
             ContactMode::Permanent
         };
-        Scene::new_with_contact(
-            SceneParams {
-                mu0: self.contact.mu0,
-                kz: self.contact.kz,
-                kx: self.contact.kx,
-                uz0: d.offset_z_m,
-                duz: d.amp_z_m,
-                dux: d.amp_x_m,
-                omega: (core::f64::consts::TAU * self.applied.achieved.freq_hz) as f32,
-                phi: self.applied.phase_rad as f32,
-            },
-            mode,
-        )
+        SceneInputs { params, contact }
+    }
+}
+
+/// The parameters of a scene and its contact mode, unvalidated: cheap to
+/// copy out of the device (no scene is formed inside the firmware's critical
+/// sections: `Scene::new` would hold the DMA handlers off for longer than a
+/// half-buffer). Form the scene with [`SceneInputs::scene`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SceneInputs {
+    /// The physical parameters (SI units).
+    pub params: SceneParams<f32>,
+    /// Permanent, or intermittent while lift-off is allowed.
+    pub contact: ContactMode,
+}
+
+impl SceneInputs {
+    /// Before the device first took its scene parameters.
+    const UNSET: SceneInputs = SceneInputs {
+        params: SceneParams {
+            mu0: 0.0,
+            kz: 0.0,
+            kx: 0.0,
+            uz0: 0.0,
+            duz: 0.0,
+            dux: 0.0,
+            omega: 0.0,
+            phi: 0.0,
+        },
+        contact: ContactMode::Permanent,
+    };
+
+    /// The scene (`Scene::new_with_contact`).
+    ///
+    /// # Errors
+    /// [`DeviceError::Scene`].
+    pub fn scene(&self) -> Result<Scene<f32>, DeviceError> {
+        Scene::new_with_contact(self.params, self.contact).map_err(DeviceError::Scene)
     }
 }
 
@@ -354,18 +407,13 @@ fn check_config(cfg: &DeviceConfig) -> Result<(), DeviceError> {
     Ok(())
 }
 
-/// Validates a contact with a nominal drive so that only the contact is judged.
+/// Validates a contact as `Scene::new` judges it with a nominal drive
+/// (`u_z0` = 1 µm, no oscillation, `ω` = 1), so that only the contact is
+/// judged: μ₀, k_z, k_x finite, > 0 and normal, and W₀ at 1 µm in range
+/// ([`scene::check_contact_params`]: the scene's own checks, without forming
+/// one — a few comparisons).
 fn check_contact(c: &Contact) -> Result<(), DeviceError> {
-    Scene::new(SceneParams {
-        mu0: c.mu0,
-        kz: c.kz,
-        kx: c.kx,
-        uz0: 1e-6,
-        duz: 0.0,
-        dux: 0.0,
-        omega: 1.0,
-        phi: 0.0,
-    })
-    .map(|_| ())
-    .map_err(DeviceError::Scene)
+    scene::check_contact_params(c.mu0, c.kz, c.kx, 1e-6)
+        .map(|_| ())
+        .map_err(DeviceError::Scene)
 }

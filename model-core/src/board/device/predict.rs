@@ -4,13 +4,13 @@
 //! answered by the lift-off model ([`crate::model::liftoff`], f32, FastF32).
 
 use super::config::MAX_VELOCITY_M_S;
-use super::{in_range, Device, DeviceError, DriveParam, Prediction};
+use super::{in_range, Device, DeviceError, DriveParam, Prediction, SceneInputs};
 use crate::model::analytic::StaticFriction;
 use crate::model::exact::{self, Solution};
 use crate::model::float::FastF32;
 use crate::model::liftoff;
 use crate::model::regime::{classify_drive, ClassifyOptions, Regime};
-use crate::model::scene::Scene;
+use crate::model::scene::{Scene, SceneParams};
 
 impl<const N: usize> Device<'_, N> {
     /// The model's μ at sliding velocity `v0` (m/s) for the current drive
@@ -22,43 +22,34 @@ impl<const N: usize> Device<'_, N> {
         predict(&self.scene()?, v0)
     }
 
-    /// The scene a prediction uses: while the drive runs in displacement
-    /// mode and holds ([`Device::drive_settled`]), the *measured* drive
-    /// (the pickups' Δu_z, Δu_x and φ as [`Device::status`] reports them,
-    /// averaged over `displacement::SMOOTHING_S`, with the setting's
-    /// offset and the DDS frequency); otherwise [`Device::scene`].
-    ///
-    /// # Errors
-    /// [`DeviceError::Scene`].
-    pub fn prediction_scene(&self) -> Result<Scene<f32>, DeviceError> {
+    /// The parameters of the scene a prediction uses (a copy: the server
+    /// forms the scene, [`super::SceneInputs::scene`], with the device
+    /// released): while the drive runs in displacement mode and holds
+    /// ([`Device::drive_settled`]), the *measured* drive (the pickups' Δu_z,
+    /// Δu_x and φ as [`Device::status`] reports them, averaged over
+    /// `displacement::SMOOTHING_S`, with the setting's offset and the DDS
+    /// frequency); while tracking, the accepted drive at the frequency that
+    /// runs; otherwise [`Device::scene_inputs`].
+    pub fn prediction_inputs(&self) -> SceneInputs {
         // The status' measured drive: smoothed over 1 ms in this mode.
         match self.status().measured {
             Some(m) if self.running && self.displacement_mode() && self.drive_settled() => {
                 let d = self.drive();
-                let mode = if self.allow_liftoff {
-                    crate::model::scene::ContactMode::Intermittent
-                } else {
-                    crate::model::scene::ContactMode::Permanent
-                };
-                Scene::new_with_contact(
-                    crate::model::scene::SceneParams {
-                        mu0: self.contact.mu0,
-                        kz: self.contact.kz,
-                        kx: self.contact.kx,
-                        uz0: d.offset_z_m,
-                        duz: m.amp_z_m,
-                        dux: m.amp_x_m,
-                        omega: (core::f64::consts::TAU * self.applied.achieved.freq_hz) as f32,
-                        phi: m.phase_rad,
-                    },
-                    mode,
-                )
-                .map_err(DeviceError::Scene)
+                self.scene_inputs_with(SceneParams {
+                    mu0: self.contact.mu0,
+                    kz: self.contact.kz,
+                    kx: self.contact.kx,
+                    uz0: d.offset_z_m,
+                    duz: m.amp_z_m,
+                    dux: m.amp_x_m,
+                    omega: (core::f64::consts::TAU * self.applied.achieved.freq_hz) as f32,
+                    phi: m.phase_rad,
+                })
             }
             // While tracking, the scene at the frequency that runs (the
-            // cached one holds the setting's).
-            _ if self.tracking_active() => self.form_scene().map_err(DeviceError::Scene),
-            _ => self.scene(),
+            // stored one holds the setting's).
+            _ if self.tracking_active() => self.live_scene_inputs(),
+            _ => self.scene_inputs(),
         }
     }
 
