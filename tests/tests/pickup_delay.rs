@@ -171,6 +171,19 @@ fn the_board_converts_its_pickups_15_adc_clocks_after_the_forces() {
             c.check_pickup_delay(),
             Err(ConfigError::PickupDelay),
             "{bad}"
+        );        // And the device refuses to be built on it.
+        let table = model_core::dds::SineTable::<1024>::build::<model_core::Libm>();
+        let contact = model_core::device::Contact {
+            mu0: 0.3,
+            kz: 1e7,
+            kx: 1e7,
+        };
+        assert!(
+            matches!(
+                model_core::device::Device::new(c, &table, contact),
+                Err(model_core::device::DeviceError::Config(ConfigError::PickupDelay))
+            ),
+            "{bad}"
         );
     }
     let zero = DeviceConfig {

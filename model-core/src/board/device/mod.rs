@@ -386,6 +386,7 @@ impl SceneInputs {
 
 /// The configuration checks the DDS and the estimator do not make themselves.
 fn check_config(cfg: &DeviceConfig) -> Result<(), DeviceError> {
+    cfg.check_pickup_delay().map_err(DeviceError::Config)?;
     let m = cfg.liftoff_margin;
     if !(m.is_finite() && (0.0..=0.99).contains(&m)) {
         return Err(DeviceError::Config(ConfigError::LiftoffMargin));
