@@ -18,9 +18,17 @@ def frame(payload):
     crc=zlib.crc32(payload)&0xffffffff
     return cobs(payload+struct.pack('<I',crc))+b'\x00', crc
 f32=lambda x: struct.pack('<f',x)
-req=bytes([6,5,0,0x0b])
+def varint(v):
+    out=bytearray()
+    while True:
+        low=v&0x7f; v>>=7
+        if v==0:
+            out.append(low); return bytes(out)
+        out.append(low|0x80)
+V=7  # PROTOCOL_VERSION
+req=bytes([V,5,0,0x0b])
 w,crc=frame(req); print('req', w.hex(' '), hex(crc))
-p=bytes([6,5,1,6, 1,1,0,0,0])+f32(2e-6)+f32(3e-7)+f32(4e-6)+bytes([0])
+p=bytes([V,5,1,6, 1,1,0,0,0])+f32(2e-6)+f32(3e-7)+f32(4e-6)+bytes([0])
 p+=bytes([1])+f32(2.2e-6)+f32(3.2e-7)+f32(-2.1)+f32(3.3e-6)+bytes([7])
 p+=bytes([1])+f32(1.5e-5)+f32(-2.5e-6)+bytes([0])+bytes([1])
 # v6: frequency_hz f32, options {track Z=1, headroom f32}, tracking_error_hz Some(-0.5), locked true
@@ -28,3 +36,7 @@ p+=f32(20100.0)+bytes([1])+f32(2.0)+bytes([1])+f32(-0.5)+bytes([1])
 print('payload', p.hex(' '))
 w,crc=frame(p); print('resp', w.hex(' '), hex(crc))
 print(', '.join('0x%02x'%b for b in w))
+# v7: Info.self_test = SelfTest { ran: ALL (0x3f), failed: HSE_FREQUENCY | STREAMS_RUNNING (0x22),
+# hse_hz: 12 000 000, sysclk_hz: 168 000 000 } (four varints)
+st=varint(0x3f)+varint(0x22)+varint(12_000_000)+varint(168_000_000)
+print('self_test', st.hex(' '))

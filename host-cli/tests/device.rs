@@ -19,7 +19,7 @@ use serde_json::Value;
 use serialport::SerialPort;
 
 /// The protocol version byte of the frames written by hand (docs/protocol.md, "Frame").
-const V: u8 = 6;
+const V: u8 = 7;
 
 /// How far the virtual device's measured μ may be from its prediction (both
 /// absolute μ) for [`DRIVE`] at the sim's stage velocity 4 mm/s, with the
@@ -413,6 +413,10 @@ const INFO_KEYS: &[&str] = &[
     "periods_max",
     "byte_timeout_us",
     "retract_z_m",
+    "self_test_ran",
+    "self_test_failed",
+    "hse_hz",
+    "sysclk_hz",
 ];
 
 const DRIVE_KEYS: &[&str] = &[
@@ -614,6 +618,144 @@ fn json_is_flat_with_the_model_commands_keys_and_text_has_units() {
     }
     let i = dev_text(&s, &["info"]);
     assert!(i.contains("Hz\n") && i.contains(" m\n"), "{i}");
+    // The virtual device has no power-up self-test (v7): not run.
+    assert!(i.contains("\nself-test        not run\n"), "{i}");
+    let j = ok_json(&s, &["info"]);
+    assert_eq!(
+        (
+            &j["self_test_ran"],
+            &j["self_test_failed"],
+            &j["hse_hz"],
+            &j["sysclk_hz"]
+        ),
+        (
+            &serde_json::json!([]),
+            &serde_json::json!([]),
+            &Value::Null,
+            &Value::Null
+        )
+    );
+}
+
+/// A one-request fake board on a TCP port: answers the first request frame
+/// with the response payload `body` (everything after version, seq and
+/// Body::Response) under the request's seq; returns its address.
+fn fake_board(body: Vec<u8>) -> (String, std::thread::JoinHandle<()>) {
+    let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = l.local_addr().unwrap().to_string();
+    let h = std::thread::spawn(move || {
+        use std::io::Read;
+        let (mut c, _) = l.accept().unwrap();
+        c.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+        // The request: bytes up to the first delimiter.
+        let mut raw = Vec::new();
+        let mut b = [0u8; 1];
+        while raw.last() != Some(&0) {
+            assert_eq!(c.read(&mut b).unwrap(), 1, "the host hung up");
+            raw.push(b[0]);
+        }
+        let n = raw.len() - 1;
+        let req = model_core::protocol::decode(&mut raw[..n]).unwrap();
+        assert_eq!(req.body, Body::Request(Request::Hello));
+        // seq as a varint, by hand (docs/protocol.md: 7 bits per byte, low first).
+        let mut p = vec![V];
+        let mut seq = req.seq;
+        loop {
+            let low = (seq & 0x7f) as u8;
+            seq >>= 7;
+            if seq == 0 {
+                p.push(low);
+                break;
+            }
+            p.push(low | 0x80);
+        }
+        p.push(1); // Body::Response
+        p.extend(body);
+        c.write_all(&common::raw_frame(&p)).unwrap();
+        // Until the host hangs up.
+        let _ = c.read(&mut [0u8; 64]);
+    });
+    (addr, h)
+}
+
+#[test]
+fn info_shows_a_failed_self_test_in_text_and_json() {
+    // Response::Info (0) built by hand from docs/protocol.md's Structures
+    // table: a board with a 12 MHz crystal under firmware built for 8 MHz,
+    // whose ADC stream never started.
+    let mut board = [0u8; 16];
+    board[..9].copy_from_slice(b"STM32F405");
+    let info: Vec<u8> = [
+        &[0u8][..], // Response::Info
+        &[0, 2, 1], // firmware
+        &[V],       // protocol
+        &board,
+        &500e3f64.to_le_bytes(),
+        &1e3f64.to_le_bytes(),
+        &1e5f64.to_le_bytes(),
+        &2e-6f32.to_le_bytes(),
+        &8e-6f32.to_le_bytes(),
+        &0.05f32.to_le_bytes(),
+        &1000f32.to_le_bytes(),
+        &1000f32.to_le_bytes(),
+        &[1, 0xc0, 0x84, 0x3d], // periods 1 … 1 000 000
+        &[0xa0, 0x8d, 0x06],    // byte timeout 100 000 µs
+        &0f32.to_le_bytes(),    // retract_z_m
+        // self_test (v7): ran 0x3f (all), failed 0x22 (hse_frequency,
+        // streams_running), hse_hz 12 000 000, sysclk_hz 252 000 000 (varints).
+        &[0x3f, 0x22, 0x80, 0xb6, 0xdc, 0x05, 0x80, 0xee, 0x94, 0x78],
+    ]
+    .concat();
+    let run = |json: bool| {
+        let (addr, h) = fake_board(info.clone());
+        let mut c = Command::cargo_bin("fricctl").unwrap();
+        c.args([
+            "device",
+            "--tcp",
+            &addr,
+            "--timeout-ms",
+            "2000",
+            "--attempts",
+            "1",
+        ]);
+        if json {
+            c.arg("--json");
+        }
+        let o = c.arg("info").output().unwrap();
+        h.join().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8(o.stdout).unwrap()
+    };
+    let text = run(false);
+    assert!(
+        text.contains(
+            "\nself-test        FAILED: hse_frequency, streams_running (HSE 12.000 MHz, SYSCLK 252.0 MHz)\n"
+        ),
+        "{text}"
+    );
+    assert!(text.contains("board            STM32F405\n"), "{text}");
+    let j: Value = serde_json::from_str(&run(true)).unwrap();
+    assert_keys(&j, INFO_KEYS);
+    assert_eq!(
+        j["self_test_ran"],
+        serde_json::json!([
+            "clock_ready",
+            "hse_frequency",
+            "sysclk",
+            "flash_latency",
+            "dma_setup",
+            "streams_running"
+        ])
+    );
+    assert_eq!(
+        j["self_test_failed"],
+        serde_json::json!(["hse_frequency", "streams_running"])
+    );
+    assert_eq!(
+        (&j["hse_hz"], &j["sysclk_hz"]),
+        (&Value::from(12_000_000), &Value::from(252_000_000))
+    );
+    assert_eq!(j["protocol"], PROTOCOL_VERSION);
 }
 
 #[test]

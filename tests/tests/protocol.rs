@@ -5,13 +5,13 @@
 use model_core::dds::SineTable;
 use model_core::device::{Contact, Device, DeviceConfig, DriveSetting};
 use model_core::protocol::{
-    decode, encode, Body, Deframed, Deframer, Frame, Info, Request, Response, WireError, CRC,
-    MAX_FRAME, PROTOCOL_VERSION,
+    decode, encode, self_test, Body, Deframed, Deframer, Frame, Info, Request, Response, SelfTest,
+    WireError, CRC, MAX_FRAME, PROTOCOL_VERSION,
 };
 use model_core::server::Server;
 
 /// The protocol version byte of the hand-built frames (docs/protocol.md, "Frame").
-const V: u8 = 6;
+const V: u8 = 7;
 
 fn cfg() -> DeviceConfig {
     integration_tests::board_config_1mhz()
@@ -34,6 +34,7 @@ fn info() -> Info {
         periods_range: (1, 1_000_000),
         byte_timeout_us: 100_000,
         retract_z_m: 0.0,
+        self_test: SelfTest::NOT_RUN,
     }
 }
 
@@ -316,7 +317,7 @@ fn docs_protocol_examples() {
     let mut out = [0u8; MAX_FRAME];
     let req = encode(
         &Frame {
-            version: 6,
+            version: 7,
             seq: 5,
             body: Body::Request(Request::GetStatus),
         },
@@ -325,7 +326,7 @@ fn docs_protocol_examples() {
     .unwrap();
     assert_eq!(
         req,
-        &[0x03, 0x06, 0x05, 0x06, 0x0b, 0xa3, 0x9b, 0x36, 0x95, 0x00]
+        &[0x03, 0x07, 0x05, 0x06, 0x0b, 0xc6, 0xfc, 0x8a, 0x2d, 0x00]
     );
     let status = model_core::device::Status {
         running: true,
@@ -358,7 +359,7 @@ fn docs_protocol_examples() {
     let mut out = [0u8; MAX_FRAME];
     let resp = encode(
         &Frame {
-            version: 6,
+            version: 7,
             seq: 5,
             body: Body::Response(Response::Status(status)),
         },
@@ -368,13 +369,36 @@ fn docs_protocol_examples() {
     assert_eq!(
         resp,
         &[
-            0x07, 0x06, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x01, 0x0d, 0xbd, 0x37, 0x06, 0x36,
+            0x07, 0x07, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x01, 0x0d, 0xbd, 0x37, 0x06, 0x36,
             0xb0, 0x0f, 0xa1, 0x34, 0xbd, 0x37, 0x86, 0x36, 0x1c, 0x01, 0xb6, 0xa3, 0x13, 0x36,
             0x77, 0xcc, 0xab, 0x34, 0x66, 0x66, 0x06, 0xc0, 0x91, 0x75, 0x5d, 0x36, 0x07, 0x01,
             0x82, 0xa8, 0x7b, 0x37, 0xac, 0xc5, 0x27, 0xb6, 0x02, 0x01, 0x05, 0x08, 0x9d, 0x46,
-            0x01, 0x01, 0x01, 0x03, 0x40, 0x01, 0x01, 0x01, 0x07, 0xbf, 0x01, 0x5a, 0x31, 0xba,
-            0x38, 0x00
+            0x01, 0x01, 0x01, 0x03, 0x40, 0x01, 0x01, 0x01, 0x07, 0xbf, 0x01, 0x45, 0x9c, 0x53,
+            0x71, 0x00
         ]
+    );
+    // v7, "Power-up self-test": the SelfTest bytes of the example there.
+    let t = SelfTest {
+        ran: self_test::ALL,
+        failed: self_test::HSE_FREQUENCY | self_test::STREAMS_RUNNING,
+        hse_hz: 12_000_000,
+        sysclk_hz: 168_000_000,
+    };
+    let mut out = [0u8; MAX_FRAME];
+    let w = encode(
+        &Frame {
+            version: 7,
+            seq: 5,
+            body: Body::Response(Response::Info(info().with_self_test(t))),
+        },
+        &mut out,
+    )
+    .unwrap();
+    // The last field of Info, just before the CRC.
+    let p = uncobs_by_hand(&w[..w.len() - 1]);
+    assert_eq!(
+        p[p.len() - 14..p.len() - 4],
+        [0x3f, 0x22, 0x80, 0xb6, 0xdc, 0x05, 0x80, 0xf4, 0x8d, 0x50]
     );
 }
 
@@ -602,6 +626,7 @@ fn hand_built_frames_get_the_spec_answers() {
         &[0xc0, 0x84, 0x3d],    // periods_range.1 = 1 000 000
         &[0xa0, 0x8d, 0x06],    // byte_timeout_us = 100 000
         &0f32.to_le_bytes(),    // retract_z_m = zero_code 0 · 2 nm (v3)
+        &[0, 0, 0, 0],          // self_test (v7): not run (ran, failed, hse_hz, sysclk_hz)
     ]);
     assert_eq!(ask(&mut s, &mut dev, &[V, 11, 0, 0]), info);
     // Inter-byte timeout: GetStatus seq 9 split 300 ms apart is dropped (the
@@ -907,6 +932,118 @@ fn measure_is_idempotent_per_seq_and_reset_ends_every_session() {
         [V, 33, 1, 7, 8, 8]
     );
     assert_eq!(ask(&mut s, &mut dev, &[V, 34, 0, 3]), [V, 34, 1, 7, 8, 8]);
+}
+
+/// An `Info` payload (response to `Hello`, seq 3) built field by field from
+/// the Structures table, the self-test's four varints `self_test` last (v7).
+fn info_payload_by_hand(self_test: &[u8]) -> Vec<u8> {
+    let mut board = [0u8; 16];
+    board[..9].copy_from_slice(b"STM32F405");
+    cat(&[
+        &[V, 3, 1, 0], // version, seq, Response, Info
+        &[0, 2, 1],    // firmware 0.2.1
+        &[V],          // protocol
+        &board,
+        &500e3f64.to_le_bytes(),
+        &1e3f64.to_le_bytes(),
+        &1e5f64.to_le_bytes(),
+        &2e-6f32.to_le_bytes(),
+        &8e-6f32.to_le_bytes(),
+        &0.05f32.to_le_bytes(),
+        &1000f32.to_le_bytes(),
+        &1000f32.to_le_bytes(),
+        &[1],                // periods_range.0
+        &[0xc0, 0x84, 0x3d], // periods_range.1 = 1 000 000
+        &[0xa0, 0x8d, 0x06], // byte_timeout_us = 100 000
+        &0f32.to_le_bytes(), // retract_z_m
+        self_test,
+    ])
+}
+
+#[test]
+fn a_hand_built_v7_info_decodes_with_its_self_test() {
+    // A board with a 12 MHz crystal and firmware built for 8 MHz: every check
+    // but the streams' ran; the crystal's frequency and the DMA set-up
+    // failed; SYSCLK ran at 12/8 of 168 MHz (the `sysclk` check not run,
+    // as a firmware may skip it once the crystal is off).
+    let ran = self_test::CLOCK_READY
+        | self_test::HSE_FREQUENCY
+        | self_test::FLASH_LATENCY
+        | self_test::DMA_SETUP;
+    let failed = self_test::HSE_FREQUENCY | self_test::DMA_SETUP;
+    assert_eq!((ran, failed), (0x1b, 0x12));
+    let st = [
+        0x1b, // ran (u16 varint)
+        0x12, // failed
+        0x80, 0xb6, 0xdc,
+        0x05, // hse_hz = 12 000 000 (u32 varint, 7 bits per byte, low first)
+        0x80, 0xee, 0x94, 0x78, // sysclk_hz = 252 000 000
+    ];
+    let mut w = wire(&info_payload_by_hand(&st));
+    let n = w.len() - 1;
+    let f = decode(&mut w[..n]).unwrap();
+    assert_eq!((f.version, f.seq), (PROTOCOL_VERSION, 3));
+    let Body::Response(Response::Info(i)) = f.body else {
+        panic!("{f:?}")
+    };
+    let want = SelfTest {
+        ran,
+        failed,
+        hse_hz: 12_000_000,
+        sysclk_hz: 252_000_000,
+    };
+    assert_eq!(i.self_test, want);
+    assert_eq!(&i.board[..9], b"STM32F405");
+    assert_eq!(
+        (i.firmware, i.protocol, i.periods_range, i.byte_timeout_us),
+        ([0, 2, 1], PROTOCOL_VERSION, (1, 1_000_000), 100_000)
+    );
+    assert!(!i.self_test.passed());
+    assert_eq!(
+        i.self_test.failed_names().collect::<Vec<_>>(),
+        ["hse_frequency", "dma_setup"]
+    );
+    assert_eq!(
+        i.self_test.ran_names().collect::<Vec<_>>(),
+        ["clock_ready", "hse_frequency", "flash_latency", "dma_setup"]
+    );
+    // A passed test; `ran` with a bit this version does not know (0x100: a
+    // two-byte u16 varint `bf 02`) decodes as sent and is not named.
+    let mut w = wire(&info_payload_by_hand(&[
+        0xbf, 0x02, 0x00, 0x80, 0xa4, 0xe8, 0x03, 0x80, 0xf4, 0x8d, 0x50,
+    ]));
+    let n = w.len() - 1;
+    let Body::Response(Response::Info(i)) = decode(&mut w[..n]).unwrap().body else {
+        panic!()
+    };
+    assert_eq!(
+        i.self_test,
+        SelfTest {
+            ran: 0x13f,
+            failed: 0,
+            hse_hz: 8_000_000,
+            sysclk_hz: 168_000_000,
+        }
+    );
+    assert!(i.self_test.passed());
+    assert_eq!(i.self_test.ran_names().count(), 6);
+    // Not run (the virtual device): four zero bytes, what `Info::for_config` sends.
+    let mut w = wire(&info_payload_by_hand(&[0, 0, 0, 0]));
+    let n = w.len() - 1;
+    let Body::Response(Response::Info(i)) = decode(&mut w[..n]).unwrap().body else {
+        panic!()
+    };
+    assert_eq!(i.self_test, SelfTest::NOT_RUN);
+    assert!(!i.self_test.passed());
+    assert_eq!(
+        Info::for_config(&cfg(), "virtual", [0, 1, 0]).self_test,
+        SelfTest::NOT_RUN
+    );
+    // The Info without its v7 field (a v6 body) is cut short: Malformed.
+    let v6 = info_payload_by_hand(&[]);
+    let mut w = wire(&v6);
+    let n = w.len() - 1;
+    assert!(decode(&mut w[..n]).is_err());
 }
 
 #[test]

@@ -9,11 +9,12 @@ use std::io::Write;
 
 use model_core::device::{Contact, DriveSetting, Status};
 use model_core::estimator::Estimate;
-use model_core::protocol::{Applied, ControlState, ControlUpdate, Info, Prediction};
+use model_core::protocol::{Applied, ControlState, ControlUpdate, Info, Prediction, SelfTest};
 use model_core::regime::Regime;
 use serde_json::{Map, Value};
 
-/// One answer: rows of (JSON key, text label, value, unit), in print order.
+/// One answer: rows of (JSON key, text label, value, unit), in print order;
+/// a row without a key is text only, one without a label JSON only.
 #[derive(Default)]
 pub struct Report {
     rows: Vec<(&'static str, &'static str, Value, &'static str)>,
@@ -66,7 +67,7 @@ impl Report {
     /// The flat JSON object.
     pub fn json(&self) -> Value {
         let mut m = Map::new();
-        for (k, _, v, _) in &self.rows {
+        for (k, _, v, _) in self.rows.iter().filter(|r| !r.0.is_empty()) {
             m.insert((*k).to_string(), v.clone());
         }
         Value::Object(m)
@@ -76,7 +77,7 @@ impl Report {
     pub fn text(&self) -> String {
         let w = self.rows.iter().map(|r| r.1.len()).max().unwrap_or(0);
         let mut s = String::new();
-        for (_, label, v, unit) in &self.rows {
+        for (_, label, v, unit) in self.rows.iter().filter(|r| !r.1.is_empty()) {
             let value = match v {
                 Value::Number(n) => n.as_f64().map_or_else(|| n.to_string(), num),
                 Value::String(t) => t.clone(),
@@ -150,6 +151,86 @@ pub fn info(answered_by: &str, i: &Info) -> Report {
         .row("periods_max", "periods max", i.periods_range.1, "")
         .row("byte_timeout_us", "byte timeout", i.byte_timeout_us, "us")
         .row("retract_z_m", "max retract", f32v(i.retract_z_m), "m")
+        .self_test(&i.self_test)
+}
+
+impl Report {
+    /// A row for the JSON only (no text line).
+    fn json_row(mut self, key: &'static str, v: impl Into<Value>) -> Self {
+        self.rows.push((key, "", v.into(), ""));
+        self
+    }
+
+    /// A line for the text only (no JSON key).
+    fn text_row(mut self, label: &'static str, v: impl Into<Value>) -> Self {
+        self.rows.push(("", label, v.into(), ""));
+        self
+    }
+
+    /// The power-up self-test (v7): one text line (`not run`, `passed (…)`
+    /// or `FAILED: names (…)`), four JSON keys (`self_test_ran`,
+    /// `self_test_failed`, `hse_hz`, `sysclk_hz`).
+    fn self_test(self, t: &SelfTest) -> Self {
+        let hz = |f: u32| {
+            if f == 0 {
+                Value::Null
+            } else {
+                Value::from(f)
+            }
+        };
+        self.text_row("self-test", self_test_text(t))
+            .json_row("self_test_ran", self_test_names(t.ran))
+            .json_row("self_test_failed", self_test_names(t.failed))
+            .json_row("hse_hz", hz(t.hse_hz))
+            .json_row("sysclk_hz", hz(t.sysclk_hz))
+    }
+}
+
+/// The names of self-test check bits ([`model_core::protocol::self_test`]),
+/// `0x…` for unknown bits.
+pub fn self_test_names(bits: u16) -> Vec<String> {
+    let mut v: Vec<String> = model_core::protocol::self_test::names(bits)
+        .map(str::to_string)
+        .collect();
+    let rest = bits & !model_core::protocol::self_test::ALL;
+    if rest != 0 {
+        v.push(format!("0x{rest:x}"));
+    }
+    v
+}
+
+/// The self-test's text line: `not run`, `passed (HSE 8.000 MHz, SYSCLK
+/// 168.0 MHz)`, `FAILED: hse_frequency (HSE 12.000 MHz, SYSCLK 168.0 MHz)`;
+/// the checks that did not run are named when some did.
+pub fn self_test_text(t: &SelfTest) -> String {
+    if t.ran == 0 {
+        return "not run".to_string();
+    }
+    let mut clocks = Vec::new();
+    if t.hse_hz != 0 {
+        clocks.push(format!("HSE {:.3} MHz", f64::from(t.hse_hz) / 1e6));
+    }
+    if t.sysclk_hz != 0 {
+        clocks.push(format!("SYSCLK {:.1} MHz", f64::from(t.sysclk_hz) / 1e6));
+    }
+    let mut details = Vec::new();
+    if !clocks.is_empty() {
+        details.push(clocks.join(", "));
+    }
+    let skipped = self_test_names(model_core::protocol::self_test::ALL & !t.ran);
+    if !skipped.is_empty() {
+        details.push(format!("not run: {}", skipped.join(", ")));
+    }
+    let head = if t.failed == 0 {
+        "passed".to_string()
+    } else {
+        format!("FAILED: {}", self_test_names(t.failed).join(", "))
+    };
+    if details.is_empty() {
+        head
+    } else {
+        format!("{head} ({})", details.join("; "))
+    }
 }
 
 fn board_name(b: &[u8]) -> String {
@@ -238,6 +319,7 @@ pub fn fault_names(bits: u32) -> Vec<String> {
         (MEASURED_LIFTOFF, "measured_liftoff"),
         (LOSS_OF_LOCK, "loss_of_lock"),
         (PICKUP_OPEN, "pickup_open"),
+        (SELF_TEST, "self_test"),
     ];
     let mut v: Vec<String> = known
         .iter()
@@ -424,6 +506,40 @@ mod tests {
         assert_eq!(
             r.json(),
             serde_json::json!({"mu0": 0.3, "kz": 1e7, "kx": 2.5e6})
+        );
+    }
+
+    #[test]
+    fn self_test_line_and_keys() {
+        use model_core::protocol::self_test::*;
+        let t = |ran, failed, hse_hz, sysclk_hz| SelfTest {
+            ran,
+            failed,
+            hse_hz,
+            sysclk_hz,
+        };
+        assert_eq!(self_test_text(&SelfTest::NOT_RUN), "not run");
+        assert_eq!(
+            self_test_text(&t(ALL, 0, 8_000_000, 168_000_000)),
+            "passed (HSE 8.000 MHz, SYSCLK 168.0 MHz)"
+        );
+        // Checks that did not run are named; an unknown bit as 0x….
+        assert_eq!(
+            self_test_text(&t(CLOCK_READY | 0x100, CLOCK_READY | 0x100, 0, 0)),
+            "FAILED: clock_ready, 0x100 (not run: hse_frequency, sysclk, flash_latency, \
+             dma_setup, streams_running)"
+        );
+        let r = Report::default().self_test(&t(ALL, DMA_SETUP, 7_990_000, 0));
+        assert_eq!(r.text(), "self-test  FAILED: dma_setup (HSE 7.990 MHz)\n");
+        assert_eq!(
+            r.json(),
+            serde_json::json!({
+                "self_test_ran": ["clock_ready", "hse_frequency", "sysclk", "flash_latency",
+                                  "dma_setup", "streams_running"],
+                "self_test_failed": ["dma_setup"],
+                "hse_hz": 7_990_000,
+                "sysclk_hz": null,
+            })
         );
     }
 }

@@ -252,6 +252,7 @@ impl Info {
             periods_range: PERIODS_RANGE,
             byte_timeout_us: BYTE_TIMEOUT_US,
             retract_z_m: cfg.retract_z_m(),
+            self_test: crate::board::protocol::messages::SelfTest::NOT_RUN,
         }
     }
 }

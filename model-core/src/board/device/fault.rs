@@ -14,6 +14,7 @@
 //! | [`faults::MEASURED_LIFTOFF`] | the normal pickup measured Δu_z above u_z0 (lift-off not allowed) | `Device::adc_block_with_pickups` (the motion window) |
 //! | [`faults::LOSS_OF_LOCK`] | the resonance tracking lost (or never found) its lock | the motion window (`tracking`) |
 //! | [`faults::PICKUP_OPEN`] | a driven channel's pickup reads nothing | the motion window (`displacement`) |
+//! | [`faults::SELF_TEST`] | the power-up self-test failed a clock or DMA check | the firmware at power-up, and again at once after every `ResetFaults` |
 //!
 //! **The safe state** ([`Device::fault`]): the closed loop off (its running
 //! estimate aborted), the drive stopped, both channels ramped at the slew
@@ -49,6 +50,12 @@ pub mod faults {
     /// (v6) A driven channel's pickup reads nothing (an open wire): its
     /// measured amplitude stayed below a tenth of the model's while driven.
     pub const PICKUP_OPEN: u32 = 1 << 7;
+    /// (v7) The power-up self-test failed a check the drive depends on
+    /// (clock or DMA: `Info.self_test` names it,
+    /// [`crate::board::protocol::SelfTest`]); the firmware latches it again
+    /// at once after `ResetFaults`, so the drive can never start on such a
+    /// board.
+    pub const SELF_TEST: u32 = 1 << 8;
     /// Every bit defined above.
     pub const ALL: u32 = ADC_SATURATED
         | DAC_UNDERRUN
@@ -57,7 +64,8 @@ pub mod faults {
         | ADC_OVERRUN
         | MEASURED_LIFTOFF
         | LOSS_OF_LOCK
-        | PICKUP_OPEN;
+        | PICKUP_OPEN
+        | SELF_TEST;
 }
 
 /// The latched bits; set only by [`Device::fault`], cleared only by

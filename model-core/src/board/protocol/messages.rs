@@ -15,7 +15,7 @@ use crate::model::regime::Regime;
 
 /// Protocol version; a frame with another version is answered with
 /// [`WireError::VersionMismatch`].
-pub const PROTOCOL_VERSION: u16 = 6;
+pub const PROTOCOL_VERSION: u16 = 7;
 
 /// The drive as commanded, physical units.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -316,6 +316,106 @@ pub struct Info {
     /// reaches, m: a drive needs `amp_z_m ≤ offset_z_m + retract_z_m` (0 on
     /// the driver board: `Δu_z ≤ u_z0`; binding once lift-off is allowed).
     pub retract_z_m: f32,
+    /// (v7) The board's power-up self-test ([`SelfTest::NOT_RUN`] on a
+    /// board without one).
+    pub self_test: SelfTest,
+}
+
+impl Info {
+    /// This `Info` with the power-up self-test's result `t`.
+    pub const fn with_self_test(self, t: SelfTest) -> Self {
+        Info {
+            self_test: t,
+            ..self
+        }
+    }
+}
+
+/// The power-up self-test of a board (v7): the clocks measured against the
+/// internal RC oscillator and the DMA set-up checked before the drive may
+/// start. A failed check the drive depends on also latches the fault
+/// [`crate::board::device::faults::SELF_TEST`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SelfTest {
+    /// Checks that ran (bits of [`self_test`]); 0 on boards without one
+    /// (the virtual device, QEMU).
+    pub ran: u16,
+    /// Checks that failed, a subset of `ran`.
+    pub failed: u16,
+    /// The crystal (HSE) frequency measured against the internal 16 MHz RC
+    /// oscillator (HSI, ±1 %), Hz; 0 if not measured.
+    pub hse_hz: u32,
+    /// The core clock (SYSCLK) measured the same way, Hz; 0 if not measured.
+    pub sysclk_hz: u32,
+}
+
+/// (v7) The checks of the power-up self-test ([`SelfTest::ran`],
+/// [`SelfTest::failed`]).
+pub mod self_test {
+    /// The crystal oscillator (HSE) and the PLL became ready within their
+    /// time-outs.
+    pub const CLOCK_READY: u16 = 1 << 0;
+    /// The measured crystal frequency ([`super::SelfTest::hse_hz`]) is
+    /// within ±3 % of the build's `HSE_HZ`.
+    pub const HSE_FREQUENCY: u16 = 1 << 1;
+    /// The measured core clock ([`super::SelfTest::sysclk_hz`]) is within
+    /// ±3 % of 168 MHz.
+    pub const SYSCLK: u16 = 1 << 2;
+    /// FLASH_ACR reads back the wait states written.
+    pub const FLASH_LATENCY: u16 = 1 << 3;
+    /// Both DMA streams (DAC and ADC) read back the buffer address, length
+    /// and peripheral address they were given.
+    pub const DMA_SETUP: u16 = 1 << 4;
+    /// Both DMA streams handed over their first two half-buffers within
+    /// 1 ms of the sample clock's start.
+    pub const STREAMS_RUNNING: u16 = 1 << 5;
+    /// Every check defined above.
+    pub const ALL: u16 =
+        CLOCK_READY | HSE_FREQUENCY | SYSCLK | FLASH_LATENCY | DMA_SETUP | STREAMS_RUNNING;
+    /// Each check's name (host output, `docs/device-json.md`), in bit order.
+    pub const NAMES: [(u16, &str); 6] = [
+        (CLOCK_READY, "clock_ready"),
+        (HSE_FREQUENCY, "hse_frequency"),
+        (SYSCLK, "sysclk"),
+        (FLASH_LATENCY, "flash_latency"),
+        (DMA_SETUP, "dma_setup"),
+        (STREAMS_RUNNING, "streams_running"),
+    ];
+
+    /// The names of the known checks among `bits`, in bit order (bits
+    /// outside [`ALL`] are not named).
+    pub fn names(bits: u16) -> impl Iterator<Item = &'static str> {
+        NAMES
+            .into_iter()
+            .filter(move |(b, _)| bits & b != 0)
+            .map(|(_, n)| n)
+    }
+}
+
+impl SelfTest {
+    /// No self-test ran (every field 0): the virtual device, QEMU.
+    pub const NOT_RUN: SelfTest = SelfTest {
+        ran: 0,
+        failed: 0,
+        hse_hz: 0,
+        sysclk_hz: 0,
+    };
+
+    /// Some check ran and none failed.
+    pub const fn passed(&self) -> bool {
+        self.ran != 0 && self.failed == 0
+    }
+
+    /// The names of the failed checks, in bit order ([`self_test::NAMES`]).
+    pub fn failed_names(&self) -> impl Iterator<Item = &'static str> {
+        self_test::names(self.failed)
+    }
+
+    /// The names of the checks that ran, in bit order.
+    pub fn ran_names(&self) -> impl Iterator<Item = &'static str> {
+        self_test::names(self.ran)
+    }
 }
 
 /// Requests (host → device). [`ENDPOINTS`] names the response of each.
