@@ -171,7 +171,7 @@ fn the_board_converts_its_pickups_15_adc_clocks_after_the_forces() {
             c.check_pickup_delay(),
             Err(ConfigError::PickupDelay),
             "{bad}"
-        );        // And the device refuses to be built on it.
+        ); // And the device refuses to be built on it.
         let table = model_core::dds::SineTable::<1024>::build::<model_core::Libm>();
         let contact = model_core::device::Contact {
             mu0: 0.3,
@@ -181,7 +181,9 @@ fn the_board_converts_its_pickups_15_adc_clocks_after_the_forces() {
         assert!(
             matches!(
                 model_core::device::Device::new(c, &table, contact),
-                Err(model_core::device::DeviceError::Config(ConfigError::PickupDelay))
+                Err(model_core::device::DeviceError::Config(
+                    ConfigError::PickupDelay
+                ))
             ),
             "{bad}"
         );
