@@ -36,6 +36,8 @@ impl<T, const LEVEL: u8> Shared<T, LEVEL> {
 
     /// Runs `f` on the value with BASEPRI at the ceiling.
     pub fn lock<R>(&self, f: impl FnOnce(&mut T) -> R) -> R {
+        // BASEPRI = 0 masks nothing: a lock at level 0 would exclude no one.
+        const { assert!(LEVEL >= 1, "a Shared at level 0 cannot be locked") };
         let old = cortex_m::register::basepri::read();
         cortex_m::register::basepri_max::write(hardware::nvic::byte(LEVEL));
         compiler_fence(Ordering::SeqCst);

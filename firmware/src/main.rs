@@ -37,7 +37,7 @@ mod panic;
 #[cfg(feature = "qemu")]
 mod qemu;
 
-use core::sync::atomic::{AtomicU32, Ordering};
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use cortex_m_rt::entry;
 use defmt_rtt as _;
@@ -83,6 +83,10 @@ static REST_WORD: AtomicU32 = AtomicU32::new(0);
 /// Set when the self-test failed: the `self_test` fault is latched again
 /// whenever it was reset.
 static SELF_TEST_FAILED: AtomicU32 = AtomicU32::new(0);
+/// Set when a stream's stop was handled (a fault latched, the outputs held
+/// at rest): the watchdog is then fed without stream progress, so that the
+/// latched cause stays readable instead of being lost to a reset.
+static HELD: AtomicBool = AtomicBool::new(false);
 
 /// Microseconds since power-up (wrapping), at the resolution of one half-buffer.
 fn now_us() -> u32 {
@@ -120,9 +124,14 @@ fn with_device<R>(f: impl FnOnce(&mut Dev) -> R) -> R {
 
 /// Pending faults and lost bytes into the device (its one fault path).
 fn fold_pending(dev: &mut Dev) {
-    let f = PENDING_FAULTS.swap(0, Ordering::Relaxed) | SELF_TEST_FAILED.load(Ordering::Relaxed);
+    let f = PENDING_FAULTS.swap(0, Ordering::Relaxed);
     if f != 0 {
         dev.fault(f);
+    }
+    // Re-latched only when it was reset (a fault enters the safe state anew).
+    let st = SELF_TEST_FAILED.load(Ordering::Relaxed);
+    if st != 0 && dev.faults() & st == 0 {
+        dev.fault(st);
     }
     let lost = RX_LOST.swap(0, Ordering::Relaxed);
     if lost != 0 {
@@ -176,7 +185,9 @@ impl Core for CortexM4 {
     }
 
     fn wait_for_interrupt(&mut self) {
-        cortex_m::asm::wfi();
+        // Three NOPs after WFI: errata ES0182 §2.1.3 (DBG_SLEEP is set).
+        // SAFETY: WFI and NOPs touch no memory.
+        unsafe { core::arch::asm!("wfi", "nop", "nop", "nop", options(nomem, nostack)) };
     }
 }
 
@@ -235,7 +246,7 @@ fn main() -> ! {
     #[cfg(feature = "qemu")]
     let mut analog = qemu::Analog::new(cfg);
     // SAFETY: the DMA is not running yet; nothing else aliases the buffers.
-    let (dac_buf, adc_buf) = unsafe {
+    let dac_preload = unsafe {
         let buf = &mut *core::ptr::addr_of_mut!(DAC_BUF);
         let (a, b) = buf.split_at_mut(HALF);
         #[cfg(not(feature = "qemu"))]
@@ -248,15 +259,13 @@ fn main() -> ! {
             analog.prefill(&mut dev, 0, a);
             analog.prefill(&mut dev, 1, b);
         }
-        (
-            &*core::ptr::addr_of!(DAC_BUF),
-            &*core::ptr::addr_of!(ADC_BUF),
-        )
+        // The word before word 0 in the circular order: DHR12RD's preload.
+        buf[DAC_WORDS - 1]
     };
     let bufs = Buffers {
-        dac: DmaBuffer::of(dac_buf),
-        adc: DmaBuffer::of(adc_buf),
-        dac_preload: dac_buf[DAC_WORDS - 1],
+        dac: DmaBuffer::of_ptr(core::ptr::addr_of!(DAC_BUF)),
+        adc: DmaBuffer::of_ptr(core::ptr::addr_of!(ADC_BUF)),
+        dac_preload,
     };
 
     let mut prepared = bring_up_or_qemu(&r, &bufs);
@@ -276,24 +285,14 @@ fn main() -> ! {
     // locks and atomics; the DMA buffers they touch are reached through raw
     // pointers to the half the DMA has left.
     unsafe {
-        let mut prio = |i: Interrupt, level: u8| cp.NVIC.set_priority(i, nvic::byte(level));
-        prio(Interrupt::EXTI0, nvic::FAULT_INPUT);
-        prio(Interrupt::USART2, nvic::LINK);
-        prio(Interrupt::TIM6_DAC, nvic::LINK);
-        prio(Interrupt::ADC, nvic::LINK);
-        prio(Interrupt::DMA1_STREAM5, nvic::DSP);
-        prio(Interrupt::DMA2_STREAM0, nvic::DSP);
-        for i in [
-            Interrupt::DMA1_STREAM5,
-            Interrupt::DMA2_STREAM0,
-            Interrupt::USART2,
-            Interrupt::TIM6_DAC,
-            Interrupt::ADC,
-        ] {
+        for (i, level) in nvic::PRIORITIES {
+            cp.NVIC.set_priority(i, nvic::byte(level));
+            // Under QEMU the fault input is not wired (its GPIO is a stub).
+            if cfg!(feature = "qemu") && i == Interrupt::EXTI0 {
+                continue;
+            }
             pac::NVIC::unmask(i);
         }
-        #[cfg(not(feature = "qemu"))]
-        pac::NVIC::unmask(Interrupt::EXTI0);
     }
     // A byte may have arrived before RXNEIE was set (it then raises no edge):
     // let the handler look once.
@@ -303,6 +302,11 @@ fn main() -> ! {
     if report.ran != 0 && report.failed != 0 {
         defmt::error!("self-test failed: {=u16:#x}", report.failed);
         SELF_TEST_FAILED.store(faults::SELF_TEST, Ordering::Relaxed);
+        if prepared.sampling {
+            // The streams started but did not deliver: stop them, hold.
+            hardware::sampling::stop(&r, REST_WORD.load(Ordering::Relaxed));
+            HELD.store(true, Ordering::Relaxed);
+        }
     }
     let mut server =
         Server::new(Info::for_config(&cfg, "STM32F405", [0, 2, 0]).with_self_test(report));
@@ -323,9 +327,11 @@ fn main() -> ! {
         );
         #[cfg(feature = "qemu")]
         let adc = adc.max(dac);
-        // A board that never started its streams (a failed self-test) has
-        // nothing to watch: it is fed, and stays in its safe state.
-        if live.check(dac, adc) || !prepared.sampling {
+        // A board that never started its streams (a failed self-test), or
+        // whose stream stop was handled (fault latched, outputs held), has
+        // nothing to watch: it is fed, and stays in its safe state with the
+        // cause readable. An unexplained stall stops the feeding: a reset.
+        if live.check(dac, adc) || !prepared.sampling || HELD.load(Ordering::Relaxed) {
             hardware::watchdog::feed(&r);
         }
         // Requests in, answers and telemetry into the transmit ring; never waits.
@@ -440,8 +446,7 @@ fn tx_pump() {
 fn DMA1_STREAM5() {
     let r = regs();
     let flags = hardware::streams::take_dac_flags(&r);
-    // SAFETY: only the buffer's address and length, no access.
-    let buf = DmaBuffer::of(unsafe { &*core::ptr::addr_of!(DAC_BUF) });
+    let buf = DmaBuffer::of_ptr(core::ptr::addr_of!(DAC_BUF));
     match flags.event(&buf) {
         StreamEvent::Half(ev) => {
             HALVES.fetch_add(1, Ordering::Relaxed);
@@ -461,6 +466,7 @@ fn DMA1_STREAM5() {
         StreamEvent::Stopped => {
             // The stream disabled itself: hold the outputs at rest, latch.
             hardware::sampling::hold_dac(&r, REST_WORD.load(Ordering::Relaxed));
+            HELD.store(true, Ordering::Relaxed);
             with_device(|dev| dev.fault(faults::DAC_UNDERRUN));
         }
         StreamEvent::None => {}
@@ -471,11 +477,13 @@ fn DMA1_STREAM5() {
 fn DMA2_STREAM0() {
     let r = regs();
     let flags = hardware::streams::take_adc_flags(&r);
-    // SAFETY: only the buffer's address and length, no access.
-    let buf = DmaBuffer::of(unsafe { &*core::ptr::addr_of!(ADC_BUF) });
+    let buf = DmaBuffer::of_ptr(core::ptr::addr_of!(ADC_BUF));
     let ev = match flags.event(&buf) {
         StreamEvent::Half(ev) => ev,
         StreamEvent::Stopped => {
+            // The DDS ramps the drive down on the latched fault; the DAC's
+            // stream goes on, the ADC's does not: held.
+            HELD.store(true, Ordering::Relaxed);
             with_device(|dev| dev.fault(faults::ADC_OVERRUN));
             return;
         }
@@ -520,6 +528,7 @@ fn TIM6_DAC() {
     let r = regs();
     if hardware::sampling::take_dac_underrun(&r) {
         hardware::sampling::hold_dac(&r, REST_WORD.load(Ordering::Relaxed));
+        HELD.store(true, Ordering::Relaxed);
         PENDING_FAULTS.fetch_or(faults::DAC_UNDERRUN, Ordering::Relaxed);
     }
 }
@@ -528,6 +537,7 @@ fn TIM6_DAC() {
 #[interrupt]
 fn ADC() {
     if hardware::sampling::take_adc_overrun(&regs()) {
+        HELD.store(true, Ordering::Relaxed);
         PENDING_FAULTS.fetch_or(faults::ADC_OVERRUN, Ordering::Relaxed);
     }
 }

@@ -176,6 +176,7 @@ pub fn prepare(
             .moder()
             .modify(|_, w| w.moder2().alternate().moder3().alternate());
         r.gpioa.afrl().modify(|_, w| w.afrl2().af7().afrl3().af7());
+        sampling::link_rx_pull_up(r);
     }
     pull_up.elapsed_us = delay.us;
     out.fault_input_active = fault_input::read_and_arm(r, &c, &mut delay, pull_up);

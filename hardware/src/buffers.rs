@@ -47,6 +47,16 @@ impl DmaBuffer {
         }
     }
 
+    /// The buffer at `ptr` (a raw pointer: no reference to memory a DMA
+    /// stream may be writing is formed).
+    pub fn of_ptr<const N: usize>(ptr: *const [u32; N]) -> Self {
+        const { assert!(N <= 0xFFFF && N % 2 == 0) };
+        DmaBuffer {
+            addr: ptr as *const u32 as usize as u32,
+            words: N as u16,
+        }
+    }
+
     /// Words per half: what a half/full-transfer event hands over.
     pub fn half_words(&self) -> u32 {
         u32::from(self.words) / 2

@@ -19,13 +19,14 @@
 //! self-test reports it; the bring-up never hangs.
 //!
 //! **The frequencies are measured** against the HSI (factory-trimmed to ±1 %
-//! at 25 °C, datasheet DS8626 Table 39): TIM11's channel 1 can capture
-//! HSE/RTCPRE (TIM11_OR.RMP = 10, RM0090 §17.4.13). Before the PLL starts,
-//! with TIM11 counting at HSI, that measures the crystal; a crystal more than
-//! [`TOLERANCE_PCT`] % off the build's `HSE_HZ` (a 12 MHz crystal on an
-//! 8 MHz build would run the core at 252 MHz) keeps the PLL off. After the
-//! switch, with TIM11 counting at SYSCLK, the same capture measures SYSCLK in
-//! units of the measured crystal.
+//! at 25 °C, −8 %/+4.5 % over −40…105 °C, datasheet DS8626 Table 39):
+//! TIM11's channel 1 can capture HSE/RTCPRE (TIM11_OR.RMP = 10, RM0090
+//! §19.5), with the HSI as the system clock. That measures the crystal
+//! before the PLL starts; a crystal outside the HSI's tolerance of the
+//! build's `HSE_HZ` ([`within_tolerance`]: a 12 MHz crystal on an 8 MHz
+//! build would run the core at 252 MHz) keeps the PLL off. SYSCLK is then
+//! *derived*, not measured: the measured crystal times N/(M·P), with the
+//! PLL's factors read back from RCC_PLLCFGR and SWS showing the PLL.
 //!
 //! **Flash**: 5 wait states for 150 < HCLK ≤ 168 MHz at 2.7–3.6 V (RM0090
 //! Table 10), read back before the switch (a latency that did not take
@@ -52,16 +53,19 @@ pub const HSE_HZ: u32 = match option_env!("FIRMWARE_HSE_HZ") {
 pub const PLL: PllConfig = PllConfig::for_hse(HSE_HZ);
 /// Flash wait states at 168 MHz, 2.7–3.6 V (RM0090 Table 10).
 pub const FLASH_LATENCY: u8 = 5;
-/// HSE start-up time-out, µs (the datasheet's typical start-up is 2 ms).
-pub const HSE_TIMEOUT_US: u32 = 10_000;
+/// HSE start-up time-out, µs (the datasheet's typical start-up is 2 ms;
+/// ST's own default is 100 ms, well inside the watchdog's 0.7 s).
+pub const HSE_TIMEOUT_US: u32 = 100_000;
 /// PLL lock time-out, µs (lock takes ≈ 100–300 µs).
 pub const PLL_TIMEOUT_US: u32 = 2_000;
 /// Clock-switch time-out, µs (a few clock cycles).
 pub const SWITCH_TIMEOUT_US: u32 = 100;
-/// How far a measured frequency may be from the expected one, %: the HSI's
-/// ±1 % plus margin; a wrong crystal is off by ≥ 25 % (8 against 10, 12,
-/// 16, 25 MHz).
-pub const TOLERANCE_PCT: u32 = 3;
+/// How much slower than its nominal 16 MHz the HSI may run, in 0.1 %:
+/// −8 % over −40…105 °C (DS8626 Table 39, ±1 % only at 25 °C), plus the
+/// capture's resolution (±2 ticks in 4 096 = 0.05 %) and margin: 8.5 %.
+pub const HSI_SLOW_PERMILLE: u32 = 85;
+/// How much faster it may run: +4.5 % over temperature, plus the same: 5 %.
+pub const HSI_FAST_PERMILLE: u32 = 50;
 /// DBGMCU_IDCODE.REV_ID of revision A silicon.
 pub const REV_A: u16 = 0x1000;
 
@@ -178,11 +182,14 @@ impl Clocks {
 pub struct ClockOutcome {
     /// The clocks in force afterwards ([`Clocks::PLL`] or [`Clocks::HSI`]).
     pub clocks: Clocks,
-    /// HSE, PLL and the switch all became ready within their time-outs.
+    /// Every oscillator started was ready within its time-out: the crystal,
+    /// and where they were started the PLL and the switch (a crystal of the
+    /// wrong frequency is ready: [`ClockOutcome::hse_hz`] tells).
     pub ready: bool,
     /// The crystal measured against the HSI, Hz (`None`: not measured).
     pub hse_hz: Option<u32>,
-    /// SYSCLK measured against the crystal, Hz (`None`: not measured).
+    /// SYSCLK derived from the measured crystal and the PLL factors read
+    /// back, Hz (`None`: the PLL is not in use, or did not read back).
     pub sysclk_hz: Option<u32>,
     /// FLASH_ACR read back the latency written.
     pub latency_ok: bool,
@@ -190,10 +197,15 @@ pub struct ClockOutcome {
     pub prefetch: bool,
 }
 
-/// Whether `measured` lies within [`TOLERANCE_PCT`] % of `expected`.
+/// Whether a frequency measured against the HSI, `measured`, can be
+/// `expected`: an HSI slow by up to [`HSI_SLOW_PERMILLE`] reads it high by
+/// up to 1/(1 − 0.085) = +9.3 %, a fast one low by up to 1/1.05 = −4.8 %.
+/// Crystals 25 % apart (8/10, 12/16, 16/20 MHz) are told apart; 24 and
+/// 25 MHz (4 %) are not.
 pub fn within_tolerance(measured: u32, expected: u32) -> bool {
     let (m, e) = (u64::from(measured), u64::from(expected));
-    m * 100 >= e * u64::from(100 - TOLERANCE_PCT) && m * 100 <= e * u64::from(100 + TOLERANCE_PCT)
+    m * (1000 + u64::from(HSI_FAST_PERMILLE)) >= e * 1000
+        && m * (1000 - u64::from(HSI_SLOW_PERMILLE)) <= e * 1000
 }
 
 /// RTCPRE for the measurement: HSE/RTCPRE ≈ 1 MHz (2 ≤ RTCPRE ≤ 31).
@@ -214,14 +226,14 @@ pub const CAPTURES: u32 = 32;
 pub const EDGES_PER_CAPTURE: u32 = 8;
 
 /// Timer ticks over [`CAPTURES`]·[`EDGES_PER_CAPTURE`] edges of HSE/RTCPRE
-/// on TIM11 (input capture of the remapped HSE_RTC, RM0090 §17.4.13); `None`
+/// on TIM11 (input capture of the remapped HSE_RTC, RM0090 §19.5); `None`
 /// if a capture does not come within 1 ms or one was missed (CC1OF).
 pub fn capture_hse_rtc(r: &Registers, delay: &mut impl Delay, sysclk_hz: u32) -> Option<u32> {
     let t = r.tim11;
     t.cr1().write(|w| w.cen().disabled());
     t.psc().write(|w| w.psc().set(0));
     t.arr().write(|w| w.arr().set(0xFFFF));
-    // SAFETY: RMP is a 2-bit field; 0b10 = HSE_RTC (RM0090 §17.4.13).
+    // SAFETY: RMP is a 2-bit field; 0b10 = HSE_RTC (RM0090 §19.5).
     t.or().write(|w| unsafe { w.rmp().bits(0b10) });
     t.ccmr1_input()
         .write(|w| w.cc1s().ti1().ic1psc().eight_events().ic1f().no_filter());
@@ -264,13 +276,6 @@ pub fn capture_hse_rtc(r: &Registers, delay: &mut impl Delay, sysclk_hz: u32) ->
 pub fn source_hz(ticks: u32, timer_hz: u32) -> u32 {
     let edges = u64::from(CAPTURES * EDGES_PER_CAPTURE);
     ((edges * u64::from(timer_hz) + u64::from(ticks) / 2) / u64::from(ticks)) as u32
-}
-
-/// The timer clock, Hz, from the ticks of [`capture_hse_rtc`] and the
-/// captured source's frequency.
-pub fn timer_hz(ticks: u32, source_hz: u32) -> u32 {
-    let edges = u64::from(CAPTURES * EDGES_PER_CAPTURE);
-    ((u64::from(ticks) * u64::from(source_hz) + edges / 2) / edges) as u32
 }
 
 /// Starts the crystal, measures it, starts the PLL and switches to it
@@ -344,27 +349,39 @@ pub fn start(r: &Registers, delay: &mut impl Delay) -> ClockOutcome {
     if !out.latency_ok {
         return back_to_hsi(out);
     }
+    // The bus prescalers first: they take effect 1–16 AHB cycles later
+    // (RM0090 §6.3.3), and APB1 must never see more than 42 MHz.
     rcc.cfgr()
-        .modify(|_, w| w.hpre().div1().ppre1().div4().ppre2().div2().sw().pll());
-    if !wait_until(delay, HSI_HZ, 1, SWITCH_TIMEOUT_US, || {
+        .modify(|_, w| w.hpre().div1().ppre1().div4().ppre2().div2());
+    delay.wait_us(1, HSI_HZ);
+    rcc.cfgr().modify(|_, w| w.sw().pll());
+    if !wait_until(delay, SYSCLK_HZ, 1, SWITCH_TIMEOUT_US, || {
         rcc.cfgr().read().sws().is_pll()
     }) {
         return back_to_hsi(out);
     }
     out.ready = true;
     out.clocks = Clocks::PLL;
-    // SYSCLK against the measured crystal: TIM11 now counts at SYSCLK.
-    let hse = out.hse_hz.unwrap_or(HSE_HZ);
-    // TIM11's clock is 2·PCLK2 = SYSCLK with APB2 at /2 (RM0090 §6.2).
-    const _: () = assert!(Clocks::PLL.tim_apb2_hz == Clocks::PLL.sysclk_hz);
-    out.sysclk_hz =
-        capture_hse_rtc(r, delay, SYSCLK_HZ).map(|t| timer_hz(t, hse / u32::from(RTCPRE)));
+    // SYSCLK from the measured crystal and the factors as read back.
+    let p = rcc.pllcfgr().read();
+    let read_back = PllConfig {
+        m: p.pllm().bits(),
+        n: p.plln().bits(),
+        p: 2 * (p.pllp().bits() + 1),
+        q: p.pllq().bits(),
+    };
+    let hse = out.hse_hz.unwrap_or(0);
+    out.sysclk_hz = (read_back == PLL && hse != 0).then(|| read_back.sysclk_hz(hse));
     out
 }
 
-/// Keeps the debugger usable: the core's clocks run in WFI (DBG_SLEEP) and
-/// the watchdog stops while the core is halted (DBG_IWDG_STOP); neither has
-/// an effect without a debugger (RM0090 §38.16).
+/// Keeps the debugger usable: HCLK runs on in sleep (DBG_SLEEP: a probe can
+/// attach while the core waits in `WFI`; it costs the sleep's power saving,
+/// which this board does not need) and the watchdog stops while the core is
+/// halted (DBG_IWDG_STOP; no effect without a debugger) (RM0090 §38.16.3).
+/// With DBG_SLEEP set, errata ES0182 §2.1.3 asks for no instruction right
+/// after `WFI` that the debugger's resumption could mis-execute: the
+/// firmware's `WFI` is followed by three `NOP`s.
 pub fn debug_freeze(r: &Registers) {
     r.dbgmcu.cr().modify(|_, w| w.dbg_sleep().set_bit());
     r.dbgmcu

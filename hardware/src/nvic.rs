@@ -13,6 +13,8 @@
 //!   which never masks the link or the fault input.
 //! * the main loop: thread mode, below all.
 
+use crate::pac::Interrupt;
+
 /// Priority bits the chip implements.
 pub const PRIO_BITS: u8 = 4;
 /// The fault input's level.
@@ -21,6 +23,26 @@ pub const FAULT_INPUT: u8 = 0;
 pub const LINK: u8 = 1;
 /// The DSP handlers' level: the device's ceiling.
 pub const DSP: u8 = 2;
+
+/// Every interrupt the firmware unmasks, with its level (the firmware sets
+/// the priorities and unmasks from this table).
+pub const PRIORITIES: [(Interrupt, u8); 6] = [
+    (Interrupt::EXTI0, FAULT_INPUT),
+    (Interrupt::USART2, LINK),
+    (Interrupt::TIM6_DAC, LINK),
+    (Interrupt::ADC, LINK),
+    (Interrupt::DMA1_STREAM5, DSP),
+    (Interrupt::DMA2_STREAM0, DSP),
+];
+
+/// The interrupts that share the device (the DSP handlers): all at the
+/// device's ceiling, [`DSP`]; nothing more urgent touches it.
+pub const DEVICE_USERS: [Interrupt; 2] = [Interrupt::DMA1_STREAM5, Interrupt::DMA2_STREAM0];
+
+/// The level of an interrupt in [`PRIORITIES`] (`None`: not used).
+pub fn level_of(i: Interrupt) -> Option<u8> {
+    PRIORITIES.iter().find(|(j, _)| *j == i).map(|(_, l)| *l)
+}
 
 /// The NVIC priority byte (and BASEPRI value) of a level.
 pub const fn byte(level: u8) -> u8 {

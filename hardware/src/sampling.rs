@@ -26,7 +26,10 @@
 //! k outputs word k − 1; DHR12RD is preloaded with the buffer's last word
 //! (the one before word 0 in the circular order), so that the first trigger
 //! outputs it and not 0. DMAUDRIE1: an underrun (a request not served
-//! before the next trigger) raises the TIM6_DAC interrupt.
+//! before the next trigger) raises the TIM6_DAC interrupt. The output
+//! buffers are on: the outputs then swing 0.2 V … V_DDA − 0.2 V (DS8626
+//! Table 65), so codes below ≈ 250 and above ≈ 3 845 are clipped (see
+//! `docs/guide/bringup.md` for the calibration this asks for).
 //!
 //! **ADC pair.** Regular simultaneous mode (MULTI = 00110), DMA mode 2 (one
 //! CDR word per pair of conversions), DDS = 1 (requests go on in circular
@@ -108,6 +111,12 @@ pub fn enable_clocks_and_pins(r: &Registers) {
             .analog()
     });
     r.gpioa.afrl().modify(|_, w| w.afrl2().af7().afrl3().af7());
+    link_rx_pull_up(r);
+}
+
+/// PA3 (USART2 RX) pulled up: an unconnected line reads idle, not noise.
+pub fn link_rx_pull_up(r: &Registers) {
+    r.gpioa.pupdr().modify(|_, w| w.pupdr3().pull_up());
 }
 
 /// TIM2 loaded for [`FS_HZ`] with TRGO on update, counter stopped (module
@@ -124,9 +133,22 @@ pub fn load_sample_clock(r: &Registers, clocks: &Clocks) -> SampleClockLoaded {
     SampleClockLoaded(())
 }
 
-/// The DAC armed on TRGO with channel 1's DMA request, DHR12RD preloaded
-/// with `preload` (the DAC buffer's last word; module docs).
+/// The DAC armed on TRGO with channel 1's DMA request, its outputs at
+/// `preload` (the DAC buffer's last word; module docs). The channels are
+/// enabled first without a trigger: then a write to DHR reaches DOR after
+/// one APB1 cycle (RM0090 §14.3.4), so the outputs hold `preload` from
+/// here until the first trigger, which outputs it again.
 pub fn arm_dac(r: &Registers, preload: u32, _clock: &SampleClockLoaded) {
+    r.dac.cr().write(|w| {
+        w.en1()
+            .enabled()
+            .boff1()
+            .enabled()
+            .en2()
+            .enabled()
+            .boff2()
+            .enabled()
+    });
     r.dac.dhr12rd().write(|w| {
         w.dacc1dhr()
             .set((preload & 0xFFF) as u16)
@@ -211,7 +233,7 @@ pub fn start_sample_clock(r: &Registers, _adc: AdcReady) {
 }
 
 /// Whether the DAC's DMA underran since the last call (DAC_SR.DMAUDR1,
-/// cleared by writing 1, §14.5.15): channel 1 then stops requesting.
+/// cleared by writing 1, §14.5.14): channel 1 then stops requesting.
 pub fn take_dac_underrun(r: &Registers) -> bool {
     let u = r.dac.sr().read().dmaudr1().bit_is_set();
     if u {
@@ -235,10 +257,20 @@ pub fn take_adc_overrun(r: &Registers) -> bool {
     any
 }
 
-/// The DAC's safe state after its stream stopped: channel 1's DMA off and
-/// `rest` (the device's rest word: zero amplitude) in DHR12RD, which the
-/// running trigger moves to the outputs within one sample.
+/// The DAC's safe state after its stream stopped or underran: DMA1
+/// Stream5 disabled (waited for, at most [`STREAM_STOP_READS`] reads: a
+/// request still pending from the underrun must not be served after the
+/// rest word is written), channel 1's DMA request off, and `rest` (the
+/// device's rest word: zero amplitude) in DHR12RD, which the running
+/// trigger moves to the outputs within one sample.
 pub fn hold_dac(r: &Registers, rest: u32) {
+    let st = r.dma1.st(5);
+    st.cr().modify(|_, w| w.en().disabled());
+    for _ in 0..STREAM_STOP_READS {
+        if st.cr().read().en().is_disabled() {
+            break;
+        }
+    }
     r.dac.cr().modify(|_, w| w.dmaen1().disabled());
     r.dac.dhr12rd().write(|w| {
         w.dacc1dhr()
@@ -246,4 +278,15 @@ pub fn hold_dac(r: &Registers, rest: u32) {
             .dacc2dhr()
             .set(((rest >> 16) & 0xFFF) as u16)
     });
+}
+
+/// The most reads of a stream's EN bit after disabling it: a stream ends
+/// its current single transfer within a few bus cycles (§10.3.17).
+pub const STREAM_STOP_READS: u32 = 1_000;
+
+/// Stops the sampling for good (a board that failed its self-test after the
+/// sample clock started): TIM2 stopped, the DAC held at `rest`.
+pub fn stop(r: &Registers, rest: u32) {
+    r.tim2.cr1().modify(|_, w| w.cen().disabled());
+    hold_dac(r, rest);
 }

@@ -1,15 +1,18 @@
 //! The two DMA streams (RM0090 §10) and their handlers' decisions.
 //!
 //! * **DAC**: DMA1 Stream5, channel 7 (DAC1 request, Table 42), memory →
-//!   DHR12RD (both channels in one 32-bit word, §14.5.15), circular over
+//!   DHR12RD (both channels in one 32-bit word, §14.5.9), circular over
 //!   [`crate::buffers::DAC_WORDS`] words: one word per sample tick.
 //! * **ADC**: DMA2 Stream0, channel 0 (ADC1, Table 43), ADC_CDR (the pair's
-//!   common data register, §13.13.16) → memory, circular over
+//!   common data register, §13.13.18) → memory, circular over
 //!   [`crate::buffers::ADC_WORDS`] words: two words per tick.
 //!
 //! Both: 32-bit on both sides, memory increment, half- and full-transfer
-//! interrupts, and the transfer-error and direct-mode-error interrupts
-//! (either stops a stream for good, §10.3.17: the handler must see it).
+//! interrupts, and the transfer-error and direct-mode-error interrupts. A
+//! transfer error (a bus error) disables the stream (§10.3.17); a
+//! direct-mode error (a request before the previous transfer ended) leaves
+//! it running but means a lost or repeated word. The handler treats both as
+//! a stopped stream: a fault, and the outputs held at rest.
 //! NDTR is the buffer's length ([`DmaBuffer::words`]); the handlers' half is
 //! half of it ([`DmaBuffer::half_words`]).
 //!
@@ -17,10 +20,10 @@
 //! [`take_adc_flags`]), clears exactly the flags it read (a flag raised
 //! between the read and the clear stays for the next entry), and decides
 //! with [`StreamFlags::event`]: a half to refill or read
-//! ([`model_core::board::dma::half_event`]), or an error that stopped the
-//! stream. The FIFO-error flag is cleared and ignored: in direct mode (the
-//! reset state of DMA_SxFCR, used here) it reports nothing the stream needs
-//! (§10.3.18).
+//! ([`model_core::board::dma::half_event`]), or an error. The FIFO-error
+//! flag is cleared and ignored: in direct mode (the reset state of
+//! DMA_SxFCR, used here) memory → peripheral it reports a bus underrun with
+//! no data lost (§10.3.18).
 
 use model_core::board::dma::{half_event, HalfEvent};
 
@@ -29,11 +32,11 @@ use crate::{pac, Registers};
 
 /// DAC base address (RM0090 §2.3 memory map).
 pub const DAC_BASE: u32 = 0x4000_7400;
-/// DAC_DHR12RD: dual 12-bit right-aligned data holding register (§14.5.15).
+/// DAC_DHR12RD: dual 12-bit right-aligned data holding register (§14.5.9).
 pub const DAC_DHR12RD: u32 = DAC_BASE + 0x20;
 /// ADC common registers base (ADC1 base 0x4001_2000 + 0x300).
 pub const ADC_COMMON_BASE: u32 = 0x4001_2300;
-/// ADC_CDR: the dual mode's common data register (§13.13.16).
+/// ADC_CDR: the dual mode's common data register (§13.13.18).
 pub const ADC_CDR: u32 = ADC_COMMON_BASE + 0x08;
 /// DMA1 Stream5's channel for the DAC1 request (Table 42).
 pub const DAC_CHANNEL: u8 = 7;

@@ -131,6 +131,9 @@ const RCC_CR_RESET: u32 = 0x0000_0083; // HSION, HSIRDY, HSITRIM = 16
 const GPIOA_MODER_RESET: u32 = 0xA800_0000; // PA13–15: JTAG/SWD
 const GPIOB_MODER_RESET: u32 = 0x0000_0280; // PB3, PB4: JTAG
 const GPIOB_PUPDR_RESET: u32 = 0x0000_0100;
+const GPIOA_PUPDR_RESET: u32 = 0x6400_0000; // PA13 pull-up, PA14 pull-down, PA15 pull-up
+const RCC_AHB1ENR_RESET: u32 = 0x0010_0000; // CCMDATARAMEN
+const RCC_PLLCFGR_RESET: u32 = 0x2400_3010;
 
 impl File {
     fn new(rev_id: u16) -> Self {
@@ -154,6 +157,9 @@ impl File {
             iwdg: Block::new::<pac::iwdg::RegisterBlock>(),
         };
         f.rcc.set(rm::RCC_CR, RCC_CR_RESET);
+        f.rcc.set(rm::RCC_AHB1ENR, RCC_AHB1ENR_RESET);
+        f.rcc.set(rm::RCC_PLLCFGR, RCC_PLLCFGR_RESET);
+        f.gpioa.set(rm::GPIO_PUPDR, GPIOA_PUPDR_RESET);
         f.gpioa.set(rm::GPIO_MODER, GPIOA_MODER_RESET);
         f.gpiob.set(rm::GPIO_MODER, GPIOB_MODER_RESET);
         f.gpiob.set(rm::GPIO_PUPDR, GPIOB_PUPDR_RESET);
@@ -195,6 +201,8 @@ struct Board {
     /// The fault input's RC: time to V_IH after the pull-up is on, µs
     /// (`None`: held low by an active alarm).
     pin_rise_us: Option<f64>,
+    /// The PLL locks.
+    pll_locks: bool,
 }
 
 impl Board {
@@ -203,6 +211,7 @@ impl Board {
         hsi_hz: 16e6,
         // 50 kΩ · 1 nF · ln(1/0.3): the module's worst case.
         pin_rise_us: Some(60.2), // 50 kΩ · 1 nF · ln(1/0.3) = 60.2 µs
+        pll_locks: true,
     };
 }
 
@@ -274,7 +283,7 @@ impl Sim {
         let cr = f.rcc.get(rm::RCC_CR);
         if cr & (1 << 24) != 0 && cr & (1 << 17) != 0 {
             let at = *self.pll_on_at.get_or_insert(t0);
-            if t - at >= PLL_LOCK_US {
+            if self.board.pll_locks && t - at >= PLL_LOCK_US {
                 f.rcc.set(rm::RCC_CR, cr | (1 << 25));
             }
         } else {
@@ -301,8 +310,12 @@ impl Sim {
     /// TIM11 input captures of HSE/RTCPRE, 8 edges each, in (t0, t].
     fn captures(&mut self, t0: f64, t: f64) {
         let f = self.file;
-        let on = f.tim11.get(rm::TIM_CR1) & 1 != 0
-            && f.tim11.get(rm::TIM_CCER) & 1 != 0
+        // TIM11 clocked, counting, CC1 an input on TI1 (CC1S = 01), enabled,
+        // rising edges, TI1 remapped to HSE_RTC.
+        let on = f.rcc.get(rm::RCC_APB2ENR) & (1 << 18) != 0
+            && f.tim11.get(rm::TIM_CR1) & 1 != 0
+            && f.tim11.get(rm::TIM_CCMR1) & 3 == 0b01
+            && f.tim11.get(rm::TIM_CCER) & 0b1011 == 0b0001
             && f.tim11.get(rm::TIM11_OR) & 3 == 0b10;
         let hse_ready = f.rcc.get(rm::RCC_CR) & (1 << 17) != 0;
         let (Some(hse), true, true) = (self.board.hse_hz, on, hse_ready) else {
@@ -310,6 +323,11 @@ impl Sim {
             return;
         };
         let rtcpre = (f.rcc.get(rm::RCC_CFGR) >> 16) & 0x1F;
+        if rtcpre < 2 {
+            // RTCPRE 0 and 1: no clock (RM0090 §6.3.3).
+            self.capture = None;
+            return;
+        }
         let psc = (f.tim11.get(rm::TIM_CCMR1) >> 2) & 3;
         let edges = [1.0, 2.0, 4.0, 8.0][psc as usize];
         let period_us = edges * f64::from(rtcpre) / hse * 1e6;
@@ -378,6 +396,9 @@ struct Run {
     sim: Rc<RefCell<Sim>>,
     prepared: Prepared,
     snaps: Vec<Snap>,
+    /// Each UG written to TIM2 (a TRGO with MMS = 010), seen at the step
+    /// after it: (step, DAC triggers on, ADC trigger on).
+    updates: Vec<(Step, bool, bool)>,
 }
 
 fn bring_up_with(board: Board, rev_id: u16) -> Run {
@@ -385,7 +406,16 @@ fn bring_up_with(board: Board, rev_id: u16) -> Run {
     let sim = Sim::new(file, board);
     let mut delay = SimDelay(sim.clone());
     let snaps = RefCell::new(Vec::new());
+    let updates = RefCell::new(Vec::new());
     let mut observe = |step: Step, _r: &Registers| {
+        // UG is self-clearing on the chip: record it and clear it here.
+        if file.tim2.get(rm::TIM_EGR) & 1 != 0 {
+            updates.borrow_mut().push((
+                step,
+                file.dac.get(rm::DAC_CR) & ((1 << 2) | (1 << 18)) != 0,
+                file.adc1.get(rm::ADC_CR2) & (0b11 << 28) != 0,
+            ));
+        }
         snaps.borrow_mut().push(Snap {
             step,
             t_us: sim.borrow().t_us,
@@ -397,7 +427,8 @@ fn bring_up_with(board: Board, rev_id: u16) -> Run {
             dhr12rd: file.dac.get(rm::DAC_DHR12RD),
             dma1_s5_cr: file.dma1.get(rm::sxcr(5)),
             gpiob_pupdr: file.gpiob.get(rm::GPIO_PUPDR),
-        })
+        });
+        file.tim2.set(rm::TIM_EGR, 0);
     };
     let regs = file.regs();
     let mut prepared = bring_up::prepare(&regs, &buffers(), &mut delay, &mut observe);
@@ -408,6 +439,7 @@ fn bring_up_with(board: Board, rev_id: u16) -> Run {
         sim,
         prepared,
         snaps,
+        updates: updates.into_inner(),
     }
 }
 
@@ -609,7 +641,10 @@ fn every_setup_register_has_its_rm0090_value() {
     );
     // AHB1ENR: GPIOA, GPIOB, DMA1, DMA2; APB1ENR: TIM2, USART2, DAC;
     // APB2ENR: ADC1, ADC2, SYSCFG, TIM11.
-    assert_eq!(f.rcc.get(rm::RCC_AHB1ENR), 1 | 2 | (1 << 21) | (1 << 22));
+    assert_eq!(
+        f.rcc.get(rm::RCC_AHB1ENR),
+        RCC_AHB1ENR_RESET | 1 | 2 | (1 << 21) | (1 << 22)
+    );
     assert_eq!(f.rcc.get(rm::RCC_APB1ENR), 1 | (1 << 17) | (1 << 29));
     assert_eq!(
         f.rcc.get(rm::RCC_APB2ENR),
@@ -629,6 +664,8 @@ fn every_setup_register_has_its_rm0090_value() {
         GPIOA_MODER_RESET | 0b11 | (0b11 << 2) | (0b10 << 4) | (0b10 << 6) | (0xFF << 8)
     );
     assert_eq!(f.gpioa.get(rm::GPIO_AFRL), (7 << 8) | (7 << 12));
+    // PA3 (USART2 RX) pulled up; the SWD pins' pulls kept.
+    assert_eq!(f.gpioa.get(rm::GPIO_PUPDR), GPIOA_PUPDR_RESET | (0b01 << 6));
     // GPIOB: PB0 input with pull-up, the JTAG pins kept.
     assert_eq!(f.gpiob.get(rm::GPIO_MODER), GPIOB_MODER_RESET);
     assert_eq!(f.gpiob.get(rm::GPIO_PUPDR), GPIOB_PUPDR_RESET | 0b01);
@@ -675,9 +712,14 @@ fn every_setup_register_has_its_rm0090_value() {
     assert_eq!(f.iwdg.get(rm::IWDG_KR), 0xCCCC);
     assert_eq!(f.iwdg.get(rm::IWDG_PR), 1);
     assert_eq!(f.iwdg.get(rm::IWDG_RLR), 0xFFF);
-    // TIM11 left stopped with its capture off.
+    // TIM11: TI1 ← HSE_RTC (OR.RMP = 10), CC1S = 01 (input TI1), IC1PSC =
+    // 11 (/8), no filter; left stopped with its capture off.
+    assert_eq!(f.tim11.get(rm::TIM11_OR), 0b10);
+    assert_eq!(f.tim11.get(rm::TIM_CCMR1), 0b1101);
     assert_eq!(f.tim11.get(rm::TIM_CR1) & 1, 0);
-    assert_eq!(f.tim11.get(rm::TIM_CCER) & 1, 0);
+    assert_eq!(f.tim11.get(rm::TIM_CCER), 0);
+    assert_eq!(f.tim11.get(rm::TIM_PSC), 0);
+    assert_eq!(f.tim11.get(rm::TIM_ARR), 0xFFFF);
 }
 
 /// Defect 4: the timer's UG (which raises TRGO) comes before any consumer
@@ -688,6 +730,11 @@ fn the_sample_clock_starts_only_after_every_consumer_is_ready() {
     let run = bring_up_with(Board::GOOD, 0x1001);
     let loaded = snap(&run, Step::SampleClockLoaded);
     assert_eq!(loaded.tim2_egr & 1, 1, "UG issued");
+    assert_eq!(
+        run.updates,
+        vec![(Step::SampleClockLoaded, false, false)],
+        "one UG, with neither consumer listening"
+    );
     assert_eq!(loaded.tim2_cr1 & 1, 0, "counter stopped at UG");
     assert_eq!(
         loaded.dac_cr & ((1 << 2) | (1 << 18)),
@@ -796,7 +843,9 @@ fn stream_errors_underruns_and_overruns_are_seen() {
         "other flags untouched"
     );
     // The safe state after a stopped DAC stream: DMA request off, rest word held.
+    assert_eq!(d1.get(rm::sxcr(5)) & 1, 1);
     sampling::hold_dac(&regs, 0x0800_0800);
+    assert_eq!(d1.get(rm::sxcr(5)) & 1, 0, "DAC stream disabled first");
     assert_eq!(run.file.dac.get(rm::DAC_CR) & (1 << 12), 0);
     assert_eq!(run.file.dac.get(rm::DAC_DHR12RD), 0x0800_0800);
     // The watchdog is fed only while both streams move.
@@ -919,7 +968,8 @@ fn a_dead_crystal_times_out_on_the_hsi() {
 /// resolution-and-HSI bound, and a pass.
 #[test]
 fn the_self_test_measures_the_clocks_against_the_hsi() {
-    for hsi in [16e6, 16.16e6, 15.84e6] {
+    // The HSI over −40…105 °C: −8 % … +4.5 % (DS8626 Table 39).
+    for hsi in [16e6, 16.16e6, 15.84e6, 16e6 * 0.92, 16e6 * 1.045] {
         let run = bring_up_with(
             Board {
                 hsi_hz: hsi,
@@ -943,10 +993,10 @@ fn the_self_test_measures_the_clocks_against_the_hsi() {
             "HSE {} vs {expect}",
             t.hse_hz
         );
-        // SYSCLK = 168 MHz true; measured in units of the measured HSE.
+        // SYSCLK = 168 MHz true; derived from the measured HSE (×21).
         let s = 168e6 * 16e6 / hsi;
         assert!(
-            (f64::from(t.sysclk_hz) / s - 1.0).abs() <= res + 2.0 / 43_008.0,
+            (f64::from(t.sysclk_hz) / s - 1.0).abs() <= res,
             "SYSCLK {} vs {s}",
             t.sysclk_hz
         );
@@ -977,6 +1027,17 @@ fn priorities_use_the_implemented_bits_and_the_lock_spares_the_link() {
     for level in 0..16u8 {
         assert_eq!(nvic::byte(level) & 0x0F, 0);
         assert_eq!(nvic::byte(level) >> 4, level);
+    }
+    // The firmware's table: the fault input above the link above the DSP;
+    // the device's users all at its ceiling.
+    use hardware::pac::Interrupt;
+    let l = |i| nvic::level_of(i).unwrap();
+    assert!(l(Interrupt::EXTI0) < l(Interrupt::USART2));
+    assert!(l(Interrupt::USART2) < l(Interrupt::DMA1_STREAM5));
+    assert_eq!(l(Interrupt::TIM6_DAC), nvic::LINK);
+    assert_eq!(l(Interrupt::ADC), nvic::LINK);
+    for i in nvic::DEVICE_USERS {
+        assert_eq!(l(i), nvic::DSP);
     }
     // BASEPRI = b masks every priority byte ≥ b (ARMv7-M B1.5.4).
     let masks = |basepri: u8, prio: u8| prio >= basepri;
@@ -1019,4 +1080,45 @@ fn the_fault_input_waits_for_its_pull_up_when_read_at_once() {
     let active = fault_input::read_and_arm(&regs, &clocks::Clocks::PLL, &mut delay, armed);
     assert!(!active, "an idle alarm line read as active");
     assert!(sim.borrow().t_us >= f64::from(fault_input::PULLUP_SETTLE_US));
+}
+
+/// Defect 7: crystals 25 % apart are told apart whatever the HSI's error
+/// over temperature; a PLL that never locks leaves the board on the HSI.
+#[test]
+fn near_crystals_are_refused_and_a_pll_that_never_locks_times_out() {
+    for (hse, hsi) in [(10e6, 16e6 * 1.045), (10e6, 16e6 * 0.92), (6e6, 16e6 * 0.92)] {
+        let run = bring_up_with(
+            Board {
+                hse_hz: Some(hse),
+                hsi_hz: hsi,
+                ..Board::GOOD
+            },
+            0x1001,
+        );
+        let t = self_test::report(&self_test::Findings {
+            clock: run.prepared.clock,
+            dma_setup: run.prepared.dma_setup,
+            first_halves: None,
+        });
+        assert_eq!(t.failed, bits::HSE_FREQUENCY, "{hse} Hz crystal, HSI {hsi} Hz");
+        assert_eq!(run.file.rcc.get(rm::RCC_CFGR) & 3, 0, "still on the HSI");
+    }
+    let run = bring_up_with(
+        Board {
+            pll_locks: false,
+            ..Board::GOOD
+        },
+        0x1001,
+    );
+    let f = run.file;
+    assert_eq!(f.rcc.get(rm::RCC_CFGR) & 0xF, 0, "SW = SWS = HSI");
+    assert_eq!(f.rcc.get(rm::RCC_CR) & (1 << 24 | 1 << 16), 0, "PLL and HSE off");
+    assert!(!run.prepared.clock.ready);
+    let t = self_test::report(&self_test::Findings {
+        clock: run.prepared.clock,
+        dma_setup: run.prepared.dma_setup,
+        first_halves: None,
+    });
+    assert_eq!(t.failed, bits::CLOCK_READY);
+    assert!(t.hse_hz > 0, "the crystal was measured before the PLL");
 }

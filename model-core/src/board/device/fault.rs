@@ -120,6 +120,12 @@ impl<const N: usize> Device<'_, N> {
         let _ = self.rest_levels();
     }
 
+    /// The latched fault bits ([`faults`]; `Status.faults` without forming
+    /// a status).
+    pub fn faults(&self) -> u32 {
+        self.latch.bits()
+    }
+
     /// Clears latched faults (the drive stays stopped, at rest).
     pub fn reset_faults(&mut self) {
         self.latch.bits = 0;
