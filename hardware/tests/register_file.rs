@@ -1086,7 +1086,11 @@ fn the_fault_input_waits_for_its_pull_up_when_read_at_once() {
 /// over temperature; a PLL that never locks leaves the board on the HSI.
 #[test]
 fn near_crystals_are_refused_and_a_pll_that_never_locks_times_out() {
-    for (hse, hsi) in [(10e6, 16e6 * 1.045), (10e6, 16e6 * 0.92), (6e6, 16e6 * 0.92)] {
+    for (hse, hsi) in [
+        (10e6, 16e6 * 1.045),
+        (10e6, 16e6 * 0.92),
+        (6e6, 16e6 * 0.92),
+    ] {
         let run = bring_up_with(
             Board {
                 hse_hz: Some(hse),
@@ -1100,7 +1104,11 @@ fn near_crystals_are_refused_and_a_pll_that_never_locks_times_out() {
             dma_setup: run.prepared.dma_setup,
             first_halves: None,
         });
-        assert_eq!(t.failed, bits::HSE_FREQUENCY, "{hse} Hz crystal, HSI {hsi} Hz");
+        assert_eq!(
+            t.failed,
+            bits::HSE_FREQUENCY,
+            "{hse} Hz crystal, HSI {hsi} Hz"
+        );
         assert_eq!(run.file.rcc.get(rm::RCC_CFGR) & 3, 0, "still on the HSI");
     }
     let run = bring_up_with(
@@ -1112,7 +1120,11 @@ fn near_crystals_are_refused_and_a_pll_that_never_locks_times_out() {
     );
     let f = run.file;
     assert_eq!(f.rcc.get(rm::RCC_CFGR) & 0xF, 0, "SW = SWS = HSI");
-    assert_eq!(f.rcc.get(rm::RCC_CR) & (1 << 24 | 1 << 16), 0, "PLL and HSE off");
+    assert_eq!(
+        f.rcc.get(rm::RCC_CR) & (1 << 24 | 1 << 16),
+        0,
+        "PLL and HSE off"
+    );
     assert!(!run.prepared.clock.ready);
     let t = self_test::report(&self_test::Findings {
         clock: run.prepared.clock,
