@@ -46,12 +46,12 @@ use hardware::buffers::{DmaBuffer, ADC_WORDS, DAC_WORDS, HALF};
 use hardware::streams::StreamEvent;
 use hardware::{nvic, Registers};
 use lock::Shared;
-use model_core::board::link::{self, Core, LinkIo, RxQueue, TxRing, RX_CAPACITY, TX_CAPACITY};
-use model_core::dds::SineTable;
-use model_core::device::{faults, Contact, Device, DeviceConfig, DriveSetting};
+use board::link::{self, Core, LinkIo, RxQueue, TxRing, RX_CAPACITY, TX_CAPACITY};
+use board::dds::SineTable;
+use board::device::{faults, Contact, Device, DeviceConfig, DriveSetting};
 use model_core::float::FastF32;
-use model_core::protocol::{Info, SelfTest, PROTOCOL_VERSION};
-use model_core::server::{DeviceAccess, Server};
+use board::protocol::{Info, SelfTest, PROTOCOL_VERSION};
+use board::server::{DeviceAccess, Server};
 use stm32f4::stm32f405::{self as pac, interrupt, Interrupt};
 
 /// DDS/ADC sample rate (`hardware::sampling::FS_HZ`): 12.5 samples per

@@ -9,11 +9,11 @@
 //! * SysTick interrupts once per half-buffer, `HALF/FS_HZ` = 128 µs of
 //!   emulated time, and counts a half as due;
 //! * the main loop then refills the next DAC half through the same
-//!   [`Device::fill_dac`](model_core::device::Device::fill_dac) the DMA
+//!   [`Device::fill_dac`](board::device::Device::fill_dac) the DMA
 //!   interrupt calls on the board, runs the plant of
-//!   [`model_core::board::plant`] (the same code as the host's virtual
+//!   [`board::plant`] (the same code as the host's virtual
 //!   device) on what that half drives, and hands the samples to
-//!   [`Device::adc_block`](model_core::device::Device::adc_block) as the
+//!   [`Device::adc_block`](board::device::Device::adc_block) as the
 //!   ADC interrupt does. Device time (the protocol's clock, ramps,
 //!   measurement windows) counts the halves so processed: when the emulated
 //!   core cannot keep up with 128 µs per half, device time runs slower than
@@ -25,7 +25,7 @@
 //! (μ₀ 0.3, k_z = k_x = 10⁷ N/m at power-up): μ₀ = [`PLANT_MU0`],
 //! k_z = k_x = 10⁷ N/m, the stage sliding at [`PLANT_V0`], ideal transducers
 //! (with the feature `qemu-resonant` the bench's resonant ones,
-//! `model_core::board::plant::bench`; with `qemu-drift` its normal mode at
+//! `board::plant::bench`; with `qemu-drift` its normal mode at
 //! 20 100 Hz drifting by −20 Hz/s),
 //! ADC noise uniform in ±[`ADC_NOISE_COUNTS`] (as the virtual device's
 //! default), rounded to whole counts. It runs in
@@ -36,9 +36,9 @@ use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::exception;
 #[cfg(feature = "qemu-resonant")]
-use model_core::board::plant::ResonantOptions;
-use model_core::board::plant::{HalfDrive, Noise, Plant, SampleConditions};
-use model_core::device::DeviceConfig;
+use board::plant::ResonantOptions;
+use board::plant::{HalfDrive, Noise, Plant, SampleConditions};
+use board::device::DeviceConfig;
 use model_core::float::FastF32;
 
 /// `qemu-drift`: the normal resonance at power-up, Hz.
@@ -133,7 +133,7 @@ impl Analog {
                 opts.modes[0].resonance_hz = DRIFT_RESONANCE_Z_HZ;
                 opts.drift_hz_per_s[0] = DRIFT_HZ_PER_S;
             }
-            plant.resonant = model_core::board::plant::Resonant::new(opts, h).ok();
+            plant.resonant = board::plant::Resonant::new(opts, h).ok();
         }
         Analog {
             plant,

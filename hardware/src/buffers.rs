@@ -1,11 +1,11 @@
 //! The DMA buffers' lengths, all from one constant: the half-buffer of
-//! [`HALF`] sample ticks (`model_core::device::HALF_BUFFER`). A stream's
+//! [`HALF`] sample ticks (`board::device::HALF_BUFFER`). A stream's
 //! NDTR is the length of the buffer it is given ([`DmaBuffer`]), and a
 //! handler's half is half of that: nothing is counted twice, and the
 //! assertions below fail the build if the pieces stop fitting.
 
 /// Sample ticks per half-buffer (64: 128 µs at 500 kS/s).
-pub const HALF: usize = model_core::device::HALF_BUFFER;
+pub const HALF: usize = board::device::HALF_BUFFER;
 /// DAC words per tick: one packed DHR12RD word drives both channels.
 pub const DAC_WORDS_PER_TICK: usize = 1;
 /// ADC words per tick: the dual-mode scan gives two CDR words (the forces,

@@ -1,12 +1,12 @@
 //! The power-up self-test, reported in `Info.self_test`
-//! ([`model_core::protocol::SelfTest`]): which checks ran and which failed,
+//! ([`board::protocol::SelfTest`]): which checks ran and which failed,
 //! with the crystal and core clock as measured ([`crate::clocks`]).
 //!
 //! Any failed check is a board on which the drive must not start: the
 //! firmware latches the `self_test` fault, and latches it again whenever it
 //! is reset.
 
-use model_core::protocol::{self_test as bits, SelfTest};
+use board::protocol::{self_test as bits, SelfTest};
 
 use crate::clocks::{within_tolerance, ClockOutcome, HSE_HZ, SYSCLK_HZ};
 

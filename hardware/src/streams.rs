@@ -20,12 +20,12 @@
 //! [`take_adc_flags`]), clears exactly the flags it read (a flag raised
 //! between the read and the clear stays for the next entry), and decides
 //! with [`StreamFlags::event`]: a half to refill or read
-//! ([`model_core::board::dma::half_event`]), or an error. The FIFO-error
+//! ([`board::dma::half_event`]), or an error. The FIFO-error
 //! flag is cleared and ignored: in direct mode (the reset state of
 //! DMA_SxFCR, used here) memory → peripheral it reports a bus underrun with
 //! no data lost (§10.3.18).
 
-use model_core::board::dma::{half_event, HalfEvent};
+use board::dma::{half_event, HalfEvent};
 
 use crate::buffers::DmaBuffer;
 use crate::{pac, Registers};
@@ -157,7 +157,8 @@ fn reads_back(st: &Stream, channel: u8, par: u32, buf: &DmaBuffer) -> bool {
         && st.ndtr().read().ndt().bits() == buf.words
 }
 
-/// [`reads_back`] for both streams.
+/// Whether both streams read back the channel, addresses and length they
+/// were given (the self-test's `dma_setup`).
 pub fn streams_read_back(r: &Registers, dac: &DmaBuffer, adc: &DmaBuffer) -> bool {
     reads_back(r.dma1.st(5), DAC_CHANNEL, DAC_DHR12RD, dac)
         && reads_back(r.dma2.st(0), ADC_CHANNEL, ADC_CDR, adc)

@@ -12,12 +12,12 @@
 use std::cell::RefCell;
 use std::rc::Rc;
 
+use board::protocol::self_test as bits;
 use hardware::bring_up::{self, Buffers, Prepared, Step};
 use hardware::buffers::{DmaBuffer, ADC_WORDS, DAC_WORDS, HALF};
 use hardware::clocks::{self, PllConfig};
 use hardware::streams::{self, StreamEvent};
 use hardware::{fault_input, nvic, pac, sampling, self_test, watchdog, Delay, Registers};
-use model_core::protocol::self_test as bits;
 
 /// RM0090 register offsets and bits, written out by hand.
 mod rm {
@@ -1059,9 +1059,9 @@ fn the_pickups_are_sampled_15_adc_clocks_after_the_forces() {
     assert_eq!(sampling::PICKUP_DELAY_NS, 714);
     // The delay the device corrects is this scan's (one fact, two crates).
     let scan = f64::from(sampling::CONVERSION_CYCLES) / f64::from(sampling::ADC_CLOCK_HZ);
-    assert_eq!(model_core::device::config::PICKUP_DELAY_S, scan);
+    assert_eq!(board::device::config::PICKUP_DELAY_S, scan);
     assert_eq!(
-        model_core::device::DeviceConfig::driver_board(1).pickup_delay_s,
+        board::device::DeviceConfig::driver_board(1).pickup_delay_s,
         scan
     );
 }

@@ -254,7 +254,7 @@ fn control_bench_step_response_holds_across_noise_records() {
 }
 
 /// The setpoint step's settling against the board's update cadence
-/// (`model_core::device` closed-loop docs: an update closes each 128 µs
+/// (`board::device` closed-loop docs: an update closes each 128 µs
 /// ADC block whose estimate is fresh; a command reaches the DAC three fills
 /// after its block and ramps at the slew rate; estimates of blocks still
 /// ramping are dropped). Returns the settling time, ms.
@@ -359,7 +359,7 @@ fn resonant_setpoint_step_settles_within_tau_and_2_5_ms() {
 /// −20 Hz/s, held 2 s after the events: locked (from the start, within the
 /// acquisition), no fault, and the drive frequency within the PLL's drift
 /// lag of the true resonance over the hold. The lag
-/// (`model_core::board::device::tracking`, T3; tests/tests/tracking.rs):
+/// (`board::device::tracking`, T3; tests/tests/tracking.rs):
 /// ḟ·(2τ̂ + τ), τ = Q_eff/(π f_r) with the contact's load
 /// (1/Q_eff = 1/300 + 1/2000: Q_eff = 260.87, τ = 4.090 ms at 20 300 Hz;
 /// the exact identification: τ̂ = τ): 20·3·4.090 ms = 0.245 Hz; with the

@@ -14,7 +14,7 @@ use common::{drive_set, signal_and_wait, DRIVE};
 
 use assert_cmd::cargo::CommandCargoExt;
 use assert_cmd::Command;
-use model_core::protocol::{Body, Frame, Request, Response, WireError, PROTOCOL_VERSION};
+use board::protocol::{Body, Frame, Request, Response, WireError, PROTOCOL_VERSION};
 use serde_json::Value;
 use serialport::SerialPort;
 
@@ -38,7 +38,7 @@ fn measured_vs_predicted_bound(estimate: &Value) -> f64 {
     let (a, b, phi) = (0.5, 0.25, 40f64.to_radians());
     let v = 0.004 / (std::f64::consts::TAU * 20e3 * 0.3 * 4e-6);
     let (lo, hi) = integration_tests::sampling_error_range(a, b, phi, v, 25, 32);
-    let cfg = model_core::device::DeviceConfig::driver_board(0);
+    let cfg = board::device::DeviceConfig::driver_board(0);
     let (gx, gz) = (f64::from(cfg.adc_x.gain), f64::from(cfg.adc_z.gain));
     let mu = estimate["mu"].as_f64().unwrap();
     let fz = estimate["fz_mean"].as_f64().unwrap();
@@ -319,7 +319,7 @@ fn ask(p: &mut dyn SerialPort, payload: &[u8]) -> Frame {
 }
 
 /// `GetStatus` (index 11) with seq `seq`, written from the spec.
-fn raw_status(p: &mut dyn SerialPort, seq: u8) -> model_core::device::Status {
+fn raw_status(p: &mut dyn SerialPort, seq: u8) -> board::device::Status {
     match ask(p, &[V, seq, 0, 11]).body {
         Body::Response(Response::Status(st)) => st,
         other => panic!("{other:?}"),
@@ -655,7 +655,7 @@ fn fake_board(body: Vec<u8>) -> (String, std::thread::JoinHandle<()>) {
             raw.push(b[0]);
         }
         let n = raw.len() - 1;
-        let req = model_core::protocol::decode(&mut raw[..n]).unwrap();
+        let req = board::protocol::decode(&mut raw[..n]).unwrap();
         assert_eq!(req.body, Body::Request(Request::Hello));
         // seq as a varint, by hand (docs/protocol.md: 7 bits per byte, low first).
         let mut p = vec![V];
@@ -1213,7 +1213,7 @@ struct Flood {
 }
 
 fn flood(p: &mut Box<dyn SerialPort>, n: u32, read_after: Duration) -> Flood {
-    use model_core::protocol::{decode, Deframed, Deframer, Telemetry};
+    use board::protocol::{decode, Deframed, Deframer, Telemetry};
     let bytes: Vec<u8> = (1..=n)
         .flat_map(|seq| common::req(seq, Request::GetDrive))
         .collect();
@@ -1348,7 +1348,7 @@ fn flood_is_answered_or_counted(read_after: Duration) -> (u64, usize, u64) {
     // dropped reached the device and went into its broken answers (each of
     // at most MAX_FRAME bytes; one more frame's worth may still wait in its
     // deframer): no byte lost without a count.
-    let max = model_core::protocol::MAX_FRAME as u64;
+    let max = board::protocol::MAX_FRAME as u64;
     assert!(
         unanswered_bytes <= dropped + (f.broken as u64 + 1) * max,
         "{unanswered_bytes} bytes unanswered, {dropped} dropped, {} broken",
@@ -1393,7 +1393,7 @@ fn requests_beyond_the_pipelining_rule_are_counted_when_the_host_does_not_read()
 /// the amplitude on each mode's phase.
 #[test]
 fn status_reports_the_measured_motion_of_resonant_transducers() {
-    use model_core::board::resonator::ModeParams;
+    use board::resonator::ModeParams;
     use model_core::Libm;
     use std::f64::consts::PI;
     let s = common::sim::sim_with(

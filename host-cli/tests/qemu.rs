@@ -22,12 +22,12 @@ mod common;
 use common::{drive_set, DRIVE};
 
 use assert_cmd::Command;
-use integration_tests::wire;
-use model_core::board::link::RX_CAPACITY;
-use model_core::protocol::{
+use board::link::RX_CAPACITY;
+use board::protocol::{
     decode, Body, Deframed, Deframer, Frame, Request, Response, StreamEnd, Telemetry, WireError,
     PROTOCOL_VERSION,
 };
+use integration_tests::wire;
 use serde_json::Value;
 
 struct Qemu {
@@ -505,7 +505,7 @@ impl RawLink {
         panic!("request {index} (seq {seq}) not answered");
     }
 
-    fn status(&mut self, seq: u8) -> model_core::device::Status {
+    fn status(&mut self, seq: u8) -> board::device::Status {
         match self.ask(seq, 11, &[]) {
             Response::Status(s) => s,
             other => panic!("{other:?}"),
@@ -926,13 +926,13 @@ fn lab_session_on_the_firmware() {
 /// top of the offset range with no normal amplitude presses the emulated
 /// contact until the normal force saturates the ADC; a stream's estimate
 /// sees it. The firmware must latch ADC_SATURATED *and* enter the safe state
-/// (one fault path, `model-core/src/board/device/fault.rs`): drive stopped,
+/// (one fault path, `board/src/device/fault.rs`): drive stopped,
 /// every output ramped to 0, one `RampDone`, the stream ended by the
 /// refusal, `Start` refused until `ResetFaults`.
 #[test]
 #[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_ELF is set)"]
 fn adc_saturation_reaches_the_safe_state_on_the_firmware() {
-    use model_core::device::faults;
+    use board::device::faults;
     let q = qemu();
     let top = ok(&q, &["info"])["max_offset_z_m"].as_f64().unwrap();
     let top = format!("{top:e}");

@@ -3,11 +3,9 @@
 //! The single-spring model of dual-mode active friction control
 //! (Popov & Li, *Multi-mode active control of friction, dynamic ratchets and
 //! actuators*; equation numbers below refer to that paper), shared by the
-//! `fricctl` host tool and the STM32F405 firmware.
-//!
-//! Two subjects, one folder each: [`model`] (the physics) and [`board`] (the
-//! driver board's logic, which uses the model; the model never uses the
-//! board). Their modules are re-exported at the crate root:
+//! `fricctl` host tool and the STM32F405 firmware. The physics only: the
+//! driver board's logic, which uses it, is the `board` crate. The modules of
+//! [`model`] are re-exported at the crate root:
 //!
 //! * [`scene`] — parameters, validation, dimensionless groups (eqs. 1–4, 25, 26);
 //! * [`analytic`] — critical velocity (eq. 8–10), static friction (eqs. 17–19 and
@@ -15,9 +13,7 @@
 //! * [`fixed_step`] — the paper's explicit scheme (§3, eq. 20);
 //! * [`exact`] — the exact event-driven steady-state solver;
 //! * [`regime`] — active control / dynamic ratchet / actuator (§3.2);
-//! * [`select`] — the cheapest method whose error bound meets a tolerance;
-//! * [`dds`] — the two phase-locked DAC waveforms of the driver board;
-//! * [`estimator`] — μ from sampled forces (eq. 20) with lock-in harmonics.
+//! * [`select`] — the cheapest method whose error bound meets a tolerance.
 //!
 //! Everything is generic over [`Float`] (`f32` for the firmware, `f64` for the
 //! host) and, where transcendental functions matter, over a [`Math`] backend
@@ -32,11 +28,9 @@
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
 
-pub mod board;
 pub mod model;
 
 // The public paths used by the firmware and the host (`model_core::scene`, …).
-pub use board::{control, dds, device, estimator, protocol, server};
 pub use model::{analytic, exact, fixed_step, float, mdr, regime, scene, select};
 
 pub use float::{FastF32, Float, Libm, Math, Micromath};

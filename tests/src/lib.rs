@@ -6,7 +6,7 @@ pub mod resonant;
 pub mod springs;
 pub mod wire;
 
-use model_core::device::DeviceConfig;
+use board::device::DeviceConfig;
 use model_core::fixed_step::{run_dimensionless, FixedStepConfig, Start, State};
 use model_core::{Drive, Groups, Libm, Scene, SceneParams};
 
@@ -201,7 +201,7 @@ pub fn board_config_1mhz() -> DeviceConfig {
 }
 
 /// The worst-case effect of an error of at most ±1 (count) on every sample
-/// on a lock-in window's amplitude (`model_core::board::lockin`, the
+/// on a lock-in window's amplitude (`board::lockin`, the
 /// least-squares fit of d + a cos θ + b sin θ): the fit's a and b are linear
 /// in the samples with weights `w_a`, `w_b` (rows of `(XᵀX)⁻¹Xᵀ`), so
 /// `|δa| ≤ Σ|w_a|`, `|δb| ≤ Σ|w_b|` and `|δA| ≤ √((Σ|w_a|)² + (Σ|w_b|)²)`;

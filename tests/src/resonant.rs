@@ -9,13 +9,13 @@
 //! tangential; contact load Q 2000; pickups without noise (the ADC's
 //! rounding only).
 
-use model_core::board::plant::{HalfDrive, Plant, Resonant, ResonantOptions, SampleConditions};
-use model_core::board::resonator::ModeParams;
-use model_core::dds::SineTable;
-use model_core::device::{
+use board::dds::SineTable;
+use board::device::{
     Contact, Device, DeviceConfig, DriveMode, DriveSetting, TransducerModel, Transducers,
     HALF_BUFFER,
 };
+use board::plant::{HalfDrive, Plant, Resonant, ResonantOptions, SampleConditions};
+use board::resonator::ModeParams;
 use model_core::Libm;
 use std::f64::consts::{PI, TAU};
 

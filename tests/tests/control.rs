@@ -1,4 +1,4 @@
-//! The closed loop (`model_core::control`) on a plant that is not its model:
+//! The closed loop (`board::control`) on a plant that is not its model:
 //! the exact law with the true μ₀ 20 % off the model's, sampled once per
 //! update with a one-update dead time (the update at `k` sees the command of
 //! update `k − 1`), as the device runs it.
@@ -17,7 +17,7 @@
 //! by the plant's finite differences on a fine grid of that interval
 //! (independent of the controller), widened by 5 % for the grid.
 
-use model_core::control::{self, Controller, Gains, Plan};
+use board::control::{self, Controller, Gains, Plan};
 use model_core::exact;
 use model_core::{Libm, Scene, SceneParams};
 

@@ -12,15 +12,15 @@
 //! of the contact refused. (The cost of each critical section on the M4F:
 //! `firmware/src/bin/predict_cost.rs` under QEMU.)
 
-use model_core::control;
-use model_core::dds::SineTable;
-use model_core::device::{self, Contact, Device, DeviceConfig, DeviceError, DriveSetting};
-use model_core::protocol::{
+use board::control;
+use board::dds::SineTable;
+use board::device::{self, Contact, Device, DeviceConfig, DeviceError, DriveSetting};
+use board::protocol::{
     decode, encode, Body, ControlSetting, Deframed, Deframer, Frame, Info, Request, Response,
     MAX_FRAME, PROTOCOL_VERSION,
 };
+use board::server::{DeviceAccess, Server};
 use model_core::scene::ContactMode;
-use model_core::server::{DeviceAccess, Server};
 use model_core::{Scene, SceneParams};
 
 fn cfg() -> DeviceConfig {
@@ -125,10 +125,7 @@ fn predict_forms_its_scene_outside_the_one_critical_section() {
     assert_eq!(call(&mut s, &mut acc, 1, Request::Hello).1, 1);
     // No offset yet: the scene is refused (formed outside, the same error).
     let (r, n) = call(&mut s, &mut acc, 2, Request::Predict { v0: 4e-3 });
-    assert_eq!(
-        r,
-        Response::Error(model_core::protocol::WireError::BadScene)
-    );
+    assert_eq!(r, Response::Error(board::protocol::WireError::BadScene));
     assert_eq!(n, 1);
     let (r, n) = call(&mut s, &mut acc, 3, Request::SetDrive(drive()));
     assert!(matches!(r, Response::Drive { .. }), "{r:?}");

@@ -7,7 +7,7 @@
 
 use std::f64::consts::{PI, TAU};
 
-use model_core::dds::{
+use board::dds::{
     pack_dual, phase_rad, phase_word, quantise, unpack_dual, Dds, DdsError, Interp, Level,
     SineTable, Slew,
 };

@@ -5,10 +5,8 @@
 
 use std::f64::consts::TAU;
 
-use model_core::dds::{unpack_dual, SineTable};
-use model_core::device::{
-    faults, Contact, Device, DeviceConfig, DeviceError, DriveParam, DriveSetting,
-};
+use board::dds::{unpack_dual, SineTable};
+use board::device::{faults, Contact, Device, DeviceConfig, DeviceError, DriveParam, DriveSetting};
 use model_core::fixed_step::{run_dimensionless, FixedStepConfig, Start, State, Stepper};
 use model_core::{exact, Libm, Scene, SceneParams};
 
@@ -343,7 +341,7 @@ fn closed_loop_measurement_agrees_with_prediction() {
 
 /// Runs the device's DAC/ADC loop with constant forces (f_x = 2100, f_z = 2000
 /// counts) until its measurement closes; returns the estimate.
-fn measure_constant(d: &mut Device<'_, 256>, periods: u32) -> model_core::estimator::Estimate {
+fn measure_constant(d: &mut Device<'_, 256>, periods: u32) -> board::estimator::Estimate {
     d.measure(periods).unwrap();
     let mut buf = vec![0u32; 500];
     let samples = vec![(2100u16, 2000u16); 500];
@@ -361,7 +359,7 @@ fn measure_constant(d: &mut Device<'_, 256>, periods: u32) -> model_core::estima
 
 #[test]
 fn estimates_say_why_they_are_not_valid() {
-    use model_core::estimator::reasons;
+    use board::estimator::reasons;
     let t = SineTable::<256>::libm();
     let mut d = Device::new(cfg(), &t, CONTACT).unwrap();
     d.set_drive(drive()).unwrap();
@@ -567,7 +565,7 @@ fn the_prediction_follows_every_change_of_contact_drive_and_liftoff_setting() {
     // solver on the changed scene; 1e-5 as in prediction_in_f32_matches_the_f64_model.
     let t = SineTable::<256>::libm();
     let mut d = Device::new(cfg(), &t, CONTACT).unwrap();
-    let want = |mu0: f64, drive: &DriveSetting, a: &model_core::device::Applied| {
+    let want = |mu0: f64, drive: &DriveSetting, a: &board::device::Applied| {
         let s = Scene::new(SceneParams {
             mu0,
             kz: 1e7,

@@ -1,4 +1,4 @@
-//! The displacement mode (`model_core::board::device::displacement`) on
+//! The displacement mode (`board::device::displacement`) on
 //! resonant transducers (`plant::Resonant`), checked against the plant's
 //! own state, not the device's lock-in: after each half-buffer the true
 //! motion of each mode is read from its state (x, ẋ) — for a motion
@@ -23,12 +23,12 @@
 //! within `0.4 % + 3·0.15 %` ≤ 0.85 % of Δu_x and 0.5 % of Δu_z, and φ
 //! within the arcsine of the sum of the two channels' relative errors.
 
-use integration_tests::resonant::{exact_model, model_of, opts, setting, true_modes, Bench, MU0};
-use model_core::dds::SineTable;
-use model_core::device::displacement::{HOLD_TOLERANCE, SMOOTHING_S};
-use model_core::device::{
+use board::dds::SineTable;
+use board::device::displacement::{HOLD_TOLERANCE, SMOOTHING_S};
+use board::device::{
     faults, Contact, Device, DeviceConfig, DriveMode, DriveSetting, TransducerModel, Transducers,
 };
+use integration_tests::resonant::{exact_model, model_of, opts, setting, true_modes, Bench, MU0};
 use std::f64::consts::{PI, TAU};
 
 fn wrong_model() -> Transducers {
@@ -236,7 +236,7 @@ fn the_displacement_mode_needs_transducers() {
     let mut dev = Device::new(cfg, &table, contact).unwrap();
     assert_eq!(
         dev.set_drive_mode(DriveMode::Displacement),
-        Err(model_core::device::DeviceError::NotIdentified)
+        Err(board::device::DeviceError::NotIdentified)
     );
     assert_eq!(dev.drive_mode(), DriveMode::OpenLoop);
     let bad = TransducerModel {
@@ -267,8 +267,8 @@ fn the_displacement_mode_needs_transducers() {
 /// 1 % · μ/(Δu_z·|∂μ/∂Δu_z|) ≈ 3 % of 1.5 µm.
 #[test]
 fn the_mu_loop_runs_on_the_displacement_loops() {
-    use model_core::control;
-    use model_core::protocol::ControlSetting;
+    use board::control;
+    use board::protocol::ControlSetting;
     let table = SineTable::<1024>::libm();
     let mut b = Bench::new(&table, opts(), wrong_model());
     b.dev.set_drive(setting(2e-6)).unwrap();
@@ -286,7 +286,7 @@ fn the_mu_loop_runs_on_the_displacement_loops() {
         phi: 40f32.to_radians(),
     })
     .unwrap();
-    let target = model_core::device::predict(&scene15, 0.004).unwrap().mu;
+    let target = board::device::predict(&scene15, 0.004).unwrap().mu;
     let s = ControlSetting {
         on: true,
         target_mu: target,
@@ -336,9 +336,9 @@ fn the_mu_loop_runs_on_the_displacement_loops() {
 /// 1 % of μ*, the bound of `the_mu_loop_runs_on_the_displacement_loops`).
 #[test]
 fn the_mu_loop_holds_a_command_the_dac_cannot_take() {
-    use model_core::control;
-    use model_core::device::DeviceError;
-    use model_core::protocol::ControlSetting;
+    use board::control;
+    use board::device::DeviceError;
+    use board::protocol::ControlSetting;
     let table = SineTable::<1024>::libm();
     let m = true_modes();
     let exact = exact_model(m);
@@ -374,11 +374,7 @@ fn the_mu_loop_holds_a_command_the_dac_cannot_take() {
         })
         .unwrap()
     };
-    let mu_at = |duz: f32| {
-        model_core::device::predict(&scene_at(duz), 0.004)
-            .unwrap()
-            .mu
-    };
+    let mu_at = |duz: f32| board::device::predict(&scene_at(duz), 0.004).unwrap().mu;
     let run = |b: &mut Bench<'_>, target: f32, secs: f64| {
         let c = ControlSetting {
             on: true,

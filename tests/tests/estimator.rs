@@ -4,9 +4,9 @@
 
 use std::f64::consts::TAU;
 
+use board::dds::{phase_rad, SineTable};
+use board::estimator::{Calibration, EstimateError, Estimator};
 use integration_tests::Rng;
-use model_core::dds::{phase_rad, SineTable};
-use model_core::estimator::{Calibration, EstimateError, Estimator};
 use model_core::fixed_step::Stepper;
 use model_core::{exact, Drive, Libm};
 
@@ -20,7 +20,7 @@ fn run(
     tw: u32,
     periods: u32,
     f: impl FnMut(f64) -> (u16, u16),
-) -> model_core::estimator::Estimate {
+) -> board::estimator::Estimate {
     run_from(est, table, tw, periods, 12345, f)
 }
 
@@ -32,7 +32,7 @@ fn run_from(
     periods: u32,
     acc0: u32,
     mut f: impl FnMut(f64) -> (u16, u16),
-) -> model_core::estimator::Estimate {
+) -> board::estimator::Estimate {
     est.start(periods).unwrap();
     let mut acc: u32 = acc0;
     for _ in 0..(periods as u64 + 3) * (4_294_967_296 / tw as u64 + 2) {
@@ -210,7 +210,7 @@ fn gauss(rng: &mut Rng) -> f64 {
 
 #[test]
 fn std_error_matches_the_closed_form_for_white_noise() {
-    use model_core::estimator::{reasons, BATCHES};
+    use board::estimator::{reasons, BATCHES};
     // 64 samples per period exactly (tw = 2^26), 320 periods: 32 batches of 10
     // periods, N = 20 480 samples. f_z = 0.02 N/count · 2000 counts (+ a
     // harmonic, no noise); f_x = 0.01 N/count · (2048 + 300 cos(θ + 0.4) + g),
@@ -276,7 +276,7 @@ fn std_error_matches_the_closed_form_for_white_noise() {
 }
 
 /// Short windows at a non-integer number of samples per period: the
-/// fractional edges (module docs of `model_core::estimator`) make the
+/// fractional edges (module docs of `board::estimator`) make the
 /// window exactly `P` periods long.
 ///
 /// **The bound.** For a force `B·cos(θ + c)` the weighted sum over the

@@ -1,5 +1,5 @@
 //! The displacement loop's transitions within a voltage headroom
-//! (`model_core::board::device::displacement`, eqs. D4–D7) and the open
+//! (`board::device::displacement`, eqs. D4–D7) and the open
 //! pickup fault, on resonant transducers, checked against the plant's own
 //! state (`integration_tests::resonant`).
 //!
@@ -22,9 +22,9 @@
 //! counter-rotating pole: a relative term of order 1/(2Q_eff) (0.19 %) of the
 //! swing the voltage drives, `h·A₁ − A₀`.
 
+use board::dds::SineTable;
+use board::device::{faults, DisplacementOptions, Track, Transducers};
 use integration_tests::resonant::{exact_model, loaded, opts, setting, true_modes, Bench};
-use model_core::dds::SineTable;
-use model_core::device::{faults, DisplacementOptions, Track, Transducers};
 
 /// The exact model of the bench's transducers (an exact identification).
 fn exact() -> Transducers {
@@ -155,7 +155,7 @@ fn overdrive_stays_below_the_liftoff_limit() {
 /// the safe state (stopped, outputs ramped to zero).
 #[test]
 fn an_open_pickup_latches_the_safe_state() {
-    use model_core::device::displacement::OPEN_WINDOWS;
+    use board::device::displacement::OPEN_WINDOWS;
     let table = SineTable::<1024>::libm();
     let mut b = held_at(&table, 2.0, 2e-6);
     let offset = b.cfg.pickup_z.offset.round() as u16;
@@ -203,10 +203,10 @@ fn an_open_pickup_latches_the_safe_state() {
 /// after the first retarget sees 1.699 µm for a command of 1.606 µm).
 #[test]
 fn a_two_half_buffer_estimate_never_covers_the_transition() {
-    use model_core::control;
-    use model_core::device::displacement::HOLD_TOLERANCE;
-    use model_core::device::{estimate_samples, HALF_BUFFER};
-    use model_core::protocol::ControlSetting;
+    use board::control;
+    use board::device::displacement::HOLD_TOLERANCE;
+    use board::device::{estimate_samples, HALF_BUFFER};
+    use board::protocol::ControlSetting;
     let table = SineTable::<1024>::libm();
     let mut b = held_at(&table, 2.0, 1.7e-6);
     let tw = b.dev.applied().achieved.tuning_word;

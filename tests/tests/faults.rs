@@ -1,11 +1,11 @@
 //! Every fault source reaches the safe state through the device's one fault
-//! path (docs/protocol.md, "Fault bits"; `model-core/src/board/device/fault.rs`),
+//! path (docs/protocol.md, "Fault bits"; `board/src/device/fault.rs`),
 //! checked natively through the protocol server as a host sees it:
 //!
 //! * ADC saturation (a railed sample in a finished estimate) with a stream
 //!   running, and with the closed loop on;
 //! * DAC underrun and ADC overrun (a DMA handler late by a half: both flags
-//!   set, the half decided from NDTR, `model_core::board::dma`);
+//!   set, the half decided from NDTR, `board::dma`);
 //! * the external input, while the closed loop runs;
 //! * the watchdog reset, latched at power-up before the link is up.
 //!
@@ -17,14 +17,14 @@
 //! interval (a target equal to a reported end is accepted; at the top of the
 //! offset range the reach is one point, never `BadScene`).
 
-use model_core::board::dma::{half_event, HalfEvent};
-use model_core::dds::SineTable;
-use model_core::device::{faults, Contact, Device, DeviceConfig, DriveSetting, HALF_BUFFER};
-use model_core::protocol::{
+use board::dds::SineTable;
+use board::device::{faults, Contact, Device, DeviceConfig, DriveSetting, HALF_BUFFER};
+use board::dma::{half_event, HalfEvent};
+use board::protocol::{
     decode, encode, Body, ControlSetting, Deframed, Deframer, Frame, Info, Request, Response,
     StreamEnd, Telemetry, WireError, MAX_FRAME, PROTOCOL_VERSION,
 };
-use model_core::server::Server;
+use board::server::Server;
 
 fn cfg() -> DeviceConfig {
     integration_tests::board_config_1mhz()
@@ -150,7 +150,7 @@ impl<'t> Bench<'t> {
         panic!("ramps not settled after {max} halves");
     }
 
-    fn status(&mut self) -> model_core::device::Status {
+    fn status(&mut self) -> board::device::Status {
         match self.call(Request::GetStatus) {
             Response::Status(s) => s,
             r => panic!("{r:?}"),

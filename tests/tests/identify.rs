@@ -1,4 +1,4 @@
-//! Identification of one transducer mode (`model_core::board::identify`):
+//! Identification of one transducer mode (`board::identify`):
 //! synthetic stepped-sine records of eq. 1, `H = g·e^{−jθ}/(1 − r² + j r/Q)`,
 //! from known f_r, Q, g, θ (computed here by hand, not by the module), noise
 //! free and with Gaussian noise of known σ; the intervals' coverage over many
@@ -8,10 +8,10 @@
 
 use std::f64::consts::PI;
 
-use model_core::board::identify::{
+use board::identify::{
     chi2_upper, fit, t_quantile_975, Fit, FitConfig, FitError, NoResonance, Sample, MIN_POINTS,
 };
-use model_core::board::resonator::ModeParams;
+use board::resonator::ModeParams;
 use model_core::Libm;
 
 /// One mode of eq. 1.

@@ -1,21 +1,21 @@
-//! The firmware's serial link (`model_core::board::link`) run natively: the
+//! The firmware's serial link (`board::link`) run natively: the
 //! receive queue's overflow verdict, the transmit ring's whole frames, the
 //! sleep decision with a byte injected between the check and the `WFI`, and
 //! a byte-time simulation of the line (pipelining within the documented
 //! depth never overflows; a flood overflows and the Status reports exactly
 //! the dropped bytes). Requests are built by hand (`integration_tests::wire`).
 
-use integration_tests::wire::{self, GET_DRIVE};
-use model_core::board::link::{
+use board::dds::SineTable;
+use board::device::{Contact, Device};
+use board::link::{
     has_work, serve, sleep_unless, Core, LinkIo, Overflow, RxQueue, TxFull, TxRing, PIPELINE_DEPTH,
     RX_CAPACITY, TX_CAPACITY,
 };
-use model_core::dds::SineTable;
-use model_core::device::{Contact, Device};
-use model_core::protocol::{
+use board::protocol::{
     decode, Body, Deframed, Deframer, Frame, Info, Response, Telemetry, MAX_FRAME, PROTOCOL_VERSION,
 };
-use model_core::server::Server;
+use board::server::Server;
+use integration_tests::wire::{self, GET_DRIVE};
 
 const CONTACT: Contact = Contact {
     mu0: 0.3,

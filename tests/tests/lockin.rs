@@ -1,4 +1,4 @@
-//! The lock-in on the DDS reference (`model_core::board::lockin`): exact
+//! The lock-in on the DDS reference (`board::lockin`): exact
 //! recovery of mean, amplitude and phase over windows of any length (the
 //! case the textbook `2/N Σ` lock-in gets wrong by its 2θ leak, measured
 //! here too), noise within its least-squares standard error, and refusal
@@ -6,7 +6,7 @@
 
 use std::f64::consts::TAU;
 
-use model_core::board::lockin::{LockIn, LockInError, MIN_SPAN_RAD};
+use board::lockin::{LockIn, LockInError, MIN_SPAN_RAD};
 use model_core::Libm;
 
 /// Samples of d + A cos(θ + ψ) at θ_i = θ0 + i·dθ, into a lock-in.

@@ -19,15 +19,15 @@
 
 use std::f64::consts::{PI, TAU};
 
-use integration_tests::lockin_error_gain;
-use model_core::board::dds::DAC_VOLTS_PER_CODE;
-use model_core::board::plant::{HalfDrive, Plant, Resonant, ResonantOptions, SampleConditions};
-use model_core::board::resonator::ModeParams;
-use model_core::dds::SineTable;
-use model_core::device::{
+use board::dds::SineTable;
+use board::dds::DAC_VOLTS_PER_CODE;
+use board::device::{
     config::PICKUP_DELAY_S, ConfigError, Contact, Device, DeviceConfig, DriveSetting,
     MeasuredDrive, HALF_BUFFER,
 };
+use board::plant::{HalfDrive, Plant, Resonant, ResonantOptions, SampleConditions};
+use board::resonator::ModeParams;
+use integration_tests::lockin_error_gain;
 use model_core::Libm;
 
 /// Accumulator words per turn.
@@ -172,18 +172,16 @@ fn the_board_converts_its_pickups_15_adc_clocks_after_the_forces() {
             Err(ConfigError::PickupDelay),
             "{bad}"
         ); // And the device refuses to be built on it.
-        let table = model_core::dds::SineTable::<1024>::build::<model_core::Libm>();
-        let contact = model_core::device::Contact {
+        let table = board::dds::SineTable::<1024>::build::<model_core::Libm>();
+        let contact = board::device::Contact {
             mu0: 0.3,
             kz: 1e7,
             kx: 1e7,
         };
         assert!(
             matches!(
-                model_core::device::Device::new(c, &table, contact),
-                Err(model_core::device::DeviceError::Config(
-                    ConfigError::PickupDelay
-                ))
+                board::device::Device::new(c, &table, contact),
+                Err(board::device::DeviceError::Config(ConfigError::PickupDelay))
             ),
             "{bad}"
         );
@@ -360,7 +358,7 @@ fn the_plant_samples_ideal_pickups_after_the_forces() {
                     let z = f64::from(d.amp_z_m) * (theta - PI / 2.0).sin();
                     let x =
                         f64::from(d.amp_x_m) * (theta + f64::from(d.phase_rad) + PI / 2.0).sin();
-                    let c = |v: f64, cal: model_core::board::estimator::Calibration| {
+                    let c = |v: f64, cal: board::estimator::Calibration| {
                         (v / f64::from(cal.gain) + f64::from(cal.offset)).round() as i32
                     };
                     (c(z, cfg.pickup_z), c(x, cfg.pickup_x))
@@ -501,7 +499,7 @@ fn the_device_measures_resonant_transducers_through_delayed_pickups() {
     );
 }
 
-/// The plant's look-ahead over δ ([`model_core::board::resonator::Mode::
+/// The plant's look-ahead over δ ([`board::resonator::Mode::
 /// update_for`] with `x_after`) is the exact solution of the mode's
 /// equation `x'' + 2ζω_r x' + ω_r² x = ω_r² g u` over δ with `u` held, from
 /// any state: checked against classical Runge–Kutta (RK4) on the same
@@ -512,7 +510,7 @@ fn the_device_measures_resonant_transducers_through_delayed_pickups() {
 /// The state is left as it was, and a zero or negative step is refused.
 #[test]
 fn the_partial_hold_step_is_exact() {
-    use model_core::board::resonator::{Mode, ModeError};
+    use board::resonator::{Mode, ModeError};
     let p = ModeParams {
         resonance_hz: 20_300.0,
         q: 260.9,

@@ -1,4 +1,4 @@
-//! The simulated analog side (`model_core::board::plant`), the plant of the
+//! The simulated analog side (`board::plant`), the plant of the
 //! host's virtual device and of the firmware under QEMU, checked without the
 //! estimator: ADC counts straight from the plant, driven by a real `Device`
 //! (DDS ramps, phases, the ADC lag).
@@ -6,9 +6,9 @@
 //! Drive: 20 kHz (25 samples a period at 500 kS/s), Δu_z = 2 µm,
 //! Δu_x = 0.3 µm, u_z0 = 4 µm, φ = 40°; contact μ0 = 0.3, k_z = k_x = 1e7 N/m.
 
-use model_core::board::plant::{HalfDrive, Plant, SampleConditions};
-use model_core::dds::SineTable;
-use model_core::device::{Contact, Device, DeviceConfig, DriveSetting, HALF_BUFFER};
+use board::dds::SineTable;
+use board::device::{Contact, Device, DeviceConfig, DriveSetting, HALF_BUFFER};
+use board::plant::{HalfDrive, Plant, SampleConditions};
 use model_core::{FastF32, Float, Libm, Math};
 
 const MU0: f64 = 0.3;
@@ -170,8 +170,8 @@ fn adc_lag_delays_the_record_by_one_sample() {
 /// ≈ 164°: the tangential mode is above its resonance).
 #[test]
 fn resonant_transducers_follow_their_transfer_functions() {
-    use model_core::board::plant::{Resonant, ResonantOptions, DAC_VOLTS_PER_CODE};
-    use model_core::board::resonator::ModeParams;
+    use board::plant::{Resonant, ResonantOptions, DAC_VOLTS_PER_CODE};
+    use board::resonator::ModeParams;
     use std::f64::consts::{PI, TAU};
     let cfg = DeviceConfig::driver_board(0);
     let table = SineTable::<1024>::libm();
@@ -318,11 +318,11 @@ fn resonant_transducers_follow_their_transfer_functions() {
 /// the motion pickups until the drive has settled, then `windows` more
 /// lock-in windows; returns the device's measured motion of each window.
 fn measured_motion(
-    resonant: Option<model_core::board::plant::ResonantOptions<f64>>,
+    resonant: Option<board::plant::ResonantOptions<f64>>,
     settle_halves: usize,
     windows: usize,
-) -> Vec<model_core::device::MeasuredDrive> {
-    use model_core::board::plant::Resonant;
+) -> Vec<board::device::MeasuredDrive> {
+    use board::plant::Resonant;
     let cfg = DeviceConfig::driver_board(1);
     let table = SineTable::<1024>::libm();
     let contact = Contact {
@@ -403,8 +403,8 @@ fn pickups_measure_the_ideal_drive() {
 
 #[test]
 fn pickups_measure_what_resonant_transducers_really_do() {
-    use model_core::board::plant::{ResonantOptions, DAC_VOLTS_PER_CODE};
-    use model_core::board::resonator::ModeParams;
+    use board::plant::{ResonantOptions, DAC_VOLTS_PER_CODE};
+    use board::resonator::ModeParams;
     use std::f64::consts::{PI, TAU};
     let cfg = DeviceConfig::driver_board(1);
     let modes = [

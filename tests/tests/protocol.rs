@@ -2,13 +2,13 @@
 //! corrupted CRC, oversize and cut-off frames, unknown messages, version
 //! mismatch, and refused commands that change nothing.
 
-use model_core::dds::SineTable;
-use model_core::device::{Contact, Device, DeviceConfig, DriveSetting};
-use model_core::protocol::{
+use board::dds::SineTable;
+use board::device::{Contact, Device, DeviceConfig, DriveSetting};
+use board::protocol::{
     decode, encode, self_test, Body, Deframed, Deframer, Frame, Info, Request, Response, SelfTest,
     WireError, CRC, MAX_FRAME, PROTOCOL_VERSION,
 };
-use model_core::server::Server;
+use board::server::Server;
 
 /// The protocol version byte of the hand-built frames (docs/protocol.md, "Frame").
 const V: u8 = 7;
@@ -114,7 +114,7 @@ fn roundtrip_every_request() {
         Request::ResetFaults,
         Request::Reset,
         Request::SetLiftOff { allow: true },
-        Request::SetControl(model_core::protocol::ControlSetting {
+        Request::SetControl(board::protocol::ControlSetting {
             on: true,
             target_mu: 0.1,
             v0_m_s: 0.004,
@@ -123,14 +123,14 @@ fn roundtrip_every_request() {
             rate_m_per_s: 1e-3,
         }),
         Request::GetControl,
-        Request::SetTransducers(Some(model_core::protocol::Transducers {
-            z: model_core::protocol::TransducerModel {
+        Request::SetTransducers(Some(board::protocol::Transducers {
+            z: board::protocol::TransducerModel {
                 resonance_hz: 40e3,
                 q: 10.0,
                 gain_m_per_v: 1e-6,
                 phase_lag_rad: 0.1,
             },
-            x: model_core::protocol::TransducerModel {
+            x: board::protocol::TransducerModel {
                 resonance_hz: 30e3,
                 q: 20.0,
                 gain_m_per_v: 5e-7,
@@ -138,16 +138,13 @@ fn roundtrip_every_request() {
             },
         })),
         Request::GetTransducers,
-        Request::SetDriveMode(model_core::protocol::DriveMode::Displacement),
-        Request::SetDisplacementOptions(model_core::protocol::DisplacementOptions {
-            track: model_core::protocol::Track::X,
+        Request::SetDriveMode(board::protocol::DriveMode::Displacement),
+        Request::SetDisplacementOptions(board::protocol::DisplacementOptions {
+            track: board::protocol::Track::X,
             headroom: 3.5,
         }),
     ];
-    assert_eq!(
-        reqs.len() as u32,
-        model_core::protocol::ENDPOINTS.len() as u32
-    );
+    assert_eq!(reqs.len() as u32, board::protocol::ENDPOINTS.len() as u32);
     for (i, r) in reqs.into_iter().enumerate() {
         let mut bytes = req(i as u32 + 7, r);
         assert_eq!(*bytes.last().unwrap(), 0);
@@ -328,7 +325,7 @@ fn docs_protocol_examples() {
         req,
         &[0x03, 0x07, 0x05, 0x06, 0x0b, 0xc6, 0xfc, 0x8a, 0x2d, 0x00]
     );
-    let status = model_core::device::Status {
+    let status = board::device::Status {
         running: true,
         settled: true,
         faults: 0,
@@ -338,7 +335,7 @@ fn docs_protocol_examples() {
         out_amp_x_m: 3e-7,
         out_offset_z_m: 4e-6,
         liftoff_allowed: false,
-        measured: Some(model_core::device::MeasuredDrive {
+        measured: Some(board::device::MeasuredDrive {
             amp_z_m: 2.2e-6,
             amp_x_m: 3.2e-7,
             phase_rad: -2.1,
@@ -347,10 +344,10 @@ fn docs_protocol_examples() {
             response_z_m_per_v: Some([1.5e-5, -2.5e-6]),
             response_x_m_per_v: None,
         }),
-        mode: model_core::protocol::DriveMode::Displacement,
+        mode: board::protocol::DriveMode::Displacement,
         frequency_hz: 20_100.0,
-        options: model_core::device::DisplacementOptions {
-            track: model_core::device::Track::Z,
+        options: board::device::DisplacementOptions {
+            track: board::device::Track::Z,
             headroom: 2.0,
         },
         tracking_error_hz: Some(-0.5),
@@ -404,7 +401,7 @@ fn docs_protocol_examples() {
 
 #[test]
 fn telemetry_reports_ramps_and_faults_with_its_own_counter() {
-    use model_core::protocol::Telemetry;
+    use board::protocol::Telemetry;
     let t = SineTable::<256>::libm();
     let mut dev = test_device(&t);
     let mut s = Server::new(info());
@@ -432,14 +429,11 @@ fn telemetry_reports_ramps_and_faults_with_its_own_counter() {
         dev.fill_dac(0, &mut buf);
         collect(&mut s, &mut dev);
     }
-    dev.fault(model_core::device::faults::EXTERNAL);
+    dev.fault(board::device::faults::EXTERNAL);
     collect(&mut s, &mut dev);
     assert_eq!(tele.len(), 2, "{tele:?}");
     assert_eq!(tele[0].1, Telemetry::RampDone);
-    assert_eq!(
-        tele[1].1,
-        Telemetry::Fault(model_core::device::faults::EXTERNAL)
-    );
+    assert_eq!(tele[1].1, Telemetry::Fault(board::device::faults::EXTERNAL));
     assert_eq!(tele[1].0, tele[0].0 + 1);
 }
 
@@ -447,7 +441,7 @@ fn telemetry_reports_ramps_and_faults_with_its_own_counter() {
 fn receive_overflow_is_announced_once_per_growth() {
     // Dropped receive bytes are announced once per growth of the count, with
     // the new total (never a silent drop).
-    use model_core::protocol::Telemetry;
+    use board::protocol::Telemetry;
     let t = SineTable::<256>::libm();
     let mut dev = test_device(&t);
     let mut s = Server::new(info());
@@ -921,7 +915,7 @@ fn measure_is_idempotent_per_seq_and_reset_ends_every_session() {
     assert_eq!(r[1][2..], [2, 3, 1]);
     // A fault ends a stream: Fault(8) then StreamStopped(Refused(Faulted(8))).
     assert_eq!(ask(&mut s, &mut dev, &[V, 32, 0, 10, 1, 40]), [V, 32, 1, 2]);
-    dev.fault(model_core::device::faults::EXTERNAL);
+    dev.fault(board::device::faults::EXTERNAL);
     let tele = polled(&mut s, &mut dev);
     let kinds: Vec<&[u8]> = tele.iter().map(|p| &p[2..]).collect();
     assert!(kinds.contains(&&[2u8, 2, 8][..]), "{tele:02x?}");
@@ -1307,7 +1301,7 @@ fn the_docs_request_table_is_the_endpoint_table() {
                 .collect()
         })
         .collect();
-    let table = model_core::protocol::ENDPOINTS;
+    let table = board::protocol::ENDPOINTS;
     assert_eq!(rows.len(), table.len());
     for (row, ep) in rows.iter().zip(table) {
         assert_eq!(row[1], ep.index.to_string());

@@ -1,4 +1,4 @@
-//! One transducer mode (`model_core::board::resonator`): the exact
+//! One transducer mode (`board::resonator`): the exact
 //! zero-order-hold update against closed forms of the continuous mode
 //! (step response, free decay with its envelope time constant τ = Q/(π f_r))
 //! and against an independent fine Runge–Kutta integration of the same
@@ -6,7 +6,7 @@
 
 use std::f64::consts::{PI, TAU};
 
-use model_core::board::resonator::{Mode, ModeError, ModeParams};
+use board::resonator::{Mode, ModeError, ModeParams};
 use model_core::Libm;
 
 const FR: f64 = 20_300.0;

@@ -1,4 +1,4 @@
-//! Resonance tracking (`model_core::board::device::tracking`, eqs. T1–T3)
+//! Resonance tracking (`board::device::tracking`, eqs. T1–T3)
 //! on resonant transducers, checked against the plant's own resonance
 //! (`ResonantOptions` with drift: `f_r(t) = f_r0 + ḟ·t` exactly) and the
 //! true motion (`integration_tests::resonant`).
@@ -12,12 +12,12 @@
 //! followed `ḟ·(2τ̂ + τ)` behind (0.25 Hz at −20 Hz/s), plus the detector's
 //! noise (noiseless pickups here: the ADC's rounding).
 
-use integration_tests::resonant::{exact_model, loaded, opts, setting, Bench};
-use model_core::board::resonator::ModeParams;
-use model_core::dds::SineTable;
-use model_core::device::{
+use board::dds::SineTable;
+use board::device::{
     faults, Contact, Device, DeviceConfig, DeviceError, DisplacementOptions, DriveParam, Track,
 };
+use board::resonator::ModeParams;
+use integration_tests::resonant::{exact_model, loaded, opts, setting, Bench};
 
 const F_R: f64 = 20_100.0;
 
@@ -134,7 +134,7 @@ fn tracking_locks_from_three_half_bands_off() {
 /// frequency that ran.
 #[test]
 fn a_lost_lock_goes_to_the_safe_state() {
-    use model_core::device::displacement::{model_response, C_MAX};
+    use board::device::displacement::{model_response, C_MAX};
     let table = SineTable::<1024>::libm();
     let mut b = tracking_bench(&table, -5_000.0, F_R);
     let model = b.dev.transducers().unwrap();
@@ -148,7 +148,7 @@ fn a_lost_lock_goes_to_the_safe_state() {
             break;
         }
         let ch = b.dev.dds().channels()[0];
-        let v = f64::from(ch.amp) * model_core::dds::DAC_VOLTS_PER_CODE;
+        let v = f64::from(ch.amp) * board::dds::DAC_VOLTS_PER_CODE;
         let h = model_response(&model.z, st.frequency_hz).norm();
         let bound = 2.0 * f64::from(C_MAX) * 2e-6 / f64::from(h);
         worst = worst.max(v / bound);
@@ -158,7 +158,7 @@ fn a_lost_lock_goes_to_the_safe_state() {
     assert_eq!(st.faults, faults::LOSS_OF_LOCK, "{st:?}");
     let t = latched.unwrap() as f64 * b.t_half();
     let exit = 0.02 * F_R / 5_000.0;
-    let loss = f64::from(model_core::device::tracking::LOSS_WINDOWS) * b.t_half();
+    let loss = f64::from(board::device::tracking::LOSS_WINDOWS) * b.t_half();
     assert!(t <= exit + loss + b.t_half(), "latched at {t} s");
     assert!(!st.running && !st.locked);
     assert!(worst <= 1.0, "{worst}");
@@ -216,7 +216,7 @@ fn options_are_refused_by_name() {
 /// settling band, 2 % of the setpoint.
 #[test]
 fn a_drifting_resonance_without_tracking_never_lifts_off() {
-    use model_core::protocol::ControlSetting;
+    use board::protocol::ControlSetting;
     let table = SineTable::<1024>::libm();
     let mut o = opts();
     o.modes = modes();
@@ -242,7 +242,7 @@ fn a_drifting_resonance_without_tracking_never_lifts_off() {
     };
     let (inputs, now, limit) = b.dev.control_plan_inputs();
     let scene = inputs.scene().unwrap();
-    let plan = model_core::control::plan(&scene, c.target_mu, c.v0_m_s, now, limit).unwrap();
+    let plan = board::control::plan(&scene, c.target_mu, c.v0_m_s, now, limit).unwrap();
     b.dev.set_control(c, Some(plan)).unwrap();
     let limit = f64::from((1.0f32 - 0.05) * 4e-6);
     let (mut peak, mut worst_mu, mut seen) = (0.0f64, 0.0f64, 0);

@@ -26,7 +26,7 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 use defmt_rtt as _;
 use model_core::analytic::CriticalVelocity;
-use model_core::device;
+use board::device;
 use model_core::exact::{self, Solution};
 use model_core::float::FastF32;
 use model_core::{Libm, Math, Scene, SceneParams};
@@ -113,8 +113,8 @@ fn id(x: f32) -> f32 {
 /// per half: fit of both pickups, amplitude and φ, the loop's
 /// step D3 and its new voltages), minus the same half without
 /// the pickups (the force intake alone).
-fn displacement_costs(table: &model_core::dds::SineTable<1024>, empty: u32, per_insn: f32) {
-    use model_core::device::{
+fn displacement_costs(table: &board::dds::SineTable<1024>, empty: u32, per_insn: f32) {
+    use board::device::{
         Contact, Device, DeviceConfig, DisplacementOptions, DriveMode, DriveSetting, Track,
         TransducerModel, Transducers,
     };
@@ -285,7 +285,7 @@ const PLANNING_BOUND: u32 = 8_000;
 /// critical sections run them, without the masking): the longest and the
 /// number of calls since [`Timed::take`].
 struct Timed<'d, 't> {
-    dev: &'d mut model_core::device::Device<'t, 1024>,
+    dev: &'d mut board::device::Device<'t, 1024>,
     /// Ticks of an empty `timed` call.
     empty: u32,
     longest: u32,
@@ -302,8 +302,8 @@ impl Timed<'_, '_> {
     }
 }
 
-impl<'t> model_core::server::DeviceAccess<1024> for Timed<'_, 't> {
-    fn with<R>(&mut self, f: impl FnOnce(&mut model_core::device::Device<'_, 1024>) -> R) -> R {
+impl<'t> board::server::DeviceAccess<1024> for Timed<'_, 't> {
+    fn with<R>(&mut self, f: impl FnOnce(&mut board::device::Device<'_, 1024>) -> R) -> R {
         let dev = &mut *self.dev;
         let (r, t) = timed(|| f(dev));
         self.longest = self.longest.max(t.saturating_sub(self.empty));
@@ -340,7 +340,7 @@ impl Longest {
 /// the longest critical sections so far.
 struct Bench<'d, 't> {
     acc: Timed<'d, 't>,
-    server: model_core::server::Server,
+    server: board::server::Server,
     seq: u32,
     per_insn: f32,
     /// Longest `with` of all, of the requests under [`CRITICAL_BOUND`], of
@@ -369,11 +369,11 @@ impl Bench<'_, '_> {
     fn call(
         &mut self,
         label: &'static str,
-        r: model_core::protocol::Request,
+        r: board::protocol::Request,
         must_pass: bool,
         bound: u32,
-    ) -> Option<model_core::protocol::Response> {
-        use model_core::protocol::{
+    ) -> Option<board::protocol::Response> {
+        use board::protocol::{
             decode, encode, Body, Deframed, Deframer, Frame, Response, MAX_FRAME, PROTOCOL_VERSION,
         };
         self.seq += 1;
@@ -470,13 +470,13 @@ impl Bench<'_, '_> {
 /// each request's longest `with` and the longest of all; returns false if
 /// one exceeds its bound ([`CRITICAL_BOUND`], or the stated exception
 /// [`PLANNING_BOUND`]) or a request meant to be accepted was refused.
-fn critical_sections(table: &model_core::dds::SineTable<1024>, per_insn: f32) -> bool {
-    use model_core::device::{
+fn critical_sections(table: &board::dds::SineTable<1024>, per_insn: f32) -> bool {
+    use board::device::{
         Contact, Device, DeviceConfig, DisplacementOptions, DriveMode, DriveSetting, Track,
         TransducerModel, Transducers,
     };
-    use model_core::protocol::{ControlSetting, Info, Request, Response};
-    use model_core::server::Server;
+    use board::protocol::{ControlSetting, Info, Request, Response};
+    use board::server::Server;
 
     let cfg = DeviceConfig::driver_board(1);
     let contact = Contact {
@@ -761,16 +761,16 @@ fn main() -> ! {
         Err(_) => 0.0,
     };
     let mut plan = None;
-    let t = ticks(|| plan = Some(model_core::control::plan(&scene, target, 4e-3, 0.0, limit)))
+    let t = ticks(|| plan = Some(board::control::plan(&scene, target, 4e-3, 0.0, limit)))
         .saturating_sub(empty);
     match plan {
         Some(Ok(p)) => {
             let plan_insn = (t as f32 / per_insn) as u32;
-            let gains = model_core::control::Gains {
+            let gains = board::control::Gains {
                 kappa: 0.95,
                 rate_m_per_s: 1.0,
             };
-            let mut ctl = model_core::control::Controller::new(p, gains, params.duz);
+            let mut ctl = board::control::Controller::new(p, gains, params.duz);
             // The first update has no secant yet; the second one learns
             // from the step the first made (C5–C6): the one timed.
             let _ = core::hint::black_box(ctl.update(0.24, 0.384e-3));
@@ -858,7 +858,7 @@ fn main() -> ! {
 
     // DDS refill of one 256-sample half-buffer (two channels, packed words),
     // and building the 1024-entry table with libm and with micromath.
-    use model_core::dds::{Dds, Level, SineTable, Slew};
+    use board::dds::{Dds, Level, SineTable, Slew};
     let mut tl = None;
     let t_libm = ticks(|| tl = Some(SineTable::<1024>::libm())).saturating_sub(empty);
     let mut tm = None;
@@ -921,7 +921,7 @@ fn main() -> ! {
             // The QEMU build's plant (module `qemu` of the firmware): one
             // half-buffer at 40 kHz, 8 sub-steps per sample, fast-f32 sine.
             {
-                use model_core::board::plant::{HalfDrive, Plant, SampleConditions};
+                use board::plant::{HalfDrive, Plant, SampleConditions};
                 let d = HalfDrive {
                     before: *dds.channels(),
                     after: *dds.channels(),
@@ -956,7 +956,7 @@ fn main() -> ! {
             }
             displacement_costs(table, empty, per_insn);
             critical_ok = critical_sections(table, per_insn);
-            dds.set_interp(model_core::dds::Interp::Nearest);
+            dds.set_interp(board::dds::Interp::Nearest);
             let t = ticks(|| dds.fill(&mut buf)).saturating_sub(empty);
             hprintln!(
                 "DDS fill, settled, nearest entry: {} instructions per sample (both channels)",

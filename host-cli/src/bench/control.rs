@@ -67,7 +67,7 @@ pub const X_OVER_Z: f64 = 19_700.0 / 20_300.0;
 pub const QX_OVER_QZ: f64 = 2.0 / 3.0;
 /// Drift of the normal resonance in the drift runs, Hz/s: the issue's
 /// −20 Hz/s (1 200 Hz in 60 s, beyond the tracking range
-/// `model_core::board::device::tracking::TRACK_RANGE`, ±2 % = ±406 Hz of
+/// `board::device::tracking::TRACK_RANGE`, ±2 % = ±406 Hz of
 /// 20 300 Hz: the tracking's run ends with `loss_of_lock` near 20 s), and
 /// −6 Hz/s, the largest whole rate whose 60 s (360 Hz) plus the thermal
 /// shift (20 Hz) stays inside that range.

@@ -2,7 +2,7 @@
 //!
 //! For every sine table size `N` (16 … 65 536), interpolation (nearest entry,
 //! linear) and table backend (libm, micromath), the board's DDS
-//! ([`model_core::dds`]) produces 2¹⁶ samples of one channel at the board's
+//! ([`board::dds`]) produces 2¹⁶ samples of one channel at the board's
 //! sample rate (500 kS/s) near full scale (amplitude 2047, DC 2047.5 codes)
 //! at 83 885 cycles per 2²⁰ samples (40.0 kHz; an odd count, so the sampling
 //! is coherent and visits 2²⁰ distinct phases). Measured:
@@ -24,8 +24,8 @@
 use std::fmt::Write as _;
 use std::hint::black_box;
 
+use board::dds::{phase_rad, quantise, Dds, Interp, Level, SineTable, Slew};
 use clap::Args;
-use model_core::dds::{phase_rad, quantise, Dds, Interp, Level, SineTable, Slew};
 use model_core::{Libm, Math, Micromath};
 use rustfft::{num_complex::Complex, FftPlanner};
 

@@ -4,7 +4,7 @@
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
-use model_core::protocol::{
+use board::protocol::{
     decode, encode, Body, Deframed, Deframer, Frame, Request, Response, Telemetry, MAX_FRAME,
     PROTOCOL_VERSION,
 };

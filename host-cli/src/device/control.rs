@@ -6,12 +6,12 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use clap::Args;
-use model_core::device::{DisplacementOptions, DriveMode, DriveSetting};
-use model_core::protocol::{
+use board::device::{DisplacementOptions, DriveMode, DriveSetting};
+use board::protocol::{
     decode, encode, Body, ControlSetting, ControlState, ControlUpdate, Deframed, Deframer, Frame,
     Request, Response, Telemetry, MAX_FRAME, PROTOCOL_VERSION,
 };
+use clap::Args;
 use serde::Serialize;
 
 use super::client::Client;
@@ -23,7 +23,7 @@ use crate::error::{CliError, CliResult};
 use crate::plot::{render_figure, Corner, Extras, Figure, Mark, Panel, Series};
 
 /// Default κ (fraction of the error removed per update, with the plant's
-/// gain learned: eqs. C5–C7 of `model_core::control`).
+/// gain learned: eqs. C5–C7 of `board::control`).
 pub const DEFAULT_GAIN: f64 = 0.95;
 /// The loop gain's domain: a fraction of the error removed per update.
 const GAIN: Real = Real::ANY.at_least(0.01).at_most(1.0);
@@ -32,7 +32,7 @@ const GAIN: Real = Real::ANY.at_least(0.01).at_most(1.0);
 /// at the drive frequency (`auto`, the default).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Periods {
-    /// `model_core::device::periods_in_half_buffer` at the drive frequency.
+    /// `board::device::periods_in_half_buffer` at the drive frequency.
     Auto,
     /// This many, 1 … `CONTROL_MAX_PERIODS`.
     Fixed(u32),
@@ -42,7 +42,7 @@ impl Periods {
     /// The periods at `freq_hz` with `sample_rate_hz`.
     pub fn at(self, freq_hz: f64, sample_rate_hz: f64) -> u32 {
         match self {
-            Periods::Auto => model_core::device::periods_in_half_buffer(freq_hz, sample_rate_hz),
+            Periods::Auto => board::device::periods_in_half_buffer(freq_hz, sample_rate_hz),
             Periods::Fixed(n) => n,
         }
     }
@@ -173,7 +173,7 @@ pub fn run(c: &mut Client, req: Request, a: &ControlArgs, json: bool) -> CliResu
             other => return Err(unexpected(other)),
         };
         expect(c.call(Request::SetDisplacementOptions(
-            model_core::device::DisplacementOptions {
+            board::device::DisplacementOptions {
                 headroom: h as f32,
                 ..st.options
             },
@@ -504,8 +504,7 @@ impl Bench {
             self.samples += HALF as u64;
             let t = self.t();
             let dev = self.dev.device();
-            let volts =
-                f64::from(dev.dds().channels()[0].amp) * model_core::dds::DAC_VOLTS_PER_CODE;
+            let volts = f64::from(dev.dds().channels()[0].amp) * board::dds::DAC_VOLTS_PER_CODE;
             let st = dev.status();
             self.trace.push(Half {
                 t,
@@ -978,19 +977,19 @@ pub const MAX_BENCH_TAU_S: f64 = 0.05;
 /// stores their exact identification): each in the model's domain and the
 /// drive frequency inside the board's range, named by flag.
 fn check_bench_plant(
-    r: &model_core::board::plant::ResonantOptions<f64>,
-    cfg: &model_core::device::DeviceConfig,
+    r: &board::plant::ResonantOptions<f64>,
+    cfg: &board::device::DeviceConfig,
     tau_s: f64,
 ) -> CliResult {
     let t = r.identified(cfg.sample_rate_hz);
     for (m, ch) in [(t.z, "z"), (t.x, "x")] {
-        if let Err(model_core::device::DeviceError::OutOfRange { param, min, max }) =
-            model_core::device::displacement::check_model(&m)
+        if let Err(board::device::DeviceError::OutOfRange { param, min, max }) =
+            board::device::displacement::check_model(&m)
         {
             let flag = match param {
-                model_core::device::DriveParam::Resonance => "resonance",
-                model_core::device::DriveParam::Quality => "q",
-                model_core::device::DriveParam::TransducerGain => "gain",
+                board::device::DriveParam::Resonance => "resonance",
+                board::device::DriveParam::Quality => "q",
+                board::device::DriveParam::TransducerGain => "gain",
                 _ => "resonance",
             };
             return Err(CliError::usage(format!(
@@ -1008,9 +1007,8 @@ fn check_bench_plant(
         )));
     }
     if tau_s > MAX_BENCH_TAU_S {
-        let tau = |m: &model_core::board::resonator::ModeParams<f64>| {
-            m.q / (std::f64::consts::PI * m.resonance_hz)
-        };
+        let tau =
+            |m: &board::resonator::ModeParams<f64>| m.q / (std::f64::consts::PI * m.resonance_hz);
         let ch = if tau(&r.modes[0]) >= tau(&r.modes[1]) {
             "z"
         } else {

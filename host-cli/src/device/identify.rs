@@ -1,5 +1,5 @@
 //! `fricctl device identify`: a stepped-sine sweep of each transducer, the
-//! fit of its mode ([`model_core::board::identify`], eq. 1: f_r, Q, static
+//! fit of its mode ([`board::identify`], eq. 1: f_r, Q, static
 //! gain, extra lag, with 95 % intervals), the result stored on the device
 //! (`SetTransducers`, kept by `Reset`) and optionally in a file and a Bode
 //! plot. Also the drive-mode choice of `drive set` ([`select_mode`]).
@@ -31,9 +31,9 @@
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use model_core::board::identify::{self as fitid, Fit, FitConfig, Sample};
-use model_core::device::{DriveMode, DriveSetting, TransducerModel, Transducers};
-use model_core::protocol::{Info, Request, Response, Status};
+use board::device::{DriveMode, DriveSetting, TransducerModel, Transducers};
+use board::identify::{self as fitid, Fit, FitConfig, Sample};
+use board::protocol::{Info, Request, Response, Status};
 
 use super::client::Client;
 use super::render::Report;
@@ -177,7 +177,7 @@ fn wait_settled(c: &mut Client, limit: Duration) -> CliResult<Status> {
 fn check_faults(s: &Status) -> CliResult {
     if s.faults != 0 {
         let names = super::render::fault_names(s.faults).join(", ");
-        let hint = if s.faults & model_core::device::faults::MEASURED_LIFTOFF != 0 {
+        let hint = if s.faults & board::device::faults::MEASURED_LIFTOFF != 0 {
             " (the normal transducer rang beyond the offset: identify it at a larger --offset-z \
              of the drive, or with a smaller response: fewer --points near the peak)"
         } else {
@@ -253,8 +253,8 @@ fn sweep(
         }
         wait(c, settle, f, fs)?;
         let (re, im) = response(c, ch)?;
-        let volts = f64::from(amp) / f64::from(metres_per_code(ch))
-            * model_core::board::dds::DAC_VOLTS_PER_CODE;
+        let volts =
+            f64::from(amp) / f64::from(metres_per_code(ch)) * board::dds::DAC_VOLTS_PER_CODE;
         peak = peak.max(re.hypot(im) * volts);
         rec.push((f, re, im, volts));
     }

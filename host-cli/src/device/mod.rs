@@ -16,9 +16,9 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
+use board::device::{Contact, DriveSetting};
+use board::protocol::{Request, Response, WireError};
 use clap::{Args, Subcommand};
-use model_core::device::{Contact, DriveSetting};
-use model_core::protocol::{Request, Response, WireError};
 use serialport::SerialPort;
 
 use self::client::Client;
@@ -202,12 +202,12 @@ pub enum TrackArg {
     X,
 }
 
-impl From<TrackArg> for model_core::device::Track {
+impl From<TrackArg> for board::device::Track {
     fn from(t: TrackArg) -> Self {
         match t {
-            TrackArg::None => model_core::device::Track::None,
-            TrackArg::Z => model_core::device::Track::Z,
-            TrackArg::X => model_core::device::Track::X,
+            TrackArg::None => board::device::Track::None,
+            TrackArg::Z => board::device::Track::Z,
+            TrackArg::X => board::device::Track::X,
         }
     }
 }
@@ -218,7 +218,7 @@ pub struct HeadroomArg {
     /// Voltage headroom of the displacement loop's transitions: the voltage
     /// may reach H times the identified model's steady-state voltage
     /// (1 = no overdrive; at most 8)
-    #[arg(long, value_name = "H", default_value_t = f64::from(model_core::device::displacement::DEFAULT_HEADROOM), value_parser = Real::ANY.at_least(1.0).at_most(8.0).because("1 is no overdrive").single_precision())]
+    #[arg(long, value_name = "H", default_value_t = f64::from(board::device::displacement::DEFAULT_HEADROOM), value_parser = Real::ANY.at_least(1.0).at_most(8.0).because("1 is no overdrive").single_precision())]
     pub headroom: f64,
 }
 
@@ -340,7 +340,7 @@ fn usb_ports() -> Vec<String> {
 }
 
 fn wire_error(e: WireError) -> CliError {
-    use model_core::device::DriveParam;
+    use board::device::DriveParam;
     let name = |p: DriveParam| match p {
         DriveParam::Freq => "--freq",
         DriveParam::AmpZ => "--amp-z",
@@ -515,7 +515,7 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             identify::select_mode(&mut c, *open_loop)?;
             if !*open_loop {
                 expect(c.call(Request::SetDisplacementOptions(
-                    model_core::device::DisplacementOptions {
+                    board::device::DisplacementOptions {
                         track: (*track).into(),
                         headroom: headroom.headroom as f32,
                     },
@@ -691,7 +691,7 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
 
 /// `Err` (exit 1, one line naming the reasons) for an invalid estimate
 /// unless `allow_invalid`.
-pub(crate) fn check_valid(e: &model_core::estimator::Estimate, allow_invalid: bool) -> CliResult {
+pub(crate) fn check_valid(e: &board::estimator::Estimate, allow_invalid: bool) -> CliResult {
     if e.valid() || allow_invalid {
         return Ok(());
     }
@@ -703,7 +703,7 @@ pub(crate) fn check_valid(e: &model_core::estimator::Estimate, allow_invalid: bo
 }
 
 pub(crate) fn unexpected(r: Response) -> CliError {
-    use model_core::protocol::Answer;
+    use board::protocol::Answer;
     let what = match r.answer() {
         Some(Answer::Info) => "Info",
         Some(Answer::Drive) => "Drive",

@@ -7,9 +7,9 @@
 
 use std::io::Write;
 
-use model_core::device::{Contact, DriveSetting, Status};
-use model_core::estimator::Estimate;
-use model_core::protocol::{Applied, ControlState, ControlUpdate, Info, Prediction, SelfTest};
+use board::device::{Contact, DriveSetting, Status};
+use board::estimator::Estimate;
+use board::protocol::{Applied, ControlState, ControlUpdate, Info, Prediction, SelfTest};
 use model_core::regime::Regime;
 use serde_json::{Map, Value};
 
@@ -186,13 +186,13 @@ impl Report {
     }
 }
 
-/// The names of self-test check bits ([`model_core::protocol::self_test`]),
+/// The names of self-test check bits ([`board::protocol::self_test`]),
 /// `0x…` for unknown bits.
 pub fn self_test_names(bits: u16) -> Vec<String> {
-    let mut v: Vec<String> = model_core::protocol::self_test::names(bits)
+    let mut v: Vec<String> = board::protocol::self_test::names(bits)
         .map(str::to_string)
         .collect();
-    let rest = bits & !model_core::protocol::self_test::ALL;
+    let rest = bits & !board::protocol::self_test::ALL;
     if rest != 0 {
         v.push(format!("0x{rest:x}"));
     }
@@ -217,7 +217,7 @@ pub fn self_test_text(t: &SelfTest) -> String {
     if !clocks.is_empty() {
         details.push(clocks.join(", "));
     }
-    let skipped = self_test_names(model_core::protocol::self_test::ALL & !t.ran);
+    let skipped = self_test_names(board::protocol::self_test::ALL & !t.ran);
     if !skipped.is_empty() {
         details.push(format!("not run: {}", skipped.join(", ")));
     }
@@ -300,7 +300,7 @@ pub fn prediction(v0: f64, p: &Prediction, regime: Regime) -> Report {
 
 /// The names of the reason bits of an estimate.
 pub fn reason_names(bits: u32) -> Vec<&'static str> {
-    model_core::estimator::reasons::NAMES
+    board::estimator::reasons::NAMES
         .iter()
         .filter(|(b, _)| bits & b != 0)
         .map(|(_, n)| *n)
@@ -309,7 +309,7 @@ pub fn reason_names(bits: u32) -> Vec<&'static str> {
 
 /// The names of latched fault bits.
 pub fn fault_names(bits: u32) -> Vec<String> {
-    use model_core::device::faults::*;
+    use board::device::faults::*;
     let known = [
         (ADC_SATURATED, "adc_saturated"),
         (DAC_UNDERRUN, "dac_underrun"),
@@ -404,27 +404,27 @@ pub fn status(s: &Status) -> Report {
 }
 
 /// The tracked transducer's name in text and JSON: `none`, `z` or `x`.
-pub fn track_name(t: model_core::device::Track) -> &'static str {
+pub fn track_name(t: board::device::Track) -> &'static str {
     match t {
-        model_core::device::Track::None => "none",
-        model_core::device::Track::Z => "z",
-        model_core::device::Track::X => "x",
+        board::device::Track::None => "none",
+        board::device::Track::Z => "z",
+        board::device::Track::X => "x",
     }
 }
 
 /// The drive mode's name in text and JSON: `open_loop` or `displacement`.
-pub fn mode_name(m: model_core::device::DriveMode) -> &'static str {
+pub fn mode_name(m: board::device::DriveMode) -> &'static str {
     match m {
-        model_core::device::DriveMode::OpenLoop => "open_loop",
-        model_core::device::DriveMode::Displacement => "displacement",
+        board::device::DriveMode::OpenLoop => "open_loop",
+        board::device::DriveMode::Displacement => "displacement",
     }
 }
 
 impl Report {
     /// The pickups' measured motion (`Status.measured`), `null` / `-` when
     /// the device has none yet.
-    pub fn measured(self, m: Option<&model_core::device::MeasuredDrive>) -> Self {
-        let v = |f: fn(&model_core::device::MeasuredDrive) -> f64| -> Value {
+    pub fn measured(self, m: Option<&board::device::MeasuredDrive>) -> Self {
+        let v = |f: fn(&board::device::MeasuredDrive) -> f64| -> Value {
             m.map_or(Value::Null, |m| Value::from(f(m)))
         };
         self.row(
@@ -511,7 +511,7 @@ mod tests {
 
     #[test]
     fn self_test_line_and_keys() {
-        use model_core::protocol::self_test::*;
+        use board::protocol::self_test::*;
         let t = |ran, failed, hse_hz, sysclk_hz| SelfTest {
             ran,
             failed,

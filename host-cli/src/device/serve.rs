@@ -14,7 +14,7 @@ use std::net::{TcpListener, TcpStream};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use model_core::board::link::{self, TxRing};
+use board::link::{self, TxRing};
 
 use super::sim::{self, VirtualDevice};
 use crate::error::{CliError, CliResult};

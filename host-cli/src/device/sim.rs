@@ -1,6 +1,6 @@
 //! The virtual device: the firmware's own device logic and protocol server
 //! (model-core `device`, `server`) plus a simulated plant
-//! ([`model_core::board::plant`], the same code the firmware runs under
+//! ([`board::plant`], the same code the firmware runs under
 //! QEMU): the paper's spring contact integrated in physical units with 32
 //! sub-steps per ADC sample, driven by the DDS channels' *current* levels (so
 //! ramps act on it), loaded by a stage sliding at `v0`; its forces go through
@@ -17,7 +17,7 @@
 //! - or, with any of the resonant flags ([`super::transducers`]), resonant
 //!   transducers: second-order modes (f_r, Q, static gain) driven by the DAC
 //!   voltages, with resonance drift, self-heating, cross-talk and the
-//!   contact's load ([`model_core::board::plant::Resonant`]);
+//!   contact's load ([`board::plant::Resonant`]);
 //! - a drifting friction coefficient μ₀(t) = μ₀ + `mu0_drift`·t (t = device
 //!   time, s; μ₀(t) stops at 0 rather than change sign);
 //! - a stage velocity that is constant (`v0`) or follows a piecewise-linear
@@ -30,20 +30,20 @@
 
 use std::f64::consts::TAU;
 
-use model_core::board::link::{self, RxQueue, TxRing};
-use model_core::board::plant::{HalfDrive, Noise, Plant, SampleConditions};
-use model_core::dds::SineTable;
-use model_core::device::{Contact, Device, DeviceConfig, DriveSetting};
-use model_core::protocol::Info;
-use model_core::server::Server;
+use board::dds::SineTable;
+use board::device::{Contact, Device, DeviceConfig, DriveSetting};
+use board::link::{self, RxQueue, TxRing};
+use board::plant::{HalfDrive, Noise, Plant, SampleConditions};
+use board::protocol::Info;
+use board::server::Server;
 use model_core::Libm;
 
 use crate::args::Real;
 
 /// Table size of the virtual device (as the firmware).
 pub const TABLE_N: usize = 1024;
-/// Samples per half-buffer (the firmware's, [`model_core::device::HALF_BUFFER`]).
-pub const HALF: usize = model_core::device::HALF_BUFFER;
+/// Samples per half-buffer (the firmware's, [`board::device::HALF_BUFFER`]).
+pub const HALF: usize = board::device::HALF_BUFFER;
 /// Seed of the pickups' noise record (xor'ed into a reseed).
 const PICKUP_SEED: u64 = 0xD1B5_4A32_D192_ED03;
 /// Sub-steps of the plant per ADC sample.
@@ -102,7 +102,7 @@ pub struct PlantOptions {
     /// factor (a disturbance of the bench; empty for none).
     pub mu0_steps: Vec<(f64, f64)>,
     /// Resonant transducers (`None`: ideal ones, with `lag_periods`).
-    pub resonant: Option<model_core::board::plant::ResonantOptions<f64>>,
+    pub resonant: Option<board::plant::ResonantOptions<f64>>,
 }
 
 impl PlantOptions {
@@ -285,7 +285,7 @@ fn plant_of(opts: &PlantOptions, cfg: &DeviceConfig) -> Plant<f64> {
         let h = 1.0 / (cfg.sample_rate_hz * f64::from(SUB));
         // The options were checked (`TransducerArgs::options`); a bad set
         // from code leaves the transducers ideal rather than panic.
-        p.resonant = model_core::board::plant::Resonant::new(r, h).ok();
+        p.resonant = board::plant::Resonant::new(r, h).ok();
     }
     p
 }

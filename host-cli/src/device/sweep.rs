@@ -10,9 +10,9 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use board::device::{Contact, DriveSetting};
+use board::protocol::{Request, Response};
 use clap::{Args, ValueEnum};
-use model_core::device::{Contact, DriveSetting};
-use model_core::protocol::{Request, Response};
 use serde::Serialize;
 
 use super::client::Client;
@@ -166,8 +166,8 @@ fn wait_status(
     c: &mut Client,
     limit: Duration,
     what: &str,
-    done: impl Fn(&model_core::protocol::Status) -> bool,
-) -> CliResult<model_core::protocol::Status> {
+    done: impl Fn(&board::protocol::Status) -> bool,
+) -> CliResult<board::protocol::Status> {
     let start = Instant::now();
     loop {
         if let Response::Status(s) = ask(c, Request::GetStatus)? {

@@ -1,6 +1,6 @@
 //! The virtual plant's transducers as flags: ideal (the DAC level times the
 //! calibration, today's board assumption) or resonant modes
-//! ([`model_core::board::plant::Resonant`]: f_r, Q, static gain, drift,
+//! ([`board::plant::Resonant`]: f_r, Q, static gain, drift,
 //! self-heating, cross-talk, the contact's load), shared by
 //! `fricctl sim-device`, `fricctl device --sim` and `device control-bench`.
 //!
@@ -22,18 +22,18 @@
 //! loop runs on the displacement loops; `--plant-ideal-transducers` for the
 //! ideal pipeline).
 
-use model_core::board::plant::ResonantOptions;
-use model_core::board::resonator::ModeParams;
+use board::plant::ResonantOptions;
+use board::resonator::ModeParams;
 
 use crate::args::Real;
 use crate::error::{CliError, CliResult};
 
-pub use model_core::board::plant::bench::{LOAD_Q, Q_X, Q_Z, RESONANCE_X_HZ, RESONANCE_Z_HZ};
+pub use board::plant::bench::{LOAD_Q, Q_X, Q_Z, RESONANCE_X_HZ, RESONANCE_Z_HZ};
 
 /// Default static gain of a channel, m/V: a thirtieth of the ideal
 /// calibration `metres_per_code` per DAC volt (module documentation).
 pub fn default_gain(metres_per_code: f32) -> f64 {
-    model_core::board::plant::bench::gain(metres_per_code)
+    board::plant::bench::gain(metres_per_code)
 }
 
 /// The domain of a transducer's Q.

@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use model_core::protocol::{Request, StreamEnd, Telemetry};
+use board::protocol::{Request, StreamEnd, Telemetry};
 
 use super::client::Client;
 use super::render::{self, reason_names};
@@ -68,7 +68,7 @@ pub fn watch(
     };
     let mut c = c;
     // While the closed loop runs the estimator is the loop's: show its updates.
-    if let model_core::protocol::Response::Control(st) = expect(c.call(Request::GetControl)?)? {
+    if let board::protocol::Response::Control(st) = expect(c.call(Request::GetControl)?)? {
         if st.setting.on {
             return control_loop(t, &mut c, count, &stop);
         }
@@ -207,7 +207,7 @@ fn stream_loop(
 }
 
 /// One text line of `watch`.
-fn text_line(seq: u32, e: &model_core::estimator::Estimate, dropped: u32) -> String {
+fn text_line(seq: u32, e: &board::estimator::Estimate, dropped: u32) -> String {
     format!(
         "#{seq:<6} mu {:>10.6} ± {:<9.2e} fx {:>9.4} N  fz {:>9.4} N  {} periods{}{}",
         e.mu,

@@ -12,7 +12,7 @@ pub mod sim;
 use std::io::Read;
 use std::time::{Duration, Instant};
 
-use model_core::protocol::{
+use board::protocol::{
     decode, encode, Body, Deframed, Deframer, Frame, Request, CRC, MAX_FRAME, PROTOCOL_VERSION,
 };
 

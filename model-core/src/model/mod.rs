@@ -18,7 +18,7 @@
 //!   or maximises an objective (ratchet asymmetry, stall force).
 //!
 //! **Dependencies.** The model uses only itself, `libm`/`micromath` and
-//! `heapless`; it never uses [`crate::board`]. New contact models, body
+//! `heapless`; it never uses the `board` crate. New contact models, body
 //! motion and controllers' inverse models belong here.
 
 pub mod analytic;

@@ -1,6 +1,6 @@
 //! The transducers' measured motion: the two motion pickups (ADC channels
 //! next to the force sensors, [`super::DeviceConfig::pickup_z`], `pickup_x`)
-//! through the lock-in of [`crate::board::lockin`] on the DDS's own phases
+//! through the lock-in of [`crate::lockin`] on the DDS's own phases
 //! of each sample (the phases the friction estimate uses, ADC lag included,
 //! advanced by the drive's phase over the pickups' conversion delay δ,
 //! [`super::DeviceConfig::pickup_delay_s`]: the ADCs convert each pickup
@@ -21,9 +21,9 @@
 //! difference for resonant ones.
 
 use super::Device;
-use crate::board::lockin::LockIn;
-pub use crate::board::protocol::messages::MeasuredDrive;
-use crate::float::FastF32;
+use crate::lockin::LockIn;
+pub use crate::protocol::messages::MeasuredDrive;
+use model_core::float::FastF32;
 use num_complex::Complex32 as C;
 
 /// The least drive phase a window spans, rad: a whole period, where the
@@ -127,7 +127,7 @@ impl<const N: usize> Device<'_, N> {
     /// voltage the DDS outputs now (`None` at zero voltage).
     fn response(&self, ch: usize, x: C) -> Option<[f32; 2]> {
         let c = self.dds.channels()[ch];
-        let v = c.amp * crate::board::dds::DAC_VOLTS_PER_CODE as f32;
+        let v = c.amp * crate::dds::DAC_VOLTS_PER_CODE as f32;
         if v == 0.0 {
             return None;
         }

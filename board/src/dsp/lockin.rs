@@ -30,7 +30,7 @@
 //! Cost per sample: the reference's cos and sin (table look-ups on the board)
 //! and nine multiply-adds into the sums.
 
-use crate::float::{Float, Math};
+use model_core::float::{Float, Math};
 
 /// The least phase span (rad) of a window: below it the fit is refused
 /// ([`LockInError::ShortWindow`]). Over a span `s` the normal matrix's

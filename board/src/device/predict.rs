@@ -1,16 +1,16 @@
 //! The model's prediction for the current drive: μ at a sliding velocity
 //! (exact solver, f32) and the regime (§3.2). A drive that lifts the contact
 //! off (`a = Δu_z/u_z0 ≥ 1`, only accepted while lift-off is allowed) is
-//! answered by the lift-off model ([`crate::model::liftoff`], f32, FastF32).
+//! answered by the lift-off model ([`model_core::model::liftoff`], f32, FastF32).
 
 use super::config::MAX_VELOCITY_M_S;
 use super::{in_range, Device, DeviceError, DriveParam, Prediction, SceneInputs};
-use crate::model::analytic::StaticFriction;
-use crate::model::exact::{self, Solution};
-use crate::model::float::FastF32;
-use crate::model::liftoff;
-use crate::model::regime::{classify_drive, ClassifyOptions, Regime};
-use crate::model::scene::{Scene, SceneParams};
+use model_core::analytic::StaticFriction;
+use model_core::exact::{self, Solution};
+use model_core::float::FastF32;
+use model_core::model::liftoff;
+use model_core::regime::{classify_drive, ClassifyOptions, Regime};
+use model_core::scene::{Scene, SceneParams};
 
 impl<const N: usize> Device<'_, N> {
     /// The model's μ at sliding velocity `v0` (m/s) for the current drive
@@ -89,7 +89,7 @@ pub fn predict(s: &Scene<f32>, v0: f32) -> Result<Prediction, DeviceError> {
             liftoff: true,
         });
     }
-    let vc = crate::model::analytic::CriticalVelocity::of_with::<FastF32>(s);
+    let vc = model_core::analytic::CriticalVelocity::of_with::<FastF32>(s);
     let (m, m_minus) = match exact::solve_with::<f32, FastF32>(s, v0).map_err(DeviceError::Model)? {
         Solution::Sliding { mu_over_mu0 } | Solution::StickSlip { mu_over_mu0 } => {
             (mu_over_mu0, mu_over_mu0)

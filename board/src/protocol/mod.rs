@@ -8,7 +8,7 @@
 //!   and the receiver's [`Deframer`].
 //!
 //! **Dependencies.** Nothing here knows the device logic; the device
-//! ([`crate::board::device`]) and the server ([`crate::board::server`]) use
+//! ([`crate::device`]) and the server ([`crate::server`]) use
 //! these types.
 
 pub mod framing;

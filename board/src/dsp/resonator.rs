@@ -33,9 +33,9 @@
 //! state. [`Mode::update_for`] forms the same exact update for any other
 //! step length, [`Mode::x_after`] applies it without moving the state: the
 //! plant's motion pickups sample a mode a fixed delay after the sample's
-//! start, within the held sample ([`crate::board::plant`]).
+//! start, within the held sample ([`crate::plant`]).
 
-use crate::float::{Float, Math};
+use model_core::float::{Float, Math};
 
 /// Why a mode cannot be formed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -52,7 +52,7 @@ pub mod faults {
     pub const PICKUP_OPEN: u32 = 1 << 7;
     /// (v7) The power-up self-test failed a check the drive depends on
     /// (clock or DMA: `Info.self_test` names it,
-    /// [`crate::board::protocol::SelfTest`]); the firmware latches it again
+    /// [`crate::protocol::SelfTest`]); the firmware latches it again
     /// at once after `ResetFaults`, so the drive can never start on such a
     /// board.
     pub const SELF_TEST: u32 = 1 << 8;

@@ -1,4 +1,4 @@
-//! The closed loop inside the device ([`crate::board::control`]): which
+//! The closed loop inside the device ([`crate::control`]): which
 //! samples each update's estimate covers and when its command reaches the DAC.
 //!
 //! **Timing.** DAC fill `n` (the `n`-th call of `fill_dac` since power-up)
@@ -38,11 +38,9 @@
 use super::config::MAX_VELOCITY_M_S;
 use super::measure::FILL_RING;
 use super::{Device, DeviceError, DriveParam};
-use crate::board::control::{self, Controller, Gains, Plan};
-use crate::board::estimator::reasons;
-use crate::board::protocol::messages::{
-    ControlSetting, ControlState, ControlUpdate, CONTROL_MAX_PERIODS,
-};
+use crate::control::{self, Controller, Gains, Plan};
+use crate::estimator::reasons;
+use crate::protocol::messages::{ControlSetting, ControlState, ControlUpdate, CONTROL_MAX_PERIODS};
 
 /// Smallest κ accepted.
 pub const MIN_GAIN: f32 = 0.01;

@@ -1,5 +1,23 @@
-//! **The board**: the driver board's logic, free of hardware types, so that
-//! the firmware and the host's virtual device run the very same code.
+//! # board
+//!
+//! **The driver board's logic**, free of hardware types, so that the
+//! firmware and the host's virtual device run the very same code. It uses
+//! the physics of [`model_core`] (scene, solvers, regimes); nothing in the
+//! model uses the board. Folders by subject:
+//!
+//! * [`protocol`] — the wire format shared by firmware and host (knows no
+//!   device logic);
+//! * [`dsp`] — small primitives: [`dds`], [`lockin`], [`resonator`],
+//!   [`estimator`] (re-exported at the crate root);
+//! * [`device`] — the state machine, its loops, faults and measurement, with
+//!   the μ loop's arithmetic in [`control`];
+//! * [`plant`] — the simulated analog side (the virtual device, the QEMU
+//!   build);
+//! * [`server`], [`link`], [`dma`] — the device side of the protocol, the
+//!   serial link's loop, the DMA half-buffer decision; [`identify`] — the
+//!   stepped-sine fit of a transducer (host side).
+//!
+//! In detail:
 //!
 //! * [`control`] — the closed loop: μ held at a setpoint by Δu_z (feedforward
 //!   from the f32 inverse model, integral trim, anti-windup, rate limit, lift-off guard);
@@ -30,18 +48,22 @@
 //! * [`plant`] — the simulated analog side (transducers, contact, force
 //!   sensors) of the host's virtual device and of the firmware under QEMU.
 //!
-//! **Dependencies.** The board uses [`crate::model`] (scene, solvers, regimes)
-//! and nothing uses the board from inside the model.
+//! ## Cargo features
+//! - `defmt` — derive `defmt::Format` for the public types (firmware logging).
+//!
+//! The crate is `no_std` and allocation-free.
+#![cfg_attr(not(test), no_std)]
+#![deny(missing_docs)]
+#![forbid(unsafe_code)]
 
 pub mod control;
-pub mod dds;
 pub mod device;
 pub mod dma;
-pub mod estimator;
+pub mod dsp;
 pub mod identify;
 pub mod link;
-pub mod lockin;
 pub mod plant;
 pub mod protocol;
-pub mod resonator;
 pub mod server;
+
+pub use dsp::{dds, estimator, lockin, resonator};

@@ -4,7 +4,7 @@
 //! the pickups' lock-ins removes what the model missed, so that the
 //! *measured* amplitudes and φ hold the setting.
 //!
-//! **Phasors** (the convention of [`crate::board::identify`], eq. 1): a
+//! **Phasors** (the convention of [`crate::identify`], eq. 1): a
 //! channel's DAC wave `dc + A·sin(θ + p)` (codes, θ the DDS phase) is the
 //! voltage phasor `U = A·v·e^{j(p − π/2)}`, `v` =
 //! [`DAC_VOLTS_PER_CODE`]; a pickup's `A cos(θ + ψ)` is `X = A·e^{jψ}`
@@ -102,12 +102,12 @@
 use num_complex::Complex32 as C;
 
 use super::{Device, DeviceError, DriveParam, DriveSetting, Status};
-use crate::board::dds::{Achieved, Level, DAC_VOLTS_PER_CODE};
-pub use crate::board::protocol::messages::{
+use crate::dds::{Achieved, Level, DAC_VOLTS_PER_CODE};
+pub use crate::protocol::messages::{
     DisplacementOptions, DriveMode, Track, TransducerModel, Transducers, DEFAULT_HEADROOM,
     MAX_HEADROOM,
 };
-use crate::float::{FastF32, Math};
+use model_core::float::{FastF32, Math};
 
 /// Largest relative error `|X − D|/|D|` of a held channel: 0.4 %, so the
 /// amplitude is within 0.4 % and φ within 0.23° of the setting per channel
@@ -303,7 +303,7 @@ pub fn check_model(m: &TransducerModel) -> Result<(), DeviceError> {
     within(m.phase_lag_rad, -tau, tau, DriveParam::PhaseLag, false)
 }
 
-/// The model's response Ĥ(f), m/V (eq. 1 of [`crate::board::identify`]).
+/// The model's response Ĥ(f), m/V (eq. 1 of [`crate::identify`]).
 pub fn model_response(m: &TransducerModel, freq_hz: f32) -> C {
     let r = freq_hz / m.resonance_hz;
     let den = C::new(1.0 - r * r, r / m.q);
@@ -458,7 +458,7 @@ impl<const N: usize> Device<'_, N> {
         for ch in 0..2 {
             let h = h_model[ch] * c[ch];
             let (lv, w) = level_of(target[ch] / h, dc[ch]);
-            let room = dc[ch].min(f32::from(crate::board::dds::DAC_MAX) - dc[ch]);
+            let room = dc[ch].min(f32::from(crate::dds::DAC_MAX) - dc[ch]);
             // NaN (a zero model response) fails the comparison: refused.
             let fits = lv.amp <= room;
             if !fits || lv.check().is_err() {
@@ -601,7 +601,7 @@ impl<const N: usize> Device<'_, N> {
             let dc = chn.dc_target;
             // The DAC's room around the DC, less a part in 10⁴ (the level's
             // own check must pass after the f32 round trip).
-            let room = dc.min(f32::from(crate::board::dds::DAC_MAX) - dc).max(0.0) * v * 0.9999;
+            let room = dc.min(f32::from(crate::dds::DAC_MAX) - dc).max(0.0) * v * 0.9999;
             let bound = (h_room * norm(d[ch] / hc).max(self.loops.u_prev[ch])).min(room);
             let un = norm(u);
             let cut = un > bound || un.is_nan();
@@ -766,8 +766,8 @@ impl<const N: usize> Device<'_, N> {
             return;
         };
         if self.displacement_mode() {
-            self.dds.set_slew(crate::board::dds::Slew {
-                amp_per_sample: f32::from(crate::board::dds::DAC_MAX),
+            self.dds.set_slew(crate::dds::Slew {
+                amp_per_sample: f32::from(crate::dds::DAC_MAX),
                 dc_per_sample: base.dc_per_sample,
                 phase_per_sample: 1 << 31,
             });

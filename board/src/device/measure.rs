@@ -3,8 +3,8 @@
 
 use super::config::PERIODS_RANGE;
 use super::{faults, Device, DeviceError, DriveParam};
-use crate::board::dma::HalfEvent;
-use crate::board::estimator::{reasons, Estimate, Estimator};
+use crate::dma::HalfEvent;
+use crate::estimator::{reasons, Estimate, Estimator};
 
 /// Fills whose start phase and conditions are kept (fill `n` is sampled by
 /// ADC block `n`, which may arrive after fills `n + 1` and `n + 2`).

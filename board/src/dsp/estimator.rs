@@ -42,8 +42,8 @@
 //! samples it tends to `σ/(f̄_z·√N)`. Fewer than two batches give `σ_μ = 0`
 //! with [`reasons::FEW_PERIODS`] set.
 
-use crate::board::dds::SineTable;
-use crate::model::float::{FastF32, Math};
+use crate::dds::SineTable;
+use model_core::float::{FastF32, Math};
 
 /// Linear ADC calibration: `force = gain · (count − offset)` (N per count, counts).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -26,8 +26,8 @@
 
 use heapless::Deque;
 
-use crate::board::protocol::MAX_FRAME;
-use crate::board::server::{DeviceAccess, Server};
+use crate::protocol::MAX_FRAME;
+use crate::server::{DeviceAccess, Server};
 
 /// Bytes the receive queue holds (the USART interrupt fills it, the loop
 /// empties it).

@@ -24,7 +24,7 @@
 //! `cos(θ + φ)` for the tangential one; [`phase_word`] turns radians into
 //! offsets (`−cos θ = sin(θ − π/2)`, `cos(θ+φ) = sin(θ + φ + π/2)`).
 
-use crate::model::float::{Libm, Math, Micromath};
+use model_core::float::{Libm, Math, Micromath};
 
 /// Largest DAC code (12 bits).
 pub const DAC_MAX: u16 = 4095;

@@ -3,13 +3,13 @@
 
 use core::fmt;
 
-use crate::board::control::ControlError;
-use crate::board::dds::DdsError;
-use crate::board::estimator::EstimateError;
-use crate::board::protocol::messages::{DriveParam, WireError};
-use crate::model::exact::ExactError;
-use crate::model::liftoff::LiftOffError;
-use crate::model::scene::SceneError;
+use crate::control::ControlError;
+use crate::dds::DdsError;
+use crate::estimator::EstimateError;
+use crate::protocol::messages::{DriveParam, WireError};
+use model_core::exact::ExactError;
+use model_core::model::liftoff::LiftOffError;
+use model_core::scene::SceneError;
 
 /// A field of [`super::DeviceConfig`] that cannot work.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

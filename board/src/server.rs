@@ -18,9 +18,9 @@
 //! itself runs in the device on every finished estimate, and each poll sends
 //! the latest update as `Control` telemetry.
 
-use crate::board::control;
-use crate::board::device::{self, Device};
-use crate::board::protocol::{
+use crate::control;
+use crate::device::{self, Device};
+use crate::protocol::{
     decode, encode, Body, ControlSetting, Deframed, Deframer, Frame, Info, Request, Response,
     StreamEnd, Telemetry, WireError, MAX_FRAME, PROTOCOL_VERSION,
 };
@@ -96,7 +96,7 @@ impl Server {
     }
 
     /// Feeds bytes received at time `now_us` (µs, any origin, wrapping: the
-    /// inter-byte timeout [`crate::board::protocol::BYTE_TIMEOUT_US`] is
+    /// inter-byte timeout [`crate::protocol::BYTE_TIMEOUT_US`] is
     /// measured on it); every complete frame is answered by calling `send`
     /// with the encoded response (at most [`MAX_FRAME`] bytes).
     pub fn receive<const N: usize, A: DeviceAccess<N>>(
@@ -233,7 +233,7 @@ impl Server {
         send_frame(&f, &mut send);
     }
 
-    /// Runs one request; the answer is the one [`crate::board::protocol::ENDPOINTS`]
+    /// Runs one request; the answer is the one [`crate::protocol::ENDPOINTS`]
     /// names, or [`Response::Error`].
     fn handle<const N: usize, A: DeviceAccess<N>>(
         &mut self,
@@ -437,8 +437,8 @@ fn error_frame(seq: u32, e: WireError) -> Frame {
     }
 }
 
-impl From<crate::board::device::DeviceError> for Response {
-    fn from(e: crate::board::device::DeviceError) -> Self {
+impl From<crate::device::DeviceError> for Response {
+    fn from(e: crate::device::DeviceError) -> Self {
         Response::Error(e.into())
     }
 }

@@ -8,7 +8,7 @@
 //! **Transducers.** Ideal ones (the default) displace by the DAC level times
 //! the board's calibration, optionally with a first-order amplitude lag
 //! (below). Resonant ones ([`Resonant`], built on
-//! [`crate::board::resonator::Mode`]) are two second-order modes driven by
+//! [`crate::resonator::Mode`]) are two second-order modes driven by
 //! the DAC channels' AC voltage ([`DAC_VOLTS_PER_CODE`] per code), each
 //! advanced by its exact zero-order-hold update on every sub-step (the DAC
 //! holds a sample's voltage), with a resonance drift (Hz/s), self-heating
@@ -49,13 +49,13 @@
 //! at the force's instant, bitwise as before); then the plant advances to
 //! the next tick in `sub` sub-steps (the paper's scheme on a finer grid: its μ error is
 //! ≈ 10·(1+b)/N² for N = `sub`·f_s/f steps per period, the fixed-step bound
-//! of [`crate::fixed_step::error_bound`]).
+//! of [`model_core::fixed_step::error_bound`]).
 
-use crate::board::dds::Channel;
-use crate::board::device::{Device, DeviceConfig};
-use crate::board::resonator::{HoldUpdate, Mode, ModeError, ModeParams};
-use crate::fixed_step::SpringContact;
-use crate::float::{Float, Math};
+use crate::dds::Channel;
+use crate::device::{Device, DeviceConfig};
+use crate::resonator::{HoldUpdate, Mode, ModeError, ModeParams};
+use model_core::fixed_step::SpringContact;
+use model_core::float::{Float, Math};
 
 /// Radians per phase-accumulator unit: 2π/2³², as the DDS (f = tw·f_s/2³²).
 const RAD_PER_WORD: f64 = core::f64::consts::TAU / 4_294_967_296.0;
@@ -74,7 +74,7 @@ pub struct HalfDrive {
     /// The DDS's slew limits during the fill (the resonant transducers
     /// follow the channels' per-sample ramps exactly: each sample's
     /// amplitude and phase are the DDS's own, `Dds::fill`).
-    pub slew: crate::board::dds::Slew,
+    pub slew: crate::dds::Slew,
 }
 
 impl HalfDrive {
@@ -162,7 +162,7 @@ pub struct SampleConditions<F> {
     pub counts_x: F,
 }
 
-pub use crate::board::dds::DAC_VOLTS_PER_CODE;
+pub use crate::dds::DAC_VOLTS_PER_CODE;
 
 /// What makes the resonant transducers' resonances move and couple.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -239,22 +239,22 @@ impl<F: Float> ResonantOptions<F> {
 impl<F: Float> ResonantOptions<F> {
     /// What an exact identification of these transducers at rest finds
     /// (`fricctl device identify`'s model, eq. 1 of
-    /// [`crate::board::identify`]): each mode's resonance, its Q with the
+    /// [`crate::identify`]): each mode's resonance, its Q with the
     /// contact's load, its static gain, and the phase lag of the DAC's
     /// hold, half a sample at the resonance (`θ = π f_r/f_s`); drift and
     /// heating are not in it.
-    pub fn identified(&self, sample_rate_hz: f64) -> crate::board::device::Transducers {
+    pub fn identified(&self, sample_rate_hz: f64) -> crate::device::Transducers {
         let m = |c: usize| {
             let p = Resonant::loaded(self, self.modes[c]);
             let f = p.resonance_hz.to_f64();
-            crate::board::device::TransducerModel {
+            crate::device::TransducerModel {
                 resonance_hz: f as f32,
                 q: p.q.to_f64() as f32,
                 gain_m_per_v: p.gain_m_per_v.to_f64() as f32,
                 phase_lag_rad: (core::f64::consts::PI * f / sample_rate_hz) as f32,
             }
         };
-        crate::board::device::Transducers { z: m(0), x: m(1) }
+        crate::device::Transducers { z: m(0), x: m(1) }
     }
 }
 

@@ -3,10 +3,10 @@
 //! limits that follow from it, each written once here.
 
 use super::error::ConfigError;
-use crate::board::dds::DAC_MAX;
-use crate::board::estimator::Calibration;
-use crate::board::protocol::framing::BYTE_TIMEOUT_US;
-use crate::board::protocol::messages::{Info, PROTOCOL_VERSION};
+use crate::dds::DAC_MAX;
+use crate::estimator::Calibration;
+use crate::protocol::framing::BYTE_TIMEOUT_US;
+use crate::protocol::messages::{Info, PROTOCOL_VERSION};
 
 /// Transducer calibration of one DAC channel: displacement
 /// `= (code − zero_code) · metres_per_code`.
@@ -252,7 +252,7 @@ impl Info {
             periods_range: PERIODS_RANGE,
             byte_timeout_us: BYTE_TIMEOUT_US,
             retract_z_m: cfg.retract_z_m(),
-            self_test: crate::board::protocol::messages::SelfTest::NOT_RUN,
+            self_test: crate::protocol::messages::SelfTest::NOT_RUN,
         }
     }
 }

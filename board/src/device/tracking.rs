@@ -6,7 +6,7 @@
 //! **Phase detector.** A window's measured response of the tracked mode,
 //! `R = X/U` (the lock-in's phasor over the fill's voltage phasor), is the
 //! mode's `H(f) = g·e^{−jθ}/(1 − r² + j r/Q)`, `r = f/f_r` (eq. 1 of
-//! [`crate::board::identify`]). With the identified θ̂ and Q̂, the
+//! [`crate::identify`]). With the identified θ̂ and Q̂, the
 //! denominator's angle `α = −θ̂ − arg R` (π/2 on resonance) gives r exactly:
 //!
 //! ```text
@@ -40,8 +40,8 @@ use num_complex::Complex32 as C;
 
 use super::displacement::{arg, norm, HOLD_FLOOR_M, STEADY_FRACTION};
 use super::{Device, TransducerModel, Transducers};
-pub use crate::board::protocol::messages::Track;
-use crate::float::{FastF32, Math};
+pub use crate::protocol::messages::Track;
+use model_core::float::{FastF32, Math};
 
 /// The tracked frequency stays within this fraction of the identified
 /// resonance (±2 %: six half-power bandwidths at Q 300).
@@ -167,7 +167,7 @@ impl<const N: usize> Device<'_, N> {
         if dtw != 0 {
             let tw = self.applied.achieved.tuning_word.wrapping_add(dtw as u32);
             self.dds.set_tuning_word(tw);
-            self.applied.achieved = crate::board::dds::Achieved {
+            self.applied.achieved = crate::dds::Achieved {
                 tuning_word: tw,
                 freq_hz: f64::from(tw) * self.cfg.sample_rate_hz / 4_294_967_296.0,
             };

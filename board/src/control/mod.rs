@@ -1,6 +1,6 @@
 //! The closed loop: μ held at a setpoint μ* at a stated sliding velocity v₀
 //! by adjusting the normal amplitude Δu_z, run on every finished
-//! period-synchronous estimate (eq. 20, [`crate::board::estimator`]).
+//! period-synchronous estimate (eq. 20, [`crate::estimator`]).
 //!
 //! # The control law (units: μ dimensionless, Δu_z in m, time in s)
 //!
@@ -29,7 +29,7 @@
 //!
 //! (C4 once kept `I_k` while only the rate limit acted, so that estimates
 //! taken mid-ramp integrated nothing; since an update only ever sees an
-//! estimate of the command in force ([`crate::board::device`], "Dead
+//! estimate of the command in force ([`crate::device`], "Dead
 //! time"), that made the next update undo the ramp's step: from 2 µm with
 //! a 0.26 µm step allowed, 2.0 → 1.74 → 1.87 → 1.62 µm where the plant
 //! needed 1.6.)
@@ -69,14 +69,14 @@
 //! mismatch) and ρ̂, and moves by the model's step scaled by the learned gain,
 //! towards `u_ff + I + (u_ff' − u_ff)/ρ̂` (C7); if the rate limit cuts the
 //! move, the trim keeps the command reached (C4) and C1 does the rest. Off: the last
-//! command stays applied ([`crate::board::device`] keeps it as the drive's
+//! command stays applied ([`crate::device`] keeps it as the drive's
 //! Δu_z). The guard (C3) is a hard constraint: no command exceeds `u_max`.
 
 use core::fmt;
 
-use crate::model::exact::{self, ExactError};
-use crate::model::float::FastF32;
-use crate::model::scene::{Drive, Scene};
+use model_core::exact::{self, ExactError};
+use model_core::float::FastF32;
+use model_core::scene::{Drive, Scene};
 
 /// Scan points of the feedforward's search (23 cells over the lift-off range).
 pub const SCAN_POINTS: usize = 24;
@@ -163,7 +163,7 @@ pub struct Plan {
 /// the range is closed: a μ* equal to a scanned μ (either end included) is
 /// reached at that amplitude. A zero bound (offset at the top of the DAC
 /// range) leaves the single amplitude 0 and the reach `[μ(0), μ(0)]`.
-/// (A compact search rather than [`crate::model::inverse`]: the firmware's
+/// (A compact search rather than [`model_core::model::inverse`]: the firmware's
 /// flash budget.)
 ///
 /// # Errors

@@ -20,7 +20,7 @@
 //!
 //! The wire types the device answers with ([`DriveSetting`], [`Contact`],
 //! [`Prediction`], [`Status`], [`Applied`], [`DriveParam`]) live in
-//! [`crate::board::protocol::messages`] and are re-exported here.
+//! [`crate::protocol::messages`] and are re-exported here.
 //!
 //! Every setter validates its whole input before touching anything: a
 //! refused command leaves the running state exactly as it was.
@@ -46,14 +46,14 @@ pub use measure::{check_periods, estimate};
 pub use motion::MeasuredDrive;
 pub use predict::{predict, regime};
 
-pub use crate::board::protocol::messages::{
+pub use crate::protocol::messages::{
     Applied, Contact, DisplacementOptions, DriveMode, DriveParam, DriveSetting, Prediction, Status,
     Track, TransducerModel, Transducers,
 };
 
-use crate::board::dds::{Achieved, Dds, Level, SineTable, Slew};
-use crate::board::estimator::Estimator;
-use crate::model::scene::{self, ContactMode, Scene, SceneParams};
+use crate::dds::{Achieved, Dds, Level, SineTable, Slew};
+use crate::estimator::Estimator;
+use model_core::scene::{self, ContactMode, Scene, SceneParams};
 
 /// The device.
 pub struct Device<'t, const N: usize> {
@@ -395,7 +395,7 @@ fn check_config(cfg: &DeviceConfig) -> Result<(), DeviceError> {
         let ok = c.metres_per_code.is_finite()
             && c.metres_per_code > 0.0
             && c.zero_code.is_finite()
-            && (0.0..=f32::from(crate::board::dds::DAC_MAX)).contains(&c.zero_code);
+            && (0.0..=f32::from(crate::dds::DAC_MAX)).contains(&c.zero_code);
         if !ok {
             return Err(DeviceError::Config(ConfigError::DacCal));
         }

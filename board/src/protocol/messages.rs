@@ -9,9 +9,9 @@ use core::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use crate::board::dds::Achieved;
-use crate::board::estimator::Estimate;
-use crate::model::regime::Regime;
+use crate::dds::Achieved;
+use crate::estimator::Estimate;
+use model_core::regime::Regime;
 
 /// Protocol version; a frame with another version is answered with
 /// [`WireError::VersionMismatch`].
@@ -131,7 +131,7 @@ pub struct Prediction {
     pub mu_0minus_over_mu0: f32,
     /// (v3) The drive lifts the contact off (`Δu_z ≥ u_z0`, allowed by
     /// [`Request::SetLiftOff`]) and the lift-off model answered
-    /// ([`crate::model::liftoff`]: μ over the contact window, its critical
+    /// ([`model_core::model::liftoff`]: μ over the contact window, its critical
     /// velocities); `false`: the permanent-contact exact solver.
     pub liftoff: bool,
 }
@@ -144,7 +144,7 @@ pub struct Status {
     pub running: bool,
     /// All ramps finished.
     pub settled: bool,
-    /// Latched fault bits ([`crate::board::device::faults`]).
+    /// Latched fault bits ([`crate::device::faults`]).
     pub faults: u32,
     /// A measurement is in progress.
     pub measuring: bool,
@@ -164,7 +164,7 @@ pub struct Status {
     /// ([`Request::SetLiftOff`]; `false` at power-up).
     pub liftoff_allowed: bool,
     /// (v4) The transducers' motion measured by the pickups' lock-ins over
-    /// the last window ([`crate::board::device`]'s `motion`); `None` before
+    /// the last window ([`crate::device`]'s `motion`); `None` before
     /// the first window, or on a board whose pickups are not wired.
     pub measured: Option<MeasuredDrive>,
     /// (v5) The drive mode in force ([`Request::SetDriveMode`]).
@@ -236,7 +236,7 @@ pub struct MeasuredDrive {
     /// Lock-in windows finished since power-up (a new value: a new window).
     pub windows: u32,
     /// (v5) The normal mode's measured response to its DAC channel, m/V as
-    /// `[re, im]` of `H = X/U` (eq. 1 of [`crate::board::identify`]: the
+    /// `[re, im]` of `H = X/U` (eq. 1 of [`crate::identify`]: the
     /// pickup's phasor over the channel's voltage phasor at the window's
     /// end); `None` while the channel's voltage is zero.
     pub response_z_m_per_v: Option<[f32; 2]>,
@@ -245,7 +245,7 @@ pub struct MeasuredDrive {
 }
 
 /// (v5) One transducer mode as identified (eq. 1 of
-/// [`crate::board::identify`]): `H(f) = g·e^{−jθ}/(1 − r² + j r/Q)`, `r = f/f_r`.
+/// [`crate::identify`]): `H(f) = g·e^{−jθ}/(1 − r² + j r/Q)`, `r = f/f_r`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TransducerModel {
@@ -275,7 +275,7 @@ pub struct Transducers {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum DriveMode {
     /// 0: voltage mode (the power-up state): the DAC calibration
-    /// ([`crate::board::device::DacCal`]) is taken to be the displacement.
+    /// ([`crate::device::DacCal`]) is taken to be the displacement.
     OpenLoop,
     /// 1: displacement mode: the identified [`Transducers`] give the
     /// voltages (feed-forward) and a complex loop per channel on the
@@ -334,7 +334,7 @@ impl Info {
 /// The power-up self-test of a board (v7): the clocks measured against the
 /// internal RC oscillator and the DMA set-up checked before the drive may
 /// start. A failed check the drive depends on also latches the fault
-/// [`crate::board::device::faults::SELF_TEST`].
+/// [`crate::device::faults::SELF_TEST`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SelfTest {
@@ -494,7 +494,7 @@ pub enum Request {
     SetDisplacementOptions(DisplacementOptions),
 }
 
-/// The closed loop as commanded ([`crate::board::control`]).
+/// The closed loop as commanded ([`crate::control`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ControlSetting {
@@ -724,7 +724,7 @@ pub enum Telemetry {
     Estimate(Estimate),
     /// 1: the ramps have settled.
     RampDone,
-    /// 2: a fault was latched (bits of [`crate::board::device::faults`]).
+    /// 2: a fault was latched (bits of [`crate::device::faults`]).
     Fault(u32),
     /// 3: the stream of estimates ended (no more `Estimate` telemetry).
     StreamStopped(StreamEnd),
@@ -792,7 +792,7 @@ pub enum WireError {
         /// The device's version.
         device: u16,
     },
-    /// 4: frame longer than [`crate::board::protocol::MAX_FRAME`].
+    /// 4: frame longer than [`crate::protocol::MAX_FRAME`].
     Oversize,
     /// 5: a parameter out of range (which one, and the limits).
     OutOfRange {

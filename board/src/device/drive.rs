@@ -4,7 +4,7 @@
 
 use super::config::MAX_PHASE_RAD;
 use super::{in_range, Applied, Device, DeviceError, DriveParam, DriveSetting};
-use crate::board::dds::{phase_rad, phase_word, Achieved, Level};
+use crate::dds::{phase_rad, phase_word, Achieved, Level};
 
 /// A validated drive, ready for the DDS.
 struct Plan {

@@ -13,7 +13,7 @@
 
 use core::fmt;
 
-use crate::board::protocol::messages::{Frame, WireError, BODY_KINDS, ENDPOINTS, PROTOCOL_VERSION};
+use crate::protocol::messages::{Frame, WireError, BODY_KINDS, ENDPOINTS, PROTOCOL_VERSION};
 
 /// Largest frame on the wire (COBS-encoded, with CRC and delimiter), bytes.
 pub const MAX_FRAME: usize = 256;

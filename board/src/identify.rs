@@ -6,7 +6,7 @@
 //! No device code and no allocation: the caller (`fricctl device identify`)
 //! collects the record and calls [`fit`]. Everything is `f64` (the host runs
 //! it; the normal equations square the Jacobian's condition number, which
-//! `f32`'s 6e-8 would not carry, and the crate's [`Float`](crate::float::Float)
+//! `f32`'s 6e-8 would not carry, and the crate's [`Float`](model_core::float::Float)
 //! has no `exp`/`ln`); it still compiles for the firmware's target.
 //!
 //! # Model
