@@ -244,7 +244,7 @@ pub fn is_numeric(a: &clap::Arg) -> bool {
             TypeId::of::<u64>(),
             TypeId::of::<usize>(),
             // `--periods auto|N` of `device control` and `control-bench`.
-            TypeId::of::<crate::device::control::Periods>(),
+            TypeId::of::<Periods>(),
         ]
         .iter()
         .any(|id| t == *id)
@@ -396,4 +396,45 @@ mod tests {
             Err(refused("must be ≤ 1000 (got 1e9; a bound)"))
         );
     }
+}
+
+/// Drive periods per update: a number, or as many as fit one half-buffer
+/// at the drive frequency (`auto`, the default).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Periods {
+    /// `board::device::periods_in_half_buffer` at the drive frequency.
+    Auto,
+    /// This many, 1 … `CONTROL_MAX_PERIODS`.
+    Fixed(u32),
+}
+
+impl Periods {
+    /// The periods at `freq_hz` with `sample_rate_hz`.
+    pub fn at(self, freq_hz: f64, sample_rate_hz: f64) -> u32 {
+        match self {
+            Periods::Auto => board::device::periods_in_half_buffer(freq_hz, sample_rate_hz),
+            Periods::Fixed(n) => n,
+        }
+    }
+}
+
+impl std::fmt::Display for Periods {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Periods::Auto => f.write_str("auto"),
+            Periods::Fixed(n) => write!(f, "{n}"),
+        }
+    }
+}
+
+/// `--periods`: `auto` or a whole number ≥ 1 (the device refuses more
+/// than `CONTROL_MAX_PERIODS` by name).
+pub fn parse_periods(s: &str) -> Result<Periods, Refused> {
+    if s == "auto" {
+        return Ok(Periods::Auto);
+    }
+    if s.trim().parse::<f64>().is_err() {
+        return Err(Refused(format!("'{s}' is neither `auto` nor a number")));
+    }
+    Count::<u32>::at_least(1).parse(s).map(Periods::Fixed)
 }

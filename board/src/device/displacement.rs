@@ -796,7 +796,7 @@ impl<const N: usize> Device<'_, N> {
             return Err(DeviceError::NotIdentified);
         }
         if o.track != self.options.track {
-            self.tracker = super::tracking::Tracker::default();
+            self.restart_tracking();
             self.loops.model = None;
         }
         self.options = o;

@@ -197,7 +197,7 @@ impl<const N: usize> Device<'_, N> {
         // The plan validated everything the DDS checks: none of these fail.
         if plan.achieved.tuning_word != self.dds.tuning_word() {
             self.dds.set_frequency(d.freq_hz)?;
-            self.tracker = super::tracking::Tracker::default();
+            self.restart_tracking();
         }
         self.drive = d;
         self.dds.set_phase(0, plan.phases[0]);
@@ -256,7 +256,7 @@ impl<const N: usize> Device<'_, N> {
         self.loops
             .restart(self.motion_phasors(), self.output_volts());
         self.running = true;
-        self.tracker = super::tracking::Tracker::default();
+        self.restart_tracking();
         self.loops.model = None;
         self.ramp_generation = self.ramp_generation.wrapping_add(1);
         self.reset_motion_peak();

@@ -111,7 +111,7 @@ impl<const N: usize> Device<'_, N> {
         // down with it, without overshoot. The tracking lets go.
         self.loops.good = 0;
         self.loops.avg = None;
-        self.tracker = super::tracking::Tracker::default();
+        self.restart_tracking();
         self.loops.model = None;
         if let Ok(s) = Self::slew(&self.cfg) {
             self.dds.set_slew(s);

@@ -91,6 +91,11 @@ impl Tracker {
 }
 
 impl<const N: usize> Device<'_, N> {
+    /// Lets the tracker go: it locks anew from the running frequency.
+    pub(super) fn restart_tracking(&mut self) {
+        self.tracker = Tracker::default();
+    }
+
     /// Tracking is on and the drive runs in displacement mode.
     pub fn tracking_active(&self) -> bool {
         self.options.track != Track::None && self.displacement_mode() && self.running

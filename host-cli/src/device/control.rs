@@ -28,48 +28,8 @@ pub const DEFAULT_GAIN: f64 = 0.95;
 /// The loop gain's domain: a fraction of the error removed per update.
 const GAIN: Real = Real::ANY.at_least(0.01).at_most(1.0);
 
-/// Drive periods per update: a number, or as many as fit one half-buffer
-/// at the drive frequency (`auto`, the default).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Periods {
-    /// `board::device::periods_in_half_buffer` at the drive frequency.
-    Auto,
-    /// This many, 1 … `CONTROL_MAX_PERIODS`.
-    Fixed(u32),
-}
+pub use crate::args::{parse_periods, Periods};
 
-impl Periods {
-    /// The periods at `freq_hz` with `sample_rate_hz`.
-    pub fn at(self, freq_hz: f64, sample_rate_hz: f64) -> u32 {
-        match self {
-            Periods::Auto => board::device::periods_in_half_buffer(freq_hz, sample_rate_hz),
-            Periods::Fixed(n) => n,
-        }
-    }
-}
-
-impl std::fmt::Display for Periods {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Periods::Auto => f.write_str("auto"),
-            Periods::Fixed(n) => write!(f, "{n}"),
-        }
-    }
-}
-
-/// `--periods`: `auto` or a whole number ≥ 1 (the device refuses more
-/// than `CONTROL_MAX_PERIODS` by name).
-pub fn parse_periods(s: &str) -> Result<Periods, crate::args::Refused> {
-    if s == "auto" {
-        return Ok(Periods::Auto);
-    }
-    if s.trim().parse::<f64>().is_err() {
-        return Err(crate::args::Refused(format!(
-            "'{s}' is neither `auto` nor a number"
-        )));
-    }
-    Count::<u32>::at_least(1).parse(s).map(Periods::Fixed)
-}
 /// Default rate limit of the commanded Δu_z, m/s (the driver board's slew).
 pub const DEFAULT_RATE: f64 = 1e-3;
 
