@@ -1467,7 +1467,7 @@ fn identify_then_the_displacement_mode_holds_the_setting() {
             "--plant-q-x",
             "200",
         ],
-        120,
+        600,
     );
     // Without identification: refused in one line, exit 2, nothing changed.
     let plain: Vec<&str> = DRIVE
