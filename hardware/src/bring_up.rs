@@ -92,14 +92,7 @@ impl Prepared {
     /// nothing set up, nothing measured.
     pub fn without_hardware() -> Prepared {
         Prepared {
-            clock: ClockOutcome {
-                clocks: Clocks::HSI,
-                ready: false,
-                hse_hz: None,
-                sysclk_hz: None,
-                latency_ok: false,
-                prefetch: false,
-            },
+            clock: ClockOutcome::RESET,
             dma_setup: None,
             fault_input_active: false,
             watchdog_reset: false,

@@ -197,6 +197,18 @@ pub struct ClockOutcome {
     pub prefetch: bool,
 }
 
+impl ClockOutcome {
+    /// The clocks after reset, before anything was started or measured.
+    pub const RESET: ClockOutcome = ClockOutcome {
+        clocks: Clocks::HSI,
+        ready: false,
+        hse_hz: None,
+        sysclk_hz: None,
+        latency_ok: false,
+        prefetch: false,
+    };
+}
+
 /// Whether a frequency measured against the HSI, `measured`, can be
 /// `expected`: an HSI slow by up to [`HSI_SLOW_PERMILLE`] reads it high by
 /// up to 1/(1 − 0.085) = +9.3 %, a fast one low by up to 1/1.05 = −4.8 %.
@@ -283,14 +295,7 @@ pub fn source_hz(ticks: u32, timer_hz: u32) -> u32 {
 /// stays on the HSI with the PLL and HSE off.
 pub fn start(r: &Registers, delay: &mut impl Delay) -> ClockOutcome {
     let rcc = r.rcc;
-    let mut out = ClockOutcome {
-        clocks: Clocks::HSI,
-        ready: false,
-        hse_hz: None,
-        sysclk_hz: None,
-        latency_ok: false,
-        prefetch: false,
-    };
+    let mut out = ClockOutcome::RESET;
     let back_to_hsi = |out: ClockOutcome| {
         rcc.cfgr().modify(|_, w| w.sw().hsi());
         rcc.cr().modify(|_, w| w.pllon().off().hseon().off());
