@@ -39,6 +39,11 @@ mod qemu;
 
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
+use board::dds::SineTable;
+use board::device::{faults, Contact, Device, DeviceConfig, DriveSetting};
+use board::link::{self, Core, LinkIo, RxQueue, TxRing, RX_CAPACITY, TX_CAPACITY};
+use board::protocol::{Info, SelfTest, PROTOCOL_VERSION};
+use board::server::{DeviceAccess, Server};
 use cortex_m_rt::entry;
 use defmt_rtt as _;
 use hardware::bring_up::{self, Buffers};
@@ -46,12 +51,7 @@ use hardware::buffers::{DmaBuffer, ADC_WORDS, DAC_WORDS, HALF};
 use hardware::streams::StreamEvent;
 use hardware::{nvic, Registers};
 use lock::Shared;
-use board::link::{self, Core, LinkIo, RxQueue, TxRing, RX_CAPACITY, TX_CAPACITY};
-use board::dds::SineTable;
-use board::device::{faults, Contact, Device, DeviceConfig, DriveSetting};
 use model_core::float::FastF32;
-use board::protocol::{Info, SelfTest, PROTOCOL_VERSION};
-use board::server::{DeviceAccess, Server};
 use stm32f4::stm32f405::{self as pac, interrupt, Interrupt};
 
 /// DDS/ADC sample rate (`hardware::sampling::FS_HZ`): 12.5 samples per

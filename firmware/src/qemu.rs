@@ -33,12 +33,12 @@
 
 use core::sync::atomic::{AtomicU32, Ordering};
 
-use cortex_m::peripheral::{syst::SystClkSource, SYST};
-use cortex_m_rt::exception;
+use board::device::DeviceConfig;
 #[cfg(feature = "qemu-resonant")]
 use board::plant::ResonantOptions;
 use board::plant::{HalfDrive, Noise, Plant, SampleConditions};
-use board::device::DeviceConfig;
+use cortex_m::peripheral::{syst::SystClkSource, SYST};
+use cortex_m_rt::exception;
 use model_core::float::FastF32;
 
 /// `qemu-drift`: the normal resonance at power-up, Hz.

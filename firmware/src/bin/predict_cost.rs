@@ -21,12 +21,12 @@
 #![no_std]
 #![no_main]
 
+use board::device;
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 use defmt_rtt as _;
 use model_core::analytic::CriticalVelocity;
-use board::device;
 use model_core::exact::{self, Solution};
 use model_core::float::FastF32;
 use model_core::{Libm, Math, Scene, SceneParams};
