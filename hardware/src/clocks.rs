@@ -70,7 +70,11 @@ pub const HSI_FAST_PERMILLE: u32 = 50;
 pub const REV_A: u16 = 0x1000;
 
 /// `s` as a decimal number of Hz, in a constant (a build-time setting).
-const fn parse_hz(s: &str) -> u32 {
+///
+/// # Panics
+/// (At compile time for a constant.) An empty string, a character that is
+/// not a digit, or a value above `u32::MAX`.
+pub const fn parse_hz(s: &str) -> u32 {
     let b = s.as_bytes();
     assert!(!b.is_empty(), "FIRMWARE_HSE_HZ is empty");
     let mut v: u64 = 0;
@@ -220,9 +224,10 @@ pub fn within_tolerance(measured: u32, expected: u32) -> bool {
         && m * (1000 - u64::from(HSI_SLOW_PERMILLE)) <= e * 1000
 }
 
-/// RTCPRE for the measurement: HSE/RTCPRE ≈ 1 MHz (2 ≤ RTCPRE ≤ 31).
-pub const RTCPRE: u8 = {
-    let p = HSE_HZ.div_ceil(1_000_000);
+/// RTCPRE for the measurement with a crystal of `hse_hz`: HSE/RTCPRE ≤ 1 MHz,
+/// the least such divider within its field's 2 ≤ RTCPRE ≤ 31.
+pub const fn rtcpre_for(hse_hz: u32) -> u8 {
+    let p = hse_hz.div_ceil(1_000_000);
     if p < 2 {
         2
     } else if p > 31 {
@@ -230,7 +235,10 @@ pub const RTCPRE: u8 = {
     } else {
         p as u8
     }
-};
+}
+
+/// RTCPRE for [`HSE_HZ`].
+pub const RTCPRE: u8 = rtcpre_for(HSE_HZ);
 /// Input-capture events per measurement: [`CAPTURES`] captures of 8 edges
 /// each (IC1PSC = /8).
 pub const CAPTURES: u32 = 32;

@@ -203,6 +203,8 @@ struct Board {
     pin_rise_us: Option<f64>,
     /// The PLL locks.
     pll_locks: bool,
+    /// RCC_PLLCFGR reads back another M once the PLL is on (a faulty RCC).
+    pllcfgr_drifts: bool,
 }
 
 impl Board {
@@ -212,6 +214,7 @@ impl Board {
         // 50 kΩ · 1 nF · ln(1/0.3): the module's worst case.
         pin_rise_us: Some(60.2), // 50 kΩ · 1 nF · ln(1/0.3) = 60.2 µs
         pll_locks: true,
+        pllcfgr_drifts: false,
     };
 }
 
@@ -281,6 +284,10 @@ impl Sim {
             f.rcc.set(rm::RCC_CR, f.rcc.get(rm::RCC_CR) & !(1 << 17));
         }
         let cr = f.rcc.get(rm::RCC_CR);
+        if self.board.pllcfgr_drifts && cr & (1 << 24) != 0 {
+            let p = f.rcc.get(rm::RCC_PLLCFGR);
+            f.rcc.set(rm::RCC_PLLCFGR, (p & !0x3F) | 5);
+        }
         if cr & (1 << 24) != 0 && cr & (1 << 17) != 0 {
             let at = *self.pll_on_at.get_or_insert(t0);
             if self.board.pll_locks && t - at >= PLL_LOCK_US {
@@ -1133,4 +1140,181 @@ fn near_crystals_are_refused_and_a_pll_that_never_locks_times_out() {
     });
     assert_eq!(t.failed, bits::CLOCK_READY);
     assert!(t.hse_hz > 0, "the crystal was measured before the PLL");
+}
+
+/// The build-time crystal's parser, the capture divider, the DMA buffer's
+/// arithmetic and the capture's conversion, against hand values.
+#[test]
+fn small_arithmetic_against_hand_values() {
+    assert_eq!(clocks::parse_hz("8000000"), 8_000_000);
+    assert_eq!(clocks::parse_hz("12000000"), 12_000_000);
+    assert_eq!(clocks::parse_hz("4294967295"), u32::MAX);
+    for bad in ["", "12a", "-1", "4294967296", "8 000 000"] {
+        assert!(
+            std::panic::catch_unwind(|| clocks::parse_hz(bad)).is_err(),
+            "{bad:?}"
+        );
+    }
+    // HSE/RTCPRE ≤ 1 MHz, the least divider, within 2…31.
+    assert_eq!(clocks::rtcpre_for(4_000_000), 4);
+    assert_eq!(clocks::rtcpre_for(8_000_000), 8);
+    assert_eq!(clocks::rtcpre_for(8_000_001), 9);
+    assert_eq!(clocks::rtcpre_for(1_000_000), 2);
+    assert_eq!(clocks::rtcpre_for(26_000_000), 26);
+    assert_eq!(clocks::rtcpre_for(40_000_000), 31);
+    // 256 edges over 4 096 ticks of 16 MHz: 1 MHz exactly; rounded to the
+    // nearest Hz (2 560 / 3 = 853.3).
+    assert_eq!(clocks::source_hz(4096, 16_000_000), 1_000_000);
+    assert_eq!(clocks::source_hz(3, 10), 853);
+    assert_eq!(clocks::source_hz(3, 11), 939); // 2 816 / 3 = 938.67
+    let b = DmaBuffer {
+        addr: 0x2000_0000,
+        words: 128,
+    };
+    assert_eq!(b.half_words(), 64);
+    assert!(b.contains(0x2000_0000));
+    assert!(b.contains(0x2000_01FC));
+    assert!(!b.contains(0x2000_0200), "one past the last word");
+    assert!(!b.contains(0x1FFF_FFFC));
+    assert_eq!(DAC_WORDS, 128);
+    assert_eq!(ADC_WORDS, 256);
+}
+
+/// The runtime helpers of the handlers and the loop, on the register file.
+#[test]
+fn link_watchdog_and_fault_input_helpers() {
+    let f = File::new(0x1001);
+    let r = f.regs();
+    use hardware::usart;
+    // USART_SR: RXNE bit 5, ORE bit 3, TXE bit 7; DR at 0x04; CR1 TXEIE bit 7.
+    assert_eq!(usart::take_rx(&r), None);
+    f.usart2.set(0x04, 0x5A);
+    f.usart2.set(0x00, 1 << 5);
+    assert_eq!(usart::take_rx(&r), Some((0x5A, false)));
+    f.usart2.set(0x00, 1 << 3);
+    assert_eq!(
+        usart::take_rx(&r),
+        Some((0x5A, true)),
+        "an overrun still yields its byte"
+    );
+    f.usart2.set(0x00, 0);
+    assert!(!usart::tx_empty(&r));
+    f.usart2.set(0x00, 1 << 7);
+    assert!(usart::tx_empty(&r));
+    usart::tx_write(&r, 0xA5);
+    assert_eq!(f.usart2.get(0x04), 0xA5);
+    usart::tx_interrupt(&r, true);
+    assert_eq!(f.usart2.get(rm::USART_CR1) & (1 << 7), 1 << 7);
+    usart::tx_interrupt(&r, false);
+    assert_eq!(f.usart2.get(rm::USART_CR1) & (1 << 7), 0);
+    // IWDG feed key; RCC_CSR WDGRSTF (bit 29) read, RMVF (bit 24) written.
+    watchdog::feed(&r);
+    assert_eq!(f.iwdg.get(rm::IWDG_KR), 0xAAAA);
+    assert!(!watchdog::take_reset_flag(&r));
+    f.rcc.set(0x74, 1 << 29);
+    assert!(watchdog::take_reset_flag(&r));
+    assert_eq!(f.rcc.get(0x74) & (1 << 24), 1 << 24);
+    // EXTI_PR bit 0: pending, cleared by writing 1.
+    assert!(!fault_input::take_pending(&r));
+    f.exti.set(0x14, 1);
+    assert!(fault_input::take_pending(&r));
+    assert_eq!(f.exti.get(0x14), 1, "written 1 to clear");
+}
+
+/// The self-test's `dma_setup` fails for each field that does not read
+/// back; `stop` halts the sample clock and holds the DAC.
+#[test]
+fn a_stream_that_does_not_read_back_fails_and_stop_halts_the_clock() {
+    let bufs = buffers();
+    for (what, off, bad) in [
+        ("NDTR", rm::sxndtr(5), 127),
+        ("M0AR", rm::sxm0ar(5), DAC_ADDR + 4),
+        ("PAR", rm::sxpar(5), 0x4000_7408),
+        ("CHSEL", rm::sxcr(5), 0x0E03_555F & !(7 << 25)),
+        ("EN", rm::sxcr(5), 0x0E03_555E),
+        ("CIRC", rm::sxcr(5), 0x0E03_555F & !(1 << 8)),
+    ] {
+        let run = bring_up_with(Board::GOOD, 0x1001);
+        let regs = run.file.regs();
+        assert!(streams::streams_read_back(&regs, &bufs.dac, &bufs.adc));
+        run.file.dma1.set(off, bad);
+        assert!(
+            !streams::streams_read_back(&regs, &bufs.dac, &bufs.adc),
+            "{what}"
+        );
+    }
+    let run = bring_up_with(Board::GOOD, 0x1001);
+    run.file.dma2.set(rm::sxndtr(0), 255);
+    assert!(!streams::streams_read_back(
+        &run.file.regs(),
+        &bufs.dac,
+        &bufs.adc
+    ));
+    let regs = run.file.regs();
+    assert_eq!(run.file.tim2.get(rm::TIM_CR1) & 1, 1);
+    sampling::stop(&regs, 0x0800_0100);
+    assert_eq!(
+        run.file.tim2.get(rm::TIM_CR1) & 1,
+        0,
+        "sample clock stopped"
+    );
+    assert_eq!(run.file.dac.get(rm::DAC_DHR12RD), 0x0800_0100);
+    assert_eq!(run.file.dma1.get(rm::sxcr(5)) & 1, 0);
+}
+
+/// `can_sample` before the start; a capture that never comes, or comes
+/// with no time between edges, measures nothing.
+#[test]
+fn the_start_needs_a_good_bring_up_and_a_dead_capture_measures_nothing() {
+    let file = File::new(0x1001);
+    let sim = Sim::new(file, Board::GOOD);
+    let mut delay = SimDelay(sim.clone());
+    let regs = file.regs();
+    let mut p = bring_up::prepare(&regs, &buffers(), &mut delay, &mut |_, _| {});
+    assert!(p.can_sample());
+    assert!(bring_up::start_sampling(&regs, &mut p, &mut |_, _| {}));
+    assert!(p.sampling);
+    assert!(
+        !bring_up::start_sampling(&regs, &mut p, &mut |_, _| {}),
+        "only once"
+    );
+    // A register file with nothing behind it: CC1IF never sets.
+    let quiet = File::new(0x1001);
+    let mut d = SimDelay(Sim::new(quiet, Board::GOOD));
+    assert_eq!(
+        clocks::capture_hse_rtc(&quiet.regs(), &mut d, 16_000_000),
+        None
+    );
+    // CC1IF stuck at 1 with a constant CCR1: zero ticks, no frequency.
+    let stuck = File::new(0x1001);
+    stuck.tim11.set(rm::TIM_SR, 0b10);
+    stuck.tim11.set(rm::TIM_CCR1, 1234);
+    let mut d = SimDelay(Sim::new(stuck, Board::GOOD));
+    // The first capture is read and cleared; no second one comes: nothing.
+    assert_eq!(
+        clocks::capture_hse_rtc(&stuck.regs(), &mut d, 16_000_000),
+        None
+    );
+}
+
+/// The `sysclk` check: PLL factors that do not read back as written.
+#[test]
+fn pll_factors_that_do_not_read_back_fail_the_sysclk_check() {
+    let run = bring_up_with(
+        Board {
+            pllcfgr_drifts: true,
+            ..Board::GOOD
+        },
+        0x1001,
+    );
+    let t = self_test::report(&self_test::Findings {
+        clock: run.prepared.clock,
+        dma_setup: run.prepared.dma_setup,
+        first_halves: Some((2, 2)),
+    });
+    assert_eq!(
+        t.sysclk_hz, 0,
+        "not derived from factors that did not read back"
+    );
+    assert_eq!(t.failed, bits::SYSCLK);
 }
