@@ -1167,6 +1167,7 @@ fn small_arithmetic_against_hand_values() {
     assert_eq!(clocks::source_hz(4096, 16_000_000), 1_000_000);
     assert_eq!(clocks::source_hz(3, 10), 853);
     assert_eq!(clocks::source_hz(3, 11), 939); // 2 816 / 3 = 938.67
+    assert_eq!(clocks::source_hz(6, 10), 427); // 2 560 / 6 = 426.67
     let b = DmaBuffer {
         addr: 0x2000_0000,
         words: 128,
