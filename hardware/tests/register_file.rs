@@ -450,6 +450,15 @@ fn bring_up_with(board: Board, rev_id: u16) -> Run {
     }
 }
 
+/// The self-test report of a bring-up, with the streams' first halves.
+fn report(run: &Run, first_halves: Option<(u32, u32)>) -> board::protocol::SelfTest {
+    self_test::report(&self_test::Findings {
+        clock: run.prepared.clock,
+        dma_setup: run.prepared.dma_setup,
+        first_halves,
+    })
+}
+
 fn snap(run: &Run, step: Step) -> &Snap {
     run.snaps
         .iter()
@@ -929,11 +938,7 @@ fn a_wrong_crystal_keeps_the_core_on_the_hsi() {
     assert_eq!(f.usart2.get(rm::USART_BRR), 139, "16 MHz / 115200 = 138.9");
     assert!(!run.prepared.can_sample());
     assert!(!run.prepared.sampling);
-    let t = self_test::report(&self_test::Findings {
-        clock: run.prepared.clock,
-        dma_setup: run.prepared.dma_setup,
-        first_halves: None,
-    });
+    let t = report(&run, None);
     assert_eq!(t.failed, bits::HSE_FREQUENCY);
     // Measured against the HSI: 12 MHz within its resolution (32·8 edges of
     // 1 MHz... here 12 MHz/8 = 1.5 MHz over 4096 ticks at 16 MHz: ±1 tick).
@@ -960,11 +965,7 @@ fn a_dead_crystal_times_out_on_the_hsi() {
         "{t_end} µs"
     );
     assert_eq!(run.file.rcc.get(rm::RCC_CR) & (1 << 16), 0, "HSE off again");
-    let t = self_test::report(&self_test::Findings {
-        clock: run.prepared.clock,
-        dma_setup: run.prepared.dma_setup,
-        first_halves: None,
-    });
+    let t = report(&run, None);
     assert_eq!(t.ran, bits::CLOCK_READY);
     assert_eq!(t.failed, bits::CLOCK_READY);
     assert_eq!(t.hse_hz, 0);
@@ -984,11 +985,7 @@ fn the_self_test_measures_the_clocks_against_the_hsi() {
             },
             0x1001,
         );
-        let t = self_test::report(&self_test::Findings {
-            clock: run.prepared.clock,
-            dma_setup: run.prepared.dma_setup,
-            first_halves: Some((2, 2)),
-        });
+        let t = report(&run, Some((2, 2)));
         assert!(t.passed(), "{t:?}");
         assert_eq!(t.ran, bits::ALL);
         // The HSI's error maps 1:1 into the measurement (f_HSE = edges·16 MHz
@@ -1009,11 +1006,7 @@ fn the_self_test_measures_the_clocks_against_the_hsi() {
         );
     }
     let run = bring_up_with(Board::GOOD, 0x1001);
-    let stalled = self_test::report(&self_test::Findings {
-        clock: run.prepared.clock,
-        dma_setup: run.prepared.dma_setup,
-        first_halves: Some((5, 1)),
-    });
+    let stalled = report(&run, Some((5, 1)));
     assert_eq!(stalled.failed, bits::STREAMS_RUNNING);
 }
 
@@ -1106,11 +1099,7 @@ fn near_crystals_are_refused_and_a_pll_that_never_locks_times_out() {
             },
             0x1001,
         );
-        let t = self_test::report(&self_test::Findings {
-            clock: run.prepared.clock,
-            dma_setup: run.prepared.dma_setup,
-            first_halves: None,
-        });
+        let t = report(&run, None);
         assert_eq!(
             t.failed,
             bits::HSE_FREQUENCY,
@@ -1133,11 +1122,7 @@ fn near_crystals_are_refused_and_a_pll_that_never_locks_times_out() {
         "PLL and HSE off"
     );
     assert!(!run.prepared.clock.ready);
-    let t = self_test::report(&self_test::Findings {
-        clock: run.prepared.clock,
-        dma_setup: run.prepared.dma_setup,
-        first_halves: None,
-    });
+    let t = report(&run, None);
     assert_eq!(t.failed, bits::CLOCK_READY);
     assert!(t.hse_hz > 0, "the crystal was measured before the PLL");
 }
@@ -1308,11 +1293,7 @@ fn pll_factors_that_do_not_read_back_fail_the_sysclk_check() {
         },
         0x1001,
     );
-    let t = self_test::report(&self_test::Findings {
-        clock: run.prepared.clock,
-        dma_setup: run.prepared.dma_setup,
-        first_halves: Some((2, 2)),
-    });
+    let t = report(&run, Some((2, 2)));
     assert_eq!(
         t.sysclk_hz, 0,
         "not derived from factors that did not read back"
