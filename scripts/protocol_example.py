@@ -25,7 +25,7 @@ def varint(v):
         if v==0:
             out.append(low); return bytes(out)
         out.append(low|0x80)
-V=7  # PROTOCOL_VERSION
+V=8  # PROTOCOL_VERSION
 req=bytes([V,5,0,0x0b])
 w,crc=frame(req); print('req', w.hex(' '), hex(crc))
 p=bytes([V,5,1,6, 1,1,0,0,0])+f32(2e-6)+f32(3e-7)+f32(4e-6)+bytes([0])
@@ -33,6 +33,8 @@ p+=bytes([1])+f32(2.2e-6)+f32(3.2e-7)+f32(-2.1)+f32(3.3e-6)+bytes([7])
 p+=bytes([1])+f32(1.5e-5)+f32(-2.5e-6)+bytes([0])+bytes([1])
 # v6: frequency_hz f32, options {track Z=1, headroom f32}, tracking_error_hz Some(-0.5), locked true
 p+=f32(20100.0)+bytes([1])+f32(2.0)+bytes([1])+f32(-0.5)+bytes([1])
+# v8: cpu_load_pct Some(12.5), cpu_load_max_pct Some(28.75)
+p+=bytes([1])+f32(12.5)+bytes([1])+f32(28.75)
 print('payload', p.hex(' '))
 w,crc=frame(p); print('resp', w.hex(' '), hex(crc))
 print(', '.join('0x%02x'%b for b in w))

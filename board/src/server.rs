@@ -250,6 +250,7 @@ impl Server {
                 dev.with(|d| {
                     d.abort_measurement();
                     d.stop();
+                    d.clear_cpu_load_max();
                 });
                 Ok(Response::Ok)
             }

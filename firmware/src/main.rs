@@ -25,6 +25,10 @@
 //! No lock masks all interrupts, and none masks a more urgent level than
 //! the data it guards needs (`lock.rs`).
 //!
+//! The DSP handlers time their work (module `cycles`: the DWT cycle
+//! counter; under QEMU SysTick, calibrated) and the device reports it as
+//! `Status.cpu_load_pct` (protocol v8).
+//!
 //! Under QEMU (`--features qemu`) the DMA streams, DAC, RCC and analog
 //! world are missing: the clocks stay on the 16 MHz HSI, and module `qemu`
 //! refills the DAC halves from the main loop on a SysTick tick and feeds the
@@ -32,6 +36,7 @@
 #![no_std]
 #![no_main]
 
+mod cycles;
 mod lock;
 mod panic;
 #[cfg(feature = "qemu")]
@@ -298,7 +303,13 @@ fn main() -> ! {
     // let the handler look once.
     pac::NVIC::pend(Interrupt::USART2);
 
+    // The DSP time count (`Status.cpu_load_pct`): on the chip before the
+    // streams start; under QEMU once SysTick runs (its calibration needs it).
+    #[cfg(not(feature = "qemu"))]
+    cycles::start(&mut cp, prepared.clocks().sysclk_hz);
     let report = start_and_test(&r, &mut prepared, &mut cp);
+    #[cfg(feature = "qemu")]
+    cycles::start(&mut cp, qemu::QEMU_SYSCLK_HZ);
     if report.ran != 0 && report.failed != 0 {
         defmt::error!("self-test failed: {=u16:#x}", report.failed);
         SELF_TEST_FAILED.store(faults::SELF_TEST, Ordering::Relaxed);
@@ -444,6 +455,7 @@ fn tx_pump() {
 
 #[interrupt]
 fn DMA1_STREAM5() {
+    let t0 = cycles::now();
     let r = regs();
     let flags = hardware::streams::take_dac_flags(&r);
     let buf = DmaBuffer::of_ptr(core::ptr::addr_of!(DAC_BUF));
@@ -462,6 +474,7 @@ fn DMA1_STREAM5() {
             };
             with_device(|dev| dev.dac_half_done(ev, half));
             core::sync::atomic::compiler_fence(Ordering::Release);
+            cycles::fill_done(cycles::since(t0));
         }
         StreamEvent::Stopped => {
             // The stream disabled itself: hold the outputs at rest, latch.
@@ -475,6 +488,7 @@ fn DMA1_STREAM5() {
 
 #[interrupt]
 fn DMA2_STREAM0() {
+    let t0 = cycles::now();
     let r = regs();
     let flags = hardware::streams::take_adc_flags(&r);
     let buf = DmaBuffer::of_ptr(core::ptr::addr_of!(ADC_BUF));
@@ -519,7 +533,11 @@ fn DMA2_STREAM0() {
     }
     // A late handler (both flags) is the fault ADC_OVERRUN, through the
     // device's one fault path.
-    with_device(|dev| dev.adc_half_done_with_pickups(ev, &samples, &pickups));
+    with_device(|dev| {
+        dev.adc_half_done_with_pickups(ev, &samples, &pickups);
+        // This half-buffer's DSP work: the refill's and this block's.
+        cycles::record(dev, cycles::since(t0));
+    });
 }
 
 /// DAC underrun: channel 1 stopped requesting; hold the outputs at rest.

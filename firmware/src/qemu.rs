@@ -20,6 +20,9 @@
 //!   the host's clock and nothing is skipped. While the device is quiescent
 //!   (drive stopped and settled, nothing measuring) a due half only moves
 //!   device time on: no refill, no plant, no ADC block (the emulator idles).
+//! * the refill and the ADC block of each half are timed (module `cycles`,
+//!   SysTick extended by [`ticks`]); the plant is not: it stands for the
+//!   world outside the chip.
 //!
 //! The plant is the true contact, deliberately *not* the device's model
 //! (μ₀ 0.3, k_z = k_x = 10⁷ N/m at power-up): μ₀ = [`PLANT_MU0`],
@@ -37,7 +40,7 @@ use board::device::DeviceConfig;
 #[cfg(feature = "qemu-resonant")]
 use board::plant::ResonantOptions;
 use board::plant::{HalfDrive, Noise, Plant, SampleConditions};
-use cortex_m::peripheral::{syst::SystClkSource, SYST};
+use cortex_m::peripheral::{syst::SystClkSource, SCB, SYST};
 use cortex_m_rt::exception;
 use model_core::float::FastF32;
 
@@ -48,7 +51,7 @@ const DRIFT_RESONANCE_Z_HZ: f32 = 20_100.0;
 #[cfg(feature = "qemu-drift")]
 const DRIFT_HZ_PER_S: f32 = -20.0;
 
-use crate::{ADC_BLOCKS, DEVICE, FS_HZ, HALF, HALVES};
+use crate::{cycles, ADC_BLOCKS, DEVICE, FS_HZ, HALF, HALVES};
 
 /// The plant's true friction coefficient (the device's model says 0.3 until
 /// `scene set` changes it).
@@ -66,7 +69,11 @@ pub const SUB: u32 = 8;
 /// SYSCLK_FRQ = 168 MHz), which SysTick counts. QEMU's model of TIM2 is not
 /// used: its update rate did not follow PSC/ARR here (QEMU 10.0, ≈ 14 times
 /// slower than programmed).
-const QEMU_SYSCLK_HZ: u32 = 168_000_000;
+pub const QEMU_SYSCLK_HZ: u32 = 168_000_000;
+/// SysTick ticks per half-buffer (its reload + 1): 21 504.
+const TICKS_PER_HALF: u32 = QEMU_SYSCLK_HZ / FS_HZ * HALF as u32;
+/// SysTick wraps since `tick` (each one half-buffer).
+static WRAPS: AtomicU32 = AtomicU32::new(0);
 
 /// Half-buffers whose 128 µs have passed and that are not yet processed.
 static DUE: AtomicU32 = AtomicU32::new(0);
@@ -79,14 +86,39 @@ pub fn due() -> bool {
 /// SysTick on the core clock: one exception per half-buffer.
 pub fn tick(syst: &mut SYST) {
     syst.set_clock_source(SystClkSource::Core);
-    syst.set_reload(QEMU_SYSCLK_HZ / FS_HZ * HALF as u32 - 1);
+    syst.set_reload(TICKS_PER_HALF - 1);
     syst.clear_current();
     syst.enable_interrupt();
     syst.enable_counter();
 }
 
+/// SysTick ticks since `tick`, wrapping at 2³² (25.6 s of emulated time):
+/// the wraps counted by the exception times the period, plus the down
+/// counter's progress. A wrap whose exception is still pending (the reload
+/// happened, the handler has not run) is counted too, so that the stamp
+/// never steps back. Safe in any context but a handler more urgent than
+/// SysTick (priority 0, the highest): none here.
+pub fn ticks() -> u32 {
+    loop {
+        let w = WRAPS.load(Ordering::Relaxed);
+        let mut c = SYST::get_current();
+        let mut wraps = w;
+        if SCB::is_pendst_pending() {
+            // Reloaded, not yet counted: read again, after the reload.
+            c = SYST::get_current();
+            wraps = w.wrapping_add(1);
+        }
+        if WRAPS.load(Ordering::Relaxed) == w {
+            return wraps
+                .wrapping_mul(TICKS_PER_HALF)
+                .wrapping_add(TICKS_PER_HALF - 1 - c.min(TICKS_PER_HALF - 1));
+        }
+    }
+}
+
 #[exception]
 fn SysTick() {
+    WRAPS.fetch_add(1, Ordering::Relaxed);
     // At most two halves queued: a core that falls behind slows device time
     // rather than bursting through a backlog.
     let _ = DUE.fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| {
@@ -179,10 +211,14 @@ impl Analog {
         let half = self.half;
         self.half ^= 1;
         let dac = &mut self.dac;
+        // Timed as the DAC handler's work on the board (with the plant's
+        // record of the drive, a copy of the DDS state).
+        let t0 = cycles::now();
         let Some(made) = DEVICE.lock(|d| d.as_mut().map(|dev| HalfDrive::fill(dev, half, dac)))
         else {
             return;
         };
+        cycles::fill_done(cycles::since(t0));
         // The half output now is the oldest waiting one (`pending`).
         let out = self.pending[0];
         self.pending = [self.pending[1], Some(made)];
@@ -193,7 +229,11 @@ impl Analog {
         self.run_plant(&d);
         let (samples, pickups) = (&self.samples, &self.pickups);
         ADC_BLOCKS.fetch_add(1, Ordering::Relaxed);
-        crate::with_device(|dev| dev.adc_block_with_pickups(half, samples, pickups));
+        let t0 = cycles::now();
+        crate::with_device(|dev| {
+            dev.adc_block_with_pickups(half, samples, pickups);
+            cycles::record(dev, cycles::since(t0));
+        });
     }
 
     fn run_plant(&mut self, d: &HalfDrive) {

@@ -5,7 +5,7 @@
 
 /// Protocol version written into every hand-built frame ("Frame" table of
 /// docs/protocol.md). A version bump is this one line.
-pub const VERSION: u16 = 7;
+pub const VERSION: u16 = 8;
 /// `Body::Request` (variant index).
 pub const BODY_REQUEST: u8 = 0;
 /// `Request::GetDrive` (variant index, "Requests" table).

@@ -11,7 +11,7 @@ use board::protocol::{
 use board::server::Server;
 
 /// The protocol version byte of the hand-built frames (docs/protocol.md, "Frame").
-const V: u8 = 7;
+const V: u8 = 8;
 
 fn cfg() -> DeviceConfig {
     integration_tests::board_config_1mhz()
@@ -314,7 +314,7 @@ fn docs_protocol_examples() {
     let mut out = [0u8; MAX_FRAME];
     let req = encode(
         &Frame {
-            version: 7,
+            version: 8,
             seq: 5,
             body: Body::Request(Request::GetStatus),
         },
@@ -323,7 +323,7 @@ fn docs_protocol_examples() {
     .unwrap();
     assert_eq!(
         req,
-        &[0x03, 0x07, 0x05, 0x06, 0x0b, 0xc6, 0xfc, 0x8a, 0x2d, 0x00]
+        &[0x03, 0x08, 0x05, 0x06, 0x0b, 0x90, 0xec, 0xe9, 0x75, 0x00]
     );
     let status = board::device::Status {
         running: true,
@@ -352,11 +352,13 @@ fn docs_protocol_examples() {
         },
         tracking_error_hz: Some(-0.5),
         locked: true,
+        cpu_load_pct: Some(12.5),
+        cpu_load_max_pct: Some(28.75),
     };
     let mut out = [0u8; MAX_FRAME];
     let resp = encode(
         &Frame {
-            version: 7,
+            version: 8,
             seq: 5,
             body: Body::Response(Response::Status(status)),
         },
@@ -366,12 +368,12 @@ fn docs_protocol_examples() {
     assert_eq!(
         resp,
         &[
-            0x07, 0x07, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x01, 0x0d, 0xbd, 0x37, 0x06, 0x36,
+            0x07, 0x08, 0x05, 0x01, 0x06, 0x01, 0x01, 0x01, 0x01, 0x0d, 0xbd, 0x37, 0x06, 0x36,
             0xb0, 0x0f, 0xa1, 0x34, 0xbd, 0x37, 0x86, 0x36, 0x1c, 0x01, 0xb6, 0xa3, 0x13, 0x36,
             0x77, 0xcc, 0xab, 0x34, 0x66, 0x66, 0x06, 0xc0, 0x91, 0x75, 0x5d, 0x36, 0x07, 0x01,
             0x82, 0xa8, 0x7b, 0x37, 0xac, 0xc5, 0x27, 0xb6, 0x02, 0x01, 0x05, 0x08, 0x9d, 0x46,
-            0x01, 0x01, 0x01, 0x03, 0x40, 0x01, 0x01, 0x01, 0x07, 0xbf, 0x01, 0x45, 0x9c, 0x53,
-            0x71, 0x00
+            0x01, 0x01, 0x01, 0x03, 0x40, 0x01, 0x01, 0x01, 0x04, 0xbf, 0x01, 0x01, 0x01, 0x04,
+            0x48, 0x41, 0x01, 0x01, 0x07, 0xe6, 0x41, 0x79, 0x38, 0xaf, 0xfa, 0x00
         ]
     );
     // v7, "Power-up self-test": the SelfTest bytes of the example there.
@@ -384,7 +386,7 @@ fn docs_protocol_examples() {
     let mut out = [0u8; MAX_FRAME];
     let w = encode(
         &Frame {
-            version: 7,
+            version: 8,
             seq: 5,
             body: Body::Response(Response::Info(info().with_self_test(t))),
         },
@@ -634,6 +636,56 @@ fn hand_built_frames_get_the_spec_answers() {
     assert!(exchange(&mut s, &mut dev, &w[..3], 1_000_000).is_empty());
     let r = exchange(&mut s, &mut dev, &w[3..], 1_050_000);
     assert_eq!(&r[0][..4], [V, 9, 1, 6]);
+}
+
+/// The f32 bytes of `100·c/B` %, eq. L1 of "DSP load" in docs/protocol.md,
+/// computed in f64 (exact for these integers) and rounded once to f32.
+fn load_pct_bytes(c: u32, b: u32) -> [u8; 4] {
+    ((f64::from(c) * 100.0 / f64::from(b)) as f32).to_le_bytes()
+}
+
+#[test]
+fn status_reports_the_recorded_dsp_load_and_reset_clears_its_maximum() {
+    // v8: Status ends with cpu_load_pct, cpu_load_max_pct, each Option<f32>
+    // (00, or 01 and the f32 LE), after `locked`.
+    let t = SineTable::<256>::libm();
+    let mut dev = test_device(&t);
+    let mut s = Server::new(info());
+    let tail = |p: &[u8], n: usize| p[p.len() - n..].to_vec();
+    // Nothing recorded (as on the virtual device): both None.
+    let st = ask(&mut s, &mut dev, &[V, 1, 0, 11]);
+    assert_eq!(&st[..4], [V, 1, 1, 6]);
+    assert_eq!(tail(&st, 2), [0, 0]);
+    // The STM32F405's budget: 168 MHz · 64 samples / 500 kS/s (eq. L1).
+    let b = 168_000_000 / 500_000 * 64;
+    assert_eq!(b, 21_504);
+    let budget = std::num::NonZeroU32::new(b).unwrap();
+    // 6 452 cycles: just above 30 % (6 451.2); then a lighter half-buffer.
+    dev.record_cpu_load(6_452, budget);
+    dev.record_cpu_load(2_000, budget);
+    let st = ask(&mut s, &mut dev, &[V, 2, 0, 11]);
+    let want = cat(&[
+        &[1],
+        &load_pct_bytes(2_000, b),
+        &[1],
+        &load_pct_bytes(6_452, b),
+    ]);
+    assert_eq!(tail(&st, 10), want);
+    let max = f32::from_le_bytes(want[6..10].try_into().unwrap());
+    assert!(max > 30.0 && max < 30.01, "{max}");
+    // Reset (request 13) answers Ok (response 2) and clears the maximum only.
+    assert_eq!(ask(&mut s, &mut dev, &[V, 3, 0, 13]), [V, 3, 1, 2]);
+    let st = ask(&mut s, &mut dev, &[V, 4, 0, 11]);
+    assert_eq!(tail(&st, 6), cat(&[&[1], &load_pct_bytes(2_000, b), &[0]]));
+    // The next half-buffer is the new maximum, even below the old one.
+    dev.record_cpu_load(1_000, budget);
+    let st = ask(&mut s, &mut dev, &[V, 5, 0, 11]);
+    let one = load_pct_bytes(1_000, b);
+    assert_eq!(tail(&st, 10), cat(&[&[1], &one, &[1], &one]));
+    // A late half-buffer (two budgets): 200 %, reported as such.
+    dev.record_cpu_load(2 * b, budget);
+    let st = ask(&mut s, &mut dev, &[V, 6, 0, 11]);
+    assert_eq!(tail(&st, 4), 200f32.to_le_bytes());
 }
 
 #[test]
@@ -1089,7 +1141,7 @@ fn ramp_done_follows_every_start_and_stop_and_status_shows_the_output() {
     // v3: liftoff_allowed, false at power-up; v4: measured, None (00): this
     // loop feeds the forces only, no motion pickups; v5: the last field, mode,
     // OpenLoop (00) at power-up.
-    assert_eq!((st.len(), st[21], st[22], st[23]), (35, 0, 0, 0));
+    assert_eq!((st.len(), st[21], st[22], st[23]), (37, 0, 0, 0));
     // v6: frequency_hz (f32), the DDS's: the setting to its resolution
     // f_s/2^32 = 2.3e-4 Hz and f32 rounding (half an ulp of 4e4: 2e-3 Hz);
     // options {track: None (00), headroom 2.0}; tracking_error_hz None (00);
@@ -1098,6 +1150,9 @@ fn ramp_done_follows_every_start_and_stop_and_status_shows_the_output() {
     assert_eq!(st[28], 0);
     assert_eq!(f32_at(&st, 29), 2.0);
     assert_eq!((st[33], st[34]), (0, 0));
+    // v8: cpu_load_pct, cpu_load_max_pct None (00 00): nothing here records
+    // the DSP time (the firmware does).
+    assert_eq!((st[35], st[36]), (0, 0));
     // SetLiftOff (14) {allow: true} → Ok; Status shows it.
     assert_eq!(ask(&mut s, &mut dev, &[V, 10, 0, 14, 1]), [V, 10, 1, 2]);
     assert_eq!(ask(&mut s, &mut dev, &[V, 11, 0, 11])[21], 1);
@@ -1253,7 +1308,9 @@ fn displacement_mode_requests_get_the_spec_answers() {
     assert_eq!(&r[..4], [V, 14, 1, 1]);
     assert_eq!(ask(&mut s, &mut dev, &[V, 15, 0, 19, 1]), [V, 15, 1, 2]);
     let st = ask(&mut s, &mut dev, &[V, 16, 0, 11]);
-    assert_eq!((st.len(), st[22], st[23]), (35, 0, 1), "{st:02x?}");
+    // v8: 35 bytes up to `locked`, then cpu_load_pct and cpu_load_max_pct None.
+    assert_eq!((st.len(), st[22], st[23]), (37, 0, 1), "{st:02x?}");
+    assert_eq!(st[35..], [0, 0]);
     let d = ask(&mut s, &mut dev, &[V, 17, 0, 1]);
     assert_eq!(&d[..4], [V, 17, 1, 1]);
     assert_eq!(applied_phase(&d), f64::from(phi));

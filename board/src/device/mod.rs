@@ -14,6 +14,7 @@
 //!   complex loop per channel on the measured motion;
 //! * [`tracking`] — the resonance tracking (a PLL on one mode's phase);
 //! * `predict` — the model's prediction for the current drive;
+//! * `load` — the board's own measure of its DSP time per half-buffer;
 //! * `closed_loop` — the closed loop's timing (which samples each update
 //!   uses, when its command reaches the DAC);
 //! * [`error`] — why a command was refused.
@@ -31,6 +32,7 @@ pub mod displacement;
 mod drive;
 pub mod error;
 mod fault;
+mod load;
 mod measure;
 mod motion;
 mod predict;
@@ -42,6 +44,7 @@ pub use config::{
 };
 pub use error::{ConfigError, DeviceError};
 pub use fault::faults;
+pub use load::CpuLoad;
 pub use measure::{check_periods, estimate};
 pub use motion::MeasuredDrive;
 pub use predict::{predict, regime};
@@ -99,6 +102,9 @@ pub struct Device<'t, const N: usize> {
     options: displacement::DisplacementOptions,
     /// (v6) The resonance tracking.
     tracker: tracking::Tracker,
+    /// (v8) The DSP handlers' cycles per half-buffer, as the firmware
+    /// counted them.
+    load: CpuLoad,
 }
 
 /// `x` if finite and in `[min, max]`, else [`DeviceError::OutOfRange`].
@@ -163,6 +169,7 @@ impl<'t, const N: usize> Device<'t, N> {
             loops: displacement::Loops::default(),
             options: displacement::DisplacementOptions::default(),
             tracker: tracking::Tracker::default(),
+            load: CpuLoad::new(),
         };
         check_contact(&contact)?;
         d.applied.achieved = d
@@ -240,9 +247,32 @@ impl<'t, const N: usize> Device<'t, N> {
             options: self.options,
             tracking_error_hz: None,
             locked: false,
+            cpu_load_pct: self.load.last_pct(),
+            cpu_load_max_pct: self.load.max_pct(),
         };
         self.displacement_status(&mut s);
         s
+    }
+
+    /// (v8) Records the cycles the DSP handlers took for one half-buffer
+    /// (the DAC refill and the ADC block of the same half) out of `budget`
+    /// cycles per half-buffer: [`Status::cpu_load_pct`] and
+    /// [`Status::cpu_load_max_pct`] (eq. L1 of `device::load`). Called by
+    /// the firmware's ADC handler at the end of its work, once per
+    /// half-buffer; a device that never calls it reports neither.
+    pub fn record_cpu_load(&mut self, cycles: u32, budget: core::num::NonZeroU32) {
+        self.load.record(cycles, budget);
+    }
+
+    /// (v8) Forgets the largest load (`Reset`): [`Status::cpu_load_max_pct`]
+    /// is `None` until the next recorded half-buffer.
+    pub fn clear_cpu_load_max(&mut self) {
+        self.load.clear_max();
+    }
+
+    /// (v8) The recorded DSP load.
+    pub fn cpu_load(&self) -> &CpuLoad {
+        &self.load
     }
 
     /// Counts the commands that set new DDS targets (accepted `set_drive`,

@@ -15,7 +15,7 @@ use model_core::regime::Regime;
 
 /// Protocol version; a frame with another version is answered with
 /// [`WireError::VersionMismatch`].
-pub const PROTOCOL_VERSION: u16 = 7;
+pub const PROTOCOL_VERSION: u16 = 8;
 
 /// The drive as commanded, physical units.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -180,6 +180,15 @@ pub struct Status {
     pub tracking_error_hz: Option<f32>,
     /// (v6) The tracking is locked (`false` when not tracking).
     pub locked: bool,
+    /// (v8) The board's DSP load in the last half-buffer, % of the
+    /// half-buffer's cycles (eq. L1 of `device::load`: the DAC refill and
+    /// the ADC block of one half, counted by the firmware; above 100 %: a
+    /// late handler). `None` before the first half-buffer, and on a device
+    /// that does not measure itself (the virtual device).
+    pub cpu_load_pct: Option<f32>,
+    /// (v8) The largest [`Status::cpu_load_pct`] since power-up or the
+    /// last `Reset`, %; `None` when no half-buffer was measured since.
+    pub cpu_load_max_pct: Option<f32>,
 }
 
 /// (v6) Which transducer's resonance the drive frequency follows.
@@ -461,7 +470,8 @@ pub enum Request {
     ResetFaults,
     /// 13: end every session: stop the stream (`StreamStopped(Reset)`),
     /// abort a running measurement, stop the drive (ramped), forget the
-    /// `Measure` seq; settings, contact and latched faults are kept.
+    /// `Measure` seq, clear `Status.cpu_load_max_pct` (v8); settings,
+    /// contact and latched faults are kept.
     Reset,
     /// 14 (v3): allow drives with `Δu_z` above the lift-off limit
     /// `(1 − liftoff_margin)·u_z0` (intermittent contact; `Predict` then uses
