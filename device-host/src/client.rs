@@ -9,8 +9,8 @@ use board::protocol::{
     PROTOCOL_VERSION,
 };
 
-use super::link::Link;
-use crate::error::CliError;
+use crate::link::Link;
+use crate::Error;
 
 /// A protocol client over a link.
 pub struct Client {
@@ -46,7 +46,7 @@ impl Client {
 
     /// Sends a request and waits for its response (same `seq`), retrying on
     /// timeout with the same `seq`.
-    pub fn call(&mut self, req: Request) -> Result<Response, CliError> {
+    pub fn call(&mut self, req: Request) -> Result<Response, Error> {
         self.seq = self.seq.wrapping_add(1);
         let seq = self.seq;
         let frame = Frame {
@@ -56,7 +56,7 @@ impl Client {
         };
         let mut buf = [0u8; MAX_FRAME];
         let bytes = encode(&frame, &mut buf)
-            .map_err(|_| CliError::failure("request too large for one frame"))?
+            .map_err(|_| Error::failure("request too large for one frame"))?
             .to_vec();
         for _ in 0..self.attempts {
             self.link.send(&bytes).map_err(|e| gone(&*self.link, &e))?;
@@ -72,7 +72,7 @@ impl Client {
                 }
             }
         }
-        Err(CliError::failure(format!(
+        Err(Error::failure(format!(
             "no answer from {} after {} attempts of {} ms (device gone or not speaking protocol v{PROTOCOL_VERSION})",
             self.link.describe(),
             self.attempts,
@@ -93,10 +93,7 @@ impl Client {
     }
 
     /// Waits up to `timeout` for one telemetry frame.
-    pub fn next_telemetry(
-        &mut self,
-        timeout: Duration,
-    ) -> Result<Option<(u32, Telemetry)>, CliError> {
+    pub fn next_telemetry(&mut self, timeout: Duration) -> Result<Option<(u32, Telemetry)>, Error> {
         if let Some(t) = self.telemetry.pop_front() {
             return Ok(Some(t));
         }
@@ -111,7 +108,7 @@ impl Client {
         Ok(None)
     }
 
-    fn next_frame(&mut self, deadline: Instant) -> Result<Option<Frame>, CliError> {
+    fn next_frame(&mut self, deadline: Instant) -> Result<Option<Frame>, Error> {
         let mut b = [0u8; 1];
         let left = deadline.saturating_duration_since(Instant::now());
         let n = self
@@ -142,6 +139,6 @@ fn session_seq() -> u32 {
     nanos ^ std::process::id().rotate_left(8)
 }
 
-fn gone(link: &dyn Link, e: &std::io::Error) -> CliError {
-    CliError::failure(format!("lost {}: {e}", link.describe()))
+fn gone(link: &dyn Link, e: &std::io::Error) -> Error {
+    Error::failure(format!("lost {}: {e}", link.describe()))
 }

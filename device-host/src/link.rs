@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use std::path::PathBuf;
 
-use super::sim::{PlantOptions, SimState, VirtualDevice};
+use crate::virtual_device::{PlantOptions, SimState, VirtualDevice};
 
 /// A bidirectional byte stream with read timeouts.
 pub trait Link {

@@ -16,8 +16,8 @@ use std::time::{Duration, Instant};
 
 use board::link::{self, TxRing};
 
-use super::sim::{self, VirtualDevice};
-use crate::error::{CliError, CliResult};
+use crate::virtual_device::{self as sim, VirtualDevice};
+use crate::{Error, Result};
 
 /// Read wait while the device is quiescent.
 pub const IDLE_WAIT: Duration = Duration::from_millis(20);
@@ -142,17 +142,17 @@ pub fn serve_pty(
     dev: &mut VirtualDevice,
     p: &mut serialport::TTYPort,
     deadline: Option<Instant>,
-) -> CliResult {
+) -> Result {
     let mut clock = Clock::new();
     match pump(dev, p, &mut clock, deadline) {
         Ok(()) => Ok(()),
-        Err(e) => Err(CliError::failure(format!("pty: {e}"))),
+        Err(e) => Err(Error::failure(format!("pty: {e}"))),
     }
 }
 
 /// Serves TCP clients one at a time until `deadline`; the device runs on
 /// between connections.
-pub fn serve_tcp(dev: &mut VirtualDevice, l: TcpListener, deadline: Option<Instant>) -> CliResult {
+pub fn serve_tcp(dev: &mut VirtualDevice, l: TcpListener, deadline: Option<Instant>) -> Result {
     let (tx, rx) = mpsc::channel();
     std::thread::spawn(move || {
         for s in l.incoming() {
@@ -183,7 +183,7 @@ pub fn serve_tcp(dev: &mut VirtualDevice, l: TcpListener, deadline: Option<Insta
             Ok(Err(e)) => eprintln!("--tcp: accept: {e}"),
             Err(mpsc::RecvTimeoutError::Timeout) => {}
             Err(mpsc::RecvTimeoutError::Disconnected) => {
-                return Err(CliError::failure("--tcp: the listener stopped"))
+                return Err(Error::failure("--tcp: the listener stopped"))
             }
         }
         // Between clients the telemetry goes nowhere (as a board's UART with no host).

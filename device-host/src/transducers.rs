@@ -1,4 +1,4 @@
-//! The virtual plant's transducers as flags: ideal (the DAC level times the
+//! The virtual plant's transducers: ideal (the DAC level times the
 //! calibration, today's board assumption) or resonant modes
 //! ([`board::plant::Resonant`]: f_r, Q, static gain, drift,
 //! self-heating, cross-talk, the contact's load), shared by
@@ -25,8 +25,9 @@
 use board::plant::ResonantOptions;
 use board::resonator::ModeParams;
 
-use crate::args::Real;
-use crate::error::{CliError, CliResult};
+use fric_analysis::numbers::{short, Real};
+
+use crate::{Error, Result};
 
 pub use board::plant::bench::{LOAD_Q, Q_X, Q_Z, RESONANCE_X_HZ, RESONANCE_Z_HZ};
 
@@ -36,53 +37,55 @@ pub fn default_gain(metres_per_code: f32) -> f64 {
     board::plant::bench::gain(metres_per_code)
 }
 
-/// The domain of a transducer's Q.
-const Q: Real = Real::ANY
+/// The domain of a transducer's Q (`--plant-q-z`, `--plant-q-x`,
+/// `--plant-load-q` without `inf`).
+pub const Q_DOMAIN: Real = Real::ANY
     .above(0.5)
     .because("a resonance with Q ≤ 0.5 does not ring");
 
-/// The transducer flags.
-#[derive(clap::Args, Debug, Clone, Default)]
-pub struct TransducerArgs {
+/// The domain of a resonance, Hz, and of a static gain, m/V.
+pub const POSITIVE: Real = Real::positive();
+/// The domain of a drift (Hz/s) and of the self-heating shift (Hz/µm²).
+pub const ANY: Real = Real::ANY;
+/// The domain of the cross-talk: a fraction of the other channel's drive.
+pub const CROSSTALK: Real = Real::ANY
+    .above(-1.0)
+    .below(1.0)
+    .because("a fraction of the other channel's drive");
+/// The domain of the contact's load as a Q (`inf` for none).
+pub const LOAD_Q_DOMAIN: Real = Real::positive().or_infinity().because("inf for no load");
+
+/// The transducers asked for: each field is a flag of `fricctl` (named in
+/// errors), `None` for the default (module documentation).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct TransducerSpec {
     /// Virtual plant: ideal transducers (displacement = DAC level × calibration) instead of the default resonant ones; refuses the resonant flags
-    #[arg(long)]
     pub plant_ideal_transducers: bool,
     /// Virtual plant: resonance of the normal transducer, Hz (resonant plant; default 20300)
-    #[arg(long, value_name = "HZ", value_parser = Real::positive())]
     pub plant_resonance_z: Option<f64>,
     /// Virtual plant: Q of the normal transducer (> 0.5; default 300)
-    #[arg(long, value_name = "Q", value_parser = Q)]
     pub plant_q_z: Option<f64>,
     /// Virtual plant: resonance of the tangential transducer, Hz (default 19700)
-    #[arg(long, value_name = "HZ", value_parser = Real::positive())]
     pub plant_resonance_x: Option<f64>,
     /// Virtual plant: Q of the tangential transducer (> 0.5; default 200)
-    #[arg(long, value_name = "Q", value_parser = Q)]
     pub plant_q_x: Option<f64>,
     /// Virtual plant: static gain of the normal transducer, m per DAC volt (default 8.27e-8)
-    #[arg(long, value_name = "M_PER_V", value_parser = Real::positive())]
     pub plant_gain_z: Option<f64>,
     /// Virtual plant: static gain of the tangential transducer, m per DAC volt (default 4.14e-8)
-    #[arg(long, value_name = "M_PER_V", value_parser = Real::positive())]
     pub plant_gain_x: Option<f64>,
     /// Virtual plant: drift of the normal resonance, Hz per second of device time (default 0)
-    #[arg(long, value_name = "HZ_PER_S", value_parser = Real::ANY)]
     pub plant_resonance_drift_z: Option<f64>,
     /// Virtual plant: drift of the tangential resonance, Hz/s (default 0)
-    #[arg(long, value_name = "HZ_PER_S", value_parser = Real::ANY)]
     pub plant_resonance_drift_x: Option<f64>,
     /// Virtual plant: self-heating shift of each resonance per squared amplitude, Hz/µm² (thermal time 1 s; default 0)
-    #[arg(long, value_name = "HZ_PER_UM2", value_parser = Real::ANY)]
     pub plant_thermal_shift: Option<f64>,
     /// Virtual plant: fraction of each channel's drive that also drives the other transducer (|c| < 1; default 0)
-    #[arg(long, value_name = "FRACTION", value_parser = Real::ANY.above(-1.0).below(1.0).because("a fraction of the other channel's drive"))]
     pub plant_crosstalk: Option<f64>,
     /// Virtual plant: the contact's load as damping, 1/Q_eff = 1/Q + 1/Q_load (> 0, `inf` for none; default 2000)
-    #[arg(long, value_name = "Q", value_parser = Real::positive().or_infinity().because("inf for no load"))]
     pub plant_load_q: Option<f64>,
 }
 
-impl TransducerArgs {
+impl TransducerSpec {
     /// The resonant options, or `None` for ideal transducers, with the
     /// calibrations `(metres_per_code_z, metres_per_code_x)` for the
     /// default gains.
@@ -94,7 +97,7 @@ impl TransducerArgs {
         &self,
         cal: (f32, f32),
         default_resonant: bool,
-    ) -> CliResult<Option<ResonantOptions<f64>>> {
+    ) -> Result<Option<ResonantOptions<f64>>> {
         let given: Vec<&str> = [
             (self.plant_resonance_z, "--plant-resonance-z"),
             (self.plant_q_z, "--plant-q-z"),
@@ -116,12 +119,12 @@ impl TransducerArgs {
             return Ok(None);
         }
         if self.plant_ideal_transducers {
-            return Err(CliError::usage(format!(
+            return Err(Error::usage(format!(
                 "--plant-ideal-transducers: cannot be used with {} (a resonant plant)",
                 given[0]
             )));
         }
-        // Each value is in its domain (the flags' parsers, `crate::args`).
+        self.check()?;
         let fz = self.plant_resonance_z.unwrap_or(RESONANCE_Z_HZ);
         let fx = self.plant_resonance_x.unwrap_or(RESONANCE_X_HZ);
         let qz = self.plant_q_z.unwrap_or(Q_Z);
@@ -133,6 +136,22 @@ impl TransducerArgs {
         let th = self.plant_thermal_shift.unwrap_or(0.0);
         let ct = self.plant_crosstalk.unwrap_or(0.0);
         let load_q = self.plant_load_q.unwrap_or(LOAD_Q);
+        // The loaded Q of each mode, 1/Q_eff = 1/Q + 1/Q_load, must still
+        // ring: a plant that would not is refused, never made ideal.
+        for (q, flag) in [(qz, "--plant-q-z"), (qx, "--plant-q-x")] {
+            let q_eff = 1.0 / (1.0 / q + 1.0 / load_q);
+            if q_eff <= 0.5 {
+                let flag = if self.plant_load_q.is_some() {
+                    "--plant-load-q"
+                } else {
+                    flag
+                };
+                return Err(Error::usage(format!(
+                    "{flag}: the loaded Q 1/(1/Q + 1/Q_load) = {} must be > 0.5 (a resonance with Q ≤ 0.5 does not ring)",
+                    short(q_eff)
+                )));
+            }
+        }
         Ok(Some(ResonantOptions {
             modes: [
                 ModeParams {
@@ -151,5 +170,40 @@ impl TransducerArgs {
             crosstalk: ct,
             load_q,
         }))
+    }
+}
+
+impl TransducerSpec {
+    /// Each given value within its domain, named by its flag.
+    fn check(&self) -> Result<()> {
+        let fields = [
+            (self.plant_resonance_z, "--plant-resonance-z", POSITIVE),
+            (self.plant_q_z, "--plant-q-z", Q_DOMAIN),
+            (self.plant_resonance_x, "--plant-resonance-x", POSITIVE),
+            (self.plant_q_x, "--plant-q-x", Q_DOMAIN),
+            (self.plant_gain_z, "--plant-gain-z", POSITIVE),
+            (self.plant_gain_x, "--plant-gain-x", POSITIVE),
+            (
+                self.plant_resonance_drift_z,
+                "--plant-resonance-drift-z",
+                ANY,
+            ),
+            (
+                self.plant_resonance_drift_x,
+                "--plant-resonance-drift-x",
+                ANY,
+            ),
+            (self.plant_thermal_shift, "--plant-thermal-shift", ANY),
+            (self.plant_crosstalk, "--plant-crosstalk", CROSSTALK),
+            (self.plant_load_q, "--plant-load-q", LOAD_Q_DOMAIN),
+        ];
+        for (v, flag, domain) in fields {
+            if let Some(x) = v {
+                domain
+                    .check(x, &short(x))
+                    .map_err(|r| Error::usage(format!("{flag}: {r}")))?;
+            }
+        }
+        Ok(())
     }
 }

@@ -14,7 +14,7 @@
 //! - transducers whose displacement amplitudes Δu_z, Δu_x follow the DAC's
 //!   with a first-order lag of time constant τ = `lag_periods`/f
 //!   (dA/dt = (A_DAC − A)/τ, advanced exactly per ADC sample);
-//! - or, with any of the resonant flags ([`super::transducers`]), resonant
+//! - or, with any of the resonant flags ([`crate::transducers`]), resonant
 //!   transducers: second-order modes (f_r, Q, static gain) driven by the DAC
 //!   voltages, with resonance drift, self-heating, cross-talk and the
 //!   contact's load ([`board::plant::Resonant`]);
@@ -38,7 +38,10 @@ use board::protocol::Info;
 use board::server::Server;
 use model_core::Libm;
 
-use crate::args::Real;
+use fric_analysis::numbers::{short, Real};
+
+use crate::transducers::TransducerSpec;
+use crate::{Error, Result};
 
 /// Table size of the virtual device (as the firmware).
 pub const TABLE_N: usize = 1024;
@@ -150,36 +153,50 @@ pub const OFFSET_COUNTS: Real = Real::ANY
     .at_most(4095.0)
     .because("the 12-bit ADC's full scale");
 /// Domain of the plant's contact (μ0, k_z, k_x): the scene's domain
-/// ([`crate::scene_args::domain`]), in `f32` as the device's contact.
-const PLANT_CONTACT: Real = Real::positive().single_precision();
+/// (the analysis' scene domain), in `f32` as the device's contact.
+pub const PLANT_CONTACT: Real = Real::positive().single_precision();
+/// Domain of the ideal transducers' lag, drive periods.
+pub const LAG_PERIODS: Real = Real::non_negative().single_precision();
+/// Domain of the drift of μ₀, 1/s.
+pub const MU0_DRIFT: Real = Real::ANY.single_precision();
 
-/// The plant's flags, shared by `fricctl sim-device` and `fricctl device --sim`.
-#[derive(clap::Args, Debug, Clone)]
-pub struct PlantArgs {
+/// The plant asked for: each field is a flag of `fricctl sim-device` and
+/// `fricctl device --sim` (named in errors); [`PlantSpec::options`] checks
+/// them and reads the profile.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlantSpec {
     /// Virtual plant: true μ0 (the device's model keeps its own, see `scene`)
-    #[arg(long, default_value_t = DEFAULT_CONTACT.0, value_parser = PLANT_CONTACT)]
     pub plant_mu0: f64,
     /// Virtual plant: true k_z, N/m
-    #[arg(long, default_value_t = DEFAULT_CONTACT.1, value_parser = PLANT_CONTACT)]
     pub plant_kz: f64,
     /// Virtual plant: true k_x, N/m
-    #[arg(long, default_value_t = DEFAULT_CONTACT.2, value_parser = PLANT_CONTACT)]
     pub plant_kx: f64,
     /// Virtual plant: ideal transducers whose displacement amplitudes follow with a first-order lag, time constant in drive periods (0 = none; non-zero implies ideal transducers)
-    #[arg(long, default_value_t = 0.0, value_parser = Real::non_negative().single_precision())]
     pub plant_lag_periods: f64,
     /// Virtual plant: drift of μ0, per second of device time (μ0 stops at 0)
-    #[arg(long, default_value_t = 0.0, value_parser = Real::ANY.single_precision())]
     pub plant_mu0_drift: f64,
     /// Virtual plant: stage velocity profile, CSV `t_s,v0_m_s` (header line, t strictly increasing), piecewise linear in device time, held outside; replaces the constant velocity
-    #[arg(long, value_name = "FILE")]
     pub v0_profile: Option<std::path::PathBuf>,
     /// The transducers: ideal or resonant.
-    #[command(flatten)]
-    pub transducers: super::transducers::TransducerArgs,
+    pub transducers: TransducerSpec,
 }
 
-impl PlantArgs {
+impl Default for PlantSpec {
+    /// The power-up contact, no lag, no drift, no profile, the default (resonant) transducers.
+    fn default() -> Self {
+        PlantSpec {
+            plant_mu0: DEFAULT_CONTACT.0,
+            plant_kz: DEFAULT_CONTACT.1,
+            plant_kx: DEFAULT_CONTACT.2,
+            plant_lag_periods: 0.0,
+            plant_mu0_drift: 0.0,
+            v0_profile: None,
+            transducers: TransducerSpec::default(),
+        }
+    }
+}
+
+impl PlantSpec {
     /// The checked plant options with the constant velocity `v0` (m/s), ADC
     /// noise and offset (counts); `names` are the flag names of those three.
     ///
@@ -192,17 +209,21 @@ impl PlantArgs {
         noise: f64,
         offset: f64,
         names: [&str; 3],
-    ) -> crate::error::CliResult<PlantOptions> {
-        use crate::error::CliError;
-        // The flags' parsers checked each value; `v0`, `noise` and `offset`
-        // may come from elsewhere, so they are checked here once more.
+    ) -> Result<PlantOptions> {
+        // The flags' parsers checked each value; a caller from elsewhere
+        // (Python, a bench) may not have, so every value is checked here.
         for (x, n, d) in [
             (v0, names[0], STAGE_VELOCITY),
             (noise, names[1], NOISE_COUNTS),
             (offset, names[2], OFFSET_COUNTS),
+            (self.plant_mu0, "plant-mu0", PLANT_CONTACT),
+            (self.plant_kz, "plant-kz", PLANT_CONTACT),
+            (self.plant_kx, "plant-kx", PLANT_CONTACT),
+            (self.plant_lag_periods, "plant-lag-periods", LAG_PERIODS),
+            (self.plant_mu0_drift, "plant-mu0-drift", MU0_DRIFT),
         ] {
-            d.check(x, &crate::args::short(x))
-                .map_err(|r| CliError::usage(format!("--{n}: {r}")))?;
+            d.check(x, &short(x))
+                .map_err(|r| Error::usage(format!("--{n}: {r}")))?;
         }
         let v0_profile = match &self.v0_profile {
             Some(p) => Some(read_profile(p)?),
@@ -216,7 +237,7 @@ impl PlantArgs {
             self.plant_lag_periods == 0.0,
         )?;
         if resonant.is_some() && self.plant_lag_periods != 0.0 {
-            return Err(CliError::usage(
+            return Err(Error::usage(
                 "--plant-lag-periods: is for ideal transducers; a resonant one has its own time constant Q/(pi f_r)",
             ));
         }
@@ -241,9 +262,8 @@ impl PlantArgs {
 ///
 /// # Errors
 /// One line naming `--v0-profile`, the file and the line.
-pub fn read_profile(path: &std::path::Path) -> crate::error::CliResult<Vec<(f64, f64)>> {
-    use crate::error::CliError;
-    let bad = |m: String| CliError::usage(format!("--v0-profile: {}: {m}", path.display()));
+pub fn read_profile(path: &std::path::Path) -> Result<Vec<(f64, f64)>> {
+    let bad = |m: String| Error::usage(format!("--v0-profile: {}: {m}", path.display()));
     let mut r = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .from_path(path)
@@ -258,7 +278,7 @@ pub fn read_profile(path: &std::path::Path) -> crate::error::CliResult<Vec<(f64,
                 rec.len()
             )));
         }
-        let num = |k: usize| -> crate::error::CliResult<f64> {
+        let num = |k: usize| -> Result<f64> {
             rec[k]
                 .parse::<f64>()
                 .ok()
@@ -283,7 +303,7 @@ fn plant_of(opts: &PlantOptions, cfg: &DeviceConfig) -> Plant<f64> {
     let mut p = Plant::new(opts.mu0, opts.kz, opts.kx);
     if let Some(r) = opts.resonant {
         let h = 1.0 / (cfg.sample_rate_hz * f64::from(SUB));
-        // The options were checked (`TransducerArgs::options`); a bad set
+        // The options were checked (`TransducerSpec::options`); a bad set
         // from code leaves the transducers ideal rather than panic.
         p.resonant = board::plant::Resonant::new(r, h).ok();
     }

@@ -27,6 +27,7 @@ use std::marker::PhantomData;
 
 use clap::builder::TypedValueParser;
 
+pub use device_host::periods::Periods;
 pub use fric_analysis::numbers::{short, Refused, Short};
 
 /// The domain of a real-valued flag ([`fric_analysis::numbers::Real`], the
@@ -54,29 +55,14 @@ impl Real {
         Real(self.0.at_least(lo))
     }
 
-    /// Also `x > lo`.
-    pub const fn above(self, lo: f64) -> Real {
-        Real(self.0.above(lo))
-    }
-
     /// Also `x ≤ hi`.
     pub const fn at_most(self, hi: f64) -> Real {
         Real(self.0.at_most(hi))
     }
 
-    /// Also `x < hi`.
-    pub const fn below(self, hi: f64) -> Real {
-        Real(self.0.below(hi))
-    }
-
     /// For a value sent to the device as an `f32` (library docs).
     pub const fn single_precision(self) -> Real {
         Real(self.0.single_precision())
-    }
-
-    /// Also accepts `inf` (library docs).
-    pub const fn or_infinity(self) -> Real {
-        Real(self.0.or_infinity())
     }
 
     /// The reason of the range, appended to a refusal.
@@ -339,6 +325,18 @@ fn refused(e: &clap::Error) -> Option<String> {
         .map(|r| r.to_string())
 }
 
+/// `--periods`: `auto` or a whole number ≥ 1 (the device refuses more
+/// than `CONTROL_MAX_PERIODS` by name).
+pub fn parse_periods(s: &str) -> Result<Periods, Refused> {
+    if s == "auto" {
+        return Ok(Periods::Auto);
+    }
+    if s.trim().parse::<f64>().is_err() {
+        return Err(Refused(format!("'{s}' is neither `auto` nor a number")));
+    }
+    Count::<u32>::at_least(1).parse(s).map(Periods::Fixed)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -396,45 +394,4 @@ mod tests {
             Err(refused("must be ≤ 1000 (got 1e9; a bound)"))
         );
     }
-}
-
-/// Drive periods per update: a number, or as many as fit one half-buffer
-/// at the drive frequency (`auto`, the default).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Periods {
-    /// `board::device::periods_in_half_buffer` at the drive frequency.
-    Auto,
-    /// This many, 1 … `CONTROL_MAX_PERIODS`.
-    Fixed(u32),
-}
-
-impl Periods {
-    /// The periods at `freq_hz` with `sample_rate_hz`.
-    pub fn at(self, freq_hz: f64, sample_rate_hz: f64) -> u32 {
-        match self {
-            Periods::Auto => board::device::periods_in_half_buffer(freq_hz, sample_rate_hz),
-            Periods::Fixed(n) => n,
-        }
-    }
-}
-
-impl std::fmt::Display for Periods {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Periods::Auto => f.write_str("auto"),
-            Periods::Fixed(n) => write!(f, "{n}"),
-        }
-    }
-}
-
-/// `--periods`: `auto` or a whole number ≥ 1 (the device refuses more
-/// than `CONTROL_MAX_PERIODS` by name).
-pub fn parse_periods(s: &str) -> Result<Periods, Refused> {
-    if s == "auto" {
-        return Ok(Periods::Auto);
-    }
-    if s.trim().parse::<f64>().is_err() {
-        return Err(Refused(format!("'{s}' is neither `auto` nor a number")));
-    }
-    Count::<u32>::at_least(1).parse(s).map(Periods::Fixed)
 }

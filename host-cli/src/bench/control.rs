@@ -28,10 +28,14 @@
 
 use std::path::{Path, PathBuf};
 
-use clap::{Args, Parser};
+use board::device::Track;
+use clap::Args;
 use serde::Serialize;
 
-use crate::device::control::{bench_out, BenchArgs, BenchOut};
+use device_host::control_bench::BenchOut;
+pub use device_host::control_grid::*;
+
+use crate::args::short;
 use crate::error::{CliError, CliResult};
 use crate::plot::{
     prepare_out_dir, render_figure, Corner, Extras, Figure, Mark, Marker, Panel, Series,
@@ -54,221 +58,6 @@ pub struct ControlArgs {
     pub seeds: u32,
 }
 
-/// Q of the normal mode in the grid (the tangential mode's: two thirds).
-pub const GRID_Q: [f64; 3] = [100.0, 300.0, 1000.0];
-/// The normal resonance in the grid, Hz.
-pub const GRID_F: [f64; 2] = [20_000.0, 40_000.0];
-/// The headroom in the grid.
-pub const GRID_H: [f64; 2] = [1.0, 2.0];
-/// The tangential resonance over the normal one (the defaults' 19 700 /
-/// 20 300).
-pub const X_OVER_Z: f64 = 19_700.0 / 20_300.0;
-/// The tangential mode's Q over the normal one's (the defaults' 200 / 300).
-pub const QX_OVER_QZ: f64 = 2.0 / 3.0;
-/// Drift of the normal resonance in the drift runs, Hz/s: the issue's
-/// −20 Hz/s (1 200 Hz in 60 s, beyond the tracking range
-/// `board::device::tracking::TRACK_RANGE`, ±2 % = ±406 Hz of
-/// 20 300 Hz: the tracking's run ends with `loss_of_lock` near 20 s), and
-/// −6 Hz/s, the largest whole rate whose 60 s (360 Hz) plus the thermal
-/// shift (20 Hz) stays inside that range.
-pub const DRIFTS_HZ_PER_S: [f64; 2] = [-20.0, -6.0];
-/// Self-heating of the drift runs, Hz/µm² (thermal time 1 s): at the loop's
-/// Δu_z ≈ 2 µm the normal resonance settles 20 Hz lower, half the
-/// half-power half-band f_r/(2Q_eff) = 39 Hz of the default normal mode
-/// (Q 300 loaded by the contact's Q_load 2000: Q_eff = 261); negative as a
-/// piezo stack's resonance falls as it warms.
-pub const THERMAL_HZ_PER_UM2: f64 = -5.0;
-/// The drift runs' hold after the events, s of device time.
-pub const HOLD_S: f64 = 60.0;
-/// The hold with `--quick`, s.
-pub const QUICK_HOLD_S: f64 = 2.0;
-
-/// `device control-bench`'s flags from an argument list (its defaults for
-/// the rest, exactly as on the command line).
-#[derive(Parser, Debug)]
-#[command(name = "device control-bench", no_binary_name = true)]
-struct BenchOnly {
-    #[command(flatten)]
-    bench: BenchArgs,
-}
-
-fn bench_args(argv: &[String]) -> CliResult<BenchArgs> {
-    use clap::{CommandFactory, FromArgMatches};
-    // As on the command line: a number may start with `-` (a drift).
-    crate::args::numbers_take_hyphens(BenchOnly::command())
-        .try_get_matches_from(argv)
-        .and_then(|m| BenchOnly::from_arg_matches(&m))
-        .map(|b| b.bench)
-        .map_err(|e| CliError::failure(format!("bench control: {}", crate::args::clap_message(&e))))
-}
-
-/// One grid run.
-#[derive(Debug, Clone)]
-pub struct GridRun {
-    /// Q of the normal mode.
-    pub q_z: f64,
-    /// Q of the tangential mode.
-    pub q_x: f64,
-    /// Normal resonance, Hz.
-    pub resonance_z_hz: f64,
-    /// Tangential resonance, Hz.
-    pub resonance_x_hz: f64,
-    /// Headroom.
-    pub headroom: f64,
-    /// The command that reproduces it (seed 0; `--seed S` for the others).
-    pub command: String,
-    /// Its result (seed 0).
-    pub out: BenchOut,
-    /// The results of every seed, 0 first.
-    pub seeds: Vec<BenchOut>,
-}
-
-impl GridRun {
-    /// The settling times of `event` over the seeds, ms (None: never).
-    fn settles(&self, event: &str) -> Vec<Option<f64>> {
-        self.seeds
-            .iter()
-            .map(|o| {
-                o.events
-                    .iter()
-                    .find(|e| e.event == event)
-                    .and_then(|e| e.settle_ms)
-            })
-            .collect()
-    }
-
-    /// The median settling time of `event` over the seeds (a run that
-    /// never settled counts as longer than any that did; None if the
-    /// median is one of those), ms.
-    pub fn median_settle(&self, event: &str) -> Option<f64> {
-        let mut v: Vec<f64> = self
-            .settles(event)
-            .into_iter()
-            .map(|s| s.unwrap_or(f64::INFINITY))
-            .collect();
-        v.sort_by(f64::total_cmp);
-        let n = v.len();
-        if n == 0 {
-            return None;
-        }
-        let m = if n % 2 == 1 {
-            v[n / 2]
-        } else {
-            0.5 * (v[n / 2 - 1] + v[n / 2])
-        };
-        m.is_finite().then_some(m)
-    }
-
-    /// The largest settling time of `event` over the seeds (None if one
-    /// never settled), ms.
-    pub fn max_settle(&self, event: &str) -> Option<f64> {
-        self.settles(event)
-            .into_iter()
-            .try_fold(0.0f64, |m, s| s.map(|s| m.max(s)))
-    }
-}
-
-/// One row of `control_grid.csv` (a grid point's event over its seeds).
-#[derive(Serialize, Debug, Clone)]
-pub struct GridRow {
-    /// Q of the normal mode.
-    pub q_z: f64,
-    /// Q of the tangential mode.
-    pub q_x: f64,
-    /// Normal resonance, Hz.
-    pub resonance_z_hz: f64,
-    /// Tangential resonance, Hz.
-    pub resonance_x_hz: f64,
-    /// Headroom.
-    pub headroom: f64,
-    /// The slower mode's τ = Q/(π f_r), ms (unloaded Q: the bench's `tau_ms`).
-    pub tau_ms: f64,
-    /// The same with the contact's load, 1/Q_eff = 1/Q + 1/Q_load, ms.
-    pub tau_eff_ms: f64,
-    /// The event.
-    pub event: &'static str,
-    /// Noise records run (seeds 0 … seeds − 1).
-    pub seeds: u32,
-    /// Median settling time over the seeds, ms (empty: the median run
-    /// never settled).
-    pub settle_ms: Option<f64>,
-    /// Largest settling time over the seeds, ms (empty: one never settled).
-    pub settle_ms_max: Option<f64>,
-    /// Settling time of seed 0, drive periods.
-    pub settle_periods: Option<f64>,
-    /// Median settling time over τ.
-    pub settle_over_tau: Option<f64>,
-    /// Overshoot as a fraction of the step, largest over the seeds
-    /// (setpoint step only).
-    pub overshoot: Option<f64>,
-    /// The settling band of seed 0, absolute μ.
-    pub band: f64,
-    /// RMS of μ̂ − μ* over the segment's last half (seed 0).
-    pub steady_rms: f64,
-    /// Samples whose true normal excursion exceeded the lift-off limit, over
-    /// all the seeds' runs.
-    pub commands_above_limit: u64,
-    /// The largest true normal excursion of the runs, m.
-    pub max_excursion_m: f64,
-    /// Faults that ended a run (`;`-separated, seed 0).
-    pub faults: String,
-    /// Wall-clock time of the runs on this host, s (all seeds).
-    pub wall_s: f64,
-}
-
-/// One row of `control_drift.csv`.
-#[derive(Serialize, Debug, Clone)]
-pub struct DriftRow {
-    /// `none` or `z`.
-    pub track: &'static str,
-    /// Drift of the normal resonance, Hz/s.
-    pub drift_hz_per_s: f64,
-    /// Self-heating, Hz/µm².
-    pub thermal_hz_per_um2: f64,
-    /// The hold asked for, s.
-    pub hold_s: f64,
-    /// The hold run, s (shorter if a fault ended it).
-    pub hold_run_s: f64,
-    /// RMS of μ̂ − μ* over the hold.
-    pub hold_mu_error_rms: Option<f64>,
-    /// Largest |μ̂ − μ*| over the hold.
-    pub hold_mu_error_max: Option<f64>,
-    /// Drive start to the first lock, ms.
-    pub lock_ms: Option<f64>,
-    /// Largest |tracking error| after the lock (the device's), Hz.
-    pub tracking_error_max_hz: Option<f64>,
-    /// Largest |f − true f_r| after the lock, Hz.
-    pub true_offset_max_hz: Option<f64>,
-    /// The drive frequency at the end, Hz.
-    pub frequency_end_hz: f64,
-    /// The plant's normal resonance at the end, Hz.
-    pub resonance_z_end_hz: Option<f64>,
-    /// Locked at the end.
-    pub locked: bool,
-    /// Faults that ended the run (`;`-separated).
-    pub faults: String,
-    /// Device time of the fault, s.
-    pub fault_at_s: Option<f64>,
-    /// The events' settling times, ms (switch-on, setpoint step,
-    /// disturbance, velocity step; `never` if one did not settle).
-    pub settle_ms: String,
-    /// Samples above the lift-off limit.
-    pub commands_above_limit: u64,
-    /// Wall-clock time of the run on this host, s.
-    pub wall_s: f64,
-}
-
-/// The drift run's result with its command.
-#[derive(Serialize, Debug)]
-pub struct DriftRun {
-    /// Drift of the normal resonance, Hz/s.
-    pub drift_hz_per_s: f64,
-    /// The command that reproduces it.
-    pub command: String,
-    /// Its result.
-    pub out: BenchOut,
-}
-
 /// The grid's JSON document.
 #[derive(Serialize, Debug)]
 struct GridJson<'a> {
@@ -286,30 +75,6 @@ struct GridJsonRun<'a> {
     command: &'a str,
     /// One result per seed (0 first; `--seed S` reproduces seed S).
     results: &'a [BenchOut],
-}
-
-/// The grid of the run (`quick`: the reduced one), as `(q_z, f_z, h)`.
-pub fn grid(quick: bool) -> Vec<(f64, f64, f64)> {
-    let mut v = Vec::new();
-    if quick {
-        for q in [100.0, 300.0] {
-            v.push((q, GRID_F[0], 2.0));
-        }
-        return v;
-    }
-    for &q in &GRID_Q {
-        for &f in &GRID_F {
-            for &h in &GRID_H {
-                v.push((q, f, h));
-            }
-        }
-    }
-    v
-}
-
-/// The contact's load of the plant (`--plant-load-q` default).
-fn load_q() -> f64 {
-    crate::device::transducers::LOAD_Q
 }
 
 fn files(out: &Path) -> [PathBuf; 5] {
@@ -341,76 +106,23 @@ pub fn run(a: &ControlArgs) -> CliResult {
     );
     let mut runs = Vec::new();
     for (q, f, h) in g {
-        let (qx, fx) = (q * QX_OVER_QZ, f * X_OVER_Z);
-        let flags: Vec<String> = [
-            "--plant-q-z".to_string(),
-            short(q),
-            "--plant-q-x".into(),
-            short(qx),
-            "--plant-resonance-z".into(),
-            short(f),
-            "--plant-resonance-x".into(),
-            short(fx),
-            "--headroom".into(),
-            short(h),
-        ]
-        .into();
         bar.set_message(format!("Q {q}, {f} Hz, headroom {h}"));
-        let mut seeds = Vec::new();
-        for seed in 0..n_seeds {
-            let mut argv = flags.clone();
-            argv.extend(["--seed".to_string(), seed.to_string()]);
-            seeds.push(bench_out(&bench_args(&argv)?, false)?);
-        }
-        let run = GridRun {
-            q_z: q,
-            q_x: qx,
-            resonance_z_hz: f,
-            resonance_x_hz: fx,
-            headroom: h,
-            command: format!("fricctl device control-bench {} --json", flags.join(" ")),
-            out: seeds[0].clone(),
-            seeds,
-        };
-        let med = |e: &str| {
-            run.median_settle(e)
-                .map_or("never".into(), |s| format!("{s:.2}"))
-        };
-        bar.println(format!(
-            "Q {q:>5}, f_r {f:>6} Hz, headroom {h}: tau {:.2} ms, median settle over {n_seeds} (ms) {} / {} / {} / {}, above limit {}, {:.1} s",
-            run.out.tau_ms,
-            med("switch_on"),
-            med("setpoint_step"),
-            med("disturbance"),
-            med("velocity_step"),
-            run.seeds.iter().map(|o| o.commands_above_limit).sum::<u64>(),
-            run.seeds.iter().map(|o| o.wall_s).sum::<f64>()
-        ));
+        let run = grid_run(q, f, h, n_seeds)?;
+        bar.println(grid_line(&run, n_seeds));
         bar.inc(1);
         runs.push(run);
     }
     let mut drift = Vec::new();
     for (rate, track) in DRIFTS_HZ_PER_S
         .iter()
-        .flat_map(|r| [(*r, "none"), (*r, "z")])
+        .flat_map(|r| [(*r, Track::None), (*r, Track::Z)])
     {
-        let flags: Vec<String> = [
-            "--plant-resonance-drift-z".to_string(),
-            short(rate),
-            "--plant-thermal-shift".into(),
-            short(THERMAL_HZ_PER_UM2),
-            "--track".into(),
-            track.into(),
-            "--hold-s".into(),
-            short(hold),
-        ]
-        .into();
-        bar.set_message(format!(
-            "drift {rate} Hz/s, tracking {track}, hold {hold} s"
-        ));
-        let out = bench_out(&bench_args(&flags)?, false)?;
+        let name = if track == Track::Z { "z" } else { "none" };
+        bar.set_message(format!("drift {rate} Hz/s, tracking {name}, hold {hold} s"));
+        let d = drift_run(rate, track, hold)?;
+        let out = &d.out;
         bar.println(format!(
-            "drift {rate} Hz/s, tracking {track}: hold {:.2} s, mu error rms {}, lock {} ms, faults [{}], {:.1} s",
+            "drift {rate} Hz/s, tracking {name}: hold {:.2} s, mu error rms {}, lock {} ms, faults [{}], {:.1} s",
             out.hold_run_s,
             out.hold_mu_error_rms.map_or("-".into(), |x| format!("{x:.2e}")),
             out.lock_ms.map_or("-".into(), |x| format!("{x:.1}")),
@@ -418,33 +130,14 @@ pub fn run(a: &ControlArgs) -> CliResult {
             out.wall_s
         ));
         bar.inc(1);
-        drift.push(DriftRun {
-            drift_hz_per_s: rate,
-            command: format!("fricctl device control-bench {} --json", flags.join(" ")),
-            out,
-        });
+        drift.push(d);
     }
     bar.finish_and_clear();
     write_outputs(a, &paths, &runs, &drift)?;
     // Events that never settle and faults that end a drift run are
     // measurements (the files and the figure show them); a sample of the
     // true normal excursion above the lift-off limit is a safety failure.
-    let above: Vec<&str> = runs
-        .iter()
-        .map(|r| {
-            (
-                &r.command,
-                r.seeds.iter().map(|o| o.commands_above_limit).sum::<u64>(),
-            )
-        })
-        .chain(
-            drift
-                .iter()
-                .map(|d| (&d.command, d.out.commands_above_limit)),
-        )
-        .filter(|(_, n)| *n > 0)
-        .map(|(c, _)| c.as_str())
-        .collect();
+    let above = above_limit(&runs, &drift);
     match above.first() {
         None => Ok(()),
         Some(first) => Err(CliError::failure(format!(
@@ -454,16 +147,25 @@ pub fn run(a: &ControlArgs) -> CliResult {
     }
 }
 
-fn short(x: f64) -> String {
-    crate::args::short(x)
-}
-
-fn settles(o: &BenchOut) -> String {
-    o.events
-        .iter()
-        .map(|e| e.settle_ms.map_or("never".into(), |s| format!("{s:.2}")))
-        .collect::<Vec<_>>()
-        .join(" / ")
+/// The progress line of a grid point.
+fn grid_line(run: &GridRun, n_seeds: u32) -> String {
+    let med = |e: &str| {
+        run.median_settle(e)
+            .map_or("never".into(), |s| format!("{s:.2}"))
+    };
+    format!(
+        "Q {:>5}, f_r {:>6} Hz, headroom {}: tau {:.2} ms, median settle over {n_seeds} (ms) {} / {} / {} / {}, above limit {}, {:.1} s",
+        run.q_z,
+        run.resonance_z_hz,
+        run.headroom,
+        run.out.tau_ms,
+        med("switch_on"),
+        med("setpoint_step"),
+        med("disturbance"),
+        med("velocity_step"),
+        run.seeds.iter().map(|o| o.commands_above_limit).sum::<u64>(),
+        run.seeds.iter().map(|o| o.wall_s).sum::<f64>()
+    )
 }
 
 fn write_outputs(
@@ -483,52 +185,7 @@ fn write_outputs(
             String::new()
         }
     );
-    let mut rows = Vec::new();
-    for r in runs {
-        let load = |q: f64| 1.0 / (1.0 / q + 1.0 / load_q());
-        let tau_eff_ms = (load(r.q_z) / (std::f64::consts::PI * r.resonance_z_hz))
-            .max(load(r.q_x) / (std::f64::consts::PI * r.resonance_x_hz))
-            * 1e3;
-        for e in &r.out.events {
-            let settle = r.median_settle(e.event);
-            let overshoot = r
-                .seeds
-                .iter()
-                .filter_map(|o| {
-                    o.events
-                        .iter()
-                        .find(|x| x.event == e.event)
-                        .and_then(|x| x.overshoot)
-                })
-                .reduce(f64::max);
-            rows.push(GridRow {
-                q_z: r.q_z,
-                q_x: r.q_x,
-                resonance_z_hz: r.resonance_z_hz,
-                resonance_x_hz: r.resonance_x_hz,
-                headroom: r.headroom,
-                tau_ms: r.out.tau_ms,
-                tau_eff_ms,
-                event: e.event,
-                seeds: r.seeds.len() as u32,
-                settle_ms: settle,
-                settle_ms_max: r.max_settle(e.event),
-                settle_periods: e.settle_periods,
-                settle_over_tau: settle.map(|s| s / r.out.tau_ms),
-                overshoot,
-                band: e.band,
-                steady_rms: e.steady_rms,
-                commands_above_limit: r.seeds.iter().map(|o| o.commands_above_limit).sum(),
-                max_excursion_m: r
-                    .seeds
-                    .iter()
-                    .map(|o| o.max_excursion_m)
-                    .fold(0.0, f64::max),
-                faults: r.out.faults.join(";"),
-                wall_s: r.seeds.iter().map(|o| o.wall_s).sum(),
-            });
-        }
-    }
+    let rows: Vec<GridRow> = runs.iter().flat_map(GridRun::rows).collect();
     write_file(&paths[0], &crate::output::csv_bytes(&rows, true)?)?;
     let doc = GridJson {
         command: cmd.clone(),
@@ -546,32 +203,7 @@ fn write_outputs(
             .collect(),
     };
     write_file(&paths[1], &json_bytes(&doc)?)?;
-    let drows: Vec<DriftRow> = drift
-        .iter()
-        .map(|d| {
-            let o = &d.out;
-            DriftRow {
-                track: o.track,
-                drift_hz_per_s: d.drift_hz_per_s,
-                thermal_hz_per_um2: THERMAL_HZ_PER_UM2,
-                hold_s: o.hold_s,
-                hold_run_s: o.hold_run_s,
-                hold_mu_error_rms: o.hold_mu_error_rms,
-                hold_mu_error_max: o.hold_mu_error_max,
-                lock_ms: o.lock_ms,
-                tracking_error_max_hz: o.tracking_error_max_hz,
-                true_offset_max_hz: o.true_offset_max_hz,
-                frequency_end_hz: o.frequency_end_hz,
-                resonance_z_end_hz: o.resonance_z_end_hz,
-                locked: o.locked,
-                faults: o.faults.join(";"),
-                fault_at_s: o.fault_at_s,
-                settle_ms: settles(o).replace(' ', ""),
-                commands_above_limit: o.commands_above_limit,
-                wall_s: o.wall_s,
-            }
-        })
-        .collect();
+    let drows: Vec<DriftRow> = drift.iter().map(DriftRun::row).collect();
     write_file(&paths[2], &crate::output::csv_bytes(&drows, true)?)?;
     #[derive(Serialize)]
     struct DriftJson<'a> {
@@ -783,7 +415,7 @@ fn figure(runs: &[GridRun], cmd: &str) -> Figure {
         ),
         format!(
             "τ = Q/(π f_r) of the slower (normal) mode with the unloaded Q (the contact's load, Q_load = {}, shortens it).",
-            short(load_q())
+            short(device_host::transducers::LOAD_Q)
         ),
         "Settled: every later estimate within 2 % of the step (or 4 × the estimates' scatter in the event's segment if wider); time to the end of that update's 128 µs half-buffer.".into(),
         "Fixed: plant μ0 = 0.24 (model 0.3); ADC noise ±2 counts; κ = 0.95 with the plant's gain learned; DAC fills 2 half-buffers ahead;".into(),
@@ -840,4 +472,57 @@ fn decade_below(v: f64) -> f64 {
 /// The power of ten at least `v` (> 0).
 fn decade_above(v: f64) -> f64 {
     10f64.powf(v.log10().ceil())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::device::control::BenchArgs;
+    use clap::{CommandFactory, FromArgMatches, Parser};
+    use device_host::control_bench::BenchConfig;
+    use device_host::control_grid::{drift_point, grid_point, Point};
+
+    #[derive(Parser, Debug)]
+    #[command(name = "device control-bench", no_binary_name = true)]
+    struct BenchOnly {
+        #[command(flatten)]
+        bench: BenchArgs,
+    }
+
+    /// The configuration `fricctl` builds from a command line.
+    fn parsed(command: &str) -> BenchConfig {
+        let argv: Vec<&str> = command
+            .trim_start_matches("fricctl device control-bench")
+            .trim_end_matches("--json")
+            .split_whitespace()
+            .collect();
+        let m = crate::args::numbers_take_hyphens(BenchOnly::command())
+            .try_get_matches_from(argv)
+            .expect("the command parses");
+        BenchOnly::from_arg_matches(&m).unwrap().bench.config()
+    }
+
+    /// The library's default bench is the one `device control-bench` runs
+    /// without flags, and each grid or drift run's `command` reproduces the
+    /// configuration the grid ran (the files' promise), parsed by the CLI's
+    /// own flags.
+    #[test]
+    fn each_run_is_reproduced_by_its_command() {
+        assert_eq!(parsed(""), BenchConfig::default());
+        let mut points: Vec<Point> = grid(false)
+            .into_iter()
+            .chain(grid(true))
+            .map(|(q, f, h)| grid_point(q, f, h))
+            .collect();
+        for rate in DRIFTS_HZ_PER_S {
+            for track in [Track::None, Track::Z] {
+                points.push(drift_point(rate, track, HOLD_S));
+                points.push(drift_point(rate, track, QUICK_HOLD_S));
+            }
+        }
+        assert_eq!(points.len(), 12 + 2 + 8);
+        for p in points {
+            assert_eq!(parsed(&p.command), p.config, "{}", p.command);
+        }
+    }
 }

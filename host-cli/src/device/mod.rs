@@ -1,16 +1,15 @@
 //! `fricctl device …` (talk to a board, QEMU or the virtual device) and
 //! `fricctl sim-device` (serve the virtual device on a pty or TCP).
 
-pub mod client;
 pub mod control;
 pub mod identify;
-pub mod link;
+pub mod plant_args;
 pub mod render;
-pub mod serve;
-pub mod sim;
 pub mod sweep;
-pub mod transducers;
 pub mod watch;
+
+pub use device_host::answers::{expect, unexpected};
+pub use device_host::{client, link, serve, virtual_device as sim};
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -25,7 +24,7 @@ use self::client::Client;
 use self::link::{Link, SerialLink, SimLink, TcpLink};
 use self::render::Report;
 use self::sim::VirtualDevice;
-use crate::args::{short, Count, Real};
+use crate::args::{Count, Real};
 use crate::error::{CliError, CliResult};
 
 /// Where the device is.
@@ -47,17 +46,17 @@ pub struct Target {
     #[arg(long, default_value_t = 3, value_parser = Count::<u32>::at_least(1).at_most(100, "a device that does not answer 100 times is gone"))]
     pub attempts: u32,
     /// Virtual device: stage velocity v0, m/s
-    #[arg(long, default_value_t = 0.004, value_parser = sim::STAGE_VELOCITY)]
+    #[arg(long, default_value_t = 0.004, value_parser = Real(sim::STAGE_VELOCITY))]
     pub sim_v0: f64,
     /// Virtual device: ADC noise, ± counts
-    #[arg(long, default_value_t = 1.0, value_parser = sim::NOISE_COUNTS)]
+    #[arg(long, default_value_t = 1.0, value_parser = Real(sim::NOISE_COUNTS))]
     pub sim_noise: f64,
     /// Virtual device: uncalibrated ADC offset, counts
-    #[arg(long, default_value_t = 0.0, value_parser = sim::OFFSET_COUNTS)]
+    #[arg(long, default_value_t = 0.0, value_parser = Real(sim::OFFSET_COUNTS))]
     pub sim_offset: f64,
     /// Virtual device: the plant (true contact and transducers)
     #[command(flatten)]
-    pub plant: sim::PlantArgs,
+    pub plant: plant_args::PlantArgs,
     /// JSON output
     #[arg(long, global = true)]
     pub json: bool,
@@ -337,71 +336,6 @@ fn usb_ports() -> Vec<String> {
         .filter(|p| matches!(p.port_type, serialport::SerialPortType::UsbPort(_)))
         .map(|p| p.port_name)
         .collect()
-}
-
-fn wire_error(e: WireError) -> CliError {
-    use board::device::DriveParam;
-    let name = |p: DriveParam| match p {
-        DriveParam::Freq => "--freq",
-        DriveParam::AmpZ => "--amp-z",
-        DriveParam::AmpX => "--amp-x",
-        DriveParam::OffsetZ => "--offset-z",
-        DriveParam::Phase => "--phase-deg",
-        DriveParam::Periods => "--periods",
-        DriveParam::Velocity => "--v0",
-        DriveParam::TargetMu => "--target-mu",
-        DriveParam::Gain => "--gain",
-        DriveParam::Rate => "--rate",
-        DriveParam::Resonance => "resonance_hz (of the identified transducers)",
-        DriveParam::Quality => "q (of the identified transducers)",
-        DriveParam::TransducerGain => "gain_m_per_v (of the identified transducers)",
-        DriveParam::PhaseLag => "phase_lag_rad (of the identified transducers)",
-        DriveParam::Headroom => "--headroom",
-    };
-    match e {
-        WireError::OutOfRange { param, min, max } => {
-            CliError::usage(format!(
-                "{}: refused by the device: allowed range [{}, {}]",
-                name(param),
-                short(render::f32v(min)),
-                short(render::f32v(max))
-            ))
-        }
-        WireError::LiftOffRefused { amp_z_m, limit_m } => CliError::usage(format!(
-            "--amp-z: refused by the device: {} m would lift the contact off (limit {} m); \
-             lower it, or allow lift-off on purpose with `fricctl device config --allow-liftoff`",
-            short(render::f32v(amp_z_m)),
-            short(render::f32v(limit_m))
-        )),
-        WireError::BadScene => CliError::usage(
-            "--offset-z: the device has no valid scene: it needs a contact (scene set) and a drive with a normal offset (drive set)"
-                .to_string(),
-        ),
-        WireError::OutOfReach { min, max } => CliError::usage(format!(
-            "--target-mu: out of reach of the device's model by adjusting Δu_z up to the lift-off limit: reachable mu {} … {}",
-            short(render::f32v(min)),
-            short(render::f32v(max))
-        )),
-        WireError::NotIdentified => CliError::usage(
-            "the transducers are not identified: run `fricctl device identify` first, or pass \
-             --open-loop (voltage mode)"
-                .to_string(),
-        ),
-        WireError::NotRunning => CliError::usage(
-            "the drive is not running: `fricctl device start` first".to_string(),
-        ),
-        WireError::Busy => CliError::failure(
-            "device busy: a measurement, stream or the closed loop is running (`device control off` ends the loop)".to_string(),
-        ),
-        other => CliError::failure(format!("device error: {other}")),
-    }
-}
-
-pub(crate) fn expect(r: Response) -> CliResult<Response> {
-    match r {
-        Response::Error(e) => Err(wire_error(e)),
-        other => Ok(other),
-    }
 }
 
 /// Prints a report (text or `--json`) to stdout.
@@ -702,23 +636,6 @@ pub(crate) fn check_valid(e: &board::estimator::Estimate, allow_invalid: bool) -
     )))
 }
 
-pub(crate) fn unexpected(r: Response) -> CliError {
-    use board::protocol::Answer;
-    let what = match r.answer() {
-        Some(Answer::Info) => "Info",
-        Some(Answer::Drive) => "Drive",
-        Some(Answer::Ok) => "Ok",
-        Some(Answer::Contact) => "Contact",
-        Some(Answer::Prediction) => "Prediction",
-        Some(Answer::Estimate) => "Estimate",
-        Some(Answer::Status) => "Status",
-        Some(Answer::Control) => "Control",
-        Some(Answer::Transducers) => "Transducers",
-        None => "an error",
-    };
-    CliError::failure(format!("unexpected answer from the device: {what}"))
-}
-
 /// `ports`: an aligned table, or a JSON array of `{port, kind}`.
 fn print_ports(json: bool, list: &[(String, String)]) -> CliResult {
     let mut o = std::io::stdout().lock();
@@ -752,17 +669,17 @@ pub struct SimArgs {
     #[arg(long, value_name = "ADDR")]
     pub tcp: Option<String>,
     /// Stage velocity v0, m/s
-    #[arg(long, default_value_t = 0.004, value_parser = sim::STAGE_VELOCITY)]
+    #[arg(long, default_value_t = 0.004, value_parser = Real(sim::STAGE_VELOCITY))]
     pub v0: f64,
     /// ADC noise, ± counts
-    #[arg(long, default_value_t = 1.0, value_parser = sim::NOISE_COUNTS)]
+    #[arg(long, default_value_t = 1.0, value_parser = Real(sim::NOISE_COUNTS))]
     pub noise: f64,
     /// Uncalibrated ADC offset, counts
-    #[arg(long, default_value_t = 0.0, value_parser = sim::OFFSET_COUNTS)]
+    #[arg(long, default_value_t = 0.0, value_parser = Real(sim::OFFSET_COUNTS))]
     pub offset: f64,
     /// The plant (true contact and transducers)
     #[command(flatten)]
-    pub plant: sim::PlantArgs,
+    pub plant: plant_args::PlantArgs,
     /// Stop after this many seconds (default: run until killed)
     #[arg(long, value_parser = Real::non_negative().at_most(1e9).because("about 30 years; omit it to run until killed"))]
     pub seconds: Option<f64>,

@@ -20,15 +20,7 @@ pub struct Report {
     rows: Vec<(&'static str, &'static str, Value, &'static str)>,
 }
 
-/// An `f32` as the `f64` with the same shortest decimal form (0.1f32 is
-/// 0.1, not 0.10000000149011612).
-pub fn f32v(x: f32) -> f64 {
-    if x.is_finite() {
-        x.to_string().parse().unwrap_or(f64::from(x))
-    } else {
-        f64::NAN
-    }
-}
+pub use device_host::answers::f32v;
 
 /// Degrees from radians, rounded to 1e-9 ° (the f32 phase's resolution is
 /// far coarser), so that 40° does not print as 39.99999974.
@@ -298,40 +290,7 @@ pub fn prediction(v0: f64, p: &Prediction, regime: Regime) -> Report {
         )
 }
 
-/// The names of the reason bits of an estimate.
-pub fn reason_names(bits: u32) -> Vec<&'static str> {
-    board::estimator::reasons::NAMES
-        .iter()
-        .filter(|(b, _)| bits & b != 0)
-        .map(|(_, n)| *n)
-        .collect()
-}
-
-/// The names of latched fault bits.
-pub fn fault_names(bits: u32) -> Vec<String> {
-    use board::device::faults::*;
-    let known = [
-        (ADC_SATURATED, "adc_saturated"),
-        (DAC_UNDERRUN, "dac_underrun"),
-        (WATCHDOG_RESET, "watchdog_reset"),
-        (EXTERNAL, "external"),
-        (ADC_OVERRUN, "adc_overrun"),
-        (MEASURED_LIFTOFF, "measured_liftoff"),
-        (LOSS_OF_LOCK, "loss_of_lock"),
-        (PICKUP_OPEN, "pickup_open"),
-        (SELF_TEST, "self_test"),
-    ];
-    let mut v: Vec<String> = known
-        .iter()
-        .filter(|(b, _)| bits & b != 0)
-        .map(|(_, n)| (*n).to_string())
-        .collect();
-    let rest = bits & !known.iter().fold(0, |a, (b, _)| a | b);
-    if rest != 0 {
-        v.push(format!("0x{rest:x}"));
-    }
-    v
-}
+pub use device_host::names::{fault_names, reason_names};
 
 /// An estimate (`measure`, each line of `watch`).
 pub fn estimate(e: &Estimate) -> Report {
@@ -401,6 +360,19 @@ pub fn status(s: &Status) -> Report {
         .row("locked", "locked", s.locked, "")
         .row("headroom", "headroom", f32v(s.options.headroom), "x steady")
         .measured(s.measured.as_ref())
+        .row(
+            "cpu_load_pct",
+            "cpu load",
+            s.cpu_load_pct.map_or(Value::Null, |p| Value::from(f32v(p))),
+            "%",
+        )
+        .row(
+            "cpu_load_max_pct",
+            "cpu load max",
+            s.cpu_load_max_pct
+                .map_or(Value::Null, |p| Value::from(f32v(p))),
+            "%",
+        )
 }
 
 /// The tracked transducer's name in text and JSON: `none`, `z` or `x`.
