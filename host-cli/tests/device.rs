@@ -19,7 +19,7 @@ use serde_json::Value;
 use serialport::SerialPort;
 
 /// The protocol version byte of the frames written by hand (docs/protocol.md, "Frame").
-const V: u8 = 7;
+const V: u8 = 8;
 
 /// How far the virtual device's measured μ may be from its prediction (both
 /// absolute μ) for [`DRIVE`] at the sim's stage velocity 4 mm/s, with the
@@ -484,6 +484,8 @@ const STATUS_KEYS: &[&str] = &[
     "amp_x_measured_m",
     "phase_measured_deg",
     "amp_z_peak_m",
+    "cpu_load_pct",
+    "cpu_load_max_pct",
 ];
 
 fn sorted(k: &[&str]) -> Vec<String> {
@@ -523,7 +525,13 @@ fn json_is_flat_with_the_model_commands_keys_and_text_has_units() {
             &Value::from(40.0)
         )
     );
-    assert_keys(&ok_json(&s, &["status"]), STATUS_KEYS);
+    let st = ok_json(&s, &["status"]);
+    assert_keys(&st, STATUS_KEYS);
+    // v8: the virtual device does not measure its DSP time: null.
+    assert!(
+        st["cpu_load_pct"].is_null() && st["cpu_load_max_pct"].is_null(),
+        "{st}"
+    );
     for cmd in ["start", "stop", "reset-faults", "reset"] {
         let v = ok_json(&s, &[cmd]);
         assert_keys(&v, &["command", "ok", "note"]);

@@ -514,4 +514,45 @@ mod tests {
             })
         );
     }
+
+    #[test]
+    fn status_shows_the_dsp_load_or_null() {
+        let t = board::dds::SineTable::<256>::libm();
+        let c = Contact {
+            mu0: 0.3,
+            kz: 1e7,
+            kx: 1e7,
+        };
+        let dev = board::device::Device::new(board::device::DeviceConfig::driver_board(1), &t, c)
+            .expect("the board's configuration");
+        // v8: 12.5 % now, 28.75 % at most (exact in f32 and in decimal).
+        let mut s = dev.status();
+        (s.cpu_load_pct, s.cpu_load_max_pct) = (Some(12.5), Some(28.75));
+        let r = status(&s);
+        let line = |text: &str, label: &str| -> Vec<String> {
+            text.lines()
+                .find(|l| l.starts_with(&format!("{label}  ")))
+                .map(|l| l.split_whitespace().map(str::to_string).collect())
+                .unwrap_or_default()
+        };
+        let text = r.text();
+        assert_eq!(line(&text, "cpu load"), ["cpu", "load", "12.5", "%"]);
+        assert_eq!(
+            line(&text, "cpu load max"),
+            ["cpu", "load", "max", "28.75", "%"]
+        );
+        let j = r.json();
+        assert_eq!(
+            (&j["cpu_load_pct"], &j["cpu_load_max_pct"]),
+            (&serde_json::json!(12.5), &serde_json::json!(28.75))
+        );
+        // A device that does not measure itself (the virtual device): `-` and null.
+        let r = status(&dev.status());
+        assert_eq!(line(&r.text(), "cpu load"), ["cpu", "load", "-", "%"]);
+        let j = r.json();
+        assert!(
+            j["cpu_load_pct"].is_null() && j["cpu_load_max_pct"].is_null(),
+            "{j}"
+        );
+    }
 }
