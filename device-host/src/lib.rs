@@ -25,10 +25,13 @@ pub mod answers;
 pub mod client;
 pub mod control_bench;
 pub mod control_grid;
+pub mod identify;
 pub mod link;
+pub mod measure;
 pub mod names;
 pub mod periods;
 pub mod serve;
+pub mod sweep;
 pub mod transducers;
 pub mod virtual_device;
 

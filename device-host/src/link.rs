@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 use std::path::PathBuf;
 
 use crate::virtual_device::{PlantOptions, SimState, VirtualDevice};
+use crate::{Error, Result};
 
 /// A bidirectional byte stream with read timeouts.
 pub trait Link {
@@ -175,4 +176,145 @@ impl Link for SimLink {
     fn describe(&self) -> String {
         "the virtual device (in process)".to_string()
     }
+}
+
+/// Where a device is (`fricctl device --port | --tcp | --sim`, or none).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Where {
+    /// A serial port (the board, or a pty of `fricctl sim-device --pty`).
+    Serial(String),
+    /// A TCP address HOST:PORT (QEMU, `fricctl sim-device --tcp`).
+    Tcp(String),
+    /// The in-process virtual device with this plant.
+    Virtual(PlantOptions),
+    /// The only USB serial device, or the virtual device with this plant
+    /// when there is none; several are refused (`--port`).
+    Auto(PlantOptions),
+}
+
+/// An opened link, and what a person should be told about the choice.
+pub struct Opened {
+    /// The link.
+    pub link: Box<dyn Link>,
+    /// For stderr: which device `Where::Auto` chose.
+    pub note: Option<String>,
+}
+
+/// Opens the link to `w`; a path or an address is checked before any I/O.
+///
+/// # Errors
+/// One line naming `--port` or `--tcp`: a path that is not a serial device
+/// or an address that is not HOST:PORT (exit 2), a link that cannot be
+/// opened (exit 1), several USB serial devices for `Auto`.
+pub fn open(w: Where) -> Result<Opened> {
+    let opened = |link: Box<dyn Link>| Opened { link, note: None };
+    match w {
+        Where::Serial(p) => {
+            check_serial_path(&p)?;
+            let l = SerialLink::open(&p).map_err(|e| serial_open_error(&p, e))?;
+            Ok(opened(Box::new(l)))
+        }
+        Where::Tcp(a) => {
+            check_host_port(&a)?;
+            let l = TcpLink::connect(&a).map_err(|e| Error::failure(format!("--tcp: {e}")))?;
+            Ok(opened(Box::new(l)))
+        }
+        Where::Virtual(plant) => Ok(opened(Box::new(SimLink::new(plant)))),
+        Where::Auto(plant) => match usb_ports().as_slice() {
+            [one] => Ok(Opened {
+                link: Box::new(
+                    SerialLink::open(one).map_err(|e| Error::failure(format!("{one}: {e}")))?,
+                ),
+                note: Some(format!("using the only USB serial device, {one}")),
+            }),
+            [] => Ok(Opened {
+                link: Box::new(SimLink::new(plant)),
+                note: Some("no USB serial device found: using the virtual device".to_string()),
+            }),
+            many => Err(Error::usage(format!(
+                "--port: several USB serial devices ({}); choose one",
+                many.join(", ")
+            ))),
+        },
+    }
+}
+
+/// The serial ports present: (name, kind: `usb VID:PID`, `pci`,
+/// `bluetooth` or `unknown`).
+///
+/// # Errors
+/// The system's listing failed.
+pub fn ports() -> Result<Vec<(String, String)>> {
+    let ports =
+        serialport::available_ports().map_err(|e| Error::failure(format!("listing ports: {e}")))?;
+    Ok(ports
+        .into_iter()
+        .map(|p| {
+            let kind = match p.port_type {
+                serialport::SerialPortType::UsbPort(u) => {
+                    format!("usb {:04x}:{:04x}", u.vid, u.pid)
+                }
+                serialport::SerialPortType::PciPort => "pci".to_string(),
+                serialport::SerialPortType::BluetoothPort => "bluetooth".to_string(),
+                serialport::SerialPortType::Unknown => "unknown".to_string(),
+            };
+            (p.port_name, kind)
+        })
+        .collect())
+}
+
+/// `--port` must name a character device (a tty); a missing path, a regular
+/// file or a directory is refused before any I/O.
+pub fn check_serial_path(p: &str) -> Result<()> {
+    use std::os::unix::fs::FileTypeExt;
+    match std::fs::metadata(p) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(Error::usage(format!(
+            "--port: {p} does not exist (`fricctl device ports` lists serial devices)"
+        ))),
+        Ok(m) if !m.file_type().is_char_device() => Err(not_serial(p)),
+        _ => Ok(()),
+    }
+}
+
+fn not_serial(p: &str) -> Error {
+    Error::usage(format!("--port: {p} is not a serial device"))
+}
+
+/// A character device that is not a terminal (e.g. `/dev/null`) fails the
+/// serial set-up with ENOTTY: that is bad input, not a failed link.
+pub fn serial_open_error(p: &str, e: std::io::Error) -> Error {
+    const ENOTTY: i32 = 25;
+    let text = e.to_string();
+    if e.raw_os_error() == Some(ENOTTY)
+        || text.contains("Inappropriate ioctl")
+        || text.contains("Not a typewriter")
+    {
+        not_serial(p)
+    } else {
+        Error::failure(format!("--port: {e}"))
+    }
+}
+
+/// `--tcp` must be HOST:PORT with a numeric port.
+pub fn check_host_port(a: &str) -> Result<()> {
+    let ok = a
+        .rsplit_once(':')
+        .is_some_and(|(host, port)| !host.is_empty() && port.parse::<u16>().is_ok());
+    if ok {
+        Ok(())
+    } else {
+        Err(Error::usage(format!(
+            "--tcp: '{a}' is not HOST:PORT (e.g. 127.0.0.1:7777)"
+        )))
+    }
+}
+
+/// The USB serial devices present.
+pub fn usb_ports() -> Vec<String> {
+    serialport::available_ports()
+        .unwrap_or_default()
+        .into_iter()
+        .filter(|p| matches!(p.port_type, serialport::SerialPortType::UsbPort(_)))
+        .map(|p| p.port_name)
+        .collect()
 }

@@ -9,7 +9,7 @@ pub mod sweep;
 pub mod watch;
 
 pub use device_host::answers::{expect, unexpected};
-pub use device_host::{client, link, serve, virtual_device as sim};
+pub use device_host::{client, link, measure, serve, virtual_device as sim};
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -21,7 +21,7 @@ use clap::{Args, Subcommand};
 use serialport::SerialPort;
 
 use self::client::Client;
-use self::link::{Link, SerialLink, SimLink, TcpLink};
+use self::link::Where;
 use self::render::Report;
 use self::sim::VirtualDevice;
 use crate::args::{Count, Real};
@@ -250,92 +250,24 @@ fn open(t: &Target) -> CliResult<Client> {
         t.sim_offset,
         ["sim-v0", "sim-noise", "sim-offset"],
     )?;
-    let timeout = Duration::from_millis(t.timeout_ms);
-    let link: Box<dyn Link> = if let Some(p) = &t.port {
-        check_serial_path(p)?;
-        Box::new(SerialLink::open(p).map_err(|e| serial_open_error(p, e))?)
+    let w = if let Some(p) = &t.port {
+        Where::Serial(p.clone())
     } else if let Some(a) = &t.tcp {
-        check_host_port(a)?;
-        Box::new(TcpLink::connect(a).map_err(|e| CliError::failure(format!("--tcp: {e}")))?)
+        Where::Tcp(a.clone())
     } else if t.sim {
-        Box::new(SimLink::new(plant))
+        Where::Virtual(plant)
     } else {
-        let usb = usb_ports();
-        match usb.as_slice() {
-            [one] => {
-                eprintln!("using the only USB serial device, {one}");
-                Box::new(
-                    SerialLink::open(one).map_err(|e| CliError::failure(format!("{one}: {e}")))?,
-                )
-            }
-            [] => {
-                eprintln!("no USB serial device found: using the virtual device");
-                Box::new(SimLink::new(plant))
-            }
-            many => {
-                return Err(CliError::usage(format!(
-                    "--port: several USB serial devices ({}); choose one",
-                    many.join(", ")
-                )))
-            }
-        }
+        Where::Auto(plant)
     };
-    Ok(Client::new(link, timeout, t.attempts))
-}
-
-/// `--port` must name a character device (a tty); a missing path, a regular
-/// file or a directory is refused before any I/O.
-fn check_serial_path(p: &str) -> CliResult {
-    use std::os::unix::fs::FileTypeExt;
-    match std::fs::metadata(p) {
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(CliError::usage(format!(
-            "--port: {p} does not exist (`fricctl device ports` lists serial devices)"
-        ))),
-        Ok(m) if !m.file_type().is_char_device() => Err(not_serial(p)),
-        _ => Ok(()),
+    let opened = link::open(w)?;
+    if let Some(n) = &opened.note {
+        eprintln!("{n}");
     }
-}
-
-fn not_serial(p: &str) -> CliError {
-    CliError::usage(format!("--port: {p} is not a serial device"))
-}
-
-/// A character device that is not a terminal (e.g. `/dev/null`) fails the
-/// serial set-up with ENOTTY: that is bad input, not a failed link.
-fn serial_open_error(p: &str, e: std::io::Error) -> CliError {
-    const ENOTTY: i32 = 25;
-    let text = e.to_string();
-    if e.raw_os_error() == Some(ENOTTY)
-        || text.contains("Inappropriate ioctl")
-        || text.contains("Not a typewriter")
-    {
-        not_serial(p)
-    } else {
-        CliError::failure(format!("--port: {e}"))
-    }
-}
-
-/// `--tcp` must be HOST:PORT with a numeric port.
-fn check_host_port(a: &str) -> CliResult {
-    let ok = a
-        .rsplit_once(':')
-        .is_some_and(|(host, port)| !host.is_empty() && port.parse::<u16>().is_ok());
-    if ok {
-        Ok(())
-    } else {
-        Err(CliError::usage(format!(
-            "--tcp: '{a}' is not HOST:PORT (e.g. 127.0.0.1:7777)"
-        )))
-    }
-}
-
-fn usb_ports() -> Vec<String> {
-    serialport::available_ports()
-        .unwrap_or_default()
-        .into_iter()
-        .filter(|p| matches!(p.port_type, serialport::SerialPortType::UsbPort(_)))
-        .map(|p| p.port_name)
-        .collect()
+    Ok(Client::new(
+        opened.link,
+        Duration::from_millis(t.timeout_ms),
+        t.attempts,
+    ))
 }
 
 /// Prints a report (text or `--json`) to stdout.
@@ -362,103 +294,66 @@ fn done(r: Response, command: &'static str, what: &'static str) -> CliResult<Rep
 
 /// `fricctl device …`.
 pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
-    if let DeviceCmd::Ports = cmd {
-        let ports = serialport::available_ports()
-            .map_err(|e| CliError::failure(format!("listing ports: {e}")))?;
-        let list: Vec<(String, String)> = ports
-            .into_iter()
-            .map(|p| {
-                let kind = match p.port_type {
-                    serialport::SerialPortType::UsbPort(u) => {
-                        format!("usb {:04x}:{:04x}", u.vid, u.pid)
-                    }
-                    serialport::SerialPortType::PciPort => "pci".to_string(),
-                    serialport::SerialPortType::BluetoothPort => "bluetooth".to_string(),
-                    serialport::SerialPortType::Unknown => "unknown".to_string(),
-                };
-                (p.port_name, kind)
-            })
-            .collect();
-        return print_ports(t.json, &list);
+    match cmd {
+        DeviceCmd::Ports => return print_ports(t.json, &link::ports()?),
+        DeviceCmd::ControlBench(a) => return control::bench(a, t.json),
+        _ => {}
     }
     // Checked before connecting: the parameters are named, not the device's refusal.
-    let mut scene = None;
-    if let DeviceCmd::Scene {
-        cmd:
-            SceneCmd::Set {
-                mu0,
-                kz,
-                kx,
-                from_fit,
-            },
-    } = cmd
-    {
-        scene = Some(sweep::scene_values(*mu0, *kz, *kx, from_fit.as_deref())?);
-    }
-    if let DeviceCmd::Sweep(a) = cmd {
-        a.check()?;
-    }
-    if let DeviceCmd::ControlBench(a) = cmd {
-        return control::bench(a, t.json);
-    }
-    let control_req = match cmd {
-        DeviceCmd::Control(a) => Some(a.request()?),
-        _ => None,
-    };
+    let checked = Checked::of(cmd)?;
     let mut c = open(t)?;
     // Which device answers: for a person at a terminal (a script reads the
     // exit status and a refusal's one line).
     if !t.json && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
         eprintln!("talking to {}", c.describe());
     }
+    dispatch(&mut c, t, cmd, checked)
+}
+
+/// What a command's flags give before the device is asked.
+#[derive(Default)]
+struct Checked {
+    /// `scene set`: (μ0, k_z, k_x).
+    scene: Option<(f64, f64, f64)>,
+    /// `control`: the request.
+    control: Option<Request>,
+}
+
+impl Checked {
+    fn of(cmd: &DeviceCmd) -> CliResult<Checked> {
+        let mut k = Checked::default();
+        match cmd {
+            DeviceCmd::Scene {
+                cmd:
+                    SceneCmd::Set {
+                        mu0,
+                        kz,
+                        kx,
+                        from_fit,
+                    },
+            } => k.scene = Some(sweep::scene_values(*mu0, *kz, *kx, from_fit.as_deref())?),
+            DeviceCmd::Sweep(a) => a.check()?,
+            DeviceCmd::Control(a) => k.control = Some(a.request()?),
+            _ => {}
+        }
+        Ok(k)
+    }
+}
+
+/// Runs `cmd` on the open device.
+fn dispatch(c: &mut Client, t: &Target, cmd: &DeviceCmd, checked: Checked) -> CliResult {
+    let json = t.json;
     match cmd {
         DeviceCmd::Info => match expect(c.call(Request::Hello)?)? {
-            Response::Info(i) => out(t.json, &render::info(&c.describe(), &i)),
+            Response::Info(i) => out(json, &render::info(&c.describe(), &i)),
             other => Err(unexpected(other)),
         },
         DeviceCmd::Drive { cmd: DriveCmd::Get } => {
-            out(t.json, &drive_report(c.call(Request::GetDrive)?)?)
+            out(json, &drive_report(c.call(Request::GetDrive)?)?)
         }
-        DeviceCmd::Drive {
-            cmd:
-                DriveCmd::Set {
-                    freq,
-                    amp_z,
-                    amp_x,
-                    offset_z,
-                    phase_deg,
-                    open_loop,
-                    track,
-                    headroom,
-                },
-        } => {
-            // Each value is a normal f32 number or 0 (the flags' parsers);
-            // the device checks its ranges and names the flag.
-            let d = DriveSetting {
-                freq_hz: *freq,
-                amp_z_m: *amp_z as f32,
-                amp_x_m: *amp_x as f32,
-                offset_z_m: *offset_z as f32,
-                phase_rad: phase_deg.to_radians() as f32,
-            };
-            if *open_loop && *track != TrackArg::None {
-                return Err(CliError::usage(
-                    "--track: needs the displacement mode (identified transducers), not --open-loop",
-                ));
-            }
-            identify::select_mode(&mut c, *open_loop)?;
-            if !*open_loop {
-                expect(c.call(Request::SetDisplacementOptions(
-                    board::device::DisplacementOptions {
-                        track: (*track).into(),
-                        headroom: headroom.headroom as f32,
-                    },
-                ))?)?;
-            }
-            out(t.json, &drive_report(c.call(Request::SetDrive(d))?)?)
-        }
+        DeviceCmd::Drive { cmd } => drive_set(c, cmd, json),
         DeviceCmd::Start => out(
-            t.json,
+            json,
             &done(
                 c.call(Request::Start)?,
                 "start",
@@ -466,32 +361,17 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             )?,
         ),
         DeviceCmd::Stop => out(
-            t.json,
+            json,
             &done(c.call(Request::Stop)?, "stop", "drive stopping (ramped)")?,
         ),
         DeviceCmd::Scene { cmd: SceneCmd::Get } => match expect(c.call(Request::GetContact)?)? {
-            Response::Contact(k) => out(t.json, &render::contact(&k)),
+            Response::Contact(k) => out(json, &render::contact(&k)),
             other => Err(unexpected(other)),
         },
-        DeviceCmd::Scene {
-            cmd: SceneCmd::Set { .. },
-        } => {
-            let (mu0, kz, kx) = scene.unwrap_or_default();
-            let contact = Contact {
-                mu0: mu0 as f32,
-                kz: kz as f32,
-                kx: kx as f32,
-            };
-            done(
-                c.call(Request::SetContact(contact))?,
-                "scene set",
-                "contact set",
-            )?;
-            out(t.json, &render::contact(&contact))
-        }
+        DeviceCmd::Scene { .. } => scene_set(c, checked.scene.unwrap_or_default(), json),
         DeviceCmd::Predict { v0 } => match expect(c.call(Request::Predict { v0: *v0 as f32 })?)? {
             Response::Prediction { prediction, regime } => out(
-                t.json,
+                json,
                 &render::prediction(render::f32v(*v0 as f32), &prediction, regime),
             ),
             other => Err(unexpected(other)),
@@ -500,97 +380,14 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             periods,
             allow_invalid,
             no_wait,
-        } => {
-            // Ctrl-C (or SIGTERM, SIGHUP) while the device measures aborts the
-            // measurement on the device with `Reset` (the protocol's one request
-            // that ends a measurement): any stream ends too and the drive ramps
-            // down, settings kept (`start` resumes). Exit 1: no estimate.
-            let interrupted = watch::interrupt_flag();
-            // The window lasts periods/f of device time: wait 4 times that
-            // plus 10 s (ramps, the window opening at a wrap, a virtual device
-            // that falls behind real time on a loaded machine), then give up.
-            let f = match expect(c.call(Request::GetDrive)?)? {
-                Response::Drive { applied, .. } => applied.achieved.freq_hz,
-                other => return Err(unexpected(other)),
-            };
-            let window_s = f64::from(*periods) / f.max(1.0);
-            let limit = Duration::from_secs_f64(4.0 * window_s + 10.0);
-            if !*no_wait {
-                wait_settled(&mut c, &interrupted)?;
-            }
-            expect(c.call(Request::Measure { periods: *periods })?)?;
-            // Wait for the window to close (the virtual device advances while we wait).
-            let start = Instant::now();
-            // Ends the measurement on the device (`Reset`) before reporting `why`.
-            let abort = |c: &mut Client, why: String| {
-                match c.call(Request::Reset).map(expect) {
-                Ok(Ok(_)) => CliError::failure(format!(
-                    "{why}; measurement aborted (device reset: drive stopping, settings kept)"
-                )),
-                Ok(Err(e)) | Err(e) => CliError::failure(format!(
-                    "{why}, but the measurement could not be aborted ({}); `fricctl device reset` ends it",
-                    e.msg
-                )),
-            }
-            };
-            loop {
-                if interrupted.load(std::sync::atomic::Ordering::SeqCst) {
-                    return Err(abort(&mut c, "interrupted".to_string()));
-                }
-                let _ = c.next_telemetry(Duration::from_millis(20))?;
-                if let Response::Status(s) = expect(c.call(Request::GetStatus)?)? {
-                    if !s.measuring {
-                        break;
-                    }
-                }
-                if start.elapsed() > limit {
-                    return Err(abort(
-                        &mut c,
-                        format!(
-                            "no estimate within {:.0} s, though {periods} periods at {f:.3} Hz take \
-                             {window_s:.3} s (is the device sampling its ADC?)",
-                            limit.as_secs_f64()
-                        ),
-                    ));
-                }
-            }
-            let r = expect(c.call(Request::GetEstimate)?)?;
-            let Response::Estimate(e) = r else {
-                return Err(unexpected(r));
-            };
-            // The drive that ran: the pickups' measured motion (the last
-            // window, or in displacement mode its 1 ms average) at the end.
-            let measured = match expect(c.call(Request::GetStatus)?)? {
-                Response::Status(st) => st.measured,
-                other => return Err(unexpected(other)),
-            };
-            // The numbers are shown even when invalid; the exit code says so.
-            out(t.json, &render::estimate(&e).measured(measured.as_ref()))?;
-            check_valid(&e, *allow_invalid)
-        }
+        } => measure_cmd(c, *periods, !*no_wait, *allow_invalid, json),
         DeviceCmd::Status => match expect(c.call(Request::GetStatus)?)? {
-            Response::Status(st) => out(t.json, &render::status(&st)),
+            Response::Status(st) => out(json, &render::status(&st)),
             other => Err(unexpected(other)),
         },
-        DeviceCmd::Config { allow_liftoff, .. } => {
-            match c.call(Request::SetLiftOff {
-                allow: *allow_liftoff,
-            })? {
-                Response::Error(WireError::LiftOffRefused { amp_z_m, limit_m }) => {
-                    return Err(CliError::usage(format!(
-                        "--refuse-liftoff: refused by the device: the accepted drive's Δu_z = {amp_z_m:e} m \
-                         is above the lift-off limit {limit_m:e} m; set a smaller --amp-z first"
-                    )))
-                }
-                r => expect(r)?,
-            };
-            match expect(c.call(Request::GetStatus)?)? {
-                Response::Status(st) => out(t.json, &render::config(&st)),
-                other => Err(unexpected(other)),
-            }
-        }
+        DeviceCmd::Config { allow_liftoff, .. } => config_cmd(c, *allow_liftoff, json),
         DeviceCmd::ResetFaults => out(
-            t.json,
+            json,
             &done(
                 c.call(Request::ResetFaults)?,
                 "reset-faults",
@@ -598,7 +395,7 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             )?,
         ),
         DeviceCmd::Reset => out(
-            t.json,
+            json,
             &done(
                 c.call(Request::Reset)?,
                 "reset",
@@ -611,15 +408,114 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
             csv,
             allow_invalid,
         } => watch::watch(t, c, *periods, *count, csv.as_deref(), *allow_invalid),
-        DeviceCmd::Ports => unreachable!("handled above"),
-        DeviceCmd::Sweep(a) => sweep::run(&mut c, a, t.json),
-        DeviceCmd::Identify(a) => identify::run(&mut c, a, t.json),
-        DeviceCmd::Control(a) => match control_req {
-            Some(req) => control::run(&mut c, req, a, t.json),
-            None => unreachable!("checked above"),
-        },
-        DeviceCmd::ControlBench(_) => unreachable!("handled above"),
-        DeviceCmd::Tune(a) => control::tune(&mut c, a, t.json),
+        DeviceCmd::Sweep(a) => sweep::run(c, a, json),
+        DeviceCmd::Identify(a) => identify::run(c, a, json),
+        DeviceCmd::Control(a) => {
+            let req = match checked.control {
+                Some(r) => r,
+                None => a.request()?,
+            };
+            control::run(c, req, a, json)
+        }
+        DeviceCmd::Tune(a) => control::tune(c, a, json),
+        DeviceCmd::Ports => print_ports(json, &link::ports()?),
+        DeviceCmd::ControlBench(a) => control::bench(a, json),
+    }
+}
+
+/// `drive set`: the drive mode (voltage with `--open-loop`, else
+/// displacement with the tracking and headroom), then the drive.
+fn drive_set(c: &mut Client, cmd: &DriveCmd, json: bool) -> CliResult {
+    let DriveCmd::Set {
+        freq,
+        amp_z,
+        amp_x,
+        offset_z,
+        phase_deg,
+        open_loop,
+        track,
+        headroom,
+    } = cmd
+    else {
+        unreachable!("drive get is answered by dispatch")
+    };
+    // Each value is a normal f32 number or 0 (the flags' parsers); the
+    // device checks its ranges and names the flag.
+    let d = DriveSetting {
+        freq_hz: *freq,
+        amp_z_m: *amp_z as f32,
+        amp_x_m: *amp_x as f32,
+        offset_z_m: *offset_z as f32,
+        phase_rad: phase_deg.to_radians() as f32,
+    };
+    if *open_loop && *track != TrackArg::None {
+        return Err(CliError::usage(
+            "--track: needs the displacement mode (identified transducers), not --open-loop",
+        ));
+    }
+    identify::select_mode(c, *open_loop)?;
+    if !*open_loop {
+        expect(c.call(Request::SetDisplacementOptions(
+            board::device::DisplacementOptions {
+                track: (*track).into(),
+                headroom: headroom.headroom as f32,
+            },
+        ))?)?;
+    }
+    out(json, &drive_report(c.call(Request::SetDrive(d))?)?)
+}
+
+/// `scene set`: the contact, then the contact as set.
+fn scene_set(c: &mut Client, (mu0, kz, kx): (f64, f64, f64), json: bool) -> CliResult {
+    let contact = Contact {
+        mu0: mu0 as f32,
+        kz: kz as f32,
+        kx: kx as f32,
+    };
+    done(
+        c.call(Request::SetContact(contact))?,
+        "scene set",
+        "contact set",
+    )?;
+    out(json, &render::contact(&contact))
+}
+
+/// `measure`: Ctrl-C (or SIGTERM, SIGHUP) while the device measures aborts
+/// the measurement on the device ([`device_host::measure`]). Exit 1: no
+/// estimate, or an invalid one without `--allow-invalid` (its numbers are
+/// shown all the same).
+fn measure_cmd(
+    c: &mut Client,
+    periods: u32,
+    wait: bool,
+    allow_invalid: bool,
+    json: bool,
+) -> CliResult {
+    let interrupted = watch::interrupt_flag();
+    let m = measure::measure(c, periods, wait, &interrupted, &mut |n| eprintln!("{n}"))?;
+    out(
+        json,
+        &render::estimate(&m.estimate).measured(m.measured.as_ref()),
+    )?;
+    check_valid(&m.estimate, allow_invalid)
+}
+
+/// `config`: lift-off allowed or refused, then the configuration.
+fn config_cmd(c: &mut Client, allow_liftoff: bool, json: bool) -> CliResult {
+    match c.call(Request::SetLiftOff {
+        allow: allow_liftoff,
+    })? {
+        Response::Error(WireError::LiftOffRefused { amp_z_m, limit_m }) => {
+            return Err(CliError::usage(format!(
+                "--refuse-liftoff: refused by the device: the accepted drive's Δu_z = {amp_z_m:e} m \
+                 is above the lift-off limit {limit_m:e} m; set a smaller --amp-z first"
+            )))
+        }
+        r => expect(r)?,
+    };
+    match expect(c.call(Request::GetStatus)?)? {
+        Response::Status(st) => out(json, &render::config(&st)),
+        other => Err(unexpected(other)),
     }
 }
 
@@ -692,7 +588,7 @@ pub fn serve(a: &SimArgs) -> CliResult {
         .options(a.v0, a.noise, a.offset, ["v0", "noise", "offset"])?;
     // The address is checked before the device starts: bad input, exit 2.
     if let Some(addr) = &a.tcp {
-        check_host_port(addr)?;
+        link::check_host_port(addr)?;
     }
     let mut dev = VirtualDevice::new(plant);
     // Ctrl-C, SIGTERM or SIGHUP end the server (exit 130), also when the
@@ -725,43 +621,5 @@ pub fn serve(a: &SimArgs) -> CliResult {
         serve::serve_tcp(&mut dev, l, deadline)
     } else {
         Err(CliError::usage("--pty: give --pty or --tcp ADDR"))
-    }
-}
-
-/// The longest wait of `measure` for the ramps to settle (a full-scale ramp
-/// at the slowest slew rate the device accepts takes well under this).
-const SETTLE_LIMIT: Duration = Duration::from_secs(60);
-
-/// Waits until the device's ramps have settled (`Status::settled`), so that
-/// `measure` right after `start` or `drive set` measures the drive it was
-/// given; stderr says that it waits. Ctrl-C ends the wait (nothing to undo).
-fn wait_settled(c: &mut Client, interrupted: &std::sync::atomic::AtomicBool) -> CliResult {
-    let start = Instant::now();
-    let mut said = false;
-    loop {
-        if let Response::Status(s) = expect(c.call(Request::GetStatus)?)? {
-            if s.settled {
-                if said {
-                    eprintln!("ramps settled after {:.1} s", start.elapsed().as_secs_f64());
-                }
-                return Ok(());
-            }
-        }
-        // Said only for a wait a person notices (the ramps of a small
-        // change take milliseconds).
-        if !said && start.elapsed() > Duration::from_millis(500) {
-            eprintln!("waiting for the ramps to settle (--no-wait measures at once)");
-            said = true;
-        }
-        if interrupted.load(std::sync::atomic::Ordering::SeqCst) {
-            return Err(CliError::failure("interrupted while waiting for the ramps"));
-        }
-        if start.elapsed() > SETTLE_LIMIT {
-            return Err(CliError::failure(format!(
-                "the ramps did not settle within {} s (`fricctl device status` shows the drive)",
-                SETTLE_LIMIT.as_secs()
-            )));
-        }
-        let _ = c.next_telemetry(Duration::from_millis(20))?;
     }
 }

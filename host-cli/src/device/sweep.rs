@@ -8,69 +8,20 @@
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
 
 use board::device::{Contact, DriveSetting};
 use board::protocol::{Request, Response};
-use clap::{Args, ValueEnum};
+use clap::Args;
 use serde::Serialize;
+
+pub use device_host::sweep::{ask, drive_of, measure_here, set_point, PointOptions, SweepParam};
 
 use super::client::Client;
 use super::render::reason_names;
-use super::{expect, unexpected};
 use crate::args::{short, Count, Real};
 use crate::error::{CliError, CliResult};
 use crate::plot::{Mark, Panel, Series};
 use crate::sweep_file::{self, SweepRow};
-
-/// The drive parameter a sweep steps.
-#[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SweepParam {
-    /// Phase φ, degrees.
-    PhaseDeg,
-    /// Normal amplitude Δu_z, m.
-    AmpZ,
-    /// Tangential amplitude Δu_x, m.
-    AmpX,
-    /// Normal offset u_z0, m.
-    OffsetZ,
-    /// Frequency, Hz.
-    Freq,
-}
-
-impl SweepParam {
-    /// The name (as in `--param` and the file's `param` column).
-    pub fn name(self) -> &'static str {
-        match self {
-            SweepParam::PhaseDeg => "phase-deg",
-            SweepParam::AmpZ => "amp-z",
-            SweepParam::AmpX => "amp-x",
-            SweepParam::OffsetZ => "offset-z",
-            SweepParam::Freq => "freq",
-        }
-    }
-
-    /// The unit of the value.
-    pub fn unit(self) -> &'static str {
-        match self {
-            SweepParam::PhaseDeg => "°",
-            SweepParam::Freq => "Hz",
-            _ => "m",
-        }
-    }
-
-    /// `d` with this parameter set to `x`.
-    fn apply(self, mut d: DriveSetting, x: f64) -> DriveSetting {
-        match self {
-            SweepParam::PhaseDeg => d.phase_rad = x.to_radians() as f32,
-            SweepParam::AmpZ => d.amp_z_m = x as f32,
-            SweepParam::AmpX => d.amp_x_m = x as f32,
-            SweepParam::OffsetZ => d.offset_z_m = x as f32,
-            SweepParam::Freq => d.freq_hz = x,
-        }
-        d
-    }
-}
 
 /// Most points of one sweep: each is a measurement of at least one drive
 /// period plus the device's ramps, so 10⁴ points are already hours of a
@@ -113,6 +64,15 @@ pub struct SweepArgs {
 }
 
 impl SweepArgs {
+    /// How each point is measured.
+    pub fn point_options(&self) -> PointOptions {
+        PointOptions {
+            settle_periods: self.settle_periods,
+            periods: self.periods,
+            v0: self.v0,
+        }
+    }
+
     /// Checks the flags before connecting.
     ///
     /// # Errors
@@ -153,47 +113,6 @@ impl SweepArgs {
                 }
             })
             .collect()
-    }
-}
-
-/// What a request answered, or a one-line error.
-fn ask(c: &mut Client, req: Request) -> CliResult<Response> {
-    expect(c.call(req)?)
-}
-
-/// Polls the status until `done` or `limit` elapses.
-fn wait_status(
-    c: &mut Client,
-    limit: Duration,
-    what: &str,
-    done: impl Fn(&board::protocol::Status) -> bool,
-) -> CliResult<board::protocol::Status> {
-    let start = Instant::now();
-    loop {
-        if let Response::Status(s) = ask(c, Request::GetStatus)? {
-            if done(&s) {
-                return Ok(s);
-            }
-        }
-        if start.elapsed() > limit {
-            return Err(CliError::failure(format!(
-                "{what} did not happen within {} s",
-                limit.as_secs()
-            )));
-        }
-        let _ = c.next_telemetry(Duration::from_millis(20))?;
-    }
-}
-
-/// `(setting, produced frequency Hz, produced phase °)` of a `Drive` answer.
-fn drive_of(r: Response) -> CliResult<(DriveSetting, f64, f64)> {
-    match r {
-        Response::Drive { setting, applied } => Ok((
-            setting,
-            applied.achieved.freq_hz,
-            applied.phase_rad.to_degrees(),
-        )),
-        other => Err(unexpected(other)),
     }
 }
 
@@ -383,46 +302,9 @@ pub fn run(c: &mut Client, a: &SweepArgs, json: bool) -> CliResult {
         // A value the device refuses is named by the end of the sweep that
         // reaches it (the points lie between --from and --to).
         let end = if x == a.from { "--from" } else { "--to" };
-        let (setting, freq, phi) = drive_of(
-            ask(c, Request::SetDrive(a.param.apply(base, x)))
-                .map_err(|e| e.renamed(&format!("--{}", a.param.name()), end))?,
-        )?;
-        wait_status(c, Duration::from_secs(60), "settling of the ramps", |s| {
-            s.settled
-        })?;
-        if a.settle_periods > 0 {
-            // S periods of *device* time: a measurement whose result is
-            // dropped (a host clock would be wrong for a device that runs
-            // slower than real time, like a virtual one on a busy machine).
-            ask(
-                c,
-                Request::Measure {
-                    periods: a.settle_periods,
-                },
-            )
-            .map_err(|e| CliError {
-                code: e.code,
-                msg: e.msg.replace("--periods", "--settle-periods"),
-            })?;
-            let limit = Duration::from_secs_f64(60.0 + 10.0 * f64::from(a.settle_periods) / freq);
-            wait_status(c, limit, "the end of the settling periods", |s| {
-                !s.measuring
-            })?;
-        }
-        ask(c, Request::Measure { periods: a.periods })?;
-        let limit = Duration::from_secs_f64(60.0 + 10.0 * f64::from(a.periods) / freq);
-        wait_status(c, limit, "the end of the measurement", |s| !s.measuring)?;
-        let Response::Estimate(e) = ask(c, Request::GetEstimate)? else {
-            return Err(CliError::failure(
-                "the device did not answer with an estimate",
-            ));
-        };
-        let Response::Prediction { prediction, .. } = ask(c, Request::Predict { v0: a.v0 as f32 })?
-        else {
-            return Err(CliError::failure(
-                "the device did not answer with a prediction",
-            ));
-        };
+        let (setting, freq, phi) = set_point(c, base, a.param, x)
+            .map_err(|e| e.renamed(&format!("--{}", a.param.name()), end))?;
+        let (e, prediction) = measure_here(c, freq, &a.point_options())?;
         let mut r = row_for(a, x, &setting, freq, phi, contact);
         r.measured_mu = f64::from(e.mu);
         r.std_error = f64::from(e.std_error);

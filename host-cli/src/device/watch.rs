@@ -45,7 +45,7 @@ enum End {
 /// Runs `watch`; the stream is stopped before returning, whatever the end.
 pub fn watch(
     t: &Target,
-    c: Client,
+    c: &mut Client,
     periods: u32,
     count: Option<u64>,
     csv: Option<&Path>,
@@ -66,18 +66,17 @@ pub fn watch(
         }
         None => None,
     };
-    let mut c = c;
     // While the closed loop runs the estimator is the loop's: show its updates.
     if let board::protocol::Response::Control(st) = expect(c.call(Request::GetControl)?)? {
         if st.setting.on {
-            return control_loop(t, &mut c, count, &stop);
+            return control_loop(t, c, count, &stop);
         }
     }
     expect(c.call(Request::Stream { on: true, periods })?)?;
     // What came before the stream's `Ok` is an earlier session's (its
     // `StreamStopped`, a late estimate): not this stream's.
     c.discard_telemetry();
-    let end = stream_loop(t, &mut c, periods, count, &mut file, allow_invalid, &stop);
+    let end = stream_loop(t, c, periods, count, &mut file, allow_invalid, &stop);
     // Stop the stream on every exit path (a failed stop is said, not hidden).
     let stopped = c.call(Request::Stream { on: false, periods });
     let stop_err = match stopped {

@@ -1,0 +1,551 @@
+//! The identification of the transducers (`fricctl device identify`): a
+//! stepped-sine sweep of each transducer, the
+//! fit of its mode ([`board::identify`], eq. 1: f_r, Q, static
+//! gain, extra lag, with 95 % intervals), the result stored on the device
+//! (`SetTransducers`, kept by `Reset`) and optionally in a file and a Bode
+//! plot. Also the drive-mode choice of `drive set` ([`select_mode`]).
+//!
+//! **The sweep**, per channel, the other at zero amplitude, the normal
+//! offset of the accepted drive (the preload the contact is identified
+//! under), in voltage mode:
+//! 1. a coarse pass of `--points` frequencies over `[--from, --to]`
+//!    (default ±5 % around the drive's frequency) at a small amplitude:
+//!    1 % of the normal channel's lift-off limit, or of the largest
+//!    tangential amplitude, in the DAC calibration's metres;
+//! 2. the amplitude rescaled so that the largest response of the coarse
+//!    pass becomes [`PEAK_FRACTION`] of that bound (never a step beyond the
+//!    DAC); a fine pass of `--fine-points` over ±2 coarse steps around the
+//!    coarse peak.
+//!
+//! At each frequency the mode is left `--settle-ms`, then the device's
+//! measured response `X/U` (`Status.measured`) of [`WINDOWS_PER_POINT`]
+//! successive lock-in windows is averaged. The coarse pass settles for five
+//! envelope time constants of a Q-[`Q_MAX`] mode, `5·Q/(π f)` (the transient
+//! after a step of frequency is then below e⁻⁵ = 0.7 % of the step's
+//! change); the fine pass for [`FINE_SETTLE_TAUS`] time constants of the
+//! coarse pass's own fit (never longer than the coarse settling), unless
+//! `--settle-ms` is given. Only the fine pass is fitted: a resonance that
+//! drifts (heating, preload) moves between the passes, and the fine pass,
+//! four times shorter at Q ≈ 300, sees the least of it (at −20 Hz/s, 12 Hz
+//! over its 0.6 s; the tracking, `drive set --track`, follows the rest).
+
+use std::time::{Duration, Instant};
+
+use board::device::{DriveMode, DriveSetting, TransducerModel, Transducers};
+use board::identify::{self as fitid, Fit, FitConfig, Sample};
+use board::protocol::{Info, Request, Response, Status};
+
+use crate::answers::{expect, unexpected};
+use crate::client::Client;
+use crate::names::fault_names;
+use crate::{Error, Result};
+
+/// The coarse pass's largest response is scaled to this fraction of the
+/// channel's bound (normal: the lift-off limit; tangential: the largest
+/// amplitude) for the fine pass.
+pub const PEAK_FRACTION: f64 = 0.25;
+
+/// The Q the default settling time allows for (`5·Q_MAX/(π f)`).
+pub const Q_MAX: f64 = 1000.0;
+
+/// The fine pass's settling, in envelope time constants of the coarse fit.
+pub const FINE_SETTLE_TAUS: f64 = 8.0;
+
+/// Lock-in windows averaged per point.
+pub const WINDOWS_PER_POINT: u32 = 8;
+
+/// The transducers to identify (`--channel`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Channels {
+    /// Both, normal first.
+    Both,
+    /// The normal one (the tangential keeps its stored model).
+    Z,
+    /// The tangential one (the normal keeps its stored model).
+    X,
+}
+
+/// How to identify: each field is a flag of `fricctl device identify`,
+/// named in errors.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IdentifyOptions {
+    /// Lowest frequency of the sweep, Hz (`--from`; default: the drive's − 5 %).
+    pub from: Option<f64>,
+    /// Highest frequency of the sweep, Hz (`--to`; default: the drive's + 5 %).
+    pub to: Option<f64>,
+    /// Frequencies of the coarse pass, 6 … 1000 (`--points`).
+    pub points: u32,
+    /// Frequencies of the fine pass, 6 … 1000 (`--fine-points`).
+    pub fine_points: u32,
+    /// Settling time per frequency, ms (`--settle-ms`; default 5·Q/(π f)
+    /// for Q = [`Q_MAX`]).
+    pub settle_ms: Option<f64>,
+    /// Which transducers (`--channel`).
+    pub channels: Channels,
+}
+
+impl Default for IdentifyOptions {
+    /// `fricctl device identify` without flags.
+    fn default() -> Self {
+        IdentifyOptions {
+            from: None,
+            to: None,
+            points: 21,
+            fine_points: 31,
+            settle_ms: None,
+            channels: Channels::Both,
+        }
+    }
+}
+
+impl IdentifyOptions {
+    /// Each value within its domain, named by its flag.
+    fn check(&self) -> Result<()> {
+        use fric_analysis::numbers::{short, Real};
+        for (v, flag, d) in [
+            (self.from, "--from", Real::positive()),
+            (self.to, "--to", Real::positive()),
+            (
+                self.settle_ms,
+                "--settle-ms",
+                Real::positive()
+                    .at_most(10_000.0)
+                    .because("ten seconds per point"),
+            ),
+        ] {
+            if let Some(x) = v {
+                d.check(x, &short(x))
+                    .map_err(|r| Error::usage(format!("{flag}: {r}")))?;
+            }
+        }
+        for (n, flag) in [
+            (self.points, "--points"),
+            (self.fine_points, "--fine-points"),
+        ] {
+            if !(6..=1000).contains(&n) {
+                return Err(Error::usage(format!(
+                    "{flag}: must be in [6, 1000] (got {n}; a longer sweep is a chirp's job)"
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One channel's record and fit.
+#[derive(Debug, Clone)]
+pub struct ChannelFit {
+    /// `normal` or `tangential`.
+    pub name: &'static str,
+    /// The fine pass's measured response, sorted by frequency.
+    pub record: Vec<Sample>,
+    /// Its fit (eq. 1 of `board::identify`), or why it was refused.
+    pub fit: std::result::Result<Fit, fitid::FitError>,
+}
+
+/// An identification: the channels swept, in order, and what to store.
+#[derive(Debug, Clone)]
+pub struct Identification {
+    /// Per channel swept.
+    pub channels: Vec<ChannelFit>,
+    /// The span swept, Hz.
+    pub span_hz: (f64, f64),
+    /// Wall-clock time of the sweeps, s.
+    pub elapsed_s: f64,
+    /// The transducers the device would hold: the fitted channels, the
+    /// other one's stored model (None when a channel has neither).
+    pub transducers: Option<Transducers>,
+}
+
+impl Identification {
+    /// The first channel whose fit was refused, as one line.
+    pub fn refused(&self) -> Option<Error> {
+        self.channels.iter().find_map(|ch| {
+            ch.fit.as_ref().err().map(|e| {
+                Error::failure(format!(
+                    "identify: the {} transducer's fit was refused: {e}; nothing stored",
+                    ch.name
+                ))
+            })
+        })
+    }
+
+    /// Stores the transducers on the device (kept by `Reset`); false when
+    /// there is nothing to store.
+    ///
+    /// # Errors
+    /// The device's refusal or a lost link.
+    pub fn store(&self, c: &mut Client) -> Result<bool> {
+        match self.transducers {
+            Some(t) => {
+                expect(c.call(Request::SetTransducers(Some(t)))?)?;
+                Ok(true)
+            }
+            None => Ok(false),
+        }
+    }
+}
+
+/// Sweeps and fits each channel of `o` (module documentation). The drive
+/// is stopped and put back as it was after each channel, whatever happened;
+/// the device's drive mode is left in voltage mode, nothing is stored.
+///
+/// # Errors
+/// One line: bad span, a running drive, no normal offset, a fault during
+/// the sweep.
+pub fn identify(c: &mut Client, o: &IdentifyOptions) -> Result<Identification> {
+    o.check()?;
+    let info = match expect(c.call(Request::Hello)?)? {
+        Response::Info(i) => i,
+        other => return Err(unexpected(other)),
+    };
+    let base = match expect(c.call(Request::GetDrive)?)? {
+        Response::Drive { setting, .. } => setting,
+        other => return Err(unexpected(other)),
+    };
+    let st = status(c)?;
+    if st.running || st.measuring {
+        return Err(Error::usage(
+            "identify: the drive is running: `fricctl device stop` first (identify drives each transducer alone)",
+        ));
+    }
+    check_faults(&st)?;
+    let (from, to) = span(o, &info, base.freq_hz)?;
+    if base.offset_z_m <= 0.0 {
+        return Err(Error::usage(
+            "identify: the drive has no normal offset: set the preload the transducers work under \
+             first (`fricctl device drive set ... --offset-z M --open-loop`)",
+        ));
+    }
+    let f_mid = 0.5 * (from + to);
+    let settle = Duration::from_secs_f64(
+        o.settle_ms
+            .map_or(5.0 * Q_MAX / (std::f64::consts::PI * f_mid), |ms| ms * 1e-3),
+    );
+    let old_t = match expect(c.call(Request::GetTransducers)?)? {
+        Response::Transducers(t) => t,
+        other => return Err(unexpected(other)),
+    };
+    expect(c.call(Request::SetDriveMode(DriveMode::OpenLoop))?)?;
+    let chans: &[usize] = match o.channels {
+        Channels::Z => &[0],
+        Channels::X => &[1],
+        Channels::Both => &[0, 1],
+    };
+    let mut channels = Vec::new();
+    let t0 = Instant::now();
+    for &ch in chans {
+        let r = identify_channel(c, o, &info, &base, ch, (from, to), settle);
+        // Stop and put the drive back whatever happened.
+        let _ = c.call(Request::Stop);
+        let _ = c.call(Request::SetDrive(base));
+        channels.push(r?);
+    }
+    let transducers = merged(&channels, old_t);
+    Ok(Identification {
+        channels,
+        span_hz: (from, to),
+        elapsed_s: t0.elapsed().as_secs_f64(),
+        transducers,
+    })
+}
+
+/// The fitted channels' models, the other one's from `old` (None when a
+/// channel has neither, or a fit was refused).
+fn merged(channels: &[ChannelFit], old: Option<Transducers>) -> Option<Transducers> {
+    if channels.iter().any(|c| c.fit.is_err()) {
+        return None;
+    }
+    let model = |f: &Fit| TransducerModel {
+        resonance_hz: f.model.resonance_hz as f32,
+        q: f.model.q as f32,
+        gain_m_per_v: f.model.gain_m_per_v as f32,
+        phase_lag_rad: f.model.phase_lag_rad as f32,
+    };
+    let pick = |name: &str| {
+        channels
+            .iter()
+            .find(|c| c.name == name)
+            .and_then(|c| c.fit.as_ref().ok().map(model))
+    };
+    match (pick("normal"), pick("tangential"), old) {
+        (Some(z), Some(x), _) => Some(Transducers { z, x }),
+        (Some(z), None, Some(o)) => Some(Transducers { z, x: o.x }),
+        (None, Some(x), Some(o)) => Some(Transducers { z: o.z, x }),
+        _ => None,
+    }
+}
+
+/// Switches the device to the drive mode `drive set` asks for: voltage
+/// mode with `--open-loop`, else the displacement mode, which needs
+/// identified transducers (one line saying to run `identify` otherwise).
+///
+/// # Errors
+/// The refusal, as one line.
+pub fn select_mode(c: &mut Client, open_loop: bool) -> Result<()> {
+    let mode =
+        if open_loop {
+            DriveMode::OpenLoop
+        } else {
+            match expect(c.call(Request::GetTransducers)?)? {
+                Response::Transducers(Some(_)) => DriveMode::Displacement,
+                Response::Transducers(None) => return Err(Error::usage(
+                    "drive set: the transducers are not identified: run `fricctl device identify` \
+                     first, or pass --open-loop (voltage mode: the DAC calibration taken as the \
+                     displacement)",
+                )),
+                other => return Err(unexpected(other)),
+            }
+        };
+    expect(c.call(Request::SetDriveMode(mode))?)?;
+    Ok(())
+}
+
+fn status(c: &mut Client) -> Result<Status> {
+    match expect(c.call(Request::GetStatus)?)? {
+        Response::Status(s) => Ok(s),
+        other => Err(unexpected(other)),
+    }
+}
+
+/// Waits `d` of *device* time at drive frequency `f_hz`, counted in the
+/// pickups' lock-in windows (`MeasuredDrive::windows`): a window is the
+/// whole 64-sample ADC blocks spanning one drive period,
+/// `⌈f_s/(64 f)⌉·64/f_s` s (`device::motion`). Under QEMU, or on a loaded
+/// machine, device time runs slower than the host's clock: a wall-clock
+/// wait would cut the settling short.
+fn wait(c: &mut Client, d: Duration, f_hz: f64, fs: f64) -> Result<()> {
+    let block = 64.0;
+    let window_s = (fs / (block * f_hz)).ceil() * block / fs;
+    let n = (d.as_secs_f64() / window_s).ceil() as u64;
+    let windows = |s: &Status| s.measured.map(|m| u64::from(m.windows));
+    let start = Instant::now();
+    let w0 = windows(&status(c)?);
+    loop {
+        let s = status(c)?;
+        check_faults(&s)?;
+        if let (Some(a), Some(b)) = (w0, windows(&s)) {
+            if b.wrapping_sub(a) & 0xffff_ffff >= n {
+                return Ok(());
+            }
+        }
+        if start.elapsed() > Duration::from_secs(30) + 20 * d {
+            return Err(Error::failure(
+                "identify: the device's lock-in windows do not advance (are its pickups wired?)",
+            ));
+        }
+        let _ = c.next_telemetry(Duration::from_millis(2))?;
+    }
+}
+
+/// Waits for the drive's ramps, up to `limit`.
+fn wait_settled(c: &mut Client, limit: Duration) -> Result<Status> {
+    let start = Instant::now();
+    loop {
+        let s = status(c)?;
+        check_faults(&s)?;
+        if s.settled {
+            return Ok(s);
+        }
+        if start.elapsed() > limit {
+            return Err(Error::failure(
+                "identify: the drive did not settle within 10 s",
+            ));
+        }
+        let _ = c.next_telemetry(Duration::from_millis(5))?;
+    }
+}
+
+fn check_faults(s: &Status) -> Result<()> {
+    if s.faults != 0 {
+        let names = fault_names(s.faults).join(", ");
+        let hint = if s.faults & board::device::faults::MEASURED_LIFTOFF != 0 {
+            " (the normal transducer rang beyond the offset: identify it at a larger --offset-z \
+             of the drive, or with a smaller response: fewer --points near the peak)"
+        } else {
+            ""
+        };
+        return Err(Error::failure(format!(
+            "identify: a fault was latched ({names}){hint}; the drive is stopped, nothing stored"
+        )));
+    }
+    Ok(())
+}
+
+/// The mean measured response of channel `ch` over [`WINDOWS_PER_POINT`]
+/// new lock-in windows, m/V.
+fn response(c: &mut Client, ch: usize) -> Result<(f64, f64)> {
+    let mut last = None;
+    let (mut re, mut im, mut n) = (0.0, 0.0, 0u32);
+    let start = Instant::now();
+    while n < WINDOWS_PER_POINT {
+        let s = status(c)?;
+        check_faults(&s)?;
+        if let Some(m) = s.measured {
+            let r = if ch == 0 {
+                m.response_z_m_per_v
+            } else {
+                m.response_x_m_per_v
+            };
+            if last != Some(m.windows) {
+                if let Some([a, b]) = r {
+                    re += f64::from(a);
+                    im += f64::from(b);
+                    n += 1;
+                }
+                last = Some(m.windows);
+            }
+        }
+        if start.elapsed() > Duration::from_secs(10) {
+            return Err(Error::failure(
+                "identify: the device reports no measured motion (are its pickups wired?)",
+            ));
+        }
+    }
+    Ok((re / f64::from(n), im / f64::from(n)))
+}
+
+/// Sweeps channel `ch` over `freqs` at amplitude `amp` (m of the DAC
+/// calibration), appending to `rec`; returns the largest measured
+/// displacement amplitude, m.
+#[allow(clippy::too_many_arguments)]
+fn sweep(
+    c: &mut Client,
+    fs: f64,
+    base: &DriveSetting,
+    ch: usize,
+    amp: f32,
+    freqs: &[f64],
+    settle: Duration,
+    rec: &mut Vec<(f64, f64, f64, f64)>,
+) -> Result<f64> {
+    let mut peak = 0.0f64;
+    for (i, &f) in freqs.iter().enumerate() {
+        let d = DriveSetting {
+            freq_hz: f,
+            amp_z_m: if ch == 0 { amp } else { 0.0 },
+            amp_x_m: if ch == 1 { amp } else { 0.0 },
+            phase_rad: 0.0,
+            ..*base
+        };
+        expect(c.call(Request::SetDrive(d))?)?;
+        if i == 0 {
+            expect(c.call(Request::Start)?)?;
+            wait_settled(c, Duration::from_secs(10))?;
+        }
+        wait(c, settle, f, fs)?;
+        let (re, im) = response(c, ch)?;
+        let volts =
+            f64::from(amp) / f64::from(metres_per_code(ch)) * board::dds::DAC_VOLTS_PER_CODE;
+        peak = peak.max(re.hypot(im) * volts);
+        rec.push((f, re, im, volts));
+    }
+    Ok(peak)
+}
+
+/// The board's calibration of channel `ch`, m per code (as the device's).
+fn metres_per_code(ch: usize) -> f32 {
+    let cfg = crate::virtual_device::config();
+    if ch == 0 {
+        cfg.dac_z.metres_per_code
+    } else {
+        cfg.dac_x.metres_per_code
+    }
+}
+
+fn linspace(a: f64, b: f64, n: u32) -> Vec<f64> {
+    (0..n)
+        .map(|i| a + (b - a) * f64::from(i) / f64::from(n - 1))
+        .collect()
+}
+
+fn span(a: &IdentifyOptions, info: &Info, f: f64) -> Result<(f64, f64)> {
+    let (lo, hi) = info.freq_range_hz;
+    let from = a.from.unwrap_or(0.95 * f).max(lo);
+    let to = a.to.unwrap_or(1.05 * f).min(hi);
+    if from >= to {
+        return Err(Error::usage(format!(
+            "--from/--to: the span [{from}, {to}] Hz is empty (the device drives {lo} … {hi} Hz)"
+        )));
+    }
+    Ok((from, to))
+}
+
+fn identify_channel(
+    c: &mut Client,
+    a: &IdentifyOptions,
+    info: &Info,
+    base: &DriveSetting,
+    ch: usize,
+    (from, to): (f64, f64),
+    settle: Duration,
+) -> Result<ChannelFit> {
+    // The bound the response is scaled to: lift-off limit or largest Δu_x.
+    let bound = if ch == 0 {
+        f64::from(1.0 - info.liftoff_margin) * f64::from(base.offset_z_m)
+    } else {
+        f64::from(info.max_amp_x_m)
+    };
+    let mut rec = Vec::new();
+    let amp0 = (0.01 * bound) as f32;
+    let coarse = linspace(from, to, a.points);
+    let fs = info.sample_rate_hz;
+    let peak = sweep(c, fs, base, ch, amp0, &coarse, settle, &mut rec)?;
+    let k = rec
+        .iter()
+        .enumerate()
+        .max_by(|x, y| {
+            let m = |r: &(f64, f64, f64, f64)| r.1.hypot(r.2);
+            m(x.1).total_cmp(&m(y.1))
+        })
+        .map_or(0, |(i, _)| i);
+    let step = (to - from) / f64::from(a.points - 1);
+    let f_pk = rec[k].0;
+    // Scale to PEAK_FRACTION of the bound (the DAC's range caps it: the
+    // device refuses a level beyond it, named).
+    let scale = if peak > 0.0 {
+        PEAK_FRACTION * bound / peak
+    } else {
+        1.0
+    };
+    let amp1 = (f64::from(amp0) * scale.min(100.0)) as f32;
+    let fine = linspace(
+        (f_pk - 2.0 * step).max(from),
+        (f_pk + 2.0 * step).min(to),
+        a.fine_points,
+    );
+    // The fine pass settles for FINE_SETTLE_TAUS of the coarse fit's τ̂.
+    let fine_settle = match (
+        a.settle_ms,
+        fitid::fit(&samples(&rec), None, &FitConfig::DEFAULT),
+    ) {
+        (None, Ok(f)) => {
+            let tau = f.model.q / (std::f64::consts::PI * f.model.resonance_hz);
+            Duration::from_secs_f64(FINE_SETTLE_TAUS * tau).min(settle)
+        }
+        _ => settle,
+    };
+    expect(c.call(Request::Stop)?)?;
+    let mut rec = Vec::new();
+    sweep(c, fs, base, ch, amp1, &fine, fine_settle, &mut rec)?;
+    rec.sort_by(|x, y| x.0.total_cmp(&y.0));
+    rec.dedup_by(|x, y| x.0 == y.0);
+    let record = samples(&rec);
+    let fit = fitid::fit(&record, None, &FitConfig::DEFAULT);
+    Ok(ChannelFit {
+        name: if ch == 0 { "normal" } else { "tangential" },
+        record,
+        fit,
+    })
+}
+
+/// A sweep's record as the fit's samples.
+fn samples(rec: &[(f64, f64, f64, f64)]) -> Vec<Sample> {
+    rec.iter()
+        .map(|&(f, re, im, _)| Sample {
+            freq_hz: f,
+            re_m_per_v: re,
+            im_m_per_v: im,
+        })
+        .collect()
+}

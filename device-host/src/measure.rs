@@ -1,0 +1,149 @@
+//! One measurement of μ (`fricctl device measure`): wait for the drive's
+//! ramps, open a window of a number of drive periods, wait for it to close
+//! in device time, read the estimate and the motion the pickups measured.
+//! An interruption or a window that never closes ends the measurement on
+//! the device with `Reset` (the protocol's one request that ends a
+//! measurement: streams end too and the drive ramps down, settings kept).
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use board::device::MeasuredDrive;
+use board::estimator::Estimate;
+use board::protocol::{Request, Response};
+
+use crate::answers::{expect, unexpected};
+use crate::client::Client;
+use crate::{Error, Result};
+
+/// The longest wait for the ramps to settle (a full-scale ramp at the
+/// slowest slew rate the device accepts takes well under this).
+pub const SETTLE_LIMIT: Duration = Duration::from_secs(60);
+
+/// A measurement's result.
+#[derive(Debug, Clone, Copy)]
+pub struct Measured {
+    /// The estimate (shown even when invalid: [`Estimate::valid`] says so).
+    pub estimate: Estimate,
+    /// The drive that ran: the pickups' measured motion at the end (the
+    /// last window, or in displacement mode its 1 ms average).
+    pub measured: Option<MeasuredDrive>,
+}
+
+/// Waits until the device's ramps have settled (`Status::settled`), so that
+/// a measurement right after `start` or a new drive measures the drive it
+/// was given. `note` hears "waiting …" after 0.5 s and "ramps settled after
+/// … s" then (a wait a person notices; the ramps of a small change take
+/// milliseconds). `interrupted` ends the wait (nothing to undo).
+///
+/// # Errors
+/// Interrupted, not settled within [`SETTLE_LIMIT`], a lost link.
+pub fn wait_settled(
+    c: &mut Client,
+    interrupted: &AtomicBool,
+    note: &mut dyn FnMut(&str),
+) -> Result<()> {
+    let start = Instant::now();
+    let mut said = false;
+    loop {
+        if let Response::Status(s) = expect(c.call(Request::GetStatus)?)? {
+            if s.settled {
+                if said {
+                    note(&format!(
+                        "ramps settled after {:.1} s",
+                        start.elapsed().as_secs_f64()
+                    ));
+                }
+                return Ok(());
+            }
+        }
+        if !said && start.elapsed() > Duration::from_millis(500) {
+            note("waiting for the ramps to settle (--no-wait measures at once)");
+            said = true;
+        }
+        if interrupted.load(Ordering::SeqCst) {
+            return Err(Error::failure("interrupted while waiting for the ramps"));
+        }
+        if start.elapsed() > SETTLE_LIMIT {
+            return Err(Error::failure(format!(
+                "the ramps did not settle within {} s (`fricctl device status` shows the drive)",
+                SETTLE_LIMIT.as_secs()
+            )));
+        }
+        let _ = c.next_telemetry(Duration::from_millis(20))?;
+    }
+}
+
+/// Measures μ over `periods` drive periods (module documentation); with
+/// `wait` the ramps are waited for first ([`wait_settled`]).
+///
+/// # Errors
+/// The device's refusal, an interruption or a window that does not close
+/// within 4 times its length plus 10 s (the measurement is then aborted on
+/// the device, and the message says whether that worked), a lost link.
+pub fn measure(
+    c: &mut Client,
+    periods: u32,
+    wait: bool,
+    interrupted: &AtomicBool,
+    note: &mut dyn FnMut(&str),
+) -> Result<Measured> {
+    // The window lasts periods/f of device time: wait 4 times that plus
+    // 10 s (ramps, the window opening at a wrap, a virtual device that
+    // falls behind real time on a loaded machine), then give up.
+    let f = match expect(c.call(Request::GetDrive)?)? {
+        Response::Drive { applied, .. } => applied.achieved.freq_hz,
+        other => return Err(unexpected(other)),
+    };
+    let window_s = f64::from(periods) / f.max(1.0);
+    let limit = Duration::from_secs_f64(4.0 * window_s + 10.0);
+    if wait {
+        wait_settled(c, interrupted, note)?;
+    }
+    expect(c.call(Request::Measure { periods })?)?;
+    // Wait for the window to close (a virtual device advances meanwhile).
+    let start = Instant::now();
+    loop {
+        if interrupted.load(Ordering::SeqCst) {
+            return Err(abort(c, "interrupted".to_string()));
+        }
+        let _ = c.next_telemetry(Duration::from_millis(20))?;
+        if let Response::Status(s) = expect(c.call(Request::GetStatus)?)? {
+            if !s.measuring {
+                break;
+            }
+        }
+        if start.elapsed() > limit {
+            return Err(abort(
+                c,
+                format!(
+                    "no estimate within {:.0} s, though {periods} periods at {f:.3} Hz take \
+                     {window_s:.3} s (is the device sampling its ADC?)",
+                    limit.as_secs_f64()
+                ),
+            ));
+        }
+    }
+    let r = expect(c.call(Request::GetEstimate)?)?;
+    let Response::Estimate(estimate) = r else {
+        return Err(unexpected(r));
+    };
+    let measured = match expect(c.call(Request::GetStatus)?)? {
+        Response::Status(st) => st.measured,
+        other => return Err(unexpected(other)),
+    };
+    Ok(Measured { estimate, measured })
+}
+
+/// Ends the measurement on the device (`Reset`) and says `why`.
+fn abort(c: &mut Client, why: String) -> Error {
+    match c.call(Request::Reset).map(expect) {
+        Ok(Ok(_)) => Error::failure(format!(
+            "{why}; measurement aborted (device reset: drive stopping, settings kept)"
+        )),
+        Ok(Err(e)) | Err(e) => Error::failure(format!(
+            "{why}, but the measurement could not be aborted ({}); `fricctl device reset` ends it",
+            e.msg
+        )),
+    }
+}
