@@ -10,14 +10,13 @@ use board::device::DriveSetting;
 use board::protocol::{ControlSetting, Request, Response};
 use clap::Args;
 
-use device_host::control_bench::{self, scenario, BenchConfig, BenchOut, BenchRun, BenchTrace};
+use device_host::control_bench::{self, BenchConfig, BenchOut, BenchRun};
 
 use super::client::Client;
 use super::render;
 use super::{expect, out, unexpected};
 use crate::args::{Count, Real};
 use crate::error::{CliError, CliResult};
-use crate::plot::{render_figure, Corner, Extras, Figure, Mark, Panel, Series};
 
 pub use device_host::control_bench::{DEFAULT_GAIN, DEFAULT_RATE, MAX_HOLD_S};
 /// The loop gain's domain: a fraction of the error removed per update.
@@ -284,7 +283,7 @@ fn run_bench(a: &BenchArgs) -> CliResult<BenchOut> {
     let BenchRun { mut out, trace } = run?;
     if let Some(p) = &a.plot {
         out.plot = Some(p.display().to_string());
-        chart(p, &trace, &out)?;
+        crate::figures::control_bench::chart(p, &trace, &out)?;
     }
     Ok(out)
 }
@@ -372,218 +371,6 @@ fn write_text(w: &mut impl Write, o: &BenchOut) -> std::io::Result<()> {
         o.freq_hz,
         1e6 / o.freq_hz
     )
-}
-
-fn chart(path: &std::path::Path, run: &BenchTrace, o: &BenchOut) -> CliResult {
-    use scenario::*;
-    let BenchTrace {
-        log,
-        trace,
-        t_events,
-        t_end,
-        states,
-        model_mu0,
-        targets,
-    } = run;
-    let (t_end, model_mu0, targets) = (*t_end, *model_mu0, *targets);
-    let resonant = o.transducers == "resonant";
-    let t0 = t_events[0] - 0.002;
-    let ms = |t: f64| (t - t0) * 1e3;
-    let x = (0.0, ms(t_end));
-    let meas: Vec<(f64, f64)> = log
-        .iter()
-        .map(|(t, u)| (ms(*t), f64::from(u.measured_mu)))
-        .collect();
-    let setp: Vec<(f64, f64)> = {
-        let mut v = vec![(ms(t_events[0]), f64::from(targets.0))];
-        v.push((ms(t_events[1]), f64::from(targets.0)));
-        v.push((ms(t_events[1]), f64::from(targets.1)));
-        v.push((ms(t_end), f64::from(targets.1)));
-        v
-    };
-    let band = |s: f64| -> Vec<(f64, f64)> {
-        vec![
-            (ms(t_events[0]), f64::from(targets.0) * (1.0 + s)),
-            (ms(t_events[1]), f64::from(targets.0) * (1.0 + s)),
-            (ms(t_events[1]), f64::NAN),
-            (ms(t_events[1]), f64::from(targets.1) * (1.0 + s)),
-            (ms(t_end), f64::from(targets.1) * (1.0 + s)),
-        ]
-    };
-    let cmd: Vec<(f64, f64)> = log
-        .iter()
-        .map(|(t, u)| (ms(*t), f64::from(u.amp_z_m) * 1e6))
-        .collect();
-    let ff: Vec<(f64, f64)> = vec![
-        (ms(t_events[0]), f64::from(states[0].feedforward_m) * 1e6),
-        (ms(t_events[1]), f64::from(states[0].feedforward_m) * 1e6),
-        (ms(t_events[1]), f64::from(states[1].feedforward_m) * 1e6),
-        (ms(t_end), f64::from(states[1].feedforward_m) * 1e6),
-    ];
-    let lim = vec![(x.0, o.liftoff_limit * 1e6), (x.1, o.liftoff_limit * 1e6)];
-    let events_note = format!(
-        "events: loop on at {:.1} ms, setpoint step at {:.1} ms, μ0 × {MU0_STEP} at {:.1} ms, v0 {}→{} mm/s at {:.1} ms",
-        ms(t_events[0]),
-        ms(t_events[1]),
-        ms(t_events[2]),
-        V0 * 1e3,
-        V1 * 1e3,
-        ms(t_events[3])
-    );
-    let p1 = Panel {
-        title: "Closed loop on the mismatched virtual plant: μ".into(),
-        x_label: "device time, ms".into(),
-        y_label: "μ".into(),
-        x,
-        y: if resonant { (0.03, 0.14) } else { (0.04, 0.17) },
-        // The estimates first, the setpoint over them: its line stays
-        // visible where the markers sit on it.
-        series: vec![
-            Series {
-                label: "μ* ± 2 %".into(),
-                points: band(0.02),
-                mark: Mark::Dashed,
-                color: 2,
-            },
-            Series {
-                label: String::new(),
-                points: band(-0.02),
-                mark: Mark::Dashed,
-                color: 2,
-            },
-            Series {
-                label: format!(
-                    "μ estimate ({} drive period{} per update)",
-                    o.periods,
-                    if o.periods == 1 { "" } else { "s" }
-                ),
-                points: meas,
-                mark: Mark::LineMarkers(crate::plot::Marker::Ring),
-                color: 0,
-            },
-            Series {
-                label: "μ* setpoint".into(),
-                points: setp,
-                mark: Mark::Line,
-                color: 1,
-            },
-        ],
-    };
-    let p2 = Panel {
-        title: "Commanded normal amplitude (the loop's output)".into(),
-        x_label: "device time, ms".into(),
-        y_label: "Δu_z, µm".into(),
-        x,
-        y: (0.0, 5.5),
-        series: vec![
-            Series {
-                label: "commanded Δu_z".into(),
-                points: cmd,
-                mark: Mark::LineMarkers(crate::plot::Marker::Circle),
-                color: 0,
-            },
-            Series {
-                label: "model feedforward".into(),
-                points: ff,
-                mark: Mark::Dashed,
-                color: 4,
-            },
-            Series {
-                label: "true normal excursion (plant)".into(),
-                points: trace.iter().map(|r| (ms(r.0), r.2 * 1e6)).collect(),
-                mark: Mark::Line,
-                color: 2,
-            },
-            Series {
-                label: "lift-off limit (1 − 0.05)·u_z0".into(),
-                points: lim,
-                mark: Mark::Line,
-                color: 3,
-            },
-        ],
-    };
-    let vmax = trace.iter().map(|r| r.1).fold(0.0, f64::max);
-    let p3 = Panel {
-        title: "Normal channel's voltage (DAC amplitude)".into(),
-        x_label: "device time, ms".into(),
-        y_label: "voltage amplitude, V".into(),
-        x,
-        y: (0.0, (vmax * 1.15).max(1e-3)),
-        series: vec![Series {
-            label: format!("voltage (headroom {} × steady)", o.headroom),
-            points: trace.iter().map(|r| (ms(r.0), r.1)).collect(),
-            mark: Mark::Line,
-            color: 0,
-        }],
-    };
-    let plant_note = if resonant {
-        format!(
-            "resonant transducers, slower τ = Q/(π f_r) = {:.2} ms; model: exact identification",
-            o.tau_ms
-        )
-    } else {
-        format!("ideal transducers, lag {} periods", o.lag_periods)
-    };
-    let notes = vec![
-        format!(
-            "plant μ0 = {:.3} (model {model_mu0}), {plant_note}, μ0 drift {} /s, ADC noise ±{} counts",
-            model_mu0 * o.mu0_ratio,
-            o.drift_per_s,
-            o.noise_counts
-        ),
-        format!(
-            "drive {:.0} Hz, u_z0 = 4 µm, Δu_x = 0.3 µm, φ = 40°, k_z = k_x = 1e7 N/m; loop v0 = {} mm/s, κ = {}",
-            o.freq_hz,
-            V0 * 1e3,
-            o.gain
-        ),
-        events_note,
-    ];
-    let fig = Figure {
-        panels: vec![
-            (
-                p1,
-                Extras {
-                    notes: notes.clone(),
-                    notes_at: Corner::UpperLeft,
-                    legend_at: Corner::LowerRight,
-                    ..Extras::default()
-                },
-            ),
-            (
-                p2,
-                Extras {
-                    legend_at: Corner::UpperRight,
-                    ..Extras::default()
-                },
-            ),
-            (
-                p3,
-                Extras {
-                    legend_at: Corner::UpperRight,
-                    ..Extras::default()
-                },
-            ),
-        ],
-        rows: 3,
-        cols: 1,
-        size: (1200, 1250),
-        legend: Vec::new(),
-        caption: vec![
-            format!(
-                "fricctl device control-bench --fill-lead {}: the setpoint step settles within ±{:.2e} in {} periods ({} ms)",
-                o.fill_lead,
-                o.events[1].band,
-                opt(o.events[1].settle_periods, 0),
-                opt(o.events[1].settle_ms, 3),
-            ),
-            format!(
-                "(band: 2 % of the step, or 4 × the estimates' scatter over the segment's last half if wider); DAC fills {} half-buffers of {} samples ahead",
-                o.fill_lead, o.half_buffer_samples
-            ),
-        ],
-    };
-    render_figure(path, &fig)
 }
 
 /// Flags of `fricctl device tune`: those of `fricctl tune` without the scene

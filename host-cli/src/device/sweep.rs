@@ -20,7 +20,6 @@ use super::client::Client;
 use super::render::reason_names;
 use crate::args::{short, Count, Real};
 use crate::error::{CliError, CliResult};
-use crate::plot::{Mark, Panel, Series};
 use crate::sweep_file::{self, SweepRow};
 
 /// Most points of one sweep: each is a measurement of at least one drive
@@ -122,7 +121,7 @@ fn same(a: f64, b: f64) -> bool {
 }
 
 /// The non-swept drive columns of a row, to compare with the device's.
-fn fixed_columns(p: SweepParam, r: &SweepRow) -> Vec<(&'static str, f64)> {
+pub(crate) fn fixed_columns(p: SweepParam, r: &SweepRow) -> Vec<(&'static str, f64)> {
     let mut v = vec![
         ("freq_hz", r.freq_hz),
         ("amp_z", r.amp_z),
@@ -318,7 +317,7 @@ pub fn run(c: &mut Client, a: &SweepArgs, json: bool) -> CliResult {
     }
     bar.finish_and_clear();
     if let Some(p) = &a.plot {
-        plot(p, a, &rows)?;
+        crate::figures::device_sweep::plot(p, a, &rows)?;
         eprintln!("wrote {}", p.display());
     }
     print_rows(a, &rows, json)?;
@@ -437,96 +436,6 @@ fn print_rows(a: &SweepArgs, rows: &[SweepRow], json: bool) -> CliResult {
         a.csv.display()
     )
     .map_err(fail)
-}
-
-/// Measured μ with ±1 standard-error bars and the device's predicted μ
-/// against the swept value.
-fn plot(path: &Path, a: &SweepArgs, rows: &[SweepRow]) -> CliResult {
-    let mut meas = Vec::new();
-    let mut bars = Vec::new();
-    let mut pred = Vec::new();
-    let (mut xlo, mut xhi) = (f64::INFINITY, f64::NEG_INFINITY);
-    let (mut ylo, mut yhi) = (f64::INFINITY, f64::NEG_INFINITY);
-    for r in rows.iter().filter(|r| r.measured_mu.is_finite()) {
-        meas.push((r.value, r.measured_mu));
-        bars.push((
-            r.value,
-            r.measured_mu - r.std_error,
-            r.measured_mu + r.std_error,
-            0,
-        ));
-        pred.push((r.value, r.predicted_mu));
-        xlo = xlo.min(r.value);
-        xhi = xhi.max(r.value);
-        for y in [
-            r.measured_mu - r.std_error,
-            r.measured_mu + r.std_error,
-            r.predicted_mu,
-        ] {
-            ylo = ylo.min(y);
-            yhi = yhi.max(y);
-        }
-    }
-    if meas.is_empty() {
-        return Err(CliError::failure("--plot: no measured point to plot"));
-    }
-    let xpad = if xhi > xlo { 0.05 * (xhi - xlo) } else { 1.0 };
-    let ypad = if yhi > ylo { 0.1 * (yhi - ylo) } else { 0.01 };
-    let r0 = &rows[0];
-    let mut fixed: Vec<String> = fixed_columns(a.param, r0)
-        .into_iter()
-        .map(|(n, v)| match n {
-            "freq_hz" => format!("f = {v:.1} Hz"),
-            "phi_deg" => format!("φ = {v:.2}°"),
-            "amp_z" => format!("Δu_z = {v:.2e} m"),
-            "amp_x" => format!("Δu_x = {v:.2e} m"),
-            _ => format!("u_z0 = {v:.2e} m"),
-        })
-        .collect();
-    fixed.push(format!("v0 = {} m/s", a.v0));
-    let panel = Panel {
-        title: format!("sweep of {}: {}", a.param.name(), fixed.join(", ")),
-        x_label: format!("{} ({})", a.param.name(), a.param.unit()),
-        y_label: format!(
-            "μ (device model: μ0 = {:.4}, kz = {:.3e} N/m, kx = {:.3e} N/m)",
-            r0.model_mu0, r0.model_kz, r0.model_kx
-        ),
-        x: (xlo - xpad, xhi + xpad),
-        y: (ylo - ypad, yhi + ypad),
-        // Points only: a line through the swept values would draw a curve
-        // that was neither measured nor computed between them.
-        series: vec![
-            Series {
-                label: "predicted μ at the swept values (device model)".into(),
-                points: pred,
-                mark: Mark::Markers(crate::plot::Marker::OpenDiamond),
-                color: 1,
-            },
-            Series {
-                label: "measured μ, ±1 standard error".into(),
-                points: meas,
-                mark: Mark::Points,
-                color: 0,
-            },
-        ],
-    };
-    crate::plot::render_figure(
-        path,
-        &crate::plot::Figure {
-            panels: vec![(
-                panel,
-                crate::plot::Extras {
-                    error_bars: bars,
-                    ..crate::plot::Extras::default()
-                },
-            )],
-            rows: 1,
-            cols: 1,
-            size: (1100, 650),
-            legend: Vec::new(),
-            caption: Vec::new(),
-        },
-    )
 }
 
 /// μ0, k_z, k_x for `scene set`: from the flags, or from the JSON that

@@ -36,6 +36,7 @@ pub use svg::*;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use plotters::style::RGBColor;
 
     #[test]
     fn log_ticks_are_plain_in_the_middle_and_powers_outside() {

@@ -1,0 +1,104 @@
+//! `fricctl device sweep --plot`: measured μ with ±1 standard-error bars
+//! and the device's predicted μ at the swept values; the title names the
+//! drive values the sweep held fixed, the y label the device's model.
+
+use std::path::Path;
+
+use fric_analysis::sweep_file::SweepRow;
+
+use crate::device::sweep::{fixed_columns, SweepArgs};
+use crate::error::{CliError, CliResult};
+use crate::plot::{render_figure, Extras, Figure, Mark, Marker, Panel, Series};
+
+/// Measured μ with ±1 standard-error bars and the device's predicted μ
+/// against the swept value.
+///
+/// # Errors
+/// No measured point, or the file cannot be written.
+pub fn plot(path: &Path, a: &SweepArgs, rows: &[SweepRow]) -> CliResult {
+    let mut meas = Vec::new();
+    let mut bars = Vec::new();
+    let mut pred = Vec::new();
+    let (mut xlo, mut xhi) = (f64::INFINITY, f64::NEG_INFINITY);
+    let (mut ylo, mut yhi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for r in rows.iter().filter(|r| r.measured_mu.is_finite()) {
+        meas.push((r.value, r.measured_mu));
+        bars.push((
+            r.value,
+            r.measured_mu - r.std_error,
+            r.measured_mu + r.std_error,
+            0,
+        ));
+        pred.push((r.value, r.predicted_mu));
+        xlo = xlo.min(r.value);
+        xhi = xhi.max(r.value);
+        for y in [
+            r.measured_mu - r.std_error,
+            r.measured_mu + r.std_error,
+            r.predicted_mu,
+        ] {
+            ylo = ylo.min(y);
+            yhi = yhi.max(y);
+        }
+    }
+    if meas.is_empty() {
+        return Err(CliError::failure("--plot: no measured point to plot"));
+    }
+    let xpad = if xhi > xlo { 0.05 * (xhi - xlo) } else { 1.0 };
+    let ypad = if yhi > ylo { 0.1 * (yhi - ylo) } else { 0.01 };
+    let r0 = &rows[0];
+    let mut fixed: Vec<String> = fixed_columns(a.param, r0)
+        .into_iter()
+        .map(|(n, v)| match n {
+            "freq_hz" => format!("f = {v:.1} Hz"),
+            "phi_deg" => format!("φ = {v:.2}°"),
+            "amp_z" => format!("Δu_z = {v:.2e} m"),
+            "amp_x" => format!("Δu_x = {v:.2e} m"),
+            _ => format!("u_z0 = {v:.2e} m"),
+        })
+        .collect();
+    fixed.push(format!("v0 = {} m/s", a.v0));
+    let panel = Panel {
+        title: format!("sweep of {}: {}", a.param.name(), fixed.join(", ")),
+        x_label: format!("{} ({})", a.param.name(), a.param.unit()),
+        y_label: format!(
+            "μ (device model: μ0 = {:.4}, kz = {:.3e} N/m, kx = {:.3e} N/m)",
+            r0.model_mu0, r0.model_kz, r0.model_kx
+        ),
+        x: (xlo - xpad, xhi + xpad),
+        y: (ylo - ypad, yhi + ypad),
+        // Points only: a line through the swept values would draw a curve
+        // that was neither measured nor computed between them.
+        series: vec![
+            Series {
+                label: "predicted μ at the swept values (device model)".into(),
+                points: pred,
+                mark: Mark::Markers(Marker::OpenDiamond),
+                color: 1,
+            },
+            Series {
+                label: "measured μ, ±1 standard error".into(),
+                points: meas,
+                mark: Mark::Points,
+                color: 0,
+            },
+        ],
+    };
+    render_figure(
+        path,
+        &Figure {
+            panels: vec![(
+                panel,
+                Extras {
+                    error_bars: bars,
+                    ..Extras::default()
+                },
+            )],
+            rows: 1,
+            cols: 1,
+            size: (1100, 650),
+            legend: Vec::new(),
+            caption: Vec::new(),
+        },
+    )
+}
