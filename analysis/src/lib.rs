@@ -10,10 +10,13 @@
 //! * [`fit`], [`sweep_file`]: identification of (μ0, kx/kz) from a measured sweep;
 //! * [`tune`]: inverse design (the drive that attains a target μ, or maximises an objective);
 //! * [`load_line`]: the contact as an actuator;
-//! * [`motion`]: a body moved by the vibrated contact.
+//! * [`motion`]: a body moved by the vibrated contact;
+//! * [`bench`]: the model benchmarks (work-precision, methods, stability,
+//!   motion): their runs, references, timings and rows.
 
 #![deny(missing_docs)]
 
+pub mod bench;
 pub mod error;
 pub mod eval;
 pub mod fit;

@@ -26,10 +26,10 @@ use std::hint::black_box;
 
 use board::dds::{phase_rad, quantise, Dds, Interp, Level, SineTable, Slew};
 use clap::Args;
+use fric_analysis::bench::time_min_of;
 use model_core::{Libm, Math, Micromath};
 use rustfft::{num_complex::Complex, FftPlanner};
 
-use super::time_min_of;
 use crate::error::{CliError, CliResult};
 use crate::plot::{prepare_out_dir, render_figure, Extras, Figure, Mark, Marker, Panel, Series};
 

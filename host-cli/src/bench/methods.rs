@@ -1,27 +1,23 @@
 //! `fricctl bench methods`: what "model no more than the scene needs" buys.
 //!
-//! The curve and map commands' own code paths ([`curve_rows`],
-//! [`mu_cells`]) are timed, in one process, with `--method auto` (at a loose
-//! tolerance and at the default, tight one), `--method exact` and
-//! `--method fixed`; time is wall-clock for the whole command body (rayon on
-//! all cores), the minimum over repeats, and is reported per point. The
-//! fixed-step runs use fewer points (they are ~10⁴× slower) and are compared
-//! per point. A last case times curved profiles ([`profile_case`]): the
-//! flat punch against a sphere and a cone through the MDR quadrature
-//! (`select::mu_within_profile`) at three tolerances, on fewer points.
+//! [`fric_analysis::bench::methods`] times the curve and map commands' own
+//! code paths ([`curve_rows`], [`mu_cells`], passed to it as [`Commands`])
+//! with `--method auto` (at a loose tolerance and at the default, tight
+//! one), `--method exact` and `--method fixed`, and curved profiles through
+//! the MDR quadrature; this module writes `methods.csv`, the table on stdout
+//! and the chart (SVG + PNG).
 
 use std::fmt::Write as _;
-use std::time::Instant;
 
 use clap::Args;
-use model_core::{Groups, Scene};
+use fric_analysis::bench::methods::{self as bench, ratios_to_first, Bodies, Config, Timing};
+use model_core::Scene;
 
 use crate::args::Count;
 use crate::error::{CliError, CliResult};
-use crate::eval::{from_rel, Method, MethodArgs};
+use crate::eval::{Method, MethodArgs};
 use crate::plot::{color, log_axis_tick, prepare_out_dir, write_chart};
-use crate::sweep::{centres, curve_rows, linspace, method_mix, mix_text, mu_cells};
-use model_core::analytic::CriticalVelocity;
+use crate::sweep::{curve_rows, mu_cells, MuCell, Row};
 
 /// Flags of `bench methods`.
 #[derive(Args, Debug, Clone)]
@@ -55,265 +51,104 @@ pub struct MethodsArgs {
     pub mdr_points: usize,
 }
 
-/// One timed configuration.
-#[derive(Debug, Clone)]
-pub struct Timing {
-    /// Which command and scene.
-    pub case: &'static str,
-    /// Method label.
-    pub method: String,
-    /// Points (velocities or cells).
-    pub points: usize,
-    /// Seconds for all points (minimum over repeats).
-    pub total_s: f64,
-    /// Which computations answered, with counts.
-    pub mix: String,
-}
-
-impl Timing {
-    /// Seconds per point.
-    pub fn per_point(&self) -> f64 {
-        self.total_s / self.points as f64
+impl MethodsArgs {
+    /// The bench's sizes.
+    fn config(&self) -> Config {
+        Config {
+            points: self.points,
+            res: self.res,
+            fixed_points: self.fixed_points,
+            fixed_res: self.fixed_res,
+            steps_per_period: self.steps_per_period,
+            tol: self.tol,
+            repeats: self.repeats,
+            mdr_points: self.mdr_points,
+        }
     }
 }
 
-fn best_of<T>(repeats: usize, mut f: impl FnMut() -> CliResult<T>) -> CliResult<(f64, T)> {
-    let mut best = f64::INFINITY;
-    let mut last = None;
-    for _ in 0..repeats.max(1) {
-        let t = Instant::now();
-        let r = f()?;
-        best = best.min(t.elapsed().as_secs_f64());
-        last = Some(r);
+/// The curve and map commands' bodies, as the bench times them.
+struct Commands;
+
+/// The flags that give the library's method options.
+fn flags(o: &fric_analysis::eval::MethodArgs) -> MethodArgs {
+    use fric_analysis::eval::Method as M;
+    MethodArgs {
+        method: match o.method {
+            M::Auto => Method::Auto,
+            M::Exact => Method::Exact,
+            M::Fixed => Method::Fixed,
+            M::Approx => Method::Approx,
+        },
+        steps_per_period: o.steps_per_period,
+        tol: o.tol,
+        profile: o.profile,
     }
-    // `repeats.max(1)` ≥ 1 iterations ran.
-    last.map(|r| (best, r))
-        .ok_or_else(|| CliError::failure("no repeat ran"))
 }
 
-fn configs(a: &MethodsArgs) -> Vec<(String, MethodArgs, bool)> {
-    let m = |method, tol| MethodArgs {
-        method,
-        steps_per_period: Some(a.steps_per_period),
-        tol,
-        ..MethodArgs::default()
-    };
-    vec![
-        (
-            format!("auto --tol {:e}", a.tol),
-            m(Method::Auto, Some(a.tol)),
-            false,
-        ),
-        (
-            "auto (default tol)".to_string(),
-            m(Method::Auto, None),
-            false,
-        ),
-        ("exact".to_string(), m(Method::Exact, None), false),
-        (
-            format!("fixed N={}", a.steps_per_period),
-            m(Method::Fixed, None),
-            true,
-        ),
-    ]
-}
-
-/// Times the curve command's body on one scene.
-fn curve_case(
-    a: &MethodsArgs,
-    case: &'static str,
-    g: Groups<f64>,
-    out: &mut Vec<Timing>,
-) -> CliResult {
-    let s = Scene::dimensionless(g).map_err(|e| CliError::failure(e.to_string()))?;
-    let vc = CriticalVelocity::of(&s);
-    for (label, how, fixed) in configs(a) {
-        let n = if fixed { a.fixed_points } else { a.points };
-        let vs: Vec<f64> = linspace(-1.5, 1.5, n)
-            .into_iter()
-            .map(|x| from_rel(&vc, x, "v-rel"))
-            .collect::<CliResult<_>>()?;
-        let (t, rows) = best_of(a.repeats, || curve_rows(&s, &vs, &how))?;
-        out.push(Timing {
-            case,
-            method: label,
-            points: n,
-            total_s: t,
-            mix: mix_text(&method_mix(rows.iter().map(|r| r.method)), " + "),
-        });
+impl Bodies for Commands {
+    type Rows = Vec<Row>;
+    type Cells = Vec<MuCell>;
+    fn curve(
+        &self,
+        scene: &Scene<f64>,
+        vs: &[f64],
+        how: &fric_analysis::eval::MethodArgs,
+    ) -> CliResult<Vec<Row>> {
+        curve_rows(scene, vs, &flags(how))
     }
-    Ok(())
-}
-
-/// Times μ over a velocity curve for the flat punch and curved profiles
-/// (`select::mu_within_profile`, rayon over the points as the curve command),
-/// without and with lift-off.
-fn profile_case(a: &MethodsArgs, out: &mut Vec<Timing>) -> CliResult {
-    for (duz_rel, case) in [
-        (0.5, "curve, profiles (Δu_z/u_z0 = 0.5, k_xΔu_x/(μ0 k_z u_z0) = 0.25, φ = 1 rad = 57.3°; u_z0 read as the mean indentation), v/v_c in [-1.5, 1.5]"),
-        (1.5, "curve, profiles with lift-off (Δu_z/u_z0 = 1.5, k_xΔu_x/(μ0 k_z u_z0) = 0.25, φ = 1 rad = 57.3°; u_z0 read as the mean indentation), v/v_c in [-1.5, 1.5]"),
-    ] {
-        profile_scene(a, duz_rel, case, out)?;
+    fn map(
+        &self,
+        a: f64,
+        ratios: &[f64],
+        phis_deg: &[f64],
+        x: f64,
+        how: &fric_analysis::eval::MethodArgs,
+    ) -> CliResult<Vec<MuCell>> {
+        mu_cells(a, ratios, phis_deg, x, &flags(how))
     }
-    Ok(())
-}
-
-/// [`profile_case`] for one drive: the flat punch (single-spring solver
-/// below `Δu_z/u_z0 = 1`, the lift-off branch from 1) and a sphere and a
-/// cone through the MDR quadrature at three tolerances.
-fn profile_scene(
-    a: &MethodsArgs,
-    duz_rel: f64,
-    case: &'static str,
-    out: &mut Vec<Timing>,
-) -> CliResult {
-    use model_core::mdr::Profile;
-    use model_core::select;
-    use model_core::Libm;
-    use rayon::prelude::*;
-    let g = Groups {
-        duz_rel,
-        dux_rel: 0.25,
-        phi: 1.0,
-    };
-    let s = Scene::dimensionless_with_contact(g, model_core::scene::ContactMode::Intermittent)
-        .map_err(|e| CliError::failure(e.to_string()))?;
-    let vc = CriticalVelocity::of(&s);
-    let vs: Vec<f64> = linspace(-1.5, 1.5, a.mdr_points)
-        .into_iter()
-        .map(|x| from_rel(&vc, x, "v-rel"))
-        .collect::<CliResult<_>>()?;
-    let flat_tol = if duz_rel < 1.0 {
-        model_core::exact::error_bound::<f64, Libm>(&s.drive())
-    } else {
-        model_core::model::liftoff::error_bound::<f64, Libm>(&s.drive())
-    };
-    let configs: [(&str, Profile<f64>, f64); 7] = [
-        (
-            if duz_rel < 1.0 {
-                "flat auto (default tol)"
-            } else {
-                "flat auto (default tol; lift-off solver)"
-            },
-            Profile::Flat,
-            flat_tol,
-        ),
-        ("sphere mdr --tol 1e-6", Profile::Sphere, 1e-6),
-        ("sphere mdr --tol 1e-8", Profile::Sphere, 1e-8),
-        ("sphere mdr --tol 1e-9", Profile::Sphere, 1e-9),
-        ("cone mdr --tol 1e-6", Profile::Cone, 1e-6),
-        ("cone mdr --tol 1e-8", Profile::Cone, 1e-8),
-        ("cone mdr --tol 1e-9", Profile::Cone, 1e-9),
-    ];
-    for (label, p, tol) in configs {
-        let (t, methods) = best_of(a.repeats, || {
-            vs.par_iter()
-                .map(|&v| {
-                    select::mu_within_profile::<f64, Libm>(&s, &p, v, tol)
-                        .map(|ans| ans.method.name())
-                        .map_err(|e| {
-                            let why = match e {
-                                select::SelectError::BadTolerance => {
-                                    "tol: must be a finite number > 0".to_string()
-                                }
-                                select::SelectError::ToleranceTooTight { best } => {
-                                    format!(
-                                        "tol: tighter than any method guarantees (best {best:e})"
-                                    )
-                                }
-                                select::SelectError::Exact(e) => e.to_string(),
-                                select::SelectError::Mdr(e) => e.to_string(),
-                            };
-                            CliError::failure(format!("{label} at v0 = {v:e} m/s: {why}"))
-                        })
-                })
-                .collect::<CliResult<Vec<_>>>()
-        })?;
-        out.push(Timing {
-            case,
-            method: label.to_string(),
-            points: vs.len(),
-            total_s: t,
-            mix: mix_text(&method_mix(methods), " + "),
-        });
+    fn row_methods(rows: &Vec<Row>) -> Vec<&'static str> {
+        rows.iter().map(|r| r.method).collect()
     }
-    Ok(())
-}
-
-/// Times the μ map's body (Δu_z/u_z0 = 0.5, v0 = 0.5·v_c).
-fn map_case(a: &MethodsArgs, out: &mut Vec<Timing>) -> CliResult {
-    for (label, how, fixed) in configs(a) {
-        let res = if fixed { a.fixed_res } else { a.res };
-        let ratios = centres(0.0, 3.0, res);
-        let phis = centres(0.0, 360.0, res);
-        let (t, cells) = best_of(a.repeats, || mu_cells(0.5, &ratios, &phis, 0.5, &how))?;
-        let mix = method_mix(cells.iter().map(|c| c.method));
-        out.push(Timing {
-            case: "map --v-rel 0.5 (dual mode, Δu_z/u_z0 = 0.5, φ × ratio over 0…360° × 0…3)",
-            method: label,
-            points: cells.len(),
-            total_s: t,
-            mix: mix_text(&mix, " + "),
-        });
+    fn cell_methods(cells: &Vec<MuCell>) -> Vec<&'static str> {
+        cells.iter().map(|c| c.method).collect()
     }
-    Ok(())
 }
 
 /// `fricctl bench methods`.
 pub fn run(a: &MethodsArgs) -> CliResult {
     // Every count is in its range and --tol > 0 (the flags' parsers); the
     // curves need an even number of points (v = 0 between two of them).
-    for (n, flag) in [
-        (a.points, "--points"),
-        (a.fixed_points, "--fixed-points"),
-        (a.mdr_points, "--mdr-points"),
-    ] {
-        if n % 2 == 1 {
-            return Err(CliError::usage(format!("{flag}: must be even (got {n})")));
-        }
-    }
+    let config = a.config();
+    config.check()?;
     prepare_out_dir(&a.out)?;
-    let mut out = Vec::new();
-    eprintln!("timing curves …");
-    curve_case(
-        a,
-        "curve, normal only (Δu_z/u_z0 = 0.4), v/v_c in [-1.5, 1.5]",
-        Groups {
-            duz_rel: 0.4,
-            dux_rel: 0.0,
-            phi: 0.0,
-        },
-        &mut out,
-    )?;
-    curve_case(
-        a,
-        "curve, dual mode (Δu_z/u_z0 = 0.5, k_xΔu_x/(μ0 k_z u_z0) = 0.25, φ = 1 rad = 57.3°), v/v_c in [-1.5, 1.5]",
-        Groups {
-            duz_rel: 0.5,
-            dux_rel: 0.25,
-            phi: 1.0,
-        },
-        &mut out,
-    )?;
-    eprintln!("timing maps …");
-    map_case(a, &mut out)?;
-    eprintln!("timing curved profiles (MDR) …");
-    profile_case(a, &mut out)?;
+    let out = bench::measure(&config, &Commands, &mut |stage| eprintln!("{stage}"))?;
+    let csv = table(&out);
+    let p = a.out.join("methods.csv");
+    std::fs::write(&p, csv).map_err(|e| CliError::failure(format!("{}: {e}", p.display())))?;
+    eprintln!("wrote {}", p.display());
+    for ext in ["svg", "png"] {
+        let path = a.out.join(format!("methods.{ext}"));
+        chart(&path, &out)?;
+        eprintln!("wrote {}", path.display());
+    }
+    Ok(())
+}
+
+/// `methods.csv`, with the table printed to stdout (a heading per case).
+fn table(out: &[Timing]) -> String {
     let mut csv = String::from("case,method,points,total_s,per_point_s,ratio_to_first,mix\n");
     let mut last_case = "";
-    let mut first = 0.0;
     let width = out
         .iter()
         .map(|t| t.method.chars().count())
         .max()
         .unwrap_or(0);
-    for t in &out {
+    for (t, ratio) in out.iter().zip(ratios_to_first(out)) {
         if t.case != last_case {
             last_case = t.case;
-            first = t.per_point();
             println!("{}", t.case);
         }
-        let ratio = t.per_point() / first;
         println!(
             "  {:width$} {:>8} points {:>10.3e} s/point  ×{:<10.1} {}",
             t.method,
@@ -334,15 +169,7 @@ pub fn run(a: &MethodsArgs) -> CliResult {
             t.mix
         );
     }
-    let p = a.out.join("methods.csv");
-    std::fs::write(&p, csv).map_err(|e| CliError::failure(format!("{}: {e}", p.display())))?;
-    eprintln!("wrote {}", p.display());
-    for ext in ["svg", "png"] {
-        let path = a.out.join(format!("methods.{ext}"));
-        chart(&path, &out)?;
-        eprintln!("wrote {}", path.display());
-    }
-    Ok(())
+    csv
 }
 
 /// `x` with three significant digits (x ≥ 0.001).

@@ -1,7 +1,10 @@
-//! `fricctl bench …`: speed against accuracy, measured in one process.
+//! `fricctl bench …`: speed against accuracy, measured in one process. The
+//! model benches' runs and measurements live in [`fric_analysis::bench`],
+//! the control bench's in `device_host`; these modules hold their flags,
+//! progress, text, files and figures.
 //!
 //! * [`work_precision`] — error against time for every μ computation
-//!   (with [`across_lift_off`]: the flat punch and a sphere across a = 1);
+//!   (with the flat punch and a sphere across a = 1);
 //! * [`methods`] — `--method auto` against always-exact and always-fixed-step
 //!   on the curve and map commands;
 //! * [`stability`] — maps of where each method stops being trustworthy;
@@ -10,22 +13,16 @@
 //!   separation and mass, the drift map, the Fig. 6 load lines;
 //! * [`control`] — the board's closed μ loop on resonant transducers: settling
 //!   against Q, resonance and headroom, and a drifting plant with and without
-//!   resonance tracking;
-//! * [`point`] — the measured point both work-precision modules produce.
-
-use std::time::Instant;
+//!   resonance tracking.
 
 use clap::Subcommand;
 
 use crate::error::CliResult;
 
-pub mod across_lift_off;
 pub mod control;
 pub mod dac;
 pub mod methods;
 pub mod motion;
-pub mod point;
-pub mod springs;
 pub mod stability;
 pub mod work_precision;
 
@@ -56,28 +53,4 @@ pub fn run(cmd: &BenchCmd) -> CliResult {
         BenchCmd::Motion(a) => motion::run(a),
         BenchCmd::Control(a) => control::run(a),
     }
-}
-
-/// Minimum time per call over batches, after a warm-up (the DiffEqDevTools
-/// convention: the minimum is the least noisy estimate of the cost).
-pub fn time_min(f: impl FnMut()) -> f64 {
-    time_min_of(5, f)
-}
-
-/// [`time_min`] over `batches` batches of ≈ 0.2 ms each.
-pub fn time_min_of(batches: usize, mut f: impl FnMut()) -> f64 {
-    f();
-    let t0 = Instant::now();
-    f();
-    let once = t0.elapsed().as_secs_f64().max(1e-9);
-    let k = ((2e-4 / once).ceil() as usize).clamp(1, 100_000);
-    let mut best = f64::INFINITY;
-    for _ in 0..batches.max(1) {
-        let t = Instant::now();
-        for _ in 0..k {
-            f();
-        }
-        best = best.min(t.elapsed().as_secs_f64() / k as f64);
-    }
-    best
 }

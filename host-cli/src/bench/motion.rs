@@ -20,27 +20,24 @@
 //!
 //! Everything is dimensionless (velocities in ωW₀, forces in μ0F̄z, masses in
 //! k_x/ω²). A run with default sizes takes well under a minute (release).
+//! The runs and what they measure are [`fric_analysis::bench::motion`]'s;
+//! this module writes the CSV files, the text and the charts.
 
-use std::f64::consts::TAU;
 use std::fmt::Write as _;
 use std::path::Path;
-use std::time::Instant;
 
 use clap::Args;
-use model_core::model::load_line::{best_forward, load_line, powers, Objective};
-use model_core::scene::ContactMode;
-use model_core::{Groups, Libm, Scene};
+use fric_analysis::bench::motion::{
+    drift_map as drift_cells, fig6_load_line, Comparison, Drift, ErrorCost, Fig6Line, Row, FAIL,
+    FIG6_PHIS_DEG, FORCE, TOL,
+};
 
 use crate::error::{CliError, CliResult};
-use crate::eval::exact_failure;
-use crate::motion::law::Law;
-use crate::motion::table::MuTable;
-use crate::motion::{estimate, homogenised, resolved, Problem};
 use crate::plot::{
     prepare_out_dir, render_figure, render_heat, Corner, Extras, Figure, Heat, HeatMap, Mark,
     Marker, Panel, Series,
 };
-use crate::sweep::{centres, progress_bar};
+use crate::sweep::progress_bar;
 
 /// Flags of `bench motion`.
 #[derive(Args, Debug, Clone)]
@@ -54,126 +51,6 @@ pub struct MotionArgs {
     /// Cells per axis of the drift map (φ × ratio), 4…200
     #[arg(long, default_value_t = 36, value_parser = crate::args::Count::<usize>::at_least(4).at_most(200, "the drift map's largest"))]
     pub res: usize,
-}
-
-/// Force amplitude of every chart, units μ0F̄z.
-const FORCE: f64 = 0.5;
-/// Tolerance of the runs, relative to the larger critical velocity.
-const TOL: f64 = 1e-4;
-/// Relative error above which homogenisation counts as failed.
-const FAIL: f64 = 0.1;
-
-/// A scene with its law and table.
-struct Case {
-    name: &'static str,
-    law: Law,
-    table: MuTable,
-    table_time: f64,
-}
-
-impl Case {
-    fn new(name: &'static str, scene: Scene<f64>) -> CliResult<Self> {
-        let law = Law::of(&scene);
-        let t0 = Instant::now();
-        let table = MuTable::new(&law, 0.02 * TOL)
-            .map_err(|e| CliError::failure(format!("{name}: {e}")))?;
-        Ok(Case {
-            name,
-            law,
-            table,
-            table_time: t0.elapsed().as_secs_f64(),
-        })
-    }
-
-    fn v_ref(&self) -> f64 {
-        self.table.c_forward.max(self.table.c_backward)
-    }
-}
-
-/// One comparison of the two models.
-#[derive(Debug, Clone, Copy)]
-struct Point {
-    inv_nu: f64,
-    mass: f64,
-    /// Body response time in ultrasonic periods, `m̃S/(2πn̄)`.
-    response: f64,
-    h: f64,
-    h_numerical: f64,
-    e_h: f64,
-    h_time: f64,
-    r: f64,
-    r_numerical: f64,
-    r_time: f64,
-    r_steps: u64,
-    periodic: bool,
-}
-
-impl Point {
-    fn rel(&self) -> f64 {
-        (self.h - self.r).abs() / self.r.abs()
-    }
-    /// The difference is not resolved: below the reference's numerical error.
-    fn below_floor(&self) -> bool {
-        (self.h - self.r).abs() <= self.r_numerical + self.h_numerical
-    }
-}
-
-fn compare(c: &Case, inv_nu: f64, mass: f64, tick: &mut dyn FnMut()) -> Point {
-    let p = Problem {
-        f0: 0.0,
-        f: FORCE,
-        nu: 1.0 / inv_nu,
-        mass,
-        kappa: 0.0,
-        normal: c.law.mean_normal().expect("flat punch: closed form"),
-    };
-    let tol = 0.1 * TOL * c.v_ref();
-    let relaxation = crate::motion::relaxation_per_period(&p, estimate::inverse_slope(&c.table));
-    let t0 = Instant::now();
-    let h = homogenised::run(
-        &p,
-        &c.table,
-        &homogenised::Settings {
-            tol,
-            periods: None,
-            max_periods: 2000,
-            relaxation,
-            min_steps: 0,
-            budget: u64::MAX,
-        },
-        tick,
-    );
-    let h_time = t0.elapsed().as_secs_f64() + c.table_time;
-    let e_h = estimate::homogenisation_error(&p, c.law.spring_bounds(), &c.table, &h);
-    let t0 = Instant::now();
-    let r = resolved::run(
-        &p,
-        &c.law.scene().drive(),
-        c.law.exponent(),
-        &resolved::Settings {
-            tol,
-            periods: None,
-            max_periods: 2000,
-            relaxation,
-            budget: u64::MAX,
-        },
-        tick,
-    );
-    Point {
-        inv_nu,
-        mass,
-        response: mass * estimate::inverse_slope(&c.table) / (TAU * p.normal),
-        h: h.mean_velocity,
-        h_numerical: h.numerical_error
-            + c.table.interpolation_error * estimate::inverse_slope(&c.table),
-        e_h,
-        h_time,
-        r: r.mean_velocity,
-        r_numerical: r.numerical_error,
-        r_time: t0.elapsed().as_secs_f64(),
-        r_steps: r.steps,
-        periodic: h.periodic && r.periodic,
-    }
 }
 
 fn write_file(path: &Path, text: &str) -> CliResult {
@@ -194,73 +71,50 @@ pub fn run(a: &MotionArgs) -> CliResult {
     load_lines(&a.out)
 }
 
-/// Scale separations, body responses `Mω Ω/k_x`, masses of the mass sweep.
-fn grids(full: bool) -> (Vec<f64>, [f64; 3], Vec<f64>) {
-    let mut inv = vec![10.0, 30.0, 100.0, 300.0, 1e3, 3e3, 1e4, 3e4];
-    if full {
-        inv.extend([1e5, 3e5, 1e6]);
-    }
-    let masses = vec![3.0, 10.0, 30.0, 100.0, 300.0, 1e3, 3e3, 1e4, 1e5];
-    (inv, [0.1, 1.0, 10.0], masses)
-}
-
-/// The lift-off scene's resolved runs stop at ω/Ω = 10⁴: beyond, |H − R| is
-/// below the resolved model's numerical error (its grid does not land
-/// exactly, a first-order error) and each run costs seconds.
-const LIFT_OFF_MAX_INV_NU: f64 = 1e4;
-
+/// Homogenised against resolved: runs the comparisons with a progress bar,
+/// writes the CSV, the lines and the chart.
 fn error_cost(a: &MotionArgs) -> CliResult {
-    let flat = Case::new(
-        "flat",
-        Scene::dimensionless(Groups::from_ratio(0.5, 0.5, 0.0).map_err(scene_err)?)
-            .map_err(scene_err)?,
-    )?;
-    let lift = Case::new(
-        "lift-off",
-        Scene::dimensionless_with_contact(
-            Groups {
-                duz_rel: 1.5,
-                dux_rel: 0.75,
-                phi: 0.6,
-            },
-            ContactMode::Intermittent,
-        )
-        .map_err(scene_err)?,
-    )?;
-    let (inv, responses, masses) = grids(a.full);
-    let lift_inv = inv.iter().filter(|&&i| i <= LIFT_OFF_MAX_INV_NU).count();
-    let runs = (inv.len() * responses.len() + lift_inv + 2 * masses.len()) as u64;
-    let pb = progress_bar(runs, "motion {bar:40} {pos}/{len} comparisons {msg}");
-    let mut tick = || {};
-    // (case, sweep, point)
-    let mut rows: Vec<(&str, String, Point)> = Vec::new();
-    for &mn in &responses {
-        for &i in &inv {
-            pb.set_message(format!("flat, ω/Ω = {i:.0e}, MωΩ/k_x = {mn}"));
-            let p = compare(&flat, i, mn * i, &mut tick);
-            rows.push((flat.name, format!("mnu={mn}"), p));
-            pb.inc(1);
-        }
-    }
-    for &i in inv.iter().filter(|&&i| i <= LIFT_OFF_MAX_INV_NU) {
-        pb.set_message(format!("lift-off, ω/Ω = {i:.0e}"));
-        let p = compare(&lift, i, i, &mut tick);
-        rows.push((lift.name, "mnu=1".into(), p));
+    let bench = ErrorCost::new(a.full)?;
+    let runs = bench.runs();
+    let pb = progress_bar(
+        runs.len() as u64,
+        "motion {bar:40} {pos}/{len} comparisons {msg}",
+    );
+    let mut rows = Vec::with_capacity(runs.len());
+    for run in &runs {
+        pb.set_message(run.message.clone());
+        rows.push(bench.measure(run)?);
         pb.inc(1);
     }
-    for c in [&flat, &lift] {
-        for &m in &masses {
-            pb.set_message(format!("{}, Mω²/k_x = {m:.0e}", c.name));
-            let p = compare(c, 1e3, m, &mut tick);
-            rows.push((c.name, "mass".into(), p));
-            pb.inc(1);
-        }
-    }
     pb.finish_and_clear();
+    let csv = error_cost_text(&rows);
+    let covered = rows.iter().filter(|r| r.point.covered()).count();
+    println!(
+        "E_h covers |H − R| in {covered} of {} comparisons; not periodic: {}",
+        rows.len(),
+        rows.iter().filter(|r| !r.point.periodic).count()
+    );
+    write_file(&a.out.join("motion_error_cost.csv"), &csv)?;
+    let path = a.out.join("motion_error_cost.png");
+    render_figure(
+        &path,
+        &error_cost_figure(&rows, &bench.inv, &bench.responses),
+    )?;
+    eprintln!("wrote {}", path.display());
+    Ok(())
+}
+
+/// The error–cost CSV, with one line per comparison printed to stdout.
+fn error_cost_text(rows: &[Row]) -> String {
     let mut csv = String::from(
         "contact,sweep,omega_over_Omega,mass_rel,response_periods,mean_velocity_homogenised,mean_velocity_resolved,rel_difference,homogenisation_error_estimate,numerical_error_homogenised,numerical_error_resolved,wall_time_homogenised,wall_time_resolved,resolved_steps_per_period,periodic\n",
     );
-    for (c, s, p) in &rows {
+    for Row {
+        case: c,
+        sweep: s,
+        point: p,
+    } in rows
+    {
         let _ = writeln!(
             csv,
             "{c},{s},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{}",
@@ -296,24 +150,7 @@ fn error_cost(a: &MotionArgs) -> CliResult {
             }
         );
     }
-    let covered = rows
-        .iter()
-        .filter(|(_, _, p)| (p.h - p.r).abs() <= p.e_h + p.h_numerical + p.r_numerical)
-        .count();
-    println!(
-        "E_h covers |H − R| in {covered} of {} comparisons; not periodic: {}",
-        rows.len(),
-        rows.iter().filter(|r| !r.2.periodic).count()
-    );
-    write_file(&a.out.join("motion_error_cost.csv"), &csv)?;
-    let path = a.out.join("motion_error_cost.png");
-    render_figure(&path, &error_cost_figure(&rows, &inv, &responses))?;
-    eprintln!("wrote {}", path.display());
-    Ok(())
-}
-
-fn scene_err(e: model_core::SceneError) -> CliError {
-    CliError::failure(format!("bench scene: {e}"))
+    csv
 }
 
 fn series(label: impl Into<String>, points: Vec<(f64, f64)>, mark: Mark, color: usize) -> Series {
@@ -336,22 +173,20 @@ fn log_range(v: impl Iterator<Item = f64>) -> (f64, f64) {
     }
 }
 
-fn error_cost_figure(rows: &[(&str, String, Point)], inv: &[f64], responses: &[f64]) -> Figure {
-    let fail_note = format!(
-        "homogenisation fails above {:.0} % (black dashed line)",
-        100.0 * FAIL
-    );
-    // (a) over ω/Ω.
+/// The comparisons of contact `c` in sweep `s`.
+fn pick(rows: &[Row], c: &str, s: &str) -> Vec<Comparison> {
+    rows.iter()
+        .filter(|r| r.case == c && r.sweep == s)
+        .map(|r| r.point)
+        .collect()
+}
+
+/// Panel (a): `|H − R|/|R|` and E_h over ω/Ω.
+fn over_separation(rows: &[Row], inv: &[f64], responses: &[f64]) -> Panel {
     let mut sa = Vec::new();
-    let pick = |c: &str, s: &str| -> Vec<Point> {
-        rows.iter()
-            .filter(|r| r.0 == c && r.1 == s)
-            .map(|r| r.2)
-            .collect()
-    };
     let mut floor = Vec::new();
     for (k, &mn) in responses.iter().enumerate() {
-        let pts = pick("flat", &format!("mnu={mn}"));
+        let pts = pick(rows, "flat", &format!("mnu={mn}"));
         sa.push(series(
             format!("|H − R|/|R|, flat, MωΩ/k_x = {mn}"),
             pts.iter().map(|p| (p.inv_nu, p.rel())).collect(),
@@ -370,7 +205,7 @@ fn error_cost_figure(rows: &[(&str, String, Point)], inv: &[f64], responses: &[f
                 .map(|p| (p.inv_nu, p.rel())),
         );
     }
-    let lp = pick("lift-off", "mnu=1");
+    let lp = pick(rows, "lift-off", "mnu=1");
     sa.push(series(
         "|H − R|/|R|, lift-off, MωΩ/k_x = 1",
         lp.iter().map(|p| (p.inv_nu, p.rel())).collect(),
@@ -396,22 +231,26 @@ fn error_cost_figure(rows: &[(&str, String, Point)], inv: &[f64], responses: &[f
         9,
     ));
     let y_a = log_range(sa.iter().flat_map(|s| s.points.iter().map(|p| p.1)));
-    let panel_a = Panel {
+    Panel {
         title: "(a) homogenised vs resolved over the scale separation".into(),
         x_label: "ω/Ω".into(),
         y_label: "relative difference of the drift".into(),
         x: x_a,
         y: y_a,
         series: sa,
-    };
-    // (b) over the body's response time at ω/Ω = 10³.
+    }
+}
+
+/// Panel (b): `|H − R|/|R|` and E_h over the body's response time at
+/// ω/Ω = 10³.
+fn over_response(rows: &[Row]) -> Panel {
     let mut sb = Vec::new();
     let mut floor_b = Vec::new();
     for (c, k, m) in [
         ("flat", 0usize, Marker::Circle),
         ("lift-off", 3, Marker::Triangle),
     ] {
-        let pts = pick(c, "mass");
+        let pts = pick(rows, c, "mass");
         sb.push(series(
             format!("|H − R|/|R|, {c}"),
             pts.iter().map(|p| (p.response, p.rel())).collect(),
@@ -446,16 +285,23 @@ fn error_cost_figure(rows: &[(&str, String, Point)], inv: &[f64], responses: &[f
         9,
     ));
     let y_b = log_range(sb.iter().flat_map(|s| s.points.iter().map(|p| p.1)));
-    let panel_b = Panel {
+    Panel {
         title: "(b) over the body's response time, ω/Ω = 10³".into(),
         x_label: "body response time M/(F̄z dμ/dv), ultrasonic periods".into(),
         y_label: "relative difference of the drift".into(),
         x: x_b,
         y: y_b,
         series: sb,
-    };
-    // (c) error against cost at MωΩ/k_x = 1 (flat).
-    let pts = pick("flat", "mnu=1");
+    }
+}
+
+/// Texts at points of a panel.
+type Labels = Vec<((f64, f64), String)>;
+
+/// Panel (c): error against wall time at MωΩ/k_x = 1 (flat), with one
+/// ω/Ω label per homogenised point.
+fn against_cost(rows: &[Row]) -> (Panel, Labels) {
+    let pts = pick(rows, "flat", "mnu=1");
     let sc = vec![
         series(
             "homogenised: |H − R|/|R| (table + RK4)",
@@ -475,11 +321,11 @@ fn error_cost_figure(rows: &[(&str, String, Point)], inv: &[f64], responses: &[f
     // One label per ω/Ω, on the homogenised point only: the two series' labels
     // collided where their points are close (the resolved points follow in
     // the same order of ω/Ω, left to right).
-    let labels: Vec<((f64, f64), String)> = pts
+    let labels: Labels = pts
         .iter()
         .map(|p| ((p.h_time, p.rel()), format!("{:.0e}", p.inv_nu)))
         .collect();
-    let panel_c = Panel {
+    let panel = Panel {
         title:
             "(c) error against wall time, flat, MωΩ/k_x = 1 (labels: ω/Ω of the homogenised runs)"
                 .into(),
@@ -489,6 +335,17 @@ fn error_cost_figure(rows: &[(&str, String, Point)], inv: &[f64], responses: &[f
         y: log_range(sc.iter().flat_map(|s| s.points.iter().map(|p| p.1))),
         series: sc,
     };
+    (panel, labels)
+}
+
+fn error_cost_figure(rows: &[Row], inv: &[f64], responses: &[f64]) -> Figure {
+    let fail_note = format!(
+        "homogenisation fails above {:.0} % (black dashed line)",
+        100.0 * FAIL
+    );
+    let panel_a = over_separation(rows, inv, responses);
+    let panel_b = over_response(rows);
+    let (panel_c, labels) = against_cost(rows);
     let ex = |notes: Vec<String>, legend_at: Corner, labels| Extras {
         notes,
         notes_at: Corner::LowerLeft,
@@ -522,12 +379,13 @@ fn error_cost_figure(rows: &[(&str, String, Point)], inv: &[f64], responses: &[f
     }
 }
 
-/// The quasi-static drift over (φ, ratio).
+/// The quasi-static drift over (φ, ratio): the map with a progress bar, its
+/// CSV, range and heat map.
 fn drift_map(a: &MotionArgs) -> CliResult {
     let n = a.res;
-    let phis = centres(0.0, 360.0, n);
-    let lr = centres(-1.0, 1.0, n);
     let pb = progress_bar((n * n) as u64, "drift map {bar:40} {pos}/{len} cells");
+    let map = drift_cells(n, &mut || pb.inc(1))?;
+    pb.finish_and_clear();
     let classes = vec![
         (
             "law not monotone".to_string(),
@@ -540,55 +398,27 @@ fn drift_map(a: &MotionArgs) -> CliResult {
     ];
     let mut cells = Vec::with_capacity(n * n);
     let mut csv = String::from("phi_deg,ratio,mean_velocity,stick_fraction,outcome\n");
-    let (mut lo, mut hi) = (0.0f64, 0.0f64);
-    for &l in &lr {
-        let ratio = 10f64.powf(l);
-        for &phi in &phis {
-            let g = Groups::from_ratio(0.5, ratio, phi.to_radians()).map_err(scene_err)?;
-            let law = Law::of(&Scene::dimensionless(g).map_err(scene_err)?);
-            let cell = match MuTable::new(&law, 1e-6) {
-                Ok(t) => {
-                    let p = Problem {
-                        f0: 0.0,
-                        f: FORCE,
-                        nu: 1e-3,
-                        mass: 0.0,
-                        kappa: 0.0,
-                        normal: 1.0,
-                    };
-                    let r = homogenised::run(
-                        &p,
-                        &t,
-                        &homogenised::Settings {
-                            tol: 1e-6,
-                            periods: None,
-                            max_periods: 10,
-                            relaxation: 0.0,
-                            min_steps: 0,
-                            budget: u64::MAX,
-                        },
-                        &mut || {},
-                    );
-                    let v = r.mean_velocity;
-                    lo = lo.min(v);
-                    hi = hi.max(v);
-                    let _ = writeln!(csv, "{phi},{ratio:e},{v:e},{},ok", r.stick_fraction);
-                    Heat::Value(v)
-                }
-                Err(crate::motion::table::TableError::NotMonotone { .. }) => {
-                    let _ = writeln!(csv, "{phi},{ratio:e},,,not_monotone");
-                    Heat::Class(0)
-                }
-                Err(_) => {
-                    let _ = writeln!(csv, "{phi},{ratio:e},,,failed");
-                    Heat::Class(1)
-                }
-            };
-            cells.push(cell);
-            pb.inc(1);
-        }
+    for c in &map.cells {
+        let (phi, ratio) = (c.phi_deg, c.ratio);
+        cells.push(match c.drift {
+            Drift::Ok {
+                mean_velocity: v,
+                stick_fraction,
+            } => {
+                let _ = writeln!(csv, "{phi},{ratio:e},{v:e},{stick_fraction},ok");
+                Heat::Value(v)
+            }
+            Drift::NotMonotone => {
+                let _ = writeln!(csv, "{phi},{ratio:e},,,not_monotone");
+                Heat::Class(0)
+            }
+            Drift::Failed => {
+                let _ = writeln!(csv, "{phi},{ratio:e},,,failed");
+                Heat::Class(1)
+            }
+        });
     }
-    pb.finish_and_clear();
+    let (lo, hi) = map.range();
     write_file(&a.out.join("motion_drift_map.csv"), &csv)?;
     println!("drift map: mean velocity from {lo:.4e} to {hi:.4e} ωW0");
     let m = HeatMap {
@@ -597,8 +427,8 @@ fn drift_map(a: &MotionArgs) -> CliResult {
         ),
         x_label: "phase shift φ, degrees".into(),
         y_label: "k_xΔu_x/(μ0k_zΔu_z)".into(),
-        xs: phis,
-        ys: lr,
+        xs: map.phis_deg,
+        ys: map.log_ratios,
         log_x: false,
         log_y: true,
         range: crate::plot::heat_range(&cells, true).unwrap_or((lo, hi)),
@@ -613,69 +443,75 @@ fn drift_map(a: &MotionArgs) -> CliResult {
     Ok(())
 }
 
-/// Load lines of the paper's Fig. 6 scenes.
+/// The three series of one Fig. 6 line: force–velocity (from stall to no
+/// load), output power, efficiency.
+fn line_series(l: &Fig6Line, k: usize) -> [Series; 3] {
+    let mut f = vec![(0.0, l.stall)];
+    f.extend(l.points.iter().map(|p| (p.v, p.load)));
+    f.push((l.no_load, 0.0));
+    let p = l.points.iter().map(|p| (p.v, p.p_out)).collect();
+    let e = l.points.iter().map(|p| (p.v, p.efficiency)).collect();
+    // Backward pushers dashed: φ and φ + π mirror each other (same curves).
+    let label = format!("φ = {:.0}° ({})", l.phi_deg, l.dir);
+    let mark = if l.sign > 0.0 {
+        Mark::Line
+    } else {
+        Mark::Dashed
+    };
+    [
+        series(label.clone(), f, mark, k),
+        series(label.clone(), p, mark, k),
+        series(label, e, mark, k),
+    ]
+}
+
+/// Load lines of the paper's Fig. 6 scenes: the CSV, a line per scene on
+/// stdout, and the chart.
 fn load_lines(out: &Path) -> CliResult {
-    let a = 0.5;
-    let mut sf = Vec::new();
-    let mut sp = Vec::new();
-    let mut se = Vec::new();
     let mut csv = String::from("phi_deg,direction,v,load_over_mu0_fz,p_out,p_in,efficiency\n");
-    let (mut vmax, mut fmax, mut pmax, mut emax) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
-    for (k, phi_deg) in [0.0f64, 45.0, 90.0, 135.0, 180.0].into_iter().enumerate() {
-        let d0 = Scene::dimensionless(
-            Groups::from_ratio(a, 2.0, phi_deg.to_radians()).map_err(scene_err)?,
-        )
-        .map_err(scene_err)?
-        .drive();
-        let line0 = load_line::<f64, Libm>(&d0).map_err(exact_failure)?;
-        // Backward pushers: the mirrored drive's forward line (μ(−v; φ) = −μ(v; φ + π)).
-        let (d, dir, sign) = if line0.no_load_forward > 0.0 {
-            (d0, "forward", 1.0)
-        } else {
-            (d0.mirrored(), "backward", -1.0)
-        };
-        let line = load_line::<f64, Libm>(&d).map_err(exact_failure)?;
-        let best = best_forward::<f64, Libm>(&d, &line, Objective::Power)
-            .map_err(exact_failure)?
-            .map_or(0.0, |o| o.powers.output);
-        let best_e = best_forward::<f64, Libm>(&d, &line, Objective::Efficiency)
-            .map_err(exact_failure)?
-            .map_or(0.0, |o| o.powers.efficiency());
+    let mut lines = Vec::new();
+    for phi_deg in FIG6_PHIS_DEG {
+        let l = fig6_load_line(phi_deg)?;
         println!(
-            "Fig. 6, φ = {phi_deg:>3}°: pushes {dir}, stall {:.4} μ0F̄z, no-load {:.4e} ωW0, max power {:.4e} μ0F̄zωW0, max efficiency {:.4}",
-            line.stall_forward, line.no_load_forward, best, best_e
+            "Fig. 6, φ = {phi_deg:>3}°: pushes {}, stall {:.4} μ0F̄z, no-load {:.4e} ωW0, max power {:.4e} μ0F̄zωW0, max efficiency {:.4}",
+            l.dir, l.stall, l.no_load, l.best_power, l.best_efficiency
         );
-        let nl = line.no_load_forward;
-        let (mut f, mut p, mut e) = (vec![(0.0, line.stall_forward)], Vec::new(), Vec::new());
-        for i in 1..200 {
-            let v = nl * i as f64 / 200.0;
-            let pw = powers::<f64, Libm>(&d, v).map_err(exact_failure)?;
-            f.push((v, -pw.mu_over_mu0));
-            p.push((v, pw.output));
-            e.push((v, pw.efficiency()));
+        for p in &l.points {
             let _ = writeln!(
                 csv,
-                "{phi_deg},{dir},{:e},{:e},{:e},{:e},{:e}",
-                sign * v,
-                -pw.mu_over_mu0,
-                pw.output,
-                pw.input,
-                pw.efficiency()
+                "{phi_deg},{},{:e},{:e},{:e},{:e},{:e}",
+                l.dir,
+                l.sign * p.v,
+                p.load,
+                p.p_out,
+                p.p_in,
+                p.efficiency
             );
-            pmax = pmax.max(pw.output);
-            emax = emax.max(pw.efficiency());
         }
-        f.push((nl, 0.0));
-        vmax = vmax.max(nl);
-        fmax = fmax.max(line.stall_forward);
-        // Backward pushers dashed: φ and φ + π mirror each other (same curves).
-        let label = format!("φ = {phi_deg:.0}° ({dir})");
-        let mark = if sign > 0.0 { Mark::Line } else { Mark::Dashed };
-        sf.push(series(label.clone(), f, mark, k));
-        sp.push(series(label.clone(), p, mark, k));
-        se.push(series(label, e, mark, k));
+        lines.push(l);
     }
     write_file(&out.join("motion_load_lines.csv"), &csv)?;
+    let path = out.join("motion_load_lines.png");
+    render_figure(&path, &load_lines_figure(&lines))?;
+    eprintln!("wrote {}", path.display());
+    Ok(())
+}
+
+/// The Fig. 6 chart: force–velocity, output power and efficiency, one
+/// legend under the panels.
+fn load_lines_figure(lines: &[Fig6Line]) -> Figure {
+    let max = |f: &dyn Fn(&Fig6Line) -> f64| lines.iter().map(f).fold(0.0f64, f64::max);
+    let vmax = max(&|l| l.no_load);
+    let fmax = max(&|l| l.stall);
+    let pmax = max(&|l| l.points.iter().map(|p| p.p_out).fold(0.0f64, f64::max));
+    let emax = max(&|l| l.points.iter().map(|p| p.efficiency).fold(0.0f64, f64::max));
+    let (mut sf, mut sp, mut se) = (Vec::new(), Vec::new(), Vec::new());
+    for (k, l) in lines.iter().enumerate() {
+        let [f, p, e] = line_series(l, k);
+        sf.push(f);
+        sp.push(p);
+        se.push(e);
+    }
     // One legend under the panels (it covers no data); the panels' series unlabelled.
     let legend: Vec<Series> = sf
         .iter()
@@ -697,7 +533,7 @@ fn load_lines(out: &Path) -> CliResult {
             Extras::default(),
         )
     };
-    let fig = Figure {
+    Figure {
         panels: vec![
             panel("force–velocity line", "load held −μ(v)F̄z, in μ0F̄z", fmax, sf),
             panel(
@@ -718,9 +554,5 @@ fn load_lines(out: &Path) -> CliResult {
             "φ = 180° mirrors φ = 0° exactly (dashed over solid); velocities in ωW0 (W0 = μ0k_zu_z0/k_x), forces in μ0F̄z, powers in μ0F̄zωW0".into(),
             "exact steady state; P_in = input of the tangential transducer (the normal one's is 0)".into(),
         ],
-    };
-    let path = out.join("motion_load_lines.png");
-    render_figure(&path, &fig)?;
-    eprintln!("wrote {}", path.display());
-    Ok(())
+    }
 }

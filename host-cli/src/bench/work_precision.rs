@@ -1,28 +1,22 @@
 //! `fricctl bench work-precision`: error against time for every way the
-//! project computes μ, on scenes covering the paper's regimes.
-//!
-//! Error is `|μ − μ_exact,f64|/μ0`; time is the minimum over repeated batches
-//! after a warm-up (the DiffEqDevTools convention). The fixed-step scheme is
-//! run for many steps per period (four per octave from 8 to 65 536: the error
-//! jitters with where the events fall on the grid, so every point is kept),
-//! from rest and warm-started at the exact steady state, in f64 and f32, with
-//! libm and with micromath for its set-up; the convergence order of each
-//! fixed-step series is fitted by least squares. The last row of the chart
-//! crosses lift-off ([`super::across_lift_off`]: the flat punch at
-//! a = 0.5 … 3 and a sphere through the MDR, each against its own reference).
+//! project computes μ, on scenes covering the paper's regimes. The points
+//! are measured by [`fric_analysis::bench::work_precision`] (the scenes, the
+//! fixed-step series, the fitted orders) and
+//! [`fric_analysis::bench::across_lift_off`] (the flat punch at a = 0.5 … 3
+//! and a sphere through the MDR, each against its own reference); this
+//! module writes `work_precision.csv`, `convergence_orders.csv` and the
+//! chart (SVG + PNG), one panel per method family.
 
 use std::fmt::Write as _;
-use std::hint::black_box;
 use std::path::Path;
 
 use clap::Args;
-use model_core::analytic::approx::approx_mu_over_mu0;
-use model_core::exact;
-use model_core::fixed_step::{run_dimensionless, FixedStepConfig, Start, State};
-use model_core::{Drive, Float, Groups, Libm, Math, Micromath, Scene};
+use fric_analysis::bench::across_lift_off;
+use fric_analysis::bench::point::Point;
+use fric_analysis::bench::work_precision::{
+    across_orders, check_max_steps, measure_all, scene_orders, SCENES,
+};
 
-use super::point::{refusal_kind, Point};
-use super::{across_lift_off, time_min};
 use crate::error::{CliError, CliResult};
 use crate::plot::{prepare_out_dir, render_figure, Extras, Figure, Mark, Marker, Panel, Series};
 
@@ -37,291 +31,34 @@ pub struct WpArgs {
     pub max_steps: u32,
 }
 
-/// The scenes (dimensionless a, b, φ and v/v_c).
-pub const SCENES: &[(&str, f64, f64, f64, f64)] = &[
-    ("normal only", 0.5, 0.0, 0.0, 0.3),
-    ("tangential small", 0.0, 0.5, 0.4, 0.3),
-    ("tangential large", 0.0, 3.0, 0.4, -0.5),
-    ("dual ratchet", 0.5, 0.25, 1.0, 0.4),
-    ("dual actuator", 0.5, 1.0, 0.3, 0.2),
-    ("near v_c", 0.5, 0.25, 1.0, 0.98),
-    ("low velocity", 0.5, 0.25, 1.0, 0.02),
-    ("near lift-off", 0.97, 0.3, 2.0, 0.4),
-];
-
-fn steps_list(max: u32) -> Vec<u32> {
-    let mut v = Vec::new();
-    let mut x = 8.0f64;
-    while x <= f64::from(max) * 1.0001 {
-        v.push(x.round() as u32);
-        x *= 2f64.powf(0.25);
-    }
-    v.dedup();
-    v
-}
-
-/// Warm start: the window end of the exact steady state (s = ±w there).
-pub fn warm_state<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Option<State<T>> {
-    let (_, arcs) = exact::steady_state::<T, M>(d, v).ok()?;
-    let last = arcs.last()?;
-    let (_, c) = M::sin_cos(last.end);
-    let w = T::ONE - d.a * c;
-    let s = if v > T::ZERO { w } else { -w };
-    Some(State {
-        phase: last.end,
-        stretch: s,
-    })
-}
-
-fn fixed_series<T: Float, M: Math<T>>(
-    out: &mut Vec<Point>,
-    scene: &'static str,
-    (method, warm): (&str, bool),
-    d: &Drive<T>,
-    v: T,
-    reference: f64,
-    steps: &[u32],
-) {
-    for &n in steps {
-        let mut cfg = FixedStepConfig::<T>::new(n);
-        cfg.max_periods = 20_000;
-        let start = if warm {
-            match warm_state::<T, M>(d, v) {
-                Some(s) => Start::State(s),
-                None => Start::Rest,
-            }
-        } else {
-            Start::Rest
-        };
-        match run_dimensionless::<T, M>(d, v, &cfg, start) {
-            Ok(r) => {
-                let t = time_min(|| {
-                    black_box(
-                        run_dimensionless::<T, M>(black_box(d), black_box(v), &cfg, start).ok(),
-                    );
-                });
-                out.push(Point {
-                    scene,
-                    method: method.to_string(),
-                    steps: Some(n),
-                    error: Some((r.mu_over_mu0.to_f64() - reference).abs()),
-                    time_s: t,
-                    bound: Some(r.error_bound.to_f64()),
-                    status: "ok".into(),
-                });
-            }
-            Err(e) => out.push(Point {
-                scene,
-                method: method.to_string(),
-                steps: Some(n),
-                error: None,
-                time_s: f64::NAN,
-                bound: None,
-                status: refusal_kind(&e).to_string(),
-            }),
-        }
-    }
-}
-
-/// All points for one scene.
-pub fn measure_scene(
-    name: &'static str,
-    a: f64,
-    b: f64,
-    phi: f64,
-    x: f64,
-    steps: &[u32],
-) -> CliResult<Vec<Point>> {
-    let s = Scene::dimensionless(Groups {
-        duz_rel: a,
-        dux_rel: b,
-        phi,
-    })
-    .map_err(|e| CliError::failure(e.to_string()))?;
-    let d = s.drive();
-    let v = x * if x > 0.0 {
-        d.c_forward::<Libm>()
-    } else {
-        d.c_backward::<Libm>()
-    };
-    let reference =
-        exact::mu_over_mu0::<f64, Libm>(&d, v).map_err(|e| CliError::failure(format!("{e}")))?;
-    let d32 = Drive::new::<Libm>(a as f32, b as f32, phi as f32);
-    let d32m = Drive::new::<Micromath>(a as f32, b as f32, phi as f32);
-    let v32 = v as f32;
-    let mut out = Vec::new();
-    let point = |method: &str, r: Option<f64>, t: f64, bound: f64| Point {
-        scene: name,
-        method: method.to_string(),
-        steps: None,
-        error: r.map(|m| (m - reference).abs()),
-        time_s: t,
-        bound: Some(bound),
-        status: if r.is_some() {
-            "ok".into()
-        } else {
-            "failed".into()
-        },
-    };
-    let r = exact::mu_over_mu0::<f64, Libm>(&d, v).ok();
-    let t = time_min(|| {
-        black_box(exact::mu_over_mu0::<f64, Libm>(black_box(&d), black_box(v)).ok());
-    });
-    out.push(point(
-        "exact f64",
-        r,
-        t,
-        exact::error_bound::<f64, Libm>(&d),
-    ));
-    let r = exact::mu_over_mu0::<f32, Libm>(&d32, v32)
-        .ok()
-        .map(f64::from);
-    let t = time_min(|| {
-        black_box(exact::mu_over_mu0::<f32, Libm>(black_box(&d32), black_box(v32)).ok());
-    });
-    out.push(point(
-        "exact f32",
-        r,
-        t,
-        exact::error_bound::<f32, Libm>(&d32).into(),
-    ));
-    let r = exact::mu_over_mu0::<f32, Micromath>(&d32m, v32)
-        .ok()
-        .map(f64::from);
-    let t = time_min(|| {
-        black_box(exact::mu_over_mu0::<f32, Micromath>(black_box(&d32m), black_box(v32)).ok());
-    });
-    out.push(point(
-        "exact f32 micromath",
-        r,
-        t,
-        exact::error_bound::<f32, Micromath>(&d32m).into(),
-    ));
-    if let Ok((kind, m)) = approx_mu_over_mu0(&s, v) {
-        let t = time_min(|| {
-            black_box(approx_mu_over_mu0(black_box(&s), black_box(v)).ok());
-        });
-        let (label, amp) = match kind {
-            model_core::analytic::ApproxKind::NormalEq21 => ("eq. 21", a),
-            model_core::analytic::ApproxKind::TangentialEq24 => ("eq. 24", b),
-        };
-        out.push(point(
-            label,
-            Some(m),
-            t,
-            model_core::analytic::approx::MAX_ERROR_OVER_A * amp,
-        ));
-    }
-    fixed_series::<f64, Libm>(
-        &mut out,
-        name,
-        ("fixed f64 from rest", false),
-        &d,
-        v,
-        reference,
-        steps,
-    );
-    fixed_series::<f64, Libm>(
-        &mut out,
-        name,
-        ("fixed f64 warm", true),
-        &d,
-        v,
-        reference,
-        steps,
-    );
-    fixed_series::<f32, Libm>(
-        &mut out,
-        name,
-        ("fixed f32 from rest", false),
-        &d32,
-        v32,
-        reference,
-        steps,
-    );
-    fixed_series::<f32, Libm>(
-        &mut out,
-        name,
-        ("fixed f32 warm", true),
-        &d32,
-        v32,
-        reference,
-        steps,
-    );
-    fixed_series::<f32, Micromath>(
-        &mut out,
-        name,
-        ("fixed f32 micromath", false),
-        &d32m,
-        v32,
-        reference,
-        steps,
-    );
-    Ok(out)
-}
-
-/// Least-squares slope of −log(error) against log(N), over points above the
-/// rounding floor (1e-13 in f64, 1e-6 in f32).
-pub fn fitted_order(points: &[&Point]) -> Option<f64> {
-    let floor = if points.first()?.method.contains("f32") {
-        1e-6
-    } else {
-        1e-13
-    };
-    let xy: Vec<(f64, f64)> = points
-        .iter()
-        .filter_map(|p| match (p.steps, p.error) {
-            (Some(n), Some(e)) if e > floor => Some((f64::from(n).ln(), e.ln())),
-            _ => None,
-        })
-        .collect();
-    if xy.len() < 4 {
-        return None;
-    }
-    let m = xy.len() as f64;
-    let (mx, my) = (
-        xy.iter().map(|p| p.0).sum::<f64>() / m,
-        xy.iter().map(|p| p.1).sum::<f64>() / m,
-    );
-    let sxx: f64 = xy.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    let sxy: f64 = xy.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    Some(-sxy / sxx)
-}
-
 /// `fricctl bench work-precision`.
 pub fn run(a: &WpArgs) -> CliResult {
-    if !a.max_steps.is_power_of_two() || !(8..=65536).contains(&a.max_steps) {
-        return Err(CliError::usage(
-            "--max-steps: must be a power of two in 8..=65536",
-        ));
-    }
+    check_max_steps(a.max_steps)?;
     prepare_out_dir(&a.out)?;
-    let steps = steps_list(a.max_steps);
-    let mut all = Vec::new();
-    for &(name, aa, b, phi, x) in SCENES {
-        eprintln!("measuring {name} …");
-        all.extend(measure_scene(name, aa, b, phi, x, &steps)?);
+    let all = measure_all(a.max_steps, &mut |name| eprintln!("measuring {name} …"))?;
+    let csv_path = a.out.join("work_precision.csv");
+    write(&csv_path, &points_csv(&all))?;
+    let op = a.out.join("convergence_orders.csv");
+    write(&op, &orders_csv(&all))?;
+    for ext in ["svg", "png"] {
+        let p = a.out.join(format!("work_precision.{ext}"));
+        render(&p, &all)?;
+        eprintln!("wrote {}", p.display());
     }
-    // Across lift-off: one steps-per-period value per octave (the series
-    // are for the order, which one per octave shows).
-    let octaves: Vec<u32> = steps
-        .iter()
-        .copied()
-        .filter(|n| n.is_power_of_two())
-        .collect();
-    for &(name, aa) in across_lift_off::FLAT {
-        eprintln!("measuring {name} …");
-        all.extend(across_lift_off::measure_flat(name, aa, &octaves)?);
-    }
-    for &(name, aa) in across_lift_off::SPHERE {
-        eprintln!("measuring {name} …");
-        all.extend(across_lift_off::measure_sphere(name, aa)?);
-    }
-    // CSV.
+    eprintln!("wrote {} and {}", csv_path.display(), op.display());
+    Ok(())
+}
+
+fn write(path: &Path, text: &str) -> CliResult {
+    std::fs::write(path, text).map_err(|e| CliError::failure(format!("{}: {e}", path.display())))
+}
+
+/// `work_precision.csv`: one row per point.
+fn points_csv(all: &[Point]) -> String {
     let mut csv = String::from(
         "scene,method,steps_per_period,error_over_mu0,time_s,error_bound_over_mu0,status\n",
     );
-    for p in &all {
+    for p in all {
         let _ = writeln!(
             csv,
             "{},{},{},{},{},{},{}",
@@ -334,56 +71,34 @@ pub fn run(a: &WpArgs) -> CliResult {
             p.status
         );
     }
-    let csv_path = a.out.join("work_precision.csv");
-    std::fs::write(&csv_path, csv)
-        .map_err(|e| CliError::failure(format!("{}: {e}", csv_path.display())))?;
-    // Orders.
+    csv
+}
+
+/// `convergence_orders.csv`, with each order printed to stdout: every
+/// scene's fixed-step series (`-` without an order), then the flat punch
+/// across lift-off (only the series with one).
+fn orders_csv(all: &[Point]) -> String {
     let mut orders = String::from("scene,method,fitted_order\n");
-    for &(name, ..) in SCENES {
-        for m in [
-            "fixed f64 from rest",
-            "fixed f64 warm",
-            "fixed f32 from rest",
-            "fixed f32 warm",
-            "fixed f32 micromath",
-        ] {
-            let pts: Vec<&Point> = all
-                .iter()
-                .filter(|p| p.scene == name && p.method == m)
-                .collect();
-            let o = fitted_order(&pts);
-            let _ = writeln!(
-                orders,
-                "{name},{m},{}",
-                o.map_or(String::new(), |o| format!("{o:.3}"))
-            );
-            println!(
-                "{name:18} {m:22} order {}",
-                o.map_or("-".to_string(), |o| format!("{o:.2}"))
-            );
+    for o in scene_orders(all) {
+        let (name, m) = (o.scene, o.method);
+        let _ = writeln!(
+            orders,
+            "{name},{m},{}",
+            o.order.map_or(String::new(), |o| format!("{o:.3}"))
+        );
+        println!(
+            "{name:18} {m:22} order {}",
+            o.order.map_or("-".to_string(), |o| format!("{o:.2}"))
+        );
+    }
+    for o in across_orders(all) {
+        let (name, m) = (o.scene, o.method);
+        if let Some(o) = o.order {
+            let _ = writeln!(orders, "{name},{m},{o:.3}");
+            println!("{name:28} {m:22} order {o:.2}");
         }
     }
-    for &(name, _) in across_lift_off::FLAT {
-        for m in ["fixed f64 from rest", "lift-off stepping f64"] {
-            let pts: Vec<&Point> = all
-                .iter()
-                .filter(|p| p.scene == name && p.method == m)
-                .collect();
-            if let Some(o) = fitted_order(&pts) {
-                let _ = writeln!(orders, "{name},{m},{o:.3}");
-                println!("{name:28} {m:22} order {o:.2}");
-            }
-        }
-    }
-    let op = a.out.join("convergence_orders.csv");
-    std::fs::write(&op, orders).map_err(|e| CliError::failure(format!("{}: {e}", op.display())))?;
-    for ext in ["svg", "png"] {
-        let p = a.out.join(format!("work_precision.{ext}"));
-        render(&p, &all)?;
-        eprintln!("wrote {}", p.display());
-    }
-    eprintln!("wrote {} and {}", csv_path.display(), op.display());
-    Ok(())
+    orders
 }
 
 /// The marker of a method: distinct within each panel of [`PANELS`].
@@ -494,9 +209,8 @@ fn is_method(p: &Point, m: &str) -> bool {
     p.method == m || (m == "eq. 21" && p.method == "eq. 24")
 }
 
-fn render(path: &Path, all: &[Point]) -> CliResult {
-    let drawn: Vec<&Point> = all.iter().filter(|p| p.error.is_some()).collect();
-    // Shared axes: every panel spans every point.
+/// The small multiples ([`PANELS`]) on axes shared by every drawn point.
+fn panels(drawn: &[&Point]) -> Vec<(Panel, Extras)> {
     let tmin = drawn
         .iter()
         .map(|p| p.time_s)
@@ -547,7 +261,12 @@ fn render(path: &Path, all: &[Point]) -> CliResult {
             },
         ));
     }
-    // Legend: the scenes as colour swatches, then the methods as black markers.
+    panels
+}
+
+/// The legend: the scenes as colour swatches, then the methods as black
+/// markers.
+fn legend() -> Vec<Series> {
     let (b, phi, x) = across_lift_off::DRIVE;
     let mut legend: Vec<Series> = SCENES
         .iter()
@@ -586,28 +305,38 @@ fn render(path: &Path, all: &[Point]) -> CliResult {
         mark: Mark::Markers(marker(m)),
         color: 6,
     }));
+    legend
+}
+
+/// The caption under the chart.
+fn caption() -> Vec<String> {
+    vec![
+        "One panel per method family, shared axes; marker: the method, colour: the scene. \
+         a = Δu_z/u_z0, b = k_xΔu_x/(μ0 k_z u_z0) (eq. 25)."
+            .to_string(),
+        "μ_ref: the exact solver in f64 (libm) at the same scene and velocity, which agrees \
+         with the paper's fixed-step scheme (Richardson, N = 65 536) to < 1e-9; across \
+         lift-off the flat punch against the exact f64 solver (the lift-off solver from a = 1)."
+            .to_string(),
+        "Sphere against the MDR f64 at twice its per-spring bound, itself checked to lie within \
+         its bound plus the error estimate of a brute force over springs ((M, N) = (48, 1024))."
+            .to_string(),
+        "Fixed-step: one point per N = 8 … 65 536 steps per period (4 per octave; across \
+         lift-off one per octave); refusals (TooFewSteps, PrecisionLimit) are not drawn. \
+         Time: minimum over repeated batches after a warm-up, this host."
+            .to_string(),
+    ]
+}
+
+fn render(path: &Path, all: &[Point]) -> CliResult {
+    let drawn: Vec<&Point> = all.iter().filter(|p| p.error.is_some()).collect();
     let f = Figure {
-        panels,
+        panels: panels(&drawn),
         rows: 4,
         cols: 2,
         size: (1800, 2150),
-        legend,
-        caption: vec![
-            "One panel per method family, shared axes; marker: the method, colour: the scene. \
-             a = Δu_z/u_z0, b = k_xΔu_x/(μ0 k_z u_z0) (eq. 25)."
-                .to_string(),
-            "μ_ref: the exact solver in f64 (libm) at the same scene and velocity, which agrees \
-             with the paper's fixed-step scheme (Richardson, N = 65 536) to < 1e-9; across \
-             lift-off the flat punch against the exact f64 solver (the lift-off solver from a = 1)."
-                .to_string(),
-            "Sphere against the MDR f64 at twice its per-spring bound, itself checked to lie within \
-             its bound plus the error estimate of a brute force over springs ((M, N) = (48, 1024))."
-                .to_string(),
-            "Fixed-step: one point per N = 8 … 65 536 steps per period (4 per octave; across \
-             lift-off one per octave); refusals (TooFewSteps, PrecisionLimit) are not drawn. \
-             Time: minimum over repeated batches after a warm-up, this host."
-                .to_string(),
-        ],
+        legend: legend(),
+        caption: caption(),
     };
     render_figure(path, &f)
 }
