@@ -11,7 +11,7 @@
 //! * [`tune`]: inverse design (the drive that attains a target μ, or maximises an objective);
 //! * [`load_line`]: the contact as an actuator;
 //! * [`motion`]: a body moved by the vibrated contact;
-//! * [`bench`]: the model benchmarks (work-precision, methods, stability,
+//! * [`bench`](mod@bench): the model benchmarks (work-precision, methods, stability,
 //!   motion): their runs, references, timings and rows.
 
 #![deny(missing_docs)]

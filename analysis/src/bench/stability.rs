@@ -136,8 +136,9 @@ fn fixed_run<T: Float>(
 /// A reference for the exact f64 solver that shares none of its code: the
 /// fixed-step scheme at N and 2N steps per period (warm-started; the steady
 /// state is unique and is proven by the run itself), Richardson-extrapolated
-/// for display and with the N = 2N run's stated bound for judging.
-fn fixed_reference(d: &Drive<f64>, v: f64, budget: u64) -> Option<(f64, f64, f64)> {
+/// for display and with the N = 2N run's stated bound for judging:
+/// `(Richardson μ/μ0, μ/μ0 at 2N, its stated bound)`, `None` if a run fails.
+pub fn fixed_reference(d: &Drive<f64>, v: f64, budget: u64) -> Option<(f64, f64, f64)> {
     let n = fixed_step::min_steps_per_period(d)
         .saturating_mul(32)
         .clamp(4096, fixed_step::max_steps_per_period::<f64>() / 2);
