@@ -2,6 +2,8 @@
 //! retries with the same sequence number, telemetry kept aside.
 
 use std::collections::VecDeque;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use board::protocol::{
@@ -23,6 +25,9 @@ pub struct Client {
     pub attempts: u32,
     telemetry: VecDeque<(u32, Telemetry)>,
     opened: Instant,
+    /// Set by a signal handler: every request and wait then ends with
+    /// [`Error::interrupted`] (see [`Client::interrupt_on`]).
+    interrupt: Option<Arc<AtomicBool>>,
 }
 
 impl Client {
@@ -36,6 +41,40 @@ impl Client {
             attempts: attempts.max(1),
             telemetry: VecDeque::new(),
             opened: Instant::now(),
+            interrupt: None,
+        }
+    }
+
+    /// From now on, a request or a wait while `flag` is set ends with the
+    /// error [`interrupted`] (exit status 130) instead of reaching the
+    /// device: a long procedure (identify, a sweep) stops at its next
+    /// request, and its caller puts the device back
+    /// ([`crate::state::restoring`]) with [`Client::uninterrupted`].
+    pub fn interrupt_on(&mut self, flag: Arc<AtomicBool>) {
+        self.interrupt = Some(flag);
+    }
+
+    /// Whether the interrupt flag is set.
+    pub fn interrupted(&self) -> bool {
+        self.interrupt
+            .as_ref()
+            .is_some_and(|f| f.load(Ordering::SeqCst))
+    }
+
+    /// Runs `f` with the interrupt flag ignored (the clean-up after an
+    /// interruption must reach the device).
+    pub fn uninterrupted<T>(&mut self, f: impl FnOnce(&mut Client) -> T) -> T {
+        let saved = self.interrupt.take();
+        let r = f(self);
+        self.interrupt = saved;
+        r
+    }
+
+    fn check_interrupt(&self) -> Result<(), Error> {
+        if self.interrupted() {
+            Err(interrupted())
+        } else {
+            Ok(())
         }
     }
 
@@ -47,6 +86,7 @@ impl Client {
     /// Sends a request and waits for its response (same `seq`), retrying on
     /// timeout with the same `seq`.
     pub fn call(&mut self, req: Request) -> Result<Response, Error> {
+        self.check_interrupt()?;
         self.seq = self.seq.wrapping_add(1);
         let seq = self.seq;
         let frame = Frame {
@@ -99,6 +139,7 @@ impl Client {
         }
         let deadline = Instant::now() + timeout;
         while Instant::now() < deadline {
+            self.check_interrupt()?;
             if let Some(f) = self.next_frame(deadline)? {
                 if let Body::Telemetry(t) = f.body {
                     return Ok(Some((f.seq, t)));
@@ -137,6 +178,15 @@ fn session_seq() -> u32 {
             d.subsec_nanos() ^ (d.as_secs() as u32).rotate_left(16)
         });
     nanos ^ std::process::id().rotate_left(8)
+}
+
+/// The error of an interrupted procedure: exit status 130, as a shell
+/// reports a command ended by SIGINT.
+pub fn interrupted() -> Error {
+    Error {
+        code: 130,
+        msg: "interrupted".to_string(),
+    }
 }
 
 fn gone(link: &dyn Link, e: &std::io::Error) -> Error {

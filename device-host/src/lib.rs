@@ -31,6 +31,7 @@ pub mod measure;
 pub mod names;
 pub mod periods;
 pub mod serve;
+pub mod state;
 pub mod sweep;
 pub mod transducers;
 pub mod virtual_device;

@@ -96,6 +96,10 @@ pub fn measure(
         other => return Err(unexpected(other)),
     };
     let window_s = f64::from(periods) / f.max(1.0);
+    let was_running = match expect(c.call(Request::GetStatus)?)? {
+        Response::Status(s) => s.running,
+        other => return Err(unexpected(other)),
+    };
     let limit = Duration::from_secs_f64(4.0 * window_s + 10.0);
     if wait {
         wait_settled(c, interrupted, note)?;
@@ -105,7 +109,7 @@ pub fn measure(
     let start = Instant::now();
     loop {
         if interrupted.load(Ordering::SeqCst) {
-            return Err(abort(c, "interrupted".to_string()));
+            return Err(abort(c, "interrupted".to_string(), was_running));
         }
         let _ = c.next_telemetry(Duration::from_millis(20))?;
         if let Response::Status(s) = expect(c.call(Request::GetStatus)?)? {
@@ -121,6 +125,7 @@ pub fn measure(
                      {window_s:.3} s (is the device sampling its ADC?)",
                     limit.as_secs_f64()
                 ),
+                was_running,
             ));
         }
     }
@@ -135,11 +140,21 @@ pub fn measure(
     Ok(Measured { estimate, measured })
 }
 
-/// Ends the measurement on the device (`Reset`) and says `why`.
-fn abort(c: &mut Client, why: String) -> Error {
+/// Ends the measurement on the device (`Reset`, which also ramps the drive
+/// down), starts the drive again if it was running, and says `why`.
+fn abort(c: &mut Client, why: String, was_running: bool) -> Error {
     match c.call(Request::Reset).map(expect) {
+        Ok(Ok(_)) if was_running => match c.call(Request::Start).map(expect) {
+            Ok(Ok(_)) => Error::failure(format!(
+                "{why}; measurement aborted (device reset, the drive started again, settings kept)"
+            )),
+            Ok(Err(e)) | Err(e) => Error::failure(format!(
+                "{why}; measurement aborted (device reset, settings kept), but the drive could not be started again ({}); `fricctl device start` starts it",
+                e.msg
+            )),
+        },
         Ok(Ok(_)) => Error::failure(format!(
-            "{why}; measurement aborted (device reset: drive stopping, settings kept)"
+            "{why}; measurement aborted (device reset, settings kept)"
         )),
         Ok(Err(e)) | Err(e) => Error::failure(format!(
             "{why}, but the measurement could not be aborted ({}); `fricctl device reset` ends it",

@@ -9,6 +9,7 @@ use std::time::{Duration, Instant};
 use board::device::DriveSetting;
 use board::estimator::Estimate;
 use board::protocol::{Prediction, Request, Response};
+use fric_analysis::sweep_file::SweepRow;
 
 use crate::answers::{expect, unexpected};
 use crate::client::Client;
@@ -214,4 +215,24 @@ pub fn drive_of(r: Response) -> Result<(DriveSetting, f64, f64)> {
         )),
         other => Err(unexpected(other)),
     }
+}
+
+/// The non-swept drive columns of a row, to compare with the device's.
+pub fn fixed_columns(p: SweepParam, r: &SweepRow) -> Vec<(&'static str, f64)> {
+    let mut v = vec![
+        ("freq_hz", r.freq_hz),
+        ("amp_z", r.amp_z),
+        ("amp_x", r.amp_x),
+        ("offset_z", r.offset_z),
+        ("phi_deg", r.phi_deg),
+    ];
+    let skip = match p {
+        SweepParam::Freq => "freq_hz",
+        SweepParam::AmpZ => "amp_z",
+        SweepParam::AmpX => "amp_x",
+        SweepParam::OffsetZ => "offset_z",
+        SweepParam::PhaseDeg => "phi_deg",
+    };
+    v.retain(|(n, _)| *n != skip);
+    v
 }

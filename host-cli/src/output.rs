@@ -77,6 +77,13 @@ fn refused(path: &Path, flag: &str) -> CliResult<bool> {
     if special(path) {
         return Ok(false);
     }
+    if path.is_dir() {
+        return Err(CliError::usage(format!(
+            "--{flag}: {} is a directory (name a file in it)",
+            path.display()
+        )));
+    }
+    writable_parent(path, flag)?;
     let exists = std::fs::symlink_metadata(path).is_ok();
     if exists && !force() {
         return Err(CliError::usage(format!(
@@ -87,12 +94,96 @@ fn refused(path: &Path, flag: &str) -> CliResult<bool> {
     Ok(exists)
 }
 
-/// [`may_write`] for each named output (`None`: not asked for).
-pub fn check_outputs(files: &[(Option<&Path>, &str)]) -> CliResult {
-    for (p, flag) in files {
-        if let Some(p) = p {
-            refused(p, flag)?;
+/// The directory `path` would be written in exists, is a directory, and
+/// takes a new file (a temporary one is created and removed): checked before
+/// any work, so that a missing or read-only directory is refused by name
+/// instead of failing after the computation (or the device's sweep).
+fn writable_parent(path: &Path, flag: &str) -> CliResult {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        let what = if dir.exists() {
+            "is not a directory"
+        } else {
+            "does not exist"
+        };
+        return Err(CliError::usage(format!(
+            "--{flag}: {}: the directory {} {what}",
+            path.display(),
+            dir.display()
+        )));
+    }
+    tempfile::NamedTempFile::new_in(dir).map(drop).map_err(|e| {
+        CliError::usage(format!(
+            "--{flag}: {}: cannot write in {}: {}",
+            path.display(),
+            dir.display(),
+            io_reason(&e)
+        ))
+    })
+}
+
+/// An I/O error's reason without the `(os error N)` suffix.
+pub fn io_reason(e: &std::io::Error) -> String {
+    let s = e.to_string();
+    match s.find(" (os error") {
+        Some(i) => s[..i].to_string(),
+        None => s,
+    }
+}
+
+/// The same file named twice, by `a` and by `b` (compared after resolving
+/// the directory, so `./x.png` and `x.png` are one file).
+fn same_file(a: &Path, b: &Path) -> bool {
+    let resolve = |p: &Path| {
+        let dir = match p.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        (
+            std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf()),
+            p.file_name().map(|n| n.to_os_string()),
+        )
+    };
+    !special(a) && resolve(a) == resolve(b)
+}
+
+/// No two outputs of one command name the same file (`None`: not asked for).
+pub fn distinct_outputs(files: &[(Option<&Path>, &str)]) -> CliResult {
+    let named: Vec<(&Path, &str)> = files
+        .iter()
+        .filter_map(|(p, f)| p.map(|p| (p, *f)))
+        .collect();
+    for (i, (a, fa)) in named.iter().enumerate() {
+        for (b, fb) in &named[i + 1..] {
+            if same_file(a, b) {
+                return Err(CliError::usage(format!(
+                    "--{fb}: names the same file as --{fa} ({}); give each output its own file",
+                    b.display()
+                )));
+            }
         }
+    }
+    Ok(())
+}
+
+/// Every output of a command checked before it computes or touches a
+/// device (`None`: not asked for): each in a writable directory, not a
+/// directory itself, an existing file only with `--force`, a `--plot` with
+/// a figure's extension, and no two outputs naming the same file.
+pub fn check_outputs(files: &[(Option<&Path>, &str)]) -> CliResult {
+    distinct_outputs(files)?;
+    let named: Vec<(&Path, &str)> = files
+        .iter()
+        .filter_map(|(p, f)| p.map(|p| (p, *f)))
+        .collect();
+    for (p, flag) in &named {
+        if *flag == "plot" {
+            crate::plot::ext(p)?;
+        }
+        refused(p, flag)?;
     }
     for (p, flag) in files {
         if let Some(p) = p {

@@ -99,13 +99,14 @@ fn unwritable_plot_file_is_one_line() {
             "20",
             "--plot",
             target.to_str().unwrap(),
-            // Past the overwrite policy (the name exists, as a directory),
-            // to the write itself.
+            // Past the overwrite policy (the name exists, as a directory):
+            // refused before the computation, as bad input.
             "--force",
         ],
-        1,
+        2,
     );
-    assert!(err.contains("c.png: cannot write: "), "{err}");
+    assert!(err.contains("--plot: "), "{err}");
+    assert!(err.contains("c.png is a directory"), "{err}");
 }
 
 /// The blend weight `α` of a pixel that is colour `c` drawn with coverage

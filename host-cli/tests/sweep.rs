@@ -319,8 +319,16 @@ fn a_lagging_plant_needs_settle_periods() {
     let (m0, se0) = step("fast.csv", "0");
     // 20000 periods = 10 τ after the ramp: e⁻¹⁰ = 4.5e-5 of the step remains.
     let (m1, se1) = step("slow.csv", "20000");
-    // The reference: the same drive long after the step.
-    std::thread::sleep(Duration::from_millis(200));
+    // Each sweep puts the drive back as it found it (Δu_x = 3e-7 m): the
+    // reference is the last point's drive, set again and measured 12 τ
+    // after its step (e⁻¹² = 6e-6 of the step remains, within the bound's
+    // e⁻¹⁰ allowance).
+    assert_eq!(ok_json(&s, &["drive", "get"])["dux"], 3e-7);
+    ok_json(
+        &s,
+        &common::drive_set("20000", "2e-6", "1e-7", "4e-6", Some("40")),
+    );
+    std::thread::sleep(Duration::from_millis(1200));
     let m = ok_json(&s, &["measure", "--periods", "200"]);
     let (mr, ser) = (m["mu"].as_f64().unwrap(), m["std_error"].as_f64().unwrap());
     // Repeat measurements of one drive on one plant differ by noise only

@@ -37,17 +37,18 @@ pub struct ControlArgs {
     /// Sliding velocity v0 the setpoint holds at, m/s (≠ 0)
     #[arg(long, value_name = "V", value_parser = Real::ANY.single_precision())]
     pub v0: Option<f64>,
-    /// κ: fraction of the error removed per update, in [0.01, 1]
-    #[arg(long, default_value_t = DEFAULT_GAIN, value_parser = GAIN)]
-    pub gain: f64,
-    /// Drive periods per estimate (one update each), 1 … 10 000, or `auto`:
-    /// as many as fit one DAC half-buffer at the drive frequency (1 at
-    /// 20 kHz, 4 at 40 kHz), the shortest update interval
-    #[arg(long, default_value = "auto", value_parser = parse_periods)]
-    pub periods: Periods,
-    /// Rate limit of the commanded Δu_z, m/s (at most the board's slew, 1e-3)
-    #[arg(long, default_value_t = DEFAULT_RATE, value_parser = Real::positive().single_precision())]
-    pub rate: f64,
+    /// κ: fraction of the error removed per update, in [0.01, 1] (default 0.95)
+    #[arg(long, value_parser = GAIN)]
+    pub gain: Option<f64>,
+    /// Drive periods per estimate (one update each), 1 … 10 000, or `auto`
+    /// (the default): as many as fit one DAC half-buffer at the drive
+    /// frequency (1 at 20 kHz, 4 at 40 kHz), the shortest update interval
+    #[arg(long, value_parser = parse_periods)]
+    pub periods: Option<Periods>,
+    /// Rate limit of the commanded Δu_z, m/s (at most the board's slew;
+    /// default 1e-3)
+    #[arg(long, value_parser = Real::positive().single_precision())]
+    pub rate: Option<f64>,
     /// The displacement loop's headroom while the loop runs (displacement
     /// mode; the tracking in force is kept)
     #[arg(long, value_name = "H", value_parser = Real::ANY.at_least(1.0).at_most(8.0).because("1 is no overdrive").single_precision())]
@@ -60,19 +61,41 @@ impl ControlArgs {
     /// # Errors
     /// One line naming the flag.
     pub fn request(&self) -> CliResult<Request> {
-        match self.action.as_deref() {
-            Some("status") => return Ok(Request::GetControl),
-            Some(_) => {
-                return Ok(Request::SetControl(ControlSetting {
+        let gain = self.gain.unwrap_or(DEFAULT_GAIN);
+        let rate = self.rate.unwrap_or(DEFAULT_RATE);
+        if let Some(action) = self.action.as_deref() {
+            // `status` only asks and `off` only switches off: a setting
+            // flag would be ignored, so it is refused by name.
+            let given = [
+                (self.target_mu.is_some(), "--target-mu"),
+                (self.v0.is_some(), "--v0"),
+                (self.gain.is_some(), "--gain"),
+                (self.periods.is_some(), "--periods"),
+                (self.rate.is_some(), "--rate"),
+                (self.headroom.is_some(), "--headroom"),
+            ];
+            if let Some((_, flag)) = given.iter().find(|(g, _)| *g) {
+                return Err(CliError::usage(format!(
+                    "{flag}: `device control {action}` takes no setting (it {})",
+                    if action == "status" {
+                        "only asks the device"
+                    } else {
+                        "switches the loop off, the last command staying applied"
+                    }
+                )));
+            }
+            return Ok(if action == "status" {
+                Request::GetControl
+            } else {
+                Request::SetControl(ControlSetting {
                     on: false,
                     target_mu: 0.0,
                     v0_m_s: 0.0,
-                    gain: self.gain as f32,
+                    gain: gain as f32,
                     periods: 1,
-                    rate_m_per_s: self.rate as f32,
-                }))
-            }
-            None => {}
+                    rate_m_per_s: rate as f32,
+                })
+            });
         }
         let target = self.target_mu.ok_or_else(|| {
             CliError::usage("--target-mu: missing (or `device control off|status`)")
@@ -88,13 +111,13 @@ impl ControlArgs {
             on: true,
             target_mu: target as f32,
             v0_m_s: v0 as f32,
-            gain: self.gain as f32,
+            gain: gain as f32,
             // `auto` is resolved on the device's frequency by `run`.
             periods: match self.periods {
-                Periods::Fixed(n) => n,
-                Periods::Auto => 1,
+                Some(Periods::Fixed(n)) => n,
+                _ => 1,
             },
-            rate_m_per_s: self.rate as f32,
+            rate_m_per_s: rate as f32,
         }))
     }
 }
@@ -104,7 +127,7 @@ impl ControlArgs {
 /// control request, so that a refused command changes nothing).
 pub fn run(c: &mut Client, req: Request, a: &ControlArgs, json: bool) -> CliResult {
     let mut req = req;
-    if let (Request::SetControl(s), Periods::Auto) = (&mut req, a.periods) {
+    if let (Request::SetControl(s), None | Some(Periods::Auto)) = (&mut req, a.periods) {
         if s.on {
             let fs = match expect(c.call(Request::Hello)?)? {
                 Response::Info(i) => i.sample_rate_hz,
@@ -114,7 +137,7 @@ pub fn run(c: &mut Client, req: Request, a: &ControlArgs, json: bool) -> CliResu
                 Response::Status(st) => f64::from(st.frequency_hz),
                 other => return Err(unexpected(other)),
             };
-            s.periods = a.periods.at(f, fs);
+            s.periods = Periods::Auto.at(f, fs);
         }
     }
     let mut before = None;
@@ -205,10 +228,7 @@ pub struct BenchArgs {
 /// range latches the device's saturation fault: that ends the bench with
 /// the verdict (exit 1) rather than the device's raw refusal.
 pub fn bench(a: &BenchArgs, json: bool) -> CliResult {
-    if let Some(p) = &a.plot {
-        crate::plot::ext(p)?;
-        crate::output::may_write(p, "plot")?;
-    }
+    crate::output::check_outputs(&[(a.plot.as_deref(), "plot")])?;
     let o = run_bench(a)?;
     let mut w = std::io::stdout().lock();
     let r = if json {
@@ -249,7 +269,7 @@ impl BenchArgs {
             fill_lead: self.fill_lead,
             seed: self.seed,
             transducers: self.transducers.spec(),
-            headroom: self.headroom.headroom,
+            headroom: self.headroom.value(),
             track: self.track.into(),
             hold_s: self.hold_s,
         }

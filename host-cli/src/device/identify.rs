@@ -73,17 +73,25 @@ pub fn run(c: &mut Client, a: &IdentifyArgs, json: bool) -> CliResult {
         crate::plot::ext(p)?;
     }
     crate::output::check_outputs(&[(a.out.as_deref(), "out"), (a.plot.as_deref(), "plot")])?;
-    let id = identify(c, &a.options())?;
+    // Each transducer is driven alone in voltage mode for the sweep: the
+    // drive, its mode and options are put back on every way out (the end, a
+    // refused fit, an error, SIGINT or SIGTERM).
+    let id = device_host::state::restoring(c, |c| identify(c, &a.options()))?;
     if let Some(plot) = &a.plot {
         crate::figures::bode::bode(plot, &id.channels, id.span_hz)?;
     }
     if let Some(e) = id.refused() {
         return Err(e);
     }
+    // The file is opened before the device stores anything: a file that
+    // cannot be created leaves the device's transducers as they were.
+    let file = match &a.out {
+        Some(p) => Some(crate::output::AtomicFile::create(p, "out")?),
+        None => None,
+    };
     let stored = !a.no_store && id.store(c)?;
     let report = report(&id.channels, stored, id.elapsed_s);
-    if let Some(p) = &a.out {
-        let mut f = crate::output::AtomicFile::create(p, "out")?;
+    if let Some(mut f) = file {
         let v = report.json();
         f.write_all(
             serde_json::to_string_pretty(&v)

@@ -13,6 +13,8 @@ pub use device_host::{client, link, measure, serve, virtual_device as sim};
 
 use std::io::Write;
 use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use board::device::{Contact, DriveSetting};
@@ -216,9 +218,17 @@ impl From<TrackArg> for board::device::Track {
 pub struct HeadroomArg {
     /// Voltage headroom of the displacement loop's transitions: the voltage
     /// may reach H times the identified model's steady-state voltage
-    /// (1 = no overdrive; at most 8)
-    #[arg(long, value_name = "H", default_value_t = f64::from(board::device::displacement::DEFAULT_HEADROOM), value_parser = Real::ANY.at_least(1.0).at_most(8.0).because("1 is no overdrive").single_precision())]
-    pub headroom: f64,
+    /// (1 = no overdrive; at most 8; default 2; displacement mode only)
+    #[arg(long, value_name = "H", value_parser = Real::ANY.at_least(1.0).at_most(8.0).because("1 is no overdrive").single_precision())]
+    pub headroom: Option<f64>,
+}
+
+impl HeadroomArg {
+    /// The headroom given, or the device's default.
+    pub fn value(&self) -> f64 {
+        self.headroom
+            .unwrap_or(f64::from(board::device::displacement::DEFAULT_HEADROOM))
+    }
 }
 
 /// `scene get|set`.
@@ -307,7 +317,11 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
     if !t.json && std::io::IsTerminal::is_terminal(&std::io::stderr()) {
         eprintln!("talking to {}", c.describe());
     }
-    dispatch(&mut c, t, cmd, checked)
+    // One handler for SIGINT, SIGTERM and SIGHUP: `measure` and `watch`
+    // watch the flag; `identify` and `sweep` stop at their next request and
+    // put the device back as they found it.
+    let flag = watch::interrupt_flag();
+    dispatch(&mut c, t, cmd, checked, &flag)
 }
 
 /// What a command's flags give before the device is asked.
@@ -341,7 +355,13 @@ impl Checked {
 }
 
 /// Runs `cmd` on the open device.
-fn dispatch(c: &mut Client, t: &Target, cmd: &DeviceCmd, checked: Checked) -> CliResult {
+fn dispatch(
+    c: &mut Client,
+    t: &Target,
+    cmd: &DeviceCmd,
+    checked: Checked,
+    flag: &Arc<AtomicBool>,
+) -> CliResult {
     let json = t.json;
     match cmd {
         DeviceCmd::Info => match expect(c.call(Request::Hello)?)? {
@@ -380,7 +400,7 @@ fn dispatch(c: &mut Client, t: &Target, cmd: &DeviceCmd, checked: Checked) -> Cl
             periods,
             allow_invalid,
             no_wait,
-        } => measure_cmd(c, *periods, !*no_wait, *allow_invalid, json),
+        } => measure_cmd(c, *periods, !*no_wait, *allow_invalid, json, flag),
         DeviceCmd::Status => match expect(c.call(Request::GetStatus)?)? {
             Response::Status(st) => out(json, &render::status(&st)),
             other => Err(unexpected(other)),
@@ -407,9 +427,15 @@ fn dispatch(c: &mut Client, t: &Target, cmd: &DeviceCmd, checked: Checked) -> Cl
             count,
             csv,
             allow_invalid,
-        } => watch::watch(t, c, *periods, *count, csv.as_deref(), *allow_invalid),
-        DeviceCmd::Sweep(a) => sweep::run(c, a, json),
-        DeviceCmd::Identify(a) => identify::run(c, a, json),
+        } => watch::watch(t, c, flag, *periods, *count, csv.as_deref(), *allow_invalid),
+        DeviceCmd::Sweep(a) => {
+            c.interrupt_on(flag.clone());
+            sweep::run(c, a, json)
+        }
+        DeviceCmd::Identify(a) => {
+            c.interrupt_on(flag.clone());
+            identify::run(c, a, json)
+        }
         DeviceCmd::Control(a) => {
             let req = match checked.control {
                 Some(r) => r,
@@ -453,12 +479,17 @@ fn drive_set(c: &mut Client, cmd: &DriveCmd, json: bool) -> CliResult {
             "--track: needs the displacement mode (identified transducers), not --open-loop",
         ));
     }
+    if *open_loop && headroom.headroom.is_some() {
+        return Err(CliError::usage(
+            "--headroom: is the displacement mode's (identified transducers), not --open-loop's",
+        ));
+    }
     identify::select_mode(c, *open_loop)?;
     if !*open_loop {
         expect(c.call(Request::SetDisplacementOptions(
             board::device::DisplacementOptions {
                 track: (*track).into(),
-                headroom: headroom.headroom as f32,
+                headroom: headroom.value() as f32,
             },
         ))?)?;
     }
@@ -490,9 +521,9 @@ fn measure_cmd(
     wait: bool,
     allow_invalid: bool,
     json: bool,
+    interrupted: &AtomicBool,
 ) -> CliResult {
-    let interrupted = watch::interrupt_flag();
-    let m = measure::measure(c, periods, wait, &interrupted, &mut |n| eprintln!("{n}"))?;
+    let m = measure::measure(c, periods, wait, interrupted, &mut |n| eprintln!("{n}"))?;
     out(
         json,
         &render::estimate(&m.estimate).measured(m.measured.as_ref()),

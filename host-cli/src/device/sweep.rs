@@ -14,7 +14,9 @@ use board::protocol::{Request, Response};
 use clap::Args;
 use serde::Serialize;
 
-pub use device_host::sweep::{ask, drive_of, measure_here, set_point, PointOptions, SweepParam};
+pub use device_host::sweep::{
+    ask, drive_of, fixed_columns, measure_here, set_point, PointOptions, SweepParam,
+};
 
 use super::client::Client;
 use super::render::reason_names;
@@ -93,6 +95,10 @@ impl SweepArgs {
             }
             crate::output::may_write(&self.csv, "csv")?;
         }
+        crate::output::distinct_outputs(&[
+            (Some(self.csv.as_path()), "csv"),
+            (self.plot.as_deref(), "plot"),
+        ])?;
         if let Some(p) = &self.plot {
             crate::plot::ext(p)?;
             crate::output::may_write(p, "plot")?;
@@ -118,26 +124,6 @@ impl SweepArgs {
 /// Equal to 1e-9 relative (values written to and read from the file).
 fn same(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(f64::MIN_POSITIVE)
-}
-
-/// The non-swept drive columns of a row, to compare with the device's.
-pub(crate) fn fixed_columns(p: SweepParam, r: &SweepRow) -> Vec<(&'static str, f64)> {
-    let mut v = vec![
-        ("freq_hz", r.freq_hz),
-        ("amp_z", r.amp_z),
-        ("amp_x", r.amp_x),
-        ("offset_z", r.offset_z),
-        ("phi_deg", r.phi_deg),
-    ];
-    let skip = match p {
-        SweepParam::Freq => "freq_hz",
-        SweepParam::AmpZ => "amp_z",
-        SweepParam::AmpX => "amp_x",
-        SweepParam::OffsetZ => "offset_z",
-        SweepParam::PhaseDeg => "phi_deg",
-    };
-    v.retain(|(n, _)| *n != skip);
-    v
 }
 
 /// The rows already in `path` for `--resume` (a cut-off last line is
@@ -236,6 +222,30 @@ fn resume_rows(a: &SweepArgs, values: &[f64], probe: &SweepRow) -> CliResult<Vec
 /// refuses or does not answer, or invalid estimates at some points (exit 1,
 /// after all rows are written).
 pub fn run(c: &mut Client, a: &SweepArgs, json: bool) -> CliResult {
+    // The drive is stepped for the sweep's own purpose: put back as it was
+    // on every way out (the end, a refusal, an error, SIGINT or SIGTERM).
+    let rows = device_host::state::restoring(c, |c| sweep_rows(c, a))?;
+    if let Some(p) = &a.plot {
+        crate::figures::device_sweep::plot(p, a.param, a.v0, &rows)?;
+        eprintln!("wrote {}", p.display());
+    }
+    print_rows(a, &rows, json)?;
+    let bad = rows.iter().filter(|r| !r.valid).count();
+    if bad > 0 {
+        return Err(CliError::failure(format!(
+            "{bad} of {} points gave invalid estimates (kept in {} with valid = false; fit skips them)",
+            rows.len(),
+            a.csv.display()
+        )));
+    }
+    Ok(())
+}
+
+/// The sweep's rows (those of `--resume` first), each written to the file
+/// as soon as it is measured. A failure before the first row of a new
+/// file removes the file: no header-only file is left behind
+/// (docs/guide/output-files.md).
+fn sweep_rows(c: &mut Client, a: &SweepArgs) -> CliResult<Vec<SweepRow>> {
     let values = a.values();
     let (base, freq0, phi0) = drive_of(ask(c, Request::GetDrive)?)?;
     let Response::Contact(contact) = ask(c, Request::GetContact)? else {
@@ -291,6 +301,33 @@ pub fn run(c: &mut Client, a: &SweepArgs, json: bool) -> CliResult {
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     bar.set_position(rows.len() as u64);
+    let before = rows.len();
+    let r = measure_points(c, a, &values, base, contact, &mut w, &mut rows, &bar);
+    bar.finish_and_clear();
+    if r.is_err() && fresh && rows.len() == before {
+        drop(w);
+        // Only a regular file: never a device or FIFO (`--csv /dev/null`).
+        if std::fs::symlink_metadata(&a.csv).is_ok_and(|m| m.is_file()) {
+            let _ = std::fs::remove_file(&a.csv);
+        }
+    }
+    r.map(|()| rows)
+}
+
+/// Measures the points after those in `rows`, appending each to `rows` and
+/// to the file.
+#[allow(clippy::too_many_arguments)]
+fn measure_points(
+    c: &mut Client,
+    a: &SweepArgs,
+    values: &[f64],
+    base: DriveSetting,
+    contact: Contact,
+    w: &mut csv::Writer<std::fs::File>,
+    rows: &mut Vec<SweepRow>,
+    bar: &indicatif::ProgressBar,
+) -> CliResult {
+    let io = |e: csv::Error| CliError::failure(format!("--csv: {}: {e}", a.csv.display()));
     for &x in &values[rows.len()..] {
         bar.set_message(format!(
             "{} = {} {}",
@@ -314,20 +351,6 @@ pub fn run(c: &mut Client, a: &SweepArgs, json: bool) -> CliResult {
         w.flush().map_err(|e| io(e.into()))?;
         bar.inc(1);
         rows.push(r);
-    }
-    bar.finish_and_clear();
-    if let Some(p) = &a.plot {
-        crate::figures::device_sweep::plot(p, a, &rows)?;
-        eprintln!("wrote {}", p.display());
-    }
-    print_rows(a, &rows, json)?;
-    let bad = rows.iter().filter(|r| !r.valid).count();
-    if bad > 0 {
-        return Err(CliError::failure(format!(
-            "{bad} of {} points gave invalid estimates (kept in {} with valid = false; fit skips them)",
-            rows.len(),
-            a.csv.display()
-        )));
     }
     Ok(())
 }

@@ -46,12 +46,12 @@ enum End {
 pub fn watch(
     t: &Target,
     c: &mut Client,
+    stop: &AtomicBool,
     periods: u32,
     count: Option<u64>,
     csv: Option<&Path>,
     allow_invalid: bool,
 ) -> CliResult {
-    let stop = interrupt_flag();
     // The CSV exists with its header before the first request.
     let mut file = match csv {
         Some(p) => {
@@ -66,17 +66,45 @@ pub fn watch(
         }
         None => None,
     };
+    let r = watch_body(t, c, stop, periods, count, &mut file, allow_invalid);
+    // A file with its header only (the command failed or was interrupted
+    // before the first estimate, or the closed loop's updates were shown)
+    // is removed: no header-only file is left (docs/guide/output-files.md).
+    if let (Some(p), Some(f)) = (csv, file) {
+        let header_only = f
+            .metadata()
+            .is_ok_and(|m| m.is_file() && m.len() <= CSV_HEADER.len() as u64 + 1);
+        drop(f);
+        // Only a regular file: never a device or FIFO (`--csv /dev/null`).
+        if header_only && std::fs::symlink_metadata(p).is_ok_and(|m| m.is_file()) {
+            let _ = std::fs::remove_file(p);
+        }
+    }
+    r
+}
+
+/// `watch` after the file is created: the closed loop's updates, or the
+/// stream, stopped on every way out.
+fn watch_body(
+    t: &Target,
+    c: &mut Client,
+    stop: &AtomicBool,
+    periods: u32,
+    count: Option<u64>,
+    file: &mut Option<std::fs::File>,
+    allow_invalid: bool,
+) -> CliResult {
     // While the closed loop runs the estimator is the loop's: show its updates.
     if let board::protocol::Response::Control(st) = expect(c.call(Request::GetControl)?)? {
         if st.setting.on {
-            return control_loop(t, c, count, &stop);
+            return control_loop(t, c, count, stop);
         }
     }
     expect(c.call(Request::Stream { on: true, periods })?)?;
     // What came before the stream's `Ok` is an earlier session's (its
     // `StreamStopped`, a late estimate): not this stream's.
     c.discard_telemetry();
-    let end = stream_loop(t, c, periods, count, &mut file, allow_invalid, &stop);
+    let end = stream_loop(t, c, periods, count, file, allow_invalid, stop);
     // Stop the stream on every exit path (a failed stop is said, not hidden).
     let stopped = c.call(Request::Stream { on: false, periods });
     let stop_err = match stopped {

@@ -6,16 +6,16 @@ use std::path::Path;
 
 use fric_analysis::sweep_file::SweepRow;
 
-use crate::device::sweep::{fixed_columns, SweepArgs};
 use crate::error::{CliError, CliResult};
 use crate::plot::{render_figure, Extras, Figure, Mark, Marker, Panel, Series};
+use device_host::sweep::{fixed_columns, SweepParam};
 
-/// Measured μ with ±1 standard-error bars and the device's predicted μ
+/// Measured μ of a sweep of `param` (predictions at `v0`, m/s) with ±1 standard-error bars and the device's predicted μ
 /// against the swept value.
 ///
 /// # Errors
 /// No measured point, or the file cannot be written.
-pub fn plot(path: &Path, a: &SweepArgs, rows: &[SweepRow]) -> CliResult {
+pub fn plot(path: &Path, param: SweepParam, v0: f64, rows: &[SweepRow]) -> CliResult {
     let mut meas = Vec::new();
     let mut bars = Vec::new();
     let mut pred = Vec::new();
@@ -47,7 +47,7 @@ pub fn plot(path: &Path, a: &SweepArgs, rows: &[SweepRow]) -> CliResult {
     let xpad = if xhi > xlo { 0.05 * (xhi - xlo) } else { 1.0 };
     let ypad = if yhi > ylo { 0.1 * (yhi - ylo) } else { 0.01 };
     let r0 = &rows[0];
-    let mut fixed: Vec<String> = fixed_columns(a.param, r0)
+    let mut fixed: Vec<String> = fixed_columns(param, r0)
         .into_iter()
         .map(|(n, v)| match n {
             "freq_hz" => format!("f = {v:.1} Hz"),
@@ -57,10 +57,10 @@ pub fn plot(path: &Path, a: &SweepArgs, rows: &[SweepRow]) -> CliResult {
             _ => format!("u_z0 = {v:.2e} m"),
         })
         .collect();
-    fixed.push(format!("v0 = {} m/s", a.v0));
+    fixed.push(format!("v0 = {v0} m/s"));
     let panel = Panel {
-        title: format!("sweep of {}: {}", a.param.name(), fixed.join(", ")),
-        x_label: format!("{} ({})", a.param.name(), a.param.unit()),
+        title: format!("sweep of {}: {}", param.name(), fixed.join(", ")),
+        x_label: format!("{} ({})", param.name(), param.unit()),
         y_label: format!(
             "μ (device model: μ0 = {:.4}, kz = {:.3e} N/m, kx = {:.3e} N/m)",
             r0.model_mu0, r0.model_kz, r0.model_kx

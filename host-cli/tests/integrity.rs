@@ -1,0 +1,332 @@
+//! A command that fails, is refused, is interrupted or only queries leaves
+//! the device and every file as it found them: the device's drive, mode,
+//! options and running state are put back on every way out (SIGINT and
+//! SIGTERM sent mid-run over a pty included), outputs are checked before any
+//! work, and no header-only file is left behind.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command as StdCommand, Stdio};
+use std::time::{Duration, Instant};
+
+use assert_cmd::cargo::CommandCargoExt;
+use common::cli::fricctl;
+use common::signal_and_wait;
+use common::sim::{dev, ok_json, sim, sim_with, Sim};
+use serde_json::Value;
+
+/// The resonant plant of the identification tests (both modes ring in the
+/// ±5 % span around 20 kHz).
+const RESONANT: &[&str] = &[
+    "--plant-resonance-z",
+    "20300",
+    "--plant-q-z",
+    "300",
+    "--plant-resonance-x",
+    "19700",
+    "--plant-q-x",
+    "200",
+];
+
+/// The drive, mode, options and running state as `drive get` and `status`
+/// report them.
+fn state(s: &Sim) -> (Value, Value, Value, Value) {
+    let d = ok_json(s, &["drive", "get"]);
+    let st = ok_json(s, &["status"]);
+    (
+        d,
+        st["drive_mode"].clone(),
+        serde_json::json!([st["track"], st["headroom"]]),
+        st["running"].clone(),
+    )
+}
+
+/// `fricctl device --port PTY ARGS`, spawned with its output piped.
+fn spawn_dev(s: &Sim, args: &[&str]) -> std::process::Child {
+    StdCommand::cargo_bin("fricctl")
+        .unwrap()
+        .args(["device", "--port", &s.path])
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+fn stderr_of(child: &mut std::process::Child) -> String {
+    let mut err = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
+    err
+}
+
+/// The transducers are not identified: `drive set` without `--open-loop`
+/// is refused, naming `identify`.
+fn assert_not_identified(s: &Sim) {
+    let plain: Vec<&str> = common::drive_set("20000", "1e-6", "2e-7", "4e-6", Some("30"))
+        .into_iter()
+        .filter(|a| *a != "--open-loop")
+        .collect();
+    let o = dev(s, &plain);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("run `fricctl device identify`"));
+}
+
+#[test]
+fn identify_interrupted_by_a_signal_puts_the_device_back() {
+    for signal in ["-INT", "-TERM"] {
+        let s = sim_with(RESONANT, 600);
+        // A drive of the user's own (identify sweeps with its own), stopped.
+        ok_json(
+            &s,
+            &common::drive_set("20000", "1e-6", "2e-7", "4e-6", Some("30")),
+        );
+        let before = state(&s);
+        assert_eq!(before.3, false);
+        let mut child = spawn_dev(&s, &["identify"]);
+        // The sweep runs for ≈ 10 s; 2 s in, it drives the normal transducer.
+        std::thread::sleep(Duration::from_millis(2000));
+        assert!(child.try_wait().unwrap().is_none(), "identify ended early");
+        let st = signal_and_wait(&mut child, signal, 10, "identify");
+        let err = stderr_of(&mut child);
+        assert_eq!(st.code(), Some(130), "{signal}: {err}");
+        assert!(err.contains("interrupted"), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        // The user's drive, voltage mode, options and the stopped drive.
+        assert_eq!(state(&s), before, "{signal}");
+        // Nothing stored.
+        assert_not_identified(&s);
+    }
+}
+
+#[test]
+fn identify_refuses_an_out_it_cannot_write_before_it_sweeps() {
+    let s = sim_with(RESONANT, 600);
+    ok_json(&s, &common::drive_set("20000", "0", "0", "4e-6", None));
+    let before = state(&s);
+    for (flag, path) in [
+        ("--out", "/nonexistent/x.json"),
+        ("--plot", "/nonexistent/x.png"),
+        ("--plot", "/tmp/bode.txt"),
+    ] {
+        let t = Instant::now();
+        let o = dev(&s, &["identify", flag, path]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{flag} {path}: {err}");
+        assert!(err.contains(flag), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        // Refused before the sweep (which takes ≈ 10 s).
+        assert!(t.elapsed() < Duration::from_secs(5), "{:?}", t.elapsed());
+    }
+    assert_eq!(state(&s), before);
+    assert_not_identified(&s);
+}
+
+/// A sweep of amp-z from 1e-6 m to `to` over 2 points, 200 periods each.
+fn sweep_args<'a>(to: &'a str, csv: &'a Path) -> Vec<&'a str> {
+    vec![
+        "sweep",
+        "--param",
+        "amp-z",
+        "--from",
+        "1e-6",
+        "--to",
+        to,
+        "--points",
+        "2",
+        "--periods",
+        "200",
+        "--v0",
+        "0.004",
+        "--csv",
+        csv.to_str().unwrap(),
+    ]
+}
+
+#[test]
+fn a_sweep_refused_midway_puts_the_drive_back_and_keeps_its_rows() {
+    let s = sim();
+    ok_json(
+        &s,
+        &common::drive_set("20000", "2e-6", "3e-7", "4e-6", Some("40")),
+    );
+    ok_json(&s, &["start"]);
+    std::thread::sleep(Duration::from_millis(300));
+    let before = state(&s);
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("sw.csv");
+    // The second point (1 m) would lift the contact off: refused, named by --to.
+    let o = dev(&s, &sweep_args("1", &csv));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.starts_with("error: --to:"), "{err}");
+    // The drive as it was, still running.
+    assert_eq!(state(&s), before);
+    // The measured row is kept whole (the file policy), resumable.
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(text.lines().count(), 2, "{text}");
+    assert!(
+        text.lines().nth(1).unwrap().starts_with("amp-z,1e-6,"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_sweep_refused_at_its_first_point_leaves_no_file() {
+    let s = sim();
+    ok_json(
+        &s,
+        &common::drive_set("20000", "2e-6", "3e-7", "4e-6", Some("40")),
+    );
+    ok_json(&s, &["start"]);
+    let before = state(&s);
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("sw.csv");
+    let mut args = sweep_args("2", &csv);
+    args[4] = "1"; // --from 1 m: refused at once.
+    let o = dev(&s, &args);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).starts_with("error: --from:"));
+    assert!(!csv.exists(), "a header-only file was left behind");
+    assert_eq!(state(&s), before);
+}
+
+#[test]
+fn a_sweep_interrupted_by_a_signal_puts_the_drive_back() {
+    let s = sim();
+    ok_json(
+        &s,
+        &common::drive_set("20000", "2e-6", "3e-7", "4e-6", Some("40")),
+    );
+    ok_json(&s, &["start"]);
+    std::thread::sleep(Duration::from_millis(300));
+    let before = state(&s);
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("sw.csv");
+    // 20 points of 4000 periods (0.2 s each at 20 kHz, the sim in real time).
+    let mut args = sweep_args("3e-6", &csv);
+    args[8] = "20";
+    args[10] = "4000";
+    let mut child = spawn_dev(&s, &args);
+    std::thread::sleep(Duration::from_millis(1500));
+    assert!(child.try_wait().unwrap().is_none(), "sweep ended early");
+    let st = signal_and_wait(&mut child, "-INT", 10, "sweep");
+    let err = stderr_of(&mut child);
+    assert_eq!(st.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted"), "{err}");
+    assert_eq!(state(&s), before);
+    // Whole rows only, each a point of this sweep.
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(text.ends_with('\n'), "{text}");
+    let rows = text.lines().count() - 1;
+    assert!((1..20).contains(&rows), "{rows} rows: {text}");
+}
+
+/// `fricctl ARGS` in `dir`.
+fn run_in(dir: &Path, args: &[&str]) -> std::process::Output {
+    fricctl().current_dir(dir).args(args).output().unwrap()
+}
+
+const LOAD_LINE: &[&str] = &[
+    "load-line",
+    "--duz-rel",
+    "0.5",
+    "--ratio",
+    "2",
+    "--phi-deg",
+    "0",
+    "--points",
+    "3",
+];
+
+#[test]
+fn outputs_are_checked_before_any_work_and_never_name_one_file_twice() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for (extra, flag, why) in [
+        (
+            &["--csv", "p.png", "--plot", "p.png"][..],
+            "--csv",
+            "same file",
+        ),
+        (
+            &["--csv", "ll.csv", "--plot", "x.txt"][..],
+            "--plot",
+            ".svg or .png",
+        ),
+        (
+            &["--csv", "ll.csv", "--plot", "missing/x.png"][..],
+            "--plot",
+            "does not exist",
+        ),
+        (&["--csv", "missing/ll.csv"][..], "--csv", "does not exist"),
+        (&["--csv", "."][..], "--csv", "is a directory"),
+    ] {
+        let o = run_in(d, &[LOAD_LINE, extra].concat());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {err}");
+        assert!(err.starts_with(&format!("error: {flag}:")), "{err}");
+        assert!(err.contains(why), "{extra:?}: {err}");
+        assert!(!err.contains("os error"), "{err}");
+        // Nothing written.
+        let left: Vec<_> = std::fs::read_dir(d).unwrap().collect();
+        assert!(left.is_empty(), "{extra:?} left {left:?}");
+    }
+    // `./p.png` and `p.png` are one file too.
+    let o = run_in(
+        d,
+        &[LOAD_LINE, &["--csv", "./p.png", "--plot", "p.png"]].concat(),
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("same file"));
+}
+
+#[test]
+fn control_bench_refuses_a_plot_it_cannot_write_before_it_runs() {
+    let o = fricctl()
+        .args(["device", "control-bench", "--plot", "/nonexistent/cb.png"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.starts_with("error: --plot:"), "{err}");
+    assert!(o.stdout.is_empty());
+}
+
+#[test]
+fn a_flag_a_subcommand_would_ignore_is_refused_by_name() {
+    let s = sim();
+    ok_json(
+        &s,
+        &common::drive_set("20000", "2e-6", "3e-7", "4e-6", Some("40")),
+    );
+    let before = state(&s);
+    for (args, flag) in [
+        (&["control", "status", "--headroom", "4"][..], "--headroom"),
+        (
+            &["control", "off", "--v0", "5", "--gain", "0.5"][..],
+            "--v0",
+        ),
+        (&["control", "off", "--gain", "0.5"][..], "--gain"),
+        (&["control", "status", "--periods", "auto"][..], "--periods"),
+        (&["control", "off", "--rate", "1e-4"][..], "--rate"),
+        (
+            &common::drive_set("20000", "2e-6", "3e-7", "4e-6", Some("40"))
+                .into_iter()
+                .chain(["--headroom", "3"])
+                .collect::<Vec<_>>()[..],
+            "--headroom",
+        ),
+    ] {
+        let o = dev(&s, args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.starts_with(&format!("error: {flag}:")),
+            "{args:?}: {err}"
+        );
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+    // A query and a refusal change nothing.
+    assert_eq!(state(&s), before);
+}
