@@ -16,6 +16,12 @@
 //!   device (`fricctl device control-bench`), and [`control_grid`], the same
 //!   over a grid of transducers (`fricctl bench control`).
 //!
+//! - [`report`]: every answer as rows of (JSON key, text label, value,
+//!   unit), printed as aligned text or one flat JSON object: the one
+//!   definition of the keys, for `fricctl --json` and Python.
+//! - [`identify`], [`sweep`], [`measure`], [`state`]: the device commands'
+//!   procedures, and what they put back on every way out.
+//!
 //! Errors are the analysis library's ([`Error`]): one line naming the
 //! parameter as its `fricctl` flag, with the class as the exit status
 //! (2 = bad input, 1 = the run failed).
@@ -30,6 +36,7 @@ pub mod link;
 pub mod measure;
 pub mod names;
 pub mod periods;
+pub mod report;
 pub mod serve;
 pub mod state;
 pub mod sweep;

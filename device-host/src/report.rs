@@ -20,7 +20,7 @@ pub struct Report {
     rows: Vec<(&'static str, &'static str, Value, &'static str)>,
 }
 
-pub use device_host::answers::f32v;
+pub use crate::answers::f32v;
 
 /// Degrees from radians, rounded to 1e-9 ° (the f32 phase's resolution is
 /// far coarser), so that 40° does not print as 39.99999974.
@@ -290,7 +290,7 @@ pub fn prediction(v0: f64, p: &Prediction, regime: Regime) -> Report {
         )
 }
 
-pub use device_host::names::{fault_names, reason_names};
+pub use crate::names::{fault_names, reason_names};
 
 /// An estimate (`measure`, each line of `watch`).
 pub fn estimate(e: &Estimate) -> Report {

@@ -4,12 +4,11 @@
 pub mod control;
 pub mod identify;
 pub mod plant_args;
-pub mod render;
 pub mod sweep;
 pub mod watch;
 
 pub use device_host::answers::{expect, unexpected};
-pub use device_host::{client, link, measure, serve, virtual_device as sim};
+pub use device_host::{client, link, measure, report as render, serve, virtual_device as sim};
 
 use std::io::Write;
 use std::path::PathBuf;
