@@ -14,7 +14,8 @@
 //! - [`serve`]: the virtual device in real time on a pty or TCP.
 //! - [`control_bench`]: the μ loop's step responses on an in-process virtual
 //!   device (`fricctl device control-bench`), and [`control_grid`], the same
-//!   over a grid of transducers (`fricctl bench control`).
+//!   over a grid of transducers (`fricctl bench control`); [`dac_bench`], the
+//!   board's DDS: spectral purity against cost (`fricctl bench dac`).
 //!
 //! - [`report`]: every answer as rows of (JSON key, text label, value,
 //!   unit), printed as aligned text or one flat JSON object: the one
@@ -31,6 +32,7 @@ pub mod answers;
 pub mod client;
 pub mod control_bench;
 pub mod control_grid;
+pub mod dac_bench;
 pub mod identify;
 pub mod link;
 pub mod measure;
