@@ -278,3 +278,157 @@ def motion(
     ``doubtful`` (the CLI's exit-1 message, or None; it is also issued as a
     RuntimeWarning).
     """
+
+class DeviceError(RuntimeError):
+    """A device operation failed (the base of DeviceRefused, DeviceFault and
+    LinkError; the CLI's exit status 1)."""
+
+class DeviceRefused(DeviceError):
+    """The device refused a request. ``kind`` ('OutOfRange', 'LiftOffRefused',
+    'NotIdentified', 'NotRunning', 'Busy', 'BadScene', 'OutOfReach', …);
+    for a range refusal ``param`` (the wire name, e.g. 'Freq') and ``min``,
+    ``max`` in the parameter's SI unit, else None. The message names the
+    CLI flag (``--freq: refused by the device: allowed range [1000, 100000]``)."""
+
+    kind: str
+    param: Optional[str]
+    min: Optional[float]
+    max: Optional[float]
+
+class DeviceFault(DeviceError):
+    """The device latched a fault (the message names its bits)."""
+
+class LinkError(DeviceError):
+    """The link failed: no answer, a closed connection, a port or address
+    that cannot be opened, a closed Device."""
+
+SweepParam = Literal["phase_deg", "amp_z", "amp_x", "offset_z", "freq"]
+
+class Device:
+    """A board, the QEMU firmware or the virtual device, driven through the
+    same library as ``fricctl device …``: the same requests and procedures,
+    each answer a :class:`Record` with the CLI's ``--json`` keys
+    (docs/device-json.md). Device I/O runs with the GIL released. A
+    KeyboardInterrupt ends a call at its next request; ``identify`` and
+    ``sweep`` put back what they changed (drive, mode, options, running)
+    before it is raised. Use it as a context manager (``with ... as dev``)."""
+
+    @staticmethod
+    def virtual(
+        *,
+        plant: Optional[Mapping[str, Union[float, bool]]] = None,
+        v0: float = 0.004,
+        noise: float = 1.0,
+        offset: float = 0.0,
+        seed: int = 0,
+    ) -> "Device":
+        """The in-process virtual device (``fricctl device --sim`` without a
+        state file): the board's logic on the simulated plant, its device
+        time as fast as the host computes. ``plant`` takes the
+        ``sim-device`` plant flags without ``--plant-`` and with ``_``:
+        ``mu0``, ``kz`` (N/m), ``kx`` (N/m), ``lag_periods``, ``mu0_drift``
+        (1/s), ``ideal_transducers``, ``resonance_z``/``_x`` (Hz),
+        ``q_z``/``_x``, ``gain_z``/``_x`` (m/V), ``resonance_drift_z``/``_x``
+        (Hz/s), ``thermal_shift`` (Hz/µm²), ``crosstalk``, ``load_q``. ``v0``
+        is the stage velocity (m/s), ``noise`` and ``offset`` the ADC's
+        (counts), ``seed`` the noise record (0: the default)."""
+    @staticmethod
+    def open(
+        port: Optional[str] = None,
+        *,
+        tcp: Optional[str] = None,
+        timeout_ms: int = 500,
+        attempts: int = 3,
+    ) -> "Device":
+        """A serial port (a board, or a pty of ``fricctl sim-device --pty``)
+        or ``tcp="HOST:PORT"`` (the QEMU firmware, ``sim-device --tcp``)."""
+    def __enter__(self) -> "Device": ...
+    def __exit__(self, *args: Any) -> None: ...
+    def close(self) -> None:
+        """Closes the link (a virtual device ends)."""
+    def info(self) -> Record:
+        """``device info``: name, firmware, protocol, ranges, self-test."""
+    def drive(
+        self,
+        *,
+        freq: float,
+        amp_z: float,
+        amp_x: float,
+        offset_z: float,
+        phase_deg: float = 0.0,
+        open_loop: bool = False,
+        track: Literal["none", "z", "x"] = "none",
+        headroom: Optional[float] = None,
+    ) -> Record:
+        """``device drive set`` (Hz, m, m, m, degrees): voltage mode with
+        ``open_loop=True``, else the displacement mode (identified
+        transducers) with resonance tracking and the headroom (1 … 8)."""
+    def get_drive(self) -> Record:
+        """``device drive get``."""
+    def start(self) -> None:
+        """``device start`` (soft start)."""
+    def stop(self) -> None:
+        """``device stop`` (ramped)."""
+    def reset(self) -> None:
+        """``device reset``: streams and measurements end, the drive stops."""
+    def reset_faults(self) -> None:
+        """``device reset-faults``."""
+    def status(self) -> Record:
+        """``device status`` (``running``, ``drive_mode``, ``faults`` by name,
+        the measured drive, tracking, ``cpu_load_pct``, …)."""
+    def scene(
+        self, *, mu0: Optional[float] = None, kz: Optional[float] = None, kx: Optional[float] = None
+    ) -> Record:
+        """The device model's contact (μ0, N/m, N/m): set with all three,
+        read with none (``device scene set|get``)."""
+    def predict(self, v0: float) -> Record:
+        """``device predict``: the device model's μ at v0 (m/s)."""
+    def measure(self, periods: int, *, wait: bool = True) -> Record:
+        """``device measure``: μ over ``periods`` drive periods with the drive
+        the pickups measured; an invalid estimate is returned (``valid`` is
+        False), not raised."""
+    def identify(
+        self,
+        *,
+        from_hz: Optional[float] = None,
+        to_hz: Optional[float] = None,
+        points: int = 21,
+        fine_points: int = 31,
+        settle_ms: Optional[float] = None,
+        channel: Literal["both", "z", "x"] = "both",
+        store: bool = True,
+    ) -> Record:
+        """``device identify``: each transducer's f_r (Hz), Q, static gain
+        (m/V) with 95 % intervals; stored on the device unless
+        ``store=False``. The drive is put back afterwards."""
+    def sweep(
+        self,
+        param: SweepParam,
+        start: float,
+        end: float,
+        *,
+        points: int,
+        periods: int,
+        v0: float,
+        settle_periods: int = 0,
+    ) -> Dict[str, Any]:
+        """``device sweep``: ``param`` from ``start`` to ``end`` over ``points``
+        (each measured over ``periods``, μ predicted at ``v0`` m/s); a dict
+        of numpy arrays with the sweep file's columns (``value``,
+        ``measured_mu``, ``std_error``, ``predicted_mu``, ``valid``, …),
+        which :func:`fit` takes. The drive is put back afterwards."""
+    def control(
+        self,
+        target_mu: Optional[float] = None,
+        v0: Optional[float] = None,
+        *,
+        on: bool = True,
+        gain: Optional[float] = None,
+        periods: Optional[int] = None,
+        rate: Optional[float] = None,
+    ) -> Record:
+        """``device control``: the closed μ loop on with the setpoint μ* at v0
+        (m/s), or off with ``on=False``; the loop's state."""
+    def watch(self, periods: int, *, count: int) -> list[Record]:
+        """``device watch --count``: ``count`` streamed estimates of
+        ``periods`` periods; the stream is stopped before returning."""

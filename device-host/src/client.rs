@@ -28,6 +28,9 @@ pub struct Client {
     /// Set by a signal handler: every request and wait then ends with
     /// [`Error::interrupted`] (see [`Client::interrupt_on`]).
     interrupt: Option<Arc<AtomicBool>>,
+    /// Asked before each request and wait: true ends the procedure as the
+    /// flag does (Python's pending KeyboardInterrupt).
+    poll: Option<Box<dyn Fn() -> bool + Send>>,
 }
 
 impl Client {
@@ -42,6 +45,7 @@ impl Client {
             telemetry: VecDeque::new(),
             opened: Instant::now(),
             interrupt: None,
+            poll: None,
         }
     }
 
@@ -54,11 +58,32 @@ impl Client {
         self.interrupt = Some(flag);
     }
 
-    /// Whether the interrupt flag is set.
+    /// As [`Client::interrupt_on`], asking `poll` before each request and
+    /// wait (e.g. whether Python has a `KeyboardInterrupt` pending); once it
+    /// answers true the client stays interrupted.
+    pub fn interrupt_when(&mut self, poll: Box<dyn Fn() -> bool + Send>) {
+        if self.interrupt.is_none() {
+            self.interrupt = Some(Arc::new(AtomicBool::new(false)));
+        }
+        self.poll = Some(poll);
+    }
+
+    /// Whether the interrupt flag is set (or the poll says so).
     pub fn interrupted(&self) -> bool {
-        self.interrupt
-            .as_ref()
-            .is_some_and(|f| f.load(Ordering::SeqCst))
+        let Some(flag) = &self.interrupt else {
+            return false;
+        };
+        if !flag.load(Ordering::SeqCst) && self.poll.as_ref().is_some_and(|p| p()) {
+            flag.store(true, Ordering::SeqCst);
+        }
+        flag.load(Ordering::SeqCst)
+    }
+
+    /// Clears the interrupt flag (a new call after an interruption).
+    pub fn clear_interrupt(&mut self) {
+        if let Some(f) = &self.interrupt {
+            f.store(false, Ordering::SeqCst);
+        }
     }
 
     /// Runs `f` with the interrupt flag ignored (the clean-up after an

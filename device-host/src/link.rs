@@ -10,8 +10,9 @@ use std::path::PathBuf;
 use crate::virtual_device::{PlantOptions, SimState, VirtualDevice};
 use crate::{Error, Result};
 
-/// A bidirectional byte stream with read timeouts.
-pub trait Link {
+/// A bidirectional byte stream with read timeouts (`Send`: a client may run
+/// on another thread, e.g. with Python's GIL released).
+pub trait Link: Send {
     /// Writes all bytes.
     fn send(&mut self, bytes: &[u8]) -> io::Result<()>;
     /// Reads what is available within `timeout` (0 bytes on timeout).
@@ -120,7 +121,8 @@ impl Link for TcpLink {
 pub struct SimLink {
     dev: VirtualDevice,
     pending: Vec<u8>,
-    state_file: PathBuf,
+    /// Where the state is kept between invocations (None: nowhere).
+    state_file: Option<PathBuf>,
 }
 
 impl SimLink {
@@ -138,15 +140,32 @@ impl SimLink {
         SimLink {
             dev,
             pending: Vec::new(),
-            state_file,
+            state_file: Some(state_file),
+        }
+    }
+
+    /// Reseeds the plant's ADC noise (0 keeps the default record).
+    pub fn set_noise_seed(&mut self, seed: u64) {
+        self.dev.set_noise_seed(seed);
+    }
+
+    /// A fresh virtual device at power-up that keeps no state file (a
+    /// notebook's or a test's: it lives as long as its client).
+    pub fn ephemeral(opts: PlantOptions) -> Self {
+        SimLink {
+            dev: VirtualDevice::new(opts),
+            pending: Vec::new(),
+            state_file: None,
         }
     }
 }
 
 impl Drop for SimLink {
     fn drop(&mut self) {
-        if let Ok(text) = serde_json::to_string(&self.dev.snapshot()) {
-            let _ = std::fs::write(&self.state_file, text);
+        if let Some(f) = &self.state_file {
+            if let Ok(text) = serde_json::to_string(&self.dev.snapshot()) {
+                let _ = std::fs::write(f, text);
+            }
         }
     }
 }

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use board::device::MeasuredDrive;
 use board::estimator::Estimate;
-use board::protocol::{Request, Response};
+use board::protocol::{Request, Response, Telemetry};
 
 use crate::answers::{expect, unexpected};
 use crate::client::Client;
@@ -161,4 +161,63 @@ fn abort(c: &mut Client, why: String, was_running: bool) -> Error {
             e.msg
         )),
     }
+}
+
+/// `count` estimates of `periods` periods each from the device's stream
+/// (`Stream`), the stream stopped on every way out (an error, an
+/// interruption).
+///
+/// # Errors
+/// The device's refusal (busy, a fault), a stream that stops (`StreamStopped`
+/// with its reason) or sends nothing for 10 s plus 10 windows, a lost link.
+pub fn stream(c: &mut Client, periods: u32, count: usize) -> Result<Vec<Estimate>> {
+    let f = match expect(c.call(Request::GetDrive)?)? {
+        Response::Drive { applied, .. } => applied.achieved.freq_hz,
+        other => return Err(unexpected(other)),
+    };
+    let patience = Duration::from_secs_f64(10.0 + 10.0 * f64::from(periods) / f.max(1.0));
+    expect(c.call(Request::Stream { on: true, periods })?)?;
+    // What came before the stream's `Ok` is an earlier session's.
+    c.discard_telemetry();
+    let r = collect(c, count, patience);
+    let off = c.uninterrupted(|c| {
+        c.call(Request::Stream { on: false, periods })
+            .and_then(expect)
+    });
+    let est = r?;
+    off.map_err(|e| {
+        Error::failure(format!(
+            "could not stop the stream ({}); `fricctl device reset` ends it",
+            e.msg
+        ))
+    })?;
+    Ok(est)
+}
+
+/// The next `count` estimates of the stream.
+fn collect(c: &mut Client, count: usize, patience: Duration) -> Result<Vec<Estimate>> {
+    let mut v = Vec::with_capacity(count);
+    let mut last = Instant::now();
+    while v.len() < count {
+        match c.next_telemetry(Duration::from_millis(20))? {
+            Some((_, Telemetry::Estimate(e))) => {
+                v.push(e);
+                last = Instant::now();
+            }
+            Some((_, Telemetry::StreamStopped(why))) => {
+                return Err(Error::failure(format!(
+                    "the device stopped the stream: {why:?}"
+                )));
+            }
+            Some(_) => {}
+            None if last.elapsed() > patience => {
+                return Err(Error::failure(format!(
+                    "no estimate from the stream within {:.0} s",
+                    patience.as_secs_f64()
+                )));
+            }
+            None => {}
+        }
+    }
+    Ok(v)
 }

@@ -6,7 +6,7 @@
 
 use std::time::{Duration, Instant};
 
-use board::device::DriveSetting;
+use board::device::{Contact, DriveSetting};
 use board::estimator::Estimate;
 use board::protocol::{Prediction, Request, Response};
 use fric_analysis::sweep_file::SweepRow;
@@ -64,6 +64,11 @@ impl SweepParam {
         d
     }
 }
+
+/// Most points of one sweep: each is a measurement of at least one drive
+/// period plus the device's ramps, so 10⁴ points are already hours of a
+/// board's time.
+pub const MAX_POINTS: usize = 10_000;
 
 /// What one point measured.
 #[derive(Debug, Clone, Copy)]
@@ -235,4 +240,82 @@ pub fn fixed_columns(p: SweepParam, r: &SweepRow) -> Vec<(&'static str, f64)> {
     };
     v.retain(|(n, _)| *n != skip);
     v
+}
+
+/// A row with the drive (as it runs: frequency Hz and phase ° produced)
+/// and the device's contact filled in, the results empty.
+pub fn row(
+    param: SweepParam,
+    x: f64,
+    d: &DriveSetting,
+    (freq_hz, phi_deg): (f64, f64),
+    k: Contact,
+    v0: f64,
+) -> SweepRow {
+    SweepRow {
+        param: param.name().to_string(),
+        value: x,
+        freq_hz,
+        amp_z: f64::from(d.amp_z_m),
+        amp_x: f64::from(d.amp_x_m),
+        offset_z: f64::from(d.offset_z_m),
+        phi_deg,
+        v0,
+        model_mu0: f64::from(k.mu0),
+        model_kz: f64::from(k.kz),
+        model_kx: f64::from(k.kx),
+        measured_mu: f64::NAN,
+        std_error: 0.0,
+        predicted_mu: f64::NAN,
+        valid: false,
+        reasons: String::new(),
+    }
+}
+
+/// `r` with a point's estimate and prediction.
+pub fn measured(mut r: SweepRow, e: &Estimate, p: &Prediction) -> SweepRow {
+    r.measured_mu = f64::from(e.mu);
+    r.std_error = f64::from(e.std_error);
+    r.predicted_mu = f64::from(p.mu);
+    r.valid = e.valid();
+    r.reasons = crate::names::reason_names(e.reasons).join(";");
+    r
+}
+
+/// A whole sweep of a running drive: `param` over `values`, each point set,
+/// settled and measured ([`set_point`], [`measure_here`]). The drive is left
+/// at the last point (callers put it back: [`crate::state::restoring`]).
+///
+/// # Errors
+/// A stopped drive, a point the device refuses (naming `--{param}`), a wait
+/// that does not end, a lost link.
+pub fn run(
+    c: &mut Client,
+    param: SweepParam,
+    values: &[f64],
+    o: &PointOptions,
+) -> Result<Vec<SweepRow>> {
+    let (base, _, _) = drive_of(ask(c, Request::GetDrive)?)?;
+    let Response::Contact(contact) = ask(c, Request::GetContact)? else {
+        return Err(Error::failure("the device did not report its contact"));
+    };
+    let Response::Status(st) = ask(c, Request::GetStatus)? else {
+        return Err(Error::failure("the device did not report its status"));
+    };
+    if !st.running {
+        return Err(Error::usage(
+            "the drive is stopped: start it first (a sweep measures a running drive)",
+        ));
+    }
+    let mut rows = Vec::with_capacity(values.len());
+    for &x in values {
+        let (setting, freq, phi) = set_point(c, base, param, x)?;
+        let (e, p) = measure_here(c, freq, o)?;
+        rows.push(measured(
+            row(param, x, &setting, (freq, phi), contact, o.v0),
+            &e,
+            &p,
+        ));
+    }
+    Ok(rows)
 }

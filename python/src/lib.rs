@@ -3,11 +3,14 @@
 //! `fric-analysis` (the code behind the CLI `fricctl`), every refusal is the
 //! CLI's one-line message, as `ValueError` (bad input) or
 //! `fricctl.SolverError` (a computation that failed); a panic never crosses
-//! the boundary. The stub `fricctl.pyi` documents the API.
+//! the boundary. `fricctl.Device` drives a board, the QEMU firmware or the
+//! virtual device through the CLI's own device library (device-host). The
+//! stub `fricctl.pyi` documents the API.
 
 #![deny(missing_docs)]
 
 mod analyses;
+mod device;
 mod errors;
 mod record;
 mod scene;
@@ -21,6 +24,8 @@ fn fricctl(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SolverError", m.py().get_type::<errors::SolverError>())?;
     m.add_class::<scene::Scene>()?;
     m.add_class::<record::Record>()?;
+    m.add_class::<device::Device>()?;
+    device::add_exceptions(m)?;
     m.add_function(wrap_pyfunction!(analyses::tune, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::fit, m)?)?;
     m.add_function(wrap_pyfunction!(analyses::load_line, m)?)?;

@@ -8,7 +8,6 @@ pub use device_host::identify::*;
 
 use super::client::Client;
 use super::out;
-use super::render::Report;
 use crate::args::{Count, Real};
 use crate::error::{CliError, CliResult};
 
@@ -90,7 +89,7 @@ pub fn run(c: &mut Client, a: &IdentifyArgs, json: bool) -> CliResult {
         None => None,
     };
     let stored = !a.no_store && id.store(c)?;
-    let report = report(&id.channels, stored, id.elapsed_s);
+    let report = super::render::identification(&id.channels, stored, id.elapsed_s);
     if let Some(mut f) = file {
         let v = report.json();
         f.write_all(
@@ -102,76 +101,4 @@ pub fn run(c: &mut Client, a: &IdentifyArgs, json: bool) -> CliResult {
         f.commit()?;
     }
     out(json, &report)
-}
-
-/// JSON keys and text labels of one channel's rows (normal, tangential).
-const KEYS: [[(&str, &str, &str); 13]; 2] = [
-    [
-        ("resonance_z_hz", "normal resonance f_r", "Hz"),
-        ("resonance_z_hz_lo", "  95 % interval from", "Hz"),
-        ("resonance_z_hz_hi", "  95 % interval to", "Hz"),
-        ("q_z", "normal Q", ""),
-        ("q_z_lo", "  95 % interval from", ""),
-        ("q_z_hi", "  95 % interval to", ""),
-        ("gain_z_m_per_v", "normal static gain", "m/V"),
-        ("gain_z_m_per_v_lo", "  95 % interval from", "m/V"),
-        ("gain_z_m_per_v_hi", "  95 % interval to", "m/V"),
-        ("phase_lag_z_deg", "normal extra lag", "deg"),
-        ("tau_z_ms", "normal tau = Q/(pi f_r)", "ms"),
-        ("fit_rms_z_pct", "normal fit residual (RMS)", "%"),
-        ("points_z", "normal points", ""),
-    ],
-    [
-        ("resonance_x_hz", "tangential resonance f_r", "Hz"),
-        ("resonance_x_hz_lo", "  95 % interval from", "Hz"),
-        ("resonance_x_hz_hi", "  95 % interval to", "Hz"),
-        ("q_x", "tangential Q", ""),
-        ("q_x_lo", "  95 % interval from", ""),
-        ("q_x_hi", "  95 % interval to", ""),
-        ("gain_x_m_per_v", "tangential static gain", "m/V"),
-        ("gain_x_m_per_v_lo", "  95 % interval from", "m/V"),
-        ("gain_x_m_per_v_hi", "  95 % interval to", "m/V"),
-        ("phase_lag_x_deg", "tangential extra lag", "deg"),
-        ("tau_x_ms", "tangential tau = Q/(pi f_r)", "ms"),
-        ("fit_rms_x_pct", "tangential fit residual (RMS)", "%"),
-        ("points_x", "tangential points", ""),
-    ],
-];
-
-fn report(results: &[ChannelFit], stored: bool, elapsed: f64) -> Report {
-    let mut r = Report::default();
-    for ch in results {
-        let Ok(f) = &ch.fit else { continue };
-        let keys = &KEYS[usize::from(ch.name != "normal")];
-        let tau_ms = 1e3 * f.q.value / (std::f64::consts::PI * f.resonance_hz.value);
-        let vals = [
-            f.resonance_hz.value,
-            f.resonance_hz.lo,
-            f.resonance_hz.hi,
-            f.q.value,
-            f.q.lo,
-            f.q.hi,
-            f.gain_m_per_v.value,
-            f.gain_m_per_v.lo,
-            f.gain_m_per_v.hi,
-            f.phase_lag_rad.value.to_degrees(),
-            tau_ms,
-            100.0 * f.rel_rms,
-            f.points as f64,
-        ];
-        for ((k, l, u), v) in keys.iter().zip(vals) {
-            r = r.row(k, l, sig(v), u);
-        }
-    }
-    r.row("stored", "stored on the device", stored, "").row(
-        "elapsed_s",
-        "elapsed",
-        (elapsed * 10.0).round() / 10.0,
-        "s",
-    )
-}
-
-/// `x` to 7 significant digits (the fit's f32 on the device holds about as many).
-fn sig(x: f64) -> f64 {
-    format!("{x:.6e}").parse().unwrap_or(x)
 }

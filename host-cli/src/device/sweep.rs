@@ -14,20 +14,17 @@ use board::protocol::{Request, Response};
 use clap::Args;
 use serde::Serialize;
 
+use device_host::sweep;
 pub use device_host::sweep::{
     ask, drive_of, fixed_columns, measure_here, set_point, PointOptions, SweepParam,
 };
 
 use super::client::Client;
-use super::render::reason_names;
 use crate::args::{short, Count, Real};
 use crate::error::{CliError, CliResult};
 use crate::sweep_file::{self, SweepRow};
 
-/// Most points of one sweep: each is a measurement of at least one drive
-/// period plus the device's ramps, so 10⁴ points are already hours of a
-/// board's time.
-pub const MAX_POINTS: usize = 10_000;
+pub use device_host::sweep::MAX_POINTS;
 
 /// Flags of `fricctl device sweep`.
 #[derive(Args, Debug, Clone)]
@@ -341,12 +338,7 @@ fn measure_points(
         let (setting, freq, phi) = set_point(c, base, a.param, x)
             .map_err(|e| e.renamed(&format!("--{}", a.param.name()), end))?;
         let (e, prediction) = measure_here(c, freq, &a.point_options())?;
-        let mut r = row_for(a, x, &setting, freq, phi, contact);
-        r.measured_mu = f64::from(e.mu);
-        r.std_error = f64::from(e.std_error);
-        r.predicted_mu = f64::from(prediction.mu);
-        r.valid = e.valid();
-        r.reasons = reason_names(e.reasons).join(";");
+        let r = sweep::measured(row_for(a, x, &setting, freq, phi, contact), &e, &prediction);
         w.serialize(&r).map_err(io)?;
         w.flush().map_err(|e| io(e.into()))?;
         bar.inc(1);
@@ -377,24 +369,7 @@ const HEADER: [&str; 16] = [
 
 /// A row with the drive and contact filled in (results empty).
 fn row_for(a: &SweepArgs, x: f64, d: &DriveSetting, freq: f64, phi: f64, k: Contact) -> SweepRow {
-    SweepRow {
-        param: a.param.name().to_string(),
-        value: x,
-        freq_hz: freq,
-        amp_z: f64::from(d.amp_z_m),
-        amp_x: f64::from(d.amp_x_m),
-        offset_z: f64::from(d.offset_z_m),
-        phi_deg: phi,
-        v0: a.v0,
-        model_mu0: f64::from(k.mu0),
-        model_kz: f64::from(k.kz),
-        model_kx: f64::from(k.kx),
-        measured_mu: f64::NAN,
-        std_error: 0.0,
-        predicted_mu: f64::NAN,
-        valid: false,
-        reasons: String::new(),
-    }
+    sweep::row(a.param, x, d, (freq, phi), k, a.v0)
 }
 
 #[derive(Serialize)]
