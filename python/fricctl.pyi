@@ -329,7 +329,8 @@ class Device:
         ``mu0``, ``kz`` (N/m), ``kx`` (N/m), ``lag_periods``, ``mu0_drift``
         (1/s), ``ideal_transducers``, ``resonance_z``/``_x`` (Hz),
         ``q_z``/``_x``, ``gain_z``/``_x`` (m/V), ``resonance_drift_z``/``_x``
-        (Hz/s), ``thermal_shift`` (Hz/µm²), ``crosstalk``, ``load_q``. ``v0``
+        (Hz/s), ``thermal_shift`` (Hz/µm²), ``crosstalk``, ``load_q``,
+        ``v0_profile`` (a CSV path, rows ``t_s,v0_m_s``). ``v0``
         is the stage velocity (m/s), ``noise`` and ``offset`` the ADC's
         (counts), ``seed`` the noise record (0: the default)."""
     @staticmethod
@@ -429,6 +430,16 @@ class Device:
     ) -> Record:
         """``device control``: the closed μ loop on with the setpoint μ* at v0
         (m/s), or off with ``on=False``; the loop's state."""
-    def watch(self, periods: int, *, count: int) -> list[Record]:
-        """``device watch --count``: ``count`` streamed estimates of
-        ``periods`` periods; the stream is stopped before returning."""
+    def watch(self, periods: int, *, count: Optional[int] = None) -> "Watch":
+        """``device watch``: the device's stream of estimates of ``periods``
+        periods, as an iterator of records (``count`` of them, or until the
+        loop ends). The stream stops when the iterator ends, is closed or
+        dropped, or raises (an error, a KeyboardInterrupt)."""
+
+class Watch:
+    """The iterator of :meth:`Device.watch`."""
+
+    def __iter__(self) -> "Watch": ...
+    def __next__(self) -> Record: ...
+    def close(self) -> None:
+        """Stops the stream now."""

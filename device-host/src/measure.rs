@@ -163,61 +163,99 @@ fn abort(c: &mut Client, why: String, was_running: bool) -> Error {
     }
 }
 
-/// `count` estimates of `periods` periods each from the device's stream
-/// (`Stream`), the stream stopped on every way out (an error, an
-/// interruption).
-///
-/// # Errors
-/// The device's refusal (busy, a fault), a stream that stops (`StreamStopped`
-/// with its reason) or sends nothing for 10 s plus 10 windows, a lost link.
-pub fn stream(c: &mut Client, periods: u32, count: usize) -> Result<Vec<Estimate>> {
-    let f = match expect(c.call(Request::GetDrive)?)? {
-        Response::Drive { applied, .. } => applied.achieved.freq_hz,
-        other => return Err(unexpected(other)),
-    };
-    let patience = Duration::from_secs_f64(10.0 + 10.0 * f64::from(periods) / f.max(1.0));
-    expect(c.call(Request::Stream { on: true, periods })?)?;
-    // What came before the stream's `Ok` is an earlier session's.
-    c.discard_telemetry();
-    let r = collect(c, count, patience);
-    let off = c.uninterrupted(|c| {
-        c.call(Request::Stream { on: false, periods })
-            .and_then(expect)
-    });
-    let est = r?;
-    off.map_err(|e| {
-        Error::failure(format!(
-            "could not stop the stream ({}); `fricctl device reset` ends it",
-            e.msg
-        ))
-    })?;
-    Ok(est)
+/// A stream of estimates on the device (`Stream`), read one at a time
+/// ([`Stream::next`]) and stopped by [`Stream::stop`].
+pub struct Stream {
+    periods: u32,
+    patience: Duration,
 }
 
-/// The next `count` estimates of the stream.
-fn collect(c: &mut Client, count: usize, patience: Duration) -> Result<Vec<Estimate>> {
-    let mut v = Vec::with_capacity(count);
-    let mut last = Instant::now();
-    while v.len() < count {
-        match c.next_telemetry(Duration::from_millis(20))? {
-            Some((_, Telemetry::Estimate(e))) => {
-                v.push(e);
-                last = Instant::now();
-            }
-            Some((_, Telemetry::StreamStopped(why))) => {
-                return Err(Error::failure(format!(
-                    "the device stopped the stream: {why:?}"
-                )));
-            }
-            Some(_) => {}
-            None if last.elapsed() > patience => {
-                return Err(Error::failure(format!(
-                    "no estimate from the stream within {:.0} s",
-                    patience.as_secs_f64()
-                )));
-            }
-            None => {}
+impl Stream {
+    /// Starts the device's stream of estimates of `periods` periods each.
+    ///
+    /// # Errors
+    /// The device's refusal (busy, a fault), a lost link.
+    pub fn start(c: &mut Client, periods: u32) -> Result<Stream> {
+        let f = match expect(c.call(Request::GetDrive)?)? {
+            Response::Drive { applied, .. } => applied.achieved.freq_hz,
+            other => return Err(unexpected(other)),
+        };
+        expect(c.call(Request::Stream { on: true, periods })?)?;
+        // What came before the stream's `Ok` is an earlier session's.
+        c.discard_telemetry();
+        Ok(Stream {
+            periods,
+            patience: Duration::from_secs_f64(10.0 + 10.0 * f64::from(periods) / f.max(1.0)),
+        })
+    }
+
+    /// The handle of a stream of `periods` periods already on the device
+    /// (to stop it).
+    pub fn for_periods(periods: u32) -> Stream {
+        Stream {
+            periods,
+            patience: Duration::from_secs(10),
         }
     }
-    Ok(v)
+
+    /// The next estimate.
+    ///
+    /// # Errors
+    /// A stream the device stopped (`StreamStopped` with its reason), no
+    /// estimate for 10 s plus 10 windows, an interruption, a lost link.
+    pub fn next(&self, c: &mut Client) -> Result<Estimate> {
+        let start = Instant::now();
+        loop {
+            match c.next_telemetry(Duration::from_millis(20))? {
+                Some((_, Telemetry::Estimate(e))) => return Ok(e),
+                Some((_, Telemetry::StreamStopped(why))) => {
+                    return Err(Error::failure(format!(
+                        "the device stopped the stream: {why:?}"
+                    )));
+                }
+                Some(_) => {}
+                None if start.elapsed() > self.patience => {
+                    return Err(Error::failure(format!(
+                        "no estimate from the stream within {:.0} s",
+                        self.patience.as_secs_f64()
+                    )));
+                }
+                None => {}
+            }
+        }
+    }
+
+    /// Stops the stream (also after an interruption).
+    ///
+    /// # Errors
+    /// The device did not confirm: `fricctl device reset` ends it.
+    pub fn stop(&self, c: &mut Client) -> Result<()> {
+        let periods = self.periods;
+        c.uninterrupted(|c| {
+            c.call(Request::Stream { on: false, periods })
+                .and_then(expect)
+        })
+        .map(drop)
+        .map_err(|e| {
+            Error::failure(format!(
+                "could not stop the stream ({}); `fricctl device reset` ends it",
+                e.msg
+            ))
+        })
+    }
+}
+
+/// `count` estimates of `periods` periods each from the device's stream,
+/// the stream stopped on every way out (an error, an interruption).
+///
+/// # Errors
+/// As [`Stream::start`] and [`Stream::next`]; a stream that could not be
+/// stopped.
+pub fn stream(c: &mut Client, periods: u32, count: usize) -> Result<Vec<Estimate>> {
+    let s = Stream::start(c, periods)?;
+    let r: Result<Vec<Estimate>> = (0..count).map(|_| s.next(c)).collect();
+    let off = s.stop(c);
+    let est = r?;
+    off?;
+    Ok(est)
 }

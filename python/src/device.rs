@@ -216,6 +216,7 @@ fn plant_spec(plant: Option<&Bound<'_, PyDict>>) -> PyResult<PlantSpec> {
             "lag_periods" => p.plant_lag_periods = num()?,
             "mu0_drift" => p.plant_mu0_drift = num()?,
             "ideal_transducers" => t.plant_ideal_transducers = v.extract()?,
+            "v0_profile" => p.v0_profile = Some(v.extract::<std::path::PathBuf>()?),
             "resonance_z" => t.plant_resonance_z = Some(num()?),
             "q_z" => t.plant_q_z = Some(num()?),
             "resonance_x" => t.plant_resonance_x = Some(num()?),
@@ -230,7 +231,7 @@ fn plant_spec(plant: Option<&Bound<'_, PyDict>>) -> PyResult<PlantSpec> {
             other => {
                 return Err(PyValueError::new_err(format!(
                     "plant: unknown option '{other}' (mu0, kz, kx, lag_periods, mu0_drift, \
-                     ideal_transducers, resonance_z, q_z, resonance_x, q_x, gain_z, gain_x, \
+                     v0_profile, ideal_transducers, resonance_z, q_z, resonance_x, q_x, gain_z, gain_x, \
                      resonance_drift_z, resonance_drift_x, thermal_shift, crosstalk, load_q)"
                 )))
             }
@@ -657,20 +658,110 @@ impl Device {
         }
     }
 
-    /// `device watch`: `count` estimates of `periods` periods each from the
-    /// device's stream, as a list of records; the stream is stopped before
-    /// returning, also on an error or a KeyboardInterrupt.
-    #[pyo3(signature = (periods, *, count))]
-    fn watch(&mut self, py: Python<'_>, periods: u32, count: usize) -> PyResult<Vec<Record>> {
-        if count == 0 {
+    /// `device watch`: the device's stream of estimates of `periods`
+    /// periods each, as an iterator of records (`count` of them, or until
+    /// the loop ends). The stream stops when the iterator ends, is closed,
+    /// is dropped, or raises (an error, a KeyboardInterrupt).
+    #[pyo3(signature = (periods, *, count=None))]
+    fn watch(slf: Bound<'_, Self>, periods: u32, count: Option<u64>) -> PyResult<Watch> {
+        if count == Some(0) {
             return Err(PyValueError::new_err("count: must be ≥ 1"));
         }
-        let est = with_client(py, self, move |c| {
-            device_host::measure::stream(c, periods, count)
-        })?;
-        est.iter()
-            .map(|e| record(py, "Estimate", &report::estimate(e)))
-            .collect()
+        if periods == 0 {
+            return Err(PyValueError::new_err("periods: must be ≥ 1"));
+        }
+        Ok(Watch {
+            dev: slf.unbind(),
+            periods,
+            left: count,
+            stream: None,
+            done: false,
+        })
+    }
+}
+
+/// The iterator of `Device.watch`.
+#[pyclass(module = "fricctl")]
+pub struct Watch {
+    dev: Py<Device>,
+    periods: u32,
+    left: Option<u64>,
+    stream: Option<device_host::measure::Stream>,
+    done: bool,
+}
+
+impl Watch {
+    /// Stops the stream if it runs.
+    fn finish(&mut self, py: Python<'_>) -> PyResult<()> {
+        self.done = true;
+        let Some(s) = self.stream.take() else {
+            return Ok(());
+        };
+        let mut dev = self.dev.bind(py).try_borrow_mut()?;
+        with_client(py, &mut dev, move |c| s.stop(c))
+    }
+}
+
+#[pymethods]
+impl Watch {
+    fn __iter__(slf: PyRef<'_, Self>) -> PyRef<'_, Self> {
+        slf
+    }
+
+    fn __next__(&mut self, py: Python<'_>) -> PyResult<Option<Record>> {
+        if self.done || self.left == Some(0) {
+            self.finish(py)?;
+            return Ok(None);
+        }
+        let periods = self.periods;
+        let stream = self.stream.take();
+        let r = {
+            let mut dev = self.dev.bind(py).try_borrow_mut()?;
+            with_client(py, &mut dev, move |c| {
+                let s = match stream {
+                    Some(s) => s,
+                    None => device_host::measure::Stream::start(c, periods)?,
+                };
+                let e = s.next(c);
+                Ok((s, e))
+            })
+        };
+        match r {
+            Ok((s, Ok(e))) => {
+                self.stream = Some(s);
+                if let Some(n) = &mut self.left {
+                    *n -= 1;
+                }
+                record(py, "Estimate", &report::estimate(&e)).map(Some)
+            }
+            Ok((s, Err(e))) => {
+                self.stream = Some(s);
+                let _ = self.finish(py);
+                Err(to_py(e))
+            }
+            Err(e) => {
+                // Interrupted or failed before an estimate: the stream (if
+                // started) was moved into the call; stop it by its periods.
+                self.stream = Some(device_host::measure::Stream::for_periods(periods));
+                let _ = self.finish(py);
+                Err(e)
+            }
+        }
+    }
+
+    /// Stops the stream now.
+    fn close(&mut self, py: Python<'_>) -> PyResult<()> {
+        self.finish(py)
+    }
+}
+
+impl Drop for Watch {
+    fn drop(&mut self) {
+        if self.stream.is_some() {
+            Python::attach(|py| {
+                let _ = self.finish(py);
+            });
+        }
     }
 }
 
@@ -725,5 +816,6 @@ pub fn add_exceptions(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("DeviceRefused", py.get_type::<DeviceRefused>())?;
     m.add("DeviceFault", py.get_type::<DeviceFault>())?;
     m.add("LinkError", py.get_type::<LinkError>())?;
+    m.add_class::<Watch>()?;
     Ok(())
 }

@@ -112,6 +112,25 @@ def test_lab_session_on_sim_device_over_a_pty(pty_sim):
         check(*session(dev))
 
 
+def test_watch_is_an_iterator_that_stops_the_stream():
+    with fricctl.Device.virtual(plant=dict(ideal_transducers=True)) as dev:
+        dev.drive(freq=20000, amp_z=2e-6, amp_x=3e-7, offset_z=4e-6, phase_deg=40, open_loop=True)
+        dev.start()
+        dev.measure(2000)
+        ests = list(dev.watch(500, count=3))
+        assert len(ests) == 3 and all(e.periods == 500 and e.valid for e in ests)
+        # The stream ended: a measurement is accepted (a running stream
+        # would make the device answer Busy).
+        assert dev.measure(500).valid
+        # Leaving the loop early and closing the iterator stops it too.
+        it = dev.watch(500)
+        for e in it:
+            break
+        it.close()
+        assert dev.measure(500).valid
+        assert dev.status().measuring is False
+
+
 def test_a_refusal_is_device_refused_with_its_range():
     with fricctl.Device.virtual() as dev:
         with pytest.raises(fricctl.DeviceRefused) as e:
