@@ -105,29 +105,20 @@ pub fn measure(
         wait_settled(c, interrupted, note)?;
     }
     expect(c.call(Request::Measure { periods })?)?;
-    // Wait for the window to close (a virtual device advances meanwhile).
-    let start = Instant::now();
-    loop {
-        if interrupted.load(Ordering::SeqCst) {
-            return Err(abort(c, "interrupted".to_string(), was_running));
-        }
-        let _ = c.next_telemetry(Duration::from_millis(20))?;
-        if let Response::Status(s) = expect(c.call(Request::GetStatus)?)? {
-            if !s.measuring {
-                break;
-            }
-        }
-        if start.elapsed() > limit {
-            return Err(abort(
-                c,
-                format!(
-                    "no estimate within {:.0} s, though {periods} periods at {f:.3} Hz take \
-                     {window_s:.3} s (is the device sampling its ADC?)",
-                    limit.as_secs_f64()
-                ),
-                was_running,
-            ));
-        }
+    // Wait for the window to close (a virtual device advances meanwhile);
+    // an interruption seen by the client (its flag or poll) ends the
+    // measurement on the device as the caller's flag does.
+    if let Err(e) = wait_window(c, interrupted, limit) {
+        let why = match e {
+            Window::Interrupted => "interrupted".to_string(),
+            Window::TooLong => format!(
+                "no estimate within {:.0} s, though {periods} periods at {f:.3} Hz take \
+                 {window_s:.3} s (is the device sampling its ADC?)",
+                limit.as_secs_f64()
+            ),
+            Window::Failed(e) => return Err(e),
+        };
+        return Err(c.uninterrupted(|c| abort(c, why, was_running)));
     }
     let r = expect(c.call(Request::GetEstimate)?)?;
     let Response::Estimate(estimate) = r else {
@@ -138,6 +129,43 @@ pub fn measure(
         other => return Err(unexpected(other)),
     };
     Ok(Measured { estimate, measured })
+}
+
+/// Why the wait for a window ended early.
+enum Window {
+    Interrupted,
+    TooLong,
+    Failed(Error),
+}
+
+/// Waits until the device no longer measures.
+fn wait_window(
+    c: &mut Client,
+    interrupted: &AtomicBool,
+    limit: Duration,
+) -> std::result::Result<(), Window> {
+    let start = Instant::now();
+    let step = |c: &mut Client| -> Result<bool> {
+        let _ = c.next_telemetry(Duration::from_millis(20))?;
+        match expect(c.call(Request::GetStatus)?)? {
+            Response::Status(s) => Ok(!s.measuring),
+            _ => Ok(false),
+        }
+    };
+    loop {
+        if interrupted.load(Ordering::SeqCst) {
+            return Err(Window::Interrupted);
+        }
+        match step(c) {
+            Ok(true) => return Ok(()),
+            Ok(false) => {}
+            Err(e) if e.code == 130 => return Err(Window::Interrupted),
+            Err(e) => return Err(Window::Failed(e)),
+        }
+        if start.elapsed() > limit {
+            return Err(Window::TooLong);
+        }
+    }
 }
 
 /// Ends the measurement on the device (`Reset`, which also ramps the drive

@@ -252,3 +252,31 @@ def test_lab_session_on_the_qemu_firmware(qemu_tcp):
     with fricctl.Device.open(tcp=qemu_tcp, timeout_ms=2000) as dev:
         assert dev.info().protocol >= 8
         check(*session(dev), mu0=0.24, q_tol=0.10)
+
+
+def test_keyboard_interrupt_during_measure_ends_it_on_the_device(pty_sim):
+    """A KeyboardInterrupt mid-measure: the device no longer measures, and a
+    drive that was running runs again (the CLI's Ctrl-C)."""
+    script = textwrap.dedent(
+        f"""
+        import fricctl
+        dev = fricctl.Device.open({pty_sim!r})
+        dev.drive(freq=20000, amp_z=2e-6, amp_x=3e-7, offset_z=4e-6, phase_deg=40, open_loop=True)
+        dev.start()
+        print("ready", flush=True)
+        try:
+            dev.measure(200000)  # 10 s at 20 kHz, the sim in real time
+            print("finished", flush=True)
+        except KeyboardInterrupt:
+            s = dev.status()
+            print("interrupted", s.measuring, s.running, flush=True)
+        """
+    )
+    child = subprocess.Popen(
+        [sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    assert child.stdout.readline().strip() == "ready"
+    time.sleep(1.5)
+    child.send_signal(signal.SIGINT)
+    out, err = child.communicate(timeout=30)
+    assert out.split() == ["interrupted", "False", "True"], (out, err)
