@@ -41,10 +41,21 @@ pub fn default_gain(metres_per_code: f32) -> f64 {
 /// `--plant-load-q` without `inf`).
 pub const Q_DOMAIN: Real = Real::ANY
     .above(0.5)
-    .because("a resonance with Q ≤ 0.5 does not ring");
+    .at_most(1e6)
+    .because("a resonance with Q ≤ 0.5 does not ring; the device's model holds Q ≤ 1e6");
 
-/// The domain of a resonance, Hz, and of a static gain, m/V.
-pub const POSITIVE: Real = Real::positive();
+/// The domain of a resonance, Hz: what the device's transducer model holds
+/// (`board::device::displacement::check_model`: 0 < f_r ≤ 10 MHz, in `f32`),
+/// so that the plant's identification can be stored.
+pub const RESONANCE: Real = Real::positive()
+    .at_most(1e7)
+    .because("the device's transducer model holds up to 10 MHz")
+    .single_precision();
+/// The domain of a static gain, m/V: as the device's model (0 < g ≤ 1).
+pub const GAIN: Real = Real::positive()
+    .at_most(1.0)
+    .because("the device's transducer model holds up to 1 m/V")
+    .single_precision();
 /// The domain of a drift (Hz/s) and of the self-heating shift (Hz/µm²).
 pub const ANY: Real = Real::ANY;
 /// The domain of the cross-talk: a fraction of the other channel's drive.
@@ -177,12 +188,12 @@ impl TransducerSpec {
     /// Each given value within its domain, named by its flag.
     fn check(&self) -> Result<()> {
         let fields = [
-            (self.plant_resonance_z, "--plant-resonance-z", POSITIVE),
+            (self.plant_resonance_z, "--plant-resonance-z", RESONANCE),
             (self.plant_q_z, "--plant-q-z", Q_DOMAIN),
-            (self.plant_resonance_x, "--plant-resonance-x", POSITIVE),
+            (self.plant_resonance_x, "--plant-resonance-x", RESONANCE),
             (self.plant_q_x, "--plant-q-x", Q_DOMAIN),
-            (self.plant_gain_z, "--plant-gain-z", POSITIVE),
-            (self.plant_gain_x, "--plant-gain-x", POSITIVE),
+            (self.plant_gain_z, "--plant-gain-z", GAIN),
+            (self.plant_gain_x, "--plant-gain-x", GAIN),
             (
                 self.plant_resonance_drift_z,
                 "--plant-resonance-drift-z",

@@ -140,9 +140,14 @@ impl PlantOptions {
     }
 }
 
-/// Domain of the plant's stage velocity, m/s (`--v0`, `--sim-v0`): a
-/// normal `f32` number or 0, as every velocity the device is told.
-pub const STAGE_VELOCITY: Real = Real::ANY.single_precision();
+/// Domain of the plant's stage velocity, m/s (`--v0`, `--sim-v0`, the rows
+/// of `--v0-profile`): within the device's ±1000 m/s, a normal `f32` number
+/// or 0, as every velocity the device is told.
+pub const STAGE_VELOCITY: Real = Real::ANY
+    .at_least(-1000.0)
+    .at_most(1000.0)
+    .because("the device's velocity limit")
+    .single_precision();
 /// Domain of the plant's ADC noise, counts: within the 12-bit ADC's full scale.
 pub const NOISE_COUNTS: Real = Real::non_negative()
     .at_most(4095.0)
@@ -286,6 +291,9 @@ pub fn read_profile(path: &std::path::Path) -> Result<Vec<(f64, f64)>> {
                 .ok_or_else(|| bad(format!("line {line}: '{}' is not a finite number", &rec[k])))
         };
         let (t, v) = (num(0)?, num(1)?);
+        STAGE_VELOCITY
+            .check(v, &rec[1])
+            .map_err(|r| bad(format!("line {line}: v0_m_s {r}")))?;
         if out.last().is_some_and(|(tl, _)| t <= *tl) {
             return Err(bad(format!("line {line}: t_s must increase strictly")));
         }

@@ -1479,7 +1479,7 @@ fn sim_device_flags_are_checked_before_serving() {
         (
             &["--tcp", "127.0.0.1:0", "--v0", "1e308"][..],
             "--v0",
-            "(got 1e308)",
+            "must be ≤ 1000 (got 1e308; the device's velocity limit)",
         ),
         (
             &["--tcp", "127.0.0.1:0", "--plant-mu0-drift", "1e308"][..],

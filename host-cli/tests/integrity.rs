@@ -330,3 +330,44 @@ fn a_flag_a_subcommand_would_ignore_is_refused_by_name() {
     // A query and a refusal change nothing.
     assert_eq!(state(&s), before);
 }
+
+#[test]
+fn the_plant_refuses_what_it_cannot_be_by_the_flag_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let prof = dir.path().join("v.csv");
+    std::fs::write(&prof, "t_s,v0_m_s\n0,0.004\n1,1e300\n").unwrap();
+    let p = prof.to_str().unwrap();
+    for (flags, named, why) in [
+        (&["--sim-v0", "1e30"][..], "--sim-v0", "1000"),
+        (&["--plant-load-q", "0.45"][..], "--plant-load-q", "> 0.5"),
+        (&["--plant-load-q", "1e-100"][..], "--plant-load-q", "> 0.5"),
+        (
+            &["--plant-resonance-z", "1e-100"][..],
+            "--plant-resonance-z",
+            "",
+        ),
+        (
+            &["--plant-resonance-z", "2e7"][..],
+            "--plant-resonance-z",
+            "10 MHz",
+        ),
+        (&["--plant-q-x", "1e7"][..], "--plant-q-x", "1e6"),
+        (&["--v0-profile", p][..], "--v0-profile", "line 3"),
+    ] {
+        let o = fricctl()
+            .env("FRICCTL_SIM_STATE", dir.path().join("state.json"))
+            .args(["device", "--sim"])
+            .args(flags)
+            .arg("status")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{flags:?}: {err}");
+        assert!(
+            err.starts_with(&format!("error: {named}:")),
+            "{flags:?}: {err}"
+        );
+        assert!(err.contains(why), "{flags:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+}

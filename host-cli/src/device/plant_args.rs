@@ -72,22 +72,22 @@ pub struct TransducerArgs {
     #[arg(long)]
     pub plant_ideal_transducers: bool,
     /// Virtual plant: resonance of the normal transducer, Hz (resonant plant; default 20300)
-    #[arg(long, value_name = "HZ", value_parser = Real(tr::POSITIVE))]
+    #[arg(long, value_name = "HZ", value_parser = Real(tr::RESONANCE))]
     pub plant_resonance_z: Option<f64>,
     /// Virtual plant: Q of the normal transducer (> 0.5; default 300)
     #[arg(long, value_name = "Q", value_parser = Real(tr::Q_DOMAIN))]
     pub plant_q_z: Option<f64>,
     /// Virtual plant: resonance of the tangential transducer, Hz (default 19700)
-    #[arg(long, value_name = "HZ", value_parser = Real(tr::POSITIVE))]
+    #[arg(long, value_name = "HZ", value_parser = Real(tr::RESONANCE))]
     pub plant_resonance_x: Option<f64>,
     /// Virtual plant: Q of the tangential transducer (> 0.5; default 200)
     #[arg(long, value_name = "Q", value_parser = Real(tr::Q_DOMAIN))]
     pub plant_q_x: Option<f64>,
     /// Virtual plant: static gain of the normal transducer, m per DAC volt (default 8.27e-8)
-    #[arg(long, value_name = "M_PER_V", value_parser = Real(tr::POSITIVE))]
+    #[arg(long, value_name = "M_PER_V", value_parser = Real(tr::GAIN))]
     pub plant_gain_z: Option<f64>,
     /// Virtual plant: static gain of the tangential transducer, m per DAC volt (default 4.14e-8)
-    #[arg(long, value_name = "M_PER_V", value_parser = Real(tr::POSITIVE))]
+    #[arg(long, value_name = "M_PER_V", value_parser = Real(tr::GAIN))]
     pub plant_gain_x: Option<f64>,
     /// Virtual plant: drift of the normal resonance, Hz per second of device time (default 0)
     #[arg(long, value_name = "HZ_PER_S", value_parser = Real(tr::ANY))]
