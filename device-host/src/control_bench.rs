@@ -499,6 +499,67 @@ struct Half {
     resonance_z_hz: Option<f64>,
 }
 
+/// What the hold keeps of its half-buffers and updates: running sums and
+/// extremes instead of the records, so that memory stays bounded by the
+/// output, not by the hold's duration (a 600 s hold is 4.7 million
+/// half-buffers).
+#[derive(Debug, Clone, Copy, Default)]
+struct Tail {
+    /// A half-buffer before the hold was locked.
+    locked_before: bool,
+    /// The setpoint of the hold.
+    target: f32,
+    /// The lift-off limit, m.
+    limit_m: f64,
+    /// The last update's number.
+    last_update: Option<u32>,
+    max_duz: f64,
+    above_limit: u32,
+    saturated: u32,
+    /// Σ(μ̂ − μ*)², their count and the largest |μ̂ − μ*|.
+    err_sq: f64,
+    err_n: u32,
+    err_max: f64,
+    max_excursion_m: f64,
+    /// Device time of the first locked half-buffer, s.
+    first_locked: Option<f64>,
+    /// Largest |tracking error| and |f − true f_r| after the lock, Hz.
+    track_err_max: f64,
+    true_off_max: f64,
+    last: Option<Half>,
+}
+
+impl Tail {
+    fn update(&mut self, u: &ControlUpdate) {
+        self.last_update = Some(u.update);
+        let duz = f64::from(u.amp_z_m);
+        self.max_duz = self.max_duz.max(duz);
+        self.above_limit += u32::from(duz > self.limit_m);
+        self.saturated += u32::from(u.saturated);
+        let e = f64::from(u.measured_mu) - f64::from(self.target);
+        self.err_sq += e * e;
+        self.err_n += 1;
+        self.err_max = self.err_max.max(e.abs());
+    }
+
+    /// A half-buffer of the hold.
+    fn half(&mut self, h: Half) {
+        self.max_excursion_m = self.max_excursion_m.max(h.excursion_m);
+        if h.locked && self.first_locked.is_none() {
+            self.first_locked = Some(h.t);
+        }
+        if self.locked_before || self.first_locked.is_some() {
+            self.track_err_max = self
+                .track_err_max
+                .max(h.tracking_error_hz.map_or(0.0, |x| f64::from(x).abs()));
+            self.true_off_max = self
+                .true_off_max
+                .max(h.resonance_z_hz.map_or(0.0, |r| (h.freq_hz - r).abs()));
+        }
+        self.last = Some(h);
+    }
+}
+
 /// An in-process virtual device with a request/telemetry helper.
 struct Bench<'p> {
     dev: VirtualDevice,
@@ -514,6 +575,8 @@ struct Bench<'p> {
     /// Progress over the run's device time (ms done, ms in all).
     progress: &'p mut dyn FnMut(f64, f64),
     total_ms: f64,
+    /// In the hold: its running summary (the records stop at its start).
+    tail: Option<Tail>,
 }
 
 impl Bench<'_> {
@@ -573,7 +636,10 @@ impl Bench<'_> {
             let faults = self.record_half(t);
             for fr in self.frames(&tel) {
                 if let Body::Telemetry(Telemetry::Control(u)) = fr.body {
-                    self.log.push((t, u));
+                    match &mut self.tail {
+                        Some(tail) => tail.update(&u),
+                        None => self.log.push((t, u)),
+                    }
                 }
             }
             if k % 64 == 0 {
@@ -593,7 +659,7 @@ impl Bench<'_> {
         let volts = f64::from(dev.dds().channels()[0].amp) * board::dds::DAC_VOLTS_PER_CODE;
         let st = dev.status();
         let plant = self.dev.plant();
-        self.trace.push(Half {
+        let h = Half {
             t,
             volts,
             excursion_m: plant.peak_excursion_m,
@@ -604,7 +670,11 @@ impl Bench<'_> {
                 .resonant
                 .as_ref()
                 .map(|r| r.params_now()[0].resonance_hz),
-        });
+        };
+        match &mut self.tail {
+            Some(tail) => tail.half(h),
+            None => self.trace.push(h),
+        }
         st.faults
     }
 }
@@ -684,6 +754,7 @@ fn set_up<'p>(
         faults: (0, 0.0),
         progress,
         total_ms: plan.total_ms(c),
+        tail: None,
     };
     b.dev.set_fill_lead(c.fill_lead);
     if c.seed != 0 {
@@ -746,6 +817,14 @@ fn run_events(b: &mut Bench, plan: &Plan, c: &BenchConfig) -> Result<(Marks, Vec
     // The events end here; the hold (if any) goes on with the last setpoint.
     let end = b.t();
     if c.hold_s > 0.0 {
+        b.tail = Some(Tail {
+            locked_before: b.trace.iter().any(|h| h.locked),
+            target: plan.targets.1,
+            limit_m: states
+                .first()
+                .map_or(f64::INFINITY, |s| f64::from(s.limit_m)),
+            ..Tail::default()
+        });
         b.run_ms(c.hold_s * 1e3);
     }
     let hold_end = b.t();
@@ -856,33 +935,36 @@ fn event_response(
 /// The lock and the tracking after it: (device time from the start to the
 /// first locked half-buffer s, largest |tracking error| Hz, largest
 /// |f − true f_r| Hz), over the hold if there is one, else the whole run.
-fn tracking(b: &Bench, m: &Marks, hold: bool) -> (Option<f64>, f64, f64) {
-    let lock_at = b.trace.iter().find(|h| h.locked).map(|h| h.t - m.start);
-    let from = if hold { m.end } else { m.start };
-    let (e, o) = b
-        .trace
-        .iter()
-        .filter(|h| h.t > from && lock_at.is_some_and(|l| h.t - m.start >= l))
-        .fold((0.0f64, 0.0f64), |(e, o), h| {
-            (
-                e.max(h.tracking_error_hz.map_or(0.0, |x| f64::from(x).abs())),
-                o.max(h.resonance_z_hz.map_or(0.0, |r| (h.freq_hz - r).abs())),
-            )
-        });
-    (lock_at, e, o)
+fn tracking(b: &Bench, m: &Marks) -> (Option<f64>, f64, f64) {
+    let first = b.trace.iter().find(|h| h.locked).map(|h| h.t);
+    match &b.tail {
+        Some(t) => (
+            first.or(t.first_locked).map(|l| l - m.start),
+            t.track_err_max,
+            t.true_off_max,
+        ),
+        None => {
+            let lock_at = first.map(|l| l - m.start);
+            let (e, o) = b
+                .trace
+                .iter()
+                .filter(|h| h.t > m.start && lock_at.is_some_and(|l| h.t - m.start >= l))
+                .fold((0.0f64, 0.0f64), |(e, o), h| {
+                    (
+                        e.max(h.tracking_error_hz.map_or(0.0, |x| f64::from(x).abs())),
+                        o.max(h.resonance_z_hz.map_or(0.0, |r| (h.freq_hz - r).abs())),
+                    )
+                });
+            (lock_at, e, o)
+        }
+    }
 }
 
-/// The hold's μ̂ − μ*: (RMS, largest magnitude), None without updates.
-fn hold_errors(log: &[(f64, ControlUpdate)], m: &Marks, target: f32) -> Option<(f64, f64)> {
-    let hold: Vec<f64> = log
-        .iter()
-        .filter(|(t, _)| *t > m.end)
-        .map(|(_, u)| f64::from(u.measured_mu) - f64::from(target))
-        .collect();
-    (!hold.is_empty()).then(|| {
-        let rms = (hold.iter().map(|e| e * e).sum::<f64>() / hold.len() as f64).sqrt();
-        (rms, hold.iter().map(|e| e.abs()).fold(0.0, f64::max))
-    })
+/// The hold's μ̂ − μ*: (RMS, largest magnitude), None without a hold or
+/// without updates in it.
+fn hold_errors(tail: Option<&Tail>) -> Option<(f64, f64)> {
+    tail.filter(|t| t.err_n > 0)
+        .map(|t| ((t.err_sq / f64::from(t.err_n)).sqrt(), t.err_max))
 }
 
 /// The run's result.
@@ -904,10 +986,12 @@ fn summarise(
     let events = (0..4)
         .map(|k| event_response(b, m, k, targets, sc[k].unwrap_or(least), &states[k.min(1)]))
         .collect();
-    let hold = hold_errors(&b.log, m, t1);
-    let (lock_at, track_err, true_off) = tracking(b, m, c.hold_s > 0.0);
-    let last = b.trace.last();
+    let tail = b.tail.as_ref();
+    let hold = hold_errors(tail);
+    let (lock_at, track_err, true_off) = tracking(b, m);
+    let last = tail.and_then(|t| t.last.as_ref()).or(b.trace.last());
     let limit = f64::from(states[0].limit_m);
+    let t = tail.copied().unwrap_or_default();
     BenchOut {
         transducers: if plan.resonant.is_some() {
             "resonant"
@@ -931,21 +1015,29 @@ fn summarise(
         half_buffer_samples: HALF,
         fill_lead: c.fill_lead,
         noise_seed: c.seed,
-        updates: b.log.last().map_or(0, |(_, u)| u.update),
+        updates: t
+            .last_update
+            .or(b.log.last().map(|(_, u)| u.update))
+            .unwrap_or(0),
         max_duz: b
             .log
             .iter()
             .map(|(_, u)| f64::from(u.amp_z_m))
-            .fold(0.0, f64::max),
+            .fold(t.max_duz, f64::max),
         liftoff_limit: limit,
         commands_above_limit: b.dev.plant().samples_above,
         commanded_above_limit: b
             .log
             .iter()
             .filter(|(_, u)| f64::from(u.amp_z_m) > limit)
-            .count() as u32,
-        max_excursion_m: b.trace.iter().map(|h| h.excursion_m).fold(0.0, f64::max),
-        saturated_updates: b.log.iter().filter(|(_, u)| u.saturated).count() as u32,
+            .count() as u32
+            + t.above_limit,
+        max_excursion_m: b
+            .trace
+            .iter()
+            .map(|h| h.excursion_m)
+            .fold(t.max_excursion_m, f64::max),
+        saturated_updates: b.log.iter().filter(|(_, u)| u.saturated).count() as u32 + t.saturated,
         events,
         hold_s: c.hold_s,
         hold_run_s: m.hold_end - m.end,
