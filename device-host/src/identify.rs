@@ -194,6 +194,33 @@ impl Identification {
 /// One line: bad span, a running drive, no normal offset, a fault during
 /// the sweep.
 pub fn identify(c: &mut Client, o: &IdentifyOptions) -> Result<Identification> {
+    identify_with_progress(c, o, &mut |_| {})
+}
+
+/// Where an identification is: `done` of `points` frequencies measured
+/// (both passes of every channel), and the plan's device time at most,
+/// s (each point's settling, at most the coarse pass's, plus its
+/// [`WINDOWS_PER_POINT`] lock-in windows).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// Frequencies measured so far.
+    pub done: u32,
+    /// Frequencies in all.
+    pub points: u32,
+    /// The whole plan's device time at most, s.
+    pub device_s_max: f64,
+}
+
+/// [`identify`], telling `progress` the plan before the first frequency
+/// and after each one.
+///
+/// # Errors
+/// As [`identify`].
+pub fn identify_with_progress(
+    c: &mut Client,
+    o: &IdentifyOptions,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Identification> {
     o.check()?;
     let info = match expect(c.call(Request::Hello)?)? {
         Response::Info(i) => i,
@@ -232,10 +259,16 @@ pub fn identify(c: &mut Client, o: &IdentifyOptions) -> Result<Identification> {
         Channels::X => &[1],
         Channels::Both => &[0, 1],
     };
+    let mut p = plan(o, &info, chans.len(), f_mid, settle);
+    progress(p);
+    let mut tick = || {
+        p.done += 1;
+        progress(p);
+    };
     let mut channels = Vec::new();
     let t0 = Instant::now();
     for &ch in chans {
-        let r = identify_channel(c, o, &info, &base, ch, (from, to), settle);
+        let r = identify_channel(c, o, &info, &base, ch, (from, to), settle, &mut tick);
         // Stop and put the drive back whatever happened.
         let _ = c.call(Request::Stop);
         let _ = c.call(Request::SetDrive(base));
@@ -408,6 +441,26 @@ fn response(c: &mut Client, ch: usize) -> Result<(f64, f64)> {
     Ok((re / f64::from(n), im / f64::from(n)))
 }
 
+/// The plan of an identification of `n_chans` channels: its frequencies and
+/// its device time at most.
+fn plan(
+    o: &IdentifyOptions,
+    info: &Info,
+    n_chans: usize,
+    f_mid: f64,
+    settle: Duration,
+) -> Progress {
+    let fs = info.sample_rate_hz;
+    let window_s = (fs / (64.0 * f_mid)).ceil() * 64.0 / fs;
+    let points = n_chans as u32 * (o.points + o.fine_points);
+    Progress {
+        done: 0,
+        points,
+        device_s_max: f64::from(points)
+            * (settle.as_secs_f64() + f64::from(WINDOWS_PER_POINT) * window_s),
+    }
+}
+
 /// Sweeps channel `ch` over `freqs` at amplitude `amp` (m of the DAC
 /// calibration), appending to `rec`; returns the largest measured
 /// displacement amplitude, m.
@@ -421,6 +474,7 @@ fn sweep(
     freqs: &[f64],
     settle: Duration,
     rec: &mut Vec<(f64, f64, f64, f64)>,
+    tick: &mut dyn FnMut(),
 ) -> Result<f64> {
     let mut peak = 0.0f64;
     for (i, &f) in freqs.iter().enumerate() {
@@ -442,6 +496,7 @@ fn sweep(
             f64::from(amp) / f64::from(metres_per_code(ch)) * board::dds::DAC_VOLTS_PER_CODE;
         peak = peak.max(re.hypot(im) * volts);
         rec.push((f, re, im, volts));
+        tick();
     }
     Ok(peak)
 }
@@ -474,6 +529,7 @@ fn span(a: &IdentifyOptions, info: &Info, f: f64) -> Result<(f64, f64)> {
     Ok((from, to))
 }
 
+#[allow(clippy::too_many_arguments)]
 fn identify_channel(
     c: &mut Client,
     a: &IdentifyOptions,
@@ -482,6 +538,7 @@ fn identify_channel(
     ch: usize,
     (from, to): (f64, f64),
     settle: Duration,
+    tick: &mut dyn FnMut(),
 ) -> Result<ChannelFit> {
     // The bound the response is scaled to: lift-off limit or largest Δu_x.
     let bound = if ch == 0 {
@@ -493,7 +550,7 @@ fn identify_channel(
     let amp0 = (0.01 * bound) as f32;
     let coarse = linspace(from, to, a.points);
     let fs = info.sample_rate_hz;
-    let peak = sweep(c, fs, base, ch, amp0, &coarse, settle, &mut rec)?;
+    let peak = sweep(c, fs, base, ch, amp0, &coarse, settle, &mut rec, tick)?;
     let k = rec
         .iter()
         .enumerate()
@@ -530,7 +587,7 @@ fn identify_channel(
     };
     expect(c.call(Request::Stop)?)?;
     let mut rec = Vec::new();
-    sweep(c, fs, base, ch, amp1, &fine, fine_settle, &mut rec)?;
+    sweep(c, fs, base, ch, amp1, &fine, fine_settle, &mut rec, tick)?;
     rec.sort_by(|x, y| x.0.total_cmp(&y.0));
     rec.dedup_by(|x, y| x.0 == y.0);
     let record = samples(&rec);

@@ -75,7 +75,12 @@ pub fn run(c: &mut Client, a: &IdentifyArgs, json: bool) -> CliResult {
     // Each transducer is driven alone in voltage mode for the sweep: the
     // drive, its mode and options are put back on every way out (the end, a
     // refused fit, an error, SIGINT or SIGTERM).
-    let id = device_host::state::restoring(c, |c| identify(c, &a.options()))?;
+    let mut bar = progress_bar(json);
+    let id = device_host::state::restoring(c, |c| {
+        identify_with_progress(c, &a.options(), &mut |p| bar.show(p))
+    });
+    bar.finish();
+    let id = id?;
     if let Some(plot) = &a.plot {
         crate::figures::bode::bode(plot, &id.channels, id.span_hz)?;
     }
@@ -101,4 +106,55 @@ pub fn run(c: &mut Client, a: &IdentifyArgs, json: bool) -> CliResult {
         f.commit()?;
     }
     out(json, &report)
+}
+
+/// The identification's progress on a terminal (not with `--json`): its
+/// plan up front when it may take over 5 s of device time, then a bar of
+/// the frequencies measured.
+struct Bar {
+    bar: Option<indicatif::ProgressBar>,
+    said: bool,
+    live: bool,
+}
+
+fn progress_bar(json: bool) -> Bar {
+    Bar {
+        bar: None,
+        said: false,
+        live: !json && std::io::IsTerminal::is_terminal(&std::io::stderr()),
+    }
+}
+
+impl Bar {
+    fn show(&mut self, p: Progress) {
+        if !self.live {
+            return;
+        }
+        if !self.said {
+            self.said = true;
+            if p.device_s_max > 5.0 {
+                eprintln!(
+                    "identify: {} frequencies, at most {:.0} s of device time",
+                    p.points, p.device_s_max
+                );
+            }
+            let b = indicatif::ProgressBar::new(u64::from(p.points));
+            b.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "{bar:30} {pos}/{len} frequencies  [{elapsed_precise}, eta {eta}]",
+                )
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+            self.bar = Some(b);
+        }
+        if let Some(b) = &self.bar {
+            b.set_position(u64::from(p.done));
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(b) = &self.bar {
+            b.finish_and_clear();
+        }
+    }
 }
