@@ -7,6 +7,8 @@
 //! * [`numbers`]: the domain of every real input, numbers in messages;
 //! * [`scene`]: a scene from physical quantities, a file or the groups (eqs. 25/26);
 //! * [`eval`]: μ at one velocity by a method, critical velocities (eq. 8, L5), regimes;
+//! * [`grid`]: evenly spaced velocities and cell centres, μ over a velocity grid (the
+//!   curve's rows), μ and the regime over a map's cells, which method answered where;
 //! * [`fit`], [`sweep_file`]: identification of (μ0, kx/kz) from a measured sweep;
 //! * [`tune`]: inverse design (the drive that attains a target μ, or maximises an objective);
 //! * [`load_line`]: the contact as an actuator;
@@ -20,6 +22,7 @@ pub mod bench;
 pub mod error;
 pub mod eval;
 pub mod fit;
+pub mod grid;
 pub mod load_line;
 pub mod motion;
 pub mod numbers;

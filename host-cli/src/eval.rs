@@ -11,7 +11,7 @@ use crate::error::CliResult;
 
 pub use fric_analysis::eval::{
     classify_scene_profile, critical_velocity, exact_failure, from_rel, lift_off_failure,
-    mean_normal_force_over_kz_uz0, profile_failure, profile_tol_at_rest, v_rel, MuOutcome,
+    mean_normal_force_over_kz_uz0, profile_failure, profile_tol_at_rest, MuOutcome,
 };
 
 /// How μ is computed.

@@ -14,8 +14,8 @@ mod eval;
 mod figures;
 mod output;
 mod plot;
+mod progress;
 mod scene_args;
-mod sweep;
 
 // The analysis lives in the library; these paths keep `crate::fit`,
 // `crate::motion` and `crate::sweep_file` for the commands.

@@ -15,9 +15,8 @@ use model_core::Scene;
 
 use crate::args::Count;
 use crate::error::{CliError, CliResult};
-use crate::eval::{Method, MethodArgs};
 use crate::plot::{color, log_axis_tick, prepare_out_dir, write_chart};
-use crate::sweep::{curve_rows, mu_cells, MuCell, Row};
+use fric_analysis::grid::{curve_rows, mu_cells, MuCell, Row};
 
 /// Flags of `bench methods`.
 #[derive(Args, Debug, Clone)]
@@ -70,22 +69,6 @@ impl MethodsArgs {
 /// The curve and map commands' bodies, as the bench times them.
 struct Commands;
 
-/// The flags that give the library's method options.
-fn flags(o: &fric_analysis::eval::MethodArgs) -> MethodArgs {
-    use fric_analysis::eval::Method as M;
-    MethodArgs {
-        method: match o.method {
-            M::Auto => Method::Auto,
-            M::Exact => Method::Exact,
-            M::Fixed => Method::Fixed,
-            M::Approx => Method::Approx,
-        },
-        steps_per_period: o.steps_per_period,
-        tol: o.tol,
-        profile: o.profile,
-    }
-}
-
 impl Bodies for Commands {
     type Rows = Vec<Row>;
     type Cells = Vec<MuCell>;
@@ -95,7 +78,7 @@ impl Bodies for Commands {
         vs: &[f64],
         how: &fric_analysis::eval::MethodArgs,
     ) -> CliResult<Vec<Row>> {
-        curve_rows(scene, vs, &flags(how))
+        curve_rows(scene, vs, how)
     }
     fn map(
         &self,
@@ -105,7 +88,7 @@ impl Bodies for Commands {
         x: f64,
         how: &fric_analysis::eval::MethodArgs,
     ) -> CliResult<Vec<MuCell>> {
-        mu_cells(a, ratios, phis_deg, x, &flags(how))
+        mu_cells(a, ratios, phis_deg, x, how)
     }
     fn row_methods(rows: &Vec<Row>) -> Vec<&'static str> {
         rows.iter().map(|r| r.method).collect()

@@ -37,7 +37,7 @@ use crate::plot::{
     prepare_out_dir, render_figure, render_heat, Corner, Extras, Figure, Heat, HeatMap, Mark,
     Marker, Panel, Series,
 };
-use crate::sweep::progress_bar;
+use crate::progress::progress_bar;
 
 /// Flags of `bench motion`.
 #[derive(Args, Debug, Clone)]

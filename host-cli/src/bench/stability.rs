@@ -17,7 +17,7 @@ use plotters::style::RGBColor;
 
 use crate::error::{CliError, CliResult};
 use crate::plot::{prepare_out_dir, render_heat, Heat, HeatMap};
-use crate::sweep::progress_bar;
+use crate::progress::progress_bar;
 
 /// Flags of `bench stability`.
 #[derive(Args, Debug, Clone)]

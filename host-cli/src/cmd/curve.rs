@@ -13,7 +13,8 @@ use crate::error::{CliError, CliResult};
 use crate::eval::{critical_velocity, from_rel, MethodArgs};
 use crate::output::{csv_bytes, stdout_error, AtomicFile};
 use crate::plot::{render_panels, Mark, Panel, Series};
-use crate::sweep::{curve_rows, linspace_at, progress_bar, MethodMix};
+use crate::progress::progress_bar;
+use fric_analysis::grid::{curve_rows, linspace_at, MethodMix};
 
 /// Flags of `fricctl curve`.
 #[derive(Args, Debug, Clone)]
@@ -162,8 +163,8 @@ impl CurveCmd {
                 Axis::Absolute(..) => "--v-max",
                 Axis::Relative(..) => "--v-rel-max",
             };
-            let rows =
-                curve_rows(&rs.scene, &vs, &self.how).map_err(|e| e.renamed("--v0", upper))?;
+            let rows = curve_rows(&rs.scene, &vs, &self.how.options())
+                .map_err(|e| e.renamed("--v0", upper))?;
             for r in &rows {
                 mix.add(r.method);
                 worst = worst.max(r.error_bound_over_mu0);

@@ -13,8 +13,9 @@ use crate::error::{CliError, CliResult};
 use crate::eval::{classify_scene_profile, Method, MethodArgs};
 use crate::output::write_rows;
 use crate::plot::{render_heat, render_map, Heat, HeatMap, RegimeMap};
+use crate::progress::progress_bar;
 use crate::scene_args::{check_reach, profile_text, ProfileArgs};
-use crate::sweep::{cell_scene, cells, centres, method_mix, mix_text, mu_cells, Cell};
+use fric_analysis::grid::{cell_scene, cells, centres, method_mix, mix_text, mu_cells, Cell};
 use model_core::mdr::Profile;
 
 /// Largest |φ| of the map's phase range, degrees: 10⁴ rad (572 957.8°,
@@ -120,7 +121,7 @@ impl MapCmd {
         }
         let ratios = centres(r.lo, r.hi, a.res);
         let phis = centres(phi.lo, phi.hi, a.res);
-        let (cells, class) = cells(a.duz_rel, &ratios, &phis, &a.how.profile, true)?;
+        let (cells, class) = classify_cells(a.duz_rel, &ratios, &phis, &a.how.profile)?;
         let counts = [0u8, 1, 2].map(|k| class.iter().filter(|&&c| c == k).count());
         eprintln!(
             "{} cells: {} active control, {} dynamic ratchet, {} actuator",
@@ -142,6 +143,20 @@ impl MapCmd {
         let _ = std::io::stderr().flush();
         Ok(())
     }
+}
+
+/// The regime of every map cell ([`cells`]) with a progress bar on stderr.
+pub fn classify_cells(
+    a: f64,
+    ratios: &[f64],
+    phis: &[f64],
+    profile: &Profile<f64>,
+) -> CliResult<(Vec<Cell>, Vec<u8>)> {
+    let n = ratios.len() * phis.len();
+    let pb = progress_bar(n as u64, "classifying {bar:40} {pos}/{len} cells ({eta})");
+    let res = cells(a, ratios, phis, profile, &|| pb.inc(1));
+    pb.finish_and_clear();
+    res
 }
 
 /// One axis of the map: `--{name}-min` … `--{name}-max` (or `--phi-min-deg`
@@ -215,8 +230,8 @@ fn run_mu_map(a: &MapCmd, x: f64, r: &Range, phi: &Range) -> CliResult {
     }
     let ratios = centres(r.lo, r.hi, a.res);
     let phis = centres(phi.lo, phi.hi, a.res);
-    let cells =
-        mu_cells(a.duz_rel, &ratios, &phis, x, &a.how).map_err(|e| e.renamed("--v0", "--v-rel"))?;
+    let cells = mu_cells(a.duz_rel, &ratios, &phis, x, &a.how.options())
+        .map_err(|e| e.renamed("--v0", "--v-rel"))?;
     let mix = method_mix(cells.iter().map(|c| c.method));
     let mix_text = mix_text(&mix, ", ");
     let worst = cells

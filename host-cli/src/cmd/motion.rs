@@ -16,8 +16,8 @@ use crate::motion::table::MuTable;
 use crate::motion::Run;
 use crate::output::{stdout_error, write_json, write_rows};
 use crate::plot::{render_figure, Corner, Extras, Figure, Mark, Panel, Series};
+use crate::progress::progress_bar;
 use crate::scene_args::{ResolvedScene, SceneArgs};
-use crate::sweep::progress_bar;
 
 /// Which model integrates the body.
 #[derive(ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]

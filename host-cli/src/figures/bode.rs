@@ -10,7 +10,7 @@ use device_host::identify::{ChannelFit, WINDOWS_PER_POINT};
 
 use crate::error::CliResult;
 use crate::plot::{render_figure, Corner, Extras, Figure, Mark, Marker, Panel, Series};
-use crate::sweep::linspace;
+use fric_analysis::grid::linspace;
 
 /// Points of each fitted curve.
 const CURVE_POINTS: usize = 600;

@@ -16,11 +16,10 @@ use model_core::model::liftoff;
 use model_core::regime::{classify, Classification, ClassifyOptions, Regime};
 use model_core::{Drive, Groups, Libm, Scene};
 
-use crate::cmd::map::write_map;
+use crate::cmd::map::{classify_cells, write_map};
 use crate::error::{CliError, CliResult};
 use crate::plot::{prepare_out_dir, render_figure, Corner, Extras, Figure, Mark, Panel, Series};
-use crate::sweep::linspace;
-use crate::sweep::{cells, centres};
+use fric_analysis::grid::{centres, linspace};
 
 fn mu(d: &Drive<f64>, v: f64) -> CliResult<f64> {
     exact::mu_over_mu0::<f64, Libm>(d, v).map_err(crate::eval::exact_failure)
@@ -597,7 +596,7 @@ pub fn run(out: &Path, map_res: usize) -> CliResult {
     // The regime map at Δu_z/u_z0 = 0.5.
     let ratios = centres(0.0, 3.0, map_res);
     let phis = centres(0.0, 360.0, map_res);
-    let (cs, class) = cells(0.5, &ratios, &phis, &model_core::mdr::Profile::Flat, true)?;
+    let (cs, class) = classify_cells(0.5, &ratios, &phis, &model_core::mdr::Profile::Flat)?;
     for ext in ["svg", "png"] {
         let p = out.join(format!("regime_map.{ext}"));
         write_map(

@@ -1,27 +1,30 @@
 //! Sets of points to compute μ or the regime over: evenly spaced velocities,
-//! cell centres, the rows of a curve, the cells of a map, and the count of
-//! which method answered where.
+//! cell centres, the rows of a curve (`fricctl curve`), the cells of a map
+//! (`fricctl map`), and the count of which method answered where.
+//!
+//! Velocities are in m/s, or in units of ωW0 (`W0 = μ0 k_z u_z0 / k_x`) for a
+//! dimensionless scene (eqs. 25/26); phases in degrees; μ in units of μ0
+//! where the name says `_over_mu0`. The work is spread over rayon's threads;
+//! the result's order is that of the input.
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use model_core::mdr::Profile;
 use model_core::regime::Regime;
 use model_core::scene::ContactMode;
 use model_core::{Groups, Scene};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::args::Short;
-use crate::error::{CliError, CliResult};
-use model_core::mdr::Profile;
-
+use crate::error::{Error, Result};
 use crate::eval::{classify_scene_profile, critical_velocity, from_rel, mu_at, v_rel, MethodArgs};
+use crate::numbers::Short;
 
 /// The `i`-th of `n` evenly spaced values from `a` to `b` inclusive (the last
-/// is `b` exactly).
+/// is `b` exactly; `n` = 1 gives `b`).
 pub fn linspace_at(a: f64, b: f64, n: usize, i: usize) -> f64 {
     if i + 1 == n {
         b
     } else {
-        a + (b - a) * i as f64 / (n - 1) as f64
+        a + (b - a) * i as f64 / n.saturating_sub(1).max(1) as f64
     }
 }
 
@@ -40,9 +43,10 @@ pub fn centres(lo: f64, hi: f64, n: usize) -> Vec<f64> {
 /// One row of a μ(v) curve (the CSV columns of `fricctl curve`, in order).
 #[derive(Serialize, Debug, Clone, Copy)]
 pub struct Row {
-    /// Velocity.
+    /// Velocity, m/s (units of ωW0 for a dimensionless scene).
     pub v0: f64,
-    /// v0/v_c (empty where that direction's v_c is 0).
+    /// v0/v_c, with v_c of eq. 8 in v0's direction (empty where that
+    /// direction's v_c is 0).
     pub v_rel: Option<f64>,
     /// μ.
     pub mu: f64,
@@ -54,12 +58,15 @@ pub struct Row {
     pub error_bound_over_mu0: f64,
 }
 
-/// Rows of μ(v) for the velocities (two rows, μ(0⁻) then μ(0⁺), at v0 = 0),
-/// computed in parallel.
-pub fn curve_rows(scene: &Scene<f64>, vs: &[f64], how: &MethodArgs) -> CliResult<Vec<Row>> {
+/// Rows of μ(v) for the velocities `vs` (two rows, μ(0⁻) then μ(0⁺), at
+/// v0 = 0), each by the method choice of `how` ([`mu_at`]), computed in
+/// parallel. A velocity the method refuses is named as `--v0` (the caller
+/// renames it to its own flag); a fixed-step run that reaches no steady
+/// state is a failure.
+pub fn curve_rows(scene: &Scene<f64>, vs: &[f64], how: &MethodArgs) -> Result<Vec<Row>> {
     let vc = critical_velocity(scene)?;
     let mu0 = scene.mu0();
-    let rows: Vec<CliResult<Vec<Row>>> = vs
+    let rows: Vec<Result<Vec<Row>>> = vs
         .par_iter()
         .map(|&v| {
             let o = mu_at(scene, v, how)?;
@@ -84,7 +91,7 @@ pub fn curve_rows(scene: &Scene<f64>, vs: &[f64], how: &MethodArgs) -> CliResult
                     method: o.method,
                     error_bound_over_mu0: o.error_bound_over_mu0.unwrap_or(f64::NAN),
                 }]),
-                None => Err(CliError::failure(format!(
+                None => Err(Error::failure(format!(
                     "v0 = {v}: the fixed-step method did not reach a steady state in {} periods",
                     o.periods.unwrap_or(0)
                 ))),
@@ -135,9 +142,11 @@ pub fn mix_text(mix: &[(&'static str, usize)], sep: &str) -> String {
     MethodMix(mix.to_vec()).text(sep)
 }
 
-/// The dimensionless scene of a map cell: `Δu_z/u_z0 = a` (`a ≥ 1`: the
-/// contact lifts off), amplitude ratio `r` (eq. 26), phase in degrees.
-pub fn cell_scene(a: f64, r: f64, phi_deg: f64) -> CliResult<Scene<f64>> {
+/// The dimensionless scene of a map cell: `Δu_z/u_z0 = a` (eq. 25; `a ≥ 1`:
+/// the contact lifts off), amplitude ratio `r = k_xΔu_x/(μ0 k_z Δu_z)`
+/// (eq. 26), phase in degrees. A value out of the scene's domain is a usage
+/// error naming the parameter as a flag.
+pub fn cell_scene(a: f64, r: f64, phi_deg: f64) -> Result<Scene<f64>> {
     Scene::dimensionless_with_contact(
         Groups {
             duz_rel: a,
@@ -146,15 +155,15 @@ pub fn cell_scene(a: f64, r: f64, phi_deg: f64) -> CliResult<Scene<f64>> {
         },
         ContactMode::Intermittent,
     )
-    .map_err(|e| CliError::usage(format!("--{e}")))
+    .map_err(|e| Error::usage(format!("--{e}")))
 }
 
 /// One cell of a μ map.
-#[derive(Debug, Clone, Copy, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Serialize)]
 pub struct MuCell {
     /// φ, degrees.
     pub phi_deg: f64,
-    /// k_xΔu_x/(μ0 k_z Δu_z).
+    /// k_xΔu_x/(μ0 k_z Δu_z) (eq. 26).
     pub ratio: f64,
     /// v0 in units of ωW0.
     pub v0: f64,
@@ -166,15 +175,18 @@ pub struct MuCell {
     pub error_bound_over_mu0: Option<f64>,
 }
 
-/// μ/μ0 at `v0 = x·v_c` over (ratio rows, phase columns), each cell by the
-/// method choice of `how`, in parallel.
+/// μ/μ0 at `v0 = x·v_c` (eq. 8; the backward v_c for `x < 0`) over (ratio
+/// rows, phase columns, degrees) at `Δu_z/u_z0 = a`, each cell by the
+/// method choice of `how` ([`mu_at`]), in parallel, row-major. A refusal
+/// names the cell (`ratio …, φ …°`); `x` is named as `--v-rel`, a velocity
+/// the method refuses as `--v0`.
 pub fn mu_cells(
     a: f64,
     ratios: &[f64],
     phis_deg: &[f64],
     x: f64,
     how: &MethodArgs,
-) -> CliResult<Vec<MuCell>> {
+) -> Result<Vec<MuCell>> {
     let n = ratios.len() * phis_deg.len();
     (0..n)
         .into_par_iter()
@@ -198,11 +210,11 @@ pub fn mu_cells(
 }
 
 /// One cell of a regime map.
-#[derive(Debug, Clone, Copy, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Serialize)]
 pub struct Cell {
     /// φ, degrees.
     pub phi_deg: f64,
-    /// k_xΔu_x/(μ0 k_z Δu_z).
+    /// k_xΔu_x/(μ0 k_z Δu_z) (eq. 26).
     pub ratio: f64,
     /// Class name.
     pub regime: &'static str,
@@ -214,29 +226,27 @@ pub struct Cell {
     pub asymmetry: f64,
 }
 
-/// The regime of every map cell (row-major: ratio rows, phase columns), in
-/// parallel, with the class index (0 active control, 1 ratchet, 2 actuator).
+/// The regime of every map cell (row-major: ratio rows, phase columns,
+/// degrees) at `Δu_z/u_z0 = a` for the contact `profile`, in parallel, with
+/// the class index (0 active control, 1 ratchet, 2 actuator). `tick` is
+/// called once per cell classified, from rayon's threads (a progress bar's
+/// step). A refusal names the cell (`ratio …, φ …°`).
 pub fn cells(
     a: f64,
     ratios: &[f64],
     phis_deg: &[f64],
     profile: &Profile<f64>,
-    progress: bool,
-) -> CliResult<(Vec<Cell>, Vec<u8>)> {
+    tick: &(dyn Fn() + Sync),
+) -> Result<(Vec<Cell>, Vec<u8>)> {
     let n = ratios.len() * phis_deg.len();
-    let pb = if progress {
-        progress_bar(n as u64, "classifying {bar:40} {pos}/{len} cells ({eta})")
-    } else {
-        ProgressBar::hidden()
-    };
-    let res: Vec<CliResult<(Cell, u8)>> = (0..n)
+    let res: Vec<Result<(Cell, u8)>> = (0..n)
         .into_par_iter()
         .map(|i| {
             let (r, phi) = (ratios[i / phis_deg.len()], phis_deg[i % phis_deg.len()]);
             let s = cell_scene(a, r, phi)?;
             let c = classify_scene_profile(&s, profile)
                 .map_err(|e| e.with_context(&format!("ratio {}, φ {}°", Short(r), Short(phi))))?;
-            pb.inc(1);
+            tick();
             let k = match c.regime {
                 Regime::ActiveControl => 0,
                 Regime::DynamicRatchet => 1,
@@ -255,7 +265,6 @@ pub fn cells(
             ))
         })
         .collect();
-    pb.finish_and_clear();
     let mut cells = Vec::with_capacity(n);
     let mut class = Vec::with_capacity(n);
     for r in res {
@@ -264,14 +273,4 @@ pub fn cells(
         class.push(k);
     }
     Ok((cells, class))
-}
-
-/// A progress bar on stderr (drawn only when stderr is a terminal) with an
-/// indicatif `template`.
-pub fn progress_bar(len: u64, template: &str) -> ProgressBar {
-    let pb = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
-    pb.set_style(
-        ProgressStyle::with_template(template).unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    pb
 }
