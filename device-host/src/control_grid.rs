@@ -1,6 +1,6 @@
 //! The μ loop's bench over a grid of resonant transducers and on a
 //! drifting plant with and without resonance tracking (`fricctl bench
-//! control`): each run is a [`control_bench::run`](crate::control_bench::run)
+//! control`): each run is a [`crate::control_bench::run`]
 //! with the defaults of `fricctl device control-bench` but for the flags its
 //! `command` names.
 //!

@@ -1,5 +1,5 @@
 //! The virtual device: the firmware's own device logic and protocol server
-//! (model-core `device`, `server`) plus a simulated plant
+//! ([`board::device`], [`board::server`]) plus a simulated plant
 //! ([`board::plant`], the same code the firmware runs under
 //! QEMU): the paper's spring contact integrated in physical units with 32
 //! sub-steps per ADC sample, driven by the DDS channels' *current* levels (so
@@ -52,7 +52,7 @@ const PICKUP_SEED: u64 = 0xD1B5_4A32_D192_ED03;
 /// Sub-steps of the plant per ADC sample.
 const SUB: u32 = 32;
 
-/// The virtual board's configuration: the driver board's (model-core), with
+/// The virtual board's configuration: the driver board's (`board`), with
 /// the plant sampled at each sample's own drive phase (no DAC lag).
 pub fn config() -> DeviceConfig {
     DeviceConfig::driver_board(0)
