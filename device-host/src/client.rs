@@ -137,9 +137,16 @@ impl Client {
                 }
             }
         }
+        let what = self.link.describe();
+        // Over TCP the usual stranger is another emulator or server on the
+        // same port (a second QEMU on 7777): say so.
+        let hint = if what.starts_with("tcp ") {
+            "; if another program (a second QEMU, an older sim-device) holds that port, start the device on a free one"
+        } else {
+            ""
+        };
         Err(Error::failure(format!(
-            "no answer from {} after {} attempts of {} ms (device gone or not speaking protocol v{PROTOCOL_VERSION})",
-            self.link.describe(),
+            "no answer from {what} after {} attempts of {} ms (device gone or not speaking protocol v{PROTOCOL_VERSION}){hint}",
             self.attempts,
             self.timeout.as_millis()
         )))
