@@ -273,3 +273,186 @@ fn nearest_entry_lookup() {
         assert_eq!(a, quantise(2048.0 + 1000.0 * t.sin_nearest(p)));
     }
 }
+
+/// A small deterministic generator (64-bit LCG, Knuth's constants): uniform
+/// in [0, 1).
+struct Lcg(u64);
+
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// The largest error of a table's entries against f64 `sin` (ε_t of eq. Q5).
+fn table_error<const N: usize>(t: &SineTable<N>) -> f64 {
+    (0..N)
+        .map(|i| (f64::from(t.entry(i)) - (TAU * i as f64 / N as f64).sin()).abs())
+        .fold(0.0, f64::max)
+}
+
+/// Eq. Q5 (board::dds; derived in docs/transducers.md, "The DDS in
+/// integers"): |code − (dc + amp·sin 2πp/2³²)| ≤ 1/2 + |amp|·(ε_t +
+/// (2π/N)²/8 + 2⁻²⁹) + 2⁻¹⁵, the exact value formed here in f64 from the
+/// phase words alone (accumulator, tuning word, offsets), never through the
+/// DDS's table. A code that differs from `round(exact)` must sit within the
+/// bound's excess over 1/2 of a tie.
+fn check_fill_against_f64<const N: usize>(t: &SineTable<N>, interp: Interp, cases: u32) -> f64 {
+    let eps_t = table_error(t);
+    let step = TAU / N as f64;
+    let read_err = match interp {
+        Interp::Linear => step * step / 8.0,
+        Interp::Nearest => step / 2.0,
+    };
+    let mut rng = Lcg(0x0123_4567_89ab_cdef);
+    let mut worst: f64 = 0.0;
+    for _ in 0..cases {
+        let mut d = Dds::new(t, FS, fast_slew()).unwrap();
+        d.set_interp(interp);
+        d.set_frequency(1e3 + 2e5 * rng.next()).unwrap();
+        let mut lv = [(0.0f32, 0.0f32); 2];
+        for (ch, l) in lv.iter_mut().enumerate() {
+            let amp = (4094.0 * rng.next() - 2047.0) as f32;
+            let room = 4095.0 - 2.0 * f64::from(amp.abs());
+            let dc = (f64::from(amp.abs()) + room * rng.next()) as f32;
+            *l = (amp, dc);
+            d.set_level(ch, Level { amp, dc }).unwrap();
+            d.set_phase(ch, (rng.next() * 4_294_967_296.0) as u32);
+        }
+        // One sample applies the targets (fast slew): settled from here.
+        d.next_codes();
+        assert!(d.settled());
+        let (acc0, tw) = (d.accumulator(), d.tuning_word());
+        let ph = [d.channels()[0].phase, d.channels()[1].phase];
+        let mut buf = [0u32; 64];
+        d.fill(&mut buf);
+        for (i, &w) in buf.iter().enumerate() {
+            let p = acc0.wrapping_add(tw.wrapping_mul(i as u32));
+            let codes = unpack_dual(w);
+            for (ch, code) in [codes.0, codes.1].into_iter().enumerate() {
+                let (amp, dc) = (f64::from(lv[ch].0), f64::from(lv[ch].1));
+                let theta = phase_rad(p.wrapping_add(ph[ch]));
+                let exact = dc + amp * theta.sin();
+                let bound = 0.5 + amp.abs() * (eps_t + read_err + 2f64.powi(-29)) + 2f64.powi(-15);
+                let err = (f64::from(code) - exact).abs();
+                assert!(
+                    err <= bound,
+                    "{interp:?} ch {ch} sample {i}: {code} vs {exact} (bound {bound})"
+                );
+                if f64::from(code) != exact.round() {
+                    let tie = (exact - exact.floor() - 0.5).abs();
+                    assert!(tie <= bound - 0.5, "{code} vs {exact}: not a near tie");
+                }
+                worst = worst.max(err);
+            }
+        }
+    }
+    worst
+}
+
+#[test]
+fn integer_fill_is_within_the_derived_bound_of_the_exact_sine() {
+    let t = SineTable::<1024>::libm();
+    // The entries are libm's f32 sine of an f32 argument 2πk/N, |k| ≤ N/2:
+    // the argument rounds by ≤ |x|·2⁻²³ (the constant 2π and the product),
+    // the sine by one ulp (2⁻²⁴ below 1): ε_t ≤ π·2⁻²³ + 2⁻²⁴ = 4.3e-7.
+    let eps_t = table_error(&t);
+    assert!(eps_t <= PI * 2f64.powi(-23) + 2f64.powi(-24), "{eps_t}");
+    let worst = check_fill_against_f64(&t, Interp::Linear, 300);
+    // Eq. Q5 at |amp| ≤ 2047 (ε_t = 2.0e-7 measured): ≈ 0.5101 LSB.
+    let at_full =
+        0.5 + 2047.0 * (eps_t + (TAU / 1024.0).powi(2) / 8.0 + 2f64.powi(-29)) + 2f64.powi(-15);
+    assert!(worst <= at_full && at_full < 0.5102, "{worst} {at_full}");
+    check_fill_against_f64(&t, Interp::Nearest, 50);
+    // A coarse table, where interpolation dominates: 2047·(2π/64)²/8 = 2.47 LSB.
+    let t64 = SineTable::<64>::libm();
+    let worst = check_fill_against_f64(&t64, Interp::Linear, 100);
+    assert!(worst > 1.5, "{worst}: the bound is not loose by a factor");
+}
+
+/// Eq. Q4: while ramping, sample `i` of a fill uses amplitude, DC and phase
+/// offset `i` slew steps on; checked in f64 against the closed form
+/// `x_0 + clamp(x_target − x_0, ±i·s)`, with eq. Q5's bound widened by the
+/// slews' rounding to the units of (Q2): `i·2⁻¹⁸` of amplitude and `i·2⁻¹⁶`
+/// of DC per sample (|sin| ≤ 1).
+#[test]
+fn integer_ramps_follow_the_slew_closed_form() {
+    let t = SineTable::<1024>::libm();
+    let eps = table_error(&t) + (TAU / 1024.0).powi(2) / 8.0 + 2f64.powi(-29);
+    let mut d = Dds::new(&t, FS, fast_slew()).unwrap();
+    d.set_frequency(39_880.0).unwrap();
+    let (a0, dc0) = (300.0f32, 2000.0f32);
+    for ch in 0..2 {
+        d.set_level(ch, Level { amp: a0, dc: dc0 }).unwrap();
+    }
+    d.next_codes();
+    assert!(d.settled());
+    let slew = Slew {
+        amp_per_sample: 7.3,
+        dc_per_sample: 1.9,
+        phase_per_sample: 3_000_000,
+    };
+    d.set_slew(slew);
+    let targets = [(1800.0f32, 2047.0f32), (-1000.0, 1500.0)];
+    let ph_target = [40_000_000u32, 4_200_000_000];
+    for ch in 0..2 {
+        let (amp, dc) = targets[ch];
+        d.set_level(ch, Level { amp, dc }).unwrap();
+        d.set_phase(ch, ph_target[ch]);
+    }
+    let mut total = 0usize;
+    // Fills until settled: the amplitude's 1500 codes at 7.3 per sample take
+    // 206 samples, four fills.
+    for _ in 0..6 {
+        let before = *d.channels();
+        let (acc0, tw) = (d.accumulator(), d.tuning_word());
+        let mut buf = [0u32; 64];
+        d.fill(&mut buf);
+        for (i, &w) in buf.iter().enumerate() {
+            let n = i as f64;
+            let p = acc0.wrapping_add(tw.wrapping_mul(i as u32));
+            let codes = unpack_dual(w);
+            for (ch, code) in [codes.0, codes.1].into_iter().enumerate() {
+                let c = before[ch];
+                let toward = |x: f32, to: f32, s: f32| {
+                    let (x, to, s) = (f64::from(x), f64::from(to), f64::from(s));
+                    x + (to - x).clamp(-s * n, s * n)
+                };
+                let amp = toward(c.amp, c.amp_target, slew.amp_per_sample);
+                let dc = toward(c.dc, c.dc_target, slew.dc_per_sample);
+                let dph = f64::from(c.phase_target.wrapping_sub(c.phase) as i32);
+                let lim = f64::from(slew.phase_per_sample) * n;
+                let ph = c
+                    .phase
+                    .wrapping_add(dph.clamp(-lim, lim) as i64 as i32 as u32);
+                let exact = (dc + amp * phase_rad(p.wrapping_add(ph)).sin()).clamp(0.0, 4095.0);
+                let bound =
+                    0.5 + amp.abs() * eps + 2f64.powi(-15) + n * (2f64.powi(-18) + 2f64.powi(-16));
+                let err = (f64::from(code) - exact).abs();
+                assert!(
+                    err <= bound,
+                    "ch {ch} sample {i}: {code} vs {exact} ({bound})"
+                );
+            }
+        }
+        total += 64;
+        // The state moved on by 64 steps, in the same closed form.
+        for (c, b) in d.channels().iter().zip(&before) {
+            let want = f64::from(b.amp)
+                + f64::from(b.amp_target - b.amp).clamp(
+                    -64.0 * f64::from(slew.amp_per_sample),
+                    64.0 * f64::from(slew.amp_per_sample),
+                );
+            assert!(
+                (f64::from(c.amp) - want).abs() <= 1e-3,
+                "{} vs {want}",
+                c.amp
+            );
+        }
+    }
+    assert!(d.settled(), "after {total} samples");
+}

@@ -6,7 +6,8 @@
 
 use std::f64::consts::TAU;
 
-use board::lockin::{LockIn, LockInError, MIN_SPAN_RAD};
+use board::dds::SineTable;
+use board::lockin::{LockIn, LockInError, LockInQ, MAX_Q_SAMPLES, MIN_SPAN_RAD};
 use model_core::Libm;
 
 /// Samples of d + A cos(θ + ψ) at θ_i = θ0 + i·dθ, into a lock-in.
@@ -123,4 +124,158 @@ fn too_short_windows_are_refused() {
     let l = window(8 * 64, dth, 0.0, 1.0, 1.0, 0.3);
     let [ph] = l.solve().unwrap();
     assert!((ph.amplitude::<Libm>() - 1.0).abs() < 1e-9);
+}
+
+/// The least-squares fit of `p ≈ d + a cos θ + b sin θ` in f64 with exact
+/// cos and sin (the normal equations solved with the inverse by cofactors), its
+/// largest residual, and `G = max_j Σ_i |((XᵀX)⁻¹Xᵀ)_ji|`, the gain from a
+/// perturbation of the samples to a coefficient.
+fn f64_fit(theta: &[f64], p: &[f64]) -> ([f64; 3], f64, f64) {
+    let x: Vec<[f64; 3]> = theta.iter().map(|t| [1.0, t.cos(), t.sin()]).collect();
+    let m: [[f64; 3]; 3] =
+        std::array::from_fn(|i| std::array::from_fn(|j| x.iter().map(|r| r[i] * r[j]).sum()));
+    // The inverse of the symmetric 3×3 normal matrix by cofactors (the
+    // cyclic form carries the signs): inv = adj/det.
+    let cof = |i: usize, j: usize| {
+        let (i1, i2, j1, j2) = ((i + 1) % 3, (i + 2) % 3, (j + 1) % 3, (j + 2) % 3);
+        m[i1][j1] * m[i2][j2] - m[i1][j2] * m[i2][j1]
+    };
+    let det: f64 = (0..3).map(|j| m[0][j] * cof(0, j)).sum();
+    let inv: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| cof(j, i) / det));
+    let rows: Vec<[f64; 3]> = x
+        .iter()
+        .map(|r| {
+            let mut out = [0.0; 3];
+            for (j, o) in out.iter_mut().enumerate() {
+                *o = (0..3).map(|k| inv[j][k] * r[k]).sum();
+            }
+            out
+        })
+        .collect();
+    let mut coef = [0.0f64; 3];
+    for (row, &pi) in rows.iter().zip(p) {
+        for j in 0..3 {
+            coef[j] += row[j] * pi;
+        }
+    }
+    let g = (0..3)
+        .map(|j| rows.iter().map(|r| r[j].abs()).sum::<f64>())
+        .fold(0.0, f64::max);
+    let resid = x
+        .iter()
+        .zip(p)
+        .map(|(r, &pi)| (pi - coef[0] - coef[1] * r[1] - coef[2] * r[2]).abs())
+        .fold(0.0, f64::max);
+    (coef, resid, g)
+}
+
+/// The integer lock-in (`LockInQ`, eqs. LQ1–LQ3; docs/transducers.md, "The
+/// lock-ins in integers") against the f64 fit of the same integer samples
+/// with exact cos and sin. The reference errs by at most
+/// `ε_r = ε_t + (2π/N)²/8 + 2⁻²⁹ + 2⁻¹⁶` (table, interpolation, Q30 floor,
+/// Q15 rounding); to first order the coefficients then move by at most
+/// `G·ε_r·(|a| + |b| + max|r|)` (`r` the f64 fit's residuals, `G` its
+/// gain), and the f32 solve adds `2⁻²⁰·κ·(|d| + A)` (16 roundings of 2⁻²⁴
+/// over the centred 2×2 system of condition `κ`, computed here; windows
+/// of at least one period).
+#[test]
+fn integer_lock_in_is_within_its_derived_bound_of_the_f64_fit() {
+    let t = SineTable::<1024>::libm();
+    let eps_t = (0..1024)
+        .map(|i| (f64::from(t.entry(i)) - (TAU * i as f64 / 1024.0).sin()).abs())
+        .fold(0.0, f64::max);
+    let eps_r = eps_t + (TAU / 1024.0).powi(2) / 8.0 + 2f64.powi(-29) + 2f64.powi(-16);
+    assert!(eps_r < 2.05e-5, "{eps_r}");
+    let mut worst = 0.0f64;
+    let mut noise = 0x9E37_79B9u32;
+    for f in [8e3f64, 12.3e3, 20e3, 20.1e3, 33.3e3, 40e3, 61e3] {
+        let tw = (f / 500e3 * 4_294_967_296.0).round() as u32;
+        for k in 0..16u32 {
+            let (d, amp, psi) = (
+                2048.0 + 20.0 * f64::from(k),
+                100.0 + 100.0 * f64::from(k),
+                -3.0 + 0.4 * f64::from(k),
+            );
+            let acc0 = k.wrapping_mul(0x1234_5678);
+            let mut l = LockInQ::<1>::new();
+            let (mut theta, mut p) = (Vec::new(), Vec::new());
+            // Whole 64-sample blocks until the window spans a period (the
+            // pickups' rule).
+            let mut i = 0u32;
+            while l.span_words() < 1 << 32 {
+                for _ in 0..64 {
+                    let w = acc0.wrapping_add(tw.wrapping_mul(i));
+                    let th = board::dds::phase_rad(w);
+                    noise = noise.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                    let jitter = f64::from(noise >> 8) / f64::from(1u32 << 24) - 0.5;
+                    let v = (d + amp * (th + psi).cos() + 2.0 * jitter).round();
+                    let (c, s) = LockInQ::<1>::reference(&t, w);
+                    l.push(c, s, tw, [v as u16]);
+                    theta.push(th);
+                    p.push(v);
+                    i += 1;
+                }
+            }
+            let [ph] = l.solve().unwrap();
+            let (coef, resid, g) = f64_fit(&theta, &p);
+            // κ of the centred 2×2 system, from its exact sums.
+            let n = theta.len() as f64;
+            let (mc, ms) = (
+                theta.iter().map(|t| t.cos()).sum::<f64>() / n,
+                theta.iter().map(|t| t.sin()).sum::<f64>() / n,
+            );
+            let scc: f64 = theta.iter().map(|t| (t.cos() - mc).powi(2)).sum();
+            let sss: f64 = theta.iter().map(|t| (t.sin() - ms).powi(2)).sum();
+            let scs: f64 = theta.iter().map(|t| (t.cos() - mc) * (t.sin() - ms)).sum();
+            let (tr, det) = (scc + sss, scc * sss - scs * scs);
+            let disc = (tr * tr / 4.0 - det).max(0.0).sqrt();
+            let kappa = (tr / 2.0 + disc) / (tr / 2.0 - disc);
+            let a_f = coef[1].abs() + coef[2].abs();
+            let bound_ab = g * eps_r * (a_f + resid) + 2f64.powi(-20) * kappa * (coef[0] + a_f);
+            let got = [
+                f64::from(ph.mean),
+                f64::from(ph.in_phase),
+                f64::from(ph.quadrature),
+            ];
+            for j in 0..3 {
+                let e = (got[j] - coef[j]).abs();
+                assert!(
+                    e <= bound_ab,
+                    "{f} Hz, case {k}, coef {j}: {} vs {} (bound {bound_ab})",
+                    got[j],
+                    coef[j]
+                );
+                worst = worst.max(e / bound_ab);
+            }
+        }
+    }
+    // The bound is not loose by orders of magnitude.
+    assert!(worst > 0.01, "worst {worst} of the bound");
+}
+
+#[test]
+fn integer_lock_in_refuses_what_it_cannot_fit() {
+    let t = SineTable::<1024>::libm();
+    let mut l = LockInQ::<1>::new();
+    let (c, s) = LockInQ::<1>::reference(&t, 0);
+    assert_eq!((c, s), (32_768, 0));
+    l.push(c, s, 0, [100]);
+    l.push(c, s, 0, [100]);
+    assert_eq!(l.solve(), Err(LockInError::TooFewSamples));
+    // 64 samples of a 1 kHz drive: 46°, below a quarter period.
+    let tw = (1e3 / 500e3 * 4_294_967_296.0) as u32;
+    let mut l = LockInQ::<1>::new();
+    for i in 0..64u32 {
+        let (c, s) = LockInQ::<1>::reference(&t, tw.wrapping_mul(i));
+        l.push(c, s, tw, [2000]);
+    }
+    assert!(l.span_rad() < MIN_SPAN_RAD as f32);
+    assert_eq!(l.solve(), Err(LockInError::ShortWindow));
+    // More than MAX_Q_SAMPLES: refused, not overflowed.
+    let mut l = LockInQ::<1>::new();
+    for i in 0..=MAX_Q_SAMPLES {
+        let (c, s) = LockInQ::<1>::reference(&t, tw.wrapping_mul(i));
+        l.push(c, s, tw, [4095]);
+    }
+    assert_eq!(l.solve(), Err(LockInError::LongWindow));
 }

@@ -21,7 +21,7 @@
 //! difference for resonant ones.
 
 use super::Device;
-use crate::lockin::LockIn;
+use crate::lockin::LockInQ;
 pub use crate::protocol::messages::MeasuredDrive;
 use model_core::float::FastF32;
 use num_complex::Complex32 as C;
@@ -31,16 +31,25 @@ use num_complex::Complex32 as C;
 /// textbook `√(2/N)` (a shorter window would be exact too, but its noise
 /// gain grows like 1/span²: `lockin::MIN_SPAN_RAD`).
 pub const WINDOW_SPAN_RAD: f32 = core::f32::consts::TAU;
+/// [`WINDOW_SPAN_RAD`] in phase words (2³² a turn; ≈ 2³², the f32 2π being 2.8e-8 above it).
+const WINDOW_SPAN_WORDS: u64 =
+    (WINDOW_SPAN_RAD as f64 / core::f64::consts::TAU * 4_294_967_296.0 + 0.5) as u64;
 
 /// The pickups' lock-ins and the last result.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct Motion {
-    lock: LockIn<f32, 2>,
+    /// In integers (issue 35): Q15 reference, ADC counts, i64 sums.
+    lock: LockInQ<2>,
     last: Option<MeasuredDrive>,
     /// The last window's phasors `X = A·e^{jψ}` of each mode, m.
     phasors: [C; 2],
     peak_z: f32,
     windows: u32,
+    /// The pickups' delay in phase words for a tuning word, `(tw, words)`
+    /// ([`super::DeviceConfig::pickup_delay_words`], soft-float f64 on
+    /// the M4): formed again only when the tuning word changes. `(0, 0)`
+    /// holds at power-up (a zero word advances nothing).
+    delay: (u32, u32),
 }
 
 impl<const N: usize> Device<'_, N> {
@@ -65,28 +74,41 @@ impl<const N: usize> Device<'_, N> {
         // Each pickup sample at its own instant: δ after its force sample
         // (`DeviceConfig::pickup_delay_s`), so the reference starts that
         // much further on (one rounding per block; the rest in words).
-        let mut acc = self.cfg.pickup_reference_word(acc0, tw);
-        let dtheta = (f64::from(tw) * core::f64::consts::TAU / 4_294_967_296.0) as f32;
-        let (cz, cx) = (self.cfg.pickup_z, self.cfg.pickup_x);
-        for &(z, x) in pickups {
-            let (s, c) = (
-                self.table.sin(acc),
-                self.table.sin(acc.wrapping_add(1 << 30)),
-            );
-            let pz = (f32::from(z) - cz.offset) * cz.gain;
-            let px = (f32::from(x) - cx.offset) * cx.gain;
-            self.motion.lock.push(c, s, dtheta, [pz, px]);
-            acc = acc.wrapping_add(tw);
+        if self.motion.delay.0 != tw {
+            self.motion.delay = (tw, self.cfg.pickup_delay_words(tw));
         }
+        // = `DeviceConfig::pickup_reference_word(acc0, tw)`.
+        let acc = self
+            .cfg
+            .adc_reference_word(acc0, tw)
+            .wrapping_add(self.motion.delay.1);
+        // One pass in integers: the DDS's own Q30 table, counts as read.
+        self.motion.lock.push_pairs(self.table, acc, tw, pickups);
         let m = &mut self.motion;
-        if m.lock.span_rad() < WINDOW_SPAN_RAD {
+        if m.lock.span_words() < WINDOW_SPAN_WORDS {
             return;
         }
         let window_s = m.lock.samples() as f32 / self.cfg.sample_rate_hz as f32;
-        let Ok([z, x]) = m.lock.solve() else {
-            return;
+        let [z, x] = match m.lock.solve() {
+            Ok(fit) => fit,
+            // Too long for the integer sums (never within the drives'
+            // range): started over.
+            Err(crate::lockin::LockInError::LongWindow) => {
+                m.lock.reset();
+                return;
+            }
+            // A singular window: it grows on until it solves.
+            Err(_) => return,
         };
         m.lock.reset();
+        // Counts to metres: the pickups' calibrations (offset, gain).
+        let (cz, cx) = (self.cfg.pickup_z, self.cfg.pickup_x);
+        let metres = |p: crate::lockin::Phasor<f32>, g: f32, offset: f32| crate::lockin::Phasor {
+            mean: (p.mean - offset) * g,
+            in_phase: p.in_phase * g,
+            quadrature: p.quadrature * g,
+        };
+        let (z, x) = (metres(z, cz.gain, cz.offset), metres(x, cx.gain, cx.offset));
         // X = A·e^{jψ} = a − j b (`displacement`'s phasors).
         let xz = C::new(z.in_phase, -z.quadrature);
         let xx = C::new(x.in_phase, -x.quadrature);

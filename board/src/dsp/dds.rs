@@ -19,6 +19,33 @@
 //! Frequency resolution is `f_s/2³²` (0.23 mHz at 1 MS/s); the achieved
 //! frequency and phase are reported exactly ([`Achieved`]).
 //!
+//! **Integer arithmetic per sample** (issue 35). The table is read as Q30
+//! integers (`q_i = 2³⁰·t_i`, exactly the f32 entries) and every sample is
+//! formed in integers, with the channel's amplitude and DC turned into
+//! integer scale factors once per fill:
+//!
+//! ```text
+//! v(p)  = q_i + 2·⌊Δq_i · r / 2³²⌋,   i = ⌊p·N/2³²⌋, r = the next 31 bits of p (Q1)
+//! k_a   = round(amp · 2¹⁸),   k_d = round(dc · 2¹⁶) + 2¹⁵                       (Q2)
+//! code  = clamp(⌊(k_d·2³² + k_a·v) / 2⁴⁸⌋, 0, 4095)                           (Q3)
+//! ```
+//!
+//! (Q3) is `round(dc + amp·v/2³⁰)`: one 32×32→64 multiply-accumulate per
+//! channel and sample (SMLAL on the M4), no float. While a channel ramps its
+//! scale factors follow the slew's closed form per sample (Q4, [`Dds::fill`]).
+//! The error against the exact waveform, derived in `docs/transducers.md`
+//! ("The DDS in integers") and asserted in `tests/tests/dds.rs` against an f64
+//! computation:
+//!
+//! ```text
+//! |code − (dc + amp·sin 2πp/2³²)| ≤ 1/2 + |amp|·(ε_t + (2π/N)²/8 + 2⁻²⁹) + 2⁻¹⁵   (Q5)
+//! ```
+//!
+//! with `ε_t` the table entries' error (an f32 sine of an f32 argument:
+//! ≤ π·2⁻²³ + 2⁻²⁴ = 4.3e-7; 2.0e-7 measured with libm; `(2π/N)²/8` the
+//! linear interpolation's, 4.7e-6 at N = 1024: 0.0096 LSB at full scale).
+//! With the nearest entry the middle term is `π/N` instead.
+//!
 //! Channel waveforms: `code = dc + amp · sin(2π·(acc + offset)/2³²)`. The drive
 //! of the paper (eqs. 1, 2) uses `−cos θ` for the normal channel and
 //! `cos(θ + φ)` for the tangential one; [`phase_word`] turns radians into
@@ -53,6 +80,11 @@ pub struct SineTable<const N: usize> {
     t: [f32; N],
     /// `t[i+1] − t[i]` (wrapping), so interpolation is one multiply-add.
     d: [f32; N],
+    /// The DDS's table (Q1), `[q_i, Δq_i]` side by side (one LDRD):
+    /// `q_i = round(2³⁰·t[i])` (exact but for entries below 2⁻⁶ in
+    /// magnitude, then within 2⁻³¹) and `Δq_i = q_{i+1} − q_i` (below 2³¹
+    /// in magnitude for `N ≥ 4`).
+    q: [[i32; 2]; N],
 }
 
 impl<const N: usize> SineTable<N> {
@@ -78,10 +110,19 @@ impl<const N: usize> SineTable<N> {
             *v = M::sin_cos(x).0;
         }
         let mut d = [0.0f32; N];
+        let mut q = [[0i32; 2]; N];
         for i in 0..N {
             d[i] = t[(i + 1) % N] - t[i];
+            // 2³⁰·t is exact in f32 (a power-of-two scale) and below 2³¹ in
+            // magnitude; it is an integer unless |t| < 2⁻⁶ (24 significant
+            // bits), where the rounding moves it by ≤ 2⁻³¹: q = round(2³⁰ t).
+            let x = t[i] * Q30_F32;
+            q[i][0] = if x >= 0.0 { x + 0.5 } else { x - 0.5 } as i32;
         }
-        SineTable { t, d }
+        for i in 0..N {
+            q[i][1] = q[(i + 1) % N][0].wrapping_sub(q[i][0]);
+        }
+        SineTable { t, d, q }
     }
 
     /// The accurate table (libm).
@@ -126,6 +167,79 @@ impl<const N: usize> SineTable<N> {
     /// Table entry `i` (for tests).
     pub fn entry(&self, i: usize) -> f32 {
         self.t[i % N]
+    }
+
+    /// `2³⁰·sin(2π·phase/2³²)`, linearly interpolated in integers (eq. Q1):
+    /// the table's error plus at most `(2π/N)²/8` (interpolation) and
+    /// `2⁻²⁹` (the floor of the halved product, two Q30 units), of 1. All
+    /// of the phase's bits below the index are used (`32 − log₂N ≤ 30`).
+    #[inline(always)]
+    pub fn sin_q30(&self, phase: u32) -> i32 {
+        let bits = Self::BITS;
+        let idx = (phase >> (32 - bits)) as usize & (N - 1);
+        // The next 31 bits of the phase: the fraction of the step, Q31.
+        let r = (phase << bits) >> 1;
+        // ⌊Δq·r/2³²⌋·2 (one SMMUL): the floor costs ≤ 2 Q30 units, 2⁻²⁹.
+        let [q, dq] = self.q[idx];
+        let half = (i64::from(dq) * i64::from(r)) >> 32;
+        q.wrapping_add((half as i32) << 1)
+    }
+
+    /// `2³⁰·sin(2π·phase/2³²)` from the nearest entry (error `≤ π/N`).
+    #[inline(always)]
+    pub fn sin_q30_nearest(&self, phase: u32) -> i32 {
+        let bits = Self::BITS;
+        let idx = (phase.wrapping_add(1 << (31 - bits)) >> (32 - bits)) as usize;
+        self.q[idx & (N - 1)][0]
+    }
+
+    /// The integer read of `interp` (eq. Q1, or the nearest entry).
+    #[inline(always)]
+    pub fn sin_q30_with(&self, interp: Interp, phase: u32) -> i32 {
+        match interp {
+            Interp::Nearest => self.sin_q30_nearest(phase),
+            Interp::Linear => self.sin_q30(phase),
+        }
+    }
+}
+
+/// `2³⁰` as f32 (exact): the scale of the Q30 table.
+const Q30_F32: f32 = 1_073_741_824.0;
+
+/// A channel's integer scale factors (eq. Q2) and phase offset.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Fixed {
+    /// `round(amp · 2¹⁸)`: `|amp| ≤ 4095` keeps it below 2³⁰.
+    ka: i32,
+    /// `round(dc · 2¹⁶) + 2¹⁵` (the half that makes (Q3)'s floor a
+    /// rounding): `0 ≤ dc ≤ 4095` keeps it below 2²⁸.
+    kd: i32,
+    /// The phase offset word.
+    ph: u32,
+}
+
+/// `round(x)` of a finite f32 within i32, half away from zero.
+#[inline(always)]
+fn round_i32(x: f32) -> i32 {
+    (if x >= 0.0 { x + 0.5 } else { x - 0.5 }) as i32
+}
+
+impl Fixed {
+    /// Eq. (Q2) of an amplitude, a DC level (codes) and a phase offset.
+    #[inline(always)]
+    fn of(amp: f32, dc: f32, ph: u32) -> Self {
+        Fixed {
+            ka: round_i32(amp * 262_144.0),
+            kd: round_i32(dc * 65_536.0) + (1 << 15),
+            ph,
+        }
+    }
+
+    /// Eq. (Q3): the code of the table value `v` (Q30).
+    #[inline(always)]
+    fn code(&self, v: i32) -> u16 {
+        let acc = (i64::from(self.kd) << 32) + i64::from(self.ka) * i64::from(v);
+        ((acc >> 48) as i32).clamp(0, DAC_MAX as i32) as u16
     }
 }
 
@@ -261,6 +375,16 @@ impl Channel {
     /// Whether the channel has reached its targets.
     pub fn settled(&self) -> bool {
         self.amp == self.amp_target && self.dc == self.dc_target && self.phase == self.phase_target
+    }
+
+    /// `n` slew steps at once, in the closed form (Q4).
+    fn advance(&mut self, s: &Slew, n: u32) {
+        let nf = n as f32;
+        self.amp = toward(self.amp, self.amp_target, s.amp_per_sample * nf);
+        self.dc = toward(self.dc, self.dc_target, s.dc_per_sample * nf);
+        let diff = i64::from(self.phase_target.wrapping_sub(self.phase) as i32);
+        let lim = i64::from(s.phase_per_sample.min(i32::MAX as u32)) * i64::from(n);
+        self.phase = self.phase.wrapping_add(diff.clamp(-lim, lim) as i32 as u32);
     }
 
     #[inline(always)]
@@ -462,18 +586,15 @@ impl<'t, const N: usize> Dds<'t, N> {
         phase_rad(self.ch[1].phase.wrapping_sub(self.ch[0].phase))
     }
 
-    /// Value of one channel for accumulator `acc`, as a real code before rounding.
-    #[inline(always)]
-    fn value(&self, c: &Channel, acc: u32) -> f32 {
-        c.dc + c.amp * self.table.sin_with(self.interp, acc.wrapping_add(c.phase))
-    }
-
-    /// One sample: returns `(drive phase, ch1 code, ch2 code)` and advances.
+    /// One sample: returns `(drive phase, ch1 code, ch2 code)` and advances
+    /// (eqs. Q1–Q3 on the channels' state, then one slew step).
     #[inline(always)]
     pub fn next_codes(&mut self) -> (u32, u16, u16) {
         let acc = self.acc;
-        let a = quantise(self.value(&self.ch[0], acc));
-        let b = quantise(self.value(&self.ch[1], acc));
+        let [a, b] = self.ch.map(|c| {
+            let f = Fixed::of(c.amp, c.dc, c.phase);
+            f.code(self.table.sin_q30_with(self.interp, acc.wrapping_add(f.ph)))
+        });
         self.acc = acc.wrapping_add(self.tw);
         let s = self.slew;
         self.ch[0].step(&s);
@@ -482,37 +603,210 @@ impl<'t, const N: usize> Dds<'t, N> {
     }
 
     /// Fills `buf` with packed DHR12RD words (what the DMA half-buffer refill
-    /// does). When both channels are settled the slew steps are skipped (the
-    /// output is identical, the loop about half as long).
+    /// does), in integers (eqs. Q1–Q3). Settled channels keep one set of
+    /// scale factors for the whole fill; while a channel ramps, sample `i`
+    /// of the fill uses the state `i` slew steps on, in the closed form
+    ///
+    /// ```text
+    /// x_i = x_0 + clamp(x_target − x_0, −i·s, i·s)                      (Q4)
+    /// ```
+    ///
+    /// for the amplitude and DC (in the units of Q2, the slew `s` rounded
+    /// likewise) and the phase offset (words, the shortest way round) — the
+    /// same sequence as one slew step per sample, and what
+    /// `plant::HalfDrive` reconstructs. The channels' state is then moved
+    /// on by `buf.len()` steps.
     pub fn fill(&mut self, buf: &mut [u32]) {
         if self.settled() {
             // The interpolation is chosen once per buffer, outside the loop.
+            // (A const parameter, not a function argument: at opt-level
+            // "z" a function passed in stays a call per sample.)
             match self.interp {
-                Interp::Nearest => self.fill_settled(buf, SineTable::<N>::sin_nearest),
-                Interp::Linear => self.fill_settled(buf, SineTable::<N>::sin),
+                Interp::Nearest => self.fill_settled::<false>(buf),
+                Interp::Linear => self.fill_settled::<true>(buf),
             }
             return;
         }
-        for w in buf.iter_mut() {
-            let (_, a, b) = self.next_codes();
-            *w = pack_dual(a, b);
+        match self.interp {
+            Interp::Nearest => self.fill_ramping::<false>(buf),
+            Interp::Linear => self.fill_ramping::<true>(buf),
+        }
+    }
+}
+
+/// One quantity's ramp over a fill in the units of (Q2) (eq. Q4):
+/// `x_i = x_0 + i·dx` for `i < n`, then the target `x_t` (wrapping, for
+/// phase words).
+#[derive(Debug, Clone, Copy)]
+struct Lin {
+    x0: i32,
+    dx: i32,
+    n: u32,
+    xt: i32,
+}
+
+impl Lin {
+    /// From `x0` toward `xt` by at most `step ≥ 0` per sample; `dist` is
+    /// the signed distance (`xt − x0`, or the shortest way round for phase
+    /// words). `n = ⌈|dist|/step⌉` samples reach the target: eq. (Q4)'s
+    /// clamp in closed form, with one hardware division per fill.
+    fn new(x0: i32, xt: i32, dist: i32, step: u32) -> Self {
+        let d = dist.unsigned_abs();
+        let n = match step {
+            0 if d == 0 => 0,
+            0 => u32::MAX,
+            s => d.div_ceil(s),
+        };
+        // |dx| = step < |dist| ≤ 2³¹ whenever n > 1; otherwise unused.
+        let dx = if n > 1 { step as i32 } else { 0 };
+        Lin {
+            x0,
+            dx: if dist < 0 { dx.wrapping_neg() } else { dx },
+            n,
+            xt,
+        }
+    }
+
+    #[inline(always)]
+    fn at(&self, i: u32) -> i32 {
+        if i < self.n {
+            // |i·dx| < |dist|: no overflow for amplitude and DC; phase
+            // words wrap by design.
+            self.x0.wrapping_add((i as i32).wrapping_mul(self.dx))
+        } else {
+            self.xt
+        }
+    }
+}
+
+/// A slew in the units of (Q2): `x·scale` truncated, at most `2³¹ − 1`
+/// (a larger step reaches any target in one sample anyway).
+fn step_of(per_sample: f32, scale: f32) -> u32 {
+    (per_sample * scale).clamp(0.0, 2_147_483_647.0) as u32
+}
+
+/// A ramping channel's fill (eq. Q4): amplitude, DC and phase offset.
+#[derive(Debug, Clone, Copy)]
+struct Ramp {
+    ka: Lin,
+    kd: Lin,
+    ph: Lin,
+}
+
+impl Ramp {
+    fn of(c: &Channel, s: &Slew) -> Self {
+        let (from, to) = (
+            Fixed::of(c.amp, c.dc, c.phase),
+            Fixed::of(c.amp_target, c.dc_target, c.phase_target),
+        );
+        Ramp {
+            ka: Lin::new(
+                from.ka,
+                to.ka,
+                to.ka - from.ka,
+                step_of(s.amp_per_sample, 262_144.0),
+            ),
+            kd: Lin::new(
+                from.kd,
+                to.kd,
+                to.kd - from.kd,
+                step_of(s.dc_per_sample, 65_536.0),
+            ),
+            ph: Lin::new(
+                from.ph as i32,
+                to.ph as i32,
+                to.ph.wrapping_sub(from.ph) as i32,
+                s.phase_per_sample.min(i32::MAX as u32),
+            ),
+        }
+    }
+
+    /// The targets' scale factors (Q4 once every quantity reached it).
+    fn target(&self) -> Fixed {
+        Fixed {
+            ka: self.ka.xt,
+            kd: self.kd.xt,
+            ph: self.ph.xt as u32,
+        }
+    }
+
+    /// The scale factors `i` slew steps on (Q4).
+    #[inline(always)]
+    fn at(&self, i: u32) -> Fixed {
+        Fixed {
+            ka: self.ka.at(i),
+            kd: self.kd.at(i),
+            ph: self.ph.at(i) as u32,
         }
     }
 }
 
 impl<const N: usize> Dds<'_, N> {
+    /// The table read of (Q1), linear or the nearest entry.
     #[inline(always)]
-    fn fill_settled(&mut self, buf: &mut [u32], sin: impl Fn(&SineTable<N>, u32) -> f32) {
-        let (c0, c1) = (self.ch[0], self.ch[1]);
+    fn read<const LINEAR: bool>(t: &SineTable<N>, phase: u32) -> i32 {
+        if LINEAR {
+            t.sin_q30(phase)
+        } else {
+            t.sin_q30_nearest(phase)
+        }
+    }
+
+    /// Both channels settled: one set of scale factors for the fill.
+    fn fill_settled<const LINEAR: bool>(&mut self, buf: &mut [u32]) {
+        let [f0, f1] = self.ch.map(|c| Fixed::of(c.amp, c.dc, c.phase));
+        self.acc = Self::fill_fixed::<LINEAR>(self.table, self.tw, buf, f0, f1, self.acc);
+    }
+
+    /// `buf` at fixed scale factors from accumulator `acc`; the
+    /// accumulator after it.
+    #[inline(always)]
+    fn fill_fixed<const LINEAR: bool>(
+        t: &SineTable<N>,
+        tw: u32,
+        buf: &mut [u32],
+        f0: Fixed,
+        f1: Fixed,
+        mut acc: u32,
+    ) -> u32 {
+        for w in buf.iter_mut() {
+            let a = f0.code(Self::read::<LINEAR>(t, acc.wrapping_add(f0.ph)));
+            let b = f1.code(Self::read::<LINEAR>(t, acc.wrapping_add(f1.ph)));
+            *w = pack_dual(a, b);
+            acc = acc.wrapping_add(tw);
+        }
+        acc
+    }
+
+    /// A channel ramps: the scale factors per sample by (Q4) while any
+    /// quantity is short of its target, the targets' fixed factors after
+    /// (the settled loop: a level changed by less than a slew step costs
+    /// one ramping sample), then the channels' state `buf.len()` steps on.
+    fn fill_ramping<const LINEAR: bool>(&mut self, buf: &mut [u32]) {
+        let [r0, r1] = self.ch.map(|c| Ramp::of(&c, &self.slew));
         let t = self.table;
         let mut acc = self.acc;
-        for w in buf.iter_mut() {
-            let a = quantise(c0.dc + c0.amp * sin(t, acc.wrapping_add(c0.phase)));
-            let b = quantise(c1.dc + c1.amp * sin(t, acc.wrapping_add(c1.phase)));
+        let ramping = [r0, r1]
+            .iter()
+            .map(|r| r.ka.n.max(r.kd.n).max(r.ph.n))
+            .max()
+            .unwrap_or(0)
+            .min(buf.len() as u32) as usize;
+        let (head, tail) = buf.split_at_mut(ramping);
+        for (i, w) in (0u32..).zip(head.iter_mut()) {
+            let (f0, f1) = (r0.at(i), r1.at(i));
+            let a = f0.code(Self::read::<LINEAR>(t, acc.wrapping_add(f0.ph)));
+            let b = f1.code(Self::read::<LINEAR>(t, acc.wrapping_add(f1.ph)));
             *w = pack_dual(a, b);
             acc = acc.wrapping_add(self.tw);
         }
-        self.acc = acc;
+        // Every quantity at its target (Q4 for i ≥ n).
+        self.acc = Self::fill_fixed::<LINEAR>(t, self.tw, tail, r0.target(), r1.target(), acc);
+        let n = buf.len() as u32;
+        let s = self.slew;
+        for c in &mut self.ch {
+            c.advance(&s, n);
+        }
     }
 }
 

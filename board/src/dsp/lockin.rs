@@ -28,7 +28,10 @@
 //! window whose normal matrix is too close to singular ([`MIN_SPAN_RAD`]).
 //!
 //! Cost per sample: the reference's cos and sin (table look-ups on the board)
-//! and nine multiply-adds into the sums.
+//! and nine multiply-adds into the sums. [`LockIn`] sums in floats (any
+//! [`Float`]); the board's pickups use [`LockInQ`], the same fit with a Q15
+//! reference from the DDS's table and exact integer sums (issue 35: 66
+//! instructions per sample for both pickups on the M4F, 103 in f32).
 
 use model_core::float::{Float, Math};
 
@@ -47,6 +50,8 @@ pub enum LockInError {
     TooFewSamples,
     /// The window spans less than [`MIN_SPAN_RAD`] of drive phase.
     ShortWindow,
+    /// An integer window ([`LockInQ`]) took more than [`MAX_Q_SAMPLES`].
+    LongWindow,
 }
 
 impl core::fmt::Display for LockInError {
@@ -54,6 +59,7 @@ impl core::fmt::Display for LockInError {
         f.write_str(match self {
             LockInError::TooFewSamples => "fewer than three samples",
             LockInError::ShortWindow => "the window spans less than a quarter period",
+            LockInError::LongWindow => "the window holds more samples than its integer sums allow",
         })
     }
 }
@@ -203,5 +209,245 @@ impl<F: Float, const K: usize> LockIn<F, K> {
     /// Empties the window.
     pub fn reset(&mut self) {
         *self = Self::new();
+    }
+}
+
+/// The most samples an integer window holds ([`LockInQ`]): `2¹⁵` keeps
+/// every centred product of (LQ2) within i64 (`n·Σc² ≤ n²·2³⁰ ≤ 2⁶⁰`);
+/// 65 ms at 500 kS/s, a period at 15 Hz, far below the drives' range.
+pub const MAX_Q_SAMPLES: u32 = 1 << 15;
+
+/// The sums of (L2) in integers (issue 35), for `K` signals of ADC counts
+/// sampled at the same phases: the reference `(cos θ, sin θ)` as Q15
+/// integers from the DDS's own Q30 table, the products summed exactly in
+/// i64 (`c`, `s`: one add; `c²`, `cs`, `pc`: one multiply-accumulate), the
+/// span in phase words. Nothing is rounded until the solve:
+///
+/// ```text
+/// c_i = round(2¹⁵ cos θ_i),  s_i = round(2¹⁵ sin θ_i)  (from the Q30 table)   (LQ1)
+/// S_xy = n·Σxy − Σx·Σy   (exact, i64: the centred sums of L2 times n)          (LQ2)
+/// a = (S_pc S_ss − S_ps S_cs)/D,  b = (S_ps S_cc − S_pc S_cs)/D,
+/// D = S_cc S_ss − S_cs²   (f32; a, b per Q15 unit, then × 2¹⁵)                (LQ3)
+/// ```
+///
+/// The reference's error — the table's `ε_t`, the interpolation's
+/// `(2π/N)²/8` and the Q15 rounding `2⁻¹⁶` — perturbs the fit by at most
+/// `G·√2·A·ε_r` for a signal of amplitude `A`, `ε_r = ε_t + (2π/N)²/8 +
+/// 2⁻²⁹ + 2⁻¹⁶` (2.02e-5 at N = 1024, libm table) and `G` the fit's gain from a
+/// residual to a coefficient (`max_j Σ_i |((XᵀX)⁻¹Xᵀ)_ji|`, ≈ 2 over a
+/// whole period); the f32 solve adds a few ulps. Derived in
+/// `docs/transducers.md` ("The lock-ins in integers") and asserted in
+/// `tests/tests/lockin.rs` against an f64 fit with exact cos and sin.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LockInQ<const K: usize> {
+    n: u32,
+    c: i64,
+    s: i64,
+    cc: i64,
+    ss: i64,
+    cs: i64,
+    p: [i64; K],
+    pc: [i64; K],
+    ps: [i64; K],
+    /// Phase words travelled from the window's first sample to its last.
+    span: u64,
+}
+
+impl<const K: usize> Default for LockInQ<K> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const K: usize> LockInQ<K> {
+    /// An empty window.
+    pub const fn new() -> Self {
+        LockInQ {
+            n: 0,
+            c: 0,
+            s: 0,
+            cc: 0,
+            ss: 0,
+            cs: 0,
+            p: [0; K],
+            pc: [0; K],
+            ps: [0; K],
+            span: 0,
+        }
+    }
+
+    /// The Q15 reference (LQ1) of phase word `p` from the DDS's table:
+    /// `(round(2¹⁵ cos), round(2¹⁵ sin))`.
+    #[inline(always)]
+    pub fn reference<const N: usize>(t: &crate::dds::SineTable<N>, p: u32) -> (i32, i32) {
+        let q15 = |v: i32| (v + (1 << 14)) >> 15;
+        (q15(t.sin_q30(p.wrapping_add(1 << 30))), q15(t.sin_q30(p)))
+    }
+
+    /// Adds one sample of each signal (`p`, ADC counts) at the reference
+    /// `(c, s)` (Q15, [`LockInQ::reference`]); `dphase` is the phase word
+    /// advanced since the previous sample. Beyond [`MAX_Q_SAMPLES`] the
+    /// sample is not taken (the window is then refused by the solve).
+    #[inline(always)]
+    pub fn push(&mut self, c: i32, s: i32, dphase: u32, p: [u16; K]) {
+        if self.n >= MAX_Q_SAMPLES {
+            self.n = MAX_Q_SAMPLES + 1;
+            return;
+        }
+        if self.n > 0 {
+            self.span += u64::from(dphase);
+        }
+        self.n += 1;
+        let (c, s) = (i64::from(c), i64::from(s));
+        self.c += c;
+        self.s += s;
+        self.cc += c * c;
+        self.ss += s * s;
+        self.cs += c * s;
+        for (k, &pk) in p.iter().enumerate() {
+            let pk = i64::from(pk);
+            self.p[k] += pk;
+            self.pc[k] += pk * c;
+            self.ps[k] += pk * s;
+        }
+    }
+
+    /// Samples in the window.
+    pub fn samples(&self) -> u32 {
+        self.n
+    }
+
+    /// Whether `more` samples still fit the integer sums.
+    fn room_for(&mut self, more: usize) -> bool {
+        if self.n as usize + more > MAX_Q_SAMPLES as usize {
+            self.n = MAX_Q_SAMPLES + 1;
+            return false;
+        }
+        true
+    }
+
+    /// The phase the window spans, rad.
+    pub fn span_rad(&self) -> f32 {
+        (self.span as f64 * (core::f64::consts::TAU / 4_294_967_296.0)) as f32
+    }
+
+    /// The phase the window spans, phase words (2³² a turn).
+    pub fn span_words(&self) -> u64 {
+        self.span
+    }
+
+    /// The fit (L1) of each signal over the window, in ADC counts (eqs.
+    /// LQ2, LQ3).
+    ///
+    /// # Errors
+    /// [`LockInError::TooFewSamples`] below three samples,
+    /// [`LockInError::ShortWindow`] below [`MIN_SPAN_RAD`] (or a singular
+    /// normal matrix), [`LockInError::LongWindow`] beyond [`MAX_Q_SAMPLES`].
+    pub fn solve(&self) -> Result<[Phasor<f32>; K], LockInError> {
+        if self.n < 3 {
+            return Err(LockInError::TooFewSamples);
+        }
+        if self.n > MAX_Q_SAMPLES {
+            return Err(LockInError::LongWindow);
+        }
+        // MIN_SPAN_RAD = π/2 is 2³⁰ words.
+        if self.span < 1 << 30 {
+            return Err(LockInError::ShortWindow);
+        }
+        let n = i64::from(self.n);
+        // (LQ2), exact: with n ≤ 2¹⁵, |c|, |s| ≤ 2¹⁵ and any u16 sample,
+        // |n·Σxy| and |Σx·Σy| are at most 2⁶¹, their difference 2⁶².
+        let centred = |sxy: i64, sx: i64, sy: i64| (n * sxy - sx * sy) as f32;
+        let scc = centred(self.cc, self.c, self.c);
+        let sss = centred(self.ss, self.s, self.s);
+        let scs = centred(self.cs, self.c, self.s);
+        let det = scc * sss - scs * scs;
+        if det.is_nan() || det <= 0.0 {
+            return Err(LockInError::ShortWindow);
+        }
+        let inv = 1.0 / det;
+        let nf = self.n as f32;
+        let (mc, ms) = (self.c as f32 / nf, self.s as f32 / nf);
+        let mut out = [Phasor {
+            mean: 0.0,
+            in_phase: 0.0,
+            quadrature: 0.0,
+        }; K];
+        for (k, o) in out.iter_mut().enumerate() {
+            let spc = centred(self.pc[k], self.p[k], self.c);
+            let sps = centred(self.ps[k], self.p[k], self.s);
+            // Per Q15 unit of the reference (LQ3).
+            let a = (spc * sss - sps * scs) * inv;
+            let b = (sps * scc - spc * scs) * inv;
+            *o = Phasor {
+                mean: self.p[k] as f32 / nf - a * mc - b * ms,
+                in_phase: a * 32_768.0,
+                quadrature: b * 32_768.0,
+            };
+        }
+        Ok(out)
+    }
+
+    /// Empties the window.
+    pub fn reset(&mut self) {
+        *self = Self::new();
+    }
+}
+
+impl LockInQ<2> {
+    /// A block of sample pairs `(p₀, p₁)` (ADC counts) taken at the phase
+    /// words `acc0 + i·tw`, in one pass: the reference (LQ1) from the
+    /// DDS's table and every sum of the block in locals (i32 for the
+    /// plain sums, i64 multiply-accumulates for the products), added to
+    /// the window's once per block. The same sums as [`LockInQ::push`]
+    /// per sample. A block that would pass [`MAX_Q_SAMPLES`] is not taken
+    /// (the window is then refused by the solve).
+    pub fn push_pairs<const N: usize>(
+        &mut self,
+        t: &crate::dds::SineTable<N>,
+        acc0: u32,
+        tw: u32,
+        pairs: &[(u16, u16)],
+    ) {
+        if pairs.is_empty() || !self.room_for(pairs.len()) {
+            return;
+        }
+        // |Σc|, |Σs| ≤ 2¹⁵·len and Σp ≤ 4095·len: i32 for len ≤ 2¹⁵.
+        let (mut c1, mut s1, mut p0, mut p1) = (0i32, 0i32, 0i32, 0i32);
+        let (mut cc, mut ss, mut cs) = (0i64, 0i64, 0i64);
+        let (mut pc0, mut ps0, mut pc1, mut ps1) = (0i64, 0i64, 0i64, 0i64);
+        let mut acc = acc0;
+        for &(a, b) in pairs {
+            let (c, s) = Self::reference(t, acc);
+            acc = acc.wrapping_add(tw);
+            let (a, b) = (i32::from(a), i32::from(b));
+            c1 += c;
+            s1 += s;
+            p0 += a;
+            p1 += b;
+            cc += i64::from(c) * i64::from(c);
+            ss += i64::from(s) * i64::from(s);
+            cs += i64::from(c) * i64::from(s);
+            pc0 += i64::from(a) * i64::from(c);
+            ps0 += i64::from(a) * i64::from(s);
+            pc1 += i64::from(b) * i64::from(c);
+            ps1 += i64::from(b) * i64::from(s);
+        }
+        let len = pairs.len() as u64;
+        // The first sample of a window adds no span (as `push`).
+        let steps = if self.n == 0 { len - 1 } else { len };
+        self.span += steps * u64::from(tw);
+        self.n += pairs.len() as u32;
+        self.c += i64::from(c1);
+        self.s += i64::from(s1);
+        self.cc += cc;
+        self.ss += ss;
+        self.cs += cs;
+        self.p[0] += i64::from(p0);
+        self.p[1] += i64::from(p1);
+        self.pc[0] += pc0;
+        self.ps[0] += ps0;
+        self.pc[1] += pc1;
+        self.ps[1] += ps1;
     }
 }
