@@ -110,6 +110,12 @@ fn qemu() -> Qemu {
 
 /// QEMU running the firmware built with `feature` ([`firmware_elf`]).
 fn qemu_with(var: &str, feature: &str) -> Qemu {
+    qemu_with_args(var, feature, &[])
+}
+
+/// [`qemu_with`] and `extra` arguments for QEMU (`-icount shift=0`: one
+/// instruction one nanosecond of emulated time).
+fn qemu_with_args(var: &str, feature: &str, extra: &[&str]) -> Qemu {
     let turn = QEMU_TURN.lock().unwrap_or_else(|e| e.into_inner());
     let elf = firmware_elf(var, feature);
     let port = free_port();
@@ -126,12 +132,9 @@ fn qemu_with(var: &str, feature: &str) -> Qemu {
         ])
         .arg("-serial")
         .arg(format!("tcp:127.0.0.1:{port},server=on,wait=on,nodelay=on"))
-        .args([
-            "-semihosting-config",
-            "enable=on,target=native",
-            "-kernel",
-            &elf,
-        ])
+        .args(["-semihosting-config", "enable=on,target=native"])
+        .args(extra)
+        .args(["-kernel", &elf])
         .stdin(Stdio::null())
         .stdout(Stdio::null())
         .stderr(Stdio::null())
@@ -567,6 +570,64 @@ fn reset_ends_the_stream_and_the_measurement_on_the_firmware() {
     assert_eq!(link.ask(30, 9, &[]), Response::Error(WireError::NotReady));
     assert_eq!(link.ask(31, 8, &MILLION), Response::Ok);
     assert_eq!(link.ask(32, 13, &[]), Response::Ok);
+}
+
+/// Protocol v8 (docs/protocol.md, "DSP load"): the firmware measures the
+/// time of its DSP work per half-buffer. Under `-icount shift=0` the QEMU
+/// build's count is instructions (SysTick calibrated at boot): with the
+/// drive running, the load is at least the settled DDS refill's — 41
+/// instructions per sample (`predict_cost`), 64 samples of a 21 504-cycle
+/// half-buffer: 12.2 % — and below 100 % (the work of a half-buffer fits
+/// in it); the maximum is at least the last, and `Reset` (13) clears the
+/// maximum only. Without `-icount` the calibration is refused (the clock
+/// follows the host's) and the firmware reports none, as the virtual
+/// device.
+#[test]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_ELF is set)"]
+fn the_firmware_measures_its_dsp_load_under_icount() {
+    {
+        let q = qemu();
+        let mut link = RawLink::connect(&q);
+        link.sync();
+        let st = link.status(1);
+        assert_eq!(
+            (st.cpu_load_pct, st.cpu_load_max_pct),
+            (None, None),
+            "{st:?}"
+        );
+    }
+    let q = qemu_with_args("FIRMWARE_ELF", "qemu", &["-icount", "shift=0"]);
+    let mut link = RawLink::connect(&q);
+    link.sync();
+    // SetDrive (2): 20 kHz (f64), Δu_z 1 µm, Δu_x 0.3 µm, u_z0 3 µm, φ 0.5 rad
+    // (f32 each); Start (3).
+    let mut drive = 20e3f64.to_le_bytes().to_vec();
+    for x in [1e-6f32, 3e-7, 3e-6, 0.5] {
+        drive.extend(x.to_le_bytes());
+    }
+    let r = link.ask(2, 2, &drive);
+    assert!(!matches!(r, Response::Error(_)), "{r:?}");
+    assert_eq!(link.ask(3, 3, &[]), Response::Ok);
+    std::thread::sleep(Duration::from_millis(1500));
+    let refill = 41.0 * 64.0 * 100.0 / 21_504.0;
+    let st = link.status(4);
+    let (Some(now), Some(max)) = (st.cpu_load_pct, st.cpu_load_max_pct) else {
+        panic!("no load measured under -icount: {st:?}")
+    };
+    println!("cpu load {now} %, max {max} % (the refill alone {refill:.1} %)");
+    assert!(st.running && st.faults == 0, "{st:?}");
+    assert!(now >= refill && now < 100.0, "{now} %");
+    assert!(max >= now, "{max} < {now}");
+    // Reset: the maximum starts over from the half-buffers measured since
+    // (the drive ramps down: they are still processed).
+    assert_eq!(link.ask(5, 13, &[]), Response::Ok);
+    std::thread::sleep(Duration::from_millis(300));
+    let st = link.status(6);
+    let after = st
+        .cpu_load_max_pct
+        .expect("a half-buffer measured since Reset");
+    assert!(after < 100.0, "{after} %");
+    println!("after Reset: max {after} %");
 }
 
 /// The fields of a `ControlSetting` by hand (docs/protocol.md, Structures):
