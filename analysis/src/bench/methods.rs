@@ -1,8 +1,8 @@
 //! The methods bench: what "model no more than the scene needs" buys
 //! (`fricctl bench methods` writes its CSV and chart).
 //!
-//! The curve and map commands' own code paths ([`Bodies`]: the CLI passes
-//! its own) are timed, in one process, with `--method auto` (at a loose
+//! The curve and map commands' own code paths ([`curve_rows`], [`mu_cells`])
+//! are timed, in one process, with `--method auto` (at a loose
 //! tolerance and at the default, tight one), `--method exact` and
 //! `--method fixed`; time is wall-clock for the whole command body (rayon on
 //! all cores), the minimum over repeats, and is reported per point. The
@@ -20,6 +20,7 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::eval::{from_rel, Method, MethodArgs};
+use crate::grid::{centres, curve_rows, linspace, method_mix, mix_text, mu_cells};
 
 /// The sizes of the bench (the CLI's flags of `bench methods`).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -81,31 +82,6 @@ impl Config {
     }
 }
 
-/// The command bodies the bench times, as the CLI runs them: `fricctl
-/// curve`'s rows and `fricctl map`'s μ cells, with what answered each point.
-pub trait Bodies: Sync {
-    /// What the curve body returns.
-    type Rows;
-    /// What the map body returns.
-    type Cells;
-    /// μ(v) of `scene` at the velocities `vs` (m/s) by `how`, in parallel.
-    fn curve(&self, scene: &Scene<f64>, vs: &[f64], how: &MethodArgs) -> Result<Self::Rows>;
-    /// μ/μ0 at `v0 = x·v_c` over (ratio rows, phase columns, degrees) at
-    /// Δu_z/u_z0 = `a`, by `how`, in parallel.
-    fn map(
-        &self,
-        a: f64,
-        ratios: &[f64],
-        phis_deg: &[f64],
-        x: f64,
-        how: &MethodArgs,
-    ) -> Result<Self::Cells>;
-    /// The method that answered each row.
-    fn row_methods(rows: &Self::Rows) -> Vec<&'static str>;
-    /// The method that answered each cell.
-    fn cell_methods(cells: &Self::Cells) -> Vec<&'static str>;
-}
-
 /// One timed configuration.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Timing {
@@ -141,35 +117,6 @@ pub fn ratios_to_first(timings: &[Timing]) -> Vec<f64> {
                 first = t.per_point();
             }
             t.per_point() / first
-        })
-        .collect()
-}
-
-/// How many points each method answered, in order of first appearance, as
-/// text: `exact 120 + sliding 40`.
-pub fn mix_text(methods: impl IntoIterator<Item = &'static str>) -> String {
-    let mut mix: Vec<(&'static str, usize)> = Vec::new();
-    for m in methods {
-        match mix.iter_mut().find(|(x, _)| *x == m) {
-            Some(e) => e.1 += 1,
-            None => mix.push((m, 1)),
-        }
-    }
-    mix.iter()
-        .map(|(m, n)| format!("{m} {n}"))
-        .collect::<Vec<_>>()
-        .join(" + ")
-}
-
-/// `n` evenly spaced values from `a` to `b` inclusive (the last is `b` exactly).
-fn linspace(a: f64, b: f64, n: usize) -> Vec<f64> {
-    (0..n)
-        .map(|i| {
-            if i + 1 == n {
-                b
-            } else {
-                a + (b - a) * i as f64 / (n - 1) as f64
-            }
         })
         .collect()
 }
@@ -221,17 +168,12 @@ fn configs(c: &Config) -> Vec<(String, MethodArgs, bool)> {
 /// Every timing, in the CSV's order: the curve on a normal-only and a
 /// dual-mode scene, the μ map, the curved profiles. `stage` is called with
 /// a progress line before each group.
-pub fn measure<B: Bodies>(
-    c: &Config,
-    bodies: &B,
-    stage: &mut dyn FnMut(&str),
-) -> Result<Vec<Timing>> {
+pub fn measure(c: &Config, stage: &mut dyn FnMut(&str)) -> Result<Vec<Timing>> {
     c.check()?;
     let mut out = Vec::new();
     stage("timing curves …");
     curve_case(
         c,
-        bodies,
         "curve, normal only (Δu_z/u_z0 = 0.4), v/v_c in [-1.5, 1.5]",
         Groups {
             duz_rel: 0.4,
@@ -242,7 +184,6 @@ pub fn measure<B: Bodies>(
     )?;
     curve_case(
         c,
-        bodies,
         "curve, dual mode (Δu_z/u_z0 = 0.5, k_xΔu_x/(μ0 k_z u_z0) = 0.25, φ = 1 rad = 57.3°), v/v_c in [-1.5, 1.5]",
         Groups {
             duz_rel: 0.5,
@@ -252,20 +193,14 @@ pub fn measure<B: Bodies>(
         &mut out,
     )?;
     stage("timing maps …");
-    map_case(c, bodies, &mut out)?;
+    map_case(c, &mut out)?;
     stage("timing curved profiles (MDR) …");
     profile_case(c, &mut out)?;
     Ok(out)
 }
 
 /// Times the curve command's body on one scene.
-fn curve_case<B: Bodies>(
-    c: &Config,
-    bodies: &B,
-    case: &'static str,
-    g: Groups<f64>,
-    out: &mut Vec<Timing>,
-) -> Result {
+fn curve_case(c: &Config, case: &'static str, g: Groups<f64>, out: &mut Vec<Timing>) -> Result {
     let s = Scene::dimensionless(g).map_err(|e| Error::failure(e.to_string()))?;
     let vc = CriticalVelocity::of(&s);
     for (label, how, fixed) in configs(c) {
@@ -274,32 +209,31 @@ fn curve_case<B: Bodies>(
             .into_iter()
             .map(|x| from_rel(&vc, x, "v-rel"))
             .collect::<Result<_>>()?;
-        let (t, rows) = best_of(c.repeats, || bodies.curve(&s, &vs, &how))?;
+        let (t, rows) = best_of(c.repeats, || curve_rows(&s, &vs, &how))?;
         out.push(Timing {
             case,
             method: label,
             points: n,
             total_s: t,
-            mix: mix_text(B::row_methods(&rows)),
+            mix: mix_text(&method_mix(rows.iter().map(|r| r.method)), " + "),
         });
     }
     Ok(())
 }
 
 /// Times the μ map's body (Δu_z/u_z0 = 0.5, v0 = 0.5·v_c).
-fn map_case<B: Bodies>(c: &Config, bodies: &B, out: &mut Vec<Timing>) -> Result {
+fn map_case(c: &Config, out: &mut Vec<Timing>) -> Result {
     for (label, how, fixed) in configs(c) {
         let res = if fixed { c.fixed_res } else { c.res };
-        let ratios = super::centres(0.0, 3.0, res);
-        let phis = super::centres(0.0, 360.0, res);
-        let (t, cells) = best_of(c.repeats, || bodies.map(0.5, &ratios, &phis, 0.5, &how))?;
-        let methods = B::cell_methods(&cells);
+        let ratios = centres(0.0, 3.0, res);
+        let phis = centres(0.0, 360.0, res);
+        let (t, cells) = best_of(c.repeats, || mu_cells(0.5, &ratios, &phis, 0.5, &how))?;
         out.push(Timing {
             case: "map --v-rel 0.5 (dual mode, Δu_z/u_z0 = 0.5, φ × ratio over 0…360° × 0…3)",
             method: label,
-            points: methods.len(),
+            points: cells.len(),
             total_s: t,
-            mix: mix_text(methods),
+            mix: mix_text(&method_mix(cells.iter().map(|c| c.method)), " + "),
         });
     }
     Ok(())
@@ -389,7 +323,7 @@ fn profile_scene(c: &Config, duz_rel: f64, case: &'static str, out: &mut Vec<Tim
             method: label.to_string(),
             points: vs.len(),
             total_s: t,
-            mix: mix_text(methods),
+            mix: mix_text(&method_mix(methods), " + "),
         });
     }
     Ok(())

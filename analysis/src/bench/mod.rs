@@ -29,10 +29,3 @@ pub mod timing;
 pub mod work_precision;
 
 pub use timing::{time_min, time_min_of};
-
-/// Cell centres of `n` cells spanning `[lo, hi]`.
-pub fn centres(lo: f64, hi: f64, n: usize) -> Vec<f64> {
-    (0..n)
-        .map(|i| lo + (hi - lo) * (i as f64 + 0.5) / n as f64)
-        .collect()
-}

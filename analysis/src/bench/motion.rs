@@ -31,9 +31,9 @@ use model_core::model::load_line::{best_forward, load_line, powers, Objective};
 use model_core::scene::ContactMode;
 use model_core::{Groups, Libm, Scene};
 
-use super::centres;
 use crate::error::{Error, Result};
 use crate::eval::exact_failure;
+use crate::grid::centres;
 use crate::motion::law::Law;
 use crate::motion::table::{MuTable, TableError};
 use crate::motion::{estimate, homogenised, relaxation_per_period, resolved, Problem};

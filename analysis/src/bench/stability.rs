@@ -28,9 +28,9 @@ use model_core::select::{self, SelectError, Value};
 use model_core::{Drive, Float, Groups, Libm, Scene, SceneError, SceneParams};
 use rayon::prelude::*;
 
-use super::centres;
 use super::springs;
 use super::work_precision::warm_state;
+use crate::grid::centres;
 
 /// What one cell gave.
 #[derive(Debug, Clone, Copy, PartialEq)]

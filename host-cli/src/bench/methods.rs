@@ -1,22 +1,20 @@
 //! `fricctl bench methods`: what "model no more than the scene needs" buys.
 //!
 //! [`fric_analysis::bench::methods`] times the curve and map commands' own
-//! code paths ([`curve_rows`], [`mu_cells`], passed to it as [`Commands`])
-//! with `--method auto` (at a loose tolerance and at the default, tight
-//! one), `--method exact` and `--method fixed`, and curved profiles through
-//! the MDR quadrature; this module writes `methods.csv`, the table on stdout
+//! code paths ([`fric_analysis::grid::curve_rows`],
+//! [`fric_analysis::grid::mu_cells`]) with `--method auto` (at a loose
+//! tolerance and at the default, tight one), `--method exact` and `--method
+//! fixed`, and curved profiles through the MDR quadrature; this module writes `methods.csv`, the table on stdout
 //! and the chart (SVG + PNG).
 
 use std::fmt::Write as _;
 
 use clap::Args;
-use fric_analysis::bench::methods::{self as bench, ratios_to_first, Bodies, Config, Timing};
-use model_core::Scene;
+use fric_analysis::bench::methods::{self as bench, ratios_to_first, Config, Timing};
 
 use crate::args::Count;
 use crate::error::{CliError, CliResult};
 use crate::plot::{color, log_axis_tick, prepare_out_dir, write_chart};
-use fric_analysis::grid::{curve_rows, mu_cells, MuCell, Row};
 
 /// Flags of `bench methods`.
 #[derive(Args, Debug, Clone)]
@@ -66,38 +64,6 @@ impl MethodsArgs {
     }
 }
 
-/// The curve and map commands' bodies, as the bench times them.
-struct Commands;
-
-impl Bodies for Commands {
-    type Rows = Vec<Row>;
-    type Cells = Vec<MuCell>;
-    fn curve(
-        &self,
-        scene: &Scene<f64>,
-        vs: &[f64],
-        how: &fric_analysis::eval::MethodArgs,
-    ) -> CliResult<Vec<Row>> {
-        curve_rows(scene, vs, how)
-    }
-    fn map(
-        &self,
-        a: f64,
-        ratios: &[f64],
-        phis_deg: &[f64],
-        x: f64,
-        how: &fric_analysis::eval::MethodArgs,
-    ) -> CliResult<Vec<MuCell>> {
-        mu_cells(a, ratios, phis_deg, x, how)
-    }
-    fn row_methods(rows: &Vec<Row>) -> Vec<&'static str> {
-        rows.iter().map(|r| r.method).collect()
-    }
-    fn cell_methods(cells: &Vec<MuCell>) -> Vec<&'static str> {
-        cells.iter().map(|c| c.method).collect()
-    }
-}
-
 /// `fricctl bench methods`.
 pub fn run(a: &MethodsArgs) -> CliResult {
     // Every count is in its range and --tol > 0 (the flags' parsers); the
@@ -105,7 +71,7 @@ pub fn run(a: &MethodsArgs) -> CliResult {
     let config = a.config();
     config.check()?;
     prepare_out_dir(&a.out)?;
-    let out = bench::measure(&config, &Commands, &mut |stage| eprintln!("{stage}"))?;
+    let out = bench::measure(&config, &mut |stage| eprintln!("{stage}"))?;
     let csv = table(&out);
     let p = a.out.join("methods.csv");
     std::fs::write(&p, csv).map_err(|e| CliError::failure(format!("{}: {e}", p.display())))?;
