@@ -7,7 +7,7 @@
 //!   them, wrapping (exact for spans under 2³² cycles, 25 s at 168 MHz).
 //! * Under QEMU, where CYCCNT stays 0: SysTick, which `qemu::tick` reloads
 //!   once per half-buffer, extended by its wraps to 32 bits
-//!   (`qemu::ticks`), and converted to instructions with a calibration of
+//!   (`systick::ticks`), and converted to instructions with a calibration of
 //!   `CAL_INSNS` `nop`s taken by [`start`] (as `predict_cost` calibrates
 //!   with 1 000; more here, so that the calibration is not lost in the
 //!   clock's resolution when QEMU runs without `-icount`). Under
@@ -61,13 +61,13 @@ pub fn start(cp: &mut cortex_m::Peripherals, sysclk_hz: u32) {
         let mut nops = [0u32; 4];
         let mut empty = u32::MAX;
         for n in nops.iter_mut() {
-            let t0 = crate::qemu::ticks();
+            let t0 = crate::systick::ticks();
             for _ in 0..CAL_INSNS / 1_000 {
                 nops_1000();
             }
-            *n = crate::qemu::ticks().wrapping_sub(t0);
-            let t0 = crate::qemu::ticks();
-            empty = empty.min(crate::qemu::ticks().wrapping_sub(t0));
+            *n = crate::systick::ticks().wrapping_sub(t0);
+            let t0 = crate::systick::ticks();
+            empty = empty.min(crate::systick::ticks().wrapping_sub(t0));
         }
         nops.sort_unstable();
         // Four runs span < 70 000 instructions, so a SysTick exception
@@ -104,7 +104,7 @@ pub fn now() -> u32 {
     #[cfg(not(feature = "qemu"))]
     return cortex_m::peripheral::DWT::cycle_count();
     #[cfg(feature = "qemu")]
-    return crate::qemu::ticks();
+    return crate::systick::ticks();
 }
 
 /// Cycles since the stamp `t0` (under QEMU: instructions, calibrated).

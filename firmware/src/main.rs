@@ -41,6 +41,8 @@ mod lock;
 mod panic;
 #[cfg(feature = "qemu")]
 mod qemu;
+#[cfg(feature = "qemu")]
+mod systick;
 
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 

@@ -21,7 +21,7 @@
 //!   (drive stopped and settled, nothing measuring) a due half only moves
 //!   device time on: no refill, no plant, no ADC block (the emulator idles).
 //! * the refill and the ADC block of each half are timed (module `cycles`,
-//!   SysTick extended by [`ticks`]); the plant is not: it stands for the
+//!   SysTick extended by [`crate::systick::ticks`]); the plant is not: it stands for the
 //!   world outside the chip.
 //!
 //! The plant is the true contact, deliberately *not* the device's model
@@ -40,7 +40,7 @@ use board::device::DeviceConfig;
 #[cfg(feature = "qemu-resonant")]
 use board::plant::ResonantOptions;
 use board::plant::{HalfDrive, Noise, Plant, SampleConditions};
-use cortex_m::peripheral::{syst::SystClkSource, SCB, SYST};
+use cortex_m::peripheral::SYST;
 use cortex_m_rt::exception;
 use model_core::float::FastF32;
 
@@ -70,11 +70,6 @@ pub const SUB: u32 = 8;
 /// used: its update rate did not follow PSC/ARR here (QEMU 10.0, ≈ 14 times
 /// slower than programmed).
 pub const QEMU_SYSCLK_HZ: u32 = 168_000_000;
-/// SysTick ticks per half-buffer (its reload + 1): 21 504.
-const TICKS_PER_HALF: u32 = QEMU_SYSCLK_HZ / FS_HZ * HALF as u32;
-/// SysTick wraps since `tick` (each one half-buffer).
-static WRAPS: AtomicU32 = AtomicU32::new(0);
-
 /// Half-buffers whose 128 µs have passed and that are not yet processed.
 static DUE: AtomicU32 = AtomicU32::new(0);
 
@@ -83,42 +78,15 @@ pub fn due() -> bool {
     DUE.load(Ordering::Relaxed) > 0
 }
 
-/// SysTick on the core clock: one exception per half-buffer.
+/// SysTick on the core clock: one exception per half-buffer
+/// ([`crate::systick::start`]).
 pub fn tick(syst: &mut SYST) {
-    syst.set_clock_source(SystClkSource::Core);
-    syst.set_reload(TICKS_PER_HALF - 1);
-    syst.clear_current();
-    syst.enable_interrupt();
-    syst.enable_counter();
-}
-
-/// SysTick ticks since `tick`, wrapping at 2³² (25.6 s of emulated time):
-/// the wraps counted by the exception times the period, plus the down
-/// counter's progress. A wrap whose exception is still pending (the reload
-/// happened, the handler has not run) is counted too, so that the stamp
-/// never steps back. Safe in any context but a handler more urgent than
-/// SysTick (priority 0, the highest): none here.
-pub fn ticks() -> u32 {
-    loop {
-        let w = WRAPS.load(Ordering::Relaxed);
-        let mut c = SYST::get_current();
-        let mut wraps = w;
-        if SCB::is_pendst_pending() {
-            // Reloaded, not yet counted: read again, after the reload.
-            c = SYST::get_current();
-            wraps = w.wrapping_add(1);
-        }
-        if WRAPS.load(Ordering::Relaxed) == w {
-            return wraps
-                .wrapping_mul(TICKS_PER_HALF)
-                .wrapping_add(TICKS_PER_HALF - 1 - c.min(TICKS_PER_HALF - 1));
-        }
-    }
+    crate::systick::start(syst, QEMU_SYSCLK_HZ / FS_HZ * HALF as u32);
 }
 
 #[exception]
 fn SysTick() {
-    WRAPS.fetch_add(1, Ordering::Relaxed);
+    crate::systick::wrapped();
     // At most two halves queued: a core that falls behind slows device time
     // rather than bursting through a backlog.
     let _ = DUE.fetch_update(Ordering::Relaxed, Ordering::Relaxed, |n| {
