@@ -570,15 +570,8 @@ impl Device {
                 sweep::MAX_POINTS
             )));
         }
-        let values: Vec<f64> = (0..points)
-            .map(|i| {
-                if i + 1 == points {
-                    end
-                } else {
-                    start + (end - start) * i as f64 / (points - 1).max(1) as f64
-                }
-            })
-            .collect();
+        // The CLI's grid (`device sweep`): evenly spaced, exact end points.
+        let values = fric_analysis::grid::linspace(start, end, points);
         let o = PointOptions {
             settle_periods,
             periods,

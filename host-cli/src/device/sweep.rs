@@ -105,16 +105,7 @@ impl SweepArgs {
 
     /// The swept values, evenly spaced (exact end points).
     pub fn values(&self) -> Vec<f64> {
-        let n = self.points;
-        (0..n)
-            .map(|i| {
-                if i + 1 == n {
-                    self.to
-                } else {
-                    self.from + (self.to - self.from) * i as f64 / (n - 1).max(1) as f64
-                }
-            })
-            .collect()
+        fric_analysis::grid::linspace(self.from, self.to, self.points)
     }
 }
 
