@@ -21,6 +21,8 @@
 #![no_std]
 #![no_main]
 
+mod everything;
+
 use board::device;
 use cortex_m::peripheral::{syst::SystClkSource, SYST};
 use cortex_m_rt::entry;
@@ -471,11 +473,19 @@ impl Bench<'_, '_> {
 /// one exceeds its bound ([`CRITICAL_BOUND`], or the stated exception
 /// [`PLANNING_BOUND`]) or a request meant to be accepted was refused.
 fn critical_sections(table: &board::dds::SineTable<1024>, per_insn: f32) -> bool {
-    use board::device::{
-        Contact, Device, DeviceConfig, DisplacementOptions, DriveMode, DriveSetting, Track,
-        TransducerModel, Transducers,
-    };
-    use board::protocol::{ControlSetting, Info, Request, Response};
+    with_bench(table, per_insn, requests).unwrap_or(false)
+}
+
+/// The driver board's device (contact μ₀ 0.3, k 1e7 N/m), a server and a
+/// [`Bench`] over them, handed to `f`; `None` if the device refuses its
+/// configuration.
+fn with_bench<R>(
+    table: &board::dds::SineTable<1024>,
+    per_insn: f32,
+    f: impl FnOnce(&mut Bench<'_, '_>) -> R,
+) -> Option<R> {
+    use board::device::{Contact, Device, DeviceConfig};
+    use board::protocol::Info;
     use board::server::Server;
 
     let cfg = DeviceConfig::driver_board(1);
@@ -485,8 +495,8 @@ fn critical_sections(table: &board::dds::SineTable<1024>, per_insn: f32) -> bool
         kx: 1e7,
     };
     let Ok(mut dev) = Device::new(cfg, table, contact) else {
-        hprintln!("critical sections: the device refused its configuration");
-        return false;
+        hprintln!("the device refused its configuration");
+        return None;
     };
     let empty = timed(|| ()).1;
     // Pickups reading ≈ 2 µm and 0.3 µm at 20 kHz (0.04 cycle per sample).
@@ -514,13 +524,43 @@ fn critical_sections(table: &board::dds::SineTable<1024>, per_insn: f32) -> bool
         forces: [(2048, 2048); 64],
         pick,
     };
-    let drive = DriveSetting {
-        freq_hz: 20_000.0,
-        amp_z_m: 2e-6,
-        amp_x_m: 3e-7,
-        offset_z_m: 4e-6,
-        phase_rad: 0.7,
+    Some(f(&mut b))
+}
+
+/// The drive of the benches: 20 kHz, Δu_z 2 µm, Δu_x 0.3 µm, u_z0 4 µm, φ 0.7 rad.
+const DRIVE: board::device::DriveSetting = board::device::DriveSetting {
+    freq_hz: 20_000.0,
+    amp_z_m: 2e-6,
+    amp_x_m: 3e-7,
+    offset_z_m: 4e-6,
+    phase_rad: 0.7,
+};
+
+/// The transducers the benches identified: z 20.3 kHz, Q 261; x 19.7 kHz, Q 182.
+fn transducers() -> board::device::Transducers {
+    let m = |f: f32, q: f32, g: f32| board::device::TransducerModel {
+        resonance_hz: f,
+        q,
+        gain_m_per_v: g,
+        phase_lag_rad: 0.126,
     };
+    board::device::Transducers {
+        z: m(20_300.0, 261.0, 8.27e-8),
+        x: m(19_700.0, 182.0, 4.14e-8),
+    }
+}
+
+/// Every request kind through `b` (voltage mode, then displacement mode):
+/// see [`critical_sections`].
+fn requests(b: &mut Bench<'_, '_>) -> bool {
+    use board::device::{Contact, DisplacementOptions, DriveMode, Track};
+    use board::protocol::{ControlSetting, Request, Response};
+    let contact = Contact {
+        mu0: 0.3,
+        kz: 1e7,
+        kx: 1e7,
+    };
+    let drive = DRIVE;
     let control = |on: bool, target_mu: f32| {
         Request::SetControl(ControlSetting {
             on,
@@ -531,16 +571,7 @@ fn critical_sections(table: &board::dds::SineTable<1024>, per_insn: f32) -> bool
             rate_m_per_s: 1e-3,
         })
     };
-    let m = |f: f32, q: f32, g: f32| TransducerModel {
-        resonance_hz: f,
-        q,
-        gain_m_per_v: g,
-        phase_lag_rad: 0.126,
-    };
-    let transducers = Transducers {
-        z: m(20_300.0, 261.0, 8.27e-8),
-        x: m(19_700.0, 182.0, 4.14e-8),
-    };
+    let transducers = transducers();
     let predict = Request::Predict { v0: 4e-3 };
     let set_drive = Request::SetDrive(drive);
     let (c, p) = (CRITICAL_BOUND, PLANNING_BOUND);
@@ -956,6 +987,16 @@ fn main() -> ! {
             }
             displacement_costs(table, empty, per_insn);
             critical_ok = critical_sections(table, per_insn);
+            let load = with_bench(table, per_insn, |b| everything::run(b, DRIVE)).flatten();
+            match load {
+                Some(l) => {
+                    everything::report(&l);
+                }
+                None => {
+                    hprintln!("everything on: a request was refused");
+                    critical_ok = false;
+                }
+            }
             dds.set_interp(board::dds::Interp::Nearest);
             let t = ticks(|| dds.fill(&mut buf)).saturating_sub(empty);
             hprintln!(

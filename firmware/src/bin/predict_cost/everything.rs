@@ -1,0 +1,273 @@
+//! The worst half-buffer with everything on (issue 35's figure): the
+//! driver board's device in displacement mode on both channels with
+//! identified transducers, the two pickups' lock-ins and the force
+//! estimator in the ADC handler's pass, the resonance tracked (`--track z`),
+//! the μ loop on (its estimate, its update) and a telemetry stream running.
+//! Every half-buffer runs what the firmware runs for it, timed part by part:
+//!
+//! * the DAC handler's work, `Device::dac_half_done` (the refill);
+//! * the ADC handler's work, `Device::adc_half_done_with_pickups` (the
+//!   intake, the windows it closes, the loops it steps);
+//! * the main loop's `Server::poll` (the stream's samples and telemetry),
+//!   which runs in the time the handlers leave.
+//!
+//! The figure is the largest sum of the three over
+//! [`HALVES`] half-buffers, against the budget of one half-buffer
+//! (21 504 cycles at 168 MHz; here instructions: a lower bound on cycles).
+
+use super::{Bench, CRITICAL_BOUND, PLANNING_BOUND};
+use board::device::{DeviceConfig, DisplacementOptions, DriveMode, DriveSetting, Track};
+use board::dma::HalfEvent;
+use board::plant::{HalfDrive, Plant, Resonant, ResonantOptions, SampleConditions};
+use board::protocol::{ControlSetting, Request, Response};
+use cortex_m_semihosting::hprintln;
+use model_core::float::FastF32;
+
+/// Half-buffers timed (≈ 0.26 s of device time: many windows, tracking
+/// steps and μ-loop updates).
+pub const HALVES: u32 = 2_000;
+
+/// One half-buffer's parts, instructions.
+#[derive(Clone, Copy, Default)]
+pub struct Parts {
+    /// The DAC handler.
+    pub fill: u32,
+    /// The ADC handler.
+    pub intake: u32,
+    /// The main loop's poll.
+    pub poll: u32,
+}
+
+impl Parts {
+    /// The three together.
+    pub fn total(&self) -> u32 {
+        self.fill + self.intake + self.poll
+    }
+}
+
+/// What the run measured: the worst half-buffer (its parts), the largest of
+/// each part on its own, the mean of the totals, and what ran.
+pub struct Load {
+    /// The half-buffer with the largest total.
+    pub worst: Parts,
+    /// The largest of each part over all half-buffers.
+    pub largest: Parts,
+    /// The mean total, instructions.
+    pub mean: u32,
+    /// μ-loop updates during the run.
+    pub updates: u32,
+    /// Lock-in windows closed during the run.
+    pub windows: u32,
+    /// Telemetry frames sent during the run.
+    pub frames: u32,
+    /// Tracking was on and locked at the end.
+    pub locked: bool,
+    /// Faults latched at the end.
+    pub faults: u32,
+}
+
+/// The bench's analog side: the resonant transducers and the contact
+/// (`board::plant`, as the firmware's `qemu-resonant` build), whose force
+/// and pickup samples the ADC handler takes, two half-buffers after the
+/// fill that drove them (as on the board).
+struct Analog {
+    plant: Plant<f32>,
+    cfg: DeviceConfig,
+    pending: [Option<HalfDrive>; 2],
+    forces: [(u16, u16); 64],
+    pickups: [(u16, u16); 64],
+}
+
+/// Plant sub-steps per sample (fewer than the QEMU build's 8: the run
+/// times the device, not the plant, whose error here only moves μ).
+const SUB: u32 = 4;
+
+impl Analog {
+    fn new(cfg: DeviceConfig) -> Self {
+        let mut plant = Plant::new(0.24, 1e7, 1e7);
+        let h = 1.0 / (cfg.sample_rate_hz as f32 * SUB as f32);
+        plant.resonant = Resonant::new(ResonantOptions::bench(&cfg), h).ok();
+        Analog {
+            plant,
+            cfg,
+            pending: [None, None],
+            forces: [(0, 0); 64],
+            pickups: [(0, 0); 64],
+        }
+    }
+
+    /// One half-buffer as the firmware runs it, timed part by part (the
+    /// plant between the handlers is not timed).
+    fn half(&mut self, b: &mut Bench<'_, '_>, frames: &mut u32) -> Parts {
+        let ev = HalfEvent {
+            half: 0,
+            late: false,
+        };
+        let dev = &mut *b.acc.dev;
+        let (before, acc0, tw) = (
+            *dev.dds().channels(),
+            dev.dds().accumulator(),
+            dev.dds().tuning_word(),
+        );
+        let fill = super::timed(|| dev.dac_half_done(ev, &mut b.dac)).1;
+        let made = HalfDrive {
+            before,
+            after: *dev.dds().channels(),
+            acc0,
+            tw,
+            slew: dev.dds().slew(),
+        };
+        let oldest = self.pending[0];
+        self.pending = [self.pending[1], Some(made)];
+        if let Some(d) = oldest {
+            self.plant.run_half_with_pickups::<FastF32>(
+                &self.cfg,
+                &d,
+                SUB,
+                0.0,
+                |_| SampleConditions {
+                    mu0: 0.24,
+                    v0: 4e-3,
+                    counts_z: 0.0,
+                    counts_x: 0.0,
+                },
+                &mut self.forces,
+                &mut self.pickups,
+            );
+        }
+        let (forces, pick) = (&self.forces, &self.pickups);
+        let intake = super::timed(|| dev.adc_half_done_with_pickups(ev, forces, pick)).1;
+        let server = &mut b.server;
+        let acc = &mut b.acc;
+        let poll = super::timed(|| server.poll(acc, |_| *frames += 1)).1;
+        let e = b.acc.empty;
+        Parts {
+            fill: b.insn(fill.saturating_sub(e)),
+            intake: b.insn(intake.saturating_sub(e)),
+            poll: b.insn(poll.saturating_sub(e)),
+        }
+    }
+
+    fn halves(&mut self, b: &mut Bench<'_, '_>, n: u32) {
+        let mut frames = 0;
+        for _ in 0..n {
+            self.half(b, &mut frames);
+        }
+    }
+}
+
+/// Sets everything on through the server (as `fricctl` would, with the
+/// transducers its identification finds) and times [`HALVES`]
+/// half-buffers; `None` if a request meant to be accepted was refused.
+pub fn run(b: &mut Bench<'_, '_>, drive: DriveSetting) -> Option<Load> {
+    let (c, p) = (CRITICAL_BOUND, PLANNING_BOUND);
+    let ok = |r: Option<Response>| !matches!(r, None | Some(Response::Error(_)));
+    hprintln!("everything on (displacement mode, two pickups, force estimator, --track z, μ loop, stream):");
+    let cfg = DeviceConfig::driver_board(1);
+    let mut analog = Analog::new(cfg);
+    let identified = ResonantOptions::<f32>::bench(&cfg).identified(cfg.sample_rate_hz);
+    let mode = Request::SetDriveMode(DriveMode::Displacement);
+    let t = Request::SetTransducers(Some(identified));
+    if !ok(b.call("  SetTransducers", t, true, c))
+        || !ok(b.call("  SetDriveMode (displacement)", mode, true, p))
+        || !ok(b.call("  SetDrive", Request::SetDrive(drive), true, p))
+        || !ok(b.call("  Start", Request::Start, true, p))
+    {
+        return None;
+    }
+    analog.halves(b, 300);
+    let track = Request::SetDisplacementOptions(DisplacementOptions {
+        track: Track::Z,
+        headroom: 2.0,
+    });
+    if !ok(b.call("  SetDisplacementOptions (track z)", track, true, c)) {
+        return None;
+    }
+    analog.halves(b, 400);
+    let target_mu = match b.call("  Predict", Request::Predict { v0: 4e-3 }, true, c) {
+        Some(Response::Prediction { prediction, .. }) => prediction.mu,
+        _ => return None,
+    };
+    let control = Request::SetControl(ControlSetting {
+        on: true,
+        target_mu,
+        v0_m_s: 4e-3,
+        gain: 0.5,
+        periods: 1,
+        rate_m_per_s: 1e-3,
+    });
+    if !ok(b.call("  SetControl (on)", control, true, c)) {
+        return None;
+    }
+    let stream = Request::Stream {
+        on: true,
+        periods: 4,
+    };
+    // Refused (Busy) while the μ loop owns the force estimator: then its
+    // updates are the telemetry stream (one `Telemetry::Control` each).
+    b.call("  Stream (on)", stream, false, c);
+    let (u0, w0) = {
+        let d = &*b.acc.dev;
+        (
+            d.control_state().last.update,
+            d.measured_drive().map_or(0, |m| m.windows),
+        )
+    };
+    let (mut worst, mut largest, mut sum, mut frames) =
+        (Parts::default(), Parts::default(), 0u64, 0);
+    for _ in 0..HALVES {
+        let h = analog.half(b, &mut frames);
+        if h.total() > worst.total() {
+            worst = h;
+        }
+        largest.fill = largest.fill.max(h.fill);
+        largest.intake = largest.intake.max(h.intake);
+        largest.poll = largest.poll.max(h.poll);
+        sum += u64::from(h.total());
+    }
+    let d = &*b.acc.dev;
+    let st = d.status();
+    Some(Load {
+        worst,
+        largest,
+        mean: (sum / u64::from(HALVES)) as u32,
+        updates: d.control_state().last.update.wrapping_sub(u0),
+        windows: d.measured_drive().map_or(0, |m| m.windows).wrapping_sub(w0),
+        frames,
+        locked: st.options.track == Track::Z && st.locked,
+        faults: st.faults,
+    })
+}
+
+/// Prints the figure and its parts; returns the worst half-buffer's share
+/// of the budget, %.
+pub fn report(l: &Load) -> f32 {
+    let pct = |n: u32| n as f32 * 100.0 / 21_504.0;
+    hprintln!(
+        "  {} half-buffers: {} μ-loop updates, {} lock-in windows, {} telemetry frames; tracking locked {}, faults {}",
+        HALVES,
+        l.updates,
+        l.windows,
+        l.frames,
+        l.locked,
+        l.faults
+    );
+    hprintln!(
+        "  worst half-buffer's parts: DAC handler {} + ADC handler {} + main loop's poll {} instructions; largest of each alone {} / {} / {}; mean half-buffer {} = {:.1} %",
+        l.worst.fill,
+        l.worst.intake,
+        l.worst.poll,
+        l.largest.fill,
+        l.largest.intake,
+        l.largest.poll,
+        l.mean,
+        pct(l.mean)
+    );
+    let n = l.worst.total();
+    hprintln!(
+        "worst half-buffer, everything on: {} instructions = {:.1} % of 21504",
+        n,
+        pct(n)
+    );
+    pct(n)
+}
