@@ -18,18 +18,20 @@ use crate::protocol::messages::{Frame, WireError, BODY_KINDS, ENDPOINTS, PROTOCO
 /// Largest frame on the wire (COBS-encoded, with CRC and delimiter), bytes.
 pub const MAX_FRAME: usize = 256;
 
-/// The CRC of the frames (CRC-32/ISO-HDLC), bitwise: no 1 KB lookup table in
-/// the firmware's flash, for ≈ 40 instructions per byte (≈ 60 µs for a
-/// [`MAX_FRAME`]-byte frame at 168 MHz, against 22 ms on the wire at 115 200 Bd).
-pub const CRC: crc::Crc<u32, crc::NoTable> =
-    crc::Crc::<u32, crc::NoTable>::new(&crc::CRC_32_ISO_HDLC);
+/// The CRC of the frames (CRC-32/ISO-HDLC) with a 256-entry table (1 KB of
+/// the firmware's flash): one look-up per byte. Bitwise (no table) it took
+/// ≈ 40 instructions per byte, and a μ-loop update's telemetry frame cost
+/// the main loop ≈ 4 700 instructions, 22 % of a half-buffer (issue 35,
+/// `predict_cost`'s worst half-buffer).
+pub const CRC: crc::Crc<u32, crc::Table<1>> =
+    crc::Crc::<u32, crc::Table<1>>::new(&crc::CRC_32_ISO_HDLC);
 
 /// A postcard flavor that feeds every byte to [`CRC`] and appends the CRC
 /// little-endian at the end (postcard's own `CrcModifier` takes only the
 /// table-driven digest).
 struct CrcAppend<'a, F> {
     flavor: F,
-    digest: crc::Digest<'a, u32, crc::NoTable>,
+    digest: crc::Digest<'a, u32, crc::Table<1>>,
 }
 
 impl<F: postcard::ser_flavors::Flavor> postcard::ser_flavors::Flavor for CrcAppend<'_, F> {
