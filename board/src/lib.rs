@@ -7,7 +7,7 @@
 //!
 //! * [`protocol`] — the wire format shared by firmware and host (knows no
 //!   device logic);
-//! * [`dsp`] — small primitives: [`dds`], [`lockin`], [`resonator`],
+//! * [`dsp`] — small primitives: [`dds`], [`lockin`], [`reference`], [`resonator`],
 //!   [`estimator`] (re-exported at the crate root);
 //! * [`device`] — the state machine, its loops, faults and measurement, with
 //!   the μ loop's arithmetic in [`control`];
@@ -66,4 +66,4 @@ pub mod plant;
 pub mod protocol;
 pub mod server;
 
-pub use dsp::{dds, estimator, lockin, resonator};
+pub use dsp::{dds, estimator, lockin, reference, resonator};

@@ -5,6 +5,7 @@ use super::config::PERIODS_RANGE;
 use super::{faults, Device, DeviceError, DriveParam};
 use crate::dma::HalfEvent;
 use crate::estimator::{reasons, Estimate, Estimator};
+use crate::reference::{Reference, BLOCK};
 
 /// Fills whose start phase and conditions are kept (fill `n` is sampled by
 /// ADC block `n`, which may arrive after fills `n + 1` and `n + 2`).
@@ -88,6 +89,17 @@ impl<const N: usize> Device<'_, N> {
     /// the half index itself is not needed)
     /// (same timer ticks, same indices).
     pub fn adc_block(&mut self, _half: usize, samples: &[(u16, u16)]) {
+        self.intake(samples, &[]);
+    }
+
+    /// One ADC block in one pass per [`BLOCK`] samples (issue 35): the drive
+    /// phase's Q15 reference formed once ([`Reference`], eq. R1) and every
+    /// signal summed against it in integers — the forces into the
+    /// estimator, the pickups (`(z, x)`, as many as the forces or none)
+    /// into their lock-ins ([`Device::adc_block_with_pickups`]). Then the
+    /// pickups' window, if it spans enough phase, and the μ loop's update,
+    /// if its estimate closed.
+    pub(super) fn intake(&mut self, samples: &[(u16, u16)], pickups: &[(u16, u16)]) {
         let block = self.adc_blocks;
         self.adc_blocks = block.wrapping_add(1);
         let open_at = self.control_block_start(block, samples.len());
@@ -96,30 +108,54 @@ impl<const N: usize> Device<'_, N> {
         // the records are kept per fill number, not per half.
         let slot = block as usize % FILL_RING;
         let (acc0, tw) = self.half[slot];
-        let mut acc = acc0.wrapping_sub(tw.wrapping_mul(self.cfg.adc_lag_samples));
+        let acc = self.cfg.adc_reference_word(acc0, tw);
         self.est.set_conditions(self.half_conditions[slot]);
         let mut closed = false;
         // The closed loop's estimates leave gaps (the dead time, the
         // transitions, the wait for a period start, the sample that closes
         // a window: `closed_loop.rs`); while it runs every sample is
         // checked, and a railed one latches the fault at once.
-        let loop_on = self.control_on();
-        for (i, &(x, z)) in samples.iter().enumerate() {
-            if open_at == Some(i) {
-                self.control_open();
+        if self.control_on() && samples.iter().any(|&(x, z)| self.est.railed(x, z)) {
+            self.fault(faults::ADC_SATURATED);
+        }
+        for (k, chunk) in samples.chunks(BLOCK).enumerate() {
+            let start = k * BLOCK;
+            let a = acc.wrapping_add(tw.wrapping_mul(start as u32));
+            let r = Reference::new(self.table, a, tw, chunk.len());
+            if let Some(p) = pickups.get(start..start + chunk.len()) {
+                self.motion_sums(&r, p, tw);
             }
-            if loop_on && self.est.railed(x, z) {
-                self.fault(faults::ADC_SATURATED);
-            }
-            if self.est.push(self.table, acc, x, z) {
+            // Split where the μ loop opens its estimate (`control_open`).
+            let cut = open_at
+                .filter(|&o| (start..start + chunk.len()).contains(&o))
+                .map_or(chunk.len(), |o| o - start);
+            let words = r.words();
+            if self
+                .est
+                .push_block(&words[..cut], a, tw, &chunk[..cut])
+                .is_some()
+            {
                 closed = true;
-                // A railed sample: the contact is pressed too hard (or a
-                // sensor is broken): the safe state, through the one path.
-                if self.est.estimate().is_ok_and(|e| e.saturated) {
-                    self.fault(faults::ADC_SATURATED);
+            }
+            if cut < chunk.len() {
+                self.control_open();
+                let a = a.wrapping_add(tw.wrapping_mul(cut as u32));
+                if self
+                    .est
+                    .push_block(&words[cut..], a, tw, &chunk[cut..])
+                    .is_some()
+                {
+                    closed = true;
                 }
             }
-            acc = acc.wrapping_add(tw);
+        }
+        // A railed sample in the window: the contact is pressed too hard
+        // (or a sensor is broken): the safe state, through the one path.
+        if closed && self.est.saturated() {
+            self.fault(faults::ADC_SATURATED);
+        }
+        if !pickups.is_empty() {
+            self.motion_window(block);
         }
         self.control_block_end(block, samples.len(), closed);
     }

@@ -21,8 +21,9 @@
 //! difference for resonant ones.
 
 use super::Device;
-use crate::lockin::LockInQ;
+use crate::lockin::{LockInQ, Phasor};
 pub use crate::protocol::messages::MeasuredDrive;
+use crate::reference::{Gram, PairSums, Reference};
 use model_core::float::FastF32;
 use num_complex::Complex32 as C;
 
@@ -45,11 +46,14 @@ pub(super) struct Motion {
     phasors: [C; 2],
     peak_z: f32,
     windows: u32,
-    /// The pickups' delay in phase words for a tuning word, `(tw, words)`
+    /// The pickups' delay for a tuning word, `(tw, words, cos δ, sin δ)`
     /// ([`super::DeviceConfig::pickup_delay_words`], soft-float f64 on
-    /// the M4): formed again only when the tuning word changes. `(0, 0)`
-    /// holds at power-up (a zero word advances nothing).
-    delay: (u32, u32),
+    /// the M4; the cosine and sine from the DDS's table, Q30): formed
+    /// again only when the tuning word changes (`(0, 0, 0, 0)` at
+    /// power-up: a zero tuning word spans no phase and closes no window).
+    delay: (u32, u32, f32, f32),
+    /// The tuning word of the last block taken.
+    tw: u32,
 }
 
 impl<const N: usize> Device<'_, N> {
@@ -58,39 +62,48 @@ impl<const N: usize> Device<'_, N> {
     /// force and the pickup input of each axis).
     pub fn adc_block_with_pickups(
         &mut self,
-        half: usize,
+        _half: usize,
         forces: &[(u16, u16)],
         pickups: &[(u16, u16)],
     ) {
-        self.pickup_block(self.adc_blocks, pickups);
-        self.adc_block(half, forces);
+        self.intake(forces, pickups);
     }
 
-    /// The pickups' samples of ADC block `block` into the lock-ins; closes a
-    /// window once it spans enough phase.
-    fn pickup_block(&mut self, block: u32, pickups: &[(u16, u16)]) {
-        let slot = block as usize % super::measure::FILL_RING;
-        let (acc0, tw) = self.half[slot];
-        // Each pickup sample at its own instant: δ after its force sample
-        // (`DeviceConfig::pickup_delay_s`), so the reference starts that
-        // much further on (one rounding per block; the rest in words).
+    /// A chunk of the pickups' samples into the lock-ins, against the
+    /// forces' reference `r` (eq. R1: the pickups' own phase is δ later;
+    /// [`Device::motion_window`] turns the fit by δ).
+    pub(super) fn motion_sums(&mut self, r: &Reference, pickups: &[(u16, u16)], tw: u32) {
+        let g = Gram::of(r.words());
+        let p = PairSums::of(r.words(), pickups);
+        self.motion.lock.push_sums(&g, &p, tw);
+        self.motion.tw = tw;
+    }
+
+    /// After a block's pickups: closes the lock-ins' window once it spans
+    /// enough phase (the fit, the guard on the measured motion, the
+    /// displacement loop's step).
+    pub(super) fn motion_window(&mut self, block: u32) {
+        let tw = self.motion.tw;
+        // Each pickup sample is taken δ after its force
+        // (`DeviceConfig::pickup_delay_s`): fitted against the forces'
+        // reference, its phasor leads by ω·δ; the fit is turned back by
+        // δ in words (formed again only when the tuning word changes).
         if self.motion.delay.0 != tw {
-            self.motion.delay = (tw, self.cfg.pickup_delay_words(tw));
+            let d = self.cfg.pickup_delay_words(tw);
+            let q30 = 1.0 / 1_073_741_824.0;
+            let (c, s) = (
+                self.table.sin_q30(d.wrapping_add(1 << 30)) as f32 * q30,
+                self.table.sin_q30(d) as f32 * q30,
+            );
+            self.motion.delay = (tw, d, c, s);
         }
-        // = `DeviceConfig::pickup_reference_word(acc0, tw)`.
-        let acc = self
-            .cfg
-            .adc_reference_word(acc0, tw)
-            .wrapping_add(self.motion.delay.1);
-        // One pass in integers: the DDS's own Q30 table, counts as read.
-        self.motion.lock.push_pairs(self.table, acc, tw, pickups);
         let m = &mut self.motion;
         if m.lock.span_words() < WINDOW_SPAN_WORDS {
             return;
         }
         let window_s = m.lock.samples() as f32 / self.cfg.sample_rate_hz as f32;
         let [z, x] = match m.lock.solve() {
-            Ok(fit) => fit,
+            Ok(fit) => fit.map(|p| turned(p, m.delay.2, m.delay.3)),
             // Too long for the integer sums (never within the drives'
             // range): started over.
             Err(crate::lockin::LockInError::LongWindow) => {
@@ -173,5 +186,16 @@ impl<const N: usize> Device<'_, N> {
     /// Starts the peak over again (an accepted `set_drive` or `start`).
     pub(super) fn reset_motion_peak(&mut self) {
         self.motion.peak_z = 0.0;
+    }
+}
+
+/// The fit `p = d + a'·cos θ + b'·sin θ` against the forces' phase θ turned
+/// to the pickups' own phase θ + δ (`cos δ`, `sin δ` given):
+/// `a = a'·cos δ − b'·sin δ`, `b = a'·sin δ + b'·cos δ`, the mean unchanged.
+fn turned(p: Phasor<f32>, cos: f32, sin: f32) -> Phasor<f32> {
+    Phasor {
+        mean: p.mean,
+        in_phase: p.in_phase * cos - p.quadrature * sin,
+        quadrature: p.in_phase * sin + p.quadrature * cos,
     }
 }

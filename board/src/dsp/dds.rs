@@ -185,6 +185,22 @@ impl<const N: usize> SineTable<N> {
         q.wrapping_add((half as i32) << 1)
     }
 
+    /// `(2³⁰·cos, 2³⁰·sin)` of `2π·phase/2³²`: the same values as
+    /// [`SineTable::sin_q30`] at `phase + 2³⁰` and at `phase` (a quarter
+    /// turn is `N/4` entries: the cosine's index is the sine's plus `N/4`,
+    /// its fraction the same), with one index and one fraction for both.
+    #[inline(always)]
+    pub fn cos_sin_q30(&self, phase: u32) -> (i32, i32) {
+        let bits = Self::BITS;
+        let idx = (phase >> (32 - bits)) as usize & (N - 1);
+        let r = (phase << bits) >> 1;
+        let read = |i: usize| {
+            let [q, dq] = self.q[i & (N - 1)];
+            q.wrapping_add((((i64::from(dq) * i64::from(r)) >> 32) as i32) << 1)
+        };
+        (read(idx + N / 4), read(idx))
+    }
+
     /// `2³⁰·sin(2π·phase/2³²)` from the nearest entry (error `≤ π/N`).
     #[inline(always)]
     pub fn sin_q30_nearest(&self, phase: u32) -> i32 {

@@ -4,9 +4,12 @@
 //! harmonic (lock-in) of each force, the sample count and a saturation flag.
 //!
 //! Raw ADC counts are summed in `u64` (exact), so the mean force has no
-//! accumulation error however long the window; the lock-in sums use `f32`
-//! blocks of 256 samples added into `f32` totals (rounding grows with the
-//! number of blocks, not of samples). The window opens at the
+//! accumulation error however long the window; the lock-in sums are the
+//! counts times the block's Q15 reference ([`crate::reference`], eq. R1),
+//! exact in i64 (issue 35: one integer pass per ADC block, the reference
+//! shared with the pickups' lock-ins; the harmonics' error is the
+//! reference's `ε_r` of eq. R2, ≤ 5.1e-5 of the amplitude, times `√2`).
+//! The window opens at the
 //! first accumulator wrap after [`Estimator::start`] and closes at the `n`-th
 //! wrap after that.
 //!
@@ -43,6 +46,7 @@
 //! with [`reasons::FEW_PERIODS`] set.
 
 use crate::dds::SineTable;
+use crate::reference::{self, PairSums};
 use model_core::float::{FastF32, Math};
 
 /// Linear ADC calibration: `force = gain · (count − offset)` (N per count, counts).
@@ -134,7 +138,9 @@ pub const MIN_VALID_PERIODS: u32 = BATCHES as u32;
 pub enum EstimateError {
     /// The window has not closed yet.
     NotReady,
-    /// Zero periods requested, or a calibration that is not finite / has zero gain.
+    /// Zero periods requested, a calibration that is not finite / has zero
+    /// gain, or a full scale other than [`reference::ADC_FULL_SCALE`] (the
+    /// board's 12-bit converters).
     BadConfig,
     /// The mean normal force is not > 0 (no contact, or a wrong calibration).
     NoNormalForce,
@@ -145,7 +151,7 @@ impl core::fmt::Display for EstimateError {
         f.write_str(match self {
             EstimateError::NotReady => "no finished measurement",
             EstimateError::BadConfig => {
-                "estimator: zero periods or a calibration that is not finite / has zero gain"
+                "estimator: zero periods, a calibration that is not finite / has zero gain, or a full scale other than the 12-bit converters' 4095"
             }
             EstimateError::NoNormalForce => {
                 "the mean normal force is not > 0 (no contact or a wrong calibration)"
@@ -161,16 +167,14 @@ struct Sums {
     n: u32,
     raw_x: u64,
     raw_z: u64,
-    // Lock-in: Σ count·cos θ, Σ count·sin θ (block + total).
-    bx: [f32; 4],
-    tx: [f32; 4],
-    block: u32,
+    /// Lock-in: Σx·c, Σx·s, Σz·c, Σz·s (counts × the Q15 reference, exact).
+    tx: [i64; 4],
     /// Per batch: samples, Σ raw x, Σ raw z.
     batch: [(u32, u64, u64); BATCHES],
     /// The fractional edges (module docs): weight, Σ raw x, Σ raw z added
     /// to the window's totals …
     edge: [f32; 3],
-    /// … and the lock-in totals …
+    /// … and the lock-in totals (counts × Q15, as `tx`) …
     edge_h: [f32; 4],
     /// … and per batch.
     edge_b: [[f32; 3]; BATCHES],
@@ -182,9 +186,7 @@ impl Default for Sums {
             n: 0,
             raw_x: 0,
             raw_z: 0,
-            bx: [0.0; 4],
-            tx: [0.0; 4],
-            block: 0,
+            tx: [0; 4],
             batch: [(0, 0, 0); BATCHES],
             edge: [0.0; 3],
             edge_h: [0.0; 4],
@@ -203,9 +205,7 @@ impl Sums {
             n,
             raw_x,
             raw_z,
-            bx,
             tx,
-            block,
             batch,
             edge,
             edge_h,
@@ -214,9 +214,7 @@ impl Sums {
         *n = 0;
         *raw_x = 0;
         *raw_z = 0;
-        bx.fill(0.0);
-        tx.fill(0.0);
-        *block = 0;
+        tx.fill(0);
         batch.fill((0, 0, 0));
         edge.fill(0.0);
         edge_h.fill(0.0);
@@ -236,8 +234,10 @@ pub struct Estimator {
     wraps: u32,
     saturated: bool,
     last_phase: u32,
-    /// The last sample pushed (raw x, z): the one a wrap splits.
+    /// The last sample pushed (raw x, z): the one a wrap splits …
     last_sample: (u16, u16),
+    /// … and its reference word ([`crate::reference`], eq. R1).
+    last_ref: u32,
     /// Reasons that hold for the samples now being pushed ([`Estimator::set_conditions`]).
     conditions: u32,
     /// Reasons collected over the window.
@@ -269,6 +269,11 @@ impl Estimator {
                 return Err(EstimateError::BadConfig);
             }
         }
+        // The integer sums and their rail check (`reference` module docs)
+        // are those of the board's 12-bit converters.
+        if full_scale != reference::ADC_FULL_SCALE {
+            return Err(EstimateError::BadConfig);
+        }
         Ok(Estimator {
             cal_x,
             cal_z,
@@ -280,6 +285,7 @@ impl Estimator {
             saturated: false,
             last_phase: 0,
             last_sample: (0, 0),
+            last_ref: 0,
             conditions: 0,
             reasons: 0,
             batch: 0,
@@ -329,8 +335,8 @@ impl Estimator {
 
     /// Feeds one sample: raw ADC counts of f_x and f_z taken at drive phase
     /// `phase` (the DDS accumulator of that tick). `table` gives the lock-in
-    /// reference. Returns `true` when this sample closed the window.
-    #[inline]
+    /// reference. Returns `true` when this sample closed the window (a
+    /// one-sample [`Estimator::push_block`]).
     pub fn push<const N: usize>(
         &mut self,
         table: &SineTable<N>,
@@ -338,77 +344,119 @@ impl Estimator {
         x: u16,
         z: u16,
     ) -> bool {
-        let wrapped = phase < self.last_phase;
-        // ε of the module docs: how far past the boundary this sample is.
-        let eps = if wrapped {
-            phase as f32 / phase.wrapping_sub(self.last_phase).max(1) as f32
-        } else {
-            0.0
-        };
-        let (last_phase, prev) = (self.last_phase, self.last_sample);
-        self.last_phase = phase;
-        self.last_sample = (x, z);
+        let w = [reference::packed(table, phase)];
+        self.push_block(&w, phase, 0, &[(x, z)]).is_some()
+    }
+
+    /// Feeds a block of samples `(f_x, f_z)` (raw ADC counts) taken at the
+    /// drive phases `acc0 + i·tw`, with their reference words `refs`
+    /// ([`crate::reference::Reference`], eq. R1; as many as `samples`,
+    /// the shorter of the two counts): the same window as one
+    /// [`Estimator::push`] per sample, in one integer pass per run of
+    /// samples between drive-period wraps (module docs). Returns the
+    /// index of the sample that closed the window, if one did (the samples
+    /// after it are not taken).
+    pub fn push_block(
+        &mut self,
+        refs: &[u32],
+        acc0: u32,
+        tw: u32,
+        samples: &[(u16, u16)],
+    ) -> Option<usize> {
+        let n = samples.len().min(refs.len());
+        let mut i = 0;
+        let mut phase = acc0;
+        let mut closed = None;
+        while i < n {
+            // The boundary: sample i starts a drive period (eps of the
+            // module docs: how far past the boundary it is).
+            if phase < self.last_phase && closed.is_none() && self.wrap(phase) {
+                closed = Some(i);
+            }
+            // The run up to the next wrap (none within `n` for tw = 0).
+            let j = match tw {
+                0 => n,
+                tw => n.min(i + ((u32::MAX - phase) / tw) as usize + 1),
+            };
+            if closed.is_none() && self.state == State::Running {
+                let sums = PairSums::of(&refs[i..j], &samples[i..j]);
+                self.take(&sums, (j - i) as u32);
+            }
+            let k = (j - i) as u32;
+            self.last_phase = phase.wrapping_add((k - 1).wrapping_mul(tw));
+            self.last_sample = samples[j - 1];
+            self.last_ref = refs[j - 1];
+            phase = phase.wrapping_add(k.wrapping_mul(tw));
+            i = j;
+        }
+        closed
+    }
+
+    /// A drive-period boundary at the sample of phase `phase` (the sample
+    /// before is [`Estimator::last_sample`]): opens, moves a batch or
+    /// closes the window. Returns `true` if it closed it.
+    fn wrap(&mut self, phase: u32) -> bool {
+        let eps = phase as f32 / phase.wrapping_sub(self.last_phase).max(1) as f32;
+        let (prev, prev_ref) = (self.last_sample, self.last_ref);
         match self.state {
-            State::Idle | State::Done => return false,
+            State::Idle | State::Done => false,
             State::WaitingForWrap => {
-                if !wrapped {
-                    return false;
-                }
                 self.state = State::Running;
                 // The sample before: ε of it is inside the window (batch 0).
-                self.edge(0, eps, prev, last_phase, table);
+                self.edge(0, eps, prev, prev_ref);
+                false
             }
             State::Running => {
-                if wrapped {
-                    self.wraps += 1;
-                    let old = self.batch;
-                    if self.wraps == self.periods {
-                        // The sample before: ε of it is past the end.
-                        self.edge(old, -eps, prev, last_phase, table);
-                        self.flush_block();
-                        self.state = State::Done;
-                        return true;
-                    }
-                    // Period k of P goes to batch ⌊k·B/P⌋ (k·B ≤ 3.2e7: no overflow).
-                    self.batch = (self.wraps as usize * BATCHES) / self.periods as usize;
-                    if self.batch != old {
-                        // ε of the sample before belongs to the new batch.
-                        let b = &mut self.sums.edge_b;
-                        let (wx, wz) = (eps * f32::from(prev.0), eps * f32::from(prev.1));
-                        b[old][0] -= eps;
-                        b[old][1] -= wx;
-                        b[old][2] -= wz;
-                        b[self.batch][0] += eps;
-                        b[self.batch][1] += wx;
-                        b[self.batch][2] += wz;
-                    }
+                self.wraps += 1;
+                let old = self.batch;
+                if self.wraps == self.periods {
+                    // The sample before: ε of it is past the end.
+                    self.edge(old, -eps, prev, prev_ref);
+                    self.state = State::Done;
+                    return true;
                 }
+                // Period k of P goes to batch ⌊k·B/P⌋ (k·B ≤ 3.2e7: no overflow).
+                self.batch = (self.wraps as usize * BATCHES) / self.periods as usize;
+                if self.batch != old {
+                    // ε of the sample before belongs to the new batch.
+                    let b = &mut self.sums.edge_b;
+                    let (wx, wz) = (eps * f32::from(prev.0), eps * f32::from(prev.1));
+                    b[old][0] -= eps;
+                    b[old][1] -= wx;
+                    b[old][2] -= wz;
+                    b[self.batch][0] += eps;
+                    b[self.batch][1] += wx;
+                    b[self.batch][2] += wz;
+                }
+                false
             }
         }
-        if self.railed(x, z) {
+    }
+
+    /// Adds a run's sums (`len` samples) to the window and its batch.
+    fn take(&mut self, p: &PairSums, len: u32) {
+        if p.railed {
             self.saturated = true;
         }
         self.reasons |= self.conditions;
         let s = &mut self.sums;
-        s.n += 1;
-        s.raw_x += u64::from(x);
-        s.raw_z += u64::from(z);
+        s.n += len;
+        s.raw_x += p.p[0] as u64;
+        s.raw_z += p.p[1] as u64;
         let b = &mut s.batch[self.batch];
-        b.0 += 1;
-        b.1 += u64::from(x);
-        b.2 += u64::from(z);
-        let sn = table.sin(phase);
-        let cs = table.sin(phase.wrapping_add(1 << 30));
-        let (xf, zf) = (f32::from(x), f32::from(z));
-        s.bx[0] += xf * cs;
-        s.bx[1] += xf * sn;
-        s.bx[2] += zf * cs;
-        s.bx[3] += zf * sn;
-        s.block += 1;
-        if s.block == 256 {
-            self.flush_block();
-        }
-        false
+        b.0 += len;
+        b.1 += p.p[0] as u64;
+        b.2 += p.p[1] as u64;
+        s.tx[0] += p.pc[0];
+        s.tx[1] += p.ps[0];
+        s.tx[2] += p.pc[1];
+        s.tx[3] += p.ps[1];
+    }
+
+    /// Whether a sample of the window so far sat at a rail (what the
+    /// estimate's `saturated` will say).
+    pub fn saturated(&self) -> bool {
+        self.saturated
     }
 
     /// A sample at an ADC rail (0 or full scale) on either channel.
@@ -417,16 +465,9 @@ impl Estimator {
         x == 0 || z == 0 || x >= self.full_scale || z >= self.full_scale
     }
 
-    /// Adds `w` (±ε) of sample `prev` (raw x, z; taken at `phase`) to the
-    /// window's totals, its lock-in and batch `b`.
-    fn edge<const N: usize>(
-        &mut self,
-        b: usize,
-        w: f32,
-        prev: (u16, u16),
-        phase: u32,
-        table: &SineTable<N>,
-    ) {
+    /// Adds `w` (±ε) of sample `prev` (raw x, z; its reference word
+    /// `r`) to the window's totals, its lock-in and batch `b`.
+    fn edge(&mut self, b: usize, w: f32, prev: (u16, u16), r: u32) {
         if w == 0.0 {
             return;
         }
@@ -435,8 +476,7 @@ impl Estimator {
         s.edge[0] += w;
         s.edge[1] += x;
         s.edge[2] += z;
-        let sn = table.sin(phase);
-        let cs = table.sin(phase.wrapping_add(1 << 30));
+        let (cs, sn) = (reference::cos_of(r) as f32, reference::sin_of(r) as f32);
         s.edge_h[0] += x * cs;
         s.edge_h[1] += x * sn;
         s.edge_h[2] += z * cs;
@@ -444,15 +484,6 @@ impl Estimator {
         s.edge_b[b][0] += w;
         s.edge_b[b][1] += x;
         s.edge_b[b][2] += z;
-    }
-
-    fn flush_block(&mut self) {
-        let s = &mut self.sums;
-        for i in 0..4 {
-            s.tx[i] += s.bx[i];
-            s.bx[i] = 0.0;
-        }
-        s.block = 0;
     }
 
     /// The estimate of the closed window.
@@ -476,11 +507,13 @@ impl Estimator {
         }
         // Lock-in: f ≈ A cos(θ + φ) ⇒ Σ f cos θ = (n/2) A cos φ, Σ f sin θ = −(n/2) A sin φ.
         // The DC offset in counts drops out over whole periods.
-        // The lock-in totals are f32, so is the result: the f32 backend
-        // (FastF32, a few ulps; the solver's too, one copy in the firmware).
-        let h = |c: f32, sn: f32, gain: f32| {
-            let re = (2.0 * f64::from(c) / n * f64::from(gain)) as f32;
-            let im = (-2.0 * f64::from(sn) / n * f64::from(gain)) as f32;
+        // The lock-in totals are counts × Q15 (exact, plus the f32 edges);
+        // the result is f32: the f32 backend (FastF32, a few ulps; the
+        // solver's too, one copy in the firmware).
+        let h = |c: i64, ce: f32, sn: i64, se: f32, gain: f32| {
+            let k = 2.0 / (n * 32_768.0) * f64::from(gain);
+            let re = ((c as f64 + f64::from(ce)) * k) as f32;
+            let im = (-(sn as f64 + f64::from(se)) * k) as f32;
             Harmonic {
                 amplitude: FastF32::hypot(re, im),
                 phase: FastF32::atan2(im, re),
@@ -499,16 +532,8 @@ impl Estimator {
             mu: mu as f32,
             fx_mean: fx as f32,
             fz_mean: fz as f32,
-            fx_h1: h(
-                s.tx[0] + s.edge_h[0],
-                s.tx[1] + s.edge_h[1],
-                self.cal_x.gain,
-            ),
-            fz_h1: h(
-                s.tx[2] + s.edge_h[2],
-                s.tx[3] + s.edge_h[3],
-                self.cal_z.gain,
-            ),
+            fx_h1: h(s.tx[0], s.edge_h[0], s.tx[1], s.edge_h[1], self.cal_x.gain),
+            fz_h1: h(s.tx[2], s.edge_h[2], s.tx[3], s.edge_h[3], self.cal_z.gain),
             samples: s.n,
             periods: self.periods,
             saturated: self.saturated,

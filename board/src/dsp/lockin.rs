@@ -33,6 +33,7 @@
 //! reference from the DDS's table and exact integer sums (issue 35: 66
 //! instructions per sample for both pickups on the M4F, 103 in f32).
 
+use crate::reference::{Gram, PairSums};
 use model_core::float::{Float, Math};
 
 /// The least phase span (rad) of a window: below it the fit is refused
@@ -395,59 +396,30 @@ impl<const K: usize> LockInQ<K> {
 }
 
 impl LockInQ<2> {
-    /// A block of sample pairs `(p₀, p₁)` (ADC counts) taken at the phase
-    /// words `acc0 + i·tw`, in one pass: the reference (LQ1) from the
-    /// DDS's table and every sum of the block in locals (i32 for the
-    /// plain sums, i64 multiply-accumulates for the products), added to
-    /// the window's once per block. The same sums as [`LockInQ::push`]
-    /// per sample. A block that would pass [`MAX_Q_SAMPLES`] is not taken
-    /// (the window is then refused by the solve).
-    pub fn push_pairs<const N: usize>(
-        &mut self,
-        t: &crate::dds::SineTable<N>,
-        acc0: u32,
-        tw: u32,
-        pairs: &[(u16, u16)],
-    ) {
-        if pairs.is_empty() || !self.room_for(pairs.len()) {
+    /// A block's sums into the window: the reference's [`Gram`] sums and a
+    /// pair of signals' [`PairSums`] against the same reference words
+    /// ([`crate::reference`], eq. R1: the Q15 reference clamped at
+    /// `2¹⁵ − 1`), `tw` phase words per sample: the same sums as
+    /// [`LockInQ::push`] per sample at that reference. A block that would
+    /// pass [`MAX_Q_SAMPLES`] is not taken (the window is then refused by
+    /// the solve).
+    pub fn push_sums(&mut self, g: &Gram, p: &PairSums, tw: u32) {
+        if g.n == 0 || !self.room_for(g.n as usize) {
             return;
         }
-        // |Σc|, |Σs| ≤ 2¹⁵·len and Σp ≤ 4095·len: i32 for len ≤ 2¹⁵.
-        let (mut c1, mut s1, mut p0, mut p1) = (0i32, 0i32, 0i32, 0i32);
-        let (mut cc, mut ss, mut cs) = (0i64, 0i64, 0i64);
-        let (mut pc0, mut ps0, mut pc1, mut ps1) = (0i64, 0i64, 0i64, 0i64);
-        let mut acc = acc0;
-        for &(a, b) in pairs {
-            let (c, s) = Self::reference(t, acc);
-            acc = acc.wrapping_add(tw);
-            let (a, b) = (i32::from(a), i32::from(b));
-            c1 += c;
-            s1 += s;
-            p0 += a;
-            p1 += b;
-            cc += i64::from(c) * i64::from(c);
-            ss += i64::from(s) * i64::from(s);
-            cs += i64::from(c) * i64::from(s);
-            pc0 += i64::from(a) * i64::from(c);
-            ps0 += i64::from(a) * i64::from(s);
-            pc1 += i64::from(b) * i64::from(c);
-            ps1 += i64::from(b) * i64::from(s);
-        }
-        let len = pairs.len() as u64;
         // The first sample of a window adds no span (as `push`).
-        let steps = if self.n == 0 { len - 1 } else { len };
-        self.span += steps * u64::from(tw);
-        self.n += pairs.len() as u32;
-        self.c += i64::from(c1);
-        self.s += i64::from(s1);
-        self.cc += cc;
-        self.ss += ss;
-        self.cs += cs;
-        self.p[0] += i64::from(p0);
-        self.p[1] += i64::from(p1);
-        self.pc[0] += pc0;
-        self.ps[0] += ps0;
-        self.pc[1] += pc1;
-        self.ps[1] += ps1;
+        let steps = if self.n == 0 { g.n - 1 } else { g.n };
+        self.span += u64::from(steps) * u64::from(tw);
+        self.n += g.n;
+        self.c += g.c;
+        self.s += g.s;
+        self.cc += g.cc;
+        self.ss += g.ss;
+        self.cs += g.cs;
+        for k in 0..2 {
+            self.p[k] += p.p[k];
+            self.pc[k] += p.pc[k];
+            self.ps[k] += p.ps[k];
+        }
     }
 }

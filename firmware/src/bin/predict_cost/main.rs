@@ -265,6 +265,42 @@ fn displacement_costs(table: &board::dds::SineTable<1024>, empty: u32, per_insn:
     }
 }
 
+/// One ADC block's integer pass (issue 35, `board::reference`): the
+/// reference of 64 samples (eq. R1), one pair of signals' sums against it
+/// (the forces, or the pickups), the reference's Gram sums (the pickups'
+/// lock-ins only).
+fn intake_costs(table: &board::dds::SineTable<1024>, empty: u32, per_insn: f32) {
+    use board::reference::{Gram, PairSums, Reference};
+    let pairs = core::hint::black_box([(2000u16, 3000u16); 64]);
+    let mut r = None;
+    let t1 = ticks(|| {
+        r = Some(core::hint::black_box(Reference::new(
+            table,
+            12_345,
+            171_798_692,
+            64,
+        )))
+    });
+    let Some(r) = r else { return };
+    let w = core::hint::black_box(r.words());
+    let t2 = ticks(|| {
+        core::hint::black_box(PairSums::of(w, &pairs));
+    });
+    let t3 = ticks(|| {
+        core::hint::black_box(Gram::of(w));
+    });
+    let n = |t: u32| (t.saturating_sub(empty) as f32 / per_insn) as u32;
+    hprintln!(
+        "ADC block's pass (64 samples): reference (R1) {} instructions ({} per sample); a pair of signals' sums {} ({} per sample); the Gram sums {} ({} per sample)",
+        n(t1),
+        n(t1) / 64,
+        n(t2),
+        n(t2) / 64,
+        n(t3),
+        n(t3) / 64
+    );
+}
+
 /// The longest critical section the server may hold: 10 % of a half-buffer
 /// (64 samples at 500 kS/s = 128 µs = 21 504 cycles at 168 MHz). Every
 /// `DeviceAccess::with` closure runs with the DMA handlers masked; one longer
@@ -985,6 +1021,7 @@ fn main() -> ! {
                     (t as f32 / per_insn / 256.0) as u32
                 );
             }
+            intake_costs(table, empty, per_insn);
             displacement_costs(table, empty, per_insn);
             critical_ok = critical_sections(table, per_insn);
             let load = with_bench(table, per_insn, |b| everything::run(b, DRIVE)).flatten();

@@ -1,0 +1,255 @@
+//! One reference for every signal of an ADC block (issue 35): the drive
+//! phase's cosine and sine at each sample, formed once from the DDS's own
+//! accumulator and table, and the sums the force estimator and the pickups'
+//! lock-ins take against it, in integers, in one pass per signal pair.
+//!
+//! ```text
+//! c_i = min(round(2¹⁵ cos θ_i), 2¹⁵ − 1),  s_i = min(round(2¹⁵ sin θ_i), 2¹⁵ − 1)   (R1)
+//! θ_i = 2π (a₀ + i·tw)/2³²   (the accumulator of sample i, ADC lag included)
+//! ```
+//!
+//! from the Q30 table read of eq. (Q1) ([`crate::dds::SineTable::sin_q30`]),
+//! packed as two i16 in one word (`c` low, `s` high), so a pair of samples
+//! and its reference are two loads. The error of `c_i`, `s_i` against the
+//! exact cosine and sine is at most
+//!
+//! ```text
+//! ε_r = ε_t + (2π/N)²/8 + 2⁻²⁹ + 2⁻¹⁶ + 2⁻¹⁵·[the clamp]                   (R2)
+//! ```
+//!
+//! of 1 (the table, its interpolation, the halved product's floor, the Q15
+//! rounding; the clamp of `+2¹⁵` to `2¹⁵ − 1`, reached only within
+//! `2⁻⁷·…` of θ = 0 or π/2, adds at most 2⁻¹⁵): ≤ 5.08e-5 at N = 1024
+//! with the libm table (`tests/tests/reference.rs`).
+//!
+//! **The sums.** For a pair of signals `(x_i, z_i)` (ADC counts, `< 2¹²`):
+//! `Σx`, `Σz` and `Σx·c`, `Σx·s`, `Σz·c`, `Σz·s`, exact. Each product is
+//! below `4095·2¹⁵ < 2²⁷`, so sixteen of them fit an i32
+//! (`16·4095·2¹⁵ = 2 146 959 360 < 2³¹`): the loop adds them in i32 over
+//! runs of [`RUN`] samples and widens once per run. The reference's own sums
+//! for the lock-ins' normal equations (`Σc`, `Σs`, `Σc²`, `Σs²`, `Σcs`,
+//! [`Gram`]) are formed with the reference, once per block.
+//!
+//! Contexts: [`Reference::new`] and [`PairSums::of`] run in the ADC
+//! handler (on the board, interrupt priority `DSP`), once per block.
+
+use crate::dds::SineTable;
+
+/// The most samples of one block's reference (the board's ADC half-buffer).
+pub const BLOCK: usize = 64;
+
+/// Samples added in i32 before the sums widen to i64 (module docs).
+pub const RUN: usize = 16;
+
+/// `round(2¹⁵·v/2³⁰)` of a Q30 value, with `+2¹⁵` clamped to `2¹⁵ − 1` (R1;
+/// a saturation to 16 bits, one `SSAT` on the M4).
+#[inline(always)]
+fn q15(v: i32) -> i32 {
+    ((v + (1 << 14)) >> 15).clamp(i32::from(i16::MIN), i32::from(i16::MAX))
+}
+
+/// The Q15 cosine and sine (R1) of phase word `p`, packed: `c` in the low
+/// half, `s` in the high half.
+#[inline(always)]
+pub fn packed<const N: usize>(t: &SineTable<N>, p: u32) -> u32 {
+    let (c, s) = t.cos_sin_q30(p);
+    (q15(c) as u16 as u32) | ((q15(s) as u16 as u32) << 16)
+}
+
+/// Fills `out` with the packed reference words (R1) of the phases
+/// `acc0 + i·tw`.
+pub fn fill<const N: usize>(t: &SineTable<N>, acc0: u32, tw: u32, out: &mut [u32]) {
+    let mut acc = acc0;
+    for w in out {
+        *w = packed(t, acc);
+        acc = acc.wrapping_add(tw);
+    }
+}
+
+/// The cosine (low half) of a packed reference word, Q15.
+#[inline(always)]
+pub fn cos_of(w: u32) -> i32 {
+    i32::from(w as u16 as i16)
+}
+
+/// The sine (high half) of a packed reference word, Q15.
+#[inline(always)]
+pub fn sin_of(w: u32) -> i32 {
+    (w as i32) >> 16
+}
+
+/// The reference's sums over samples: `n`, `Σc`, `Σs`, `Σc²`, `Σs²`,
+/// `Σcs` (the normal equations' reference part, eq. L2 of
+/// [`crate::lockin`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Gram {
+    /// Samples.
+    pub n: u32,
+    /// Σc.
+    pub c: i64,
+    /// Σs.
+    pub s: i64,
+    /// Σc².
+    pub cc: i64,
+    /// Σs².
+    pub ss: i64,
+    /// Σcs.
+    pub cs: i64,
+}
+
+impl Gram {
+    /// The sums of the packed reference words `w`.
+    pub fn of(w: &[u32]) -> Self {
+        let (mut c1, mut s1) = (0i32, 0i32);
+        let (mut cc, mut ss, mut cs) = (0i64, 0i64, 0i64);
+        for &r in w {
+            let (c, s) = (cos_of(r), sin_of(r));
+            c1 += c;
+            s1 += s;
+            cc += i64::from(c * c);
+            ss += i64::from(s * s);
+            cs += i64::from(c * s);
+        }
+        Gram {
+            n: w.len() as u32,
+            c: i64::from(c1),
+            s: i64::from(s1),
+            cc,
+            ss,
+            cs,
+        }
+    }
+}
+
+/// One block's reference (R1) and its [`Gram`] sums.
+#[derive(Debug, Clone, Copy)]
+pub struct Reference {
+    words: [u32; BLOCK],
+    len: usize,
+}
+
+impl Reference {
+    /// The reference of `len ≤ BLOCK` samples from phase word `acc0`,
+    /// `tw` words per sample (more than [`BLOCK`] are cut to it).
+    pub fn new<const N: usize>(t: &SineTable<N>, acc0: u32, tw: u32, len: usize) -> Self {
+        let mut r = Reference {
+            words: [0; BLOCK],
+            len: 0,
+        };
+        r.set(t, acc0, tw, len);
+        r
+    }
+
+    /// Forms the reference again in place (as [`Reference::new`]).
+    pub fn set<const N: usize>(&mut self, t: &SineTable<N>, acc0: u32, tw: u32, len: usize) {
+        self.len = len.min(BLOCK);
+        fill(t, acc0, tw, &mut self.words[..self.len]);
+    }
+
+    /// The packed words (R1), one per sample.
+    pub fn words(&self) -> &[u32] {
+        &self.words[..self.len]
+    }
+
+    /// Samples.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// No samples.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
+/// The sums of a pair of signals `(x, z)` against a reference: `Σx`, `Σz`,
+/// `Σx·c`, `Σx·s`, `Σz·c`, `Σz·s` (module docs), exact for counts of the
+/// 12-bit converters (`≤ ADC_FULL_SCALE`), and whether a sample sat at a
+/// rail (0 or [`ADC_FULL_SCALE`]; a count above it, which a 12-bit
+/// converter cannot give, counts as railed too, and the sums of its run
+/// are then not exact).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct PairSums {
+    /// Σx, Σz.
+    pub p: [i64; 2],
+    /// Σx·c, Σz·c.
+    pub pc: [i64; 2],
+    /// Σx·s, Σz·s.
+    pub ps: [i64; 2],
+    /// A sample of either signal was 0 or ≥ [`ADC_FULL_SCALE`].
+    pub railed: bool,
+}
+
+/// The full scale of the board's 12-bit converters, counts (the rail).
+pub const ADC_FULL_SCALE: u16 = 4095;
+
+impl PairSums {
+    /// The sums of `pairs` against the reference words `w` (as many as
+    /// `pairs`; extra ones of either are ignored).
+    pub fn of(w: &[u32], pairs: &[(u16, u16)]) -> Self {
+        let mut out = PairSums::default();
+        let mut rails = 0u32;
+        for (w, pairs) in w.chunks(RUN).zip(pairs.chunks(RUN)) {
+            let r = run(w, pairs);
+            out.p[0] += i64::from(r.x);
+            out.p[1] += i64::from(r.z);
+            out.pc[0] += i64::from(r.xc);
+            out.ps[0] += i64::from(r.xs);
+            out.pc[1] += i64::from(r.zc);
+            out.ps[1] += i64::from(r.zs);
+            rails |= r.rails;
+        }
+        out.railed = rails & RAIL_BITS != 0;
+        out
+    }
+}
+
+/// The bits of a run's `rails` that only a railed sample sets: for a pair
+/// packed `w = x | z << 16` with `1 ≤ x, z ≤ 4094`, `(w + 0x1_0001) |
+/// (w − 0x1_0001)` keeps each half within 12 bits; `x = 4095` carries into
+/// bit 12 (`z`: 28), `x = 0` borrows through bits 12–15 (`z = 0`: 28–31),
+/// and a count above 4095 has a bit above 11 of its own.
+const RAIL_BITS: u32 = 0xF000_F000;
+
+/// One run's sums in i32 (at most [`RUN`] samples: module docs).
+struct Run {
+    x: i32,
+    z: i32,
+    xc: i32,
+    xs: i32,
+    zc: i32,
+    zs: i32,
+    /// The OR of each pair's rail word ([`RAIL_BITS`]).
+    rails: u32,
+}
+
+/// The sums of one run of at most [`RUN`] samples, in registers (a
+/// function of its own: the i64 totals of [`PairSums::of`] stay out of the
+/// loop's registers). Each pair is packed into one word as the DMA delivers
+/// it, so that the four products are the M4's 16-bit multiply-accumulates
+/// (`SMLAxy`; the counts are below 2¹⁵, so as i16 they are unchanged).
+#[inline(never)]
+fn run(w: &[u32], pairs: &[(u16, u16)]) -> Run {
+    let mut o = Run {
+        x: 0,
+        z: 0,
+        xc: 0,
+        xs: 0,
+        zc: 0,
+        zs: 0,
+        rails: 0,
+    };
+    for (&r, &(x, z)) in w.iter().zip(pairs) {
+        let p = u32::from(x) | (u32::from(z) << 16);
+        let (c, s) = (cos_of(r), sin_of(r));
+        let (x, z) = (i32::from(p as u16 as i16), (p as i32) >> 16);
+        o.rails |= p.wrapping_add(0x1_0001) | p.wrapping_sub(0x1_0001);
+        o.x += x;
+        o.z += z;
+        o.xc = o.xc.wrapping_add(x * c);
+        o.xs = o.xs.wrapping_add(x * s);
+        o.zc = o.zc.wrapping_add(z * c);
+        o.zs = o.zs.wrapping_add(z * s);
+    }
+    o
+}
