@@ -410,7 +410,7 @@ impl<const N: usize> Device<'_, N> {
         if !closed {
             return;
         }
-        let Ok(e) = self.est.estimate() else {
+        let Ok(e) = self.est.estimate_mu() else {
             return;
         };
         let unusable = reasons::SATURATED | reasons::FAULT | reasons::NOT_RUNNING;

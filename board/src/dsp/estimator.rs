@@ -492,6 +492,45 @@ impl Estimator {
     /// [`EstimateError::NotReady`] before the window closes,
     /// [`EstimateError::NoNormalForce`] if ⟨f_z⟩ ≤ 0.
     pub fn estimate(&self) -> Result<Estimate, EstimateError> {
+        let m = self.mu_estimate()?;
+        let s = &self.sums;
+        // Lock-in: f ≈ A cos(θ + φ) ⇒ Σ f cos θ = (n/2) A cos φ, Σ f sin θ = −(n/2) A sin φ.
+        // The DC offset in counts drops out over whole periods. The totals
+        // are counts × Q15 (exact, plus the f32 edges), the result f32 (the
+        // f32 backend, FastF32: a few ulps; the solver's too, one copy in
+        // the firmware): f32 throughout, ≈ 1e-7 of the amplitude.
+        let h = |c: i64, ce: f32, sn: i64, se: f32, gain: f32| {
+            let k = 2.0 / (m.weight * 32_768.0) * gain;
+            let re = (c as f32 + ce) * k;
+            let im = -(sn as f32 + se) * k;
+            Harmonic {
+                amplitude: FastF32::hypot(re, im),
+                phase: FastF32::atan2(im, re),
+            }
+        };
+        Ok(Estimate {
+            fx_h1: h(s.tx[0], s.edge_h[0], s.tx[1], s.edge_h[1], self.cal_x.gain),
+            fz_h1: h(s.tx[2], s.edge_h[2], s.tx[3], s.edge_h[3], self.cal_z.gain),
+            ..m.estimate
+        })
+    }
+
+    /// The closed window's μ, mean forces, standard error and reasons — the
+    /// [`Estimator::estimate`] without the harmonics (zero here), which is
+    /// all the μ loop uses (issue 35: the harmonics' two `hypot`s and
+    /// `atan2`s stay out of its update).
+    ///
+    /// # Errors
+    /// As [`Estimator::estimate`].
+    pub fn estimate_mu(&self) -> Result<Estimate, EstimateError> {
+        self.mu_estimate().map(|m| m.estimate)
+    }
+
+    /// μ and the means in f64 (the sums are exact; the few soft-float
+    /// operations on the M4 keep μ to ≈ 1e-16, so that the standard error
+    /// of a noiseless window is 0 to f32's rounding), the standard error
+    /// from the batches' integer deviations ([`Estimator::std_error`]).
+    fn mu_estimate(&self) -> Result<MuEstimate, EstimateError> {
         if self.state != State::Done || self.sums.n == 0 {
             return Err(EstimateError::NotReady);
         }
@@ -505,22 +544,8 @@ impl Estimator {
         if fz.is_nan() || fz <= 0.0 {
             return Err(EstimateError::NoNormalForce);
         }
-        // Lock-in: f ≈ A cos(θ + φ) ⇒ Σ f cos θ = (n/2) A cos φ, Σ f sin θ = −(n/2) A sin φ.
-        // The DC offset in counts drops out over whole periods.
-        // The lock-in totals are counts × Q15 (exact, plus the f32 edges);
-        // the result is f32: the f32 backend (FastF32, a few ulps; the
-        // solver's too, one copy in the firmware).
-        let h = |c: i64, ce: f32, sn: i64, se: f32, gain: f32| {
-            let k = 2.0 / (n * 32_768.0) * f64::from(gain);
-            let re = ((c as f64 + f64::from(ce)) * k) as f32;
-            let im = (-(sn as f64 + f64::from(se)) * k) as f32;
-            Harmonic {
-                amplitude: FastF32::hypot(re, im),
-                phase: FastF32::atan2(im, re),
-            }
-        };
         let mu = fx / fz;
-        let std_error = self.std_error(mu);
+        let std_error = self.std_error(mu, (mean_x, mean_z), n * fz);
         let mut reasons = self.reasons;
         if self.saturated {
             reasons |= reasons::SATURATED;
@@ -528,40 +553,71 @@ impl Estimator {
         if self.periods < MIN_VALID_PERIODS {
             reasons |= reasons::FEW_PERIODS;
         }
-        Ok(Estimate {
-            mu: mu as f32,
-            fx_mean: fx as f32,
-            fz_mean: fz as f32,
-            fx_h1: h(s.tx[0], s.edge_h[0], s.tx[1], s.edge_h[1], self.cal_x.gain),
-            fz_h1: h(s.tx[2], s.edge_h[2], s.tx[3], s.edge_h[3], self.cal_z.gain),
-            samples: s.n,
-            periods: self.periods,
-            saturated: self.saturated,
-            std_error: std_error as f32,
-            reasons,
+        let none = Harmonic {
+            amplitude: 0.0,
+            phase: 0.0,
+        };
+        Ok(MuEstimate {
+            weight: n as f32,
+            estimate: Estimate {
+                mu: mu as f32,
+                fx_mean: fx as f32,
+                fz_mean: fz as f32,
+                fx_h1: none,
+                fz_h1: none,
+                samples: s.n,
+                periods: self.periods,
+                saturated: self.saturated,
+                std_error: std_error as f32,
+                reasons,
+            },
         })
     }
 
     /// `σ_μ = √(B/(B−1)·Σ(X_b − μZ_b)²)/|Z|` over the non-empty batches
-    /// (module docs); 0 for fewer than two.
-    fn std_error(&self, mu: f64) -> f64 {
-        let (gx, ox) = (f64::from(self.cal_x.gain), f64::from(self.cal_x.offset));
-        let (gz, oz) = (f64::from(self.cal_z.gain), f64::from(self.cal_z.offset));
-        let (mut used, mut sum_z, mut sum_sq) = (0u32, 0.0f64, 0.0f64);
+    /// (module docs); 0 for fewer than two. `means` are the window's mean
+    /// counts `(m_x, m_z)` that `μ` was formed from, `z` the window's
+    /// calibrated normal sum `Z = W·⟨f_z⟩`. Each batch's residual is formed
+    /// from its deviations from the window's means, `d = S_b − W_b·m`
+    /// (counts; the integer part exact in i64 with the means in Q16, the
+    /// edges in f32), as
+    ///
+    /// ```text
+    /// X_b − μ·Z_b = g_x·d_x − μ·g_z·d_z                             (E1)
+    /// ```
+    ///
+    /// — exact, because `g_x(m_x − o_x) = μ·g_z(m_z − o_z)` defines μ — so
+    /// the calibrated sums' large common part never meets f32 (issue 35:
+    /// per batch a few integer and f32 operations, not soft-float f64).
+    fn std_error(&self, mu: f64, means: (f64, f64), z: f64) -> f64 {
+        let q16 = |m: f64| (m * 65_536.0 + 0.5) as i64;
+        let (qx, qz) = (q16(means.0), q16(means.1));
+        let (mx, mz) = (means.0 as f32, means.1 as f32);
+        let (gx, gz, muf) = (self.cal_x.gain, self.cal_z.gain, mu as f32);
+        let (mut used, mut sum_sq) = (0u32, 0.0f32);
         let edges = self.sums.edge_b.iter();
         for (&(n, rx, rz), e) in self.sums.batch.iter().zip(edges).filter(|b| b.0 .0 > 0) {
-            let n = f64::from(n) + f64::from(e[0]);
-            let xb = gx * (rx as f64 + f64::from(e[1]) - n * ox);
-            let zb = gz * (rz as f64 + f64::from(e[2]) - n * oz);
+            let dev = |r: u64, q: i64, m: f32, e_sum: f32| {
+                let whole = ((r as i64) << 16) - i64::from(n) * q;
+                whole as f32 * (1.0 / 65_536.0) + (e_sum - e[0] * m)
+            };
+            let (dx, dz) = (dev(rx, qx, mx, e[1]), dev(rz, qz, mz, e[2]));
+            let r = gx * dx - muf * gz * dz;
             used += 1;
-            sum_z += zb;
-            sum_sq += (xb - mu * zb) * (xb - mu * zb);
+            sum_sq += r * r;
         }
-        if used < 2 || sum_z == 0.0 {
+        if used < 2 || z == 0.0 {
             return 0.0;
         }
-        let b = f64::from(used);
+        let b = used as f32;
         // Reported as f32: the root in f32 (FastF32, relative error a few ulps).
-        f64::from(FastF32::sqrt((b / (b - 1.0) * sum_sq) as f32)) / sum_z.abs()
+        f64::from(FastF32::sqrt(b / (b - 1.0) * sum_sq)) / z.abs()
     }
+}
+
+/// [`Estimator::mu_estimate`]'s result: the estimate without harmonics
+/// and the window's weight `W` (samples with the fractional edges).
+struct MuEstimate {
+    weight: f32,
+    estimate: Estimate,
 }
