@@ -191,8 +191,9 @@ impl PairSums {
         let mut rails = 0u32;
         for (w, pairs) in w.chunks(RUN).zip(pairs.chunks(RUN)) {
             let r = run(w, pairs);
-            out.p[0] += i64::from(r.x);
-            out.p[1] += i64::from(r.z);
+            // The packed sum's halves: Σx below, Σz above (module docs).
+            out.p[0] += i64::from(r.xz & 0xFFFF);
+            out.p[1] += i64::from(r.xz >> 16);
             out.pc[0] += i64::from(r.xc);
             out.ps[0] += i64::from(r.xs);
             out.pc[1] += i64::from(r.zc);
@@ -213,8 +214,10 @@ const RAIL_BITS: u32 = 0xF000_F000;
 
 /// One run's sums in i32 (at most [`RUN`] samples: module docs).
 struct Run {
-    x: i32,
-    z: i32,
+    /// `Σ(x | z << 16)`: over at most 16 counts below 2¹² each half's sum
+    /// stays below 2¹⁶ (≤ 65 520), so the halves are `Σx` and `Σz` (a
+    /// count above 4095 is railed, and its run's sums are not exact).
+    xz: u32,
     xc: i32,
     xs: i32,
     zc: i32,
@@ -231,8 +234,7 @@ struct Run {
 #[inline(never)]
 fn run(w: &[u32], pairs: &[(u16, u16)]) -> Run {
     let mut o = Run {
-        x: 0,
-        z: 0,
+        xz: 0,
         xc: 0,
         xs: 0,
         zc: 0,
@@ -244,8 +246,7 @@ fn run(w: &[u32], pairs: &[(u16, u16)]) -> Run {
         let (c, s) = (cos_of(r), sin_of(r));
         let (x, z) = (i32::from(p as u16 as i16), (p as i32) >> 16);
         o.rails |= p.wrapping_add(0x1_0001) | p.wrapping_sub(0x1_0001);
-        o.x += x;
-        o.z += z;
+        o.xz = o.xz.wrapping_add(p);
         o.xc = o.xc.wrapping_add(x * c);
         o.xs = o.xs.wrapping_add(x * s);
         o.zc = o.zc.wrapping_add(z * c);
