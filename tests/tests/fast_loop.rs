@@ -151,17 +151,21 @@ fn overdrive_stays_below_the_liftoff_limit() {
 
 /// The normal pickup's wire opens while the drive holds: the pickup reads
 /// its offset (no motion) while the model says 2 µm; after
-/// `OPEN_WINDOWS` windows in a row the fault latches and the drive goes to
+/// `OPEN_S` of windows in a row the fault latches and the drive goes to
 /// the safe state (stopped, outputs ramped to zero).
 #[test]
 fn an_open_pickup_latches_the_safe_state() {
-    use board::device::displacement::OPEN_WINDOWS;
+    use board::device::displacement::OPEN_S;
+    use board::device::WINDOW_MIN_SAMPLES;
     let table = SineTable::<1024>::libm();
     let mut b = held_at(&table, 2.0, 2e-6);
     let offset = b.cfg.pickup_z.offset.round() as u16;
     b.pickup_stuck[0] = Some(offset);
     let mut at = None;
-    for k in 1..=4 * usize::from(OPEN_WINDOWS) {
+    // Half-buffers per window (four at 20 kHz) and windows to reach OPEN_S.
+    let per = WINDOW_MIN_SAMPLES as usize / 64;
+    let windows = (f64::from(OPEN_S) / (per as f64 * b.t_half()) - 1e-3).ceil() as usize;
+    for k in 1..=4 * windows * per {
         b.step();
         if b.dev.status().faults != 0 {
             at = Some(k);
@@ -170,12 +174,13 @@ fn an_open_pickup_latches_the_safe_state() {
     }
     let st = b.dev.status();
     assert_eq!(st.faults, faults::PICKUP_OPEN, "{st:?}");
-    // One window per half-buffer at 20 kHz; the first window may still
-    // carry a part of the motion (the ADC lag).
+    // `windows` whole windows of the stuck pickup; the window it began in
+    // may still carry a part of the motion (one window more), and the ADC
+    // lag one half-buffer.
     let k = at.unwrap();
     assert!(
-        (usize::from(OPEN_WINDOWS)..=usize::from(OPEN_WINDOWS) + 1).contains(&k),
-        "after {k} windows"
+        (windows * per..=(windows + 1) * per + 1).contains(&k),
+        "after {k} half-buffers"
     );
     assert!(!st.running);
     for _ in 0..5_000 {

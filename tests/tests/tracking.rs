@@ -99,7 +99,7 @@ fn tracking_follows_a_drifting_resonance() {
 /// Started three half-bands below the resonance (115 Hz): the lock comes
 /// within a bound derived from T3 — the error decays as e^{−t/2τ̂} from
 /// 115 Hz to the half band (38.5 Hz) in 2τ̂·ln 3 = 2.2 τ̂, then
-/// `LOCK_WINDOWS` windows in the band; with the start's own transient
+/// `LOCK_S` of windows in the band; with the start's own transient
 /// (the mode rising, ≈ τ) and ζ ≈ 0.7's ringing, 8 τ̂ bounds it (33 ms).
 #[test]
 fn tracking_locks_from_three_half_bands_off() {
@@ -128,7 +128,7 @@ fn tracking_locks_from_three_half_bands_off() {
 /// A resonance that runs away (−5 000 Hz/s): the tracking follows with a
 /// lag ḟ·3τ = 62 Hz, inside the loss threshold (the full band, 77 Hz), until
 /// the resonance leaves the ±2 % tracking range after 402/5000 s = 80 ms;
-/// then the lock is lost within `LOSS_WINDOWS` windows, the fault latches
+/// then the lock is lost within `LOSS_S` of windows, the fault latches
 /// alone and the drive goes to the safe state. Meanwhile the voltage never
 /// exceeded the identified model's bound `h·C_MAX·|D/Ĥ(f)|` at the
 /// frequency that ran.
@@ -158,8 +158,12 @@ fn a_lost_lock_goes_to_the_safe_state() {
     assert_eq!(st.faults, faults::LOSS_OF_LOCK, "{st:?}");
     let t = latched.unwrap() as f64 * b.t_half();
     let exit = 0.02 * F_R / 5_000.0;
-    let loss = f64::from(board::device::tracking::LOSS_WINDOWS) * b.t_half();
-    assert!(t <= exit + loss + b.t_half(), "latched at {t} s");
+    // The loss is counted in whole windows of four half-buffers
+    // (`WINDOW_MIN_SAMPLES`): at most one more than `LOSS_S` holds, plus
+    // the window the resonance left the range in.
+    let window = f64::from(board::device::WINDOW_MIN_SAMPLES) / 64.0 * b.t_half();
+    let loss = f64::from(board::device::tracking::LOSS_S) + window;
+    assert!(t <= exit + loss + window + b.t_half(), "latched at {t} s");
     assert!(!st.running && !st.locked);
     assert!(worst <= 1.0, "{worst}");
     assert!(b.dev.start().is_err());

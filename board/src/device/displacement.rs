@@ -96,7 +96,7 @@
 //!
 //! **An open pickup.** A driven channel whose model envelope exceeds
 //! [`OPEN_FLOOR_M`] while its pickup reads less than [`OPEN_FRACTION`] of
-//! it for [`OPEN_WINDOWS`] windows in a row latches
+//! it for [`OPEN_S`] of windows in a row latches
 //! [`super::faults::PICKUP_OPEN`] (the safe state).
 
 use num_complex::Complex32 as C;
@@ -139,8 +139,10 @@ pub const OBSERVER_GAIN: f32 = 0.5;
 pub const OPEN_FLOOR_M: f32 = 1e-7;
 /// … while the pickup reads less than this fraction of it …
 pub const OPEN_FRACTION: f32 = 0.1;
-/// … for this many windows in a row (≈ 1 ms at 20 kHz).
-pub const OPEN_WINDOWS: u8 = 8;
+/// … for this long, in windows in a row, s (eight windows of 128 µs before
+/// windows took four blocks; counted in time so that the window's length
+/// does not change it).
+pub const OPEN_S: f32 = 1.0e-3;
 
 /// The motion's smoothing time for the status and the holding test, s: an
 /// exponential average of the windows' phasors (one window every 128 µs at
@@ -207,8 +209,8 @@ pub(super) struct Loops {
     pub(super) moving: [[bool; 2]; super::measure::FILL_RING],
     /// Fills since each channel's setting last changed (saturating).
     pub(super) since_change: [u8; 2],
-    /// Windows in a row with an open pickup's symptom, per channel.
-    pub(super) open: [u8; 2],
+    /// Time of windows in a row with an open pickup's symptom, per channel, s.
+    pub(super) open: [f32; 2],
 }
 
 impl Default for Loops {
@@ -226,7 +228,7 @@ impl Default for Loops {
             at_fill: [(z, z); super::measure::FILL_RING],
             moving: [[false; 2]; super::measure::FILL_RING],
             since_change: [u8::MAX; 2],
-            open: [0; 2],
+            open: [0.0; 2],
         }
     }
 }
@@ -243,7 +245,7 @@ impl Loops {
         self.at_fill = [(z, z); super::measure::FILL_RING];
         self.moving = [[false; 2]; super::measure::FILL_RING];
         self.since_change = [0; 2];
-        self.open = [0; 2];
+        self.open = [0.0; 2];
         self.good = 0;
         self.avg = None;
     }
@@ -657,7 +659,7 @@ impl<const N: usize> Device<'_, N> {
     /// the output of fill `block`): the corrections c (D3 against the
     /// fill's model envelope), the open-pickup check, the tracking, the
     /// holding count.
-    pub(super) fn displacement_step(&mut self, block: u32, x: [C; 2], window_s: f32) {
+    pub(super) fn displacement_step(&mut self, block: u32, blocks: u32, x: [C; 2], window_s: f32) {
         if !self.displacement_mode() || !self.running || self.latch.any() {
             self.loops.good = 0;
             return;
@@ -667,7 +669,7 @@ impl<const N: usize> Device<'_, N> {
         };
         let d = self.drive;
         let target = setpoint(&d);
-        let (mean, u_fill) = self.loops.at_fill[block as usize % super::measure::FILL_RING];
+        let (mean, u_fill, moving) = self.window_fills(block, blocks);
         let alpha = (window_s / SMOOTHING_S).min(1.0);
         let avg = match self.loops.avg {
             Some(a) => [a[0] + (x[0] - a[0]) * alpha, a[1] + (x[1] - a[1]) * alpha],
@@ -676,7 +678,6 @@ impl<const N: usize> Device<'_, N> {
         self.loops.avg = Some(avg);
         let mut within = true;
         let models = self.tracker.models(&t);
-        let moving = self.loops.moving[block as usize % super::measure::FILL_RING];
         for (ch, m) in models.iter().enumerate() {
             let dn = norm(target[ch]);
             within &= if dn > 0.0 {
@@ -687,14 +688,14 @@ impl<const N: usize> Device<'_, N> {
             let mn = norm(mean[ch]);
             // An open pickup: the model says the mode moves, the pickup not.
             if mn > OPEN_FLOOR_M && norm(x[ch]) < OPEN_FRACTION * mn {
-                self.loops.open[ch] = self.loops.open[ch].saturating_add(1);
-                if self.loops.open[ch] >= OPEN_WINDOWS {
+                self.loops.open[ch] += window_s;
+                if self.loops.open[ch] >= OPEN_S * (1.0 - 1e-3) {
                     self.fault(super::faults::PICKUP_OPEN);
                     return;
                 }
                 continue;
             }
-            self.loops.open[ch] = 0;
+            self.loops.open[ch] = 0.0;
             // D3 against the fill's mean envelope, from a twentieth of the
             // setting up (below, the window's noise dominates); a window of
             // a transition also corrects the model's envelope (D7: its
@@ -725,6 +726,28 @@ impl<const N: usize> Device<'_, N> {
         } else {
             0
         };
+    }
+
+    /// The fills' records over a window of `blocks` ADC blocks that ends
+    /// with `block`: the mean model envelopes and voltages averaged over
+    /// its blocks (equal weights: whole blocks of equal length), moving if
+    /// any was — the last [`super::measure::FILL_RING`] blocks at most (a
+    /// longer window, below 2 kHz, takes its last four).
+    pub(super) fn window_fills(&self, block: u32, blocks: u32) -> ([C; 2], [C; 2], [bool; 2]) {
+        let k = blocks.clamp(1, super::measure::FILL_RING as u32);
+        let z = C::new(0.0, 0.0);
+        let (mut mean, mut u, mut moving) = ([z; 2], [z; 2], [false; 2]);
+        for j in 0..k {
+            let slot = block.wrapping_sub(j) as usize % super::measure::FILL_RING;
+            let (m, v) = self.loops.at_fill[slot];
+            for ch in 0..2 {
+                mean[ch] += m[ch];
+                u[ch] += v[ch];
+                moving[ch] |= self.loops.moving[slot][ch];
+            }
+        }
+        let w = 1.0 / k as f32;
+        (mean.map(|m| m * w), u.map(|v| v * w), moving)
     }
 
     /// The observer of a transition (D7): the model's envelope moves by

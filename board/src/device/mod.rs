@@ -46,7 +46,7 @@ pub use error::{ConfigError, DeviceError};
 pub use fault::faults;
 pub use load::CpuLoad;
 pub use measure::{check_periods, estimate};
-pub use motion::MeasuredDrive;
+pub use motion::{MeasuredDrive, WINDOW_MIN_SAMPLES, WINDOW_SPAN_RAD};
 pub use predict::{predict, regime};
 
 pub use crate::protocol::messages::{

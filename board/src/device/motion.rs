@@ -7,8 +7,9 @@
 //! 0.714 µs after its force, 10.3° of a 40 kHz drive; demodulated at the
 //! force's phase, every measured response would lead the true one by ω·δ,
 //! which cancels in φ only). Each window of whole ADC blocks spanning at
-//! least one drive period ([`WINDOW_SPAN_RAD`]: one 64-sample block from 7.8 kHz up at
-//! 500 kS/s, so every half-buffer at the transducers' frequencies) gives the amplitude and
+//! least one drive period ([`WINDOW_SPAN_RAD`]) and [`WINDOW_MIN_SAMPLES`]
+//! (four 64-sample blocks, 0.512 ms at 500 kS/s: at the transducers'
+//! frequencies every fourth half-buffer) gives the amplitude and
 //! phase of each mode; the phase between them is the φ the contact sees:
 //! with the drive `u_z = −Δu_z cos θ`, `u_x = Δu_x cos(θ + φ)` (eqs. 1–2),
 //! the pickups read `A_z cos(θ + ψ_z)` and `A_x cos(θ + ψ_x)`, and
@@ -32,6 +33,13 @@ use num_complex::Complex32 as C;
 /// textbook `√(2/N)` (a shorter window would be exact too, but its noise
 /// gain grows like 1/span²: `lockin::MIN_SPAN_RAD`).
 pub const WINDOW_SPAN_RAD: f32 = core::f32::consts::TAU;
+/// The fewest samples a window holds: four ADC blocks (issue 35: the
+/// window's fit, guard, loop step and tracking step once per four
+/// half-buffers, not every one). The loops' gains per window scale with
+/// the window's length (`k = t_w/4τ` of D3, `t_w/2τ` of T3), so their
+/// bandwidth in time is the same; the fills' model records are averaged
+/// over the window's blocks ([`Device::window_fills`]).
+pub const WINDOW_MIN_SAMPLES: u32 = 256;
 /// [`WINDOW_SPAN_RAD`] in phase words (2³² a turn; ≈ 2³², the f32 2π being 2.8e-8 above it).
 const WINDOW_SPAN_WORDS: u64 =
     (WINDOW_SPAN_RAD as f64 / core::f64::consts::TAU * 4_294_967_296.0 + 0.5) as u64;
@@ -54,6 +62,8 @@ pub(super) struct Motion {
     delay: (u32, u32, f32, f32),
     /// The tuning word of the last block taken.
     tw: u32,
+    /// ADC blocks in the open window.
+    blocks: u32,
 }
 
 impl<const N: usize> Device<'_, N> {
@@ -83,6 +93,7 @@ impl<const N: usize> Device<'_, N> {
     /// enough phase (the fit, the guard on the measured motion, the
     /// displacement loop's step).
     pub(super) fn motion_window(&mut self, block: u32) {
+        self.motion.blocks = self.motion.blocks.saturating_add(1);
         let tw = self.motion.tw;
         // Each pickup sample is taken δ after its force
         // (`DeviceConfig::pickup_delay_s`): fitted against the forces'
@@ -97,8 +108,19 @@ impl<const N: usize> Device<'_, N> {
             );
             self.motion.delay = (tw, d, c, s);
         }
+        // In a transition of the displacement loop (a channel's voltage
+        // cut to its bound or a new setting within the last fills) the
+        // window closes at once (one period): the observer (D7) and D3
+        // compare it with the fill's own model record, which moves from
+        // fill to fill while a transition lasts.
+        let moving = self.loops.moving[block as usize % super::measure::FILL_RING];
+        let least = if moving[0] || moving[1] {
+            0
+        } else {
+            WINDOW_MIN_SAMPLES
+        };
         let m = &mut self.motion;
-        if m.lock.span_words() < WINDOW_SPAN_WORDS {
+        if m.lock.span_words() < WINDOW_SPAN_WORDS || m.lock.samples() < least {
             return;
         }
         let window_s = m.lock.samples() as f32 / self.cfg.sample_rate_hz as f32;
@@ -108,12 +130,14 @@ impl<const N: usize> Device<'_, N> {
             // range): started over.
             Err(crate::lockin::LockInError::LongWindow) => {
                 m.lock.reset();
+                m.blocks = 0;
                 return;
             }
             // A singular window: it grows on until it solves.
             Err(_) => return,
         };
         m.lock.reset();
+        let blocks = core::mem::take(&mut m.blocks);
         // Counts to metres: the pickups' calibrations (offset, gain).
         let (cz, cx) = (self.cfg.pickup_z, self.cfg.pickup_x);
         let metres = |p: crate::lockin::Phasor<f32>, g: f32, offset: f32| crate::lockin::Phasor {
@@ -155,7 +179,7 @@ impl<const N: usize> Device<'_, N> {
             self.fault(super::faults::MEASURED_LIFTOFF);
             return;
         }
-        self.displacement_step(block, [xz, xx], window_s);
+        self.displacement_step(block, blocks, [xz, xx], window_s);
     }
 
     /// The measured response `X/U` of channel `ch` (m/V, `[re, im]`) to the

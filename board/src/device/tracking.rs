@@ -27,10 +27,10 @@
 //! smoothed estimate f̂_r (the displacement loop's Ĥ and envelope dynamics
 //! follow the resonance; its correction c stays near 1).
 //!
-//! **Lock.** Locked after [`LOCK_WINDOWS`] windows in a row with
+//! **Lock.** Locked after [`LOCK_S`] of windows in a row with
 //! `|e| ≤ f̂_r/(2Q̂)` (inside the half-power band). Lost — the fault
 //! [`super::faults::LOSS_OF_LOCK`] and the safe state — after
-//! [`LOSS_WINDOWS`] windows in a row with `|e| > f̂_r/Q̂`, no usable
+//! [`LOSS_S`] of windows in a row with `|e| > f̂_r/Q̂`, no usable
 //! estimate, or the resonance outside the range; and if no lock comes
 //! within [`ACQUIRE_TAUS`]·τ̂ of driving. Windows during a transition of the
 //! displacement loop (the mode not in its steady state for the fill's
@@ -46,11 +46,14 @@ use model_core::float::{FastF32, Math};
 /// The tracked frequency stays within this fraction of the identified
 /// resonance (±2 %: six half-power bandwidths at Q 300).
 pub const TRACK_RANGE: f32 = 0.02;
-/// Windows in a row inside the half-power band before the lock is declared.
-pub const LOCK_WINDOWS: u16 = 8;
-/// Windows in a row outside the band before the lock is lost (≈ 2 ms at
-/// 20 kHz: longer than a transition's skipped windows, shorter than τ).
-pub const LOSS_WINDOWS: u16 = 16;
+/// Time of windows in a row inside the half-power band before the lock is
+/// declared, s (eight windows of 128 µs before windows took four blocks;
+/// counted in time so that the window's length does not change it).
+pub const LOCK_S: f32 = 1.0e-3;
+/// Time of windows in a row outside the band before the lock is lost, s
+/// (longer than a transition's skipped windows, shorter than τ; sixteen
+/// windows of 128 µs before windows took four blocks).
+pub const LOSS_S: f32 = 2.0e-3;
 /// Envelope time constants τ̂ the tracking may take to lock.
 pub const ACQUIRE_TAUS: f32 = 40.0;
 
@@ -63,8 +66,9 @@ pub(super) struct Tracker {
     pub(super) error_hz: Option<f32>,
     /// Locked.
     pub(super) locked: bool,
-    /// Windows in a row inside (before the lock) or outside (after) the band.
-    run: u16,
+    /// Time of windows in a row inside (before the lock) or outside
+    /// (after) the band, s.
+    run_s: f32,
     /// Seconds of driving since tracking started, without a lock.
     acquiring_s: f32,
     /// The tracked channel is the tangential one.
@@ -154,7 +158,7 @@ impl<const N: usize> Device<'_, N> {
             |g: f32| g >= lo && g <= hi && f64::from(g) >= cfg_lo && f64::from(g) <= cfg_hi;
         let Some(fr) = estimate.filter(|&g| in_range(g)) else {
             self.tracker.error_hz = None;
-            self.lock_bad();
+            self.lock_bad(window_s);
             return;
         };
         let e = fr - f;
@@ -179,30 +183,30 @@ impl<const N: usize> Device<'_, N> {
         }
         if self.tracker.locked {
             if e.abs() > 2.0 * half_band {
-                self.lock_bad();
+                self.lock_bad(window_s);
             } else {
-                self.tracker.run = 0;
+                self.tracker.run_s = 0.0;
             }
         } else if e.abs() <= half_band {
-            self.tracker.run += 1;
-            if self.tracker.run >= LOCK_WINDOWS {
+            self.tracker.run_s += window_s;
+            if self.tracker.run_s >= LOCK_S * (1.0 - 1e-3) {
                 self.tracker.locked = true;
-                self.tracker.run = 0;
+                self.tracker.run_s = 0.0;
             }
         } else {
-            self.tracker.run = 0;
+            self.tracker.run_s = 0.0;
         }
     }
 
-    /// A window against the lock: counted after the lock, the fault after
-    /// [`LOSS_WINDOWS`] in a row.
-    fn lock_bad(&mut self) {
+    /// A window of `window_s` against the lock: counted after the lock, the
+    /// fault after [`LOSS_S`] of them in a row.
+    fn lock_bad(&mut self, window_s: f32) {
         if !self.tracker.locked {
-            self.tracker.run = 0;
+            self.tracker.run_s = 0.0;
             return;
         }
-        self.tracker.run += 1;
-        if self.tracker.run >= LOSS_WINDOWS {
+        self.tracker.run_s += window_s;
+        if self.tracker.run_s >= LOSS_S * (1.0 - 1e-3) {
             self.fault(super::faults::LOSS_OF_LOCK);
         }
     }
