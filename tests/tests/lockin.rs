@@ -253,6 +253,108 @@ fn integer_lock_in_is_within_its_derived_bound_of_the_f64_fit() {
     assert!(worst > 0.01, "worst {worst} of the bound");
 }
 
+/// The board's pickup path (issue 35): the pickups summed against the
+/// forces' reference (`board::reference`, eq. R1: Q15 clamped at
+/// `2¹⁵ − 1`, error `ε_r ≤ ε_t + (2π/N)²/8 + 2⁻²⁹ + 2⁻¹⁶ + 2⁻¹⁵`, R2),
+/// in blocks of 64 (`push_sums`), the fit turned by the pickups' delay δ
+/// with the table's cos δ and sin δ (each within `ε_δ = ε_t + (2π/N)²/8 +
+/// 2⁻²⁹` + f32 rounding 2⁻²⁴), against the f64 fit of the same integer
+/// samples on their own exact phases θ + δ. The bound is the integer
+/// lock-in's with R2's `ε_r`, times the turn's gain `|cos δ| + |sin δ|`,
+/// plus the turn's own `2·ε_δ·(|a| + |b|)` and its f32 products (2⁻²³ of
+/// the same); two signals per block, as the board's.
+#[test]
+fn the_pickups_on_the_forces_reference_are_within_their_bound() {
+    use board::reference::{Gram, PairSums, Reference};
+    let t = SineTable::<1024>::libm();
+    let eps_t = (0..1024)
+        .map(|i| (f64::from(t.entry(i)) - (TAU * i as f64 / 1024.0).sin()).abs())
+        .fold(0.0, f64::max);
+    let interp = (TAU / 1024.0).powi(2) / 8.0 + 2f64.powi(-29);
+    let eps_r = eps_t + interp + 2f64.powi(-16) + 2f64.powi(-15);
+    let eps_d = eps_t + interp + 2f64.powi(-24);
+    let mut worst = 0.0f64;
+    let mut noise = 0x2545_F491u32;
+    for f in [8e3f64, 20e3, 20.1e3, 40e3, 61e3] {
+        let tw = (f / 500e3 * 4_294_967_296.0).round() as u32;
+        // δ = 0.714 µs of the drive in words (the board's ADC scan).
+        let delay = (f64::from(tw) * 0.714e-6 * 500e3).round() as u32;
+        let q30 = 1.0 / 1_073_741_824.0;
+        let (cd, sd) = (
+            t.sin_q30(delay.wrapping_add(1 << 30)) as f32 * q30 as f32,
+            t.sin_q30(delay) as f32 * q30 as f32,
+        );
+        for k in 0..8u32 {
+            let acc0 = k.wrapping_mul(0x0765_4321);
+            let (d, amp, psi) = (
+                2048.0 + 30.0 * f64::from(k),
+                150.0 + 180.0 * f64::from(k),
+                -2.9 + 0.7 * f64::from(k),
+            );
+            let mut l = LockInQ::<2>::new();
+            let (mut theta, mut p0, mut p1) = (Vec::new(), Vec::new(), Vec::new());
+            let mut i = 0u32;
+            while l.span_words() < 1 << 32 {
+                let a = acc0.wrapping_add(tw.wrapping_mul(i));
+                let r = Reference::new(&t, a, tw, 64);
+                let mut pairs = Vec::new();
+                for j in 0..64u32 {
+                    let w = a.wrapping_add(tw.wrapping_mul(j)).wrapping_add(delay);
+                    let th = board::dds::phase_rad(w);
+                    noise = noise.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                    let jitter = f64::from(noise >> 8) / f64::from(1u32 << 24) - 0.5;
+                    let v0 = (d + amp * (th + psi).cos() + 2.0 * jitter).round();
+                    let v1 = (d - 0.5 * amp * (th - psi).sin()).round();
+                    pairs.push((v0 as u16, v1 as u16));
+                    theta.push(th);
+                    p0.push(v0);
+                    p1.push(v1);
+                }
+                l.push_sums(&Gram::of(r.words()), &PairSums::of(r.words(), &pairs), tw);
+                i += 64;
+            }
+            let fits = l.solve().unwrap().map(|ph| ph.turned(cd, sd));
+            for (ph, p) in fits.iter().zip([&p0, &p1]) {
+                let (coef, resid, g) = f64_fit(&theta, p);
+                let n = theta.len() as f64;
+                let (mc, ms) = (
+                    theta.iter().map(|t| t.cos()).sum::<f64>() / n,
+                    theta.iter().map(|t| t.sin()).sum::<f64>() / n,
+                );
+                let scc: f64 = theta.iter().map(|t| (t.cos() - mc).powi(2)).sum();
+                let sss: f64 = theta.iter().map(|t| (t.sin() - ms).powi(2)).sum();
+                let scs: f64 = theta.iter().map(|t| (t.cos() - mc) * (t.sin() - ms)).sum();
+                let (tr, det) = (scc + sss, scc * sss - scs * scs);
+                let disc = (tr * tr / 4.0 - det).max(0.0).sqrt();
+                let kappa = (tr / 2.0 + disc) / (tr / 2.0 - disc);
+                let a_f = coef[1].abs() + coef[2].abs();
+                // The turn maps the fit's errors in (a', b') into (a, b)
+                // with the gain |cos δ| + |sin δ| ≤ √2.
+                let turn = f64::from(cd.abs() + sd.abs());
+                let bound = turn
+                    * (g * eps_r * (a_f + resid) + 2f64.powi(-20) * kappa * (coef[0] + a_f))
+                    + (2.0 * eps_d + 2f64.powi(-23)) * a_f;
+                let got = [
+                    f64::from(ph.mean),
+                    f64::from(ph.in_phase),
+                    f64::from(ph.quadrature),
+                ];
+                for j in 0..3 {
+                    let e = (got[j] - coef[j]).abs();
+                    assert!(
+                        e <= bound,
+                        "{f} Hz, case {k}, coef {j}: {} vs {} (bound {bound})",
+                        got[j],
+                        coef[j]
+                    );
+                    worst = worst.max(e / bound);
+                }
+            }
+        }
+    }
+    assert!(worst > 0.01, "worst {worst} of the bound");
+}
+
 #[test]
 fn integer_lock_in_refuses_what_it_cannot_fit() {
     let t = SineTable::<1024>::libm();

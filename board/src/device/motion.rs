@@ -22,7 +22,7 @@
 //! difference for resonant ones.
 
 use super::Device;
-use crate::lockin::{LockInQ, Phasor};
+use crate::lockin::LockInQ;
 pub use crate::protocol::messages::MeasuredDrive;
 use crate::reference::{Gram, PairSums, Reference};
 use model_core::float::FastF32;
@@ -125,7 +125,7 @@ impl<const N: usize> Device<'_, N> {
         }
         let window_s = m.lock.samples() as f32 / self.cfg.sample_rate_hz as f32;
         let [z, x] = match m.lock.solve() {
-            Ok(fit) => fit.map(|p| turned(p, m.delay.2, m.delay.3)),
+            Ok(fit) => fit.map(|p| p.turned(m.delay.2, m.delay.3)),
             // Too long for the integer sums (never within the drives'
             // range): started over.
             Err(crate::lockin::LockInError::LongWindow) => {
@@ -210,16 +210,5 @@ impl<const N: usize> Device<'_, N> {
     /// Starts the peak over again (an accepted `set_drive` or `start`).
     pub(super) fn reset_motion_peak(&mut self) {
         self.motion.peak_z = 0.0;
-    }
-}
-
-/// The fit `p = d + a'·cos θ + b'·sin θ` against the forces' phase θ turned
-/// to the pickups' own phase θ + δ (`cos δ`, `sin δ` given):
-/// `a = a'·cos δ − b'·sin δ`, `b = a'·sin δ + b'·cos δ`, the mean unchanged.
-fn turned(p: Phasor<f32>, cos: f32, sin: f32) -> Phasor<f32> {
-    Phasor {
-        mean: p.mean,
-        in_phase: p.in_phase * cos - p.quadrature * sin,
-        quadrature: p.in_phase * sin + p.quadrature * cos,
     }
 }

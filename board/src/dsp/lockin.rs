@@ -79,6 +79,23 @@ pub struct Phasor<F> {
     pub quadrature: F,
 }
 
+impl Phasor<f32> {
+    /// The fit `p = d + a'·cos θ + b'·sin θ` made against the phase θ,
+    /// turned to the phase θ + δ of `p`'s own samples (`cos δ`, `sin δ`
+    /// given): `a = a'·cos δ − b'·sin δ`, `b = a'·sin δ + b'·cos δ`, the
+    /// mean unchanged — exact, since `a·cos(θ+δ) + b·sin(θ+δ)` is
+    /// `a'·cos θ + b'·sin θ`. (The board's pickups are fitted against the
+    /// forces' reference, [`crate::reference`], and turned by their
+    /// conversion delay.)
+    pub fn turned(self, cos: f32, sin: f32) -> Self {
+        Phasor {
+            mean: self.mean,
+            in_phase: self.in_phase * cos - self.quadrature * sin,
+            quadrature: self.in_phase * sin + self.quadrature * cos,
+        }
+    }
+}
+
 impl<F: Float> Phasor<F> {
     /// Amplitude A = √(a² + b²).
     pub fn amplitude<M: Math<F>>(&self) -> F {
