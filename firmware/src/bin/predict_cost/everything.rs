@@ -23,6 +23,15 @@ use board::protocol::{ControlSetting, Request, Response};
 use cortex_m_semihosting::hprintln;
 use model_core::float::FastF32;
 
+/// The share of a half-buffer above which `predict_cost` fails (and with
+/// it `.ci/run`): the deadline itself, instructions being a lower bound on
+/// the chip's cycles. Issue 35's target is 30 % ([`TARGET_PCT`]); the run
+/// prints the distance to it.
+pub const LIMIT_PCT: f32 = 100.0;
+
+/// Issue 35's target for the worst half-buffer, % (not yet met: printed).
+pub const TARGET_PCT: f32 = 30.0;
+
 /// Half-buffers timed (≈ 0.26 s of device time: many windows, tracking
 /// steps and μ-loop updates).
 pub const HALVES: u32 = 2_000;
@@ -268,6 +277,16 @@ pub fn report(l: &Load) -> f32 {
         "worst half-buffer, everything on: {} instructions = {:.1} % of 21504",
         n,
         pct(n)
+    );
+    hprintln!(
+        "  limit {} % (the deadline; fails above), target {} %: {}",
+        LIMIT_PCT,
+        TARGET_PCT,
+        if pct(n) <= TARGET_PCT {
+            "met"
+        } else {
+            "not met yet"
+        }
     );
     pct(n)
 }

@@ -1033,7 +1033,14 @@ fn main() -> ! {
             let load = with_bench(table, per_insn, |b| everything::run(b, DRIVE)).flatten();
             match load {
                 Some(l) => {
-                    everything::report(&l);
+                    let pct = everything::report(&l);
+                    if pct > everything::LIMIT_PCT || l.faults != 0 {
+                        hprintln!(
+                            "worst half-buffer over {} % (or a fault latched): the handlers would miss their deadline",
+                            everything::LIMIT_PCT
+                        );
+                        critical_ok = false;
+                    }
                 }
                 None => {
                     hprintln!("everything on: a request was refused");
