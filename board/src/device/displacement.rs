@@ -37,7 +37,7 @@
 //! **Holding** ([`Status::settled`] in this mode): the DDS at its targets and
 //! the relative error `|X − D|/|D|` of every driven channel (and `|X|` of an
 //! undriven one, against [`HOLD_FLOOR_M`]) within [`HOLD_TOLERANCE`] for
-//! [`HOLD_WINDOWS`] windows in a row (the error is averaged over
+//! [`HOLD_S`] of windows in a row (the error is averaged over
 //! the windows with [`SMOOTHING_S`], as the status reports it in this
 //! mode, so a single noisy window neither makes nor breaks it).
 //!
@@ -114,8 +114,10 @@ use model_core::float::{FastF32, Math};
 /// (0.46° between the two modes).
 pub const HOLD_TOLERANCE: f32 = 0.004;
 
-/// Windows in a row within [`HOLD_TOLERANCE`] before the drive holds.
-pub const HOLD_WINDOWS: u8 = 4;
+/// Time of windows in a row within [`HOLD_TOLERANCE`] before the drive
+/// holds, s (four windows of 128 µs before windows took four blocks;
+/// counted in time so that the window's length does not change it).
+pub const HOLD_S: f32 = 0.512e-3;
 
 /// An undriven channel holds while its measured amplitude is below this, m
 /// (cross-talk of the other channel and the pickup's noise: a few counts).
@@ -188,8 +190,8 @@ pub(super) struct Loops {
     pub(super) c: [C; 2],
     /// The correction left its bound or the voltage the DAC (held).
     pub(super) saturated: [bool; 2],
-    /// Windows in a row within the tolerance.
-    pub(super) good: u8,
+    /// Time of windows in a row within the tolerance, s.
+    pub(super) good: f32,
     /// The smoothed measured phasors (`None` until the first window after
     /// a new setting).
     pub(super) avg: Option<[C; 2]>,
@@ -219,7 +221,7 @@ impl Default for Loops {
         Loops {
             c: [C::new(1.0, 0.0); 2],
             saturated: [false; 2],
-            good: 0,
+            good: 0.0,
             avg: None,
             model: None,
             env: z,
@@ -246,7 +248,7 @@ impl Loops {
         self.moving = [[false; 2]; super::measure::FILL_RING];
         self.since_change = [0; 2];
         self.open = [0.0; 2];
-        self.good = 0;
+        self.good = 0.0;
         self.avg = None;
     }
 }
@@ -506,7 +508,7 @@ impl<const N: usize> Device<'_, N> {
                 Ok(Some(_))
             );
             if ok {
-                self.loops.good = 0;
+                self.loops.good = 0.0;
             }
             ok
         } else {
@@ -661,7 +663,7 @@ impl<const N: usize> Device<'_, N> {
     /// holding count.
     pub(super) fn displacement_step(&mut self, block: u32, blocks: u32, x: [C; 2], window_s: f32) {
         if !self.displacement_mode() || !self.running || self.latch.any() {
-            self.loops.good = 0;
+            self.loops.good = 0.0;
             return;
         }
         let Some(t) = self.transducers else {
@@ -722,9 +724,9 @@ impl<const N: usize> Device<'_, N> {
         }
         self.tracking_step(&t, x, mean, u_fill, window_s);
         self.loops.good = if within {
-            self.loops.good.saturating_add(1)
+            self.loops.good + window_s
         } else {
-            0
+            0.0
         };
     }
 
@@ -775,7 +777,7 @@ impl<const N: usize> Device<'_, N> {
     /// finished.
     pub fn drive_settled(&self) -> bool {
         if self.displacement_mode() && self.running {
-            self.loops.good >= HOLD_WINDOWS
+            self.loops.good >= HOLD_S * (1.0 - 1e-3)
         } else {
             self.dds.settled()
         }

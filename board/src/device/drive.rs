@@ -220,7 +220,7 @@ impl<const N: usize> Device<'_, N> {
         if plan.fresh_loops {
             self.loops = self.fresh_loops();
         }
-        self.loops.good = 0;
+        self.loops.good = 0.0;
         self.loops.avg = None;
         self.refresh_scene();
         self.ramp_generation = self.ramp_generation.wrapping_add(1);
@@ -265,7 +265,7 @@ impl<const N: usize> Device<'_, N> {
 
     /// Stops the drive: amplitudes ramp to zero, the normal offset stays.
     pub fn stop(&mut self) {
-        self.loops.good = 0;
+        self.loops.good = 0.0;
         self.loops.avg = None;
         self.control_off();
         self.dds.ramp_down();

@@ -109,7 +109,7 @@ impl<const N: usize> Device<'_, N> {
         // At the board's slew, also in displacement mode (whose fills jump
         // to D5's voltages): a resonant mode whose drive ramps down rings
         // down with it, without overshoot. The tracking lets go.
-        self.loops.good = 0;
+        self.loops.good = 0.0;
         self.loops.avg = None;
         self.restart_tracking();
         self.loops.model = None;
