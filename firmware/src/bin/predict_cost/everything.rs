@@ -69,6 +69,14 @@ pub struct Load {
     pub windows: u32,
     /// Telemetry frames sent during the run.
     pub frames: u32,
+    /// The ADC handler's work by what happened in its block: the largest
+    /// and the mean of blocks that only accumulated, that closed a lock-in
+    /// window (fit, guard, D3, tracking T1–T3), and that ran a μ-loop update
+    /// (its estimate and C1–C7; with or without a window).
+    pub intake_by_event: [(u32, u32); 3],
+    /// The DAC handler's work: the largest of fills right after a μ-loop
+    /// update (the new command planned into the drive) and of the others.
+    pub fill_after_update: (u32, u32),
     /// Tracking was on and locked at the end.
     pub locked: bool,
     /// Faults latched at the end.
@@ -224,8 +232,31 @@ pub fn run(b: &mut Bench<'_, '_>, drive: DriveSetting) -> Option<Load> {
     };
     let (mut worst, mut largest, mut sum, mut frames) =
         (Parts::default(), Parts::default(), 0u64, 0);
+    // Per event: (largest, sum, count).
+    let mut by = [(0u32, 0u64, 0u32); 3];
+    let (mut after, mut fill_after) = (false, (0u32, 0u32));
     for _ in 0..HALVES {
+        let (u, w) = events(b);
         let h = analog.half(b, &mut frames);
+        let (u1, w1) = events(b);
+        let e = if u1 != u {
+            2
+        } else if w1 != w {
+            1
+        } else {
+            0
+        };
+        by[e] = (
+            by[e].0.max(h.intake),
+            by[e].1 + u64::from(h.intake),
+            by[e].2 + 1,
+        );
+        if after {
+            fill_after.0 = fill_after.0.max(h.fill);
+        } else {
+            fill_after.1 = fill_after.1.max(h.fill);
+        }
+        after = u1 != u;
         if h.total() > worst.total() {
             worst = h;
         }
@@ -243,9 +274,20 @@ pub fn run(b: &mut Bench<'_, '_>, drive: DriveSetting) -> Option<Load> {
         updates: d.control_state().last.update.wrapping_sub(u0),
         windows: d.measured_drive().map_or(0, |m| m.windows).wrapping_sub(w0),
         frames,
+        intake_by_event: by.map(|(m, s, n)| (m, (s / u64::from(n.max(1))) as u32)),
+        fill_after_update: fill_after,
         locked: st.options.track == Track::Z && st.locked,
         faults: st.faults,
     })
+}
+
+/// The μ-loop updates and lock-in windows so far.
+fn events(b: &Bench<'_, '_>) -> (u32, u32) {
+    let d = &*b.acc.dev;
+    (
+        d.control_state().last.update,
+        d.measured_drive().map_or(0, |m| m.windows),
+    )
 }
 
 /// Prints the figure and its parts; returns the worst half-buffer's share
@@ -271,6 +313,21 @@ pub fn report(l: &Load) -> f32 {
         l.largest.poll,
         l.mean,
         pct(l.mean)
+    );
+    let [acc, win, upd] = l.intake_by_event;
+    hprintln!(
+        "  ADC handler, largest / mean: accumulating only {} / {}; closing a lock-in window {} / {}; with a μ-loop update {} / {}",
+        acc.0,
+        acc.1,
+        win.0,
+        win.1,
+        upd.0,
+        upd.1
+    );
+    hprintln!(
+        "  DAC handler, largest: after a μ-loop update {}, otherwise {}",
+        l.fill_after_update.0,
+        l.fill_after_update.1
     );
     let n = l.worst.total();
     hprintln!(
