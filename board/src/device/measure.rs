@@ -118,10 +118,11 @@ impl<const N: usize> Device<'_, N> {
         if self.control_on() && samples.iter().any(|&(x, z)| self.est.railed(x, z)) {
             self.fault(faults::ADC_SATURATED);
         }
+        let mut r = Reference::EMPTY;
         for (k, chunk) in samples.chunks(BLOCK).enumerate() {
             let start = k * BLOCK;
             let a = acc.wrapping_add(tw.wrapping_mul(start as u32));
-            let r = Reference::new(self.table, a, tw, chunk.len());
+            r.set(self.table, a, tw, chunk.len());
             if let Some(p) = pickups.get(start..start + chunk.len()) {
                 self.motion_sums(&r, p, tw);
             }

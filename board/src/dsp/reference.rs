@@ -4,23 +4,32 @@
 //! lock-ins take against it, in integers, in one pass per signal pair.
 //!
 //! ```text
-//! c_i = min(round(2¹⁵ cos θ_i), 2¹⁵ − 1),  s_i = min(round(2¹⁵ sin θ_i), 2¹⁵ − 1)   (R1)
+//! c_i = sat16(round(2¹⁵ cos θ_i)),  s_i = sat16(round(2¹⁵ sin θ_i))                 (R1)
 //! θ_i = 2π (a₀ + i·tw)/2³²   (the accumulator of sample i, ADC lag included)
 //! ```
 //!
-//! from the Q30 table read of eq. (Q1) ([`crate::dds::SineTable::sin_q30`]),
-//! packed as two i16 in one word (`c` low, `s` high), so a pair of samples
-//! and its reference are two loads. The error of `c_i`, `s_i` against the
-//! exact cosine and sine is at most
+//! The table read of eq. (Q1) ([`crate::dds::SineTable::cos_sin_q30`], Q30)
+//! seeds the first sample of every run of [`RUN`] samples; between seeds
+//! the Q30 pair is turned by one sample's step per sample ([`step`]:
+//! `(cos Δ, sin Δ)` in Q31, `Δ = 2π·tw/2³²`; two high-word multiplies per
+//! component, `SMMUL`/`SMMLA`), and each value is rounded to Q15 and
+//! saturated to 16 bits, packed as two i16 in one word (`c` low, `s` high),
+//! so a pair of samples and its reference are two loads. The error of
+//! `c_i`, `s_i` against the exact cosine and sine is at most
 //!
 //! ```text
-//! ε_r = ε_t + (2π/N)²/8 + 2⁻²⁹ + 2⁻¹⁶ + 2⁻¹⁵·[the clamp]                   (R2)
+//! ε_r = ε_t + (2π/N)²/8 + 2⁻²⁹ + R3 + 2⁻¹⁶ + 2⁻¹⁵·[the clamp]               (R2)
+//! R3  = (RUN − 1)·(2·ε_Δ + 2⁻²⁸),  ε_Δ = 6.8e-8 + |Δ|·3·2⁻²⁴ + 2⁻³¹          (R3)
 //! ```
 //!
-//! of 1 (the table, its interpolation, the halved product's floor, the Q15
-//! rounding; the clamp of `+2¹⁵` to `2¹⁵ − 1`, reached only within
-//! `2⁻⁷·…` of θ = 0 or π/2, adds at most 2⁻¹⁵): ≤ 5.08e-5 at N = 1024
-//! with the libm table (`tests/tests/reference.rs`).
+//! of 1: the seed (the table, its interpolation, the halved product's
+//! floor), the rotation between seeds (each step's cosine and sine within
+//! `ε_Δ` — FastF32's `sin_cos` and Δ rounded in f32 — moving the vector by
+//! at most `2ε_Δ`, and the truncated high words `2⁻²⁸`, for at most 15
+//! steps; a rotation keeps the error it carries), the Q15 rounding, and
+//! the clamp of `+2¹⁵` to `2¹⁵ − 1` (at θ = 0 exactly, 2⁻¹⁵): ≤ 7.0e-5 for
+//! any step, ≤ 6.0e-5 up to 100 kHz at 500 kS/s, N = 1024 with the libm
+//! table (`tests/tests/reference.rs`).
 //!
 //! **The sums.** For a pair of signals `(x_i, z_i)` (ADC counts, `< 2¹²`):
 //! `Σx`, `Σz` and `Σx·c`, `Σx·s`, `Σz·c`, `Σz·s`, exact. Each product is
@@ -34,6 +43,7 @@
 //! handler (on the board, interrupt priority `DSP`), once per block.
 
 use crate::dds::SineTable;
+use model_core::float::{FastF32, Math};
 
 /// The most samples of one block's reference (the board's ADC half-buffer).
 pub const BLOCK: usize = 64;
@@ -56,13 +66,45 @@ pub fn packed<const N: usize>(t: &SineTable<N>, p: u32) -> u32 {
     (q15(c) as u16 as u32) | ((q15(s) as u16 as u32) << 16)
 }
 
+/// The rotation by one sample's phase step, `(cos Δ, sin Δ)` in Q31
+/// (`Δ = 2π·tw/2³²`; `cos Δ = 1` saturates to `2³¹ − 1`): Δ formed in f32
+/// (the word, the constant and the product each rounded once: within
+/// `|Δ|·3·2⁻²⁴`), then [`FastF32`]'s `sin_cos` (absolute error ≤ 6.8e-8,
+/// `model_core`'s `ERR_SIN_COS`). Each component is within
+/// `ε_Δ = 6.8e-8 + |Δ|·3·2⁻²⁴ + 2⁻³¹` of the exact one (eq. R3).
+pub fn step(tw: u32) -> (i32, i32) {
+    // Taken as signed: a step above half a turn is the same rotation backwards.
+    let delta = tw as i32 as f32 * (core::f32::consts::TAU / 4_294_967_296.0);
+    let (s, c) = FastF32::sin_cos(delta);
+    let q31 = |v: f32| {
+        let x = v * 2_147_483_648.0;
+        // `as` saturates 2³¹ to 2³¹ − 1 (and keeps −2³¹).
+        (if x >= 0.0 { x + 0.5 } else { x - 0.5 }) as i32
+    };
+    (q31(c), q31(s))
+}
+
 /// Fills `out` with the packed reference words (R1) of the phases
-/// `acc0 + i·tw`.
+/// `acc0 + i·tw`: every [`RUN`] samples the cosine and sine from the
+/// table (eq. Q1, Q30), between them a rotation by [`step`] per sample
+/// in Q30 (eq. R3: two 32×32→64 multiply-accumulates per component, not
+/// two table reads per sample).
 pub fn fill<const N: usize>(t: &SineTable<N>, acc0: u32, tw: u32, out: &mut [u32]) {
+    let (sc, ss) = step(tw);
+    // The high word of a 32×32 product (`SMMUL`, and `SMMLA`/`SMMLS` with
+    // the add): Q30 × Q31 / 2³² is Q29, doubled back to Q30 — each
+    // component truncated twice, within 2⁻²⁸ per step.
+    let hi = |a: i32, b: i32| ((i64::from(a) * i64::from(b)) >> 32) as i32;
     let mut acc = acc0;
-    for w in out {
-        *w = packed(t, acc);
-        acc = acc.wrapping_add(tw);
+    for run in out.chunks_mut(RUN) {
+        let (mut c, mut s) = t.cos_sin_q30(acc);
+        for w in run.iter_mut() {
+            *w = (q15(c) as u16 as u32) | ((q15(s) as u16 as u32) << 16);
+            let nc = (hi(c, sc) - hi(s, ss)) << 1;
+            s = (hi(s, sc) + hi(c, ss)) << 1;
+            c = nc;
+        }
+        acc = acc.wrapping_add(tw.wrapping_mul(run.len() as u32));
     }
 }
 
@@ -129,6 +171,12 @@ pub struct Reference {
 }
 
 impl Reference {
+    /// No samples (a buffer for [`Reference::set`]).
+    pub const EMPTY: Reference = Reference {
+        words: [0; BLOCK],
+        len: 0,
+    };
+
     /// The reference of `len ≤ BLOCK` samples from phase word `acc0`,
     /// `tw` words per sample (more than [`BLOCK`] are cut to it).
     pub fn new<const N: usize>(t: &SineTable<N>, acc0: u32, tw: u32, len: usize) -> Self {
