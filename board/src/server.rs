@@ -146,7 +146,15 @@ impl Server {
     ) {
         self.meet(dev);
         // One RampDone per change of the ramp generation, once settled.
-        let (status, ramp) = dev.with(|d| (d.status(), d.ramp_generation()));
+        // What the notices need, not the whole status (whose measured
+        // motion is formed when asked: issue 35 keeps it out of the
+        // critical section of every poll).
+        let status = dev.with(|d| Brief {
+            settled: d.drive_settled(),
+            faults: d.faults(),
+            rx_overflows: d.rx_overflow_count(),
+        });
+        let ramp = dev.with(|d| d.ramp_generation());
         if status.settled && Some(ramp) != self.reported_ramp {
             self.reported_ramp = Some(ramp);
             self.telemetry(Telemetry::RampDone, &mut send);
@@ -193,7 +201,7 @@ impl Server {
         let Some(periods) = self.stream.periods else {
             return;
         };
-        let measuring = dev.with(|d| d.status().measuring);
+        let measuring = dev.with(|d| d.measuring());
         if self.stream.measuring && !measuring {
             // A copy of the finished window, its estimate computed with the
             // device released.
@@ -421,6 +429,13 @@ fn run<const N: usize, A: DeviceAccess<N>>(
         | Request::Reset
         | Request::SetControl(_) => return Err(WireError::Internal),
     })
+}
+
+/// What [`Server::poll`] reads of the device for its notices.
+struct Brief {
+    settled: bool,
+    faults: u32,
+    rx_overflows: u32,
 }
 
 fn send_frame(frame: &Frame, send: &mut impl FnMut(&[u8])) {

@@ -166,6 +166,10 @@ pub(super) struct ModelAt {
     pub(super) p: [C; 2],
     /// `(p − 1)/(sT)` of D6, with the same pole.
     pub(super) mean: [C; 2],
+    /// The correction c that `p` and `mean` were placed with (D8): they are
+    /// formed again only when c moves (a window's D3), not at every fill
+    /// (issue 35: one `expf` and one `sin_cos` per channel).
+    pole_c: [C; 2],
 }
 
 /// The pole a correction `c` implies (D8): with `sT` the model's pole
@@ -551,6 +555,7 @@ impl<const N: usize> Device<'_, N> {
             st: [C::new(0.0, 0.0); 2],
             p: [C::new(0.0, 0.0); 2],
             mean: [C::new(0.0, 0.0); 2],
+            pole_c: [C::new(1.0, 0.0); 2],
         };
         for (ch, md) in models.iter().enumerate() {
             m.h[ch] = model_response(md, f);
@@ -579,7 +584,10 @@ impl<const N: usize> Device<'_, N> {
         // D8: the envelope's pole where the learned c places it (the
         // observer's propagation uses the same, through the cache).
         for ch in 0..2 {
-            (m.p[ch], m.mean[ch]) = pole_of(m.st[ch], self.loops.c[ch]);
+            if m.pole_c[ch] != self.loops.c[ch] {
+                (m.p[ch], m.mean[ch]) = pole_of(m.st[ch], self.loops.c[ch]);
+                m.pole_c[ch] = self.loops.c[ch];
+            }
         }
         self.loops.model = Some(m);
         let d = setpoint(&self.drive);

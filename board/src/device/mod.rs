@@ -288,6 +288,17 @@ impl<'t, const N: usize> Device<'t, N> {
         self.rx_overflows = self.rx_overflows.saturating_add(n);
     }
 
+    /// The received bytes dropped by a full receive queue since power-up
+    /// ([`Status::rx_overflows`]).
+    pub fn rx_overflow_count(&self) -> u32 {
+        self.rx_overflows
+    }
+
+    /// A measurement's window is open or pending ([`Status::measuring`]).
+    pub fn measuring(&self) -> bool {
+        self.est.busy()
+    }
+
     /// Sets the contact parameters.
     ///
     /// # Errors

@@ -49,7 +49,7 @@ const WINDOW_SPAN_WORDS: u64 =
 pub(super) struct Motion {
     /// In integers (issue 35): Q15 reference, ADC counts, i64 sums.
     lock: LockInQ<2>,
-    last: Option<MeasuredDrive>,
+    last: Option<Window>,
     /// The last window's phasors `X = A·e^{jψ}` of each mode, m.
     phasors: [C; 2],
     peak_z: f32,
@@ -149,28 +149,20 @@ impl<const N: usize> Device<'_, N> {
         // X = A·e^{jψ} = a − j b (`displacement`'s phasors).
         let xz = C::new(z.in_phase, -z.quadrature);
         let xx = C::new(x.in_phase, -x.quadrature);
-        let (az, ax) = (z.amplitude::<FastF32>(), x.amplitude::<FastF32>());
-        let pi = core::f32::consts::PI;
-        let mut phi = x.phase::<FastF32>() - z.phase::<FastF32>() + pi;
-        while phi > pi {
-            phi -= 2.0 * pi;
-        }
-        while phi <= -pi {
-            phi += 2.0 * pi;
-        }
+        // Only what the guard and the loops use now; the rest of the
+        // window's report (Δu_x, φ, the responses) is formed when asked
+        // (`measured_drive`, in the server's context: issue 35).
+        let az = z.amplitude::<FastF32>();
         m.peak_z = m.peak_z.max(az);
         m.windows = m.windows.wrapping_add(1);
-        let (rz, rx) = (self.response(0, xz), self.response(1, xx));
-        self.motion.phasors = [xz, xx];
+        let ch = self.dds.channels();
         let m = &mut self.motion;
-        m.last = Some(MeasuredDrive {
+        m.phasors = [xz, xx];
+        m.last = Some(Window {
             amp_z_m: az,
-            amp_x_m: ax,
-            phase_rad: phi,
             amp_z_peak_m: m.peak_z,
             windows: m.windows,
-            response_z_m_per_v: rz,
-            response_x_m_per_v: rx,
+            voltages: [(ch[0].amp, ch[0].phase), (ch[1].amp, ch[1].phase)],
         });
         // The guard on the measured motion: Δu_z above u_z0 lifts the
         // contact off (the setting's guard keeps the margin below it).
@@ -182,16 +174,16 @@ impl<const N: usize> Device<'_, N> {
         self.displacement_step(block, blocks, [xz, xx], window_s);
     }
 
-    /// The measured response `X/U` of channel `ch` (m/V, `[re, im]`) to the
-    /// voltage the DDS outputs now (`None` at zero voltage).
-    fn response(&self, ch: usize, x: C) -> Option<[f32; 2]> {
-        let c = self.dds.channels()[ch];
-        let v = c.amp * crate::dds::DAC_VOLTS_PER_CODE as f32;
+    /// The measured response `X/U` (m/V, `[re, im]`) to the voltage
+    /// `(amp, phase)` (codes, phase word) the DDS put out when the window
+    /// closed (`None` at zero voltage).
+    fn response(x: C, (amp, phase): (f32, u32)) -> Option<[f32; 2]> {
+        let v = amp * crate::dds::DAC_VOLTS_PER_CODE as f32;
         if v == 0.0 {
             return None;
         }
         // U = v·e^{j(p − π/2)} for the wave `dc + amp·sin(θ + p)`.
-        let p = c.phase as f32 * (core::f32::consts::TAU / 4_294_967_296.0)
+        let p = phase as f32 * (core::f32::consts::TAU / 4_294_967_296.0)
             - core::f32::consts::FRAC_PI_2;
         let h = x / super::displacement::polar(v, p);
         Some([h.re, h.im])
@@ -202,13 +194,44 @@ impl<const N: usize> Device<'_, N> {
         self.motion.phasors
     }
 
-    /// The last window's measured motion (`None` before the first).
+    /// The last window's measured motion (`None` before the first): its
+    /// phasors' amplitudes, the phase between them (eq. M1) and the
+    /// responses to the voltages of the window's close.
     pub fn measured_drive(&self) -> Option<MeasuredDrive> {
-        self.motion.last
+        let w = self.motion.last?;
+        let [xz, xx] = self.motion.phasors;
+        let pi = core::f32::consts::PI;
+        let mut phi = super::displacement::arg(xx) - super::displacement::arg(xz) + pi;
+        while phi > pi {
+            phi -= 2.0 * pi;
+        }
+        while phi <= -pi {
+            phi += 2.0 * pi;
+        }
+        Some(MeasuredDrive {
+            amp_z_m: w.amp_z_m,
+            amp_x_m: super::displacement::norm(xx),
+            phase_rad: phi,
+            amp_z_peak_m: w.amp_z_peak_m,
+            windows: w.windows,
+            response_z_m_per_v: Self::response(xz, w.voltages[0]),
+            response_x_m_per_v: Self::response(xx, w.voltages[1]),
+        })
     }
 
     /// Starts the peak over again (an accepted `set_drive` or `start`).
     pub(super) fn reset_motion_peak(&mut self) {
         self.motion.peak_z = 0.0;
     }
+}
+
+/// What a window's close keeps for its report ([`Device::measured_drive`]
+/// forms the rest from the phasors when asked).
+#[derive(Debug, Clone, Copy)]
+struct Window {
+    amp_z_m: f32,
+    amp_z_peak_m: f32,
+    windows: u32,
+    /// Each channel's DDS amplitude (codes) and phase word at the close.
+    voltages: [(f32, u32); 2],
 }
