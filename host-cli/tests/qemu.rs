@@ -1162,6 +1162,81 @@ fn identify_and_the_displacement_mode_on_the_firmware() {
     assert!((m / p - 1.0).abs() <= 0.02, "measure {m} vs predict {p}");
 }
 
+/// Issue 35: a whole session on the firmware with the bench's resonant
+/// transducers (`qemu-resonant`) under `-icount shift=0`, where the
+/// firmware times each half-buffer's DSP work in instructions (protocol
+/// v8): identify, the displacement mode with `--track z`, measure, a
+/// stream of estimates (`watch`), then the μ loop on — and `Status`'s
+/// `cpu_load_max_pct`, the largest half-buffer since power-up, stays
+/// within the deadline (100 %: `predict_cost`'s worst half-buffer with
+/// everything on is 89.0 %, this session's largest 95.1 % in one run;
+/// issue 35's target, 30 %, is not met yet) with no overrun or underrun
+/// fault latched.
+#[test]
+#[ignore = "needs qemu-system-arm and the thumbv7em target (builds the firmware unless FIRMWARE_RESONANT_ELF is set)"]
+fn a_whole_session_keeps_the_dsp_load_within_its_deadline() {
+    let q = qemu_with_args(
+        "FIRMWARE_RESONANT_ELF",
+        "qemu-resonant",
+        &["-icount", "shift=0"],
+    );
+    ok(&q, &drive_set("20000", "0", "0", "4e-6", None));
+    let t0 = Instant::now();
+    ok(&q, &["identify"]);
+    eprintln!(
+        "identify under -icount: {:.1} s",
+        t0.elapsed().as_secs_f64()
+    );
+    ok(
+        &q,
+        &[
+            "scene", "set", "--mu0", "0.24", "--kz", "1e7", "--kx", "1e7",
+        ],
+    );
+    let mut tracked: Vec<&str> = DRIVE
+        .iter()
+        .copied()
+        .filter(|a| *a != "--open-loop")
+        .collect();
+    tracked.extend(["--track", "z"]);
+    ok(&q, &tracked);
+    ok(&q, &["start"]);
+    let t = Instant::now();
+    loop {
+        let st = ok(&q, &["status"]);
+        if st["settled"] == true && st["locked"] == true {
+            break;
+        }
+        assert!(t.elapsed() < Duration::from_secs(60), "{st}");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    ok(&q, &["measure", "--periods", "4000"]);
+    let o = dev(&q, &["watch", "--count", "3", "--periods", "1000"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let p = ok(&q, &["predict", "--v0", "0.004"])["mu"]
+        .as_f64()
+        .unwrap();
+    let target = format!("{}", 0.98 * p);
+    ok(&q, &["control", "--target-mu", &target, "--v0", "0.004"]);
+    std::thread::sleep(Duration::from_secs(3));
+    let c = ok(&q, &["control", "status"]);
+    eprintln!("control: {c}");
+    let st = ok(&q, &["status"]);
+    eprintln!("{st}");
+    let (now, max) = (
+        st["cpu_load_pct"].as_f64().expect("measured under -icount"),
+        st["cpu_load_max_pct"]
+            .as_f64()
+            .expect("measured under -icount"),
+    );
+    println!(
+        "whole session: DSP load now {now:.1} %, largest half-buffer since power-up {max:.1} %"
+    );
+    assert_eq!(st["faults"], serde_json::json!([]), "{st}");
+    assert!(st["running"] == true, "{st}");
+    assert!(max >= now && max <= 100.0, "largest half-buffer {max} %");
+}
+
 /// Issue 25's tracking scenario on the firmware (`--features qemu-drift`:
 /// the normal resonance at 20 100 Hz drifting by −20 Hz per second of
 /// device time): `identify` under the drift, `drive set --freq 20100 …
