@@ -102,6 +102,9 @@ fn never_marks(never: &[Never], y_top: f64, series: &mut Vec<Series>) {
     for &(tau, hs, k) in never {
         let (_, marker, _) = EVENTS[k];
         let y = segment_ms(tau, k);
+        // Events of one run share τ and often their segment's length: each
+        // is moved sideways by its own few per cent so that none hides another.
+        let tau = tau * 1.07f64.powf(k as f64 - 1.5);
         series.push(Series {
             label: String::new(),
             points: vec![(tau, y), (tau, y_top)],
@@ -183,22 +186,23 @@ fn caption(runs: &[GridRun], heads: &[f64], never: usize) -> Vec<String> {
         .collect();
     let mut caption = vec![
         format!(
-            "Grid: Q_z ∈ {{{}}}, Q_x = 2/3 Q_z; f_r ∈ {{{}}} (tangential {:.2} % below), driven at the normal resonance; headroom ∈ {{{}}}; median of {} noise records.",
+            "Median of {} noise records per point. Grid: Q_z ∈ {{{}}}, Q_x = 2/3 Q_z; f_r ∈ {{{}}} (tangential {:.2} % below); headroom ∈ {{{}}}.",
+            runs.first().map_or(1, |r| r.seeds.len()),
             qs.join(", "),
             fs.join(", "),
             100.0 * (1.0 - X_OVER_Z),
             heads.iter().map(|h| short(*h)).collect::<Vec<_>>().join(", "),
-            runs.first().map_or(1, |r| r.seeds.len())
         ),
         format!(
-            "τ = Q/(π f_r), normal mode, unloaded Q (the contact's load, Q_load = {}, shortens it). Settled: every later estimate within 2 % of the step (or 4 × their scatter).",
+            "τ = Q/(π f_r), normal mode, unloaded Q (the contact's load, Q_load = {}, shortens it); driven at the normal resonance.",
             short(device_host::transducers::LOAD_Q)
         ),
+        "Settled: every later estimate within 2 % of the step (or 4 × the estimates' scatter if wider).".into(),
         "Fixed: plant μ0 = 0.24 (model 0.3), ADC noise ±2 counts, κ = 0.95, u_z0 = 4 µm, Δu_x = 0.3 µm, φ = 40°, v0 = 4 → 6 mm/s, μ* = 0.08 → 0.10.".into(),
     ];
     if never > 0 {
         caption.push(format!(
-            "{never} event(s) never settled: marked at the length of their segment (15 ms or 8 τ), a lower bound, with a dotted line up; lines break there."
+            "{never} event(s) never settled: marked at their segment's length (15 ms or 8 τ), a lower bound, with a dotted line up, each event a few per cent aside in τ."
         ));
     }
     caption
