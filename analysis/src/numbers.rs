@@ -77,6 +77,19 @@ pub fn round_sig(x: f64, digits: usize) -> f64 {
     format!("{x:.p$e}").parse().unwrap_or(x)
 }
 
+/// A bound as text output writes it: `x ≥ 0` rounded *up* to `digits`
+/// significant digits, so that the printed bound still bounds
+/// (`1.3499999999999999e-9` → 1.35e-9, `1.231e-9` → 1.24e-9 at 3 digits).
+pub fn round_up_sig(x: f64, digits: usize) -> f64 {
+    let r = round_sig(x, digits);
+    if r >= x || !x.is_finite() {
+        return r;
+    }
+    let p = digits.clamp(1, 17) as i32 - 1;
+    let step = 10f64.powi(x.abs().log10().floor() as i32 - p);
+    round_sig(r + step, digits)
+}
+
 /// [`rounded`] as a `Display` value, for `format!` arguments.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rounded(pub f64);
@@ -341,6 +354,15 @@ mod tests {
         assert_eq!(rounded(0.0), "0");
         assert_eq!(short(round_sig(3.6198584246e-10, 3)), "3.62e-10");
         assert_eq!(short(round_sig(0.00995, 1)), "0.01");
+        // Bounds round up: never below the value.
+        assert_eq!(short(round_up_sig(1.3499999999999999e-9, 3)), "1.35e-9");
+        assert_eq!(short(round_up_sig(1.231e-9, 3)), "1.24e-9");
+        assert_eq!(short(round_up_sig(2e-9, 3)), "2e-9");
+        assert_eq!(short(round_up_sig(9.996e-3, 3)), "0.01");
+        for x in [1.0 / 3.0, 2.7e-9 - 1e-24, 4.0801100972520985e-10, 123.4567] {
+            assert!(round_up_sig(x, 3) >= x, "{x}");
+            assert!(round_up_sig(x, 3) <= x * (1.0 + 1e-2), "{x}");
+        }
         assert_eq!(rounded(f64::NAN), "NaN");
     }
 

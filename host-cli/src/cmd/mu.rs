@@ -5,7 +5,7 @@ use std::io::Write;
 use clap::Args;
 use model_core::scene::ContactMode;
 
-use crate::args::{round_sig, Real, Rounded, Short};
+use crate::args::{round_up_sig, Real, Rounded, Short};
 use crate::error::{CliError, CliResult};
 use crate::eval::{
     critical_velocity, from_rel, mean_normal_force_over_kz_uz0, mu_at, MethodArgs, MuOutcome,
@@ -94,7 +94,7 @@ fn write_text(out: &mut impl Write, o: &MuOutcome, rs: &ResolvedScene) -> std::i
     }
     writeln!(out, "method       {}", o.method)?;
     if let Some(b) = o.error_bound_over_mu0 {
-        writeln!(out, "error bound  {} mu0", Short(round_sig(b, 3)))?;
+        writeln!(out, "error bound  {} mu0", Short(round_up_sig(b, 3)))?;
     }
     if let Some(n) = o.steps_per_period {
         writeln!(out, "steps/period {n}")?;

@@ -10,7 +10,7 @@ use model_core::scene::ContactMode;
 use model_core::{exact, Libm, Scene};
 use serde::Serialize;
 
-use crate::args::{round_sig, Rounded, Short};
+use crate::args::{round_up_sig, Rounded, Short};
 use crate::error::CliResult;
 use crate::eval::{exact_failure, lift_off_failure, mean_normal_force_over_kz_uz0};
 use crate::output::{stdout_error, write_json};
@@ -183,7 +183,7 @@ fn write_lift_off_text(
         out,
         "force at rest          unique: mu(0)/mu0 = {} (error bound {} mu0)",
         Rounded(o.mu_at_rest_over_mu0),
-        Short(round_sig(o.error_bound_over_mu0, 3))
+        Short(round_up_sig(o.error_bound_over_mu0, 3))
     )?;
     writeln!(
         out,
@@ -288,7 +288,11 @@ fn write_text(
             Rounded(o.paper_eq19_backward_over_mu0)
         )?,
     }
-    writeln!(out, "mu(0+)/mu0             {}", Rounded(o.mu_0plus_over_mu0))?;
+    writeln!(
+        out,
+        "mu(0+)/mu0             {}",
+        Rounded(o.mu_0plus_over_mu0)
+    )?;
     writeln!(
         out,
         "mu(0-)/mu0             {}",

@@ -85,7 +85,8 @@ pub(super) fn draw_map<'a, DB: DrawingBackend + 'a>(
         chart.draw_series(std::iter::once(Polygon::new(poly.clone(), c.filled())))?;
         let mut closed = poly;
         closed.push(closed[0]);
-        chart.draw_series(std::iter::once(PathElement::new(closed, c.stroke_width(1))))?;
+        let k = fine_line(&pm, &closed, c, 1, None);
+        chart.draw_series(LineSeries::new(closed, k.stroke_width(1)))?;
     }
     // The active-control set has no area: wide lines in its colour, under
     // the paper's rules (drawn next, 2 px), so that both show.
@@ -171,7 +172,15 @@ pub(super) fn region_polygons(m: &RegimeMap) -> Vec<(u8, Vec<(f64, f64)>)> {
     let y_bottom = m.ys[0] - hy;
     let y_top = m.ys[ny - 1] + hy;
     // The edge below row j (j = ny: the top edge).
-    let edge = |j: usize| if j == 0 { y_bottom } else if j >= ny { y_top } else { m.ys[j] - hy };
+    let edge = |j: usize| {
+        if j == 0 {
+            y_bottom
+        } else if j >= ny {
+            y_top
+        } else {
+            m.ys[j] - hy
+        }
+    };
     let runs: Vec<Vec<(u8, usize, usize)>> = (0..nx).map(|i| column_runs(m, i)).collect();
     let same = |a: &[(u8, usize, usize)], b: &[(u8, usize, usize)]| {
         a.len() == b.len() && a.iter().zip(b).all(|(p, q)| p.0 == q.0)
