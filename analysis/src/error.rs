@@ -89,7 +89,10 @@ mod os_error_tests {
     fn the_os_error_number_is_dropped_from_messages() {
         let e = std::io::Error::from_raw_os_error(2);
         let m = Error::usage(format!("--data: cannot read /nope.csv: {e}")).msg;
-        assert_eq!(m, "--data: cannot read /nope.csv: No such file or directory");
+        assert_eq!(
+            m,
+            "--data: cannot read /nope.csv: No such file or directory"
+        );
         let m = Error::failure("a (os error 13) and b (os error 2)").msg;
         assert_eq!(m, "a and b");
         // Text that only looks like it stays.

@@ -70,12 +70,8 @@ impl Report {
         if std_error > 0.0 {
             self.row("std_error", "std error", f32v(std_error), "")
         } else {
-            self.row("std_error", "", f32v(std_error), "").row(
-                "",
-                "std error",
-                STD_ERROR_NA,
-                "",
-            )
+            self.row("std_error", "", f32v(std_error), "")
+                .row("", "std error", STD_ERROR_NA, "")
         }
     }
 

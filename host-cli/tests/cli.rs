@@ -1578,7 +1578,10 @@ fn classify_and_static_explain_an_actuator_that_sticks_when_held() {
     // c′ = 0.855): free, it rests.
     let r = ["--duz-rel", "0.9", "--ratio", "0.05"];
     let c = String::from_utf8(run_ok(&[&["classify"], &r[..]].concat()).stdout).unwrap();
-    assert!(c.starts_with("regime                 dynamic_ratchet (class II"), "{c}");
+    assert!(
+        c.starts_with("regime                 dynamic_ratchet (class II"),
+        "{c}"
+    );
     assert!(c.contains("; free (zero force), it rests\n"), "{c}");
     for text in [&c, &s] {
         for l in text.lines() {

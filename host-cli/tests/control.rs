@@ -463,7 +463,15 @@ fn device_tune_without_a_drive_names_the_device_setting() {
     let s = sim();
     let o = dev(
         &s,
-        &["tune", "--v0", "0.004", "--target-mu", "0.1", "--adjust", "duz"],
+        &[
+            "tune",
+            "--v0",
+            "0.004",
+            "--target-mu",
+            "0.1",
+            "--adjust",
+            "duz",
+        ],
     );
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);

@@ -1580,7 +1580,10 @@ fn a_silent_program_on_the_tcp_port_is_named_as_the_likely_cause() {
     assert_eq!(o.status.code(), Some(1));
     let err = String::from_utf8_lossy(&o.stderr);
     let line = err.lines().find(|l| l.starts_with("error:")).unwrap_or("");
-    assert!(line.contains(&format!("no answer from tcp {addr}")), "{err}");
+    assert!(
+        line.contains(&format!("no answer from tcp {addr}")),
+        "{err}"
+    );
     assert!(line.contains("another program"), "{err}");
     assert!(line.contains("start the device on a free one"), "{err}");
     h.join().unwrap();

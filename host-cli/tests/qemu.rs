@@ -214,7 +214,12 @@ fn a_taken_port_is_named_and_skipped() {
     };
     assert!(!status.success());
     let mut err = String::new();
-    child.stderr.take().unwrap().read_to_string(&mut err).unwrap();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
     assert!(err.contains("Address already in use"), "{err}");
     // fricctl on the taken port: the stranger accepts and stays silent.
     let addr = format!("127.0.0.1:{taken}");

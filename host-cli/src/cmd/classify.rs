@@ -149,7 +149,11 @@ fn write_text(
             "static interval        none (no static interval with lift-off)"
         )?;
     } else {
-        writeln!(out, "mu(0+)/mu0             {}", Rounded(o.mu_0plus_over_mu0))?;
+        writeln!(
+            out,
+            "mu(0+)/mu0             {}",
+            Rounded(o.mu_0plus_over_mu0)
+        )?;
         writeln!(
             out,
             "mu(0-)/mu0             {}",

@@ -318,8 +318,7 @@ fn write_text(w: &mut impl Write, o: &BenchOut) -> std::io::Result<()> {
     let lag = if o.transducers == "resonant" {
         format!(
             "resonant transducers (slower tau = Q/(pi f_r) = {:.2} ms, headroom {})",
-            o.tau_ms,
-            o.headroom
+            o.tau_ms, o.headroom
         )
     } else {
         format!("ideal transducers lagging {} periods", o.lag_periods)

@@ -303,11 +303,10 @@ fn control_loop(t: &Target, c: &mut Client, count: Option<u64>, stop: &AtomicBoo
             Some((_, Telemetry::Control(u))) => {
                 idle = Instant::now();
                 n += 1;
-                let shown =
-                    if t.json {
-                        writeln!(out, "{}", render::control_update(&u).json())
-                    } else {
-                        writeln!(
+                let shown = if t.json {
+                    writeln!(out, "{}", render::control_update(&u).json())
+                } else {
+                    writeln!(
                         out,
                         "#{:<6} setpoint {:>9.6}  measured {:>9.6} ± {:<9} duz {:>11.4e} m{}{}",
                         u.update,
@@ -316,9 +315,13 @@ fn control_loop(t: &Target, c: &mut Client, count: Option<u64>, stop: &AtomicBoo
                         std_error_text(u.std_error),
                         u.amp_z_m,
                         if u.saturated { "  limited" } else { "" },
-                        if u.held { "  HELD (estimate not usable)" } else { "" }
+                        if u.held {
+                            "  HELD (estimate not usable)"
+                        } else {
+                            ""
+                        }
                     )
-                    };
+                };
                 if shown.and_then(|()| out.flush()).is_err() {
                     return Ok(());
                 }

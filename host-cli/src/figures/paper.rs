@@ -336,8 +336,7 @@ const LIMIT_MARKERS: [Marker; 5] = [
 
 /// Whether the steady period at `v` holds slip in both directions.
 fn slips_both_ways(d: &Drive<f64>, v: f64) -> CliResult<bool> {
-    let (_, arcs) =
-        exact::steady_state::<f64, Libm>(d, v).map_err(crate::eval::exact_failure)?;
+    let (_, arcs) = exact::steady_state::<f64, Libm>(d, v).map_err(crate::eval::exact_failure)?;
     let back = arcs.iter().any(|a| a.kind == exact::ArcKind::SlipBackward);
     let fwd = arcs.iter().any(|a| a.kind == exact::ArcKind::SlipForward);
     Ok(back && fwd)
