@@ -20,7 +20,7 @@ impl Error {
     pub fn usage(msg: impl Into<String>) -> Self {
         Error {
             code: 2,
-            msg: msg.into(),
+            msg: without_os_error(msg.into()),
         }
     }
     /// The same error with `at …` appended (where in a map or a sweep it happened).
@@ -46,7 +46,7 @@ impl Error {
     pub fn failure(msg: impl Into<String>) -> Self {
         Error {
             code: 1,
-            msg: msg.into(),
+            msg: without_os_error(msg.into()),
         }
     }
     /// Whether the input was bad (rather than the computation failing).
@@ -65,3 +65,37 @@ impl std::error::Error for Error {}
 
 /// Result of an analysis.
 pub type Result<T = (), E = Error> = std::result::Result<T, E>;
+
+/// `msg` without the ` (os error N)` that `std::io::Error` appends to its
+/// reason (`No such file or directory (os error 2)`): the reason is for the
+/// user, the number for the C library.
+fn without_os_error(mut msg: String) -> String {
+    while let Some(i) = msg.find(" (os error ") {
+        let rest = &msg[i + " (os error ".len()..];
+        let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
+        if digits == 0 || rest.as_bytes().get(digits) != Some(&b')') {
+            break;
+        }
+        msg.replace_range(i..i + " (os error ".len() + digits + 1, "");
+    }
+    msg
+}
+
+#[cfg(test)]
+mod os_error_tests {
+    use super::*;
+
+    #[test]
+    fn the_os_error_number_is_dropped_from_messages() {
+        let e = std::io::Error::from_raw_os_error(2);
+        let m = Error::usage(format!("--data: cannot read /nope.csv: {e}")).msg;
+        assert_eq!(
+            m,
+            "--data: cannot read /nope.csv: No such file or directory"
+        );
+        let m = Error::failure("a (os error 13) and b (os error 2)").msg;
+        assert_eq!(m, "a and b");
+        // Text that only looks like it stays.
+        assert_eq!(Error::usage("x (os error y)").msg, "x (os error y)");
+    }
+}

@@ -57,6 +57,49 @@ impl fmt::Display for Short {
     }
 }
 
+/// A computed result as text output writes it: rounded to 12 significant
+/// digits, then [`short`]. The results printed this way carry error bounds
+/// of 1e-12 relative or more (the exact solver's are ≥ 1e-9 μ0), so the
+/// digits beyond the twelfth are f64 rounding noise (`0.5300000000000002`
+/// is 0.53 + 2 ulp): they are dropped, and `0.53` is printed. Input values
+/// in messages keep [`short`] (they read back exactly).
+pub fn rounded(x: f64) -> String {
+    short(round_sig(x, 12))
+}
+
+/// `x` rounded to `digits` significant digits (1 … 17); 0, infinities and
+/// NaN unchanged. An error bound is printed to 3 (`1.35e-9`).
+pub fn round_sig(x: f64, digits: usize) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    let p = digits.clamp(1, 17) - 1;
+    format!("{x:.p$e}").parse().unwrap_or(x)
+}
+
+/// A bound as text output writes it: `x ≥ 0` rounded *up* to `digits`
+/// significant digits, so that the printed bound still bounds
+/// (`1.3499999999999999e-9` → 1.35e-9, `1.231e-9` → 1.24e-9 at 3 digits).
+pub fn round_up_sig(x: f64, digits: usize) -> f64 {
+    let r = round_sig(x, digits);
+    if r >= x || !x.is_finite() {
+        return r;
+    }
+    let p = digits.clamp(1, 17) as i32 - 1;
+    let step = 10f64.powi(x.abs().log10().floor() as i32 - p);
+    round_sig(r + step, digits)
+}
+
+/// [`rounded`] as a `Display` value, for `format!` arguments.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rounded(pub f64);
+
+impl fmt::Display for Rounded {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&rounded(self.0))
+    }
+}
+
 /// One end of a [`Real`] domain.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum End {
@@ -290,6 +333,37 @@ mod tests {
             Real::non_negative().parse("1e-200"),
             Err(refused("must be 0 or of magnitude ≥ 1e-100 (got 1e-200)"))
         );
+    }
+
+    #[test]
+    fn rounded_numbers_drop_float_noise_only() {
+        // The examples: each is a short decimal plus a few ulp.
+        assert_eq!(rounded(0.53 + 2.0 * f64::EPSILON * 0.5), "0.53");
+        assert_eq!(rounded(-0.7000000000000001), "-0.7");
+        assert_eq!(rounded(1.4000000000000001), "1.4");
+        assert_eq!(rounded(1.3499999999999999e-9), "1.35e-9");
+        assert_eq!(rounded(0.5300000000000002), "0.53");
+        // Twelve digits kept: a result differing in the 12th digit stays apart.
+        assert_eq!(rounded(0.112389322493595), "0.112389322494");
+        assert_eq!(rounded(-1.23456789012e-7), "-1.23456789012e-7");
+        // Within 5e-12 relative of the value (half a unit of the 12th digit).
+        for x in [1.0 / 3.0, -2.0 / 7.0, 123456.789012345, 9.87654321e-6] {
+            let r: f64 = rounded(x).parse().unwrap();
+            assert!((r - x).abs() <= 5e-12 * x.abs(), "{x} {r}");
+        }
+        assert_eq!(rounded(0.0), "0");
+        assert_eq!(short(round_sig(3.6198584246e-10, 3)), "3.62e-10");
+        assert_eq!(short(round_sig(0.00995, 1)), "0.01");
+        // Bounds round up: never below the value.
+        assert_eq!(short(round_up_sig(1.3499999999999999e-9, 3)), "1.35e-9");
+        assert_eq!(short(round_up_sig(1.231e-9, 3)), "1.24e-9");
+        assert_eq!(short(round_up_sig(2e-9, 3)), "2e-9");
+        assert_eq!(short(round_up_sig(9.996e-3, 3)), "0.01");
+        for x in [1.0 / 3.0, 2.7e-9 - 1e-24, 4.0801100972520985e-10, 123.4567] {
+            assert!(round_up_sig(x, 3) >= x, "{x}");
+            assert!(round_up_sig(x, 3) <= x * (1.0 + 1e-2), "{x}");
+        }
+        assert_eq!(rounded(f64::NAN), "NaN");
     }
 
     #[test]

@@ -551,11 +551,13 @@ fn inverse_failure(e: InverseError<f64>) -> Error {
     }
 }
 
-/// A value of the adjusted quantity as text: metres in `e` notation, degrees plain.
+/// A value of the adjusted quantity as text: metres in `e` notation, degrees
+/// plain; a computed value to 12 significant digits
+/// ([`crate::numbers::rounded`]: no float noise).
 pub fn knob_text(adjust: &str, x: f64) -> String {
     if adjust == "phase" || x == 0.0 {
-        short(x)
+        crate::numbers::rounded(x)
     } else {
-        format!("{x:e}")
+        format!("{:e}", crate::numbers::round_sig(x, 12))
     }
 }

@@ -24,6 +24,10 @@ pub struct Report {
 
 pub use crate::answers::f32v;
 
+/// The text of a standard error the estimator could not estimate (0: fewer
+/// than two batches in the window).
+pub const STD_ERROR_NA: &str = "n/a (fewer than 2 batches: not estimated)";
+
 /// Degrees from radians, rounded to 1e-9 ° (the f32 phase's resolution is
 /// far coarser), so that 40° does not print as 39.99999974.
 fn deg(rad: f64) -> f64 {
@@ -56,6 +60,19 @@ impl Report {
     ) -> Self {
         self.rows.push((key, label, v.into(), unit));
         self
+    }
+
+    /// The `std_error` row of an estimate: the number in JSON (0 when the
+    /// estimator had fewer than two batches to scatter, so no error was
+    /// estimated), and in the text `n/a (…)` for that 0 rather than a
+    /// standard error of 0.
+    pub fn std_error(self, std_error: f32) -> Self {
+        if std_error > 0.0 {
+            self.row("std_error", "std error", f32v(std_error), "")
+        } else {
+            self.row("std_error", "", f32v(std_error), "")
+                .row("", "std error", STD_ERROR_NA, "")
+        }
     }
 
     /// The flat JSON object.
@@ -298,7 +315,7 @@ pub use crate::names::{fault_names, reason_names};
 pub fn estimate(e: &Estimate) -> Report {
     Report::default()
         .row("mu", "mu", f32v(e.mu), "")
-        .row("std_error", "std error", f32v(e.std_error), "")
+        .std_error(e.std_error)
         .row("valid", "valid", e.valid(), "")
         .row("reasons", "reasons", reason_names(e.reasons), "")
         .row("periods", "periods", e.periods, "")
@@ -445,7 +462,7 @@ pub fn control(s: &ControlState) -> Report {
         .row("duz_limit", "lift-off limit", f32v(s.limit_m), "m")
         .row("update", "updates", u.update, "")
         .row("measured_mu", "measured mu", f32v(u.measured_mu), "")
-        .row("std_error", "std error", f32v(u.std_error), "")
+        .std_error(u.std_error)
         .row("duz", "commanded duz", f32v(u.amp_z_m), "m")
         .row("duz_trim", "integral trim", f32v(u.integral_m), "m")
         .row("saturated", "limited", u.saturated, "")
@@ -458,7 +475,7 @@ pub fn control_update(u: &ControlUpdate) -> Report {
         .row("update", "update", u.update, "")
         .row("target_mu", "setpoint mu*", f32v(u.target_mu), "")
         .row("measured_mu", "measured mu", f32v(u.measured_mu), "")
-        .row("std_error", "std error", f32v(u.std_error), "")
+        .std_error(u.std_error)
         .row("duz", "commanded duz", f32v(u.amp_z_m), "m")
         .row("duz_trim", "integral trim", f32v(u.integral_m), "m")
         .row("saturated", "limited", u.saturated, "")

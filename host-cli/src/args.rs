@@ -28,7 +28,7 @@ use std::marker::PhantomData;
 use clap::builder::TypedValueParser;
 
 pub use device_host::periods::Periods;
-pub use fric_analysis::numbers::{short, Refused, Short};
+pub use fric_analysis::numbers::{round_up_sig, short, Refused, Rounded, Short};
 
 /// The domain of a real-valued flag ([`fric_analysis::numbers::Real`], the
 /// library's one check) as a clap value parser

@@ -67,7 +67,7 @@ enum Command {
         #[command(subcommand)]
         cmd: Box<device::DeviceCmd>,
     },
-    /// Speed against accuracy: work-precision, methods, stability, dac
+    /// Benchmarks: work-precision, methods, stability, dac, motion, control
     Bench {
         #[command(subcommand)]
         cmd: bench::BenchCmd,

@@ -1243,7 +1243,11 @@ fn limits_are_named_and_values_echoed_short() {
     // A tiny valid velocity is written short in the text output too.
     let o = bounded(&["mu"], &m(&["--v0", "1e-90"]), Duration::from_secs(20));
     assert_eq!(o.code, Some(0), "{}", o.stderr);
-    assert!(o.stdout.contains("v0           1e-90\n"), "{}", o.stdout);
+    assert!(
+        o.stdout.contains("v0           1e-90 ωW0\n"),
+        "{}",
+        o.stdout
+    );
     assert!(o.stdout.lines().all(|l| l.len() <= 80), "{}", o.stdout);
 }
 

@@ -1502,7 +1502,7 @@ fn zero_critical_velocity_at_phi_180_ratio_1() {
         text.contains("v0/v_c       (v_c = 0 in this direction)\n"),
         "{text}"
     );
-    assert!(text.contains("v_c forward  0\n"), "{text}");
+    assert!(text.contains("v_c forward  0 ωW0\n"), "{text}");
 }
 
 #[test]
@@ -1520,4 +1520,77 @@ fn help_texts_match_behaviour() {
     let mu = help(&["mu", "--help"]);
     assert!(!mu.contains("velocities are then relative to v_c"), "{mu}");
     assert!(mu.contains("--v0 is in units of ωW0"), "{mu}");
+}
+
+/// Issue 37: `bench --help`'s summary (also `fricctl --help`'s line for
+/// `bench`) names every bench that the help lists under "Commands:".
+#[test]
+fn bench_help_summary_names_every_bench() {
+    let text = String::from_utf8(run_ok(&["bench", "--help"]).stdout).unwrap();
+    let summary = text.lines().next().unwrap();
+    let benches: Vec<&str> = text
+        .lines()
+        .skip_while(|l| *l != "Commands:")
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|b| *b != "help")
+        .collect();
+    assert_eq!(benches.len(), 6, "{text}");
+    for b in &benches {
+        assert!(summary.contains(b), "{b} missing from {summary:?}");
+    }
+}
+
+/// Issue 37, wall 5: the regime's words. At Δu_z/u_z0 = a = 0.9, ratio
+/// r = 0.7, φ = 0, eq. 8 gives c = a(1 + r) = 1.53 and c′ = a|1 − r| = 0.27, so
+/// the static interval (paper §2.2) is [c′ − 1, 1 − c] = [−0.73, −0.53]: the
+/// contact sticks when held by such a force, and free (zero force, outside
+/// the interval) it moves — an actuator (class III) with a static interval.
+/// The text says both, prints no float noise (0.53, not 0.5300000000000002),
+/// and keeps μ_s− a magnitude named as one. Every label fits the 23-column
+/// field (no label pushes its value out of line).
+#[test]
+fn classify_and_static_explain_an_actuator_that_sticks_when_held() {
+    let g = ["--duz-rel", "0.9", "--ratio", "0.7"];
+    let c = String::from_utf8(run_ok(&[&["classify"], &g[..]].concat()).stdout).unwrap();
+    let want = [
+        "regime                 actuator (class III: pushes by itself, mu(0+) < 0 or mu(0-) > 0)",
+        "mu(0+)/mu0             -0.53",
+        "mu(0-)/mu0             -0.73",
+        "static interval        sticks when held at mu/mu0 in [-0.73, -0.53]; free (zero force), it moves",
+        "v_c forward/backward   1.53 / 0.27 ωW0",
+    ];
+    for w in want {
+        assert!(c.lines().any(|l| l == w), "missing {w:?} in\n{c}");
+    }
+    let s = String::from_utf8(run_ok(&[&["static"], &g[..]].concat()).stdout).unwrap();
+    let want = [
+        "static interval u_x0   [-0.73, -0.53] W0 (sticks when held there)",
+        "held force mu/mu0      [-0.73, -0.53]: free (zero force), it moves (an actuator)",
+        "mu_s+/mu0 forward      -0.53 (= mu(0+); paper eq. 18: -0.53)",
+        "mu_s-/mu0 backward     0.73 (= -mu(0-), along -x; paper eq. 19: 0.73)",
+    ];
+    for w in want {
+        assert!(s.lines().any(|l| l == w), "missing {w:?} in\n{s}");
+    }
+    // A ratchet at the same a with a small ratio (r = 0.05: c = 0.945 ≤ 1,
+    // c′ = 0.855): free, it rests.
+    let r = ["--duz-rel", "0.9", "--ratio", "0.05"];
+    let c = String::from_utf8(run_ok(&[&["classify"], &r[..]].concat()).stdout).unwrap();
+    assert!(
+        c.starts_with("regime                 dynamic_ratchet (class II"),
+        "{c}"
+    );
+    assert!(c.contains("; free (zero force), it rests\n"), "{c}");
+    for text in [&c, &s] {
+        for l in text.lines() {
+            assert_eq!(
+                l.char_indices().nth(23).map(|(_, ch)| ch != ' '),
+                Some(true),
+                "value not at column 23: {l:?}"
+            );
+            assert_eq!(l.chars().nth(22), Some(' '), "label overflows: {l:?}");
+        }
+    }
 }

@@ -453,3 +453,33 @@ fn bench_control_quick_writes_its_files() {
     assert!(err.contains("--out") && err.contains("--force"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 37, wall 4: `device tune` on a device with no drive set (offset 0).
+/// `fricctl tune` refuses u_z0 = 0; the error names the device's setting and
+/// the command that sets it, not `--uz0`, which `device tune` has no flag
+/// for: exit 2, one line.
+#[test]
+fn device_tune_without_a_drive_names_the_device_setting() {
+    let s = sim();
+    let o = dev(
+        &s,
+        &[
+            "tune",
+            "--v0",
+            "0.004",
+            "--target-mu",
+            "0.1",
+            "--adjust",
+            "duz",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert_eq!(
+        err.trim(),
+        "error: device tune: the device's --offset-z (from `device drive set`): must be > 0 (got 0); \
+         set it with `device drive set --offset-z …` first"
+    );
+    assert!(!err.contains("--uz0"), "{err}");
+}

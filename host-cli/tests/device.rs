@@ -1556,3 +1556,35 @@ fn identify_then_the_displacement_mode_holds_the_setting() {
         "measure {mm} vs predict {pm}"
     );
 }
+
+/// Issue 37, wall 1: a port held by a program that accepts and never answers
+/// (a second QEMU in another session). `device --tcp … info` fails with exit
+/// 1 in one line that names the likely cause and what to do; the time it
+/// takes is the attempts × the timeout asked for (3 × 100 ms here), so a
+/// stranger is reported in well under a second.
+#[test]
+fn a_silent_program_on_the_tcp_port_is_named_as_the_likely_cause() {
+    let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = l.local_addr().unwrap().to_string();
+    let h = std::thread::spawn(move || {
+        use std::io::Read;
+        let (mut c, _) = l.accept().unwrap();
+        // Read and drop whatever comes, until the host hangs up.
+        let mut b = [0u8; 256];
+        while matches!(c.read(&mut b), Ok(n) if n > 0) {}
+    });
+    let o = common::cli::fricctl()
+        .args(["device", "--tcp", &addr, "--timeout-ms", "100", "info"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let line = err.lines().find(|l| l.starts_with("error:")).unwrap_or("");
+    assert!(
+        line.contains(&format!("no answer from tcp {addr}")),
+        "{err}"
+    );
+    assert!(line.contains("another program"), "{err}");
+    assert!(line.contains("start the device on a free one"), "{err}");
+    h.join().unwrap();
+}

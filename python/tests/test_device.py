@@ -227,22 +227,31 @@ def qemu_tcp():
     elf = os.environ.get("FRICCTL_QEMU_RESONANT_ELF")
     if not elf or shutil.which("qemu-system-arm") is None:
         pytest.skip("set FRICCTL_QEMU_RESONANT_ELF to the qemu-resonant firmware (needs qemu-system-arm)")
-    port = free_port()
-    q = subprocess.Popen(
-        ["qemu-system-arm", "-machine", "netduinoplus2", "-display", "none", "-monitor", "none",
-         "-serial", "null", "-serial", f"tcp:127.0.0.1:{port},server=on,wait=on,nodelay=on",
-         "-semihosting-config", "enable=on,target=native", "-kernel", elf],
-        stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-    )
-    t = time.time()
-    while True:
-        try:
-            socket.create_connection(("127.0.0.1", port), timeout=1).close()
+    # The port is free when asked for, but another program may take it before
+    # QEMU binds it: QEMU then exits ("Address already in use") and a
+    # connection would reach the stranger. Such a start is retried elsewhere.
+    for _ in range(5):
+        port = free_port()
+        q = subprocess.Popen(
+            ["qemu-system-arm", "-machine", "netduinoplus2", "-display", "none", "-monitor", "none",
+             "-serial", "null", "-serial", f"tcp:127.0.0.1:{port},server=on,wait=on,nodelay=on",
+             "-semihosting-config", "enable=on,target=native", "-kernel", elf],
+            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+        )
+        t = time.time()
+        while q.poll() is None:
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                break
+            except OSError:
+                assert time.time() - t < 10, "QEMU did not open its serial port"
+                time.sleep(0.05)
+        time.sleep(0.3)  # the firmware enables its USART (earlier bytes are dropped)
+        if q.poll() is None:
             break
-        except OSError:
-            assert time.time() - t < 10, "QEMU did not open its serial port"
-            time.sleep(0.05)
-    time.sleep(0.3)  # the firmware enables its USART (earlier bytes are dropped)
+        q.wait()
+    else:
+        raise AssertionError("QEMU could not listen on any of 5 free ports")
     yield f"127.0.0.1:{port}"
     q.kill()
     q.wait()

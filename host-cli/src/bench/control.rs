@@ -214,7 +214,7 @@ fn write_outputs(
             runs: drift,
         })?,
     )?;
-    render_figure(&paths[4], &crate::figures::control_grid::figure(runs, &cmd))?;
+    render_figure(&paths[4], &crate::figures::control_grid::figure(runs))?;
     eprintln!("wrote {}", paths[4].display());
     Ok(())
 }

@@ -8,7 +8,7 @@ use model_core::regime::rule_of_thumb;
 use model_core::scene::ContactMode;
 use serde::Serialize;
 
-use crate::args::Short;
+use crate::args::{Rounded, Short};
 use crate::error::CliResult;
 use crate::eval::{classify_scene_profile, critical_velocity};
 use crate::output::{stdout_error, write_json};
@@ -97,12 +97,35 @@ impl ClassifyCmd {
         if self.json {
             return write_json(out, &o);
         }
-        write_text(out, &o, &rs.profile).map_err(stdout_error)
+        write_text(out, &o, &rs.profile, rs.dimensionless).map_err(stdout_error)
     }
 }
 
-fn write_text(out: &mut impl Write, o: &ClassifyOut, p: &Profile<f64>) -> std::io::Result<()> {
-    writeln!(out, "regime                 {}", o.regime)?;
+/// What each regime means, in the paper's words (§3.2, classes I–III).
+fn regime_meaning(regime: &str) -> &'static str {
+    match regime {
+        "active_control" => "class I: symmetric, always against the motion",
+        "dynamic_ratchet" => {
+            "class II: asymmetric, always against the motion; at rest with no force"
+        }
+        "actuator" => "class III: pushes by itself, mu(0+) < 0 or mu(0-) > 0",
+        _ => "",
+    }
+}
+
+/// The text output; velocities in m/s, or in ωW0 for a `dimensionless` scene.
+fn write_text(
+    out: &mut impl Write,
+    o: &ClassifyOut,
+    p: &Profile<f64>,
+    dimensionless: bool,
+) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "regime                 {} ({})",
+        o.regime,
+        regime_meaning(o.regime)
+    )?;
     if *p != Profile::Flat {
         writeln!(
             out,
@@ -119,34 +142,56 @@ fn write_text(out: &mut impl Write, o: &ClassifyOut, p: &Profile<f64>) -> std::i
         writeln!(
             out,
             "mu(0)/mu0              {} (unique at rest: the state resets at every landing)",
-            Short(o.mu_0plus_over_mu0)
+            Rounded(o.mu_0plus_over_mu0)
         )?;
         writeln!(
             out,
-            "static equilibrium     none (no static interval with lift-off)"
+            "static interval        none (no static interval with lift-off)"
         )?;
     } else {
-        writeln!(out, "mu(0+)/mu0             {}", Short(o.mu_0plus_over_mu0))?;
+        writeln!(
+            out,
+            "mu(0+)/mu0             {}",
+            Rounded(o.mu_0plus_over_mu0)
+        )?;
         writeln!(
             out,
             "mu(0-)/mu0             {}",
-            Short(o.mu_0minus_over_mu0)
+            Rounded(o.mu_0minus_over_mu0)
         )?;
-        match o.static_exists {
-            Some(x) => writeln!(out, "static equilibrium     {x}")?,
-            None => writeln!(out, "static equilibrium     n/a (curved profile)")?,
+        // The static interval (paper §2.2): the held forces at which the
+        // contact sticks. An actuator may have one (0 outside it: held, it
+        // sticks; free, it moves) or none (it slips at every force).
+        match (o.static_exists, o.static_lo_over_w0, o.static_hi_over_w0) {
+            (Some(true), Some(lo), Some(hi)) => writeln!(
+                out,
+                "static interval        sticks when held at mu/mu0 in [{}, {}]; {}",
+                Rounded(lo),
+                Rounded(hi),
+                if lo <= 0.0 && 0.0 <= hi {
+                    "free (zero force), it rests"
+                } else {
+                    "free (zero force), it moves"
+                }
+            )?,
+            (Some(_), _, _) => writeln!(
+                out,
+                "static interval        none: it slips at every held force (c + c' > 2)"
+            )?,
+            _ => writeln!(out, "static interval        n/a (curved profile)")?,
         }
     }
     writeln!(
         out,
-        "asymmetry max|mu(v)+mu(-v)|/mu0  {}",
-        Short(o.asymmetry)
+        "asymmetry              {} (max |mu(v) + mu(-v)|/mu0)",
+        Rounded(o.asymmetry)
     )?;
+    let unit = if dimensionless { "ωW0" } else { "m/s" };
     writeln!(
         out,
-        "v_c forward/backward   {} / {}",
-        Short(o.vc_forward),
-        Short(o.vc_backward)
+        "v_c forward/backward   {} / {} {unit}",
+        Rounded(o.vc_forward),
+        Rounded(o.vc_backward)
     )?;
     match (o.rule_of_thumb, o.rule_of_thumb_agrees) {
         (Some(r), Some(agrees)) => writeln!(

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use clap::Args;
 use model_core::scene::ContactMode;
 
-use crate::args::{Count, Real};
+use crate::args::{Count, Real, Rounded};
 use crate::error::{CliError, CliResult};
 use crate::eval::{critical_velocity, from_rel, MethodArgs};
 use crate::output::{csv_bytes, stdout_error, AtomicFile};
@@ -212,13 +212,18 @@ impl CurveCmd {
                 });
             let ymin = pts.iter().fold(0.0f64, |m, p| m.min(p.1));
             let g = rs.scene.groups();
+            // The tangential group the user gave: the ratio (eq. 26) if
+            // given, else k_xΔu_x/(μ0 k_z u_z0) (eq. 25).
+            let tangential = match rs.scene.ratio() {
+                Some(r) => format!("k_xΔu_x/(μ0 k_z Δu_z) = {}", Rounded(r)),
+                None => format!("k_xΔu_x/(μ0 k_z u_z0) = {}", Rounded(g.dux_rel)),
+            };
             let panel = Panel {
                 title: format!(
-                    "μ(v), {}: Δu_z/u_z0 = {:.3}, k_xΔu_x/(μ0k_z u_z0) = {:.3}, φ = {:.1}°{}",
+                    "μ(v), {}: Δu_z/u_z0 = {}, {tangential}, φ = {}°{}",
                     crate::scene_args::profile_text(&rs.profile),
-                    g.duz_rel,
-                    g.dux_rel,
-                    g.phi.to_degrees(),
+                    Rounded(g.duz_rel),
+                    Rounded(g.phi.to_degrees()),
                     if rs.scene.lifts_off() {
                         " (lifts off: μ = ⟨f_x⟩/⟨f_z⟩)"
                     } else {
@@ -229,8 +234,9 @@ impl CurveCmd {
                 y_label: "μ / μ0".to_string(),
                 x: (x0, if x1 > x0 { x1 } else { x0 + 1.0 }),
                 y: (ymin.min(-0.05) - 0.05, 1.08),
+                // One curve: no legend (the methods and the bound are on stderr).
                 series: vec![Series {
-                    label: format!("{rows_written} points: {}", mix.text(", ")),
+                    label: String::new(),
                     points: pts,
                     mark: Mark::Line,
                     color: 0,

@@ -291,7 +291,7 @@ fn run_mu_map(a: &MapCmd, x: f64, r: &Range, phi: &Range) -> CliResult {
 
 /// The colours of the three classes.
 pub const CLASSES: [(&str, RGBColor); 3] = [
-    ("active control (I)", RGBColor(120, 190, 120)),
+    ("active control (I), lines", RGBColor(120, 190, 120)),
     ("dynamic ratchet (II)", RGBColor(110, 160, 220)),
     ("actuator (III)", RGBColor(235, 130, 90)),
 ];

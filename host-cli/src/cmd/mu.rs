@@ -5,7 +5,7 @@ use std::io::Write;
 use clap::Args;
 use model_core::scene::ContactMode;
 
-use crate::args::{Real, Short};
+use crate::args::{round_up_sig, Real, Rounded, Short};
 use crate::error::{CliError, CliResult};
 use crate::eval::{
     critical_velocity, from_rel, mean_normal_force_over_kz_uz0, mu_at, MethodArgs, MuOutcome,
@@ -75,32 +75,34 @@ impl MuCmd {
 }
 
 fn write_text(out: &mut impl Write, o: &MuOutcome, rs: &ResolvedScene) -> std::io::Result<()> {
-    writeln!(out, "v0           {}", Short(o.v0))?;
+    // Velocities in the scene's unit: m/s, or ωW0 for a dimensionless scene.
+    let v = if rs.dimensionless { "ωW0" } else { "m/s" };
+    writeln!(out, "v0           {} {v}", Rounded(o.v0))?;
     match o.v_rel {
-        Some(x) => writeln!(out, "v0/v_c       {}", Short(x))?,
+        Some(x) => writeln!(out, "v0/v_c       {}", Rounded(x))?,
         None => writeln!(out, "v0/v_c       (v_c = 0 in this direction)")?,
     }
     if let Some(m) = o.mu {
-        writeln!(out, "mu           {}", Short(m))?;
+        writeln!(out, "mu           {}", Rounded(m))?;
         if let Some(r) = o.mu_over_mu0 {
-            writeln!(out, "mu/mu0       {}", Short(r))?;
+            writeln!(out, "mu/mu0       {}", Rounded(r))?;
         }
     }
     if let (Some(p), Some(m)) = (o.mu_0plus_over_mu0, o.mu_0minus_over_mu0) {
-        writeln!(out, "mu(0+)/mu0   {}", Short(p))?;
-        writeln!(out, "mu(0-)/mu0   {}", Short(m))?;
+        writeln!(out, "mu(0+)/mu0   {}", Rounded(p))?;
+        writeln!(out, "mu(0-)/mu0   {}", Rounded(m))?;
     }
     writeln!(out, "method       {}", o.method)?;
     if let Some(b) = o.error_bound_over_mu0 {
-        writeln!(out, "error bound  {b:e} (units of mu0)")?;
+        writeln!(out, "error bound  {} mu0", Short(round_up_sig(b, 3)))?;
     }
     if let Some(n) = o.steps_per_period {
         writeln!(out, "steps/period {n}")?;
         writeln!(out, "periods      {}", o.periods.unwrap_or(0))?;
         writeln!(out, "converged    {}", o.converged.unwrap_or(false))?;
     }
-    writeln!(out, "v_c forward  {}", Short(o.vc_forward))?;
-    writeln!(out, "v_c backward {}", Short(o.vc_backward))?;
+    writeln!(out, "v_c forward  {} {v}", Rounded(o.vc_forward))?;
+    writeln!(out, "v_c backward {} {v}", Rounded(o.vc_backward))?;
     if rs.profile != Profile::Flat {
         write_profile_notes(out, rs)?;
     } else if o.lifts_off {
@@ -148,7 +150,7 @@ fn write_lift_off_notes(
     writeln!(
         out,
         "normal force mean kz<uz+> = {} kz uz0: mu = <fx>/<fz> is normalised by it, not by kz uz0",
-        Short(w)
+        Rounded(w)
     )?;
     writeln!(
         out,

@@ -10,7 +10,7 @@ use model_core::scene::ContactMode;
 use model_core::{exact, Libm, Scene};
 use serde::Serialize;
 
-use crate::args::Short;
+use crate::args::{round_up_sig, Rounded, Short};
 use crate::error::CliResult;
 use crate::eval::{exact_failure, lift_off_failure, mean_normal_force_over_kz_uz0};
 use crate::output::{stdout_error, write_json};
@@ -173,41 +173,41 @@ fn write_lift_off_text(
     writeln!(
         out,
         "contact                lifts off once per period (duz/uz0 = {} >= 1)",
-        Short(s.drive().a)
+        Rounded(s.drive().a)
     )?;
     writeln!(
         out,
-        "static equilibrium     none in the permanent-contact sense: the stretch resets at every landing"
+        "static interval        none in the permanent-contact sense: the stretch resets at every landing"
     )?;
     writeln!(
         out,
-        "force at rest          unique: mu(0)/mu0 = {} (error bound {:e} mu0)",
-        Short(o.mu_at_rest_over_mu0),
-        o.error_bound_over_mu0
+        "force at rest          unique: mu(0)/mu0 = {} (error bound {} mu0)",
+        Rounded(o.mu_at_rest_over_mu0),
+        Short(round_up_sig(o.error_bound_over_mu0, 3))
     )?;
     writeln!(
         out,
         "mean normal force      kz<uz+> = {} kz uz0 = {} {}",
-        Short(o.mean_normal_force_over_kz_uz0),
-        Short(o.mean_normal_force_over_kz_uz0 * p.kz * p.uz0),
+        Rounded(o.mean_normal_force_over_kz_uz0),
+        Rounded(o.mean_normal_force_over_kz_uz0 * p.kz * p.uz0),
         u.force
     )?;
     writeln!(
         out,
-        "tangential force at rest  mu(0)*<fz> = {} {}",
-        Short(o.mu_at_rest_over_mu0 * s.mu0() * o.mean_normal_force_over_kz_uz0 * p.kz * p.uz0),
+        "tangential at rest     mu(0)*<fz> = {} {}",
+        Rounded(o.mu_at_rest_over_mu0 * s.mu0() * o.mean_normal_force_over_kz_uz0 * p.kz * p.uz0),
         u.tangential
     )?;
     writeln!(
         out,
         "v_c forward            {} {} (contact window, eq. L5)",
-        Short(o.vc_forward),
+        Rounded(o.vc_forward),
         u.velocity
     )?;
     writeln!(
         out,
         "v_c backward           {} {}",
-        Short(o.vc_backward),
+        Rounded(o.vc_backward),
         u.velocity
     )
 }
@@ -222,64 +222,80 @@ fn write_text(
     writeln!(
         out,
         "v_c forward            {} {}",
-        Short(o.vc_forward),
+        Rounded(o.vc_forward),
         u.velocity
     )?;
     writeln!(
         out,
         "v_c backward           {} {}",
-        Short(o.vc_backward),
+        Rounded(o.vc_backward),
         u.velocity
     )?;
-    writeln!(
-        out,
-        "static equilibrium     {}",
-        if o.static_exists {
-            "exists"
-        } else {
-            "none (the contact cannot rest)"
-        }
-    )?;
+    // The static interval (paper §2.2): the spring stretches u_x0, and so the
+    // held forces k_x u_x0 = mu/mu0 · μ0 k_z u_z0, at which the contact
+    // sticks. Its ends are μ(0−) and μ(0+); an actuator may have one (0
+    // outside it) or none (c + c' > 2).
     match iv {
-        Some((lo, hi)) => writeln!(
-            out,
-            "static interval u_x0   [{}, {}] {}",
-            Short(lo),
-            Short(hi),
-            u.length
-        )?,
+        Some((lo, hi)) => {
+            writeln!(
+                out,
+                "static interval u_x0   [{}, {}] {} (sticks when held there)",
+                Rounded(lo),
+                Rounded(hi),
+                u.length
+            )?;
+            writeln!(
+                out,
+                "held force mu/mu0      [{}, {}]: free (zero force), it {}",
+                Rounded(st.lo),
+                Rounded(st.hi),
+                if st.lo <= 0.0 && 0.0 <= st.hi {
+                    "rests"
+                } else {
+                    "moves (an actuator)"
+                }
+            )?;
+        }
         None => writeln!(
             out,
-            "static interval u_x0   empty (lo = {} W0 > hi = {} W0)",
-            Short(st.lo),
-            Short(st.hi)
+            "static interval u_x0   empty (lo = {} W0 > hi = {} W0): slips at every held force",
+            Rounded(st.lo),
+            Rounded(st.hi)
         )?,
     }
-    let opt = |x: Option<f64>| x.map_or("-".to_string(), crate::args::short);
+    // μ_s± as the paper writes them (eqs. 18/19): the largest force that
+    // holds in each direction, each as a magnitude along its direction:
+    // μ_s+ = μ(0+), μ_s− = −μ(0−); none without a static interval.
+    match (o.mu_s_forward_over_mu0, o.mu_s_backward_over_mu0) {
+        (Some(f), Some(b)) => {
+            writeln!(
+                out,
+                "mu_s+/mu0 forward      {} (= mu(0+); paper eq. 18: {})",
+                Rounded(f),
+                Rounded(o.paper_eq18_forward_over_mu0)
+            )?;
+            writeln!(
+                out,
+                "mu_s-/mu0 backward     {} (= -mu(0-), along -x; paper eq. 19: {})",
+                Rounded(b),
+                Rounded(o.paper_eq19_backward_over_mu0)
+            )?;
+        }
+        _ => writeln!(
+            out,
+            "mu_s+/mu0, mu_s-/mu0   none (no static interval; paper eqs. 18/19: {}, {})",
+            Rounded(o.paper_eq18_forward_over_mu0),
+            Rounded(o.paper_eq19_backward_over_mu0)
+        )?,
+    }
     writeln!(
         out,
-        "mu_s+/mu0 (exact)      {}",
-        opt(o.mu_s_forward_over_mu0)
+        "mu(0+)/mu0             {}",
+        Rounded(o.mu_0plus_over_mu0)
     )?;
-    writeln!(
-        out,
-        "mu_s-/mu0 (exact)      {}",
-        opt(o.mu_s_backward_over_mu0)
-    )?;
-    writeln!(
-        out,
-        "paper eq. 18 (forward) {}",
-        Short(o.paper_eq18_forward_over_mu0)
-    )?;
-    writeln!(
-        out,
-        "paper eq. 19 (backward) {}",
-        Short(o.paper_eq19_backward_over_mu0)
-    )?;
-    writeln!(out, "mu(0+)/mu0             {}", Short(o.mu_0plus_over_mu0))?;
     writeln!(
         out,
         "mu(0-)/mu0             {}",
-        Short(o.mu_0minus_over_mu0)
+        Rounded(o.mu_0minus_over_mu0)
     )
 }

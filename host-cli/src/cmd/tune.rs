@@ -9,7 +9,7 @@ use fric_analysis::tune::{
     self, knob_text, DriveOut, MaximizeOut, TargetOut, TuneOutcome, TuneRequest,
 };
 
-use crate::args::{Real, Short};
+use crate::args::{round_up_sig, Real, Rounded, Short};
 use crate::error::CliResult;
 use crate::output::{stdout_error, write_json};
 use crate::scene_args::SceneArgs;
@@ -146,45 +146,46 @@ fn unit_of(adjust: &str) -> &'static str {
 fn write_drive(out: &mut impl Write, d: &DriveOut) -> std::io::Result<()> {
     writeln!(
         out,
-        "duz             {:e} m   (duz/uz0 = {})",
-        d.duz,
-        Short(d.duz_rel)
+        "duz             {} m   (duz/uz0 = {})",
+        Rounded(d.duz),
+        Rounded(d.duz_rel)
     )?;
     writeln!(
         out,
-        "dux             {:e} m   (kx·dux/(mu0·kz·uz0) = {})",
-        d.dux,
-        Short(d.dux_rel)
+        "dux             {} m   (kx·dux/(mu0·kz·uz0) = {})",
+        Rounded(d.dux),
+        Rounded(d.dux_rel)
     )?;
-    writeln!(out, "phi             {} deg", Short(d.phi_deg))
+    writeln!(out, "phi             {} deg", Rounded(d.phi_deg))
 }
 
 fn write_target_text(out: &mut impl Write, o: &TargetOut) -> std::io::Result<()> {
     let unit = unit_of(o.drive.adjust);
     writeln!(out, "adjust          {}", o.drive.adjust)?;
-    writeln!(out, "v0              {} m/s", Short(o.v0))?;
+    writeln!(out, "v0              {} m/s", Rounded(o.v0))?;
     writeln!(
         out,
         "target          mu = {}   (mu/mu0 = {})",
-        Short(o.target_mu),
-        Short(o.target_mu_over_mu0)
+        Rounded(o.target_mu),
+        Rounded(o.target_mu_over_mu0)
     )?;
     write_drive(out, &o.drive)?;
     writeln!(
         out,
         "mu              {}   (mu/mu0 = {})",
-        Short(o.mu),
-        Short(o.mu_over_mu0)
+        Rounded(o.mu),
+        Rounded(o.mu_over_mu0)
     )?;
     writeln!(
         out,
-        "residual        {:e} (units of mu0)",
-        o.residual_over_mu0
+        "residual        {} (units of mu0)",
+        Short(round_up_sig(o.residual_over_mu0.abs(), 3).copysign(o.residual_over_mu0))
     )?;
     writeln!(
         out,
-        "error bound     {:e} (units of mu0, method {})",
-        o.error_bound_over_mu0, o.method
+        "error bound     {} (units of mu0, method {})",
+        Short(round_up_sig(o.error_bound_over_mu0, 3)),
+        o.method
     )?;
     let list: Vec<String> = o
         .solutions
@@ -202,8 +203,8 @@ fn write_target_text(out: &mut impl Write, o: &TargetOut) -> std::io::Result<()>
     writeln!(
         out,
         "reachable       mu/mu0 {} … {}",
-        Short(o.reachable_min_over_mu0),
-        Short(o.reachable_max_over_mu0)
+        Rounded(o.reachable_min_over_mu0),
+        Rounded(o.reachable_max_over_mu0)
     )?;
     writeln!(
         out,
@@ -221,9 +222,9 @@ fn write_maximize_text(out: &mut impl Write, o: &MaximizeOut) -> std::io::Result
     writeln!(out, "maximize        {}", o.objective)?;
     writeln!(
         out,
-        "value           {}   (bound {:e}, units of {})",
-        Short(o.value),
-        o.error_bound_over_mu0,
+        "value           {}   (bound {}, units of {})",
+        Rounded(o.value),
+        Short(round_up_sig(o.error_bound_over_mu0, 3)),
         if o.objective == "asymmetry" {
             "mu0"
         } else {
@@ -232,14 +233,14 @@ fn write_maximize_text(out: &mut impl Write, o: &MaximizeOut) -> std::io::Result
     )?;
     write_drive(out, &o.drive)?;
     writeln!(out, "regime          {}", o.regime)?;
-    writeln!(out, "asymmetry       {}", Short(o.asymmetry))?;
+    writeln!(out, "asymmetry       {}", Rounded(o.asymmetry))?;
     writeln!(
         out,
         "stall force     {} (units of mu0·kz·uz0, forward)",
-        Short(o.stall_force_forward)
+        Rounded(o.stall_force_forward)
     )?;
-    writeln!(out, "mu(0+)/mu0      {}", Short(o.mu_0plus_over_mu0))?;
-    writeln!(out, "mu(0-)/mu0      {}", Short(o.mu_0minus_over_mu0))?;
+    writeln!(out, "mu(0+)/mu0      {}", Rounded(o.mu_0plus_over_mu0))?;
+    writeln!(out, "mu(0-)/mu0      {}", Rounded(o.mu_0minus_over_mu0))?;
     writeln!(
         out,
         "search          {} in [{}, {}] {unit}, {} cells, maxima refined",

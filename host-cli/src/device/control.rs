@@ -313,10 +313,25 @@ fn opt(x: Option<f64>, prec: usize) -> String {
 }
 
 fn write_text(w: &mut impl Write, o: &BenchOut) -> std::io::Result<()> {
+    // The amplitude's lag: a fixed delay for ideal transducers, the modes'
+    // own dynamics (τ = Q/(π f_r), answered by the headroom) for resonant ones.
+    let lag = if o.transducers == "resonant" {
+        format!(
+            "resonant transducers (slower tau = Q/(pi f_r) = {:.2} ms, headroom {})",
+            o.tau_ms, o.headroom
+        )
+    } else {
+        format!("ideal transducers lagging {} periods", o.lag_periods)
+    };
     writeln!(
         w,
-        "plant: mu0 = {} x model, lag {} periods, drift {} /s, noise ±{} counts; loop: gain {}, {} periods/update, {} samples/half-buffer, fills {} half-buffers ahead",
-        o.mu0_ratio, o.lag_periods, o.drift_per_s, o.noise_counts, o.gain, o.periods, o.half_buffer_samples, o.fill_lead
+        "plant: mu0 = {} x model, {lag}, mu0 drift {} /s, noise ±{} counts",
+        o.mu0_ratio, o.drift_per_s, o.noise_counts
+    )?;
+    writeln!(
+        w,
+        "loop:  gain {}, {} periods/update, {} samples/half-buffer, fills {} half-buffers ahead",
+        o.gain, o.periods, o.half_buffer_samples, o.fill_lead
     )?;
     writeln!(
         w,
@@ -411,6 +426,39 @@ struct TuneOnly {
     tune: crate::cmd::tune::TuneCmd,
 }
 
+/// `fricctl tune`'s scene flags, which `device tune` fills from the device,
+/// and the device command that sets each value (same units).
+const DEVICE_FLAGS: [(&str, &str, &str); 8] = [
+    ("--uz0", "--offset-z", "drive set"),
+    ("--duz", "--amp-z", "drive set"),
+    ("--dux", "--amp-x", "drive set"),
+    ("--freq", "--freq", "drive set"),
+    ("--phi-deg", "--phase-deg", "drive set"),
+    ("--mu0", "--mu0", "scene set"),
+    ("--kz", "--kz", "scene set"),
+    ("--kx", "--kx", "scene set"),
+];
+
+/// An error of `fricctl tune` about a value `device tune` took from the
+/// device (`--uz0: must be > 0 (got 0)` on a device with no drive set)
+/// named as the device's setting and the command that sets it: `device
+/// tune` has no `--uz0`.
+fn device_flag_names(e: CliError) -> CliError {
+    for (tune_flag, device_flag, cmd) in DEVICE_FLAGS {
+        if let Some(rest) = e.msg.strip_prefix(tune_flag) {
+            if let Some(rest) = rest.strip_prefix(':') {
+                return CliError {
+                    code: e.code,
+                    msg: format!(
+                        "the device's {device_flag} (from `device {cmd}`):{rest}; set it with `device {cmd} {device_flag} …` first"
+                    ),
+                };
+            }
+        }
+    }
+    e
+}
+
 /// `fricctl device tune …`: `fricctl tune`'s solver on the device's contact
 /// and drive (its lift-off margin too), then `SetDrive` with the result.
 pub fn tune(c: &mut Client, a: &DeviceTuneArgs, json: bool) -> CliResult {
@@ -461,9 +509,18 @@ pub fn tune(c: &mut Client, a: &DeviceTuneArgs, json: bool) -> CliResult {
     let parsed = crate::args::numbers_take_hyphens(<TuneOnly as clap::CommandFactory>::command())
         .try_get_matches_from(&argv)
         .and_then(|m| <TuneOnly as clap::FromArgMatches>::from_arg_matches(&m))
-        .map_err(|e| CliError::usage(format!("device tune: {}", crate::args::clap_message(&e))))?;
+        .map_err(|e| {
+            let e = device_flag_names(CliError::usage(crate::args::clap_message(&e)));
+            CliError::usage(format!("device tune: {}", e.msg))
+        })?;
     let mut buf = Vec::new();
-    parsed.tune.run(&mut buf)?;
+    parsed.tune.run(&mut buf).map_err(|e| {
+        let e = device_flag_names(e);
+        CliError {
+            code: e.code,
+            msg: format!("device tune: {}", e.msg),
+        }
+    })?;
     let v: serde_json::Value =
         serde_json::from_slice(&buf).map_err(|e| CliError::failure(format!("tune result: {e}")))?;
     let get = |k: &str| {

@@ -233,12 +233,22 @@ fn stream_loop(
     end
 }
 
+/// A standard error in a `watch` line: `7.94e-7`, or `n/a` for the 0 of
+/// an estimate with fewer than two batches (not estimated; not an error of 0).
+fn std_error_text(x: f32) -> String {
+    if x > 0.0 {
+        format!("{x:.2e}")
+    } else {
+        "n/a".to_string()
+    }
+}
+
 /// One text line of `watch`.
 fn text_line(seq: u32, e: &board::estimator::Estimate, dropped: u32) -> String {
     format!(
-        "#{seq:<6} mu {:>10.6} ± {:<9.2e} fx {:>9.4} N  fz {:>9.4} N  {} periods{}{}",
+        "#{seq:<6} mu {:>10.6} ± {:<9} fx {:>9.4} N  fz {:>9.4} N  {} periods{}{}",
         e.mu,
-        e.std_error,
+        std_error_text(e.std_error),
         e.fx_mean,
         e.fz_mean,
         e.periods,
@@ -293,22 +303,25 @@ fn control_loop(t: &Target, c: &mut Client, count: Option<u64>, stop: &AtomicBoo
             Some((_, Telemetry::Control(u))) => {
                 idle = Instant::now();
                 n += 1;
-                let shown =
-                    if t.json {
-                        writeln!(out, "{}", render::control_update(&u).json())
-                    } else {
-                        writeln!(
+                let shown = if t.json {
+                    writeln!(out, "{}", render::control_update(&u).json())
+                } else {
+                    writeln!(
                         out,
-                        "#{:<6} setpoint {:>9.6}  measured {:>9.6} ± {:<9.2e} duz {:>11.4e} m{}{}",
+                        "#{:<6} setpoint {:>9.6}  measured {:>9.6} ± {:<9} duz {:>11.4e} m{}{}",
                         u.update,
                         u.target_mu,
                         u.measured_mu,
-                        u.std_error,
+                        std_error_text(u.std_error),
                         u.amp_z_m,
                         if u.saturated { "  limited" } else { "" },
-                        if u.held { "  HELD (estimate not usable)" } else { "" }
+                        if u.held {
+                            "  HELD (estimate not usable)"
+                        } else {
+                            ""
+                        }
                     )
-                    };
+                };
                 if shown.and_then(|()| out.flush()).is_err() {
                     return Ok(());
                 }

@@ -151,7 +151,7 @@ pub fn bode(path: &Path, results: &[ChannelFit], (from, to): (f64, f64)) -> CliR
         legend: Vec::new(),
         caption: vec![
             format!(
-                "The fine pass of `fricctl device identify`: each point the mean of {WINDOWS_PER_POINT} lock-in windows; the fit is the mode of eq. 1 (f_r, Q, static gain g, extra lag)."
+                "The fine pass of the stepped-sine identification: each point the mean of {WINDOWS_PER_POINT} lock-in windows; the fit is the mode of eq. 1 (f_r, Q, static gain g, extra lag)."
             ),
             "Each transducer driven alone in voltage mode, the other at zero amplitude, under the normal offset u_z0 of the drive set before (the preload).".into(),
         ],

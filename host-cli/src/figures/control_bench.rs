@@ -243,7 +243,7 @@ fn caption(o: &BenchOut) -> Vec<String> {
         |x: Option<f64>, prec: usize| x.map_or("never".to_string(), |v| format!("{v:.prec$}"));
     vec![
         format!(
-            "fricctl device control-bench --fill-lead {}: the setpoint step settles within ±{:.2e} in {} periods ({} ms)",
+            "The μ loop with the DAC filled {} half-buffers ahead: the setpoint step settles within ±{:.2e} in {} periods ({} ms)",
             o.fill_lead,
             o.events[1].band,
             opt(o.events[1].settle_periods, 0),

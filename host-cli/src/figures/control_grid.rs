@@ -69,9 +69,7 @@ fn settle_series(runs: &[GridRun], heads: &[f64]) -> (Vec<Series>, Vec<f64>, Vec
 }
 
 /// The axes' ranges in whole decades (the log axis's minor grid stays
-/// regular): the data with a margin, the 2.5 ms and τ = 5 ms lines inside,
-/// and with events that never settled room above the data for their band
-/// (a separator at y_top/4.2, rows at y_top/1.4/1.3^k, k = 0…3).
+/// regular): the data with a margin, the 2.5 ms and τ = 5 ms lines inside.
 fn ranges(runs: &[GridRun], ys: &[f64], never: bool) -> ((f64, f64), (f64, f64)) {
     let taus: Vec<f64> = runs.iter().map(|r| r.out.tau_ms).collect();
     let lo = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
@@ -80,50 +78,46 @@ fn ranges(runs: &[GridRun], ys: &[f64], never: bool) -> ((f64, f64), (f64, f64))
         decade_below(lo(&taus).min(5.0) / 1.2),
         decade_above(hi(&taus).max(5.0) * 1.2),
     );
-    let room = if never { 4.5 } else { 1.2 };
+    // The events that never settled sit at their segment's length (≤ 8 τ
+    // or 15 ms), inside the axis: no extra room.
+    let _ = never;
     let y = (
         decade_below(lo(ys).min(2.5) / 1.2),
-        decade_above(hi(ys).max(x.1) * room),
+        decade_above(hi(ys).max(x.1) * 1.2),
     );
     (x, y)
 }
 
-/// The band of events that never settled: a separator and its label, one
-/// row of markers per event.
-fn never_band(
-    never: &[Never],
-    (x, y): ((f64, f64), (f64, f64)),
-    series: &mut Vec<Series>,
-) -> Vec<((f64, f64), String)> {
-    let mut labels = Vec::new();
-    let sep = y.1 / 4.2;
-    if !never.is_empty() {
+/// The segment an event had to settle in, ms: the scenario's spacing of
+/// the events, or 8 τ if longer (as the bench runs it).
+fn segment_ms(tau_ms: f64, k: usize) -> f64 {
+    use device_host::control_bench::scenario::EVENTS_MS;
+    (EVENTS_MS[k + 1] - EVENTS_MS[k]).max(8.0 * tau_ms)
+}
+
+/// The events that never settled: each at the length of its segment — a
+/// lower bound on its settling time — with a dotted line up to the top of
+/// the axis (the time is beyond it). No height without a meaning.
+fn never_marks(never: &[Never], y_top: f64, series: &mut Vec<Series>) {
+    for &(tau, hs, k) in never {
+        let (_, marker, _) = EVENTS[k];
+        let y = segment_ms(tau, k);
+        // Events of one run share τ and often their segment's length: each
+        // is moved sideways by its own few per cent so that none hides another.
+        let tau = tau * 1.07f64.powf(k as f64 - 1.5);
         series.push(Series {
             label: String::new(),
-            points: vec![(x.0, sep), (x.1, sep)],
-            mark: Mark::Line,
-            color: 8,
+            points: vec![(tau, y), (tau, y_top)],
+            mark: Mark::Dashed,
+            color: hs,
         });
-        labels.push((
-            (x.0 * 1.15, sep * 1.12),
-            "never settled (above this line; one row per event)".to_string(),
-        ));
+        series.push(Series {
+            label: String::new(),
+            points: vec![(tau, y)],
+            mark: Mark::Markers(if hs == 0 { marker } else { open(marker) }),
+            color: hs,
+        });
     }
-    for hs in [0, 1] {
-        for (k, (_, marker, _)) in EVENTS.into_iter().enumerate() {
-            series.push(Series {
-                label: String::new(),
-                points: never
-                    .iter()
-                    .filter(|n| n.1 == hs && n.2 == k)
-                    .map(|n| (n.0, y.1 / 1.4 / 1.3f64.powi(k as i32)))
-                    .collect(),
-                mark: Mark::Markers(if hs == 0 { marker } else { open(marker) }),
-                color: hs,
-            });
-        }
-    }
-    labels
 }
 
 /// The reference lines: settle = τ, 2.5 ms, τ = 5 ms.
@@ -165,7 +159,7 @@ fn legend(heads: &[f64]) -> Vec<Series> {
     }
     legend.push(entry("settle = τ".into(), Mark::Dashed, 6));
     legend.push(entry(
-        "2.5 ms (the issue's bound where τ ≤ 5 ms)".into(),
+        "2.5 ms (the required settling where τ ≤ 5 ms)".into(),
         Mark::Dashed,
         9,
     ));
@@ -173,9 +167,9 @@ fn legend(heads: &[f64]) -> Vec<Series> {
     legend
 }
 
-/// The caption: the command, the grid, τ, the settling rule and the fixed
-/// parameters.
-fn caption(runs: &[GridRun], heads: &[f64], cmd: &str, never: usize) -> Vec<String> {
+/// The caption: the grid, τ, the settling rule and the fixed parameters
+/// (the command that reproduces it is in the docs beside the figure).
+fn caption(runs: &[GridRun], heads: &[f64], never: usize) -> Vec<String> {
     let distinct = |v: Vec<f64>| {
         let mut v = v;
         v.sort_by(f64::total_cmp);
@@ -192,40 +186,35 @@ fn caption(runs: &[GridRun], heads: &[f64], cmd: &str, never: usize) -> Vec<Stri
         .collect();
     let mut caption = vec![
         format!(
-            "{cmd}: per point the median over {} noise records of `device control-bench`.",
-            runs.first().map_or(1, |r| r.seeds.len())
-        ),
-        format!(
-            "Grid: Q_z ∈ {{{}}}, Q_x = 2/3 Q_z; normal resonance f_r ∈ {{{}}}, tangential {:.2} % below; headroom ∈ {{{}}}; the drive at the normal resonance.",
+            "Median of {} noise records per point. Grid: Q_z ∈ {{{}}}, Q_x = 2/3 Q_z; f_r ∈ {{{}}} (tangential {:.2} % below); headroom ∈ {{{}}}.",
+            runs.first().map_or(1, |r| r.seeds.len()),
             qs.join(", "),
             fs.join(", "),
             100.0 * (1.0 - X_OVER_Z),
-            heads.iter().map(|h| short(*h)).collect::<Vec<_>>().join(", ")
+            heads.iter().map(|h| short(*h)).collect::<Vec<_>>().join(", "),
         ),
         format!(
-            "τ = Q/(π f_r) of the slower (normal) mode with the unloaded Q (the contact's load, Q_load = {}, shortens it).",
+            "τ = Q/(π f_r), normal mode, unloaded Q (the contact's load, Q_load = {}, shortens it); driven at the normal resonance.",
             short(device_host::transducers::LOAD_Q)
         ),
-        "Settled: every later estimate within 2 % of the step (or 4 × the estimates' scatter in the event's segment if wider); time to the end of that update's 128 µs half-buffer.".into(),
-        "Fixed: plant μ0 = 0.24 (model 0.3); ADC noise ±2 counts; κ = 0.95 with the plant's gain learned; DAC fills 2 half-buffers ahead;".into(),
-        "drive periods per update: as many as fit a 64-sample half-buffer (1 at 20 kHz, 4 at 40 kHz); u_z0 = 4 µm, Δu_x = 0.3 µm, φ = 40°;".into(),
-        "v0 = 4 mm/s (step to 6 mm/s); setpoints μ* = 0.08, then 0.10; disturbance μ0 × 0.9.".into(),
+        "Settled: every later estimate within 2 % of the step (or 4 × the estimates' scatter if wider).".into(),
+        "Fixed: plant μ0 = 0.24 (model 0.3), ADC noise ±2 counts, κ = 0.95, u_z0 = 4 µm, Δu_x = 0.3 µm, φ = 40°, v0 = 4 → 6 mm/s, μ* = 0.08 → 0.10.".into(),
     ];
     if never > 0 {
         caption.push(format!(
-            "{never} event(s) never settled within their segment (≥ 15 ms and ≥ 8 τ): their markers above the grey line (one row per event); lines break there."
+            "{never} event(s) never settled: marked at their segment's length (15 ms or 8 τ), a lower bound, with a dotted line up, each event a few per cent aside in τ."
         ));
     }
     caption
 }
 
 /// Settling time against τ, log–log: per event a marker, per headroom a
-/// colour and a line through the runs ordered by τ; `cmd` reproduces it.
-pub fn figure(runs: &[GridRun], cmd: &str) -> Figure {
+/// colour and a line through the runs ordered by τ.
+pub fn figure(runs: &[GridRun]) -> Figure {
     let heads = headrooms(runs);
     let (mut series, ys, never) = settle_series(runs, &heads);
     let (x, y) = ranges(runs, &ys, !never.is_empty());
-    let labels = never_band(&never, (x, y), &mut series);
+    never_marks(&never, y.1, &mut series);
     series.extend(reference_lines((x, y)));
     Figure {
         panels: vec![(
@@ -241,7 +230,6 @@ pub fn figure(runs: &[GridRun], cmd: &str) -> Figure {
                 log_x: true,
                 log_y: true,
                 legend_at: Corner::UpperLeft,
-                labels,
                 ..Extras::default()
             },
         )],
@@ -249,7 +237,7 @@ pub fn figure(runs: &[GridRun], cmd: &str) -> Figure {
         cols: 1,
         size: (1200, 1000),
         legend: legend(&heads),
-        caption: caption(runs, &heads, cmd, never.len()),
+        caption: caption(runs, &heads, never.len()),
     }
 }
 

@@ -61,17 +61,16 @@ pub fn plot(path: &Path, param: SweepParam, v0: f64, rows: &[SweepRow]) -> CliRe
     let panel = Panel {
         title: format!("sweep of {}: {}", param.name(), fixed.join(", ")),
         x_label: format!("{} ({})", param.name(), param.unit()),
-        y_label: format!(
-            "μ (device model: μ0 = {:.4}, kz = {:.3e} N/m, kx = {:.3e} N/m)",
-            r0.model_mu0, r0.model_kz, r0.model_kx
-        ),
+        // The axis is μ, measured and predicted alike; the model the
+        // prediction used is named in the legend and the caption.
+        y_label: "μ".to_string(),
         x: (xlo - xpad, xhi + xpad),
         y: (ylo - ypad, yhi + ypad),
         // Points only: a line through the swept values would draw a curve
         // that was neither measured nor computed between them.
         series: vec![
             Series {
-                label: "predicted μ at the swept values (device model)".into(),
+                label: "predicted μ at the swept values (the device's model)".into(),
                 points: pred,
                 mark: Mark::Markers(Marker::OpenDiamond),
                 color: 1,
@@ -98,7 +97,14 @@ pub fn plot(path: &Path, param: SweepParam, v0: f64, rows: &[SweepRow]) -> CliRe
             cols: 1,
             size: (1100, 650),
             legend: Vec::new(),
-            caption: Vec::new(),
+            caption: vec![format!(
+                "Prediction: the device's model with μ_{{0}} = {}, k_{{z}} = {:.3e} N/m, k_{{x}} = {:.3e} N/m, \
+                 at each swept value.",
+                // The device holds μ0 in f32: its shortest f32 text (0.3, not 0.300000011921).
+                r0.model_mu0 as f32,
+                r0.model_kz,
+                r0.model_kx
+            )],
         },
     )
 }

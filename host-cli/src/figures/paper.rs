@@ -18,7 +18,9 @@ use model_core::{Drive, Groups, Libm, Scene};
 
 use crate::cmd::map::{classify_cells, write_map};
 use crate::error::{CliError, CliResult};
-use crate::plot::{prepare_out_dir, render_figure, Corner, Extras, Figure, Mark, Panel, Series};
+use crate::plot::{
+    prepare_out_dir, render_figure, Corner, Extras, Figure, Mark, Marker, Panel, Series,
+};
 use fric_analysis::grid::{centres, linspace};
 
 fn mu(d: &Drive<f64>, v: f64) -> CliResult<f64> {
@@ -146,21 +148,33 @@ fn fig2(out: &Path) -> CliResult {
 /// `k_xΔu_x/(μ0 k_z u_z0) ≤ 1`; beyond, it is drawn dashed and only where it
 /// stays a friction coefficient (μ/μ0 ≥ −1), with a cross where it leaves.
 fn fig3(out: &Path, name: &str, bs: &[f64], title: &str, ymin: f64) -> CliResult {
-    let pts_x = linspace(0.0, 1.2, 31);
     let line_x = linspace(0.0, 1.2, 1201);
     let mut series = Vec::new();
     let mut left_domain = false;
+    // Each amplitude its own marker, and its points shifted by a fraction of
+    // the spacing (0.04 v_c / the number of amplitudes), so that laws that
+    // nearly coincide at low velocity (ratios 5, 10, 20) stay apart.
+    const MARKERS: [Marker; 5] = [
+        Marker::Circle,
+        Marker::Square,
+        Marker::Triangle,
+        Marker::Diamond,
+        Marker::Ring,
+    ];
+    let step = 0.04;
     for (i, &b) in bs.iter().enumerate() {
         let d = drive(0.0, b, 0.0)?;
         let c = d.c_forward::<Libm>();
+        let shift = step * i as f64 / bs.len() as f64;
         let mut pts = Vec::new();
-        for &x in &pts_x[1..] {
+        for j in 1..30 {
+            let x = j as f64 * step + shift;
             pts.push((x, mu(&d, x * c)?));
         }
         series.push(Series {
             label: format!("{B_NAME} = {b}"),
             points: pts,
-            mark: Mark::Points,
+            mark: Mark::Markers(MARKERS[i % MARKERS.len()]),
             color: i,
         });
         let inside = b <= 1.0;
@@ -191,7 +205,7 @@ fn fig3(out: &Path, name: &str, bs: &[f64], title: &str, ymin: f64) -> CliResult
             color: i,
         });
     }
-    series.push(key("dots: exact solver", Mark::Points));
+    series.push(key("markers: exact solver", Mark::Points));
     series.push(key("solid: eq. (24), inside its domain", Mark::Line));
     if left_domain {
         series.push(key("dashed: eq. (24) outside it", Mark::Dashed));
@@ -220,17 +234,43 @@ fn fig3(out: &Path, name: &str, bs: &[f64], title: &str, ymin: f64) -> CliResult
     save(out, name, &one_panel(panel, extras, caption))
 }
 
-/// Fig. 4: φ = 0, Δu_z/u_z0 = 0 … 0.95, per-side normalised velocity.
+/// Fig. 4: φ = 0, Δu_z/u_z0 = 0 … 0.95, per-side normalised velocity. The
+/// three panels are stacked, each as wide as a one-panel figure, so that
+/// the text keeps its size at column width.
 fn fig4(out: &Path) -> CliResult {
     let xs = linspace(-1.5, 1.5, 601);
     let mut panels = Vec::new();
+    let mut zero_vc = Vec::new();
     for (tag, b) in [("a", 1.0), ("b", 2.0), ("c", 0.5)] {
         let mut series = Vec::new();
         for (i, a) in [0.0, 0.25, 0.5, 0.75, 0.95].into_iter().enumerate() {
             let d = drive(a, b, 0.0)?;
+            let mut pts = normalised_curve(&d, &xs)?;
+            // A direction whose v_c is 0 (here Δu_z/u_z0 = k_xΔu_x/(μ0 k_z
+            // u_z0), φ = 0: v_c− = ω|Δu_x − μ0 (k_z/k_x) Δu_z| = 0) has no
+            // v0/v_c axis: every velocity of it is beyond v_c, μ = ∓μ0. That
+            // half is drawn dashed at ∓1, named in the legend and the caption.
+            let backward_zero = d.c_backward::<Libm>() == 0.0;
+            let label = if backward_zero {
+                zero_vc.push(format!("4{tag}: Δu_{{z}}/u_{{z0}} = {a}"));
+                format!("Δu_z/u_z0 = {a}  (v_c− = 0: dashed, μ = −μ0)")
+            } else {
+                format!("Δu_z/u_z0 = {a}")
+            };
+            if backward_zero {
+                for p in pts.iter_mut().filter(|p| p.0 < 0.0) {
+                    p.1 = f64::NAN;
+                }
+                series.push(Series {
+                    label: String::new(),
+                    points: vec![(-1.5, -1.0), (0.0, -1.0)],
+                    mark: Mark::Dashed,
+                    color: i,
+                });
+            }
             series.push(Series {
-                label: format!("Δu_z/u_z0 = {a}"),
-                points: normalised_curve(&d, &xs)?,
+                label,
+                points: pts,
                 mark: Mark::Line,
                 color: i,
             });
@@ -244,24 +284,29 @@ fn fig4(out: &Path) -> CliResult {
             series,
         };
         let extras = Extras {
-            notes: vec!["φ = 0°".to_string(), format!("{B_NAME} = {b}")],
-            notes_at: Corner::LowerRight,
             legend_at: Corner::UpperLeft,
             ..Extras::default()
         };
         panels.push((panel, extras));
     }
+    let mut caption = vec![
+        "v_{c} per direction from eq. 8: v_{c±} = ω |Δu_{x} e^{iφ} ± μ_{0} (k_{z}/k_{x}) Δu_{z}|; \
+         μ(0±) are the exact one-sided limits."
+            .to_string(),
+    ];
+    if !zero_vc.is_empty() {
+        caption.push(format!(
+            "{}: v_{{c−}} = 0, so backward sliding is beyond v_{{c}} at every speed (μ = −μ_{{0}}, dashed) and v_{{0}}/v_{{c}} is undefined there.",
+            zero_vc.join(", ")
+        ));
+    }
     let f = Figure {
         panels,
-        rows: 1,
-        cols: 3,
-        size: (1800, 660),
+        rows: 3,
+        cols: 1,
+        size: (1000, 1700),
         legend: Vec::new(),
-        caption: vec![
-            "v_c per direction from eq. 8: v_c± = ω·|Δu_x·e^(iφ) ± μ0 (k_z/k_x) Δu_z|; \
-             μ(0±) are the exact one-sided limits."
-                .to_string(),
-        ],
+        caption,
     };
     save(out, "fig4", &f)
 }
@@ -280,6 +325,65 @@ fn dual_remark(phi: f64, cl: &Classification<f64>) -> Option<String> {
     })
 }
 
+/// The markers of the one-sided limits μ(0±) in the combined panel of Figs. 5–7.
+const LIMIT_MARKERS: [Marker; 5] = [
+    Marker::Circle,
+    Marker::Square,
+    Marker::Triangle,
+    Marker::Diamond,
+    Marker::Ring,
+];
+
+/// Whether the steady period at `v` holds slip in both directions.
+fn slips_both_ways(d: &Drive<f64>, v: f64) -> CliResult<bool> {
+    let (_, arcs) = exact::steady_state::<f64, Libm>(d, v).map_err(crate::eval::exact_failure)?;
+    let back = arcs.iter().any(|a| a.kind == exact::ArcKind::SlipBackward);
+    let fwd = arcs.iter().any(|a| a.kind == exact::ArcKind::SlipForward);
+    Ok(back && fwd)
+}
+
+/// The velocity range around 0 in which the period slips both ways (its
+/// ends are the law's kinks), as `φ = 90°: −0.058 … 0.112`, or `None` if
+/// the law has none within `±vmax`. The ends are bisected to 1e-4 ωW0 from
+/// a 400-point scan on each side.
+fn two_way_slip(d: &Drive<f64>, vmax: f64, phi: f64) -> CliResult<Option<String>> {
+    let mut ends = [0.0f64; 2];
+    for (k, sign) in [-1.0f64, 1.0].into_iter().enumerate() {
+        let near = sign * 1e-6;
+        if !slips_both_ways(d, near)? {
+            return Ok(None);
+        }
+        let (mut lo, mut hi) = (near, near);
+        let n = 400;
+        for j in 1..=n {
+            let v = sign * vmax * j as f64 / n as f64;
+            if !slips_both_ways(d, v)? {
+                hi = v;
+                break;
+            }
+            lo = v;
+        }
+        if hi == near {
+            return Ok(None);
+        }
+        while (hi - lo).abs() > 1e-4 {
+            let mid = 0.5 * (lo + hi);
+            if slips_both_ways(d, mid)? {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        ends[k] = 0.5 * (lo + hi);
+    }
+    Ok(Some(format!(
+        "[{}, {}] at φ = {:.0}°",
+        crate::plot::minus(&format!("{:.3}", ends[0])),
+        crate::plot::minus(&format!("{:.3}", ends[1])),
+        phi.to_degrees()
+    )))
+}
+
 /// Figs. 5–7: Δu_z/u_z0 = 0.5, ratio 1, 2, 0.5, phases 0 … π; velocity in ωW0.
 fn figs5_7(out: &Path) -> CliResult {
     let phases = [0.0, PI / 4.0, PI / 2.0, 3.0 * PI / 4.0, PI];
@@ -291,6 +395,7 @@ fn figs5_7(out: &Path) -> CliResult {
         let mut panels = Vec::new();
         let mut all = Vec::new();
         let mut remarks = Vec::new();
+        let mut kinks = Vec::new();
         for (i, &phi) in phases.iter().enumerate() {
             let s = scene(a, b, phi)?;
             let d = s.drive();
@@ -327,11 +432,27 @@ fn figs5_7(out: &Path) -> CliResult {
             // The fixed parameters are in the caption and the phase in the
             // title: no box over the data; a remark goes to the caption.
             remarks.extend(dual_remark(phi, &cl));
+            kinks.extend(two_way_slip(&d, vmax, phi)?);
             panels.push((panel, Extras::default()));
+            // Together, the five jumps at v0 = 0 would lie on one another:
+            // there the curves break at 0, and each one's limits μ(0±) are
+            // its own marker.
+            let (p0, m0) = limits(&d)?;
+            let mut broken = pts;
+            if let Some(k) = broken.iter().position(|p| p.0 == 0.0) {
+                broken[k].1 = f64::NAN;
+                broken[k + 1].1 = f64::NAN;
+            }
             all.push(Series {
                 label: format!("φ = {:.0}°", phi.to_degrees()),
-                points: pts,
+                points: broken,
                 mark: Mark::Line,
+                color: i,
+            });
+            all.push(Series {
+                label: String::new(),
+                points: vec![(0.0, m0), (0.0, p0)],
+                mark: Mark::Markers(LIMIT_MARKERS[i % LIMIT_MARKERS.len()]),
                 color: i,
             });
         }
@@ -360,22 +481,35 @@ fn figs5_7(out: &Path) -> CliResult {
                 ..Extras::default()
             },
         ));
+        let kink_note = (!kinks.is_empty()).then(|| {
+            [
+                "Kinks near v_{0} = 0: inside them each period slips both ways (stick, slip back, stick, slip forward), \
+                 outside one way only;"
+                    .to_string(),
+                format!(
+                    "μ is continuous there, its slope is not. Both-way slip for v_{{0}}/(ωW_{{0}}) in {}.",
+                    kinks.join(", ")
+                ),
+            ]
+        });
         let f = Figure {
             panels,
             rows: 2,
             cols: 3,
-            size: (1800, 1080),
+            size: (1500, 980),
             legend: Vec::new(),
             caption: [
                 format!(
                     "Fig. {fig}: Δu_{{z}}/u_{{z0}} = {a}, {RATIO_NAME} = {ratio}; exact solver; \
-                     W_{{0}} = μ_{{0}}k_{{z}}u_{{z0}}/k_{{x}}. Regime from the exact classification (fricctl classify)."
+                     W_{{0}} = μ_{{0}}k_{{z}}u_{{z0}}/k_{{x}}; regimes of §3.2, exactly from μ(0±) and the symmetry of μ(v)."
                 ),
-                "c, c′ = v_{c±}/(ωW_{0}) (eq. 8); a static equilibrium exists iff c + c′ ≤ 2."
+                "c, c′ = v_{c±}/(ωW_{0}) (eq. 8); a static equilibrium exists iff c + c′ ≤ 2. \
+                 Last panel: the curves break at v_{0} = 0, the markers are μ(0−) and μ(0+)."
                     .to_string(),
             ]
             .into_iter()
             .chain(remarks)
+            .chain(kink_note.into_iter().flatten())
             .collect(),
         };
         save(out, &format!("fig{fig}"), &f)?;
@@ -440,7 +574,7 @@ fn liftoff_normal(out: &Path) -> CliResult {
     let caption = vec![
         "Δu_x = 0 (φ has no effect); v0 in units of ωW0, W0 = μ0 k_z u_z0 / k_x; for Δu_z ≥ u_z0: μ = ⟨f_x⟩/⟨f_z⟩, ⟨f_z⟩ = k_z⟨u_z⁺⟩."
             .to_string(),
-        "Below Δu_z/u_z0 = 1: the exact solver (eq. 8: v_c = a ωW0, μ = μ0 above it); from 1: the lift-off solver (model-core liftoff), continuous at 1."
+        "Below Δu_z/u_z0 = 1: the exact solver (eq. 8: v_c = a ωW0, μ = μ0 above it); from 1: the lift-off solver (one contact window per period, exact), continuous at 1."
             .to_string(),
     ];
     save(out, "liftoff_normal", &one_panel(panel, extras, caption))
@@ -558,12 +692,12 @@ fn profiles(out: &Path) -> CliResult {
         size: (1800, 700),
         legend: Vec::new(),
         caption: vec![
-            "Curved profiles through MDR (model-core mdr): u_z0 read as the mean indentation d0, \
+            "Curved profiles through the method of dimensionality reduction (MDR): u_z0 read as the mean indentation d0, \
              k_z/k_x as E*/G*; μ = ΣF_x/ΣF_z over the springs."
                 .to_string(),
             format!(
                 "Same a, b, φ for all three; the critical velocities are the flat punch's. \
-                 Largest error bound on the figure: {worst:.1e} μ0 (select::mu_within_profile)."
+                 Largest error bound of any point on the figure: {worst:.1e} μ0 (exact solver or MDR quadrature)."
             ),
         ],
     };

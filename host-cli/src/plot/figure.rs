@@ -173,14 +173,17 @@ pub fn log_axis_tick(v: f64) -> String {
 }
 
 /// The palette (colour-blind friendly: Okabe–Ito, then grey and dark red).
+/// The first five are told apart in print and by colour-blind readers: sky
+/// blue comes fifth, orange after it (vermillion and orange side by side
+/// in a five-curve figure were hard to tell apart).
 pub fn color(i: usize) -> RGBColor {
     const P: [RGBColor; 10] = [
         RGBColor(0, 114, 178),
         RGBColor(213, 94, 0),
         RGBColor(0, 158, 115),
         RGBColor(204, 121, 167),
-        RGBColor(230, 159, 0),
         RGBColor(86, 180, 233),
+        RGBColor(230, 159, 0),
         RGBColor(0, 0, 0),
         RGBColor(240, 228, 66),
         RGBColor(128, 128, 128),

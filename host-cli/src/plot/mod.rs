@@ -80,6 +80,11 @@ mod tests {
         );
         // Words with an underscore longer than three characters stay.
         assert_eq!(typeset_text("not_settled", 10.0), "not_settled");
+        // A superscript: raised by 0.35 of the size, at 0.7 of it.
+        assert_eq!(
+            typeset_text("e^{iφ}", 10.0),
+            "e<tspan baseline-shift=\"3.5\" font-size=\"7.0\">iφ</tspan>"
+        );
     }
 
     #[test]

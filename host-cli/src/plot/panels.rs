@@ -76,7 +76,13 @@ pub(super) fn draw_figure<'a, DB: DrawingBackend + 'a>(
     let (w, h) = root.dim_in_pixel();
     let layout = legend_layout(root, &f.legend, w as i32);
     let legend_rows = layout.last().map_or(0, |&(_, r)| r + 1);
-    let footer = legend_rows * LEGEND_LINE + f.caption.len() as i32 * CAPTION_LINE;
+    // The caption grows with the figure's width (15 px at 1000 px, up to
+    // 1.5 times that), so that a wide figure scaled to the page keeps a
+    // readable caption without its caption outgrowing the panels' titles.
+    let cap_scale = (f64::from(w) / 1000.0).clamp(1.0, 1.5);
+    let cap_px = (15.0 * cap_scale).round();
+    let cap_line = (CAPTION_LINE as f64 * cap_scale).round() as i32;
+    let footer = legend_rows * LEGEND_LINE + f.caption.len() as i32 * cap_line;
     let footer = if footer > 0 { footer + 16 } else { 0 };
     let (grid, foot) = root.split_vertically(h as i32 - footer);
     let areas = grid.split_evenly((f.rows, f.cols));
@@ -99,9 +105,9 @@ pub(super) fn draw_figure<'a, DB: DrawingBackend + 'a>(
             font.color(&BLACK).pos(text_pos_left_center()),
         ))?;
     }
-    let cap_font = ("sans-serif", 15).into_font();
+    let cap_font = ("sans-serif", cap_px).into_font();
     for (i, line) in f.caption.iter().enumerate() {
-        let y = 8 + legend_rows * LEGEND_LINE + i as i32 * CAPTION_LINE;
+        let y = 8 + legend_rows * LEGEND_LINE + i as i32 * cap_line;
         foot.draw(&Text::new(line.as_str(), (16, y), cap_font.color(&BLACK)))?;
     }
     Ok(())

@@ -174,6 +174,19 @@ pub(super) fn typeset_text(t: &str, size: f64) -> String {
                 continue;
             }
         }
+        // A superscript: `e^{iφ}`.
+        if ch == '^' && c.get(i + 1) == Some(&'{') {
+            if let Some(end) = c[i + 2..].iter().position(|&x| x == '}') {
+                out.push_str(&format!(
+                    "<tspan baseline-shift=\"{:.1}\" font-size=\"{:.1}\">{}</tspan>",
+                    0.35 * size,
+                    0.7 * size,
+                    c[i + 2..i + 2 + end].iter().collect::<String>()
+                ));
+                i += end + 3;
+                continue;
+            }
+        }
         // μ0, W0, v0 as words of their own.
         if ch == '0'
             && i > 0
