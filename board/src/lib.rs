@@ -7,7 +7,7 @@
 //!
 //! * [`protocol`] — the wire format shared by firmware and host (knows no
 //!   device logic);
-//! * [`dsp`] — small primitives: [`dds`], [`lockin`], [`reference`], [`resonator`],
+//! * [`dsp`] — small primitives: [`dds`], [`lockin`], [`reference`](mod@reference), [`resonator`],
 //!   [`estimator`] (re-exported at the crate root);
 //! * [`device`] — the state machine, its loops, faults and measurement, with
 //!   the μ loop's arithmetic in [`control`];

@@ -25,6 +25,20 @@
 //!
 //! Every setter validates its whole input before touching anything: a
 //! refused command leaves the running state exactly as it was.
+//!
+//! # Contexts
+//!
+//! Where each piece runs on the board (issue 35; the firmware's priorities
+//! in `hardware::nvic`, the work per half-buffer measured by `predict_cost`'s
+//! "worst half-buffer, everything on" and reported as
+//! [`Status::cpu_load_pct`]):
+//!
+//! | context | priority | work | bound |
+//! |---|---|---|---|
+//! | the DAC handler, per half-buffer | `DSP` | [`Device::dac_half_done`]: the μ loop's command in force, the dead-beat levels (D4–D6, the pole D8 only when c moved), the DDS refill | one half-buffer with the ADC handler's work |
+//! | the ADC handler, per half-buffer | `DSP` | [`Device::adc_half_done_with_pickups`]: one reference and the integer sums of every signal ([`crate::reference`]); when a lock-in window closes (every fourth block while the loop holds), its fit, the lift-off guard, D3 and the tracking step (T1–T3); when the μ loop's estimate closes, [`crate::estimator::Estimator::estimate_mu`] and the update (C1–C7) | the same |
+//! | the server, in the main loop | thread | every request; the scene and the prediction (≈ 4 200 and 1 300 instructions), the μ loop's plan (≈ 61 000, once per setpoint), a measurement's whole estimate (on a copy of the estimator), the measured motion's report ([`Device::measured_drive`]) — all with the device released | none (preempted by the handlers) |
+//! | the server's critical sections ([`crate::server::DeviceAccess::with`]) | masks `DSP` | copies in and out of the device, the checks of a request | 10 % of a half-buffer; the drive-planning requests a stated 8 000 instructions |
 
 mod closed_loop;
 pub mod config;

@@ -38,7 +38,7 @@ pub const WINDOW_SPAN_RAD: f32 = core::f32::consts::TAU;
 /// half-buffers, not every one). The loops' gains per window scale with
 /// the window's length (`k = t_w/4τ` of D3, `t_w/2τ` of T3), so their
 /// bandwidth in time is the same; the fills' model records are averaged
-/// over the window's blocks ([`Device::window_fills`]).
+/// over the window's blocks.
 pub const WINDOW_MIN_SAMPLES: u32 = 256;
 /// [`WINDOW_SPAN_RAD`] in phase words (2³² a turn; ≈ 2³², the f32 2π being 2.8e-8 above it).
 const WINDOW_SPAN_WORDS: u64 =

@@ -6,7 +6,7 @@
 //!   reference, exact over any window;
 //! * [`resonator`] — one transducer mode advanced by its exact
 //!   zero-order-hold update;
-//! * [`reference`] — the drive phase's Q15 cosine and sine of an ADC block,
+//! * [`reference`](mod@reference) — the drive phase's Q15 cosine and sine of an ADC block,
 //!   shared by every signal demodulated in it, and their integer sums;
 //! * [`estimator`] — μ from sampled forces (eq. 20) with lock-in harmonics.
 
