@@ -331,6 +331,41 @@ fn a_flag_a_subcommand_would_ignore_is_refused_by_name() {
     assert_eq!(state(&s), before);
 }
 
+/// `drive set --track` below the amplitude the tracking needs (0.2 µm of
+/// the tracked mode, `TRACK_MIN_AMP_M`; an undriven one, 0, included) is
+/// refused by the flag of that amplitude with the least value, before the
+/// mode, the options or the drive reach the device: nothing changes.
+#[test]
+fn tracking_below_the_amplitude_it_needs_is_refused_by_name() {
+    let s = sim();
+    ok_json(
+        &s,
+        &common::drive_set("20000", "2e-6", "3e-7", "4e-6", Some("40")),
+    );
+    let before = state(&s);
+    for (amp_z, amp_x, track, flag, got) in [
+        ("2e-6", "1e-7", "x", "--amp-x", "1e-7"),
+        ("2e-6", "0", "x", "--amp-x", "0"),
+        ("1.5e-7", "3e-7", "z", "--amp-z", "1.5e-7"),
+    ] {
+        let args: Vec<&str> = common::drive_set("20000", amp_z, amp_x, "4e-6", Some("40"))
+            .into_iter()
+            .filter(|a| *a != "--open-loop")
+            .chain(["--track", track])
+            .collect();
+        let o = dev(&s, &args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.starts_with(&format!("error: {flag}:")), "{err}");
+        assert!(
+            err.contains("at least 2e-7 m") && err.contains(&format!("(got {got})")),
+            "{err}"
+        );
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+    assert_eq!(state(&s), before);
+}
+
 #[test]
 fn the_plant_refuses_what_it_cannot_be_by_the_flag_given() {
     let dir = tempfile::tempdir().unwrap();

@@ -270,3 +270,58 @@ fn a_drifting_resonance_without_tracking_never_lifts_off() {
     assert!(peak < limit, "{peak} ≥ {limit}");
     assert!(worst_mu <= 0.02, "{worst_mu}");
 }
+
+/// Tracking needs an amplitude the pickup can phase (`TRACK_MIN_AMP_M`,
+/// 10 × the hold floor, 0.2 µm): in displacement mode with tracking on, a
+/// setting below it on the tracked channel — 0 included, an undriven mode
+/// that could never lock — is refused naming that channel with the least
+/// value, and the drive in force stays; the other channel, or tracking off,
+/// takes any amplitude.
+#[test]
+fn tracking_refuses_an_amplitude_it_cannot_phase() {
+    use board::device::tracking::TRACK_MIN_AMP_M;
+    let table = SineTable::<1024>::libm();
+    let mut b = tracking_bench(&table, 0.0, F_R);
+    assert!((TRACK_MIN_AMP_M - 2e-7).abs() < 1e-12);
+    let before = b.dev.drive();
+    for amp in [0.0, 1e-7, 1.99e-7] {
+        let mut s = setting(2e-6);
+        s.amp_z_m = amp;
+        match b.dev.set_drive(s) {
+            Err(DeviceError::OutOfRange { param, min, .. }) => {
+                assert_eq!(param, DriveParam::AmpZ);
+                assert_eq!(min, TRACK_MIN_AMP_M);
+            }
+            other => panic!("amp_z {amp}: {other:?}"),
+        }
+        assert_eq!(b.dev.drive(), before);
+    }
+    // The untracked channel takes any amplitude; the least one is taken.
+    let mut s = setting(TRACK_MIN_AMP_M);
+    s.amp_x_m = 0.0;
+    b.dev.set_drive(s).unwrap();
+    // Tracking x: the same for the tangential channel.
+    b.dev
+        .set_displacement_options(DisplacementOptions {
+            track: Track::X,
+            headroom: 2.0,
+        })
+        .unwrap();
+    let mut s = setting(2e-6);
+    s.amp_x_m = 1e-7;
+    assert!(matches!(
+        b.dev.set_drive(s),
+        Err(DeviceError::OutOfRange {
+            param: DriveParam::AmpX,
+            ..
+        })
+    ));
+    // Tracking off: any amplitude.
+    b.dev
+        .set_displacement_options(DisplacementOptions {
+            track: Track::None,
+            headroom: 2.0,
+        })
+        .unwrap();
+    b.dev.set_drive(s).unwrap();
+}

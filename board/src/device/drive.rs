@@ -99,6 +99,7 @@ impl<const N: usize> Device<'_, N> {
             });
         }
         let amp_x = in_range(d.amp_x_m, 0.0, self.cfg.max_amp_x_m(), DriveParam::AmpX)?;
+
         let phase = in_range(
             d.phase_rad,
             -MAX_PHASE_RAD,
@@ -176,6 +177,37 @@ impl<const N: usize> Device<'_, N> {
         }
     }
 
+    /// In displacement mode with tracking on, the tracked mode's setting
+    /// is at least [`super::tracking::TRACK_MIN_AMP_M`] (below it no window
+    /// gives an estimate: the tracking would never lock, or lose its lock).
+    ///
+    /// # Errors
+    /// [`DeviceError::OutOfRange`] naming the tracked channel's amplitude,
+    /// from that least value to the channel's largest.
+    fn check_tracked_amplitude(&self, d: &DriveSetting) -> Result<(), DeviceError> {
+        if !self.displacement_mode() {
+            return Ok(());
+        }
+        let least = super::tracking::TRACK_MIN_AMP_M;
+        let (param, amp, max) = match self.options.track {
+            super::Track::Z => (
+                DriveParam::AmpZ,
+                d.amp_z_m,
+                self.cfg.liftoff_limit_m(d.offset_z_m),
+            ),
+            super::Track::X => (DriveParam::AmpX, d.amp_x_m, self.cfg.max_amp_x_m()),
+            super::Track::None => return Ok(()),
+        };
+        if amp < least {
+            return Err(DeviceError::OutOfRange {
+                param,
+                min: least,
+                max,
+            });
+        }
+        Ok(())
+    }
+
     /// Sets the drive. While running the DDS ramps to it; while stopped it is
     /// stored and used at the next start (the normal offset is ramped to at
     /// once, unless a fault is latched: then nothing moves).
@@ -194,6 +226,7 @@ impl<const N: usize> Device<'_, N> {
             return Err(DeviceError::Busy);
         }
         let plan = self.plan(&d)?;
+        self.check_tracked_amplitude(&d)?;
         // The plan validated everything the DDS checks: none of these fail.
         if plan.achieved.tuning_word != self.dds.tuning_word() {
             self.dds.set_frequency(d.freq_hz)?;

@@ -54,6 +54,13 @@ pub const LOCK_S: f32 = 1.0e-3;
 /// (longer than a transition's skipped windows, shorter than τ; sixteen
 /// windows of 128 µs before windows took four blocks).
 pub const LOSS_S: f32 = 2.0e-3;
+/// The least amplitude of the tracked mode's setting, m: below it a
+/// window's estimate is refused (`10·HOLD_FLOOR_M`, the pickup's noise), so
+/// the tracking could never lock (an undriven mode) or would lose the lock
+/// it had. `SetDrive` refuses a smaller setting while tracking is on
+/// (`DeviceError::OutOfRange` with this as its least value).
+pub const TRACK_MIN_AMP_M: f32 = 10.0 * HOLD_FLOOR_M;
+
 /// Envelope time constants τ̂ the tracking may take to lock.
 pub const ACQUIRE_TAUS: f32 = 40.0;
 
@@ -145,7 +152,7 @@ impl<const N: usize> Device<'_, N> {
         if gap.is_nan() || gap > STEADY_FRACTION * norm(steady) {
             return;
         }
-        let usable = norm(u[ch]) > 0.0 && norm(x[ch]) > 10.0 * HOLD_FLOOR_M;
+        let usable = norm(u[ch]) > 0.0 && norm(x[ch]) > TRACK_MIN_AMP_M;
         let estimate = if usable {
             resonance_of(x[ch] / u[ch], f, &id)
         } else {

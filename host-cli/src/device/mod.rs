@@ -478,6 +478,23 @@ fn drive_set(c: &mut Client, cmd: &DriveCmd, json: bool) -> CliResult {
             "--track: needs the displacement mode (identified transducers), not --open-loop",
         ));
     }
+    // The tracked mode needs an amplitude its pickup can phase (the
+    // device refuses less at SetDrive; checked here before the mode and
+    // the options go to the device, so a refusal changes nothing).
+    let least = board::device::tracking::TRACK_MIN_AMP_M;
+    let tracked = match track {
+        TrackArg::Z => Some(("--amp-z", *amp_z)),
+        TrackArg::X => Some(("--amp-x", *amp_x)),
+        TrackArg::None => None,
+    };
+    if let Some((flag, a)) = tracked.filter(|&(_, a)| !*open_loop && a < f64::from(least)) {
+        return Err(CliError::usage(format!(
+            "{flag}: --track needs at least {} m of the tracked mode (got {}): \
+             below it no lock-in window can phase the mode",
+            fric_analysis::numbers::short(device_host::answers::f32v(least)),
+            fric_analysis::numbers::short(a)
+        )));
+    }
     if *open_loop && headroom.headroom.is_some() {
         return Err(CliError::usage(
             "--headroom: is the displacement mode's (identified transducers), not --open-loop's",
