@@ -39,6 +39,16 @@ pub fn wire_error(e: WireError) -> Error {
         DriveParam::Headroom => "--headroom",
     };
     match e {
+        // The device's phase limits are radians; the flag takes degrees.
+        WireError::OutOfRange {
+            param: DriveParam::Phase,
+            min,
+            max,
+        } => Error::usage(format!(
+            "--phase-deg: refused by the device: allowed range [{}, {}] degrees",
+            short(f32v(min).to_degrees().trunc()),
+            short(f32v(max).to_degrees().trunc())
+        )),
         WireError::OutOfRange { param, min, max } => {
             Error::usage(format!(
                 "{}: refused by the device: allowed range [{}, {}]",

@@ -517,13 +517,26 @@ fn linspace(a: f64, b: f64, n: u32) -> Vec<f64> {
         .collect()
 }
 
+/// The sweep's span: `--from`/`--to` as given (each refused by name
+/// outside the device's range: nothing is clamped silently), by default
+/// ±5 % around the drive's frequency `f` within that range.
 fn span(a: &IdentifyOptions, info: &Info, f: f64) -> Result<(f64, f64)> {
     let (lo, hi) = info.freq_range_hz;
+    for (flag, v) in [("--from", a.from), ("--to", a.to)] {
+        if let Some(v) = v.filter(|v| !(lo..=hi).contains(v)) {
+            return Err(Error::usage(format!(
+                "{flag}: {} Hz is outside the device's range {lo} … {hi} Hz",
+                fric_analysis::numbers::short(v)
+            )));
+        }
+    }
     let from = a.from.unwrap_or(0.95 * f).max(lo);
     let to = a.to.unwrap_or(1.05 * f).min(hi);
     if from >= to {
         return Err(Error::usage(format!(
-            "--from/--to: the span [{from}, {to}] Hz is empty (the device drives {lo} … {hi} Hz)"
+            "--from/--to: --from ({} Hz) must be below --to ({} Hz)",
+            fric_analysis::numbers::short(from),
+            fric_analysis::numbers::short(to)
         )));
     }
     Ok((from, to))

@@ -366,6 +366,51 @@ fn tracking_below_the_amplitude_it_needs_is_refused_by_name() {
     assert_eq!(state(&s), before);
 }
 
+/// Issue 41 §3: a message names the flag the user typed, in the user's
+/// units, and nothing is clamped silently — the device's phase limit
+/// (±1000 rad) comes back in degrees, truncated inside it (±57 295°);
+/// `identify --from`/`--to` outside the device's range (1 … 100 kHz) are
+/// refused by name, not clamped, and an empty span names both; the device
+/// is as it was.
+#[test]
+fn refusals_name_the_flag_in_its_units_and_clamp_nothing() {
+    let s = sim();
+    ok_json(
+        &s,
+        &common::drive_set("20000", "0", "0", "4e-6", Some("40")),
+    );
+    let before = state(&s);
+    let phase = common::drive_set("20000", "1e-6", "1e-7", "4e-6", Some("60000"));
+    let cases: [(Vec<&str>, &str); 4] = [
+        (
+            phase,
+            "error: --phase-deg: refused by the device: allowed range [-57295, 57295] degrees",
+        ),
+        (
+            vec!["identify", "--from", "500", "--to", "30000"],
+            "error: --from: 500 Hz is outside the device's range 1000 … 100000 Hz",
+        ),
+        (
+            vec!["identify", "--from", "19000", "--to", "2e5"],
+            "error: --to: 200000 Hz is outside the device's range 1000 … 100000 Hz",
+        ),
+        (
+            vec!["identify", "--from", "30000", "--to", "20000"],
+            "error: --from/--to: --from (30000 Hz) must be below --to (20000 Hz)",
+        ),
+    ];
+    for (args, want) in cases {
+        let o = dev(&s, &args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.trim(), want, "{args:?}");
+    }
+    // −1000 rad is −57 295.78°: the range printed lies inside it.
+    assert!(1000f64.to_degrees() >= 57_295.0 && 1000f64.to_degrees() < 57_296.0);
+    assert_eq!(state(&s), before);
+    assert_not_identified(&s);
+}
+
 #[test]
 fn the_plant_refuses_what_it_cannot_be_by_the_flag_given() {
     let dir = tempfile::tempdir().unwrap();
