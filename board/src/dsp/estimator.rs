@@ -45,8 +45,8 @@
 //! samples it tends to `σ/(f̄_z·√N)`. Fewer than two batches give `σ_μ = 0`
 //! with [`reasons::FEW_PERIODS`] set.
 
-use crate::dds::SineTable;
-use crate::reference::{self, PairSums};
+use super::dds::SineTable;
+use super::reference::{self, PairSums};
 use model_core::float::{FastF32, Math};
 
 /// Linear ADC calibration: `force = gain · (count − offset)` (N per count, counts).

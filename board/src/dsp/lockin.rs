@@ -33,7 +33,7 @@
 //! reference from the DDS's table and exact integer sums (issue 35: 66
 //! instructions per sample for both pickups on the M4F, 103 in f32).
 
-use crate::reference::{Gram, PairSums};
+use super::reference::{Gram, PairSums};
 use model_core::float::{Float, Math};
 
 /// The least phase span (rad) of a window: below it the fit is refused
@@ -297,7 +297,7 @@ impl<const K: usize> LockInQ<K> {
     /// The Q15 reference (LQ1) of phase word `p` from the DDS's table:
     /// `(round(2¹⁵ cos), round(2¹⁵ sin))`.
     #[inline(always)]
-    pub fn reference<const N: usize>(t: &crate::dds::SineTable<N>, p: u32) -> (i32, i32) {
+    pub fn reference<const N: usize>(t: &super::dds::SineTable<N>, p: u32) -> (i32, i32) {
         let q15 = |v: i32| (v + (1 << 14)) >> 15;
         (q15(t.sin_q30(p.wrapping_add(1 << 30))), q15(t.sin_q30(p)))
     }

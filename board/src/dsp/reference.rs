@@ -42,7 +42,7 @@
 //! Contexts: [`Reference::new`] and [`PairSums::of`] run in the ADC
 //! handler (on the board, interrupt priority `DSP`), once per block.
 
-use crate::dds::SineTable;
+use super::dds::SineTable;
 use model_core::float::{FastF32, Math};
 
 /// The most samples of one block's reference (the board's ADC half-buffer).
