@@ -157,6 +157,20 @@ impl<T: Bounded> Count<T> {
     where
         T: TryFrom<u64>,
     {
+        let why = self.why.map_or(String::new(), |w| format!("; {w}"));
+        // Digits: read exactly as an integer (a seed above 2⁵³ is not
+        // rounded through f64).
+        if let Ok(n) = s.trim().trim_start_matches('+').parse::<i128>() {
+            if n < i128::from(self.min) {
+                return Err(Refused(format!("must be ≥ {} (got {s})", self.min)));
+            }
+            if n > i128::from(self.max) {
+                return Err(Refused(format!("must be ≤ {} (got {s}{why})", self.max)));
+            }
+            let n = n as u64;
+            return T::try_from(n)
+                .map_err(|_| Refused(format!("must be ≤ {} (got {s}{why})", self.max)));
+        }
         let x: f64 = s
             .trim()
             .parse()
@@ -164,7 +178,13 @@ impl<T: Bounded> Count<T> {
         if x.is_nan() {
             return Err(Refused(format!("'{s}' is not a number")));
         }
-        let why = self.why.map_or(String::new(), |w| format!("; {w}"));
+        // Any other form (`1e3`, `1000.0`) through f64, exact only up to
+        // 2⁵³: above, the text's value may have been rounded.
+        if x.abs() > 9_007_199_254_740_992.0 && x <= self.max as f64 {
+            return Err(Refused(format!(
+                "above 2^53 write it in digits (got {s}: as a decimal number it may round)"
+            )));
+        }
         if x < self.min as f64 {
             return Err(Refused(format!("must be ≥ {} (got {s})", self.min)));
         }
@@ -392,6 +412,31 @@ mod tests {
                 .at_most(1000, "a bound")
                 .parse("1e9"),
             Err(refused("must be ≤ 1000 (got 1e9; a bound)"))
+        );
+    }
+
+    /// Issue 41 §3: digits are read as an integer, exactly — 2⁵³ + 1 is not
+    /// rounded to 2⁵³, u64::MAX is taken; a decimal form above 2⁵³ is
+    /// refused rather than rounded.
+    #[test]
+    fn counts_in_digits_are_exact() {
+        assert_eq!(
+            count::<u64>(0, "9007199254740993"),
+            Ok(9_007_199_254_740_993)
+        );
+        assert_eq!(count::<u64>(0, "18446744073709551615"), Ok(u64::MAX));
+        assert_eq!(count::<u64>(0, "+7"), Ok(7));
+        assert_eq!(count::<u64>(0, " 12 "), Ok(12));
+        assert_eq!(
+            count::<u64>(0, "1e19"),
+            Err(refused(
+                "above 2^53 write it in digits (got 1e19: as a decimal number it may round)"
+            ))
+        );
+        assert_eq!(count::<u64>(0, "9e15"), Ok(9_000_000_000_000_000));
+        assert_eq!(
+            count::<u32>(1, "4294967296"),
+            Err(refused("must be ≤ 4294967295 (got 4294967296)"))
         );
     }
 }
