@@ -411,6 +411,38 @@ fn refusals_name_the_flag_in_its_units_and_clamp_nothing() {
     assert_not_identified(&s);
 }
 
+/// `scene set` takes the stiffnesses the device's f32 model takes
+/// (`STIFFNESS_RANGE_N_PER_M`, 1 … 1e12 N/m) and names the flag, or the
+/// fit file's key, of one outside it (k_x 1e-30 was accepted and then made
+/// every prediction fail; k_z 1e-30 blamed `--offset-z`); the contact stays.
+#[test]
+fn scene_set_names_a_stiffness_the_model_cannot_take() {
+    let s = sim();
+    let before = ok_json(&s, &["scene", "get"]);
+    let dir = tempfile::tempdir().unwrap();
+    let fit = dir.path().join("fit.json");
+    std::fs::write(&fit, r#"{"mu0": 0.3, "kz": 1e7, "kx": 0.5}"#).unwrap();
+    let fit_arg = fit.to_str().unwrap();
+    for (args, want) in [
+        (
+            vec!["scene", "set", "--mu0", "0.3", "--kz", "1e-30", "--kx", "1e7"],
+            "error: --kz: must be ≥ 1 (got 1e-30; the contact stiffness the device's f32 model takes, N/m)",
+        ),
+        (
+            vec!["scene", "set", "--mu0", "0.3", "--kz", "1e7", "--kx", "1e13"],
+            "error: --kx: must be ≤ 1e12 (got 1e13; the contact stiffness the device's f32 model takes, N/m)",
+        ),
+        (vec!["scene", "set", "--from-fit", fit_arg], "kx: must be ≥ 1 (got 0.5"),
+    ] {
+        let o = dev(&s, &args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.trim().starts_with(want) || err.contains(want), "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+    assert_eq!(ok_json(&s, &["scene", "get"]), before);
+}
+
 #[test]
 fn the_plant_refuses_what_it_cannot_be_by_the_flag_given() {
     let dir = tempfile::tempdir().unwrap();

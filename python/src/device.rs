@@ -441,6 +441,15 @@ impl Device {
                 other => return Err(unexpected(other)),
             },
             (Some(mu0), Some(kz), Some(kx)) => {
+                // The device model's stiffness domain, by keyword.
+                let (lo, hi) = board::device::STIFFNESS_RANGE_N_PER_M;
+                for (name, k) in [("kz", kz), ("kx", kx)] {
+                    if !(lo..=hi).contains(&k) {
+                        return Err(PyValueError::new_err(format!(
+                            "{name}: must be in [{lo}, {hi:e}] N/m, the contact stiffness the device's f32 model takes (got {k})"
+                        )));
+                    }
+                }
                 let k = Contact {
                     mu0: mu0 as f32,
                     kz: kz as f32,

@@ -161,6 +161,16 @@ def test_bad_arguments_name_the_keyword():
             dev.drive(freq=20000, amp_z=0, amp_x=0, offset_z=4e-6, track="y")
         with pytest.raises(ValueError, match="param: must be"):
             dev.sweep("phase", 0, 1, points=2, periods=10, v0=0.004)
+        # The device model's stiffness domain (1 … 1e12 N/m), by keyword;
+        # the contact is left as it was.
+        k = dev.scene()
+        before = (k.mu0, k.kz, k.kx)
+        with pytest.raises(ValueError, match=r"kx: must be in \[1, 1e12\] N/m"):
+            dev.scene(mu0=0.3, kz=1e7, kx=1e-30)
+        with pytest.raises(ValueError, match=r"kz: must be in \[1, 1e12\] N/m"):
+            dev.scene(mu0=0.3, kz=1e13, kx=1e7)
+        k = dev.scene()
+        assert (k.mu0, k.kz, k.kx) == before
 
 
 def test_a_link_that_fails_is_link_error():

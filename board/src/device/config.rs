@@ -104,6 +104,13 @@ pub const PERIODS_RANGE: (u32, u32) = (1, 1_000_000);
 /// Largest |φ| of a drive, rad (a phase beyond is surely a unit mistake).
 pub const MAX_PHASE_RAD: f32 = 1_000.0;
 
+/// The contact stiffnesses k_z, k_x the device's f32 model takes, N/m: a
+/// contact softer than 1 N/m or stiffer than 10¹² N/m is no probe's, and
+/// inside this range every quantity of the model (W₀ = μ₀k_z u_z0/k_x,
+/// the forces) stays well inside f32's (a k_x of 10⁻³⁰ was accepted and
+/// then made every prediction fail). Host front ends check it by flag.
+pub const STIFFNESS_RANGE_N_PER_M: (f64, f64) = (1.0, 1e12);
+
 /// Largest |v₀| of a prediction, m/s.
 pub const MAX_VELOCITY_M_S: f32 = 1_000.0;
 

@@ -55,6 +55,7 @@ pub mod tracking;
 pub use closed_loop::{estimate_samples, periods_in_half_buffer, MIN_GAIN};
 pub use config::{
     DacCal, DeviceConfig, HALF_BUFFER, MAX_PHASE_RAD, MAX_VELOCITY_M_S, PERIODS_RANGE,
+    STIFFNESS_RANGE_N_PER_M,
 };
 pub use error::{ConfigError, DeviceError};
 pub use fault::faults;

@@ -240,11 +240,11 @@ pub enum SceneCmd {
         /// μ0 (> 0)
         #[arg(long, required_unless_present = "from_fit", value_parser = Real::positive().single_precision())]
         mu0: Option<f64>,
-        /// k_z, N/m (> 0)
-        #[arg(long, required_unless_present = "from_fit", value_parser = Real::positive().single_precision())]
+        /// k_z, N/m (1 … 1e12: `board::device::STIFFNESS_RANGE_N_PER_M`)
+        #[arg(long, required_unless_present = "from_fit", value_parser = sweep::STIFFNESS)]
         kz: Option<f64>,
-        /// k_x, N/m (> 0)
-        #[arg(long, required_unless_present = "from_fit", value_parser = Real::positive().single_precision())]
+        /// k_x, N/m (1 … 1e12)
+        #[arg(long, required_unless_present = "from_fit", value_parser = sweep::STIFFNESS)]
         kx: Option<f64>,
         /// Take mu0, kz, kx from the JSON written by `fricctl fit --out FILE`
         #[arg(long, value_name = "FILE", conflicts_with_all = ["mu0", "kz", "kx"])]

@@ -427,12 +427,20 @@ fn print_rows(a: &SweepArgs, rows: &[SweepRow], json: bool) -> CliResult {
     .map_err(fail)
 }
 
+/// The domain of `--kz` and `--kx` (N/m): the device model's
+/// ([`board::device::STIFFNESS_RANGE_N_PER_M`]).
+pub const STIFFNESS: Real = Real::positive()
+    .at_least(board::device::STIFFNESS_RANGE_N_PER_M.0)
+    .at_most(board::device::STIFFNESS_RANGE_N_PER_M.1)
+    .single_precision()
+    .because("the contact stiffness the device's f32 model takes, N/m");
+
 /// μ0, k_z, k_x for `scene set`: from the flags, or from the JSON that
 /// `fricctl fit --out` wrote (keys `mu0`, `kz`, `kx`).
 ///
 /// # Errors
-/// One line naming the flag (or the file and key) for a value that is not > 0
-/// or a file that is not a fit result.
+/// One line naming the flag (or the file and key) for a value outside its domain
+/// (μ0 > 0, the stiffnesses [`STIFFNESS`]) or a file that is not a fit result.
 pub fn scene_values(
     mu0: Option<f64>,
     kz: Option<f64>,
@@ -459,12 +467,17 @@ pub fn scene_values(
         None => ([mu0, kz, kx], "--".to_string()),
     };
     let mut out = [0.0; 3];
-    for ((x, name), o) in vals.iter().zip(["mu0", "kz", "kx"]).zip(&mut out) {
+    let domains = [Real::positive().single_precision(), STIFFNESS, STIFFNESS];
+    for (((x, name), o), domain) in vals
+        .iter()
+        .zip(["mu0", "kz", "kx"])
+        .zip(&mut out)
+        .zip(domains)
+    {
         // The flags' own domain, for the values of a fit file too.
         match x {
             Some(x) => {
-                *o = Real::positive()
-                    .single_precision()
+                *o = domain
                     .check(*x, &short(*x))
                     .map_err(|r| CliError::usage(format!("{src}{name}: {r}")))?;
             }
