@@ -381,7 +381,8 @@ class Device:
         self, *, mu0: Optional[float] = None, kz: Optional[float] = None, kx: Optional[float] = None
     ) -> Record:
         """The device model's contact (μ0, N/m, N/m): set with all three,
-        read with none (``device scene set|get``)."""
+        read with none (``device scene set|get``). ``kz`` and ``kx`` lie in
+        [1, 1e12] N/m (ValueError naming the keyword otherwise)."""
     def predict(self, v0: float) -> Record:
         """``device predict``: the device model's μ at v0 (m/s)."""
     def measure(self, periods: int, *, wait: bool = True) -> Record:
