@@ -169,6 +169,44 @@ fn f64_fit(theta: &[f64], p: &[f64]) -> ([f64; 3], f64, f64) {
     (coef, resid, g)
 }
 
+/// The condition number κ of the centred 2×2 normal system of the phases
+/// `theta`, from its exact sums (f64).
+fn centred_condition(theta: &[f64]) -> f64 {
+    let n = theta.len() as f64;
+    let (mc, ms) = (
+        theta.iter().map(|t| t.cos()).sum::<f64>() / n,
+        theta.iter().map(|t| t.sin()).sum::<f64>() / n,
+    );
+    let scc: f64 = theta.iter().map(|t| (t.cos() - mc).powi(2)).sum();
+    let sss: f64 = theta.iter().map(|t| (t.sin() - ms).powi(2)).sum();
+    let scs: f64 = theta.iter().map(|t| (t.cos() - mc) * (t.sin() - ms)).sum();
+    let (tr, det) = (scc + sss, scc * sss - scs * scs);
+    let disc = (tr * tr / 4.0 - det).max(0.0).sqrt();
+    (tr / 2.0 + disc) / (tr / 2.0 - disc)
+}
+
+/// Asserts each coefficient of `ph` (mean, in-phase, quadrature) within
+/// `bound` of the f64 fit `coef`; returns the largest error as a share of it.
+fn within(ph: &board::lockin::Phasor<f32>, coef: &[f64; 3], bound: f64, label: &str) -> f64 {
+    let got = [
+        f64::from(ph.mean),
+        f64::from(ph.in_phase),
+        f64::from(ph.quadrature),
+    ];
+    let mut worst = 0.0f64;
+    for j in 0..3 {
+        let e = (got[j] - coef[j]).abs();
+        assert!(
+            e <= bound,
+            "{label}, coef {j}: {} vs {} (bound {bound})",
+            got[j],
+            coef[j]
+        );
+        worst = worst.max(e / bound);
+    }
+    worst
+}
+
 /// The integer lock-in (`LockInQ`, eqs. LQ1–LQ3; docs/transducers.md, "The
 /// lock-ins in integers") against the f64 fit of the same integer samples
 /// with exact cos and sin. The reference errs by at most
@@ -218,35 +256,11 @@ fn integer_lock_in_is_within_its_derived_bound_of_the_f64_fit() {
             }
             let [ph] = l.solve().unwrap();
             let (coef, resid, g) = f64_fit(&theta, &p);
-            // κ of the centred 2×2 system, from its exact sums.
-            let n = theta.len() as f64;
-            let (mc, ms) = (
-                theta.iter().map(|t| t.cos()).sum::<f64>() / n,
-                theta.iter().map(|t| t.sin()).sum::<f64>() / n,
-            );
-            let scc: f64 = theta.iter().map(|t| (t.cos() - mc).powi(2)).sum();
-            let sss: f64 = theta.iter().map(|t| (t.sin() - ms).powi(2)).sum();
-            let scs: f64 = theta.iter().map(|t| (t.cos() - mc) * (t.sin() - ms)).sum();
-            let (tr, det) = (scc + sss, scc * sss - scs * scs);
-            let disc = (tr * tr / 4.0 - det).max(0.0).sqrt();
-            let kappa = (tr / 2.0 + disc) / (tr / 2.0 - disc);
+            let kappa = centred_condition(&theta);
             let a_f = coef[1].abs() + coef[2].abs();
             let bound_ab = g * eps_r * (a_f + resid) + 2f64.powi(-20) * kappa * (coef[0] + a_f);
-            let got = [
-                f64::from(ph.mean),
-                f64::from(ph.in_phase),
-                f64::from(ph.quadrature),
-            ];
-            for j in 0..3 {
-                let e = (got[j] - coef[j]).abs();
-                assert!(
-                    e <= bound_ab,
-                    "{f} Hz, case {k}, coef {j}: {} vs {} (bound {bound_ab})",
-                    got[j],
-                    coef[j]
-                );
-                worst = worst.max(e / bound_ab);
-            }
+            let label = format!("{f} Hz, case {k}");
+            worst = worst.max(within(&ph, &coef, bound_ab, &label));
         }
     }
     // The bound is not loose by orders of magnitude.
@@ -321,17 +335,7 @@ fn the_pickups_on_the_forces_reference_are_within_their_bound() {
             let fits = l.solve().unwrap().map(|ph| ph.turned(cd, sd));
             for (ph, p) in fits.iter().zip([&p0, &p1]) {
                 let (coef, resid, g) = f64_fit(&theta, p);
-                let n = theta.len() as f64;
-                let (mc, ms) = (
-                    theta.iter().map(|t| t.cos()).sum::<f64>() / n,
-                    theta.iter().map(|t| t.sin()).sum::<f64>() / n,
-                );
-                let scc: f64 = theta.iter().map(|t| (t.cos() - mc).powi(2)).sum();
-                let sss: f64 = theta.iter().map(|t| (t.sin() - ms).powi(2)).sum();
-                let scs: f64 = theta.iter().map(|t| (t.cos() - mc) * (t.sin() - ms)).sum();
-                let (tr, det) = (scc + sss, scc * sss - scs * scs);
-                let disc = (tr * tr / 4.0 - det).max(0.0).sqrt();
-                let kappa = (tr / 2.0 + disc) / (tr / 2.0 - disc);
+                let kappa = centred_condition(&theta);
                 let a_f = coef[1].abs() + coef[2].abs();
                 // The turn maps the fit's errors in (a', b') into (a, b)
                 // with the gain |cos δ| + |sin δ| ≤ √2.
@@ -339,21 +343,8 @@ fn the_pickups_on_the_forces_reference_are_within_their_bound() {
                 let bound = turn
                     * (g * eps_r * (a_f + resid) + 2f64.powi(-20) * kappa * (coef[0] + a_f))
                     + (2.0 * eps_d + 2f64.powi(-23)) * a_f;
-                let got = [
-                    f64::from(ph.mean),
-                    f64::from(ph.in_phase),
-                    f64::from(ph.quadrature),
-                ];
-                for j in 0..3 {
-                    let e = (got[j] - coef[j]).abs();
-                    assert!(
-                        e <= bound,
-                        "{f} Hz, case {k}, coef {j}: {} vs {} (bound {bound})",
-                        got[j],
-                        coef[j]
-                    );
-                    worst = worst.max(e / bound);
-                }
+                let label = format!("{f} Hz, case {k}");
+                worst = worst.max(within(ph, &coef, bound, &label));
             }
         }
     }
