@@ -1206,6 +1206,150 @@ fn out_of_range(seq: u8, param: u8, min: f32, max: f32) -> Vec<u8> {
 }
 
 #[test]
+fn set_controls_target_limit_is_inclusive() {
+    // docs/protocol.md, SetControl check 2: `|target_mu| ≤ μ₀` (μ₀ = 0.3 of
+    // the test device), refused OutOfRange{TargetMu, −μ₀, μ₀}. The drive is
+    // stopped, so a target that passes check 2 meets check 7, NotRunning.
+    use board::device::DeviceError;
+    use board::protocol::{ControlSetting, DriveParam};
+    let t = SineTable::<256>::libm();
+    let dev = test_device(&t);
+    let mu0 = 0.3f32;
+    let setting = |target_mu| ControlSetting {
+        on: true,
+        target_mu,
+        v0_m_s: 0.004,
+        gain: 0.7,
+        periods: 4,
+        rate_m_per_s: 1e-3,
+    };
+    let refused = DeviceError::OutOfRange {
+        param: DriveParam::TargetMu,
+        min: -mu0,
+        max: mu0,
+    };
+    let up = |m: f32| f32::from_bits(m.to_bits() + 1);
+    for target in [mu0, -mu0, 0.0] {
+        assert_eq!(
+            dev.check_control(&setting(target), false),
+            Err(DeviceError::NotRunning),
+            "{target} passes check 2"
+        );
+    }
+    for target in [up(mu0), -up(mu0), f32::NAN, f32::INFINITY] {
+        assert_eq!(
+            dev.check_control(&setting(target), false),
+            Err(refused),
+            "{target}"
+        );
+    }
+}
+
+#[test]
+fn check_8s_reported_maximum_is_itself_accepted() {
+    // docs/protocol.md, SetDrive check 8: every limit is inclusive, tested in
+    // the f32 the refusal reports. The maximum m of a refusal sent back is
+    // accepted; the f32 one step above it is refused with the same m. On
+    // each channel (z: 40 kHz, Q 10, 1 µm/V; x: 30 kHz, Q 20, 0.5 µm/V),
+    // at 20 kHz on u_z0 = 4 µm (the normal room binds near 2.1 µm).
+    let t = SineTable::<256>::libm();
+    let mut dev = test_device(&t);
+    let mut s = Server::new(Info::for_config(&cfg(), "virtual", [0, 1, 0]));
+    let z = model_bytes(40e3, 10.0, 1e-6, 0.1);
+    let x = model_bytes(30e3, 20.0, 5e-7, 0.2);
+    assert_eq!(
+        ask(&mut s, &mut dev, &set_transducers_payload(1, &z, &x)),
+        [V, 1, 1, 2]
+    );
+    assert_eq!(
+        ask(
+            &mut s,
+            &mut dev,
+            &set_drive_payload(2, 2e4, 1e-6, 1e-7, 4e-6, 0.3)
+        )[..4],
+        [V, 2, 1, 1],
+        "voltage mode: Applied"
+    );
+    assert_eq!(ask(&mut s, &mut dev, &[V, 3, 0, 19, 1]), [V, 3, 1, 2]);
+    let max_of = |r: &[u8], param: u8| {
+        assert_eq!(r.get(2..6), Some(&[1, 7, 5, param][..]), "{r:02x?}");
+        assert_eq!((r.len(), f32_at(r, 6)), (14, 0.0));
+        f32_at(r, 10)
+    };
+    let up = |m: f32| f32::from_bits(m.to_bits() + 1);
+    // z: a drive far above the room is refused with m_z.
+    let mz = max_of(
+        &ask(
+            &mut s,
+            &mut dev,
+            &set_drive_payload(4, 2e4, 3e-6, 1e-7, 4e-6, 0.3),
+        ),
+        1,
+    );
+    assert!(mz > 1e-6 && mz < 3e-6, "{mz}");
+    let r = ask(
+        &mut s,
+        &mut dev,
+        &set_drive_payload(5, 2e4, up(mz), 1e-7, 4e-6, 0.3),
+    );
+    assert_eq!(max_of(&r, 1), mz, "one f32 step above m_z");
+    let r = ask(
+        &mut s,
+        &mut dev,
+        &set_drive_payload(6, 2e4, mz, 1e-7, 4e-6, 0.3),
+    );
+    assert_eq!(&r[..4], [V, 6, 1, 1], "m_z itself: {r:02x?}");
+    // x: the same with the tangential channel's room (its zero code 2048,
+    // room 2047 codes: m_x ≈ 1.48 µm), asked between m_x and the
+    // voltage mode's `max_amp_x_m` (2047 codes · 1 nm), which check 6 reports.
+    let mx = max_of(
+        &ask(
+            &mut s,
+            &mut dev,
+            &set_drive_payload(7, 2e4, 1e-6, 1.9e-6, 4e-6, 0.3),
+        ),
+        2,
+    );
+    assert!(mx > 1e-6 && mx < 1.9e-6, "{mx}");
+    let r = ask(
+        &mut s,
+        &mut dev,
+        &set_drive_payload(8, 2e4, 1e-6, up(mx), 4e-6, 0.3),
+    );
+    assert_eq!(max_of(&r, 2), mx, "one f32 step above m_x");
+    let r = ask(
+        &mut s,
+        &mut dev,
+        &set_drive_payload(9, 2e4, 1e-6, mx, 4e-6, 0.3),
+    );
+    assert_eq!(&r[..4], [V, 9, 1, 1], "m_x itself: {r:02x?}");
+    // Over 55 frequencies (17…23.6 kHz) and offsets (3…4.1 µm; 0.85·u_z0 passes
+    // checks 4 and 5, so check 8 is the one refused): the voltage
+    // rounds differently each time, m is accepted every time.
+    for k in 0..55u32 {
+        let seq = 10 + 2 * k as u8;
+        let f = 17e3 + 100.0 * f64::from(k) + 0.37 * f64::from(k * k);
+        let off = 3e-6 + 2e-8 * k as f32;
+        let r = ask(
+            &mut s,
+            &mut dev,
+            &set_drive_payload(seq, f, 0.85 * off, 1e-7, off, 0.3),
+        );
+        let m = max_of(&r, 1);
+        let r = ask(
+            &mut s,
+            &mut dev,
+            &set_drive_payload(seq + 1, f, m, 1e-7, off, 0.3),
+        );
+        assert_eq!(
+            &r[2..4],
+            [1, 1],
+            "{f} Hz, u_z0 {off:e} m: m {m:e} refused: {r:02x?}"
+        );
+    }
+}
+
+#[test]
 fn displacement_mode_requests_get_the_spec_answers() {
     // docs/protocol.md, "The displacement mode": requests 17–19, response 9,
     // error 16, DriveParam 10–13, check 8 of SetDrive, Status.mode.

@@ -104,7 +104,7 @@ pub const FORGET: f32 = 0.5;
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ControlError {
-    /// The target is not finite or `|μ*| ≥ μ₀`.
+    /// The target is not finite or `|μ*| > μ₀`.
     BadTarget,
     /// v₀ is zero or not finite (μ is not unique at rest).
     BadVelocity,
@@ -124,7 +124,7 @@ pub enum ControlError {
 impl fmt::Display for ControlError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            ControlError::BadTarget => f.write_str("the target mu must be finite with |mu| < mu0"),
+            ControlError::BadTarget => f.write_str("the target mu must be finite with |mu| <= mu0"),
             ControlError::BadVelocity => f.write_str("v0 must be finite and != 0"),
             ControlError::NoOffset => f.write_str("the drive has no normal offset"),
             ControlError::OutOfReach { min, max } => {
@@ -177,7 +177,7 @@ pub fn plan(
 ) -> Result<Plan, ControlError> {
     let mu0 = scene.mu0();
     let base = *scene.params();
-    if !(target_mu.is_finite() && target_mu.abs() < mu0) {
+    if !(target_mu.is_finite() && target_mu.abs() <= mu0) {
         return Err(ControlError::BadTarget);
     }
     if !(v0.is_finite() && v0 != 0.0) {

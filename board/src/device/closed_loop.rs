@@ -135,7 +135,7 @@ fn idle_state() -> ControlState {
 
 impl<const N: usize> Device<'_, N> {
     /// Checks a closed-loop setting, in this order: a latched fault; the
-    /// target within `±μ₀` (exclusive) of the device's contact; v₀ finite,
+    /// target within `±μ₀` (inclusive) of the device's contact; v₀ finite,
     /// ≠ 0, within `±MAX_VELOCITY_M_S`; κ in `[MIN_GAIN, 1]`; periods in
     /// `1..=CONTROL_MAX_PERIODS`; rate in `(0, slew_m_per_s]`; the drive
     /// running; no host measurement or stream running (`busy`). Nothing is
@@ -153,7 +153,7 @@ impl<const N: usize> Device<'_, N> {
         }
         let mu0 = self.contact.mu0;
         let out = |param, min, max| DeviceError::OutOfRange { param, min, max };
-        if !(s.target_mu.is_finite() && s.target_mu.abs() < mu0) {
+        if !(s.target_mu.is_finite() && s.target_mu.abs() <= mu0) {
             return Err(out(DriveParam::TargetMu, -mu0, mu0));
         }
         if !(s.v0_m_s.is_finite() && s.v0_m_s != 0.0 && s.v0_m_s.abs() <= MAX_VELOCITY_M_S) {

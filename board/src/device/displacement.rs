@@ -463,14 +463,20 @@ impl<const N: usize> Device<'_, N> {
         let h_model = self.model_h_at(&t, at);
         let mut levels = [Level { amp: 0.0, dc: 0.0 }; 2];
         let mut words = [0u32; 2];
+        let wanted = [d.amp_z_m, d.amp_x_m];
         for ch in 0..2 {
             let h = h_model[ch] * c[ch];
-            let (lv, w) = level_of(target[ch] / h, dc[ch]);
+            let (mut lv, w) = level_of(target[ch] / h, dc[ch]);
             let room = dc[ch].min(f32::from(crate::dds::DAC_MAX) - dc[ch]);
+            // The largest displacement that fits, in the f32 the refusal
+            // reports: the amplitude is compared with it (inclusive, so the
+            // reported maximum sent back is accepted), and the level's
+            // rounding past the room (an ulp or two) is the room itself.
             // NaN (a zero model response) fails the comparison: refused.
-            let fits = lv.amp <= room;
+            let max = room.max(0.0) * DAC_VOLTS_PER_CODE as f32 * norm(h);
+            let fits = wanted[ch] <= max;
+            lv.amp = lv.amp.min(room);
             if !fits || lv.check().is_err() {
-                let max = room.max(0.0) * DAC_VOLTS_PER_CODE as f32 * norm(h);
                 return Err(DeviceError::OutOfRange {
                     param: if ch == 0 {
                         DriveParam::AmpZ
