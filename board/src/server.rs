@@ -341,6 +341,11 @@ impl Server {
         periods: u32,
     ) -> Result<Response, WireError> {
         if on {
+            let faults = dev.with(|d| d.faults());
+            if faults != 0 {
+                // As `Measure`: no stream starts (or changes) with a fault latched.
+                return Err(WireError::Faulted(faults));
+            }
             device::check_periods(periods)?;
             if self.stream.periods.is_none() && dev.with(|d| d.status().measuring || d.control_on())
             {

@@ -648,3 +648,64 @@ impl VirtualDevice {
         self.samples += HALF as u64;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use board::protocol::{
+        decode, encode, Body, Deframed, Deframer, Frame, Request, Response, MAX_FRAME,
+        PROTOCOL_VERSION,
+    };
+
+    /// The answers to `seq` among the bytes a virtual device sent.
+    fn answers_to(seq: u32, out: &[u8]) -> Vec<Response> {
+        let mut df = Deframer::default();
+        let mut found = Vec::new();
+        for &b in out {
+            if let Deframed::Frame(f) = df.push(b, 0) {
+                if let Ok(fr) = decode(f) {
+                    if let (true, Body::Response(r)) = (fr.seq == seq, fr.body) {
+                        found.push(r);
+                    }
+                }
+            }
+        }
+        found
+    }
+
+    /// docs/protocol.md, "Inter-byte timeout": measured in device time. A
+    /// `GetStatus` split in two with 50 ms of the virtual device's time
+    /// between the halves is answered; split by 150 ms (> 100 ms) its first
+    /// half is discarded and the request gets no `Status` (wall time between
+    /// the two writes is nil in both cases).
+    #[test]
+    fn the_inter_byte_timeout_counts_device_time() {
+        let mut buf = [0u8; MAX_FRAME];
+        let frame = |seq: u32, buf: &mut [u8; MAX_FRAME]| {
+            encode(
+                &Frame {
+                    version: PROTOCOL_VERSION,
+                    seq,
+                    body: Body::Request(Request::GetStatus),
+                },
+                buf,
+            )
+            .unwrap()
+            .to_vec()
+        };
+        for (seq, gap_s, answered) in [(9u32, 0.05, true), (10, 0.15, false)] {
+            let opts = PlantSpec::default()
+                .options(0.0, 0.0, 0.0, ["v0", "noise", "offset"])
+                .unwrap();
+            let mut v = VirtualDevice::new(opts);
+            let bytes = frame(seq, &mut buf);
+            let cut = bytes.len() / 2;
+            let mut out = v.receive(&bytes[..cut]);
+            out.extend(v.advance((gap_s * v.sample_rate()) as usize));
+            out.extend(v.receive(&bytes[cut..]));
+            let got = answers_to(seq, &out);
+            let status = got.iter().any(|r| matches!(r, Response::Status(_)));
+            assert_eq!(status, answered, "gap {gap_s} s: {got:?}");
+        }
+    }
+}

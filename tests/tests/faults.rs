@@ -289,6 +289,23 @@ fn adc_saturation_with_a_stream_reaches_the_safe_state() {
         "{:?}",
         b.tele
     );
+    // A new stream with the fault latched is refused like `Measure`
+    // (docs/protocol.md, `Stream`): nothing starts, no telemetry follows.
+    let before = b.tele.len();
+    assert_eq!(
+        b.call(on),
+        Response::Error(WireError::Faulted(faults::ADC_SATURATED))
+    );
+    for _ in 0..10 {
+        b.half(MID);
+    }
+    assert!(
+        !b.tele[before..]
+            .iter()
+            .any(|t| matches!(t, Telemetry::Estimate(_) | Telemetry::StreamStopped(_))),
+        "{:?}",
+        b.tele
+    );
     assert_safe_state_and_recovery(&mut b, faults::ADC_SATURATED, 1);
 }
 

@@ -1471,15 +1471,23 @@ fn displacement_mode_requests_get_the_spec_answers() {
     // mode already in force: Ok.
     assert_eq!(ask(&mut s, &mut dev, &[V, 19, 0, 17, 0]), [V, 19, 1, 7, 16]);
     assert_eq!(ask(&mut s, &mut dev, &[V, 20, 0, 19, 1]), [V, 20, 1, 2]);
-    // `Reset` (13) keeps the transducers and the mode ("Reset": settings kept):
-    // GetTransducers still answers Some (01 after the response index 9), the
-    // status' mode (byte 23) is still 1.
+    // `Reset` (13) keeps the transducers, the mode, the displacement options
+    // and the lift-off permission ("Reset": settings kept): set before it
+    // tracking Z (1) with headroom 3.5 (request 20) and SetLiftOff{allow:
+    // true} (14); after it GetTransducers still answers Some (01 after the
+    // response index 9), the status' liftoff_allowed (byte 21) is 1, mode
+    // (byte 23) 1, track (28) 1, headroom (29) 3.5.
+    assert_eq!(ask(&mut s, &mut dev, &opts(43, 1, 3.5)), [V, 43, 1, 2]);
+    assert_eq!(ask(&mut s, &mut dev, &[V, 44, 0, 14, 1]), [V, 44, 1, 2]);
     assert_eq!(ask(&mut s, &mut dev, &[V, 40, 0, 13]), [V, 40, 1, 2]);
     assert_eq!(
         &ask(&mut s, &mut dev, &[V, 41, 0, 18])[..5],
         [V, 41, 1, 9, 1]
     );
-    assert_eq!(ask(&mut s, &mut dev, &[V, 42, 0, 11])[23], 1);
+    let st = ask(&mut s, &mut dev, &[V, 42, 0, 11]);
+    assert_eq!((st[21], st[23], st[28], f32_at(&st, 29)), (1, 1, 1, 3.5));
+    assert_eq!(ask(&mut s, &mut dev, &[V, 45, 0, 14, 0]), [V, 45, 1, 2]);
+    assert_eq!(ask(&mut s, &mut dev, &opts(46, 0, 2.0)), [V, 46, 1, 2]);
     // Back to voltage mode, then they can be forgotten.
     assert_eq!(ask(&mut s, &mut dev, &[V, 21, 0, 19, 0]), [V, 21, 1, 2]);
     assert_eq!(ask(&mut s, &mut dev, &[V, 22, 0, 11])[23], 0);

@@ -325,3 +325,50 @@ fn tracking_refuses_an_amplitude_it_cannot_phase() {
         .unwrap();
     b.dev.set_drive(s).unwrap();
 }
+
+/// docs/protocol.md, "Tracking and headroom": tracking switched off while
+/// running keeps the DDS at the frequency the tracking moved it to (no jump
+/// of the drive), `Status` then shows no tracking (`locked` false,
+/// `tracking_error_hz` None); the next `SetDrive` retunes to its own
+/// `freq_hz`, even the setting's same value.
+#[test]
+fn tracking_switched_off_while_running_keeps_the_tracked_frequency() {
+    let table = SineTable::<1024>::libm();
+    let off = 3.0 * F_R / (2.0 * loaded(300.0));
+    let mut b = tracking_bench(&table, 0.0, F_R - off);
+    for _ in 0..(0.15 / b.t_half()) as usize {
+        b.step();
+    }
+    let st = b.dev.status();
+    assert!(st.locked, "{st:?}");
+    let tracked = f64::from(st.frequency_hz);
+    // On the resonance within 0.5 Hz (as in tracking_locks_from_three_half_bands_off),
+    // 115 Hz from the setting.
+    assert!((tracked - F_R).abs() <= 0.5, "{tracked} Hz");
+    b.dev
+        .set_displacement_options(DisplacementOptions {
+            track: Track::None,
+            headroom: 2.0,
+        })
+        .unwrap();
+    for _ in 0..(0.02 / b.t_half()) as usize {
+        b.step();
+    }
+    let st = b.dev.status();
+    assert_eq!(
+        (st.faults, st.locked, st.tracking_error_hz),
+        (0, false, None)
+    );
+    assert!(st.running);
+    // Unmoved: the same f32 the tracking left.
+    assert_eq!(f64::from(st.frequency_hz), tracked);
+    // The setting's own frequency again: retuned to it (within f32's
+    // resolution at 20 kHz, 0.002 Hz).
+    let mut s = setting(2e-6);
+    s.freq_hz = F_R - off;
+    b.dev.set_drive(s).unwrap();
+    b.step();
+    let f = f64::from(b.dev.status().frequency_hz);
+    assert!((f - (F_R - off)).abs() <= 0.002, "{f} Hz");
+    eprintln!("tracked {tracked} Hz, then {f} Hz");
+}
