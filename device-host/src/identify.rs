@@ -9,13 +9,41 @@
 //! offset of the accepted drive (the preload the contact is identified
 //! under), in voltage mode:
 //! 1. a coarse pass of `--points` frequencies over `[--from, --to]`
-//!    (default ±5 % around the drive's frequency) at a small amplitude:
-//!    1 % of the normal channel's lift-off limit, or of the largest
-//!    tangential amplitude, in the DAC calibration's metres;
-//! 2. the amplitude rescaled so that the largest response of the coarse
-//!    pass becomes [`PEAK_FRACTION`] of that bound (never a step beyond the
-//!    DAC); a fine pass of `--fine-points` over ±2 coarse steps around the
-//!    coarse peak.
+//!    (default ±5 % around the drive's frequency) at most at a small
+//!    amplitude: 1 % of the channel's bound B (normal: the lift-off limit;
+//!    tangential: the largest amplitude), in the DAC calibration's metres;
+//! 2. a fine pass of `--fine-points` over ±2 coarse steps around the
+//!    coarse peak, at most at the voltage that puts the coarse pass's
+//!    largest response at [`PEAK_FRACTION`] of B (never a step beyond the
+//!    DAC).
+//!
+//! **Every point's voltage is planned** from what the sweep measured so
+//! far, so that no mode up to [`Q_MAX`] is driven toward B, wherever its
+//! peak hides between the points (docs/transducers.md, "A sweep that
+//! cannot ring a mode up", eqs. I1–I4). For one mode of eq. 1 (any f_r,
+//! gain and lag, Q ≤ Q_MAX) the response at f is bounded by the response
+//! measured at any f_k:
+//!
+//! ```text
+//! |H(f)| ≤ |H(f_k)|·G(f_k/f),   G(ρ) = 1 + ρ + (Q_MAX + ½)·|1 − ρ²|        (I1)
+//! ```
+//!
+//! (`D(r) = √((1 − r²)² + (r/Q)²)`, `|H| = g/D`; `D(ρr) ≤ |1 − r²| +
+//! r²|1 − ρ²| + ρr/Q` and `r²/D(r) ≤ Q + ½`). The point's voltage is
+//!
+//! ```text
+//! V = min(V_cap, SAFE_FRACTION·B / min_k(1.1·|H(f_k)|·G(f_k/f)))           (I2)
+//! ```
+//!
+//! (the first point of a channel, with nothing measured, at `V_cap/100`).
+//! A point measured below [`PEAK_FRACTION`]·B is raised at its own
+//! frequency to `min(V_cap, PEAK_FRACTION·B/|H(f)|)` (I3; only in the fine
+//! pass, where the fit needs the signal, and only when that at least
+//! doubles it) and measured again: at one frequency the response is
+//! known, the raise safe. While a point settles its measured amplitude is
+//! watched: past [`ABORT_FRACTION`]·B the voltage is cut at once to put it
+//! at SAFE_FRACTION·B/2 and the point settles again (I4; at most
+//! [`MAX_CUTS`] times, then the sweep stops, nothing stored).
 //!
 //! At each frequency the mode is left `--settle-ms`, then the device's
 //! measured response `X/U` (`Status.measured`) of [`WINDOWS_PER_POINT`]
@@ -40,13 +68,32 @@ use crate::client::Client;
 use crate::names::fault_names;
 use crate::{Error, Result};
 
-/// The coarse pass's largest response is scaled to this fraction of the
-/// channel's bound (normal: the lift-off limit; tangential: the largest
-/// amplitude) for the fine pass.
+/// The fine pass's voltage puts the coarse pass's largest response at this
+/// fraction of the channel's bound B (normal: the lift-off limit;
+/// tangential: the largest amplitude), and a point measured below it is
+/// raised to it at its own frequency (eq. I3).
 pub const PEAK_FRACTION: f64 = 0.25;
 
-/// The Q the default settling time allows for (`5·Q_MAX/(π f)`).
-pub const Q_MAX: f64 = 1000.0;
+/// The largest Q the sweep is planned for: the default settling time
+/// (`5·Q_MAX/(π f)`) and the bound on an unseen peak (eq. I1) hold up to
+/// it. Unloaded transducers reach Q 500–1500.
+pub const Q_MAX: f64 = 2000.0;
+
+/// A point's voltage is planned so that the bound on its steady response
+/// (eq. I1 from every point measured so far) is at most this fraction of B.
+pub const SAFE_FRACTION: f64 = 0.3;
+
+/// A point whose measured amplitude passes this fraction of B while it
+/// settles is cut at once (eq. I4), before the device's own guard (the
+/// normal channel faults at the offset, B/(1 − margin)).
+pub const ABORT_FRACTION: f64 = 0.8;
+
+/// Cuts allowed per point before the sweep gives up (nothing stored).
+pub const MAX_CUTS: u32 = 4;
+
+/// The measured |X/U| a bound starts from is taken this much larger: the
+/// pickups' rounding and the settling residue (e⁻⁵ = 0.7 %) of a point.
+const MEASURE_MARGIN: f64 = 1.1;
 
 /// The fine pass's settling, in envelope time constants of the coarse fit.
 pub const FINE_SETTLE_TAUS: f64 = 8.0;
@@ -341,13 +388,37 @@ fn status(c: &mut Client) -> Result<Status> {
     }
 }
 
+/// The watch on a settling point (eq. I4): channel `ch`'s measured
+/// amplitude must stay at most `abort_m`.
+#[derive(Debug, Clone, Copy)]
+struct Watch {
+    ch: usize,
+    abort_m: f64,
+}
+
+impl Watch {
+    /// The measured amplitude if it passed the abort level.
+    fn passed(&self, s: &Status) -> Option<f64> {
+        let m = s.measured?;
+        let a = f64::from(if self.ch == 0 { m.amp_z_m } else { m.amp_x_m });
+        (a > self.abort_m).then_some(a)
+    }
+}
+
 /// Waits `d` of *device* time at drive frequency `f_hz`, counted in the
 /// pickups' lock-in windows (`MeasuredDrive::windows`): a window is the
 /// whole 64-sample ADC blocks spanning one drive period,
 /// `⌈f_s/(64 f)⌉·64/f_s` s (`device::motion`). Under QEMU, or on a loaded
 /// machine, device time runs slower than the host's clock: a wall-clock
-/// wait would cut the settling short.
-fn wait(c: &mut Client, d: Duration, f_hz: f64, fs: f64) -> Result<()> {
+/// wait would cut the settling short. `Err(a)` inside: the watched
+/// amplitude passed its abort level at `a` m.
+fn wait(
+    c: &mut Client,
+    d: Duration,
+    f_hz: f64,
+    fs: f64,
+    watch: Watch,
+) -> Result<std::result::Result<(), f64>> {
     let block = 64.0;
     let window_s = (fs / (block * f_hz)).ceil() * block / fs;
     let n = (d.as_secs_f64() / window_s).ceil() as u64;
@@ -357,9 +428,12 @@ fn wait(c: &mut Client, d: Duration, f_hz: f64, fs: f64) -> Result<()> {
     loop {
         let s = status(c)?;
         check_faults(&s)?;
+        if let Some(a) = watch.passed(&s) {
+            return Ok(Err(a));
+        }
         if let (Some(a), Some(b)) = (w0, windows(&s)) {
             if b.wrapping_sub(a) & 0xffff_ffff >= n {
-                return Ok(());
+                return Ok(Ok(()));
             }
         }
         if start.elapsed() > Duration::from_secs(30) + 20 * d {
@@ -393,8 +467,9 @@ fn check_faults(s: &Status) -> Result<()> {
     if s.faults != 0 {
         let names = fault_names(s.faults).join(", ");
         let hint = if s.faults & board::device::faults::MEASURED_LIFTOFF != 0 {
-            " (the normal transducer rang beyond the offset: identify it at a larger --offset-z \
-             of the drive, or with a smaller response: fewer --points near the peak)"
+            " (the normal transducer rang beyond the offset although every point was planned \
+             below it: a Q above the sweep's Q_MAX, or more than one mode near the span? \
+             identify at a larger --offset-z of the drive, or over a narrower --from/--to)"
         } else {
             ""
         };
@@ -406,16 +481,20 @@ fn check_faults(s: &Status) -> Result<()> {
 }
 
 /// The mean measured response of channel `ch` over [`WINDOWS_PER_POINT`]
-/// new lock-in windows, m/V.
-fn response(c: &mut Client, ch: usize) -> Result<(f64, f64)> {
+/// new lock-in windows, m/V; `Err(a)` inside when the watched amplitude
+/// passed its abort level at `a` m meanwhile.
+fn response(c: &mut Client, watch: Watch) -> Result<std::result::Result<(f64, f64), f64>> {
     let mut last = None;
     let (mut re, mut im, mut n) = (0.0, 0.0, 0u32);
     let start = Instant::now();
     while n < WINDOWS_PER_POINT {
         let s = status(c)?;
         check_faults(&s)?;
+        if let Some(a) = watch.passed(&s) {
+            return Ok(Err(a));
+        }
         if let Some(m) = s.measured {
-            let r = if ch == 0 {
+            let r = if watch.ch == 0 {
                 m.response_z_m_per_v
             } else {
                 m.response_x_m_per_v
@@ -438,7 +517,96 @@ fn response(c: &mut Client, ch: usize) -> Result<(f64, f64)> {
         // virtual device advances its clock only while the client waits).
         let _ = c.next_telemetry(Duration::from_millis(2))?;
     }
-    Ok((re / f64::from(n), im / f64::from(n)))
+    Ok(Ok((re / f64::from(n), im / f64::from(n))))
+}
+
+/// The bound G of eq. I1 on the growth of one mode's response |H| from a
+/// frequency f_k to f, `ρ = f_k/f`, for any f_r, gain and lag and
+/// Q ≤ [`Q_MAX`].
+pub fn growth_bound(rho: f64) -> f64 {
+    1.0 + rho + (Q_MAX + 0.5) * (1.0 - rho * rho).abs()
+}
+
+/// The voltage of a point at `f` (eq. I2): at most `cap` V, and at most
+/// what puts the bound of eq. I1, from every point `known` so far
+/// (`(f_k, |H_k|)`, Hz and m/V), at [`SAFE_FRACTION`] of `bound` m; with
+/// nothing known, `cap/100`.
+pub fn planned_volts(f: f64, cap: f64, bound: f64, known: &[(f64, f64)]) -> f64 {
+    let worst = known
+        .iter()
+        .map(|&(fk, hk)| MEASURE_MARGIN * hk * growth_bound(fk / f))
+        .fold(f64::INFINITY, f64::min);
+    if known.is_empty() {
+        cap / 100.0
+    } else {
+        cap.min(SAFE_FRACTION * bound / worst)
+    }
+}
+
+/// One point of a sweep: what it drives and where.
+struct Point<'a> {
+    base: &'a DriveSetting,
+    ch: usize,
+    f: f64,
+    settle: Duration,
+    bound: f64,
+    fs: f64,
+}
+
+impl Point<'_> {
+    /// The drive of this point at `volts` on its channel.
+    fn drive(&self, volts: f64) -> DriveSetting {
+        let amp =
+            (volts / board::dds::DAC_VOLTS_PER_CODE * f64::from(metres_per_code(self.ch))) as f32;
+        DriveSetting {
+            freq_hz: self.f,
+            amp_z_m: if self.ch == 0 { amp } else { 0.0 },
+            amp_x_m: if self.ch == 1 { amp } else { 0.0 },
+            phase_rad: 0.0,
+            ..*self.base
+        }
+    }
+
+    /// Drives the point at `volts` (starting the drive if `started` is
+    /// false), lets it settle and measures its response, cutting the
+    /// voltage whenever the measured amplitude passes [`ABORT_FRACTION`]
+    /// of the bound (eq. I4). Returns the voltage used and `X/U` (m/V).
+    fn measure(
+        &self,
+        c: &mut Client,
+        mut volts: f64,
+        started: &mut bool,
+    ) -> Result<(f64, f64, f64)> {
+        let watch = Watch {
+            ch: self.ch,
+            abort_m: ABORT_FRACTION * self.bound,
+        };
+        for _ in 0..=MAX_CUTS {
+            expect(c.call(Request::SetDrive(self.drive(volts)))?)?;
+            if !*started {
+                expect(c.call(Request::Start)?)?;
+                wait_settled(c, Duration::from_secs(10))?;
+                *started = true;
+            }
+            let got = match wait(c, self.settle, self.f, self.fs, watch)? {
+                Ok(()) => response(c, watch)?,
+                Err(a) => Err(a),
+            };
+            match got {
+                Ok((re, im)) => return Ok((volts, re, im)),
+                // I4: put the amplitude seen at half the safe fraction.
+                Err(a) => volts *= 0.5 * SAFE_FRACTION * self.bound / a,
+            }
+        }
+        Err(Error::failure(format!(
+            "identify: the {} response at {:.1} Hz kept passing {} % of its bound after {MAX_CUTS} \
+             cuts of the voltage (a mode of Q above {Q_MAX}, or more than one mode?); the drive \
+             is stopped, nothing stored",
+            if self.ch == 0 { "normal" } else { "tangential" },
+            self.f,
+            ABORT_FRACTION * 100.0
+        )))
+    }
 }
 
 /// The plan of an identification of `n_chans` channels: its frequencies and
@@ -453,52 +621,80 @@ fn plan(
     let fs = info.sample_rate_hz;
     let window_s = (fs / (64.0 * f_mid)).ceil() * 64.0 / fs;
     let points = n_chans as u32 * (o.points + o.fine_points);
+    // A fine point may be measured twice (raised, eq. I3); cuts (I4) are
+    // not counted.
+    let settles = n_chans as u32 * (o.points + 2 * o.fine_points);
     Progress {
         done: 0,
         points,
-        device_s_max: f64::from(points)
+        device_s_max: f64::from(settles)
             * (settle.as_secs_f64() + f64::from(WINDOWS_PER_POINT) * window_s),
     }
 }
 
-/// Sweeps channel `ch` over `freqs` at amplitude `amp` (m of the DAC
-/// calibration), appending to `rec`; returns the largest measured
-/// displacement amplitude, m.
-#[allow(clippy::too_many_arguments)]
+/// How a pass drives its channel.
+struct Pass<'a> {
+    base: &'a DriveSetting,
+    ch: usize,
+    /// The most voltage a point gets, V.
+    cap_v: f64,
+    /// The channel's bound B, m.
+    bound: f64,
+    settle: Duration,
+    fs: f64,
+    /// Raise a point measured below PEAK_FRACTION·B (eq. I3).
+    raise: bool,
+}
+
+/// Sweeps a pass over `freqs`, each point's voltage planned (eq. I2) from
+/// `known` (`(f, |H|)` of every point measured so far on the channel,
+/// appended to), appending `(f, re, im, volts)` to `rec`; returns the
+/// largest measured displacement amplitude, m.
 fn sweep(
     c: &mut Client,
-    fs: f64,
-    base: &DriveSetting,
-    ch: usize,
-    amp: f32,
+    p: &Pass<'_>,
     freqs: &[f64],
-    settle: Duration,
+    known: &mut Vec<(f64, f64)>,
     rec: &mut Vec<(f64, f64, f64, f64)>,
     tick: &mut dyn FnMut(),
 ) -> Result<f64> {
     let mut peak = 0.0f64;
-    for (i, &f) in freqs.iter().enumerate() {
-        let d = DriveSetting {
-            freq_hz: f,
-            amp_z_m: if ch == 0 { amp } else { 0.0 },
-            amp_x_m: if ch == 1 { amp } else { 0.0 },
-            phase_rad: 0.0,
-            ..*base
+    let mut started = false;
+    // A displacement below one pickup count is not resolved: |H| is at
+    // least a count over the voltage for the bound.
+    let count_m = f64::from(pickup_metres_per_count(p.ch));
+    for &f in freqs {
+        let point = Point {
+            base: p.base,
+            ch: p.ch,
+            f,
+            settle: p.settle,
+            bound: p.bound,
+            fs: p.fs,
         };
-        expect(c.call(Request::SetDrive(d))?)?;
-        if i == 0 {
-            expect(c.call(Request::Start)?)?;
-            wait_settled(c, Duration::from_secs(10))?;
+        let v = planned_volts(f, p.cap_v, p.bound, known);
+        let (mut v, mut re, mut im) = point.measure(c, v, &mut started)?;
+        known.push((f, re.hypot(im).max(count_m / v)));
+        let up = p.cap_v.min(PEAK_FRACTION * p.bound / re.hypot(im));
+        if p.raise && up >= 2.0 * v {
+            (v, re, im) = point.measure(c, up, &mut started)?;
+            known.push((f, re.hypot(im).max(count_m / v)));
         }
-        wait(c, settle, f, fs)?;
-        let (re, im) = response(c, ch)?;
-        let volts =
-            f64::from(amp) / f64::from(metres_per_code(ch)) * board::dds::DAC_VOLTS_PER_CODE;
-        peak = peak.max(re.hypot(im) * volts);
-        rec.push((f, re, im, volts));
+        peak = peak.max(re.hypot(im) * v);
+        rec.push((f, re, im, v));
         tick();
     }
     Ok(peak)
+}
+
+/// The board's pickup calibration of channel `ch`, m per count.
+fn pickup_metres_per_count(ch: usize) -> f32 {
+    let cfg = crate::virtual_device::config();
+    if ch == 0 {
+        cfg.pickup_z.gain
+    } else {
+        cfg.pickup_x.gain
+    }
 }
 
 /// The board's calibration of channel `ch`, m per code (as the device's).
@@ -553,17 +749,28 @@ fn identify_channel(
     settle: Duration,
     tick: &mut dyn FnMut(),
 ) -> Result<ChannelFit> {
-    // The bound the response is scaled to: lift-off limit or largest Δu_x.
+    // The bound B: lift-off limit or largest Δu_x.
     let bound = if ch == 0 {
         f64::from(1.0 - info.liftoff_margin) * f64::from(base.offset_z_m)
     } else {
         f64::from(info.max_amp_x_m)
     };
+    let volts_of = |m: f64| m / f64::from(metres_per_code(ch)) * board::dds::DAC_VOLTS_PER_CODE;
     let mut rec = Vec::new();
-    let amp0 = (0.01 * bound) as f32;
+    let mut known = Vec::new();
     let coarse = linspace(from, to, a.points);
     let fs = info.sample_rate_hz;
-    let peak = sweep(c, fs, base, ch, amp0, &coarse, settle, &mut rec, tick)?;
+    let cap0 = volts_of(0.01 * bound);
+    let mut pass = Pass {
+        base,
+        ch,
+        cap_v: cap0,
+        bound,
+        settle,
+        fs,
+        raise: false,
+    };
+    let peak = sweep(c, &pass, &coarse, &mut known, &mut rec, tick)?;
     let k = rec
         .iter()
         .enumerate()
@@ -574,21 +781,22 @@ fn identify_channel(
         .map_or(0, |(i, _)| i);
     let step = (to - from) / f64::from(a.points - 1);
     let f_pk = rec[k].0;
-    // Scale to PEAK_FRACTION of the bound (the DAC's range caps it: the
-    // device refuses a level beyond it, named).
-    let scale = if peak > 0.0 {
-        PEAK_FRACTION * bound / peak
+    // The fine pass's cap puts the coarse peak's response at
+    // PEAK_FRACTION of B (at most 100 × the coarse cap: the bound in the
+    // calibration's metres, which the device accepts).
+    let h_pk = rec[k].1.hypot(rec[k].2);
+    pass.cap_v = if peak > 0.0 && h_pk > 0.0 {
+        (PEAK_FRACTION * bound / h_pk).min(100.0 * cap0)
     } else {
-        1.0
+        cap0
     };
-    let amp1 = (f64::from(amp0) * scale.min(100.0)) as f32;
     let fine = linspace(
         (f_pk - 2.0 * step).max(from),
         (f_pk + 2.0 * step).min(to),
         a.fine_points,
     );
     // The fine pass settles for FINE_SETTLE_TAUS of the coarse fit's τ̂.
-    let fine_settle = match (
+    pass.settle = match (
         a.settle_ms,
         fitid::fit(&samples(&rec), None, &FitConfig::DEFAULT),
     ) {
@@ -598,9 +806,10 @@ fn identify_channel(
         }
         _ => settle,
     };
+    pass.raise = true;
     expect(c.call(Request::Stop)?)?;
     let mut rec = Vec::new();
-    sweep(c, fs, base, ch, amp1, &fine, fine_settle, &mut rec, tick)?;
+    sweep(c, &pass, &fine, &mut known, &mut rec, tick)?;
     rec.sort_by(|x, y| x.0.total_cmp(&y.0));
     rec.dedup_by(|x, y| x.0 == y.0);
     let record = samples(&rec);
