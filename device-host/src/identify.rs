@@ -37,10 +37,12 @@
 //!
 //! (the first point of a channel, with nothing measured, at `V_cap/100`).
 //! A point measured below [`PEAK_FRACTION`]·B is raised at its own
-//! frequency to `min(V_cap, PEAK_FRACTION·B/|H(f)|)` (I3; only in the fine
-//! pass, where the fit needs the signal, and only when that at least
-//! doubles it) and measured again: at one frequency the response is
-//! known, the raise safe. While a point settles its measured amplitude is
+//! frequency to `min(V_cap, PEAK_FRACTION·B/|H(f)|)` and measured again
+//! (I3; only when that at least doubles the voltage, at most
+//! [`MAX_RAISES`] times; a displacement below one pickup count counts as
+//! one): at one frequency the response is known, the raise safe. The
+//! coarse peak is the largest response among the points the pickup
+//! resolves (3 counts or more). While a point settles its measured amplitude is
 //! watched: past [`ABORT_FRACTION`]·B the voltage is cut at once to put it
 //! at SAFE_FRACTION·B/2 and the point settles again (I4; at most
 //! [`MAX_CUTS`] times, then the sweep stops, nothing stored).
@@ -90,6 +92,13 @@ pub const ABORT_FRACTION: f64 = 0.8;
 
 /// Cuts allowed per point before the sweep gives up (nothing stored).
 pub const MAX_CUTS: u32 = 4;
+
+/// Raises of one point at its own frequency at most (eq. I3).
+pub const MAX_RAISES: u32 = 2;
+
+/// A coarse point's displacement counts for the peak's place from this
+/// many pickup counts on.
+const RESOLVED_COUNTS: f64 = 3.0;
 
 /// The measured |X/U| a bound starts from is taken this much larger: the
 /// pickups' rounding and the settling residue (e⁻⁵ = 0.7 %) of a point.
@@ -642,8 +651,6 @@ struct Pass<'a> {
     bound: f64,
     settle: Duration,
     fs: f64,
-    /// Raise a point measured below PEAK_FRACTION·B (eq. I3).
-    raise: bool,
 }
 
 /// Sweeps a pass over `freqs`, each point's voltage planned (eq. I2) from
@@ -672,13 +679,18 @@ fn sweep(
             bound: p.bound,
             fs: p.fs,
         };
-        let v = planned_volts(f, p.cap_v, p.bound, known);
-        let (mut v, mut re, mut im) = point.measure(c, v, &mut started)?;
-        known.push((f, re.hypot(im).max(count_m / v)));
-        let up = p.cap_v.min(PEAK_FRACTION * p.bound / re.hypot(im));
-        if p.raise && up >= 2.0 * v {
+        let planned = planned_volts(f, p.cap_v, p.bound, known);
+        let (mut v, mut re, mut im) = point.measure(c, planned, &mut started)?;
+        for raise in 0..=MAX_RAISES {
+            let h = re.hypot(im).max(count_m / v);
+            known.push((f, h));
+            // I3: at this frequency |H| is known (an unresolved one at
+            // most a count over the voltage): raise toward PEAK_FRACTION·B.
+            let up = p.cap_v.min(PEAK_FRACTION * p.bound / h);
+            if raise == MAX_RAISES || up < 2.0 * v {
+                break;
+            }
             (v, re, im) = point.measure(c, up, &mut started)?;
-            known.push((f, re.hypot(im).max(count_m / v)));
         }
         peak = peak.max(re.hypot(im) * v);
         rec.push((f, re, im, v));
@@ -768,12 +780,18 @@ fn identify_channel(
         bound,
         settle,
         fs,
-        raise: false,
     };
     let peak = sweep(c, &pass, &coarse, &mut known, &mut rec, tick)?;
+    // The coarse peak among the points whose displacement the pickup
+    // resolves (at least RESOLVED_COUNTS counts): below, X/U is mostly
+    // rounding over a small voltage. All points if none is.
+    let count_m = f64::from(pickup_metres_per_count(ch));
+    let resolved = |r: &(f64, f64, f64, f64)| r.1.hypot(r.2) * r.3 >= RESOLVED_COUNTS * count_m;
+    let any_resolved = rec.iter().any(resolved);
     let k = rec
         .iter()
         .enumerate()
+        .filter(|(_, r)| !any_resolved || resolved(r))
         .max_by(|x, y| {
             let m = |r: &(f64, f64, f64, f64)| r.1.hypot(r.2);
             m(x.1).total_cmp(&m(y.1))
@@ -806,7 +824,6 @@ fn identify_channel(
         }
         _ => settle,
     };
-    pass.raise = true;
     expect(c.call(Request::Stop)?)?;
     let mut rec = Vec::new();
     sweep(c, &pass, &fine, &mut known, &mut rec, tick)?;

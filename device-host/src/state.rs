@@ -112,3 +112,29 @@ pub fn restoring<T>(c: &mut Client, body: impl FnOnce(&mut Client) -> Result<T>)
         }),
     }
 }
+
+/// Runs `body`, which changes the device in several requests (e.g. the
+/// mode, the options, then the drive), all or nothing: when it fails —
+/// the device refuses a later request, the link fails, an interruption —
+/// the device is put back as it was before; when it succeeds its changes
+/// stay. A failure to restore is said in the error.
+///
+/// # Errors
+/// `body`'s error (with the restoring's failure appended, if any).
+pub fn all_or_nothing<T>(c: &mut Client, body: impl FnOnce(&mut Client) -> Result<T>) -> Result<T> {
+    let before = DeviceState::read(c)?;
+    let e = match body(c) {
+        Ok(t) => return Ok(t),
+        Err(e) => e,
+    };
+    match c.uninterrupted(|c| before.restore(c)) {
+        Ok(()) => Err(e),
+        Err(b) => Err(Error {
+            code: e.code,
+            msg: format!(
+                "{}; and the device could not be put back as it was ({})",
+                e.msg, b.msg
+            ),
+        }),
+    }
+}

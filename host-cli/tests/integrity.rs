@@ -483,3 +483,50 @@ fn the_plant_refuses_what_it_cannot_be_by_the_flag_given() {
         assert_eq!(err.trim().lines().count(), 1, "{err}");
     }
 }
+
+/// Issue 41 §1: `drive set` sends the mode, the options, then the drive; a
+/// drive the device refuses puts the mode and the options back as they
+/// were (all or nothing). Identified transducers (a short identification),
+/// the device in voltage mode with headroom 2: `drive set` (displacement,
+/// `--headroom 3`) with a Δu_z the DAC cannot give in displacement mode
+/// (check 8) is refused naming `--amp-z`, and the mode, options, drive and
+/// running state are as before.
+#[test]
+fn a_refused_drive_puts_the_mode_and_options_back() {
+    // A normal transducer a quarter as strong as the bench's: in
+    // displacement mode the DAC's room around u_z0 = 4 µm reaches about
+    // 1.1 µm at 20 kHz, below the lift-off limit 3.8 µm.
+    let s = sim_with(&[RESONANT, &["--plant-gain-z", "2e-8"]].concat(), 600);
+    ok_json(
+        &s,
+        &common::drive_set("20000", "0", "0", "4e-6", Some("40")),
+    );
+    ok_json(
+        &s,
+        &[
+            "identify",
+            "--points",
+            "11",
+            "--fine-points",
+            "11",
+            "--settle-ms",
+            "20",
+        ],
+    );
+    ok_json(
+        &s,
+        &common::drive_set("20000", "1e-6", "2e-7", "4e-6", Some("40")),
+    );
+    let before = state(&s);
+    assert_eq!(before.1, "open_loop", "{before:?}");
+    let args: Vec<&str> = common::drive_set("20000", "2e-6", "2e-7", "4e-6", Some("40"))
+        .into_iter()
+        .filter(|a| *a != "--open-loop")
+        .chain(["--headroom", "3"])
+        .collect();
+    let o = dev(&s, &args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.starts_with("error: --amp-z:"), "{err}");
+    assert_eq!(state(&s), before);
+}

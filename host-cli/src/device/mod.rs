@@ -500,16 +500,21 @@ fn drive_set(c: &mut Client, cmd: &DriveCmd, json: bool) -> CliResult {
             "--headroom: is the displacement mode's (identified transducers), not --open-loop's",
         ));
     }
-    identify::select_mode(c, *open_loop)?;
-    if !*open_loop {
-        expect(c.call(Request::SetDisplacementOptions(
-            board::device::DisplacementOptions {
-                track: (*track).into(),
-                headroom: headroom.value() as f32,
-            },
-        ))?)?;
-    }
-    out(json, &drive_report(c.call(Request::SetDrive(d))?)?)
+    // The mode, the options, then the drive: all or nothing (a refused
+    // drive puts the mode and the options back as they were).
+    let report = device_host::state::all_or_nothing(c, |c| {
+        identify::select_mode(c, *open_loop)?;
+        if !*open_loop {
+            expect(c.call(Request::SetDisplacementOptions(
+                board::device::DisplacementOptions {
+                    track: (*track).into(),
+                    headroom: headroom.value() as f32,
+                },
+            ))?)?;
+        }
+        drive_report(c.call(Request::SetDrive(d))?)
+    })?;
+    out(json, &report)
 }
 
 /// `scene set`: the contact, then the contact as set.
