@@ -772,13 +772,46 @@ fn set_up<'p>(
             headroom: c.headroom as f32,
         }))?;
     }
-    b.ask(Request::SetDrive(DriveSetting {
+    let drive = b.call(Request::SetDrive(DriveSetting {
         freq_hz: plan.freq_hz,
         amp_z_m: AMP_Z0_M,
         amp_x_m: AMP_X_M,
         offset_z_m: OFFSET_Z_M,
         phase_rad: PHASE_DEG.to_radians(),
     }))?;
+    if let Response::Error(board::protocol::WireError::OutOfRange {
+        param: p @ (DriveParam::AmpZ | DriveParam::AmpX),
+        max,
+        ..
+    }) = drive
+    {
+        // The bench has no drive flags: the plant asked for cannot give its
+        // fixed drive. Name the plant's flags of that channel.
+        let f = short(plan.freq_hz);
+        let (ch, want, flags, hint) = if p == DriveParam::AmpZ {
+            (
+                "normal",
+                AMP_Z0_M,
+                "--plant-gain-z, --plant-q-z",
+                "a larger gain or Q (the bench drives at this mode's own resonance)".to_string(),
+            )
+        } else {
+            (
+                "tangential",
+                AMP_X_M,
+                "--plant-gain-x, --plant-resonance-x, --plant-q-x",
+                format!("a larger gain, or a resonance nearer {f} Hz"),
+            )
+        };
+        return Err(Error::usage(format!(
+            "{flags}: this plant's {ch} transducer cannot give the bench's fixed drive: {} m at \
+             {f} Hz (the normal mode's resonance) needs more than the DAC reaches through it \
+             ({} m at most there); {hint}",
+            short(crate::answers::f32v(want)),
+            short(crate::answers::f32v(max)),
+        )));
+    }
+    expect(drive)?;
     b.ask(Request::Start)?;
     Ok(b)
 }

@@ -530,3 +530,34 @@ fn a_refused_drive_puts_the_mode_and_options_back() {
     assert!(err.starts_with("error: --amp-z:"), "{err}");
     assert_eq!(state(&s), before);
 }
+
+/// Issue 41 §3: `control-bench` has no drive flags; a plant that cannot
+/// give its fixed drive (Δu_z 2 µm, Δu_x 0.3 µm at the normal resonance)
+/// is refused naming the plant's flags of that channel, with what the DAC
+/// reaches, not `--amp-z`/`--amp-x` (flags the bench does not have), before
+/// any run and exit 2.
+#[test]
+fn control_bench_names_the_plant_flags_that_cannot_give_its_drive() {
+    for (flags, names) in [
+        (
+            &["--plant-gain-z", "1e-9"][..],
+            "--plant-gain-z, --plant-q-z:",
+        ),
+        (
+            &["--plant-resonance-z", "30000"][..],
+            "--plant-gain-x, --plant-resonance-x, --plant-q-x:",
+        ),
+    ] {
+        let o = fricctl()
+            .args(["device", "control-bench"])
+            .args(flags)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{flags:?}: {err}");
+        assert!(err.starts_with(&format!("error: {names}")), "{err}");
+        assert!(err.contains("m at most there"), "{err}");
+        assert!(!err.contains("--amp-"), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+}
