@@ -1594,3 +1594,57 @@ fn classify_and_static_explain_an_actuator_that_sticks_when_held() {
         }
     }
 }
+
+/// Issue 41 §4: a map that may take long says so before it starts, on a
+/// terminal (run under `script`, which gives the command a pty). A sphere
+/// map of 100 × 100 cells (≈ 4 ms a cell in release) is timed on 16 cells
+/// and announced in one line — at least the 5 s from which it speaks —
+/// before the progress bar; the run is then stopped (the estimate is what
+/// is tested, and it comes before any work on the whole).
+#[test]
+fn a_long_map_prints_its_estimate_up_front_on_a_terminal() {
+    use std::io::{BufRead, BufReader};
+    let bin = assert_cmd::cargo::cargo_bin("fricctl");
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("m.csv");
+    let cmd = format!(
+        "{} map --duz-rel 0.5 --res 100 --profile sphere --csv {}",
+        bin.display(),
+        csv.display()
+    );
+    let mut child = std::process::Command::new("script")
+        .args(["-qec", &cmd, "/dev/null"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .expect("script (util-linux) runs the command on a pty");
+    let out = child.stdout.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(out).split(b'\n').map_while(Result::ok) {
+            let _ = tx.send(String::from_utf8_lossy(&line).into_owned());
+        }
+    });
+    let first = rx
+        .recv_timeout(std::time::Duration::from_secs(120))
+        .expect("a line within 120 s");
+    let _ = child.kill();
+    let _ = child.wait();
+    let first = first.trim();
+    let rest = first
+        .strip_prefix("map: 10000 cells, about ")
+        .unwrap_or_else(|| panic!("{first:?}"));
+    let (v, unit) = rest
+        .strip_suffix(" (timed on 16 of them)")
+        .and_then(|r| r.split_once(' '))
+        .unwrap_or_else(|| panic!("{first:?}"));
+    let s = v.parse::<f64>().unwrap()
+        * match unit {
+            "s" => 1.0,
+            "min" => 60.0,
+            "h" => 3600.0,
+            _ => panic!("{first:?}"),
+        };
+    assert!(s >= 5.0, "{first}");
+    assert!(!csv.exists(), "nothing written before the map is done");
+}

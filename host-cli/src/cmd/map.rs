@@ -153,10 +153,42 @@ pub fn classify_cells(
     profile: &Profile<f64>,
 ) -> CliResult<(Vec<Cell>, Vec<u8>)> {
     let n = ratios.len() * phis.len();
+    estimate_up_front(a, ratios, phis, profile)?;
     let pb = progress_bar(n as u64, "classifying {bar:40} {pos}/{len} cells ({eta})");
     let res = cells(a, ratios, phis, profile, &|| pb.inc(1));
     pb.finish_and_clear();
     res
+}
+
+/// On a terminal, a map of more than 256 cells is first timed on 16 of them
+/// spread over the grid (4 × 4, as the whole map runs: in parallel); when
+/// the whole would take over 5 s the estimate is printed on stderr before
+/// the work starts (the progress bar's own estimate follows).
+fn estimate_up_front(
+    a: f64,
+    ratios: &[f64],
+    phis: &[f64],
+    profile: &Profile<f64>,
+) -> CliResult<()> {
+    let n = ratios.len() * phis.len();
+    if n <= 256 || !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
+        return Ok(());
+    }
+    let pick = |v: &[f64]| -> Vec<f64> { (0..4).map(|k| v[(2 * k + 1) * v.len() / 8]).collect() };
+    let t0 = std::time::Instant::now();
+    cells(a, &pick(ratios), &pick(phis), profile, &|| {})?;
+    let total = t0.elapsed().as_secs_f64() * n as f64 / 16.0;
+    if total > 5.0 {
+        let (v, unit) = if total >= 7200.0 {
+            (total / 3600.0, "h")
+        } else if total >= 120.0 {
+            (total / 60.0, "min")
+        } else {
+            (total, "s")
+        };
+        eprintln!("map: {n} cells, about {v:.0} {unit} (timed on 16 of them)");
+    }
+    Ok(())
 }
 
 /// One axis of the map: `--{name}-min` … `--{name}-max` (or `--phi-min-deg`
