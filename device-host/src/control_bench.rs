@@ -788,21 +788,43 @@ fn set_up<'p>(
         // The bench has no drive flags: the plant asked for cannot give its
         // fixed drive. Name the plant's flags of that channel.
         let f = short(plan.freq_hz);
-        let (ch, want, flags, hint) = if p == DriveParam::AmpZ {
+        let t = &c.transducers;
+        let (ch, want, candidates, hint) = if p == DriveParam::AmpZ {
             (
                 "normal",
                 AMP_Z0_M,
-                "--plant-gain-z, --plant-q-z",
+                vec![
+                    (t.plant_gain_z, "--plant-gain-z"),
+                    (t.plant_q_z, "--plant-q-z"),
+                    (t.plant_resonance_z, "--plant-resonance-z"),
+                ],
                 "a larger gain or Q (the bench drives at this mode's own resonance)".to_string(),
             )
         } else {
             (
                 "tangential",
                 AMP_X_M,
-                "--plant-gain-x, --plant-resonance-x, --plant-q-x",
+                vec![
+                    (t.plant_gain_x, "--plant-gain-x"),
+                    (t.plant_resonance_x, "--plant-resonance-x"),
+                    (t.plant_q_x, "--plant-q-x"),
+                    (t.plant_resonance_z, "--plant-resonance-z"),
+                ],
                 format!("a larger gain, or a resonance nearer {f} Hz"),
             )
         };
+        // The flags given first (the one the user typed leads the line).
+        let given: Vec<&str> = candidates
+            .iter()
+            .filter(|(v, _)| v.is_some())
+            .map(|(_, n)| *n)
+            .collect();
+        let flags = if given.is_empty() {
+            candidates.iter().map(|(_, n)| *n).collect::<Vec<_>>()
+        } else {
+            given
+        }
+        .join(", ");
         return Err(Error::usage(format!(
             "{flags}: this plant's {ch} transducer cannot give the bench's fixed drive: {} m at \
              {f} Hz (the normal mode's resonance) needs more than the DAC reaches through it \

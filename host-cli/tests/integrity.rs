@@ -533,19 +533,21 @@ fn a_refused_drive_puts_the_mode_and_options_back() {
 
 /// Issue 41 §3: `control-bench` has no drive flags; a plant that cannot
 /// give its fixed drive (Δu_z 2 µm, Δu_x 0.3 µm at the normal resonance)
-/// is refused naming the plant's flags of that channel, with what the DAC
-/// reaches, not `--amp-z`/`--amp-x` (flags the bench does not have), before
-/// any run and exit 2.
+/// is refused naming the plant's flags given that shape that channel (the
+/// normal resonance sets the drive frequency), with what the DAC reaches,
+/// not `--amp-z`/`--amp-x` (flags the bench does not have), before any run
+/// and exit 2.
 #[test]
 fn control_bench_names_the_plant_flags_that_cannot_give_its_drive() {
     for (flags, names) in [
-        (
-            &["--plant-gain-z", "1e-9"][..],
-            "--plant-gain-z, --plant-q-z:",
-        ),
+        (&["--plant-gain-z", "1e-9"][..], "--plant-gain-z:"),
         (
             &["--plant-resonance-z", "30000"][..],
-            "--plant-gain-x, --plant-resonance-x, --plant-q-x:",
+            "--plant-resonance-z:",
+        ),
+        (
+            &["--plant-resonance-x", "25000", "--plant-q-x", "50"][..],
+            "--plant-resonance-x, --plant-q-x:",
         ),
     ] {
         let o = fricctl()
