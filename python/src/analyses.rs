@@ -9,10 +9,11 @@ use fric_analysis::sweep_file::{self, SweepRow};
 use fric_analysis::tune::{self as tuning, Adjust, Maximize, TuneOutcome, TuneRequest};
 use model_core::scene::ContactMode;
 use numpy::{PyArray1, PyArrayMethods};
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyString;
+use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 
+use crate::args::type_name;
 use crate::errors::{run, to_py, warn};
 use crate::record::Record;
 use crate::scene::Scene;
@@ -95,19 +96,38 @@ const COLUMNS: [(&str, bool); 16] = [
 ];
 
 /// Column `name` of `data` (a mapping or a DataFrame) as floats, or None.
+/// A column that is not numbers (strings, None, objects) is a TypeError
+/// naming `data` and the column: numpy would read "0.1" as a number.
 fn column(
     np: &Bound<'_, PyModule>,
     data: &Bound<'_, PyAny>,
     name: &str,
     n: Option<usize>,
 ) -> PyResult<Option<Vec<f64>>> {
-    let has = data.call_method1("__contains__", (name,))?.is_truthy()?;
+    let named_err = |e: PyErr| {
+        PyTypeError::new_err(format!(
+            "data: column '{name}': {}",
+            e.value(data.py())
+        ))
+    };
+    let has = data
+        .call_method1("__contains__", (name,))
+        .and_then(|h| h.is_truthy())
+        .map_err(named_err)?;
     if !has {
         return Ok(None);
     }
-    let col = data.get_item(name)?;
-    let arr = np
-        .call_method1("asarray", (col, np.getattr("float64")?))?
+    let col = data.get_item(name).map_err(named_err)?;
+    let arr = np.call_method1("asarray", (col,)).map_err(named_err)?;
+    let kind: String = arr.getattr("dtype")?.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "b" | "i" | "u" | "f") {
+        return Err(PyTypeError::new_err(format!(
+            "data: column '{name}' must hold numbers (got dtype {})",
+            arr.getattr("dtype")?.str()?
+        )));
+    }
+    let arr = arr
+        .call_method1("astype", (np.getattr("float64")?,))?
         .call_method0("ravel")?;
     let arr = arr.cast_into::<PyArray1<f64>>()?;
     let v: Vec<f64> = arr.readonly().as_array().to_vec();
@@ -167,6 +187,39 @@ fn rows_of(py: Python<'_>, data: &Bound<'_, PyAny>) -> PyResult<Vec<SweepRow>> {
         .collect())
 }
 
+/// `params` as the CLI's comma-separated text: None (the default), a
+/// string, or a list or tuple of strings; anything else a TypeError naming
+/// `params`.
+fn params_text(params: Option<&Bound<'_, PyAny>>) -> PyResult<String> {
+    let wrong = |what: String| {
+        PyTypeError::new_err(format!(
+            "params: expected a string or a list of strings, got {what}"
+        ))
+    };
+    let Some(p) = params else {
+        return Ok("mu0,kx_over_kz".to_string());
+    };
+    if p.is_instance_of::<PyString>() {
+        return p.extract::<String>();
+    }
+    if !(p.is_instance_of::<PyList>() || p.is_instance_of::<PyTuple>()) {
+        return Err(wrong(type_name(p)));
+    }
+    let mut names = Vec::new();
+    for item in p.try_iter()? {
+        let item = item?;
+        if !item.is_instance_of::<PyString>() {
+            return Err(wrong(format!(
+                "a {} holding {}",
+                type_name(p),
+                type_name(&item)
+            )));
+        }
+        names.push(item.extract::<String>()?);
+    }
+    Ok(names.join(","))
+}
+
 /// Identification (`fricctl fit`): `data` is the path of a sweep file, or
 /// its columns (a dict of arrays or a pandas DataFrame).
 #[pyfunction]
@@ -176,17 +229,21 @@ pub fn fit(
     data: &Bound<'_, PyAny>,
     params: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Record> {
-    let which = match params {
-        None => FitParam::parse_list("mu0,kx_over_kz"),
-        Some(p) if p.is_instance_of::<PyString>() => FitParam::parse_list(&p.extract::<String>()?),
-        Some(p) => FitParam::parse_list(&p.extract::<Vec<String>>()?.join(",")),
-    }
-    .map_err(to_py)?;
+    let which = FitParam::parse_list(&params_text(params)?).map_err(to_py)?;
     let rows = if data.is_instance_of::<PyString>() || data.hasattr("__fspath__")? {
-        let path: std::path::PathBuf = data.extract()?;
+        let path: std::path::PathBuf = data.extract().map_err(|e: PyErr| {
+            PyTypeError::new_err(format!("data: {}", e.value(py)))
+        })?;
         run(|| sweep_file::read_as(&path, "data"))?
-    } else {
+    } else if data.is_instance_of::<PyDict>()
+        || (data.hasattr("__contains__")? && data.hasattr("__getitem__")? && data.hasattr("keys")?)
+    {
         rows_of(py, data)?
+    } else {
+        return Err(PyTypeError::new_err(format!(
+            "data: expected a sweep file path, a dict of arrays or a pandas DataFrame, got {}",
+            type_name(data)
+        )));
     };
     let (r, residuals) = py.detach(|| run(|| fitting::fit(&rows, &which)))?;
     let (value, residual_mu, std_error): (Vec<f64>, Vec<f64>, Vec<f64>) = residuals
@@ -198,6 +255,9 @@ pub fn fit(
             acc.2.push(x.2);
             acc
         });
+    if let Some(msg) = &r.doubtful {
+        warn(py, msg)?;
+    }
     let arr = |v: Vec<f64>| PyArray1::from_vec(py, v).into_any().unbind();
     Ok(Record::of(py, "FitResult", &r)?
         .with("residual_value", arr(value))
