@@ -585,6 +585,11 @@ mod tests {
                 .collect();
             let (f, _) = fit(&noisy, &[FitParam::Mu0]).unwrap();
             assert!((f.mu0 / 0.24 - 1.0).abs() < 0.02, "μ0 = {}", f.mu0);
+            // Noise as stated: the χ² verdict flags a draw with probability
+            // GOODNESS_P = 1e-6 (any of 200: 2e-4).
+            assert!(f.doubtful.is_none(), "{:?}", f.doubtful);
+            let p = f.chi2_p_value.unwrap();
+            assert!(p > 0.0 && p <= 1.0, "{p}");
             assert!(f.mu0_ci95_low < f.mu0 && f.mu0 < f.mu0_ci95_high);
             if f.mu0_ci95_low <= 0.24 && 0.24 <= f.mu0_ci95_high {
                 covered += 1;
@@ -648,6 +653,21 @@ mod tests {
         );
         assert!(f.mu0_ci95_low <= 0.24 && 0.24 <= f.mu0_ci95_high);
         assert!(f.kx_over_kz_ci95_low <= 0.5 && 0.5 <= f.kx_over_kz_ci95_high);
+    }
+
+    /// The verdict's quantile: χ²_ν's upper 1e-6 point (tables: ν = 3:
+    /// 30.66, ν = 7: 40.52), and a χ² at it has p = 1e-6.
+    #[test]
+    fn goodness_quantile_and_p_value() {
+        for (dof, q) in [(3, 30.66), (7, 40.52)] {
+            let (p, d) = goodness(q * 1.001, dof);
+            assert!(p < GOODNESS_P && d.is_some(), "{p}");
+            let (p, d) = goodness(q * 0.999, dof);
+            assert!(p > GOODNESS_P && d.is_none(), "{p}");
+        }
+        let (p, d) = goodness(7.0, 7);
+        // P(χ²_7 ≥ 7) = 0.4289 (tables).
+        assert!((p - 0.4289).abs() < 1e-4 && d.is_none(), "{p}");
     }
 
     #[test]

@@ -104,12 +104,8 @@ fn column(
     name: &str,
     n: Option<usize>,
 ) -> PyResult<Option<Vec<f64>>> {
-    let named_err = |e: PyErr| {
-        PyTypeError::new_err(format!(
-            "data: column '{name}': {}",
-            e.value(data.py())
-        ))
-    };
+    let named_err =
+        |e: PyErr| PyTypeError::new_err(format!("data: column '{name}': {}", e.value(data.py())));
     let has = data
         .call_method1("__contains__", (name,))
         .and_then(|h| h.is_truthy())
@@ -231,12 +227,14 @@ pub fn fit(
 ) -> PyResult<Record> {
     let which = FitParam::parse_list(&params_text(params)?).map_err(to_py)?;
     let rows = if data.is_instance_of::<PyString>() || data.hasattr("__fspath__")? {
-        let path: std::path::PathBuf = data.extract().map_err(|e: PyErr| {
-            PyTypeError::new_err(format!("data: {}", e.value(py)))
-        })?;
+        let path: std::path::PathBuf = data
+            .extract()
+            .map_err(|e: PyErr| PyTypeError::new_err(format!("data: {}", e.value(py))))?;
         run(|| sweep_file::read_as(&path, "data"))?
     } else if data.is_instance_of::<PyDict>()
-        || (data.hasattr("__contains__")? && data.hasattr("__getitem__")? && data.hasattr("keys")?)
+        || (data.hasattr("__contains__")?
+            && data.hasattr("__getitem__")?
+            && data.hasattr("keys")?)
     {
         rows_of(py, data)?
     } else {

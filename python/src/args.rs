@@ -139,7 +139,9 @@ mod tests {
     #[test]
     fn int_ranges_name_the_keyword() {
         let e = Int::Small(-5).u32("steps_per_period", 1).unwrap_err();
-        assert!(e.to_string().contains("steps_per_period: must be ≥ 1 (got -5)"));
+        assert!(e
+            .to_string()
+            .contains("steps_per_period: must be ≥ 1 (got -5)"));
         let e = Int::Big("1180591620717411303424".into(), false)
             .u32("steps_per_period", 1)
             .unwrap_err();

@@ -90,7 +90,9 @@ impl Scene {
                 .map_err(to_py)?
         };
         if let Some((i, e)) = tally.first_error {
-            return Err(to_py(e.with_context(&format!("v0[{}]", flat_index(&shape, i)))));
+            return Err(to_py(
+                e.with_context(&format!("v0[{}]", flat_index(&shape, i))),
+            ));
         }
         if tally.at_rest > 0 {
             warn(py, &format!("{AT_REST} ({} point(s))", tally.at_rest))?;
@@ -509,9 +511,13 @@ fn velocities<'py>(np: &Bound<'py, PyModule>, v0: &Bound<'py, PyAny>) -> PyResul
             .map(Velocities::Scalar)
             .map_err(|e| PyValueError::new_err(format!("v0: {}", e.value(v0.py()))));
     }
-    let arr = np
-        .call_method1("asarray", (v0,))
-        .map_err(|e| wrong(format!("{} that numpy cannot read as an array ({})", type_name(v0), e.value(v0.py()))))?;
+    let arr = np.call_method1("asarray", (v0,)).map_err(|e| {
+        wrong(format!(
+            "{} that numpy cannot read as an array ({})",
+            type_name(v0),
+            e.value(v0.py())
+        ))
+    })?;
     let kind: String = arr.getattr("dtype")?.getattr("kind")?.extract()?;
     if !matches!(kind.as_str(), "i" | "u" | "f") {
         let dtype = arr.getattr("dtype")?.str()?.to_string();
