@@ -26,6 +26,7 @@ use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use crate::args::{named, Int};
 use crate::errors::guard;
 use crate::record::Record;
 
@@ -57,10 +58,10 @@ pyo3::create_exception!(
 
 /// The Python exception of a device-host error.
 fn to_py(e: Error) -> PyErr {
-    let m = e.msg.clone();
     if e.code == 130 {
-        return PyKeyboardInterrupt::new_err(m);
+        return PyKeyboardInterrupt::new_err(e.msg);
     }
+    let m = keyword_first(&e.msg);
     if m.contains("refused by the device") || m.contains("not identified") {
         return DeviceRefused::new_err(m);
     }
@@ -85,9 +86,23 @@ fn to_py(e: Error) -> PyErr {
     }
 }
 
+/// A message in Python's words: the keyword of the flag it starts with,
+/// then the CLI's text (`--freq: refused …` → `freq: --freq: refused …`);
+/// a plant flag is `Device.virtual`'s `plant` key (`--plant-load-q: …` →
+/// `plant['load_q']: --plant-load-q: …`).
+fn keyword_first(msg: &str) -> String {
+    match msg
+        .strip_prefix("--plant-")
+        .and_then(|rest| rest.split_once(':'))
+    {
+        Some((flag, _)) => format!("plant['{}']: {msg}", flag.replace('-', "_")),
+        None => named(msg),
+    }
+}
+
 /// A device's refusal as `DeviceRefused` with its kind and range.
 fn refused(py: Python<'_>, w: WireError) -> PyErr {
-    let msg = device_host::answers::wire_error(w).msg;
+    let msg = keyword_first(&device_host::answers::wire_error(w).msg);
     let e = DeviceRefused::new_err(msg);
     let v = e.value(py);
     let (kind, param, range) = match w {
@@ -259,14 +274,15 @@ impl Device {
     /// state file): the board's own logic on the simulated plant, whose
     /// device time runs as fast as the host computes it.
     #[staticmethod]
-    #[pyo3(name = "virtual", signature = (*, plant=None, v0=0.004, noise=1.0, offset=0.0, seed=0))]
+    #[pyo3(name = "virtual", signature = (*, plant=None, v0=0.004, noise=1.0, offset=0.0, seed=Int::Small(0)))]
     fn virtual_(
         plant: Option<&Bound<'_, PyDict>>,
         v0: f64,
         noise: f64,
         offset: f64,
-        seed: u64,
+        seed: Int,
     ) -> PyResult<Device> {
+        let seed = seed.get("seed", 0, u64::MAX)?;
         let spec = plant_spec(plant)?;
         let opts =
             guard(|| spec.options(v0, noise, offset, ["v0", "noise", "offset"])).map_err(to_py)?;
@@ -281,13 +297,15 @@ impl Device {
     /// --pty`) or, with `tcp="HOST:PORT"`, the QEMU firmware or
     /// `sim-device --tcp`.
     #[staticmethod]
-    #[pyo3(signature = (port=None, *, tcp=None, timeout_ms=500, attempts=3))]
+    #[pyo3(signature = (port=None, *, tcp=None, timeout_ms=Int::Small(500), attempts=Int::Small(3)))]
     fn open(
         port: Option<String>,
         tcp: Option<String>,
-        timeout_ms: u64,
-        attempts: u32,
+        timeout_ms: Int,
+        attempts: Int,
     ) -> PyResult<Device> {
+        let timeout_ms = timeout_ms.get("timeout_ms", 0, u64::MAX)?;
+        let attempts = attempts.u32("attempts", 0)?;
         let w = match (port, tcp) {
             (Some(p), None) => Where::Serial(p),
             (None, Some(a)) => Where::Tcp(a),
@@ -483,7 +501,8 @@ impl Device {
     /// settle unless `wait=False`), with the drive the pickups measured. An
     /// invalid estimate is returned (its `valid` is False), not raised.
     #[pyo3(signature = (periods, *, wait=true))]
-    fn measure(&mut self, py: Python<'_>, periods: u32, wait: bool) -> PyResult<Record> {
+    fn measure(&mut self, py: Python<'_>, periods: Int, wait: bool) -> PyResult<Record> {
+        let periods = periods.u32("periods", 0)?;
         let flag = std::sync::atomic::AtomicBool::new(false);
         let m = with_client(py, self, |c| {
             device_host::measure::measure(c, periods, wait, &flag, &mut |_| {})
@@ -499,19 +518,21 @@ impl Device {
     /// intervals), stored on the device unless `store=False`. The drive,
     /// its mode and options are put back afterwards, also on an error or a
     /// KeyboardInterrupt.
-    #[pyo3(signature = (*, from_hz=None, to_hz=None, points=21, fine_points=31, settle_ms=None, channel="both", store=true))]
+    #[pyo3(signature = (*, from_hz=None, to_hz=None, points=Int::Small(21), fine_points=Int::Small(31), settle_ms=None, channel="both", store=true))]
     #[allow(clippy::too_many_arguments)]
     fn identify(
         &mut self,
         py: Python<'_>,
         from_hz: Option<f64>,
         to_hz: Option<f64>,
-        points: u32,
-        fine_points: u32,
+        points: Int,
+        fine_points: Int,
         settle_ms: Option<f64>,
         channel: &str,
         store: bool,
     ) -> PyResult<Record> {
+        let points = points.u32("points", 0)?;
+        let fine_points = fine_points.u32("fine_points", 0)?;
         let channels = match channel {
             "both" => Channels::Both,
             "z" => Channels::Z,
@@ -548,7 +569,7 @@ impl Device {
     /// predicts μ at `v0`. The drive is put back afterwards, also on an
     /// error or a KeyboardInterrupt. Returns a dict of numpy arrays (the
     /// columns of the CLI's sweep file) that `fricctl.fit` takes.
-    #[pyo3(signature = (param, start, end, *, points, periods, v0, settle_periods=0))]
+    #[pyo3(signature = (param, start, end, *, points, periods, v0, settle_periods=Int::Small(0)))]
     #[allow(clippy::too_many_arguments)]
     fn sweep<'py>(
         &mut self,
@@ -556,11 +577,14 @@ impl Device {
         param: &str,
         start: f64,
         end: f64,
-        points: usize,
-        periods: u32,
+        points: Int,
+        periods: Int,
         v0: f64,
-        settle_periods: u32,
+        settle_periods: Int,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let points = points.get("points", 0, u32::MAX.into())? as usize;
+        let periods = periods.u32("periods", 0)?;
+        let settle_periods = settle_periods.u32("settle_periods", 0)?;
         let p = match param.replace('-', "_").as_str() {
             "phase_deg" => SweepParam::PhaseDeg,
             "amp_z" => SweepParam::AmpZ,
@@ -605,9 +629,10 @@ impl Device {
         v0: Option<f64>,
         on: bool,
         gain: Option<f64>,
-        periods: Option<u32>,
+        periods: Option<Int>,
         rate: Option<f64>,
     ) -> PyResult<Record> {
+        let periods = periods.map(|n| n.u32("periods", 0)).transpose()?;
         use device_host::control_bench::{DEFAULT_GAIN, DEFAULT_RATE};
         let setting = if on {
             let (Some(t), Some(v)) = (target_mu, v0) else {
@@ -665,7 +690,9 @@ impl Device {
     /// the loop ends). The stream stops when the iterator ends, is closed,
     /// is dropped, or raises (an error, a KeyboardInterrupt).
     #[pyo3(signature = (periods, *, count=None))]
-    fn watch(slf: Bound<'_, Self>, periods: u32, count: Option<u64>) -> PyResult<Watch> {
+    fn watch(slf: Bound<'_, Self>, periods: Int, count: Option<Int>) -> PyResult<Watch> {
+        let periods = periods.u32("periods", 0)?;
+        let count = count.map(|n| n.get("count", 0, u64::MAX)).transpose()?;
         if count == Some(0) {
             return Err(PyValueError::new_err("count: must be ≥ 1"));
         }
