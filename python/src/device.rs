@@ -20,6 +20,7 @@ use device_host::report;
 use device_host::sweep::{self, PointOptions, SweepParam};
 use device_host::transducers::TransducerSpec;
 use device_host::virtual_device::PlantSpec;
+use fric_analysis::numbers::{short, Real};
 use fric_analysis::Error;
 use numpy::PyArray1;
 use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyValueError};
@@ -61,14 +62,15 @@ fn to_py(e: Error) -> PyErr {
     if e.code == 130 {
         return PyKeyboardInterrupt::new_err(e.msg);
     }
-    let m = keyword_first(&e.msg);
-    if m.contains("refused by the device") || m.contains("not identified") {
+    // Classified by the library's text, raised with the keyword first.
+    let (raw, m) = (e.msg.as_str(), keyword_first(&e.msg));
+    if raw.contains("refused by the device") || raw.contains("not identified") {
         return DeviceRefused::new_err(m);
     }
-    if m.starts_with("lost ")
-        || m.starts_with("no answer from")
-        || m.starts_with("--port:")
-        || m.starts_with("--tcp:")
+    if raw.starts_with("lost ")
+        || raw.starts_with("no answer from")
+        || raw.starts_with("--port:")
+        || raw.starts_with("--tcp:")
     {
         return if e.is_bad_input() {
             PyValueError::new_err(m)
@@ -76,7 +78,7 @@ fn to_py(e: Error) -> PyErr {
             LinkError::new_err(m)
         };
     }
-    if m.contains("fault") && m.contains("latched") {
+    if raw.contains("fault") && raw.contains("latched") {
         return DeviceFault::new_err(m);
     }
     if e.is_bad_input() {
@@ -91,13 +93,26 @@ fn to_py(e: Error) -> PyErr {
 /// a plant flag is `Device.virtual`'s `plant` key (`--plant-load-q: …` →
 /// `plant['load_q']: --plant-load-q: …`).
 fn keyword_first(msg: &str) -> String {
-    match msg
+    if let Some((flag, _)) = msg
         .strip_prefix("--plant-")
         .and_then(|rest| rest.split_once(':'))
     {
-        Some((flag, _)) => format!("plant['{}']: {msg}", flag.replace('-', "_")),
-        None => named(msg),
+        return format!("plant['{}']: {msg}", flag.replace('-', "_"));
     }
+    // identify's `--from`/`--to` are `from_hz`/`to_hz` here.
+    for (flag, kw) in [("--from:", "from_hz"), ("--to:", "to_hz")] {
+        if msg.starts_with(flag) {
+            return format!("{kw}: {msg}");
+        }
+    }
+    named(msg)
+}
+
+/// `x` in `domain`, or a ValueError naming `kw` (`mu0: must be > 0 (got -1)`).
+fn check_real(domain: Real, x: f64, kw: &str) -> PyResult<f64> {
+    domain
+        .check(x, &short(x))
+        .map_err(|r| PyValueError::new_err(format!("{kw}: {r}")))
 }
 
 /// A device's refusal as `DeviceRefused` with its kind and range.
@@ -459,6 +474,8 @@ impl Device {
                 other => return Err(unexpected(other)),
             },
             (Some(mu0), Some(kz), Some(kx)) => {
+                // μ0 as `device scene set --mu0` takes it (> 0, an f32).
+                check_real(Real::positive().single_precision(), mu0, "mu0")?;
                 // The device model's stiffness domain, by keyword.
                 let (lo, hi) = board::device::STIFFNESS_RANGE_N_PER_M;
                 for (name, k) in [("kz", kz), ("kx", kx)] {
@@ -583,6 +600,10 @@ impl Device {
         settle_periods: Int,
     ) -> PyResult<Bound<'py, PyDict>> {
         let points = points.get("points", 0, u32::MAX.into())? as usize;
+        // The ends are numbers by keyword here; the device refuses a value
+        // outside its range by the swept parameter's name.
+        check_real(Real::ANY, start, "start")?;
+        check_real(Real::ANY, end, "end")?;
         let periods = periods.u32("periods", 0)?;
         let settle_periods = settle_periods.u32("settle_periods", 0)?;
         let p = match param.replace('-', "_").as_str() {
