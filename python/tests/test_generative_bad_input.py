@@ -193,13 +193,11 @@ ADMITTED = {
     ("Scene.__init__", "dux", "zero"), ("Scene.__init__", "duz", "zero"),
     ("Scene.__init__", "dux_rel", "zero"), ("Scene.__init__", "ratio", "zero"),
     ("Scene.__init__", "duz_rel", "zero"),
-    ("Scene.__init__", "kz", "2**70"), ("Scene.__init__", "kx", "2**70"),
+    ("Scene.__init__", "kz", "2**70"),
+    ("Scene.__init__", "kx", "2**70"),  # refused as the drive's reach, by dux
     ("Scene.__init__", "freq", "2**70"), ("Scene.__init__", "omega", "2**70"),
-    ("Scene.__init__", "phi_deg", "2**70"), ("Scene.__init__", "phi_rad", "2**70"),
     ("Scene.__init__", "mu0", "2**70"), ("Scene.__init__", "uz0", "2**70"),
-    ("Scene.__init__", "duz", "2**70"),  # lifts off: admitted by default (liftoff=True)
     ("Scene.__init__", "exponent", "2**70"),
-    ("Scene.__init__", "liftoff", "int"),
     # mu: v0 any real (0: two-sided, NaN with a warning; checked apart).
     ("Scene.mu", "v0", "2**70"),
     ("Scene.mu", "tol", "2**70"),  # a bound every method meets
@@ -207,7 +205,7 @@ ADMITTED = {
     # tune: v0 any non-zero real, targets as documented.
     ("tune", "v0", "negative"), ("tune", "v_rel", "negative"), ("tune", "v_rel", "2**70"),
     ("tune", "target_mu_rel", "zero"),
-    ("tune", "target_mu", "zero"), ("tune", "max_duz", "2**70"),
+    ("tune", "target_mu", "zero"),
     # motion: offsets and springs as documented.
     ("motion", "force_offset_rel", "negative"), ("motion", "force_offset_rel", "zero"),
     ("motion", "spring", "zero"), ("motion", "mass", "zero"), ("motion", "force_amp_rel", "zero"),
@@ -216,7 +214,6 @@ ADMITTED = {
     ("Device.virtual", "v0", "negative"), ("Device.virtual", "v0", "zero"),
     ("Device.virtual", "noise", "zero"), ("Device.virtual", "offset", "negative"),
     ("Device.virtual", "offset", "zero"), ("Device.virtual", "seed", "zero"),
-    ("Device.virtual", "seed", "bool"),
     ("Device.drive", "amp_z", "zero"), ("Device.drive", "amp_x", "zero"),
     ("Device.drive", "offset_z", "zero"),  # refused as amp_z's lift-off
     ("Device.drive", "phase_deg", "negative"), ("Device.drive", "phase_deg", "zero"),
@@ -227,7 +224,7 @@ ADMITTED = {
     ("Device.sweep", "start", "2**70"), ("Device.sweep", "end", "2**70"),  # the device's range
     ("Device.sweep", "v0", "negative"), ("Device.sweep", "v0", "zero"),
     ("Device.scene", "mu0", "2**70"),  # as `device scene set --mu0` (an f32)
-    ("Device.control", "target_mu", "negative"), ("Device.control", "target_mu", "zero"),
+    ("Device.control", "target_mu", "zero"),
     ("Device.control", "v0", "negative"),
 }
 
