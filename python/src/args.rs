@@ -57,26 +57,42 @@ impl<'py> FromPyObject<'_, 'py> for Int {
     }
 }
 
+/// Why a count is out of its range: below (a `ValueError`) or beyond its
+/// type (an `OverflowError`), with the message.
+#[derive(Debug, PartialEq, Eq)]
+pub enum OutOfRange {
+    /// Below the least value.
+    Below(String),
+    /// Above the greatest value the quantity's type holds.
+    Above(String),
+}
+
 impl Int {
+    /// The value in `[lo, hi]`, or why not (naming `kw`).
+    pub fn check(&self, kw: &str, lo: u64, hi: u64) -> Result<u64, OutOfRange> {
+        let below = |got: &dyn std::fmt::Display| {
+            OutOfRange::Below(format!("{kw}: must be ≥ {lo} (got {got})"))
+        };
+        let above = |got: &dyn std::fmt::Display| {
+            OutOfRange::Above(format!("{kw}: must be ≤ {hi} (got {got})"))
+        };
+        match self {
+            Int::Small(v) if *v < 0 || (*v as u64) < lo => Err(below(v)),
+            Int::Small(v) if (*v as u64) > hi => Err(above(v)),
+            Int::Small(v) => Ok(*v as u64),
+            Int::Big(t, true) => Err(below(t)),
+            Int::Big(t, false) => Err(above(t)),
+        }
+    }
+
     /// The value in `[lo, hi]`, as `u64`: below `lo` a `ValueError`, above
     /// `hi` an `OverflowError` (`hi` is the largest the quantity's type
     /// holds), each naming `kw`.
     pub fn get(&self, kw: &str, lo: u64, hi: u64) -> PyResult<u64> {
-        match self {
-            Int::Small(v) if *v < 0 || (*v as u64) < lo => Err(PyValueError::new_err(format!(
-                "{kw}: must be ≥ {lo} (got {v})"
-            ))),
-            Int::Small(v) if (*v as u64) > hi => Err(PyOverflowError::new_err(format!(
-                "{kw}: must be ≤ {hi} (got {v})"
-            ))),
-            Int::Small(v) => Ok(*v as u64),
-            Int::Big(t, true) => Err(PyValueError::new_err(format!(
-                "{kw}: must be ≥ {lo} (got {t})"
-            ))),
-            Int::Big(t, false) => Err(PyOverflowError::new_err(format!(
-                "{kw}: must be ≤ {hi} (got {t})"
-            ))),
-        }
+        self.check(kw, lo, hi).map_err(|e| match e {
+            OutOfRange::Below(m) => PyValueError::new_err(m),
+            OutOfRange::Above(m) => PyOverflowError::new_err(m),
+        })
     }
 
     /// [`Int::get`] into a `u32` (its whole range above `lo`).
@@ -138,16 +154,27 @@ mod tests {
 
     #[test]
     fn int_ranges_name_the_keyword() {
-        let e = Int::Small(-5).u32("steps_per_period", 1).unwrap_err();
-        assert!(e
-            .to_string()
-            .contains("steps_per_period: must be ≥ 1 (got -5)"));
-        let e = Int::Big("1180591620717411303424".into(), false)
-            .u32("steps_per_period", 1)
-            .unwrap_err();
-        assert!(e
-            .to_string()
-            .contains("steps_per_period: must be ≤ 4294967295 (got 1180591620717411303424)"));
-        assert_eq!(Int::Small(7).u32("n", 1).unwrap(), 7);
+        let max = u64::from(u32::MAX);
+        assert_eq!(
+            Int::Small(-5).check("steps_per_period", 1, max),
+            Err(OutOfRange::Below(
+                "steps_per_period: must be ≥ 1 (got -5)".into()
+            ))
+        );
+        assert_eq!(
+            Int::Big("1180591620717411303424".into(), false).check("steps_per_period", 1, max),
+            Err(OutOfRange::Above(
+                "steps_per_period: must be ≤ 4294967295 (got 1180591620717411303424)".into()
+            ))
+        );
+        assert_eq!(
+            Int::Small(1 << 40).check("n", 0, max),
+            Err(OutOfRange::Above(format!(
+                "n: must be ≤ 4294967295 (got {})",
+                1u64 << 40
+            )))
+        );
+        assert_eq!(Int::Small(7).check("n", 1, max), Ok(7));
+        assert_eq!(Int::Small(0).check("n", 0, max), Ok(0));
     }
 }
