@@ -166,6 +166,12 @@ def test_fit_refuses_a_row_of_absurd_values_by_name():
         fricctl.fit(_rows(std_error=(1, 1e-300)), params="mu0")
     with pytest.raises(ValueError, match=r"^data: --data: line 3: std_error 1e-20 is below what the model resolves \(3e-13 = 1e-12·model_mu0; 0 = unknown\)$"):
         fricctl.fit(_rows(std_error=(1, 1e-20)), params="mu0")
+    # v0 1e50 is in the domain: the row slides (μ = μ0 there), 0.3 − 0.11
+    # off at σ = 1e-3: χ² in the tens of thousands on 7 degrees of freedom,
+    # flagged (the CLI: exit 1).
+    with pytest.warns(RuntimeWarning, match=r"^doubtful: chi2 "):
+        r = fricctl.fit(_rows(v0=(2, 1e50)), params="mu0")
+    assert r.doubtful and r.chi2_p_value < 1e-6 and r.reduced_chi2 > 1000
     # At the floor the fit runs (the weight is finite).
     r = fricctl.fit(_rows(std_error=(1, 3e-13)), params="mu0")
     assert abs(r.mu0 - 0.3) <= 1e-9
