@@ -13,28 +13,35 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 
-use crate::args::type_name;
+use crate::args::{type_name, Float};
 use crate::errors::{run, to_py, warn};
 use crate::record::Record;
 use crate::scene::Scene;
 
 /// Inverse design (`fricctl tune`).
 #[pyfunction]
-#[pyo3(signature = (scene, *, adjust, target_mu_rel=None, target_mu=None, maximize=None, v0=None, v_rel=None, max_duz=None, max_dux=None, liftoff_margin=tuning::DEFAULT_LIFTOFF_MARGIN))]
+#[pyo3(signature = (scene, *, adjust, target_mu_rel=None, target_mu=None, maximize=None, v0=None, v_rel=None, max_duz=None, max_dux=None, liftoff_margin=Float::Num(tuning::DEFAULT_LIFTOFF_MARGIN)), text_signature = "(scene, *, adjust, target_mu_rel=None, target_mu=None, maximize=None, v0=None, v_rel=None, max_duz=None, max_dux=None, liftoff_margin=0.05)")]
 #[allow(clippy::too_many_arguments)]
 pub fn tune(
     py: Python<'_>,
     scene: &Scene,
     adjust: &str,
-    target_mu_rel: Option<f64>,
-    target_mu: Option<f64>,
+    target_mu_rel: Option<Float>,
+    target_mu: Option<Float>,
     maximize: Option<&str>,
-    v0: Option<f64>,
-    v_rel: Option<f64>,
-    max_duz: Option<f64>,
-    max_dux: Option<f64>,
-    liftoff_margin: f64,
+    v0: Option<Float>,
+    v_rel: Option<Float>,
+    max_duz: Option<Float>,
+    max_dux: Option<Float>,
+    liftoff_margin: Float,
 ) -> PyResult<Record> {
+    let target_mu_rel = Float::opt(target_mu_rel, "target_mu_rel")?;
+    let target_mu = Float::opt(target_mu, "target_mu")?;
+    let v0 = Float::opt(v0, "v0")?;
+    let v_rel = Float::opt(v_rel, "v_rel")?;
+    let max_duz = Float::opt(max_duz, "max_duz")?;
+    let max_dux = Float::opt(max_dux, "max_dux")?;
+    let liftoff_margin = liftoff_margin.get("liftoff_margin")?;
     let req = TuneRequest {
         v0,
         v_rel,
@@ -266,20 +273,27 @@ pub fn fit(
 /// A body moved by the vibrated contact (`fricctl motion`): the result and
 /// the trajectory (the last ≤ 50 load periods) as arrays.
 #[pyfunction]
-#[pyo3(signature = (scene, *, mass, force_amp_rel, force_omega, force_offset_rel=0.0, spring=0.0, duration=None, method="auto", tol=1e-3))]
+#[pyo3(signature = (scene, *, mass, force_amp_rel, force_omega, force_offset_rel=Float::Num(0.0), spring=Float::Num(0.0), duration=None, method="auto", tol=Float::Num(1e-3)), text_signature = "(scene, *, mass, force_amp_rel, force_omega, force_offset_rel=0.0, spring=0.0, duration=None, method=\"auto\", tol=0.001)")]
 #[allow(clippy::too_many_arguments)]
 pub fn motion(
     py: Python<'_>,
     scene: &Scene,
-    mass: f64,
-    force_amp_rel: f64,
-    force_omega: f64,
-    force_offset_rel: f64,
-    spring: f64,
-    duration: Option<f64>,
+    mass: Float,
+    force_amp_rel: Float,
+    force_omega: Float,
+    force_offset_rel: Float,
+    spring: Float,
+    duration: Option<Float>,
     method: &str,
-    tol: f64,
+    tol: Float,
 ) -> PyResult<Record> {
+    let mass = mass.get("mass")?;
+    let force_amp_rel = force_amp_rel.get("force_amp_rel")?;
+    let force_omega = force_omega.get("force_omega")?;
+    let force_offset_rel = force_offset_rel.get("force_offset_rel")?;
+    let spring = spring.get("spring")?;
+    let duration = Float::opt(duration, "duration")?;
+    let tol = tol.get("tol")?;
     let req = MotionRequest {
         mass,
         force_amp_rel,

@@ -57,6 +57,55 @@ impl<'py> FromPyObject<'_, 'py> for Int {
     }
 }
 
+/// A real number as Python gives it: anything pyo3 reads as an `f64` (a
+/// float, an int, a numpy scalar), or an int beyond the `f64` range
+/// (`10**400`), which pyo3 would refuse with an `OverflowError` that does
+/// not name the argument: [`Float::get`] names it.
+#[derive(Clone, Copy, Debug)]
+pub enum Float {
+    /// The value.
+    Num(f64),
+    /// An int beyond ±f64::MAX: its number of decimal digits and sign.
+    Huge(usize, bool),
+}
+
+impl<'py> FromPyObject<'_, 'py> for Float {
+    type Error = PyErr;
+
+    fn extract(ob: Borrowed<'_, 'py, PyAny>) -> PyResult<Self> {
+        match ob.extract::<f64>() {
+            Ok(x) => Ok(Float::Num(x)),
+            Err(e)
+                if ob.is_instance_of::<PyInt>() && e.is_instance_of::<PyOverflowError>(ob.py()) =>
+            {
+                let text = ob.str()?.to_string();
+                let negative = text.starts_with('-');
+                Ok(Float::Huge(text.trim_start_matches('-').len(), negative))
+            }
+            // A TypeError: pyo3 names the argument.
+            Err(e) => Err(e),
+        }
+    }
+}
+
+impl Float {
+    /// The value, or an `OverflowError` naming `kw`.
+    pub fn get(self, kw: &str) -> PyResult<f64> {
+        match self {
+            Float::Num(x) => Ok(x),
+            Float::Huge(digits, negative) => Err(PyOverflowError::new_err(format!(
+                "{kw}: {}an int of {digits} digits is beyond the range of a float (magnitude ≤ 1.8e308)",
+                if negative { "-" } else { "" }
+            ))),
+        }
+    }
+
+    /// [`Float::get`] of an optional argument.
+    pub fn opt(x: Option<Float>, kw: &str) -> PyResult<Option<f64>> {
+        x.map(|x| x.get(kw)).transpose()
+    }
+}
+
 /// Why a count is out of its range: below (a `ValueError`) or beyond its
 /// type (an `OverflowError`), with the message.
 #[derive(Debug, PartialEq, Eq)]

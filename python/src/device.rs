@@ -27,7 +27,7 @@ use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::args::{named, Int};
+use crate::args::{named, Float, Int};
 use crate::errors::guard;
 use crate::record::Record;
 
@@ -289,14 +289,17 @@ impl Device {
     /// state file): the board's own logic on the simulated plant, whose
     /// device time runs as fast as the host computes it.
     #[staticmethod]
-    #[pyo3(name = "virtual", signature = (*, plant=None, v0=0.004, noise=1.0, offset=0.0, seed=Int::Small(0)))]
+    #[pyo3(name = "virtual", signature = (*, plant=None, v0=Float::Num(0.004), noise=Float::Num(1.0), offset=Float::Num(0.0), seed=Int::Small(0)), text_signature = "(*, plant=None, v0=0.004, noise=1.0, offset=0.0, seed=0)")]
     fn virtual_(
         plant: Option<&Bound<'_, PyDict>>,
-        v0: f64,
-        noise: f64,
-        offset: f64,
+        v0: Float,
+        noise: Float,
+        offset: Float,
         seed: Int,
     ) -> PyResult<Device> {
+        let v0 = v0.get("v0")?;
+        let noise = noise.get("noise")?;
+        let offset = offset.get("offset")?;
         let seed = seed.get("seed", 0, u64::MAX)?;
         let spec = plant_spec(plant)?;
         let opts =
@@ -312,7 +315,7 @@ impl Device {
     /// --pty`) or, with `tcp="HOST:PORT"`, the QEMU firmware or
     /// `sim-device --tcp`.
     #[staticmethod]
-    #[pyo3(signature = (port=None, *, tcp=None, timeout_ms=Int::Small(500), attempts=Int::Small(3)))]
+    #[pyo3(signature = (port=None, *, tcp=None, timeout_ms=Int::Small(500), attempts=Int::Small(3)), text_signature = "(port=None, *, tcp=None, timeout_ms=500, attempts=3)")]
     fn open(
         port: Option<String>,
         tcp: Option<String>,
@@ -368,20 +371,26 @@ impl Device {
     /// `device drive set` (m, Hz, degrees): voltage mode with
     /// `open_loop=True`, else the displacement mode (identified transducers)
     /// with `track` ('none', 'z', 'x') and `headroom`.
-    #[pyo3(signature = (*, freq, amp_z, amp_x, offset_z, phase_deg=0.0, open_loop=false, track="none", headroom=None))]
+    #[pyo3(signature = (*, freq, amp_z, amp_x, offset_z, phase_deg=Float::Num(0.0), open_loop=false, track="none", headroom=None), text_signature = "($self, *, freq, amp_z, amp_x, offset_z, phase_deg=0.0, open_loop=False, track=\"none\", headroom=None)")]
     #[allow(clippy::too_many_arguments)]
     fn drive(
         &mut self,
         py: Python<'_>,
-        freq: f64,
-        amp_z: f64,
-        amp_x: f64,
-        offset_z: f64,
-        phase_deg: f64,
+        freq: Float,
+        amp_z: Float,
+        amp_x: Float,
+        offset_z: Float,
+        phase_deg: Float,
         open_loop: bool,
         track: &str,
-        headroom: Option<f64>,
+        headroom: Option<Float>,
     ) -> PyResult<Record> {
+        let freq = freq.get("freq")?;
+        let amp_z = amp_z.get("amp_z")?;
+        let amp_x = amp_x.get("amp_x")?;
+        let offset_z = offset_z.get("offset_z")?;
+        let phase_deg = phase_deg.get("phase_deg")?;
+        let headroom = Float::opt(headroom, "headroom")?;
         let track = track_of(track)?;
         if open_loop && (track != Track::None || headroom.is_some()) {
             return Err(PyValueError::new_err(
@@ -464,10 +473,13 @@ impl Device {
     fn scene(
         &mut self,
         py: Python<'_>,
-        mu0: Option<f64>,
-        kz: Option<f64>,
-        kx: Option<f64>,
+        mu0: Option<Float>,
+        kz: Option<Float>,
+        kx: Option<Float>,
     ) -> PyResult<Record> {
+        let mu0 = Float::opt(mu0, "mu0")?;
+        let kz = Float::opt(kz, "kz")?;
+        let kx = Float::opt(kx, "kx")?;
         let k = match (mu0, kz, kx) {
             (None, None, None) => match ask(py, self, Request::GetContact)? {
                 Response::Contact(k) => k,
@@ -503,7 +515,8 @@ impl Device {
     }
 
     /// `device predict` at `v0` m/s.
-    fn predict(&mut self, py: Python<'_>, v0: f64) -> PyResult<Record> {
+    fn predict(&mut self, py: Python<'_>, v0: Float) -> PyResult<Record> {
+        let v0 = v0.get("v0")?;
         match ask(py, self, Request::Predict { v0: v0 as f32 })? {
             Response::Prediction { prediction, regime } => record(
                 py,
@@ -535,19 +548,22 @@ impl Device {
     /// intervals), stored on the device unless `store=False`. The drive,
     /// its mode and options are put back afterwards, also on an error or a
     /// KeyboardInterrupt.
-    #[pyo3(signature = (*, from_hz=None, to_hz=None, points=Int::Small(21), fine_points=Int::Small(31), settle_ms=None, channel="both", store=true))]
+    #[pyo3(signature = (*, from_hz=None, to_hz=None, points=Int::Small(21), fine_points=Int::Small(31), settle_ms=None, channel="both", store=true), text_signature = "($self, *, from_hz=None, to_hz=None, points=21, fine_points=31, settle_ms=None, channel=\"both\", store=True)")]
     #[allow(clippy::too_many_arguments)]
     fn identify(
         &mut self,
         py: Python<'_>,
-        from_hz: Option<f64>,
-        to_hz: Option<f64>,
+        from_hz: Option<Float>,
+        to_hz: Option<Float>,
         points: Int,
         fine_points: Int,
-        settle_ms: Option<f64>,
+        settle_ms: Option<Float>,
         channel: &str,
         store: bool,
     ) -> PyResult<Record> {
+        let from_hz = Float::opt(from_hz, "from_hz")?;
+        let to_hz = Float::opt(to_hz, "to_hz")?;
+        let settle_ms = Float::opt(settle_ms, "settle_ms")?;
         let points = points.u32("points", 0)?;
         let fine_points = fine_points.u32("fine_points", 0)?;
         let channels = match channel {
@@ -586,19 +602,22 @@ impl Device {
     /// predicts μ at `v0`. The drive is put back afterwards, also on an
     /// error or a KeyboardInterrupt. Returns a dict of numpy arrays (the
     /// columns of the CLI's sweep file) that `fricctl.fit` takes.
-    #[pyo3(signature = (param, start, end, *, points, periods, v0, settle_periods=Int::Small(0)))]
+    #[pyo3(signature = (param, start, end, *, points, periods, v0, settle_periods=Int::Small(0)), text_signature = "($self, param, start, end, *, points, periods, v0, settle_periods=0)")]
     #[allow(clippy::too_many_arguments)]
     fn sweep<'py>(
         &mut self,
         py: Python<'py>,
         param: &str,
-        start: f64,
-        end: f64,
+        start: Float,
+        end: Float,
         points: Int,
         periods: Int,
-        v0: f64,
+        v0: Float,
         settle_periods: Int,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let start = start.get("start")?;
+        let end = end.get("end")?;
+        let v0 = v0.get("v0")?;
         let points = points.get("points", 0, u32::MAX.into())? as usize;
         // The ends are numbers by keyword here; the device refuses a value
         // outside its range by the swept parameter's name.
@@ -646,13 +665,17 @@ impl Device {
     fn control(
         &mut self,
         py: Python<'_>,
-        target_mu: Option<f64>,
-        v0: Option<f64>,
+        target_mu: Option<Float>,
+        v0: Option<Float>,
         on: bool,
-        gain: Option<f64>,
+        gain: Option<Float>,
         periods: Option<Int>,
-        rate: Option<f64>,
+        rate: Option<Float>,
     ) -> PyResult<Record> {
+        let target_mu = Float::opt(target_mu, "target_mu")?;
+        let v0 = Float::opt(v0, "v0")?;
+        let gain = Float::opt(gain, "gain")?;
+        let rate = Float::opt(rate, "rate")?;
         let periods = periods.map(|n| n.u32("periods", 0)).transpose()?;
         use device_host::control_bench::{DEFAULT_GAIN, DEFAULT_RATE};
         let setting = if on {

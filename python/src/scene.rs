@@ -17,7 +17,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyComplex, PyFloat, PyInt, PyString};
 use rayon::prelude::*;
 
-use crate::args::{named, type_name, Int};
+use crate::args::{named, type_name, Float, Int};
 use crate::errors::{guard, is_solver_failure, run, to_py, warn};
 use crate::record::Record;
 
@@ -212,24 +212,38 @@ impl Scene {
     #[pyo3(signature = (*, mu0=None, kz=None, kx=None, uz0=None, duz=None, dux=None, freq=None, omega=None, phi_deg=None, phi_rad=None, duz_rel=None, dux_rel=None, ratio=None, profile=None, exponent=None, scene=None, liftoff=true))]
     #[allow(clippy::too_many_arguments)]
     fn new(
-        mu0: Option<f64>,
-        kz: Option<f64>,
-        kx: Option<f64>,
-        uz0: Option<f64>,
-        duz: Option<f64>,
-        dux: Option<f64>,
-        freq: Option<f64>,
-        omega: Option<f64>,
-        phi_deg: Option<f64>,
-        phi_rad: Option<f64>,
-        duz_rel: Option<f64>,
-        dux_rel: Option<f64>,
-        ratio: Option<f64>,
+        mu0: Option<Float>,
+        kz: Option<Float>,
+        kx: Option<Float>,
+        uz0: Option<Float>,
+        duz: Option<Float>,
+        dux: Option<Float>,
+        freq: Option<Float>,
+        omega: Option<Float>,
+        phi_deg: Option<Float>,
+        phi_rad: Option<Float>,
+        duz_rel: Option<Float>,
+        dux_rel: Option<Float>,
+        ratio: Option<Float>,
         profile: Option<&str>,
-        exponent: Option<f64>,
+        exponent: Option<Float>,
         scene: Option<PathBuf>,
         liftoff: bool,
     ) -> PyResult<Scene> {
+        let mu0 = Float::opt(mu0, "mu0")?;
+        let kz = Float::opt(kz, "kz")?;
+        let kx = Float::opt(kx, "kx")?;
+        let uz0 = Float::opt(uz0, "uz0")?;
+        let duz = Float::opt(duz, "duz")?;
+        let dux = Float::opt(dux, "dux")?;
+        let freq = Float::opt(freq, "freq")?;
+        let omega = Float::opt(omega, "omega")?;
+        let phi_deg = Float::opt(phi_deg, "phi_deg")?;
+        let phi_rad = Float::opt(phi_rad, "phi_rad")?;
+        let duz_rel = Float::opt(duz_rel, "duz_rel")?;
+        let dux_rel = Float::opt(dux_rel, "dux_rel")?;
+        let ratio = Float::opt(ratio, "ratio")?;
+        let exponent = Float::opt(exponent, "exponent")?;
         let profile = match profile {
             None => None,
             Some(name) => Some(lib::ProfileKind::from_flag(name).map_err(to_py)?),
@@ -272,11 +286,12 @@ impl Scene {
         py: Python<'_>,
         v0: &Bound<'_, PyAny>,
         method: &str,
-        tol: Option<f64>,
+        tol: Option<Float>,
         steps_per_period: Option<Int>,
         return_bound: bool,
         errors: &str,
     ) -> PyResult<Py<PyAny>> {
+        let tol = Float::opt(tol, "tol")?;
         let steps = steps_per_period
             .map(|n| n.u32("steps_per_period", 1))
             .transpose()?;
@@ -349,7 +364,8 @@ impl Scene {
     /// The state of the contact at sliding velocity v0: "rest" (v0 = 0),
     /// "stick_slip" (0 < |v0| < v_c in its direction) or "sliding" (|v0| ≥ v_c,
     /// μ = ±μ0).
-    fn regime(&self, v0: f64) -> PyResult<&'static str> {
+    fn regime(&self, v0: Float) -> PyResult<&'static str> {
+        let v0 = v0.get("v0")?;
         run(|| lib::check(Real::ANY, v0, "--v0"))?;
         let vc = run(|| eval::critical_velocity(&self.rs.scene))?;
         Ok(if v0 == 0.0 {

@@ -1,8 +1,8 @@
 """Bad input, generatively (issue 41 §6): every keyword of every public
 function, method and constructor in ``fricctl.pyi`` gets hostile values for
 its type — None (where None is not the keyword's "not given"), a string, NaN,
-±inf, a negative number, 0, 2**70, a container of the right element, and
-for text an unknown word — each in a valid call that differs only there.
+±inf, a negative number, 0, 2**70, ±10**400 (an int beyond a float), a
+container of the right element, and for text an unknown word — each in a valid call that differs only there.
 
 The table is generated from the stub (``ast``): a new keyword is tested
 without being listed here. Every call must
@@ -19,6 +19,7 @@ type, never a silent result for a value outside the domain.
 """
 
 import ast
+import inspect
 import math
 import pathlib
 import re
@@ -31,12 +32,14 @@ import fricctl
 STUB = pathlib.Path(__file__).resolve().parents[1] / "fricctl.pyi"
 PAPER = dict(mu0=0.3, kz=2e6, kx=1.5e6, uz0=5e-6, duz=2e-6, dux=0.7e-6, freq=40e3, phi_deg=50.0)
 NAN, INF = float("nan"), float("inf")
+REQUIRED = object()
 
 
-def signatures():
+def signatures(defaults_out=None):
     """{qualified name: [(keyword, annotation text, optional)]} of the stub's
     public callables (overloads and properties skipped: the implementation
-    signature is the one after the overloads)."""
+    signature is the one after the overloads). With `defaults_out` a dict, it
+    also receives {qualified name: {keyword: default value or REQUIRED}}."""
     tree = ast.parse(STUB.read_text())
     out = {}
 
@@ -54,6 +57,8 @@ def signatures():
             ann = ast.unparse(arg.annotation) if arg.annotation is not None else "Any"
             none_is_default = d is not None and isinstance(d, ast.Constant) and d.value is None
             params.append((arg.arg, ann, none_is_default or ann.startswith("Optional[")))
+            if defaults_out is not None:
+                defaults_out.setdefault(qual, {})[arg.arg] = REQUIRED if d is None else ast.literal_eval(d)
         if params:
             out[qual] = params
 
@@ -95,13 +100,15 @@ def category(ann):
 
 HOSTILE = {
     "float": [("str", "0.5"), ("nan", NAN), ("inf", INF), ("-inf", -INF), ("negative", -1.0),
-              ("zero", 0.0), ("2**70", 2**70), ("list", [0.5])],
+              ("zero", 0.0), ("2**70", 2**70), ("10**400", 10**400), ("-10**400", -10**400),
+              ("list", [0.5])],
     "int": [("str", "5"), ("nan", NAN), ("inf", INF), ("negative", -5), ("zero", 0),
-            ("2**70", 2**70), ("list", [5]), ("float", 2.5), ("bool", True)],
+            ("2**70", 2**70), ("10**400", 10**400), ("list", [5]), ("float", 2.5), ("bool", True)],
     "bool": [("str", "yes"), ("nan", NAN), ("list", [True]), ("int", 2)],
     "text": [("int", 5), ("nan", NAN), ("list", ["auto"]), ("unknown", "bogus")],
     "scene": [("str", "scene"), ("int", 5), ("dict", {})],
     "array": [("str", "0.01"), ("nan", NAN), ("inf", INF), ("-inf", -INF), ("2**70", 2**70),
+              ("10**400", 10**400),
               ("list-of-str", ["0.01"]), ("dict", {"v0": 0.01}), ("bool", True)],
     "data": [("int", 5), ("nan", NAN), ("list", [1.0]), ("missing-file", "no/such/sweep.csv")],
     "path": [("int", 5), ("nan", NAN), ("list", ["s.toml"]), ("missing-file", "no/such/scene.toml")],
@@ -322,6 +329,24 @@ def test_every_base_call_is_valid(qual, kw):
     finally:
         if dev is not None:
             dev.close()
+
+
+def test_the_stub_is_the_modules_signature():
+    """Every public callable's keywords and defaults in fricctl.pyi are those
+    the module reports (``inspect.signature`` of pyo3's text signature)."""
+    defaults = {}
+    signatures(defaults)
+    for qual, stub in defaults.items():
+        obj = fricctl
+        for part in qual.split("."):
+            obj = getattr(obj, part)
+        target = getattr(fricctl, qual.split(".")[0]) if qual.endswith(".__init__") else obj
+        sig = inspect.signature(target)
+        got = {name: (REQUIRED if p.default is inspect.Parameter.empty else p.default)
+               for name, p in sig.parameters.items() if name not in ("self", "args")}
+        assert set(got) == set(stub), (qual, set(got) ^ set(stub))
+        for name, d in stub.items():
+            assert got[name] is d if d is REQUIRED else got[name] == d, (qual, name, got[name], d)
 
 
 def test_the_table_covers_the_stub():
