@@ -9,7 +9,9 @@ refusal names the keyword first, then gives the CLI's one-line message
 ``ValueError`` (bad input), ``TypeError`` (a value of the wrong type: a
 string, None or a list for a number, a float for a count), ``OverflowError``
 (a count beyond its type, ``steps_per_period: must be ≤ 4294967295 (got
-…)``) or :class:`SolverError` (a computation that failed).
+…)``, or an int beyond a float's range, ``mu0: an int of 401 digits is
+beyond the range of a float``) or :class:`SolverError` (a computation that
+failed).
 
 Units: SI (m, N/m, Hz, m/s), or the paper's dimensionless groups (eqs.
 25/26: ``duz_rel``, ``dux_rel``, ``ratio``), with which μ0 = kz = kx = uz0 =
