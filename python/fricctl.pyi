@@ -4,8 +4,14 @@ The exact steady-state solver of the Popov & Li single-spring model (and its
 lift-off and curved-profile extensions) from Python. Every number comes from
 the same Rust library as the command-line tool ``fricctl``; every keyword is
 one of its flags with underscores (``--phi-deg`` is ``phi_deg``); every
-refusal is its one-line message, raised as ``ValueError`` (bad input) or
-:class:`SolverError` (a computation that failed).
+refusal names the keyword first, then gives the CLI's one-line message
+(``phi_deg: --phi-deg: must be of magnitude ≤ 1e100 (got inf)``), raised as
+``ValueError`` (bad input), ``TypeError`` (a value of the wrong type: a
+string, None or a list for a number, a float for a count), ``OverflowError``
+(a count beyond its type, ``steps_per_period: must be ≤ 4294967295 (got
+…)``, or an int beyond a float's range, ``mu0: an int of 401 digits is
+beyond the range of a float``) or :class:`SolverError` (a computation that
+failed).
 
 Units: SI (m, N/m, Hz, m/s), or the paper's dimensionless groups (eqs.
 25/26: ``duz_rel``, ``dux_rel``, ``ratio``), with which μ0 = kz = kx = uz0 =
@@ -68,8 +74,10 @@ class Scene:
             permanent-contact commands do.
 
     Raises:
-        ValueError: a parameter out of its domain, named as its CLI flag
-            (``--mu0: must be > 0 (got -1)``).
+        ValueError: a parameter out of its domain, named by its keyword and
+            then the CLI's text (``mu0: --mu0: must be > 0 (got -1)``).
+        TypeError: a value that is not a number (``argument 'mu0': must be
+            real number, not str``).
     """
 
     def __init__(
@@ -136,9 +144,13 @@ class Scene:
         """The steady-state coefficient of friction μ = ⟨F_x⟩/⟨F_z⟩ at sliding
         velocity ``v0`` (m/s; units of ωW0 for a dimensionless scene).
 
-        ``v0`` a number gives a float; any array-like gives an ndarray of the
-        same shape, computed in parallel without the GIL. ``|μ| ≤ μ0``; μ = ±μ0
-        beyond the critical velocities (eq. 8).
+        ``v0`` a number (Python or numpy, not a bool) gives a float; any
+        array-like of integers or floats gives an ndarray of the same shape
+        (a 0-d array a 0-d array), computed in parallel without the GIL and
+        written straight into the result: the peak memory grows by the
+        result's size (and a float64 copy of an input that is not one), 78 MB
+        for 10⁷ velocities (python/README.md). ``|μ| ≤ μ0``; μ = ±μ0 beyond
+        the critical velocities (eq. 8).
 
         Args:
             method: "auto" (the cheapest method whose guaranteed bound is
@@ -146,7 +158,8 @@ class Scene:
                 "exact" (the event-driven steady-state solver), "fixed" (the
                 paper's fixed-step scheme, §3), "approx" (eq. 21 or eq. 24).
             tol: the error bound asked of "auto", in units of μ0.
-            steps_per_period: steps of "fixed" (default 10000).
+            steps_per_period: steps of "fixed" (default 10000): an int in
+                [1, 2³² − 1].
             return_bound: also return the guaranteed error bound of each μ
                 (units of μ): a pair (μ, bound).
             errors: "raise" (default) raises on the first failure; "nan"
@@ -158,9 +171,15 @@ class Scene:
         μ(0) is unique and returned).
 
         Raises:
-            ValueError: a bad argument (``--v0: must be of magnitude ≤ 1e100
-                (got inf)``), the CLI's text; for an array the element's
-                index is appended, ``(at v0[3])``.
+            ValueError: a bad argument, its keyword then the CLI's text
+                (``v0: --v0: must be of magnitude ≤ 1e100 (got inf)``); for an
+                array the first bad element's index (C order) is appended,
+                ``(at v0[3])``.
+            TypeError: ``v0`` not numbers (None, a string — numpy would read
+                "0.01" —, a bool, a complex number, an array of strings or
+                objects): ``v0: expected a number or an array of numbers,
+                got str``; a ``steps_per_period`` that is not an int.
+            OverflowError: ``steps_per_period`` beyond 2³² − 1, named.
             SolverError: a solver failure, or a ``tol`` no method meets.
         """
     def critical_velocity(self) -> Tuple[float, float]:
@@ -247,8 +266,21 @@ def fit(
         params: "mu0,kx_over_kz" (default), or a list of those names.
 
     The result's fields are ``fricctl fit --json``'s keys (mu0,
-    mu0_ci95_low, mu0_ci95_high, kx_over_kz, …, chi2, dof), plus the arrays
-    residual_value, residual_mu, residual_std_error.
+    mu0_ci95_low, mu0_ci95_high, kx_over_kz, …, chi2, dof, chi2_p_value,
+    doubtful), plus the arrays residual_value, residual_mu,
+    residual_std_error. With standard errors, a χ² whose p-value
+    ``chi2_p_value`` is below 1e-6 (the model does not describe the data
+    within their errors; docs/guide/fit.md) makes the fit doubtful: the
+    verdict is ``doubtful`` and a RuntimeWarning (the CLI's exit 1).
+
+    Raises:
+        TypeError: ``data`` neither a path nor a mapping of columns
+            (``data: expected a sweep file path, a dict of arrays or a
+            pandas DataFrame, got NoneType``), a column that is not numbers,
+            ``params`` not text.
+        ValueError: a bad row or parameter, by keyword then the CLI's text
+            (``data: --data: line 4: v0 must be of magnitude ≤ 1e100 (got
+            1e300)``).
     """
 
 def load_line(scene: Scene) -> Record:
@@ -288,7 +320,8 @@ class DeviceRefused(DeviceError):
     'NotIdentified', 'NotRunning', 'Busy', 'BadScene', 'OutOfReach', …);
     for a range refusal ``param`` (the wire name, e.g. 'Freq') and ``min``,
     ``max`` in the parameter's SI unit, else None. The message names the
-    CLI flag (``--freq: refused by the device: allowed range [1000, 100000]``)."""
+    keyword, then the CLI's text (``freq: --freq: refused by the device:
+    allowed range [1000, 100000]``)."""
 
     kind: str
     param: Optional[str]
@@ -311,7 +344,12 @@ class Device:
     (docs/device-json.md). Device I/O runs with the GIL released. A
     KeyboardInterrupt ends a call at its next request; ``identify`` and
     ``sweep`` put back what they changed (drive, mode, options, running)
-    before it is raised. Use it as a context manager (``with ... as dev``)."""
+    before it is raised. Use it as a context manager (``with ... as dev``).
+
+    Counts (``periods``, ``points``, ``count``, ``seed``, ``timeout_ms``, …)
+    are ints: a negative one is a ValueError, one beyond its type an
+    OverflowError, a float or a bool a TypeError, each naming the keyword
+    (``periods: must be ≤ 4294967295 (got …)``)."""
 
     @staticmethod
     def virtual(

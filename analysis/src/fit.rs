@@ -20,17 +20,44 @@
 //! narrows it). Without standard errors (all zero) the fit is unweighted and
 //! `s² = χ²/ν`. The 95 % interval of each parameter is
 //! `exp(ln p̂ ± t₀.₉₇₅,ν · σ_ln p)` (Student's t, ν degrees of freedom).
+//!
+//! # Goodness of fit
+//! With standard errors, χ² of a model that describes the data is
+//! χ²-distributed with ν degrees of freedom. A χ² above that distribution's
+//! upper `1 − GOODNESS_P` quantile ([`GOODNESS_P`] = 10⁻⁶, the false-refusal
+//! rate of the board's transducer fit, `board::identify`) says the model does
+//! not describe the data within their standard errors (a bias of the
+//! estimator, a plant the model does not describe, a wrong row, errors
+//! stated too small): the result is returned with [`FitResult::doubtful`]
+//! set, and the CLI prints it and exits 1. An unweighted fit has no scale to
+//! test χ² against and is never judged.
+//!
+//! # Rows
+//! Every used row's numbers lie in the flags' domain (magnitude ≤ 1e100, non-zero
+//! magnitude ≥ 1e-100), and a stated standard error is 0 (unknown) or at
+//! least [`STD_ERROR_FLOOR_OVER_MU0`]·μ₀ (the device model's): below it the
+//! weight asks more of the model than the exact solver resolves.
 
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use model_core::exact::{self, Solution};
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use serde::Serialize;
-use statrs::distribution::{ContinuousCDF, StudentsT};
+use statrs::distribution::{ChiSquared, ContinuousCDF, StudentsT};
 
 use crate::error::{Error, Result};
-use crate::numbers::short;
+use crate::numbers::{short, Real};
 use crate::scene::domain;
 use crate::sweep_file::SweepRow;
+
+/// The smallest non-zero standard error of a row, in units of the device
+/// model's μ₀: ten times the exact solver's error (≲ 10⁻¹³ μ₀, the module's
+/// Method), so that the model's own error stays below a tenth of every
+/// row's weight.
+pub const STD_ERROR_FLOOR_OVER_MU0: f64 = 1e-12;
+
+/// The goodness-of-fit test's false-flag probability: a weighted fit whose χ²
+/// exceeds the upper `1 − GOODNESS_P` quantile of χ²_ν is doubtful.
+pub const GOODNESS_P: f64 = 1e-6;
 
 /// A fittable contact parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -113,6 +140,43 @@ pub struct FitResult {
     pub weighted: bool,
     /// Root-mean-square residual μ_measured − μ_fit.
     pub rms_residual_mu: f64,
+    /// P(χ²_ν ≥ χ²): the probability of a χ² this large if the model
+    /// described the data within their standard errors (null when unweighted).
+    pub chi2_p_value: Option<f64>,
+    /// Why the result is doubtful (χ²'s p-value below [`GOODNESS_P`]), or
+    /// null. The CLI prints the result and exits 1 with this line.
+    pub doubtful: Option<String>,
+}
+
+impl FitResult {
+    /// The refusal of a doubtful fit (the CLI's exit 1), or None.
+    pub fn doubtful(&self) -> Option<Error> {
+        self.doubtful.as_ref().map(|m| Error::failure(m.clone()))
+    }
+}
+
+/// The goodness-of-fit verdict of a weighted fit: (p-value, message when
+/// the p-value is below [`GOODNESS_P`]).
+fn goodness(chi2: f64, dof: usize) -> (f64, Option<String>) {
+    let Ok(d) = ChiSquared::new(dof as f64) else {
+        return (f64::NAN, None);
+    };
+    let p = d.sf(chi2);
+    if p >= GOODNESS_P {
+        return (p, None);
+    }
+    let limit = d.inverse_cdf(1.0 - GOODNESS_P);
+    (
+        p,
+        Some(format!(
+            "doubtful: chi2 {} on {dof} degrees of freedom (chi2/dof = {}) exceeds its {} quantile {}: the model does not describe the data within their standard errors (p = {})",
+            short(crate::numbers::round_sig(chi2, 4)),
+            short(crate::numbers::round_sig(chi2 / dof as f64, 4)),
+            short(1.0 - GOODNESS_P),
+            short(crate::numbers::round_sig(limit, 4)),
+            short(crate::numbers::round_sig(p, 2)),
+        )),
+    )
 }
 
 /// One row's residual at the fit, for the residual plot.
@@ -287,6 +351,29 @@ pub fn fit(rows: &[SweepRow], which: &[FitParam]) -> Result<(FitResult, Vec<Resi
                 "--data: line {line}: std_error must be ≥ 0"
             )));
         }
+        // Every number in the flags' domain (as `--v0`, `--freq`, … are).
+        for (name, v) in [
+            ("freq_hz", r.freq_hz),
+            ("amp_z", r.amp_z),
+            ("amp_x", r.amp_x),
+            ("offset_z", r.offset_z),
+            ("phi_deg", r.phi_deg),
+            ("v0", r.v0),
+            ("measured_mu", r.measured_mu),
+            ("std_error", r.std_error),
+        ] {
+            Real::ANY
+                .check(v, &short(v))
+                .map_err(|e| Error::usage(format!("--data: line {line}: {name} {e}")))?;
+        }
+        let floor = STD_ERROR_FLOOR_OVER_MU0 * mu0_model;
+        if r.std_error > 0.0 && r.std_error < floor {
+            return Err(Error::usage(format!(
+                "--data: line {line}: std_error {} is below what the model resolves ({} = 1e-12·model_mu0; 0 = unknown)",
+                short(r.std_error),
+                short(floor)
+            )));
+        }
     }
     let k = which.len();
     if used.len() <= k {
@@ -329,6 +416,12 @@ pub fn fit(rows: &[SweepRow], which: &[FitParam]) -> Result<(FitResult, Vec<Resi
     let chi2 = r.norm_squared();
     let dof = used.len() - k;
     let reduced = chi2 / dof as f64;
+    let (chi2_p_value, doubtful) = if weighted {
+        let (p, d) = goodness(chi2, dof);
+        (Some(p), d)
+    } else {
+        (None, None)
+    };
     let scale = if weighted { reduced.max(1.0) } else { reduced };
     let info = j.transpose() * &j;
     let cov = info
@@ -389,6 +482,8 @@ pub fn fit(rows: &[SweepRow], which: &[FitParam]) -> Result<(FitResult, Vec<Resi
             reduced_chi2: reduced,
             weighted,
             rms_residual_mu: (sum2 / used.len() as f64).sqrt(),
+            chi2_p_value,
+            doubtful,
         },
         residuals,
     ))
@@ -490,6 +585,11 @@ mod tests {
                 .collect();
             let (f, _) = fit(&noisy, &[FitParam::Mu0]).unwrap();
             assert!((f.mu0 / 0.24 - 1.0).abs() < 0.02, "μ0 = {}", f.mu0);
+            // Noise as stated: the χ² verdict flags a draw with probability
+            // GOODNESS_P = 1e-6 (any of 200: 2e-4).
+            assert!(f.doubtful.is_none(), "{:?}", f.doubtful);
+            let p = f.chi2_p_value.unwrap();
+            assert!(p > 0.0 && p <= 1.0, "{p}");
             assert!(f.mu0_ci95_low < f.mu0 && f.mu0 < f.mu0_ci95_high);
             if f.mu0_ci95_low <= 0.24 && 0.24 <= f.mu0_ci95_high {
                 covered += 1;
@@ -553,6 +653,21 @@ mod tests {
         );
         assert!(f.mu0_ci95_low <= 0.24 && 0.24 <= f.mu0_ci95_high);
         assert!(f.kx_over_kz_ci95_low <= 0.5 && 0.5 <= f.kx_over_kz_ci95_high);
+    }
+
+    /// The verdict's quantile: χ²_ν's upper 1e-6 point (tables: ν = 3:
+    /// 30.66, ν = 7: 40.52), and a χ² at it has p = 1e-6.
+    #[test]
+    fn goodness_quantile_and_p_value() {
+        for (dof, q) in [(3, 30.66), (7, 40.52)] {
+            let (p, d) = goodness(q * 1.001, dof);
+            assert!(p < GOODNESS_P && d.is_some(), "{p}");
+            let (p, d) = goodness(q * 0.999, dof);
+            assert!(p > GOODNESS_P && d.is_none(), "{p}");
+        }
+        let (p, d) = goodness(7.0, 7);
+        // P(χ²_7 ≥ 7) = 0.4289 (tables).
+        assert!((p - 0.4289).abs() < 1e-4 && d.is_none(), "{p}");
     }
 
     #[test]

@@ -322,8 +322,10 @@ impl TuneRequest {
             Adjust::Duz => {
                 let hi = max_duz.unwrap_or(limit);
                 if hi > limit {
+                    // A dimensionless scene's lengths are in units of uz0.
+                    let unit = if rs.dimensionless { " uz0" } else { " m" };
                     return Err(Error::usage(format!(
-                        "--max-duz: {} m is above the lift-off limit (1 − liftoff-margin)·uz0 = {} m",
+                        "--max-duz: {}{unit} is above the lift-off limit (1 − liftoff-margin)·uz0 = {}{unit}",
                         short(hi),
                         short(limit)
                     )));

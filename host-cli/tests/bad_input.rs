@@ -1350,6 +1350,141 @@ fn fit_names_what_is_wrong() {
     );
 }
 
+/// A sweep file of `fricctl fit` on PHYS's drive at four phases whose
+/// measured μ is the model's own (`fricctl mu`, exact), σ = 1e-3; `edit`
+/// changes a row's fields before it is written.
+fn model_sweep(path: &Path, edit: impl Fn(usize, &mut Vec<String>)) {
+    let header = "param,value,freq_hz,amp_z,amp_x,offset_z,phi_deg,v0,model_mu0,model_kz,model_kx,measured_mu,std_error,predicted_mu,valid,reasons";
+    let mut csv = format!("{header}\n");
+    for (i, phi) in ["0", "60", "120", "180"].into_iter().enumerate() {
+        let m = common::cli::json(
+            &[
+                &["mu"][..],
+                &PHYS[..PHYS.len() - 2],
+                &["--phi-deg", phi, "--v0", "0.01", "--method", "exact"],
+            ]
+            .concat(),
+        );
+        let mu = m["mu"].as_f64().unwrap().to_string();
+        let mut row: Vec<String> = [
+            "phase-deg",
+            phi,
+            "40000",
+            "2e-6",
+            "0.7e-6",
+            "5e-6",
+            phi,
+            "0.01",
+            "0.3",
+            "2e6",
+            "1.5e6",
+            &mu,
+            "0.001",
+            &mu,
+            "true",
+            "",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        edit(i, &mut row);
+        csv += &format!("{}\n", row.join(","));
+    }
+    std::fs::write(path, csv).unwrap();
+}
+
+/// Issue 41 §5: a row of absurd values is refused by its line and column
+/// (v0 1e300 was fitted with exit 0 and χ²/ν 3.8e7; σ 1e-300 overflowed the
+/// normal matrix and was called "not identifiable"); a fit whose χ² its
+/// distribution does not reach prints its result and exits 1 with the
+/// verdict (analysis::fit, "Goodness of fit"); one the model describes
+/// exits 0 and prints p(χ²).
+#[test]
+fn fit_refuses_absurd_rows_and_flags_a_chi2_beyond_its_quantile() {
+    const V0: usize = 7;
+    const MEASURED: usize = 11;
+    const STD_ERROR: usize = 12;
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("sw.csv");
+    let data = |edit: &dyn Fn(usize, &mut Vec<String>)| {
+        model_sweep(&f, edit);
+        v(&[&["--params", "mu0", "--data", f.to_str().unwrap()]])
+    };
+    let at = |row: usize, col: usize, val: &'static str| {
+        move |i: usize, r: &mut Vec<String>| {
+            if i == row {
+                r[col] = val.to_string();
+            }
+        }
+    };
+    refused(
+        &["fit"],
+        &data(&at(2, V0, "1e300")),
+        "--data",
+        "line 4: v0 must be of magnitude ≤ 1e100 (got 1e300)",
+    );
+    refused(
+        &["fit"],
+        &data(&at(1, STD_ERROR, "1e-300")),
+        "--data",
+        "line 3: std_error must be 0 or of magnitude ≥ 1e-100 (got 1e-300)",
+    );
+    refused(
+        &["fit"],
+        &data(&at(1, STD_ERROR, "1e-20")),
+        "--data",
+        "line 3: std_error 1e-20 is below what the model resolves (3e-13 = 1e-12·model_mu0; 0 = unknown)",
+    );
+    // The model's own μ: χ² ≈ 0, p ≈ 1, exit 0.
+    let args = data(&|_, _| {});
+    let o = bounded(&["fit"], &args, Duration::from_secs(60));
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    assert!(o.stdout.contains("p(χ²)        1 "), "{}", o.stdout);
+    // One row 0.05 off at σ = 1e-3: χ² ≈ 0.05²/σ²·(1 − 1/4) = 1875 on 3
+    // degrees of freedom, whose 1 − 1e-6 quantile is 30.66: exit 1 after
+    // the result (text, and JSON with the verdict in `doubtful`).
+    let off = |i: usize, r: &mut Vec<String>| {
+        if i == 1 {
+            let m: f64 = r[MEASURED].parse().unwrap();
+            r[MEASURED] = (m + 0.05).to_string();
+        }
+    };
+    let args = data(&off);
+    let o = bounded(&["fit"], &args, Duration::from_secs(60));
+    assert_eq!(o.code, Some(1), "{}", o.stderr);
+    assert!(o.stdout.starts_with("μ0 "), "{}", o.stdout);
+    let err = o.stderr.trim_end();
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.starts_with("error: doubtful: chi2 ")
+            && err.contains(" on 3 degrees of freedom ")
+            && err.contains("exceeds its 0.999999 quantile 30.66: the model does not describe the data within their standard errors"),
+        "{err}"
+    );
+    let mut json_args = args.clone();
+    json_args.push("--json".into());
+    let o = bounded(&["fit"], &json_args, Duration::from_secs(60));
+    assert_eq!(o.code, Some(1), "{}", o.stderr);
+    let j: serde_json::Value = serde_json::from_str(&o.stdout).unwrap();
+    let chi2 = j["chi2"].as_f64().unwrap();
+    // Between the outlier's share (0.05·3/4/σ)² and its whole (0.05/σ)².
+    assert!((1406.0..2500.0).contains(&chi2), "{chi2}");
+    assert!(j["chi2_p_value"].as_f64().unwrap() < 1e-6);
+    assert_eq!(
+        format!("error: {}", j["doubtful"].as_str().unwrap()),
+        err,
+        "the JSON's verdict is the stderr line"
+    );
+    // Unweighted (no standard errors): no scale to judge χ² by, exit 0.
+    let args = data(&|i, r| {
+        off(i, r);
+        r[STD_ERROR] = "0".into();
+    });
+    let o = bounded(&["fit"], &args, Duration::from_secs(60));
+    assert_eq!(o.code, Some(0), "{}", o.stderr);
+    assert!(!o.stdout.contains("p(χ²)"), "{}", o.stdout);
+}
+
 /// Issue 28 §13: a flag that would be ignored is refused.
 #[test]
 fn stray_steps_per_period_is_refused() {

@@ -519,3 +519,83 @@ fn stall_force_without_push_is_refused() {
         "{err}"
     );
 }
+
+/// Issue 41 §5: a dimensionless scene's result is in the groups' units
+/// (lengths in uz0 and W0, velocities in ωW0), never in m or m/s; the
+/// numbers are the JSON's (where uz0 = W0 = 1).
+#[test]
+fn dimensionless_scene_prints_no_si_units() {
+    let scene = ["--duz-rel", "0.5", "--ratio", "1", "--phi-deg", "45"];
+    let text = |args: &[&str]| {
+        let o = fricctl()
+            .args(["tune"])
+            .args(scene)
+            .args(args)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(0), "{o:?}");
+        String::from_utf8(o.stdout).unwrap()
+    };
+    let j = |args: &[&str]| common::cli::json(&[&["tune"][..], &scene, args, &["--json"]].concat());
+    for (adjust, unit) in [("duz", "uz0"), ("dux", "W0")] {
+        let args = ["--adjust", adjust, "--target-mu-rel", "0.2", "--v0", "0.1"];
+        let t = text(&args);
+        // No SI unit anywhere (" m" as a word, m/s, N).
+        for line in t.lines() {
+            let words: Vec<&str> = line.split_whitespace().collect();
+            assert!(
+                !words
+                    .iter()
+                    .any(|w| matches!(*w, "m" | "m/s" | "N" | "m," | "m)")),
+                "{line}"
+            );
+        }
+        assert!(
+            t.contains("v0              0.1 ωW0 (dimensionless scene)\n"),
+            "{t}"
+        );
+        let out = j(&args);
+        // The reported knob: its JSON value (the scene's uz0 = W0 = 1) and unit.
+        let x = out[adjust].as_f64().unwrap();
+        let line = t
+            .lines()
+            .find(|l| l.starts_with(&format!("{adjust:<16}")))
+            .unwrap();
+        let shown: f64 = line.split_whitespace().nth(1).unwrap().parse().unwrap();
+        // Rounded prints 12 significant digits.
+        assert!((shown - x).abs() <= 1e-11 * x.abs(), "{line} vs {x}");
+        assert_eq!(line.split_whitespace().nth(2), Some(unit), "{line}");
+        let search = t.lines().find(|l| l.starts_with("search")).unwrap();
+        assert!(search.contains(&format!("] {unit}, ")), "{search}");
+    }
+    // The refusal of a --max-duz beyond the lift-off limit, in uz0 too.
+    let o = fricctl()
+        .args(["tune"])
+        .args(scene)
+        .args([
+            "--adjust",
+            "duz",
+            "--target-mu-rel",
+            "0.2",
+            "--v0",
+            "0.1",
+            "--max-duz",
+            "2",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(
+        String::from_utf8(o.stderr).unwrap(),
+        "error: --max-duz: 2 uz0 is above the lift-off limit (1 − liftoff-margin)·uz0 = 0.95 uz0\n"
+    );
+    // The physical scene keeps its SI units.
+    let o = run(&["--adjust", "duz", "--target-mu-rel", "0.2", "--v0", "0.01"]);
+    let t = String::from_utf8(o.stdout).unwrap();
+    assert!(t.contains("v0              0.01 m/s\n"), "{t}");
+    assert!(
+        t.lines()
+            .any(|l| l.starts_with("duz") && l.contains(" m   (duz/uz0 = ")),
+        "{t}"
+    );
+}

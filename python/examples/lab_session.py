@@ -9,6 +9,7 @@ plant's true μ0 (0.25) is not the device's model's (0.3): the fit finds it.
 """
 
 import sys
+import warnings
 
 import numpy as np
 
@@ -47,8 +48,14 @@ with dev:
     model0 = dev.scene()
     table = dev.sweep("phase_deg", 0, 180, points=13, periods=2000, v0=V0)
     # 4. The fit of μ0 on the sweep's arrays, and the device's model updated.
-    fit = fricctl.fit(table, params="mu0")
+    # At 20 kHz (25 samples a period) the estimator's bias, ~3e-5 in μ, is
+    # far above the points' standard errors: the fit's χ² verdict calls it
+    # doubtful (docs/guide/fit.md) — μ0 is found all the same.
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        fit = fricctl.fit(table, params="mu0")
     print(f"fitted mu0 {fit.mu0:.4f} [{fit.mu0_ci95_low:.4f}, {fit.mu0_ci95_high:.4f}] (device model {model0.mu0})")
+    print(f"chi2/dof {fit.reduced_chi2:.0f}: {'doubtful' if fit.doubtful else 'consistent with the standard errors'}")
     dev.scene(mu0=fit.mu0, kz=model0.kz, kx=model0.kx)
     m = dev.measure(4000)
     p = dev.predict(V0)

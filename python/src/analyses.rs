@@ -9,31 +9,39 @@ use fric_analysis::sweep_file::{self, SweepRow};
 use fric_analysis::tune::{self as tuning, Adjust, Maximize, TuneOutcome, TuneRequest};
 use model_core::scene::ContactMode;
 use numpy::{PyArray1, PyArrayMethods};
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyString;
+use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 
+use crate::args::{type_name, Float};
 use crate::errors::{run, to_py, warn};
 use crate::record::Record;
 use crate::scene::Scene;
 
 /// Inverse design (`fricctl tune`).
 #[pyfunction]
-#[pyo3(signature = (scene, *, adjust, target_mu_rel=None, target_mu=None, maximize=None, v0=None, v_rel=None, max_duz=None, max_dux=None, liftoff_margin=tuning::DEFAULT_LIFTOFF_MARGIN))]
+#[pyo3(signature = (scene, *, adjust, target_mu_rel=None, target_mu=None, maximize=None, v0=None, v_rel=None, max_duz=None, max_dux=None, liftoff_margin=Float::Num(tuning::DEFAULT_LIFTOFF_MARGIN)), text_signature = "(scene, *, adjust, target_mu_rel=None, target_mu=None, maximize=None, v0=None, v_rel=None, max_duz=None, max_dux=None, liftoff_margin=0.05)")]
 #[allow(clippy::too_many_arguments)]
 pub fn tune(
     py: Python<'_>,
     scene: &Scene,
     adjust: &str,
-    target_mu_rel: Option<f64>,
-    target_mu: Option<f64>,
+    target_mu_rel: Option<Float>,
+    target_mu: Option<Float>,
     maximize: Option<&str>,
-    v0: Option<f64>,
-    v_rel: Option<f64>,
-    max_duz: Option<f64>,
-    max_dux: Option<f64>,
-    liftoff_margin: f64,
+    v0: Option<Float>,
+    v_rel: Option<Float>,
+    max_duz: Option<Float>,
+    max_dux: Option<Float>,
+    liftoff_margin: Float,
 ) -> PyResult<Record> {
+    let target_mu_rel = Float::opt(target_mu_rel, "target_mu_rel")?;
+    let target_mu = Float::opt(target_mu, "target_mu")?;
+    let v0 = Float::opt(v0, "v0")?;
+    let v_rel = Float::opt(v_rel, "v_rel")?;
+    let max_duz = Float::opt(max_duz, "max_duz")?;
+    let max_dux = Float::opt(max_dux, "max_dux")?;
+    let liftoff_margin = liftoff_margin.get("liftoff_margin")?;
     let req = TuneRequest {
         v0,
         v_rel,
@@ -95,19 +103,34 @@ const COLUMNS: [(&str, bool); 16] = [
 ];
 
 /// Column `name` of `data` (a mapping or a DataFrame) as floats, or None.
+/// A column that is not numbers (strings, None, objects) is a TypeError
+/// naming `data` and the column: numpy would read "0.1" as a number.
 fn column(
     np: &Bound<'_, PyModule>,
     data: &Bound<'_, PyAny>,
     name: &str,
     n: Option<usize>,
 ) -> PyResult<Option<Vec<f64>>> {
-    let has = data.call_method1("__contains__", (name,))?.is_truthy()?;
+    let named_err =
+        |e: PyErr| PyTypeError::new_err(format!("data: column '{name}': {}", e.value(data.py())));
+    let has = data
+        .call_method1("__contains__", (name,))
+        .and_then(|h| h.is_truthy())
+        .map_err(named_err)?;
     if !has {
         return Ok(None);
     }
-    let col = data.get_item(name)?;
-    let arr = np
-        .call_method1("asarray", (col, np.getattr("float64")?))?
+    let col = data.get_item(name).map_err(named_err)?;
+    let arr = np.call_method1("asarray", (col,)).map_err(named_err)?;
+    let kind: String = arr.getattr("dtype")?.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "b" | "i" | "u" | "f") {
+        return Err(PyTypeError::new_err(format!(
+            "data: column '{name}' must hold numbers (got dtype {})",
+            arr.getattr("dtype")?.str()?
+        )));
+    }
+    let arr = arr
+        .call_method1("astype", (np.getattr("float64")?,))?
         .call_method0("ravel")?;
     let arr = arr.cast_into::<PyArray1<f64>>()?;
     let v: Vec<f64> = arr.readonly().as_array().to_vec();
@@ -167,6 +190,39 @@ fn rows_of(py: Python<'_>, data: &Bound<'_, PyAny>) -> PyResult<Vec<SweepRow>> {
         .collect())
 }
 
+/// `params` as the CLI's comma-separated text: None (the default), a
+/// string, or a list or tuple of strings; anything else a TypeError naming
+/// `params`.
+fn params_text(params: Option<&Bound<'_, PyAny>>) -> PyResult<String> {
+    let wrong = |what: String| {
+        PyTypeError::new_err(format!(
+            "params: expected a string or a list of strings, got {what}"
+        ))
+    };
+    let Some(p) = params else {
+        return Ok("mu0,kx_over_kz".to_string());
+    };
+    if p.is_instance_of::<PyString>() {
+        return p.extract::<String>();
+    }
+    if !(p.is_instance_of::<PyList>() || p.is_instance_of::<PyTuple>()) {
+        return Err(wrong(type_name(p)));
+    }
+    let mut names = Vec::new();
+    for item in p.try_iter()? {
+        let item = item?;
+        if !item.is_instance_of::<PyString>() {
+            return Err(wrong(format!(
+                "a {} holding {}",
+                type_name(p),
+                type_name(&item)
+            )));
+        }
+        names.push(item.extract::<String>()?);
+    }
+    Ok(names.join(","))
+}
+
 /// Identification (`fricctl fit`): `data` is the path of a sweep file, or
 /// its columns (a dict of arrays or a pandas DataFrame).
 #[pyfunction]
@@ -176,17 +232,23 @@ pub fn fit(
     data: &Bound<'_, PyAny>,
     params: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Record> {
-    let which = match params {
-        None => FitParam::parse_list("mu0,kx_over_kz"),
-        Some(p) if p.is_instance_of::<PyString>() => FitParam::parse_list(&p.extract::<String>()?),
-        Some(p) => FitParam::parse_list(&p.extract::<Vec<String>>()?.join(",")),
-    }
-    .map_err(to_py)?;
+    let which = FitParam::parse_list(&params_text(params)?).map_err(to_py)?;
     let rows = if data.is_instance_of::<PyString>() || data.hasattr("__fspath__")? {
-        let path: std::path::PathBuf = data.extract()?;
+        let path: std::path::PathBuf = data
+            .extract()
+            .map_err(|e: PyErr| PyTypeError::new_err(format!("data: {}", e.value(py))))?;
         run(|| sweep_file::read_as(&path, "data"))?
-    } else {
+    } else if data.is_instance_of::<PyDict>()
+        || (data.hasattr("__contains__")?
+            && data.hasattr("__getitem__")?
+            && data.hasattr("keys")?)
+    {
         rows_of(py, data)?
+    } else {
+        return Err(PyTypeError::new_err(format!(
+            "data: expected a sweep file path, a dict of arrays or a pandas DataFrame, got {}",
+            type_name(data)
+        )));
     };
     let (r, residuals) = py.detach(|| run(|| fitting::fit(&rows, &which)))?;
     let (value, residual_mu, std_error): (Vec<f64>, Vec<f64>, Vec<f64>) = residuals
@@ -198,6 +260,9 @@ pub fn fit(
             acc.2.push(x.2);
             acc
         });
+    if let Some(msg) = &r.doubtful {
+        warn(py, msg)?;
+    }
     let arr = |v: Vec<f64>| PyArray1::from_vec(py, v).into_any().unbind();
     Ok(Record::of(py, "FitResult", &r)?
         .with("residual_value", arr(value))
@@ -208,20 +273,27 @@ pub fn fit(
 /// A body moved by the vibrated contact (`fricctl motion`): the result and
 /// the trajectory (the last ≤ 50 load periods) as arrays.
 #[pyfunction]
-#[pyo3(signature = (scene, *, mass, force_amp_rel, force_omega, force_offset_rel=0.0, spring=0.0, duration=None, method="auto", tol=1e-3))]
+#[pyo3(signature = (scene, *, mass, force_amp_rel, force_omega, force_offset_rel=Float::Num(0.0), spring=Float::Num(0.0), duration=None, method="auto", tol=Float::Num(1e-3)), text_signature = "(scene, *, mass, force_amp_rel, force_omega, force_offset_rel=0.0, spring=0.0, duration=None, method=\"auto\", tol=0.001)")]
 #[allow(clippy::too_many_arguments)]
 pub fn motion(
     py: Python<'_>,
     scene: &Scene,
-    mass: f64,
-    force_amp_rel: f64,
-    force_omega: f64,
-    force_offset_rel: f64,
-    spring: f64,
-    duration: Option<f64>,
+    mass: Float,
+    force_amp_rel: Float,
+    force_omega: Float,
+    force_offset_rel: Float,
+    spring: Float,
+    duration: Option<Float>,
     method: &str,
-    tol: f64,
+    tol: Float,
 ) -> PyResult<Record> {
+    let mass = mass.get("mass")?;
+    let force_amp_rel = force_amp_rel.get("force_amp_rel")?;
+    let force_omega = force_omega.get("force_omega")?;
+    let force_offset_rel = force_offset_rel.get("force_offset_rel")?;
+    let spring = spring.get("spring")?;
+    let duration = Float::opt(duration, "duration")?;
+    let tol = tol.get("tol")?;
     let req = MotionRequest {
         mass,
         force_amp_rel,

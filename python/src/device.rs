@@ -20,12 +20,14 @@ use device_host::report;
 use device_host::sweep::{self, PointOptions, SweepParam};
 use device_host::transducers::TransducerSpec;
 use device_host::virtual_device::PlantSpec;
+use fric_analysis::numbers::{short, Real};
 use fric_analysis::Error;
 use numpy::PyArray1;
 use pyo3::exceptions::{PyKeyboardInterrupt, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use crate::args::{named, Float, Int};
 use crate::errors::guard;
 use crate::record::Record;
 
@@ -57,17 +59,18 @@ pyo3::create_exception!(
 
 /// The Python exception of a device-host error.
 fn to_py(e: Error) -> PyErr {
-    let m = e.msg.clone();
     if e.code == 130 {
-        return PyKeyboardInterrupt::new_err(m);
+        return PyKeyboardInterrupt::new_err(e.msg);
     }
-    if m.contains("refused by the device") || m.contains("not identified") {
+    // Classified by the library's text, raised with the keyword first.
+    let (raw, m) = (e.msg.as_str(), keyword_first(&e.msg));
+    if raw.contains("refused by the device") || raw.contains("not identified") {
         return DeviceRefused::new_err(m);
     }
-    if m.starts_with("lost ")
-        || m.starts_with("no answer from")
-        || m.starts_with("--port:")
-        || m.starts_with("--tcp:")
+    if raw.starts_with("lost ")
+        || raw.starts_with("no answer from")
+        || raw.starts_with("--port:")
+        || raw.starts_with("--tcp:")
     {
         return if e.is_bad_input() {
             PyValueError::new_err(m)
@@ -75,7 +78,7 @@ fn to_py(e: Error) -> PyErr {
             LinkError::new_err(m)
         };
     }
-    if m.contains("fault") && m.contains("latched") {
+    if raw.contains("fault") && raw.contains("latched") {
         return DeviceFault::new_err(m);
     }
     if e.is_bad_input() {
@@ -85,9 +88,36 @@ fn to_py(e: Error) -> PyErr {
     }
 }
 
+/// A message in Python's words: the keyword of the flag it starts with,
+/// then the CLI's text (`--freq: refused …` → `freq: --freq: refused …`);
+/// a plant flag is `Device.virtual`'s `plant` key (`--plant-load-q: …` →
+/// `plant['load_q']: --plant-load-q: …`).
+fn keyword_first(msg: &str) -> String {
+    if let Some((flag, _)) = msg
+        .strip_prefix("--plant-")
+        .and_then(|rest| rest.split_once(':'))
+    {
+        return format!("plant['{}']: {msg}", flag.replace('-', "_"));
+    }
+    // identify's `--from`/`--to` are `from_hz`/`to_hz` here.
+    for (flag, kw) in [("--from:", "from_hz"), ("--to:", "to_hz")] {
+        if msg.starts_with(flag) {
+            return format!("{kw}: {msg}");
+        }
+    }
+    named(msg)
+}
+
+/// `x` in `domain`, or a ValueError naming `kw` (`mu0: must be > 0 (got -1)`).
+fn check_real(domain: Real, x: f64, kw: &str) -> PyResult<f64> {
+    domain
+        .check(x, &short(x))
+        .map_err(|r| PyValueError::new_err(format!("{kw}: {r}")))
+}
+
 /// A device's refusal as `DeviceRefused` with its kind and range.
 fn refused(py: Python<'_>, w: WireError) -> PyErr {
-    let msg = device_host::answers::wire_error(w).msg;
+    let msg = keyword_first(&device_host::answers::wire_error(w).msg);
     let e = DeviceRefused::new_err(msg);
     let v = e.value(py);
     let (kind, param, range) = match w {
@@ -259,14 +289,18 @@ impl Device {
     /// state file): the board's own logic on the simulated plant, whose
     /// device time runs as fast as the host computes it.
     #[staticmethod]
-    #[pyo3(name = "virtual", signature = (*, plant=None, v0=0.004, noise=1.0, offset=0.0, seed=0))]
+    #[pyo3(name = "virtual", signature = (*, plant=None, v0=Float::Num(0.004), noise=Float::Num(1.0), offset=Float::Num(0.0), seed=Int::Small(0)), text_signature = "(*, plant=None, v0=0.004, noise=1.0, offset=0.0, seed=0)")]
     fn virtual_(
         plant: Option<&Bound<'_, PyDict>>,
-        v0: f64,
-        noise: f64,
-        offset: f64,
-        seed: u64,
+        v0: Float,
+        noise: Float,
+        offset: Float,
+        seed: Int,
     ) -> PyResult<Device> {
+        let v0 = v0.get("v0")?;
+        let noise = noise.get("noise")?;
+        let offset = offset.get("offset")?;
+        let seed = seed.get("seed", 0, u64::MAX)?;
         let spec = plant_spec(plant)?;
         let opts =
             guard(|| spec.options(v0, noise, offset, ["v0", "noise", "offset"])).map_err(to_py)?;
@@ -281,13 +315,15 @@ impl Device {
     /// --pty`) or, with `tcp="HOST:PORT"`, the QEMU firmware or
     /// `sim-device --tcp`.
     #[staticmethod]
-    #[pyo3(signature = (port=None, *, tcp=None, timeout_ms=500, attempts=3))]
+    #[pyo3(signature = (port=None, *, tcp=None, timeout_ms=Int::Small(500), attempts=Int::Small(3)), text_signature = "(port=None, *, tcp=None, timeout_ms=500, attempts=3)")]
     fn open(
         port: Option<String>,
         tcp: Option<String>,
-        timeout_ms: u64,
-        attempts: u32,
+        timeout_ms: Int,
+        attempts: Int,
     ) -> PyResult<Device> {
+        let timeout_ms = timeout_ms.get("timeout_ms", 0, u64::MAX)?;
+        let attempts = attempts.u32("attempts", 0)?;
         let w = match (port, tcp) {
             (Some(p), None) => Where::Serial(p),
             (None, Some(a)) => Where::Tcp(a),
@@ -335,20 +371,26 @@ impl Device {
     /// `device drive set` (m, Hz, degrees): voltage mode with
     /// `open_loop=True`, else the displacement mode (identified transducers)
     /// with `track` ('none', 'z', 'x') and `headroom`.
-    #[pyo3(signature = (*, freq, amp_z, amp_x, offset_z, phase_deg=0.0, open_loop=false, track="none", headroom=None))]
+    #[pyo3(signature = (*, freq, amp_z, amp_x, offset_z, phase_deg=Float::Num(0.0), open_loop=false, track="none", headroom=None), text_signature = "($self, *, freq, amp_z, amp_x, offset_z, phase_deg=0.0, open_loop=False, track=\"none\", headroom=None)")]
     #[allow(clippy::too_many_arguments)]
     fn drive(
         &mut self,
         py: Python<'_>,
-        freq: f64,
-        amp_z: f64,
-        amp_x: f64,
-        offset_z: f64,
-        phase_deg: f64,
+        freq: Float,
+        amp_z: Float,
+        amp_x: Float,
+        offset_z: Float,
+        phase_deg: Float,
         open_loop: bool,
         track: &str,
-        headroom: Option<f64>,
+        headroom: Option<Float>,
     ) -> PyResult<Record> {
+        let freq = freq.get("freq")?;
+        let amp_z = amp_z.get("amp_z")?;
+        let amp_x = amp_x.get("amp_x")?;
+        let offset_z = offset_z.get("offset_z")?;
+        let phase_deg = phase_deg.get("phase_deg")?;
+        let headroom = Float::opt(headroom, "headroom")?;
         let track = track_of(track)?;
         if open_loop && (track != Track::None || headroom.is_some()) {
             return Err(PyValueError::new_err(
@@ -431,16 +473,21 @@ impl Device {
     fn scene(
         &mut self,
         py: Python<'_>,
-        mu0: Option<f64>,
-        kz: Option<f64>,
-        kx: Option<f64>,
+        mu0: Option<Float>,
+        kz: Option<Float>,
+        kx: Option<Float>,
     ) -> PyResult<Record> {
+        let mu0 = Float::opt(mu0, "mu0")?;
+        let kz = Float::opt(kz, "kz")?;
+        let kx = Float::opt(kx, "kx")?;
         let k = match (mu0, kz, kx) {
             (None, None, None) => match ask(py, self, Request::GetContact)? {
                 Response::Contact(k) => k,
                 other => return Err(unexpected(other)),
             },
             (Some(mu0), Some(kz), Some(kx)) => {
+                // μ0 as `device scene set --mu0` takes it (> 0, an f32).
+                check_real(Real::positive().single_precision(), mu0, "mu0")?;
                 // The device model's stiffness domain, by keyword.
                 let (lo, hi) = board::device::STIFFNESS_RANGE_N_PER_M;
                 for (name, k) in [("kz", kz), ("kx", kx)] {
@@ -468,7 +515,8 @@ impl Device {
     }
 
     /// `device predict` at `v0` m/s.
-    fn predict(&mut self, py: Python<'_>, v0: f64) -> PyResult<Record> {
+    fn predict(&mut self, py: Python<'_>, v0: Float) -> PyResult<Record> {
+        let v0 = v0.get("v0")?;
         match ask(py, self, Request::Predict { v0: v0 as f32 })? {
             Response::Prediction { prediction, regime } => record(
                 py,
@@ -483,7 +531,8 @@ impl Device {
     /// settle unless `wait=False`), with the drive the pickups measured. An
     /// invalid estimate is returned (its `valid` is False), not raised.
     #[pyo3(signature = (periods, *, wait=true))]
-    fn measure(&mut self, py: Python<'_>, periods: u32, wait: bool) -> PyResult<Record> {
+    fn measure(&mut self, py: Python<'_>, periods: Int, wait: bool) -> PyResult<Record> {
+        let periods = periods.u32("periods", 0)?;
         let flag = std::sync::atomic::AtomicBool::new(false);
         let m = with_client(py, self, |c| {
             device_host::measure::measure(c, periods, wait, &flag, &mut |_| {})
@@ -499,19 +548,24 @@ impl Device {
     /// intervals), stored on the device unless `store=False`. The drive,
     /// its mode and options are put back afterwards, also on an error or a
     /// KeyboardInterrupt.
-    #[pyo3(signature = (*, from_hz=None, to_hz=None, points=21, fine_points=31, settle_ms=None, channel="both", store=true))]
+    #[pyo3(signature = (*, from_hz=None, to_hz=None, points=Int::Small(21), fine_points=Int::Small(31), settle_ms=None, channel="both", store=true), text_signature = "($self, *, from_hz=None, to_hz=None, points=21, fine_points=31, settle_ms=None, channel=\"both\", store=True)")]
     #[allow(clippy::too_many_arguments)]
     fn identify(
         &mut self,
         py: Python<'_>,
-        from_hz: Option<f64>,
-        to_hz: Option<f64>,
-        points: u32,
-        fine_points: u32,
-        settle_ms: Option<f64>,
+        from_hz: Option<Float>,
+        to_hz: Option<Float>,
+        points: Int,
+        fine_points: Int,
+        settle_ms: Option<Float>,
         channel: &str,
         store: bool,
     ) -> PyResult<Record> {
+        let from_hz = Float::opt(from_hz, "from_hz")?;
+        let to_hz = Float::opt(to_hz, "to_hz")?;
+        let settle_ms = Float::opt(settle_ms, "settle_ms")?;
+        let points = points.u32("points", 0)?;
+        let fine_points = fine_points.u32("fine_points", 0)?;
         let channels = match channel {
             "both" => Channels::Both,
             "z" => Channels::Z,
@@ -548,19 +602,29 @@ impl Device {
     /// predicts μ at `v0`. The drive is put back afterwards, also on an
     /// error or a KeyboardInterrupt. Returns a dict of numpy arrays (the
     /// columns of the CLI's sweep file) that `fricctl.fit` takes.
-    #[pyo3(signature = (param, start, end, *, points, periods, v0, settle_periods=0))]
+    #[pyo3(signature = (param, start, end, *, points, periods, v0, settle_periods=Int::Small(0)), text_signature = "($self, param, start, end, *, points, periods, v0, settle_periods=0)")]
     #[allow(clippy::too_many_arguments)]
     fn sweep<'py>(
         &mut self,
         py: Python<'py>,
         param: &str,
-        start: f64,
-        end: f64,
-        points: usize,
-        periods: u32,
-        v0: f64,
-        settle_periods: u32,
+        start: Float,
+        end: Float,
+        points: Int,
+        periods: Int,
+        v0: Float,
+        settle_periods: Int,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let start = start.get("start")?;
+        let end = end.get("end")?;
+        let v0 = v0.get("v0")?;
+        let points = points.get("points", 0, u32::MAX.into())? as usize;
+        // The ends are numbers by keyword here; the device refuses a value
+        // outside its range by the swept parameter's name.
+        check_real(Real::ANY, start, "start")?;
+        check_real(Real::ANY, end, "end")?;
+        let periods = periods.u32("periods", 0)?;
+        let settle_periods = settle_periods.u32("settle_periods", 0)?;
         let p = match param.replace('-', "_").as_str() {
             "phase_deg" => SweepParam::PhaseDeg,
             "amp_z" => SweepParam::AmpZ,
@@ -601,13 +665,18 @@ impl Device {
     fn control(
         &mut self,
         py: Python<'_>,
-        target_mu: Option<f64>,
-        v0: Option<f64>,
+        target_mu: Option<Float>,
+        v0: Option<Float>,
         on: bool,
-        gain: Option<f64>,
-        periods: Option<u32>,
-        rate: Option<f64>,
+        gain: Option<Float>,
+        periods: Option<Int>,
+        rate: Option<Float>,
     ) -> PyResult<Record> {
+        let target_mu = Float::opt(target_mu, "target_mu")?;
+        let v0 = Float::opt(v0, "v0")?;
+        let gain = Float::opt(gain, "gain")?;
+        let rate = Float::opt(rate, "rate")?;
+        let periods = periods.map(|n| n.u32("periods", 0)).transpose()?;
         use device_host::control_bench::{DEFAULT_GAIN, DEFAULT_RATE};
         let setting = if on {
             let (Some(t), Some(v)) = (target_mu, v0) else {
@@ -665,7 +734,9 @@ impl Device {
     /// the loop ends). The stream stops when the iterator ends, is closed,
     /// is dropped, or raises (an error, a KeyboardInterrupt).
     #[pyo3(signature = (periods, *, count=None))]
-    fn watch(slf: Bound<'_, Self>, periods: u32, count: Option<u64>) -> PyResult<Watch> {
+    fn watch(slf: Bound<'_, Self>, periods: Int, count: Option<Int>) -> PyResult<Watch> {
+        let periods = periods.u32("periods", 0)?;
+        let count = count.map(|n| n.get("count", 0, u64::MAX)).transpose()?;
         if count == Some(0) {
             return Err(PyValueError::new_err("count: must be ≥ 1"));
         }

@@ -1,6 +1,8 @@
 //! Errors across the boundary: the library's one-line message becomes
 //! `ValueError` (bad input) or `fricctl.SolverError` (the computation
-//! failed), with the CLI's text; a Rust panic becomes `SolverError` too.
+//! failed), the Python keyword first and the CLI's text after it
+//! (`mu0: --mu0: must be > 0 (got -1)`); a Rust panic becomes `SolverError`
+//! too.
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
@@ -27,12 +29,14 @@ pub fn is_solver_failure(e: &Error) -> bool {
     !e.is_bad_input() || tolerance_unmet(e)
 }
 
-/// The Python exception of a library error.
+/// The Python exception of a library error, its message led by the
+/// keyword of the flag it names ([`crate::args::named`]).
 pub fn to_py(e: Error) -> PyErr {
+    let msg = crate::args::named(&e.msg);
     if is_solver_failure(&e) {
-        SolverError::new_err(e.msg)
+        SolverError::new_err(msg)
     } else {
-        PyValueError::new_err(e.msg)
+        PyValueError::new_err(msg)
     }
 }
 

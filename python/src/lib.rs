@@ -1,7 +1,8 @@
 //! `import fricctl`: the Python bindings of the dual-mode friction-control
 //! analysis (pyo3 + rust-numpy). Thin: every number comes from
-//! `fric-analysis` (the code behind the CLI `fricctl`), every refusal is the
-//! CLI's one-line message, as `ValueError` (bad input) or
+//! `fric-analysis` (the code behind the CLI `fricctl`), every refusal names the
+//! Python keyword, then gives the CLI's one-line message, as `ValueError`
+//! (bad input; `TypeError` for a value of the wrong type) or
 //! `fricctl.SolverError` (a computation that failed); a panic never crosses
 //! the boundary. `fricctl.Device` drives a board, the QEMU firmware or the
 //! virtual device through the CLI's own device library (device-host). The
@@ -10,6 +11,7 @@
 #![deny(missing_docs)]
 
 mod analyses;
+mod args;
 mod device;
 mod errors;
 mod record;

@@ -10,10 +10,14 @@ use model_core::analytic::{CriticalVelocity, StaticFriction};
 use model_core::mdr::Profile;
 use model_core::scene::ContactMode;
 use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
-use pyo3::exceptions::PyValueError;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyBytes, PyComplex, PyFloat, PyInt, PyString};
 use rayon::prelude::*;
 
+use crate::args::{named, type_name, Float, Int};
 use crate::errors::{guard, is_solver_failure, run, to_py, warn};
 use crate::record::Record;
 
@@ -57,6 +61,120 @@ impl Scene {
         }
     }
 
+    /// μ (and its bound) over a C-contiguous float64 array, in parallel
+    /// without the GIL, written straight into the result arrays: nothing
+    /// else grows with the input (the one per-point allocation, an error's
+    /// message, lives only until its chunk's tally).
+    fn mu_array(
+        &self,
+        py: Python<'_>,
+        arr: &Bound<'_, PyArrayDyn<f64>>,
+        how: &MethodArgs,
+        policy: OnError,
+        return_bound: bool,
+    ) -> PyResult<Py<PyAny>> {
+        let shape: Vec<usize> = arr.shape().to_vec();
+        let mu_arr = PyArrayDyn::<f64>::zeros(py, shape.as_slice(), false);
+        let bound_arr = return_bound.then(|| PyArrayDyn::<f64>::zeros(py, shape.as_slice(), false));
+        let tally = {
+            let input = arr.readonly();
+            let xs = input.as_slice()?;
+            let mut mu_rw = mu_arr.readwrite();
+            let mut bound_rw = bound_arr.as_ref().map(|b| b.readwrite());
+            let mus = mu_rw.as_slice_mut()?;
+            let bounds = match bound_rw.as_mut() {
+                Some(b) => Some(b.as_slice_mut()?),
+                None => None,
+            };
+            py.detach(|| guard(|| Ok(self.mu_chunks(xs, mus, bounds, how, policy))))
+                .map_err(to_py)?
+        };
+        if let Some((i, e)) = tally.first_error {
+            return Err(to_py(
+                e.with_context(&format!("v0[{}]", flat_index(&shape, i))),
+            ));
+        }
+        if tally.at_rest > 0 {
+            warn(py, &format!("{AT_REST} ({} point(s))", tally.at_rest))?;
+        }
+        if let Some((_, msg)) = tally.first_failure {
+            warn(
+                py,
+                &format!(
+                    "mu: NaN returned at {} point(s); the first: {}",
+                    tally.failed,
+                    named(&msg)
+                ),
+            )?;
+        }
+        let mu_obj = mu_arr.into_any().unbind();
+        match bound_arr {
+            Some(b) => Ok((mu_obj, b.into_any().unbind())
+                .into_pyobject(py)?
+                .into_any()
+                .unbind()),
+            None => Ok(mu_obj),
+        }
+    }
+
+    /// μ of `xs` into `mus` (and `bounds`), in chunks on the thread pool:
+    /// the tally of points at rest and failures, the first error (by index)
+    /// that `policy` does not turn into NaN. Once an error is found, chunks
+    /// after it are skipped.
+    fn mu_chunks(
+        &self,
+        xs: &[f64],
+        mus: &mut [f64],
+        bounds: Option<&mut [f64]>,
+        how: &MethodArgs,
+        policy: OnError,
+    ) -> Tally {
+        const CHUNK: usize = 1024;
+        let stop = AtomicUsize::new(usize::MAX);
+        let n_chunks = xs.len().div_ceil(CHUNK);
+        let bound_chunks: Vec<Option<&mut [f64]>> = match bounds {
+            Some(b) => b.chunks_mut(CHUNK).map(Some).collect(),
+            None => (0..n_chunks).map(|_| None).collect(),
+        };
+        mus.par_chunks_mut(CHUNK)
+            .zip(bound_chunks)
+            .enumerate()
+            .map(|(c, (mu_c, mut bound_c))| {
+                let mut t = Tally::default();
+                let base = c * CHUNK;
+                if base > stop.load(Ordering::Relaxed) {
+                    return t;
+                }
+                for (j, (&x, m_out)) in xs[base..].iter().zip(mu_c.iter_mut()).enumerate() {
+                    let (m, b) = match guard(|| self.point(x, how)) {
+                        Ok(Point::Mu(m, b)) => (m, b),
+                        Ok(Point::AtRest) => {
+                            t.at_rest += 1;
+                            (f64::NAN, f64::NAN)
+                        }
+                        Err(e) if policy == OnError::Nan && nan_allowed(&e) => {
+                            t.failed += 1;
+                            if t.first_failure.is_none() {
+                                t.first_failure = Some((base + j, e.msg));
+                            }
+                            (f64::NAN, f64::NAN)
+                        }
+                        Err(e) => {
+                            t.first_error = Some((base + j, e));
+                            stop.fetch_min(base + j, Ordering::Relaxed);
+                            break;
+                        }
+                    };
+                    *m_out = m;
+                    if let Some(bc) = bound_c.as_deref_mut() {
+                        bc[j] = b;
+                    }
+                }
+                t
+            })
+            .reduce(Tally::default, Tally::merge)
+    }
+
     fn how(&self, method: &str, tol: Option<f64>, steps: Option<u32>) -> PyResult<MethodArgs> {
         let how = MethodArgs {
             method: Method::from_name(method).map_err(to_py)?,
@@ -94,24 +212,38 @@ impl Scene {
     #[pyo3(signature = (*, mu0=None, kz=None, kx=None, uz0=None, duz=None, dux=None, freq=None, omega=None, phi_deg=None, phi_rad=None, duz_rel=None, dux_rel=None, ratio=None, profile=None, exponent=None, scene=None, liftoff=true))]
     #[allow(clippy::too_many_arguments)]
     fn new(
-        mu0: Option<f64>,
-        kz: Option<f64>,
-        kx: Option<f64>,
-        uz0: Option<f64>,
-        duz: Option<f64>,
-        dux: Option<f64>,
-        freq: Option<f64>,
-        omega: Option<f64>,
-        phi_deg: Option<f64>,
-        phi_rad: Option<f64>,
-        duz_rel: Option<f64>,
-        dux_rel: Option<f64>,
-        ratio: Option<f64>,
+        mu0: Option<Float>,
+        kz: Option<Float>,
+        kx: Option<Float>,
+        uz0: Option<Float>,
+        duz: Option<Float>,
+        dux: Option<Float>,
+        freq: Option<Float>,
+        omega: Option<Float>,
+        phi_deg: Option<Float>,
+        phi_rad: Option<Float>,
+        duz_rel: Option<Float>,
+        dux_rel: Option<Float>,
+        ratio: Option<Float>,
         profile: Option<&str>,
-        exponent: Option<f64>,
+        exponent: Option<Float>,
         scene: Option<PathBuf>,
         liftoff: bool,
     ) -> PyResult<Scene> {
+        let mu0 = Float::opt(mu0, "mu0")?;
+        let kz = Float::opt(kz, "kz")?;
+        let kx = Float::opt(kx, "kx")?;
+        let uz0 = Float::opt(uz0, "uz0")?;
+        let duz = Float::opt(duz, "duz")?;
+        let dux = Float::opt(dux, "dux")?;
+        let freq = Float::opt(freq, "freq")?;
+        let omega = Float::opt(omega, "omega")?;
+        let phi_deg = Float::opt(phi_deg, "phi_deg")?;
+        let phi_rad = Float::opt(phi_rad, "phi_rad")?;
+        let duz_rel = Float::opt(duz_rel, "duz_rel")?;
+        let dux_rel = Float::opt(dux_rel, "dux_rel")?;
+        let ratio = Float::opt(ratio, "ratio")?;
+        let exponent = Float::opt(exponent, "exponent")?;
         let profile = match profile {
             None => None,
             Some(name) => Some(lib::ProfileKind::from_flag(name).map_err(to_py)?),
@@ -144,7 +276,9 @@ impl Scene {
 
     /// μ at sliding velocity `v0` (m/s; units of ωW0 for a dimensionless
     /// scene): a float for a number, an ndarray of the same shape for an
-    /// array-like.
+    /// array-like of numbers. The result array is the only allocation that
+    /// grows with the input (an input that is not already a C-contiguous
+    /// float64 array is converted to one first).
     #[pyo3(signature = (v0, method="auto", tol=None, steps_per_period=None, return_bound=false, errors="raise"))]
     #[allow(clippy::too_many_arguments)]
     fn mu(
@@ -152,17 +286,20 @@ impl Scene {
         py: Python<'_>,
         v0: &Bound<'_, PyAny>,
         method: &str,
-        tol: Option<f64>,
-        steps_per_period: Option<u32>,
+        tol: Option<Float>,
+        steps_per_period: Option<Int>,
         return_bound: bool,
         errors: &str,
     ) -> PyResult<Py<PyAny>> {
-        let how = self.how(method, tol, steps_per_period)?;
+        let tol = Float::opt(tol, "tol")?;
+        let steps = steps_per_period
+            .map(|n| n.u32("steps_per_period", 1))
+            .transpose()?;
+        let how = self.how(method, tol, steps)?;
         let policy = on_error(errors)?;
         let np = py.import("numpy")?;
-        let is_array = v0.is_instance(&np.getattr("ndarray")?)?;
-        if !is_array {
-            if let Ok(x) = v0.extract::<f64>() {
+        match velocities(&np, v0)? {
+            Velocities::Scalar(x) => {
                 let (m, b) = match guard(|| self.point(x, &how)) {
                     Ok(Point::Mu(m, b)) => (m, b),
                     Ok(Point::AtRest) => {
@@ -170,77 +307,18 @@ impl Scene {
                         (f64::NAN, f64::NAN)
                     }
                     Err(e) if policy == OnError::Nan && nan_allowed(&e) => {
-                        warn(py, &format!("mu: NaN returned: {}", e.msg))?;
+                        warn(py, &format!("mu: NaN returned: {}", named(&e.msg)))?;
                         (f64::NAN, f64::NAN)
                     }
                     Err(e) => return Err(to_py(e)),
                 };
-                return if return_bound {
+                if return_bound {
                     Ok((m, b).into_pyobject(py)?.into_any().unbind())
                 } else {
                     Ok(m.into_pyobject(py)?.into_any().unbind())
-                };
+                }
             }
-        }
-        let arr = np.call_method1("asarray", (v0, np.getattr("float64")?))?;
-        let arr = arr.cast_into::<PyArrayDyn<f64>>()?;
-        let shape: Vec<usize> = arr.shape().to_vec();
-        let xs: Vec<f64> = arr.readonly().as_array().iter().copied().collect();
-        let results: Vec<Result<Point, Error>> = py
-            .detach(|| {
-                guard(|| {
-                    Ok(xs
-                        .par_iter()
-                        .map(|&x| guard(|| self.point(x, &how)))
-                        .collect())
-                })
-            })
-            .map_err(to_py)?;
-        let mut mu = Vec::with_capacity(xs.len());
-        let mut bound = Vec::with_capacity(xs.len());
-        let (mut at_rest, mut failed, mut first_failure) = (0usize, 0usize, None);
-        for (i, r) in results.into_iter().enumerate() {
-            let (m, b) = match r {
-                Ok(Point::Mu(m, b)) => (m, b),
-                Ok(Point::AtRest) => {
-                    at_rest += 1;
-                    (f64::NAN, f64::NAN)
-                }
-                Err(e) if policy == OnError::Nan && nan_allowed(&e) => {
-                    failed += 1;
-                    first_failure.get_or_insert(e.msg);
-                    (f64::NAN, f64::NAN)
-                }
-                Err(e) => {
-                    return Err(to_py(
-                        e.with_context(&format!("v0[{}]", flat_index(&shape, i))),
-                    ))
-                }
-            };
-            mu.push(m);
-            bound.push(b);
-        }
-        if at_rest > 0 {
-            warn(py, &format!("{AT_REST} ({at_rest} point(s))"))?;
-        }
-        if let Some(msg) = first_failure {
-            warn(
-                py,
-                &format!("mu: NaN returned at {failed} point(s); the first: {msg}"),
-            )?;
-        }
-        let to_arr = |v: Vec<f64>| -> PyResult<Py<PyAny>> {
-            let a = numpy::ndarray::ArrayD::from_shape_vec(shape.clone(), v)
-                .map_err(|e| PyValueError::new_err(e.to_string()))?;
-            Ok(numpy::PyArray::from_owned_array(py, a).into_any().unbind())
-        };
-        if return_bound {
-            Ok((to_arr(mu)?, to_arr(bound)?)
-                .into_pyobject(py)?
-                .into_any()
-                .unbind())
-        } else {
-            to_arr(mu)
+            Velocities::Array(arr) => self.mu_array(py, &arr, &how, policy, return_bound),
         }
     }
 
@@ -286,7 +364,8 @@ impl Scene {
     /// The state of the contact at sliding velocity v0: "rest" (v0 = 0),
     /// "stick_slip" (0 < |v0| < v_c in its direction) or "sliding" (|v0| ≥ v_c,
     /// μ = ±μ0).
-    fn regime(&self, v0: f64) -> PyResult<&'static str> {
+    fn regime(&self, v0: Float) -> PyResult<&'static str> {
+        let v0 = v0.get("v0")?;
         run(|| lib::check(Real::ANY, v0, "--v0"))?;
         let vc = run(|| eval::critical_velocity(&self.rs.scene))?;
         Ok(if v0 == 0.0 {
@@ -406,6 +485,95 @@ impl Scene {
                 p => format!("{} profile", p.name()),
             }
         )
+    }
+}
+
+/// What `mu` was given: one number, or an array of numbers (C-contiguous
+/// float64).
+enum Velocities<'py> {
+    Scalar(f64),
+    Array(Bound<'py, PyArrayDyn<f64>>),
+}
+
+/// `v0` read as numbers: a Python or numpy real number (not a bool), or
+/// anything numpy reads as an array of integers or floats. A string, None,
+/// a bool, a complex number, or an array of anything else is a TypeError
+/// naming `v0` (numpy would read "0.01" as a number and None as NaN).
+fn velocities<'py>(np: &Bound<'py, PyModule>, v0: &Bound<'py, PyAny>) -> PyResult<Velocities<'py>> {
+    let wrong = |what: String| {
+        PyTypeError::new_err(format!(
+            "v0: expected a number or an array of numbers, got {what}"
+        ))
+    };
+    if v0.is_none()
+        || v0.is_instance_of::<PyString>()
+        || v0.is_instance_of::<PyBytes>()
+        || v0.is_instance_of::<PyBool>()
+        || v0.is_instance(&np.getattr("bool_")?)?
+        || v0.is_instance(&np.getattr("complexfloating")?)?
+        || v0.is_instance_of::<PyComplex>()
+    {
+        return Err(wrong(type_name(v0)));
+    }
+    let is_array = v0.is_instance(&np.getattr("ndarray")?)?;
+    if !is_array
+        && (v0.is_instance_of::<PyFloat>()
+            || v0.is_instance_of::<PyInt>()
+            || v0.is_instance(&np.getattr("number")?)?)
+    {
+        // A Python int beyond f64 (10**400) is a value error, named.
+        return v0
+            .extract::<f64>()
+            .map(Velocities::Scalar)
+            .map_err(|e| PyValueError::new_err(format!("v0: {}", e.value(v0.py()))));
+    }
+    let arr = np.call_method1("asarray", (v0,)).map_err(|e| {
+        wrong(format!(
+            "{} that numpy cannot read as an array ({})",
+            type_name(v0),
+            e.value(v0.py())
+        ))
+    })?;
+    let kind: String = arr.getattr("dtype")?.getattr("kind")?.extract()?;
+    if !matches!(kind.as_str(), "i" | "u" | "f") {
+        let dtype = arr.getattr("dtype")?.str()?.to_string();
+        return Err(wrong(format!("{} of dtype {dtype}", type_name(v0))));
+    }
+    // asarray, not ascontiguousarray: that one makes a 0-d array 1-d.
+    let kwargs = pyo3::types::PyDict::new(v0.py());
+    kwargs.set_item("dtype", np.getattr("float64")?)?;
+    kwargs.set_item("order", "C")?;
+    let arr = np
+        .call_method("asarray", (arr,), Some(&kwargs))
+        .map_err(|e| PyValueError::new_err(format!("v0: {}", e.value(v0.py()))))?;
+    Ok(Velocities::Array(arr.cast_into::<PyArrayDyn<f64>>()?))
+}
+
+/// The outcome of a chunk of `mu` (merged over the chunks).
+#[derive(Default)]
+struct Tally {
+    at_rest: usize,
+    failed: usize,
+    /// The first failure turned into NaN: (index, message).
+    first_failure: Option<(usize, String)>,
+    /// The first error raised: (index, error).
+    first_error: Option<(usize, Error)>,
+}
+
+impl Tally {
+    fn merge(a: Tally, b: Tally) -> Tally {
+        fn first<T>(x: Option<(usize, T)>, y: Option<(usize, T)>) -> Option<(usize, T)> {
+            match (x, y) {
+                (Some(x), Some(y)) => Some(if x.0 <= y.0 { x } else { y }),
+                (x, y) => x.or(y),
+            }
+        }
+        Tally {
+            at_rest: a.at_rest + b.at_rest,
+            failed: a.failed + b.failed,
+            first_failure: first(a.first_failure, b.first_failure),
+            first_error: first(a.first_error, b.first_error),
+        }
     }
 }
 

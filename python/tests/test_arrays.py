@@ -63,10 +63,10 @@ def test_zero_velocity_is_nan_with_a_pointer_to_mu_limits():
 
 
 @pytest.mark.parametrize("bad,msg", [
-    (float("nan"), "--v0: 'NaN' is not a number"),
-    (float("inf"), "--v0: must be of magnitude ≤ 1e100 (got inf)"),
-    (float("-inf"), "--v0: must be of magnitude ≤ 1e100 (got -inf)"),
-    (1e200, "--v0: must be of magnitude ≤ 1e100 (got 1e200)"),
+    (float("nan"), "v0: --v0: 'NaN' is not a number"),
+    (float("inf"), "v0: --v0: must be of magnitude ≤ 1e100 (got inf)"),
+    (float("-inf"), "v0: --v0: must be of magnitude ≤ 1e100 (got -inf)"),
+    (1e200, "v0: --v0: must be of magnitude ≤ 1e100 (got 1e200)"),
 ])
 def test_nan_and_inf_inputs(bad, msg):
     with pytest.raises(ValueError) as e:

@@ -17,6 +17,7 @@ import subprocess
 import sys
 import textwrap
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -48,7 +49,14 @@ def session(dev):
     m = dev.measure(4000)
     # Each point settles 200 periods after the ramps before its window.
     table = dev.sweep("phase_deg", 0, 180, points=7, periods=2000, v0=0.004, settle_periods=200)
-    fit = fricctl.fit(table, params="mu0")
+    # At 20 kHz (25 samples a period) the estimator's bias, ~3e-5 in μ, is
+    # far above the rows' standard errors (host-cli/tests/sweep.rs,
+    # FIT_FREQ): the fit's χ² verdict calls it doubtful (a RuntimeWarning),
+    # and μ0 is still found within 2 % (check).
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fit = fricctl.fit(table, params="mu0")
+    assert [str(w.message) for w in caught] == ([fit.doubtful] if fit.doubtful else [])
     # The device's model takes the fitted μ0; its prediction is then the
     # measured μ's.
     dev.scene(mu0=fit.mu0, kz=fit.kz, kx=fit.kx)
@@ -75,6 +83,10 @@ def check(ident, m, p, table, fit, mu0=PLANT["mu0"], q_tol=0.05):
     assert len(table["value"]) == 7 and table["valid"].all(), table["reasons"]
     assert np.allclose(table["value"], np.linspace(0, 180, 7))
     assert abs(fit.mu0 / mu0 - 1) <= 0.02, fit
+    # The bias above (χ²/ν in the thousands here, 200–350 in sweep.rs's
+    # measurement) against the flag's quantile (χ²/ν ≈ 6.4 at 6 degrees of
+    # freedom): flagged, whichever of the three devices ran.
+    assert fit.doubtful is not None and fit.reduced_chi2 > 100 and fit.chi2_p_value < 1e-6, fit
 
 
 def test_lab_session_on_the_virtual_device():
@@ -139,7 +151,7 @@ def test_a_refusal_is_device_refused_with_its_range():
         assert e.value.param == "Freq"
         assert e.value.min is not None and e.value.max is not None
         assert e.value.min < 20000 < e.value.max
-        assert str(e.value).startswith("--freq: refused by the device")
+        assert str(e.value).startswith("freq: --freq: refused by the device")
         # The displacement mode needs identified transducers.
         with pytest.raises(fricctl.DeviceRefused) as e:
             dev.drive(freq=20000, amp_z=1e-6, amp_x=0, offset_z=4e-6)
@@ -152,7 +164,7 @@ def test_bad_arguments_name_the_keyword():
         fricctl.Device.virtual(plant=dict(q=3))
     with pytest.raises(TypeError, match=r"plant\['q_z'\]: must be a number"):
         fricctl.Device.virtual(plant=dict(q_z="high"))
-    with pytest.raises(ValueError, match="--plant-load-q"):
+    with pytest.raises(ValueError, match=r"^plant\['load_q'\]: --plant-load-q: "):
         fricctl.Device.virtual(plant=dict(load_q=0.45))
     with pytest.raises(ValueError, match="open: give a serial port or tcp"):
         fricctl.Device.open()

@@ -1,6 +1,9 @@
-"""Every refusal: ValueError with the CLI's own text (compared with the
-CLI's stderr for the same flags where the CLI has them), SolverError for a
-computation that fails, and no panic across the boundary."""
+"""Every refusal: ValueError naming the Python keyword, then the CLI's own
+text (compared with the CLI's stderr for the same flags where the CLI has
+them), SolverError for a computation that fails, and no panic across the
+boundary."""
+
+import re
 
 import pytest
 
@@ -8,6 +11,16 @@ import fricctl
 from conftest import flags
 
 PAPER = dict(mu0=0.3, kz=2e6, kx=1.5e6, uz0=5e-6, duz=2e-6, dux=0.7e-6, freq=40e3, phi_deg=50.0)
+
+
+def as_python(cli_stderr):
+    """The Python message of a CLI refusal: the keyword of the flag it
+    starts with, then the CLI's text (`error: --phi-deg: …` → `phi_deg:
+    --phi-deg: …`)."""
+    text = cli_stderr.removeprefix("error: ")
+    m = re.match(r"--([a-z0-9-]+):", text)
+    assert m, cli_stderr
+    return m.group(1).replace("-", "_") + ": " + text
 
 
 def without(*keys, **extra):
@@ -55,7 +68,7 @@ def test_scene_refusals_are_the_clis(cli, kw):
     assert status == 2, err
     with pytest.raises(ValueError) as e:
         fricctl.Scene(**kw)
-    assert "error: " + str(e.value) == err
+    assert str(e.value) == as_python(err)
 
 
 MU_CASES = [
@@ -75,7 +88,7 @@ def test_mu_refusals_are_the_clis(cli, kw, args):
     assert status == 2, err
     with pytest.raises(ValueError) as e:
         fricctl.Scene(**PAPER).mu(0.01, **kw)
-    assert "error: " + str(e.value) == err
+    assert str(e.value) == as_python(err)
 
 
 def test_fixed_at_rest_and_approx_at_rest(cli):
@@ -84,7 +97,7 @@ def test_fixed_at_rest_and_approx_at_rest(cli):
         _, _, err = cli("mu", *flags(**dict(PAPER, dux=0.0)), "--v0", "0", "--method", method)
         with pytest.raises(ValueError) as e:
             s.mu(0.0, method=method)
-        assert "error: " + str(e.value) == err
+        assert str(e.value) == as_python(err)
 
 
 def test_bad_errors_policy():
@@ -96,7 +109,7 @@ def test_tolerance_no_method_meets_is_a_solver_error(cli):
     _, _, err = cli("mu", *flags(**PAPER), "--v0", "0.01", "--tol", "1e-30")
     with pytest.raises(fricctl.SolverError) as e:
         fricctl.Scene(**PAPER).mu(0.01, tol=1e-30)
-    assert "error: " + str(e.value) == err
+    assert str(e.value) == as_python(err)
     assert isinstance(e.value, RuntimeError)
     with pytest.warns(RuntimeWarning, match="tighter than"):
         import math
@@ -104,7 +117,7 @@ def test_tolerance_no_method_meets_is_a_solver_error(cli):
 
 
 def test_liftoff_false_refuses_a_lifting_drive():
-    with pytest.raises(ValueError, match=r"^--duz: must be < uz0 for this command"):
+    with pytest.raises(ValueError, match=r"^duz: --duz: must be < uz0 for this command"):
         fricctl.Scene(**dict(PAPER, duz=7e-6), liftoff=False)
 
 
@@ -126,7 +139,7 @@ def test_tune_refusals_are_the_clis(cli, kw, args):
     assert status == 2, err
     with pytest.raises(ValueError) as e:
         fricctl.tune(fricctl.Scene(**PAPER), **kw)
-    assert "error: " + str(e.value) == err
+    assert str(e.value) == as_python(err)
 
 
 MOTION_CASES = [
@@ -146,15 +159,15 @@ def test_motion_refusals_are_the_clis(cli, kw):
     assert status == 2, err
     with pytest.raises(ValueError) as e:
         fricctl.motion(fricctl.Scene(**PAPER), **kw)
-    assert "error: " + str(e.value) == err
+    assert str(e.value) == as_python(err)
 
 
 def test_fit_refusals():
     with pytest.raises(ValueError, match=r"^data: missing column 'amp_z'"):
         fricctl.fit({"freq_hz": [1.0]})
-    with pytest.raises(ValueError, match=r"^--params: unknown parameter 'kz'"):
+    with pytest.raises(ValueError, match=r"^params: --params: unknown parameter 'kz'"):
         fricctl.fit({}, params="kz")
-    with pytest.raises(ValueError, match=r"^--data: the sweep file has no rows$"):
+    with pytest.raises(ValueError, match=r"^data: --data: the sweep file has no rows$"):
         fricctl.fit({k: [] for k in ["freq_hz", "amp_z", "amp_x", "offset_z", "phi_deg", "v0",
                                      "model_mu0", "model_kz", "model_kx", "measured_mu"]})
 

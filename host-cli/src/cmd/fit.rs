@@ -56,9 +56,16 @@ impl FitCmd {
             eprintln!("wrote {}", p.display());
         }
         if self.json {
-            return write_json(out, &r);
+            write_json(out, &r)?;
+        } else {
+            write_text(out, &r).map_err(stdout_error)?;
         }
-        write_text(out, &r).map_err(stdout_error)
+        // A χ² its distribution does not reach (analysis::fit, "Goodness of
+        // fit"): the result is printed, the verdict is exit 1.
+        match r.doubtful() {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
     }
 }
 
@@ -106,6 +113,14 @@ fn write_text(out: &mut impl Write, r: &FitResult) -> std::io::Result<()> {
             ", unweighted: no standard errors in the data"
         }
     )?;
+    if let Some(p) = r.chi2_p_value {
+        writeln!(
+            out,
+            "p(χ²)        {} (the probability of a χ² this large if the model describes the data; below {} the fit is doubtful)",
+            crate::args::Short(fric_analysis::numbers::round_sig(p, 2)),
+            crate::args::Short(crate::fit::GOODNESS_P)
+        )?;
+    }
     writeln!(out, "rms residual {:.3e} (μ)", r.rms_residual_mu)
 }
 

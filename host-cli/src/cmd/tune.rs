@@ -107,13 +107,14 @@ impl TuneCmd {
     /// Runs the command.
     pub fn run(self, out: &mut impl Write) -> CliResult {
         let rs = self.scene.resolve()?;
+        let u = Units::of(rs.dimensionless);
         match tune::tune(&rs, &self.request())? {
-            TuneOutcome::Target(o) => finish_target(out, &o, self.json),
+            TuneOutcome::Target(o) => finish_target(out, &o, self.json, u),
             TuneOutcome::Maximize(o) => {
                 if self.json {
                     write_json(out, &o)
                 } else {
-                    write_maximize_text(out, &o).map_err(stdout_error)
+                    write_maximize_text(out, &o, u).map_err(stdout_error)
                 }
             }
         }
@@ -123,11 +124,11 @@ impl TuneCmd {
 /// Prints a target's result, then judges it: a residual above the solver's
 /// bound is reported (exit 1, the result still printed: it is the best the
 /// search found, but not within the stated bound).
-fn finish_target(out: &mut impl Write, o: &TargetOut, json: bool) -> CliResult {
+fn finish_target(out: &mut impl Write, o: &TargetOut, json: bool, u: Units) -> CliResult {
     if json {
         write_json(out, o)?;
     } else {
-        write_target_text(out, o).map_err(stdout_error)?;
+        write_target_text(out, o, u).map_err(stdout_error)?;
     }
     match o.doubtful() {
         Some(e) => Err(e),
@@ -135,41 +136,81 @@ fn finish_target(out: &mut impl Write, o: &TargetOut, json: bool) -> CliResult {
     }
 }
 
-fn unit_of(adjust: &str) -> &'static str {
-    if adjust == "phase" {
-        "deg"
-    } else {
-        "m"
+/// Units of the text output: SI, or for a scene given by its dimensionless
+/// groups (eqs. 25/26: μ0 = kz = kx = uz0 = ω = 1) the groups' own units —
+/// lengths in uz0 (= W0 = μ0·kz·uz0/kx there), velocities in ωW0.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Units {
+    /// Whether the scene is dimensionless.
+    dimensionless: bool,
+}
+
+impl Units {
+    fn of(dimensionless: bool) -> Self {
+        Units { dimensionless }
+    }
+
+    /// The unit of an adjusted quantity's values (after the number).
+    fn knob(self, adjust: &str) -> &'static str {
+        match (adjust, self.dimensionless) {
+            ("phase", _) => " deg",
+            ("duz", true) => " uz0",
+            (_, true) => " W0",
+            _ => " m",
+        }
+    }
+
+    /// The unit of v0.
+    fn velocity(self) -> &'static str {
+        if self.dimensionless {
+            "ωW0 (dimensionless scene)"
+        } else {
+            "m/s"
+        }
     }
 }
 
-fn write_drive(out: &mut impl Write, d: &DriveOut) -> std::io::Result<()> {
-    writeln!(
-        out,
-        "duz             {} m   (duz/uz0 = {})",
-        Rounded(d.duz),
-        Rounded(d.duz_rel)
-    )?;
-    writeln!(
-        out,
-        "dux             {} m   (kx·dux/(mu0·kz·uz0) = {})",
-        Rounded(d.dux),
-        Rounded(d.dux_rel)
-    )?;
+fn write_drive(out: &mut impl Write, d: &DriveOut, u: Units) -> std::io::Result<()> {
+    if u.dimensionless {
+        // duz/uz0 and kx·dux/(mu0·kz·uz0) are duz and dux themselves.
+        writeln!(
+            out,
+            "duz             {} uz0   (duz/uz0, dimensionless)",
+            Rounded(d.duz_rel)
+        )?;
+        writeln!(
+            out,
+            "dux             {} W0   (kx·dux/(mu0·kz·uz0), dimensionless)",
+            Rounded(d.dux_rel)
+        )?;
+    } else {
+        writeln!(
+            out,
+            "duz             {} m   (duz/uz0 = {})",
+            Rounded(d.duz),
+            Rounded(d.duz_rel)
+        )?;
+        writeln!(
+            out,
+            "dux             {} m   (kx·dux/(mu0·kz·uz0) = {})",
+            Rounded(d.dux),
+            Rounded(d.dux_rel)
+        )?;
+    }
     writeln!(out, "phi             {} deg", Rounded(d.phi_deg))
 }
 
-fn write_target_text(out: &mut impl Write, o: &TargetOut) -> std::io::Result<()> {
-    let unit = unit_of(o.drive.adjust);
+fn write_target_text(out: &mut impl Write, o: &TargetOut, u: Units) -> std::io::Result<()> {
+    let unit = u.knob(o.drive.adjust);
     writeln!(out, "adjust          {}", o.drive.adjust)?;
-    writeln!(out, "v0              {} m/s", Rounded(o.v0))?;
+    writeln!(out, "v0              {} {}", Rounded(o.v0), u.velocity())?;
     writeln!(
         out,
         "target          mu = {}   (mu/mu0 = {})",
         Rounded(o.target_mu),
         Rounded(o.target_mu_over_mu0)
     )?;
-    write_drive(out, &o.drive)?;
+    write_drive(out, &o.drive, u)?;
     writeln!(
         out,
         "mu              {}   (mu/mu0 = {})",
@@ -194,7 +235,7 @@ fn write_target_text(out: &mut impl Write, o: &TargetOut) -> std::io::Result<()>
         .collect();
     writeln!(
         out,
-        "solutions       {}: {} {unit}   (reported: the nearest to the scene's {} = {} {unit})",
+        "solutions       {}: {}{unit}   (reported: the nearest to the scene's {} = {}{unit})",
         o.solutions_found,
         list.join(", "),
         o.drive.adjust,
@@ -208,7 +249,7 @@ fn write_target_text(out: &mut impl Write, o: &TargetOut) -> std::io::Result<()>
     )?;
     writeln!(
         out,
-        "search          {} in [{}, {}] {unit}, {} cells, extrema refined",
+        "search          {} in [{}, {}]{unit}, {} cells, extrema refined",
         o.drive.adjust,
         knob_text(o.drive.adjust, o.drive.range_lo),
         knob_text(o.drive.adjust, o.drive.range_hi),
@@ -216,8 +257,8 @@ fn write_target_text(out: &mut impl Write, o: &TargetOut) -> std::io::Result<()>
     )
 }
 
-fn write_maximize_text(out: &mut impl Write, o: &MaximizeOut) -> std::io::Result<()> {
-    let unit = unit_of(o.drive.adjust);
+fn write_maximize_text(out: &mut impl Write, o: &MaximizeOut, u: Units) -> std::io::Result<()> {
+    let unit = u.knob(o.drive.adjust);
     writeln!(out, "adjust          {}", o.drive.adjust)?;
     writeln!(out, "maximize        {}", o.objective)?;
     writeln!(
@@ -231,7 +272,7 @@ fn write_maximize_text(out: &mut impl Write, o: &MaximizeOut) -> std::io::Result
             "mu0·kz·uz0"
         }
     )?;
-    write_drive(out, &o.drive)?;
+    write_drive(out, &o.drive, u)?;
     writeln!(out, "regime          {}", o.regime)?;
     writeln!(out, "asymmetry       {}", Rounded(o.asymmetry))?;
     writeln!(
@@ -243,7 +284,7 @@ fn write_maximize_text(out: &mut impl Write, o: &MaximizeOut) -> std::io::Result
     writeln!(out, "mu(0-)/mu0      {}", Rounded(o.mu_0minus_over_mu0))?;
     writeln!(
         out,
-        "search          {} in [{}, {}] {unit}, {} cells, maxima refined",
+        "search          {} in [{}, {}]{unit}, {} cells, maxima refined",
         o.drive.adjust,
         knob_text(o.drive.adjust, o.drive.range_lo),
         knob_text(o.drive.adjust, o.drive.range_hi),
@@ -293,7 +334,7 @@ mod tests {
     fn doubtful_residual_prints_and_fails() {
         for json in [false, true] {
             let mut out = Vec::new();
-            let e = finish_target(&mut out, &result(3e-9), json).unwrap_err();
+            let e = finish_target(&mut out, &result(3e-9), json, Units::of(false)).unwrap_err();
             assert_eq!(e.code, 1);
             assert_eq!(
                 e.msg,
@@ -302,7 +343,7 @@ mod tests {
             let text = String::from_utf8(out).unwrap();
             assert!(text.contains("3e-9"), "{text}");
             let mut out = Vec::new();
-            assert!(finish_target(&mut out, &result(5e-10), json).is_ok());
+            assert!(finish_target(&mut out, &result(5e-10), json, Units::of(false)).is_ok());
             assert!(!out.is_empty());
         }
     }
