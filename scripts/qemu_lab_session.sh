@@ -51,7 +51,10 @@ one_run() {
   t20k=$(timed "$out/m20k.json" d measure --periods 20000)
   tsweep=$(timed "$out/sweep.json" d sweep --param phase-deg --from 0 --to 180 --points 7 \
     --periods 300 --settle-periods 20 --v0 0.004 --csv "$out/q.csv")
-  $F fit --data "$out/q.csv" --params mu0 --out "$out/fit.json" --json >"$out/fitout.json"
+  # Exit 1 is the fit's "doubtful" verdict (its residuals exceed the rows' standard errors:
+  # the estimator's bias at 20 kHz, docs/guide/fit.md); the result and fit.json are written.
+  $F fit --data "$out/q.csv" --params mu0 --out "$out/fit.json" --json >"$out/fitout.json" \
+    || [ $? -eq 1 ]
   d measure --periods 2000 >"$out/m180.json"
   d predict --v0 0.004 >"$out/p180.json"
   d scene set --from-fit "$out/fit.json" >/dev/null
