@@ -256,7 +256,8 @@ pub fn identify(c: &mut Client, o: &IdentifyOptions) -> Result<Identification> {
 /// Where an identification is: `done` of `points` frequencies measured
 /// (both passes of every channel), and the plan's device time at most,
 /// s (each point's settling, at most the coarse pass's, plus its
-/// [`WINDOWS_PER_POINT`] lock-in windows).
+/// [`WINDOWS_PER_POINT`] lock-in windows, 1 + [`MAX_RAISES`] times; the
+/// cuts of eq. I4, rare, not counted).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Progress {
     /// Frequencies measured so far.
@@ -630,9 +631,9 @@ fn plan(
     let fs = info.sample_rate_hz;
     let window_s = (fs / (64.0 * f_mid)).ceil() * 64.0 / fs;
     let points = n_chans as u32 * (o.points + o.fine_points);
-    // A fine point may be measured twice (raised, eq. I3); cuts (I4) are
-    // not counted.
-    let settles = n_chans as u32 * (o.points + 2 * o.fine_points);
+    // A point may be measured 1 + MAX_RAISES times (raised, eq. I3); cuts
+    // (I4) are not counted.
+    let settles = n_chans as u32 * (o.points + o.fine_points) * (1 + MAX_RAISES);
     Progress {
         done: 0,
         points,
