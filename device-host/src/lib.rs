@@ -45,8 +45,8 @@ pub mod serve;
 pub mod state;
 pub mod sweep;
 pub mod transducers;
-pub mod virtual_device;
 #[cfg(feature = "view")]
 pub mod view;
+pub mod virtual_device;
 
 pub use fric_analysis::error::{Error, Result};

@@ -526,9 +526,12 @@ impl DeviceThread {
             }
         }
         if self.streaming {
-            let stopped = self
-                .c
-                .uninterrupted(|c| c.call(Request::Stream { on: false, periods: 1 }));
+            let stopped = self.c.uninterrupted(|c| {
+                c.call(Request::Stream {
+                    on: false,
+                    periods: 1,
+                })
+            });
             if let Err(e) = stopped.and_then(expect) {
                 return Err(Error::failure(format!(
                     "could not stop the stream ({}); `fricctl device reset` ends it",

@@ -89,10 +89,18 @@ function makePlot(p) {
     { label: "time (s)", stroke: "#333" },
     { label: p.y, stroke: "#333", size: 70 },
   ];
-  const scales = { x: { time: false } };
+  // A flat series (a constant frequency) gets a narrow range around it,
+  // not uPlot's default that reaches down to 0.
+  const pad = (u, min, max) => {
+    if (min == null || max == null) return [0, 1];
+    const span = max - min;
+    const d = span > 0 ? span * 0.08 : Math.max(Math.abs(max) * 1e-4, 1e-12);
+    return [min - d, max + d];
+  };
+  const scales = { x: { time: false }, y: { range: pad } };
   if (p.y2) {
     axes.push({ label: p.y2, scale: "y2", side: 1, stroke: "#c0392b", size: 70, grid: { show: false } });
-    scales.y2 = { auto: true };
+    scales.y2 = { range: pad };
   }
   const opts = {
     width: 560, height: 230,
@@ -112,7 +120,7 @@ function makePlot(p) {
 function redraw() {
   if (!dirty) return;
   dirty = false;
-  const width = Math.max(380, Math.floor(($("plots").clientWidth - 30) / 2));
+  const width = Math.max(300, Math.floor(($("plots").clientWidth - 10) / 2) - 12);
   for (const p of PLOTS) {
     const src = rows[p.src];
     const t = new Array(src.length);
@@ -219,7 +227,11 @@ async function run(words) {
       body: JSON.stringify({ words }),
     });
     const a = await r.json();
-    for (const line of String(a.message).trim().split("\n")) message(line, !a.ok);
+    // A refusal (422) reaches every page as an event of the batch; the
+    // answer of a command done, and the server's own refusals, only here.
+    if (r.status !== 422) {
+      for (const line of String(a.message).trim().split("\n")) message(line, !a.ok);
+    }
   } catch (e) {
     message("no answer from the view's server: " + e, true);
   }

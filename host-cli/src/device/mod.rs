@@ -665,7 +665,11 @@ pub fn serve(a: &SimArgs) -> CliResult {
     if let Some(addr) = &a.tcp {
         link::check_host_port(addr)?;
     }
-    let faults = a.fault_listen.as_deref().map(fault_side_channel).transpose()?;
+    let faults = a
+        .fault_listen
+        .as_deref()
+        .map(fault_side_channel)
+        .transpose()?;
     let mut dev = VirtualDevice::new(plant);
     // Ctrl-C, SIGTERM or SIGHUP end the server (exit 130), also when the
     // shell that started it ignores SIGINT (a background job): the handler
@@ -703,7 +707,8 @@ pub fn serve(a: &SimArgs) -> CliResult {
 /// `sim-device --fault-listen ADDR`: the side channel, bound before the
 /// device starts (a bad or taken address is named); its address on stderr.
 fn fault_side_channel(addr: &str) -> CliResult<serve::FaultSource> {
-    link::check_host_port(addr).map_err(|e| CliError::usage(e.msg.replace("--tcp", "--fault-listen")))?;
+    link::check_host_port(addr)
+        .map_err(|e| CliError::usage(e.msg.replace("--tcp", "--fault-listen")))?;
     let l = std::net::TcpListener::bind(addr)
         .map_err(|e| CliError::failure(format!("--fault-listen: {addr}: {e}")))?;
     let local = l

@@ -127,12 +127,7 @@ impl Controls for CliControls {
 
 /// `fricctl device view`: serves the page until Ctrl-C; prints the page's
 /// address on stdout (`http://127.0.0.1:8080/`) once it is served.
-pub fn run(
-    c: Client,
-    a: &ViewArgs,
-    listener: TcpListener,
-    stop: Arc<AtomicBool>,
-) -> CliResult {
+pub fn run(c: Client, a: &ViewArgs, listener: TcpListener, stop: Arc<AtomicBool>) -> CliResult {
     let addr = listener
         .local_addr()
         .map_err(|e| CliError::failure(format!("--listen: {e}")))?;
