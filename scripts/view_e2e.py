@@ -9,7 +9,8 @@ provokes the `external` fault through the side channel and sees it named on
 the page with the drive off, and takes a screenshot.
 
     python3 scripts/view_e2e.py [--fricctl target/debug/fricctl]
-        [--screenshot docs/guide/view.png] [--soak-seconds 0]
+        [--screenshot docs/guide/view-fault.png]
+        [--screenshot-running docs/guide/view.png] [--soak-seconds 0]
 
 With --soak-seconds S it then keeps the page open S seconds with the stream
 at its full rate (--periods 32) and prints the server's RSS and the page's
@@ -109,7 +110,10 @@ def browser(chromium, driver, profile):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--fricctl", default="target/debug/fricctl")
-    ap.add_argument("--screenshot", default=None, help="PNG to write (default: a temporary file)")
+    ap.add_argument("--screenshot", default=None,
+                    help="PNG of the page after the fault (default: a temporary file)")
+    ap.add_argument("--screenshot-running", default=None,
+                    help="also a PNG of the page with the drive running, after the φ step")
     ap.add_argument("--chromium", default=shutil.which("chromium") or "/usr/bin/chromium")
     ap.add_argument("--chromedriver", default=shutil.which("chromedriver") or "/usr/bin/chromedriver")
     ap.add_argument("--soak-seconds", type=float, default=0.0)
@@ -198,6 +202,10 @@ def main():
 
         if a.soak_seconds > 0:
             soak(drv, view.pid, a.soak_seconds)
+        if a.screenshot_running:
+            time.sleep(2.0)  # two seconds of the new φ in the plots
+            drv.save_screenshot(a.screenshot_running)
+            log(f"screenshot {a.screenshot_running}")
 
         # 4. A fault: `external` through the side channel; named, drive off.
         time.sleep(1.0)  # a second of the new φ in the plots
