@@ -172,6 +172,10 @@ def main():
                      int(data("plot-mu", "points")), 15)
         log(f"μ plot has {n} estimates {dt:.2f} s later")
 
+        # A second client that never reads: the broadcast leaves it behind
+        # (it loses batches); the browser's page and the device go on.
+        stalled = stalled_client(url)
+
         # Wait for the drive to hold φ = PHI_START before the step.
         def phi_measured():
             m = re.match(r"(-?[0-9.]+)", text("phi-measured"))
@@ -227,6 +231,7 @@ def main():
         shot = a.screenshot or os.path.join(tmp, "view.png")
         drv.save_screenshot(shot)
         log(f"screenshot {shot} ({os.path.getsize(shot)} bytes)")
+        stalled.close()
         log("OK")
     finally:
         if drv is not None:
@@ -238,6 +243,22 @@ def main():
             except subprocess.TimeoutExpired:
                 p.kill()
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def stalled_client(url):
+    """A WebSocket to the view that reads the first frame and then nothing:
+    its socket buffers fill and the server leaves it behind."""
+    host, port = url.split("//", 1)[1].rstrip("/").rsplit(":", 1)
+    s = socket.create_connection((host, int(port)))
+    s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    s.sendall((f"GET /ws HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\n"
+               "Connection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
+               "Sec-WebSocket-Version: 13\r\n\r\n").encode())
+    head = s.recv(4096).decode(errors="replace")
+    if " 101 " not in head.split("\r\n", 1)[0]:
+        raise SystemExit(f"the view refused a WebSocket: {head[:200]}")
+    log("a second client connected to /ws and reads nothing from now on")
+    return s
 
 
 def soak(drv, server_pid, seconds):
