@@ -59,13 +59,17 @@ const UPLOT_CSS: &str = include_str!("../assets/uplot/uPlot.min.css");
 /// further behind skips to the newest (at 10 batches a second: 6.4 s).
 pub const BROADCAST_BATCHES: usize = 64;
 /// Batches kept for a page that opens later, so that its plots start with
-/// the last seconds (at 10 a second: 30 s).
+/// the last seconds (at 10 a second: 30 s) …
 pub const HISTORY_BATCHES: usize = 300;
-/// Rows of one kind in one batch at most: at a stream's full rate (an
-/// estimate every 32 periods, 625 a second at 20 kHz) the page gets every
-/// row up to this many per batch, and the newest ones beyond (the dropped
-/// count is in the batch, `dropped_rows`); `--record` writes them all.
-pub const MAX_ROWS_PER_BATCH: usize = 400;
+/// … and at most this many bytes of them (at a stream's full rate, 625
+/// estimates a second, 30 s of batches are ≈ 3 MB).
+pub const HISTORY_BYTES: usize = 4 << 20;
+/// Estimates (or loop updates) in one batch at most: at a stream's full
+/// rate (an estimate every 32 periods, 625 a second at 20 kHz) a batch has
+/// ≈ 63, and this leaves 3 s for a device thread that fell behind (a loaded
+/// machine) to catch up; beyond, the page gets the newest ones (the count
+/// dropped is in the batch, `dropped_rows`); `--record` writes them all.
+pub const MAX_ROWS_PER_BATCH: usize = 2000;
 
 /// The columns of a row, in the CSV's order: the CLI's JSON keys (`device
 /// status`, `drive get`, `measure`, `control status`; docs/device-json.md)
@@ -412,6 +416,8 @@ struct DeviceThread {
     record: Option<Recorder>,
     batches: broadcast::Sender<Utf8Bytes>,
     history: Arc<Mutex<VecDeque<Utf8Bytes>>>,
+    /// The bytes of the batches in `history`.
+    history_bytes: usize,
     t0: Instant,
     /// Rows not yet published: estimates and control updates, status.
     fast: VecDeque<Map<String, Value>>,
@@ -447,6 +453,7 @@ impl DeviceThread {
             record,
             batches,
             history,
+            history_bytes: 0,
             t0: Instant::now(),
             fast: VecDeque::new(),
             slow: Vec::new(),
@@ -777,10 +784,14 @@ impl DeviceThread {
         });
         let text: Utf8Bytes = batch.to_string().into();
         if let Ok(mut h) = self.history.lock() {
-            if h.len() >= HISTORY_BATCHES {
-                h.pop_front();
-            }
             h.push_back(text.clone());
+            self.history_bytes += text.len();
+            while h.len() > HISTORY_BATCHES || self.history_bytes > HISTORY_BYTES {
+                match h.pop_front() {
+                    Some(old) => self.history_bytes -= old.len(),
+                    None => break,
+                }
+            }
         }
         // No page open: nobody to tell.
         let _ = self.batches.send(text);

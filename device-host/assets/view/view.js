@@ -85,9 +85,17 @@ function makePlot(p) {
   h.textContent = p.title;
   box.appendChild(h);
   $("plots").appendChild(box);
+  // Tick labels with as many digits as the tick spacing needs (μ varies
+  // by 1e-4 around 0.13: uPlot's default three decimals repeat one value).
+  const ticks = (u, splits, axis, space, incr) => {
+    let d = 0;
+    while (incr > 0 && d < 12 && Math.abs(incr * 10 ** d - Math.round(incr * 10 ** d)) > 1e-6 * incr * 10 ** d) d++;
+    return splits.map((v) => (v == null ? "" : Math.abs(v) >= 1e5 || (v !== 0 && Math.abs(v) < 1e-4)
+      ? v.toExponential(Math.max(1, d - 1 + Math.floor(Math.log10(Math.abs(v))))) : v.toFixed(d)));
+  };
   const axes = [
-    { label: "time (s)", stroke: "#333" },
-    { label: p.y, stroke: "#333", size: 70 },
+    { label: "time (s)", stroke: "#333", values: ticks },
+    { label: p.y, stroke: "#333", size: 80, values: ticks },
   ];
   // A flat series (a constant frequency) gets a narrow range around it,
   // not uPlot's default that reaches down to 0.
@@ -99,7 +107,7 @@ function makePlot(p) {
   };
   const scales = { x: { time: false }, y: { range: pad } };
   if (p.y2) {
-    axes.push({ label: p.y2, scale: "y2", side: 1, stroke: "#c0392b", size: 70, grid: { show: false } });
+    axes.push({ label: p.y2, scale: "y2", side: 1, stroke: "#c0392b", size: 70, grid: { show: false }, values: ticks });
     scales.y2 = { range: pad };
   }
   const opts = {
