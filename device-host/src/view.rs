@@ -277,10 +277,11 @@ async fn ws_upgrade(ws: WebSocketUpgrade, State(sh): State<Shared>) -> HttpRespo
 /// (a page behind by more than [`BROADCAST_BATCHES`] is told how many it
 /// lost and goes on from the newest).
 async fn page(mut ws: WebSocket, sh: Shared) {
-    let mut rx = sh.batches.subscribe();
-    let recent: Vec<Utf8Bytes> = match sh.history.lock() {
-        Ok(h) => h.iter().cloned().collect(),
-        Err(_) => Vec::new(),
+    // Subscribed under the history's lock, under which every batch is also
+    // kept and sent: each batch comes once, from the history or the channel.
+    let (mut rx, recent): (_, Vec<Utf8Bytes>) = match sh.history.lock() {
+        Ok(h) => (sh.batches.subscribe(), h.iter().cloned().collect()),
+        Err(_) => (sh.batches.subscribe(), Vec::new()),
     };
     for m in std::iter::once(sh.hello.clone()).chain(recent) {
         if ws.send(Message::Text(m)).await.is_err() {
@@ -783,14 +784,17 @@ impl DeviceThread {
             "dropped_rows": std::mem::take(&mut self.dropped_rows),
         });
         let text: Utf8Bytes = batch.to_string().into();
-        if let Ok(mut h) = self.history.lock() {
-            h.push_back(text.clone());
-            self.history_bytes += text.len();
-            while h.len() > HISTORY_BATCHES || self.history_bytes > HISTORY_BYTES {
-                match h.pop_front() {
-                    Some(old) => self.history_bytes -= old.len(),
-                    None => break,
-                }
+        // Kept and sent under the lock (see `page`); the send never waits.
+        let mut h = match self.history.lock() {
+            Ok(h) => h,
+            Err(poisoned) => poisoned.into_inner(),
+        };
+        h.push_back(text.clone());
+        self.history_bytes += text.len();
+        while h.len() > HISTORY_BATCHES || self.history_bytes > HISTORY_BYTES {
+            match h.pop_front() {
+                Some(old) => self.history_bytes -= old.len(),
+                None => break,
             }
         }
         // No page open: nobody to tell.
