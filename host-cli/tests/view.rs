@@ -259,13 +259,22 @@ fn record_writes_the_cli_keys() {
 
 #[test]
 fn listen_is_checked_before_the_device_is_opened() {
-    for (listen, msg) in [
-        ("nonsense", "--listen: 'nonsense' is not IP:PORT"),
-        ("0.0.0.0:0", "--listen: 0.0.0.0:0 is not a loopback address"),
+    for (flags, msg) in [
+        (
+            ["--listen", "nonsense"],
+            "--listen: 'nonsense' is not IP:PORT",
+        ),
+        (
+            ["--listen", "0.0.0.0:0"],
+            "--listen: 0.0.0.0:0 is not a loopback address",
+        ),
+        (["--status-ms", "5"], "--status-ms: must be ≥ 10 (got 5)"),
+        (["--periods", "nan"], "--periods: 'nan' is not a number"),
     ] {
         // --tcp to a closed port: the refusal comes before any connection.
         let o = fricctl()
-            .args(["device", "--tcp", "127.0.0.1:1", "view", "--listen", listen])
+            .args(["device", "--tcp", "127.0.0.1:1", "view"])
+            .args(flags)
             .output()
             .unwrap();
         assert_eq!(o.status.code(), Some(2));
