@@ -22,6 +22,8 @@
 //!   definition of the keys, for `fricctl --json` and Python.
 //! - [`identify`], [`sweep`], [`measure`], [`state`]: the device commands'
 //!   procedures, and what they put back on every way out.
+//! - `view` (feature `view`): the live page of `fricctl device view`, an
+//!   HTTP and WebSocket server with the plotting library compiled in.
 //!
 //! Errors are the analysis library's ([`Error`]): one line naming the
 //! parameter as its `fricctl` flag, with the class as the exit status
@@ -43,6 +45,8 @@ pub mod serve;
 pub mod state;
 pub mod sweep;
 pub mod transducers;
+#[cfg(feature = "view")]
+pub mod view;
 pub mod virtual_device;
 
 pub use fric_analysis::error::{Error, Result};

@@ -77,11 +77,16 @@ impl Report {
 
     /// The flat JSON object.
     pub fn json(&self) -> Value {
+        Value::Object(self.json_map())
+    }
+
+    /// The flat JSON object's keys and values.
+    pub fn json_map(&self) -> Map<String, Value> {
         let mut m = Map::new();
         for (k, _, v, _) in self.rows.iter().filter(|r| !r.0.is_empty()) {
             m.insert((*k).to_string(), v.clone());
         }
-        Value::Object(m)
+        m
     }
 
     /// The aligned text: `label  value unit`, labels padded to the longest.
@@ -244,7 +249,8 @@ pub fn self_test_text(t: &SelfTest) -> String {
     }
 }
 
-fn board_name(b: &[u8]) -> String {
+/// The board name of `Info.board` (ASCII, zero-padded).
+pub fn board_name(b: &[u8]) -> String {
     String::from_utf8_lossy(b)
         .trim_end_matches('\0')
         .to_string()

@@ -8,8 +8,14 @@
 //! measurement or stream — its samples reach nothing, so the plant is not
 //! simulated: the clock is moved on ([`VirtualDevice::skip`]) and the loop
 //! sleeps in its read for up to [`IDLE_WAIT`].
+//!
+//! Faults the virtual plant cannot raise by itself (a late DAC refill, a
+//! watchdog reset, the external input, a late ADC intake) come in from a
+//! host-only side channel ([`fault_listener`], `sim-device --fault-listen`):
+//! one fault name or bit per line, latched at the device's next tick
+//! through the board's one fault path.
 
-use std::io::{self, Read, Write};
+use std::io::{self, BufRead, BufReader, Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -78,23 +84,81 @@ fn drain(
     Ok(())
 }
 
+/// Fault bits to latch on the device, from [`fault_listener`].
+pub type FaultSource = mpsc::Receiver<u32>;
+
+/// The side channel that provokes faults on the virtual device: accepts
+/// connections on `l` (a thread per connection), reads one fault per line —
+/// a name of [`crate::names::FAULTS`] (`external`) or its bit (`8`) — sends
+/// its bit to the device and answers one line: `latched NAME` or what is
+/// wrong with the line. Not part of the board's protocol: a board has no
+/// such input (its faults come from its hardware).
+pub fn fault_listener(l: TcpListener) -> FaultSource {
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for s in l.incoming().flatten() {
+            let tx = tx.clone();
+            std::thread::spawn(move || fault_connection(s, &tx));
+        }
+    });
+    rx
+}
+
+/// One side-channel connection: a fault per line until the peer closes it.
+fn fault_connection(s: TcpStream, tx: &mpsc::Sender<u32>) {
+    let Ok(mut w) = s.try_clone() else { return };
+    for line in BufReader::new(s).lines() {
+        let Ok(line) = line else { return };
+        if line.trim().is_empty() {
+            continue;
+        }
+        let answer = match crate::names::fault_bit(&line) {
+            Some(bit) if tx.send(bit).is_ok() => {
+                eprintln!("fault side channel: latching {}", line.trim());
+                format!("latched {}", crate::names::fault_names(bit).join(""))
+            }
+            Some(_) => "the device has stopped".to_string(),
+            None => format!(
+                "unknown fault '{}': one of {}",
+                line.trim(),
+                crate::names::FAULTS
+                    .iter()
+                    .map(|(b, n)| format!("{n} ({b})"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
+        if writeln!(w, "{answer}").is_err() {
+            return;
+        }
+    }
+}
+
 /// The device's real-time clock: simulated samples owed to real time.
 struct Clock {
     last: Instant,
     debt: f64,
+    /// Faults to latch at the next tick.
+    faults: Option<FaultSource>,
 }
 
 impl Clock {
-    fn new() -> Self {
+    fn new(faults: Option<FaultSource>) -> Self {
         Clock {
             last: Instant::now(),
             debt: 0.0,
+            faults,
         }
     }
 
     /// Advances the device to now, handing its transmit ring to `port`
     /// (if any) after each simulated half-buffer.
     fn tick(&mut self, dev: &mut VirtualDevice, port: Option<&mut dyn Port>) -> io::Result<()> {
+        if let Some(rx) = &self.faults {
+            while let Ok(bits) = rx.try_recv() {
+                dev.inject_fault(bits);
+            }
+        }
         let now = Instant::now();
         let rate = dev.sample_rate();
         self.debt += now.duration_since(self.last).as_secs_f64() * rate;
@@ -137,13 +201,15 @@ impl Clock {
     }
 }
 
-/// Serves on the pty master `p` until `deadline`, or until the pty fails.
+/// Serves on the pty master `p` until `deadline`, or until the pty fails,
+/// latching the faults `faults` brings ([`fault_listener`]).
 pub fn serve_pty(
     dev: &mut VirtualDevice,
     p: &mut serialport::TTYPort,
     deadline: Option<Instant>,
+    faults: Option<FaultSource>,
 ) -> Result {
-    let mut clock = Clock::new();
+    let mut clock = Clock::new(faults);
     match pump(dev, p, &mut clock, deadline) {
         Ok(()) => Ok(()),
         Err(e) => Err(Error::failure(format!("pty: {e}"))),
@@ -151,8 +217,14 @@ pub fn serve_pty(
 }
 
 /// Serves TCP clients one at a time until `deadline`; the device runs on
-/// between connections.
-pub fn serve_tcp(dev: &mut VirtualDevice, l: TcpListener, deadline: Option<Instant>) -> Result {
+/// between connections, latching the faults `faults` brings
+/// ([`fault_listener`]).
+pub fn serve_tcp(
+    dev: &mut VirtualDevice,
+    l: TcpListener,
+    deadline: Option<Instant>,
+    faults: Option<FaultSource>,
+) -> Result {
     let (tx, rx) = mpsc::channel();
     std::thread::spawn(move || {
         for s in l.incoming() {
@@ -161,7 +233,7 @@ pub fn serve_tcp(dev: &mut VirtualDevice, l: TcpListener, deadline: Option<Insta
             }
         }
     });
-    let mut clock = Clock::new();
+    let mut clock = Clock::new(faults);
     loop {
         if deadline.is_some_and(|d| Instant::now() >= d) {
             return Ok(());

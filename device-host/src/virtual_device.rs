@@ -561,6 +561,15 @@ impl VirtualDevice {
         &self.dev
     }
 
+    /// Latches fault `bits` through the board's one fault path
+    /// (`Device::fault`: the safe state, one `Fault` telemetry frame), as
+    /// the board's own sources raise them — a late DAC refill, the
+    /// watchdog, the external input, a late ADC intake. `sim-device
+    /// --fault-listen` feeds it from outside; 0 changes nothing.
+    pub fn inject_fault(&mut self, bits: u32) {
+        self.dev.fault(bits);
+    }
+
     /// The plant (the bench's view of the true motion).
     pub fn plant(&self) -> &Plant<f64> {
         &self.plant

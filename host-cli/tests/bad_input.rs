@@ -61,6 +61,9 @@ const NOT_NUMERIC: &[&str] = &[
     "from-fit",
     "v0-profile",
     "track",
+    "fault-listen",
+    "listen",
+    "record",
 ];
 
 /// The one-line messages of exit 1 that are a computation's stated verdict

@@ -122,10 +122,16 @@ impl ControlArgs {
     }
 }
 
+/// `fricctl device control …` on a connected device, printed.
+pub fn run(c: &mut Client, req: Request, a: &ControlArgs, json: bool) -> CliResult {
+    out(json, &apply(c, req, a)?)
+}
+
 /// `fricctl device control …` on a connected device (`--headroom` first,
 /// keeping the tracking in force; put back if the device refuses the
-/// control request, so that a refused command changes nothing).
-pub fn run(c: &mut Client, req: Request, a: &ControlArgs, json: bool) -> CliResult {
+/// control request, so that a refused command changes nothing): the loop's
+/// state as the device answers it. `device view`'s loop controls call this.
+pub fn apply(c: &mut Client, req: Request, a: &ControlArgs) -> CliResult<render::Report> {
     let mut req = req;
     if let (Request::SetControl(s), None | Some(Periods::Auto)) = (&mut req, a.periods) {
         if s.on {
@@ -155,7 +161,7 @@ pub fn run(c: &mut Client, req: Request, a: &ControlArgs, json: bool) -> CliResu
         before = Some(st.options);
     }
     match c.call(req).and_then(expect) {
-        Ok(Response::Control(s)) => out(json, &render::control(&s)),
+        Ok(Response::Control(s)) => Ok(render::control(&s)),
         Ok(other) => Err(unexpected(other)),
         Err(e) => {
             if let Some(o) = before {

@@ -5,6 +5,7 @@ pub mod control;
 pub mod identify;
 pub mod plant_args;
 pub mod sweep;
+pub mod view;
 pub mod watch;
 
 pub use device_host::answers::{expect, unexpected};
@@ -153,6 +154,10 @@ pub enum DeviceCmd {
     ControlBench(control::BenchArgs),
     /// `fricctl tune` on the device's contact and drive, then set the drive to the result (e.g. `device tune --v0 0.004 --target-mu 0.1 --adjust duz`)
     Tune(control::DeviceTuneArgs),
+    /// A live view in a local web page: plots of μ, the measured drive, the
+    /// frequency and the lift-off margin; the state; start, stop, setpoints,
+    /// tracking and the μ loop through the CLI's own commands
+    View(view::ViewArgs),
 }
 
 /// `drive get|set`.
@@ -252,7 +257,7 @@ pub enum SceneCmd {
     },
 }
 
-fn open(t: &Target) -> CliResult<Client> {
+pub(crate) fn open(t: &Target) -> CliResult<Client> {
     let plant = t.plant.options(
         t.sim_v0,
         t.sim_noise,
@@ -309,7 +314,7 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
         _ => {}
     }
     // Checked before connecting: the parameters are named, not the device's refusal.
-    let checked = Checked::of(cmd)?;
+    let mut checked = Checked::of(cmd)?;
     let mut c = open(t)?;
     // Which device answers: for a person at a terminal (a script reads the
     // exit status and a refusal's one line).
@@ -320,6 +325,10 @@ pub fn run(t: &Target, cmd: &DeviceCmd) -> CliResult {
     // watch the flag; `identify` and `sweep` stop at their next request and
     // put the device back as they found it.
     let flag = watch::interrupt_flag();
+    if let (DeviceCmd::View(a), Some(l)) = (cmd, checked.view.take()) {
+        // The view owns the link: one connection, its requests in turn.
+        return view::run(c, a, l, flag);
+    }
     dispatch(&mut c, t, cmd, checked, &flag)
 }
 
@@ -330,6 +339,8 @@ struct Checked {
     scene: Option<(f64, f64, f64)>,
     /// `control`: the request.
     control: Option<Request>,
+    /// `view`: the page's socket, bound before the device is opened.
+    view: Option<std::net::TcpListener>,
 }
 
 impl Checked {
@@ -347,6 +358,7 @@ impl Checked {
             } => k.scene = Some(sweep::scene_values(*mu0, *kz, *kx, from_fit.as_deref())?),
             DeviceCmd::Sweep(a) => a.check()?,
             DeviceCmd::Control(a) => k.control = Some(a.request()?),
+            DeviceCmd::View(a) => k.view = Some(a.bind()?),
             _ => {}
         }
         Ok(k)
@@ -370,19 +382,9 @@ fn dispatch(
         DeviceCmd::Drive { cmd: DriveCmd::Get } => {
             out(json, &drive_report(c.call(Request::GetDrive)?)?)
         }
-        DeviceCmd::Drive { cmd } => drive_set(c, cmd, json),
-        DeviceCmd::Start => out(
-            json,
-            &done(
-                c.call(Request::Start)?,
-                "start",
-                "drive starting (soft start; `status` shows when settled)",
-            )?,
-        ),
-        DeviceCmd::Stop => out(
-            json,
-            &done(c.call(Request::Stop)?, "stop", "drive stopping (ramped)")?,
-        ),
+        DeviceCmd::Drive { cmd } => out(json, &drive_set(c, cmd)?),
+        DeviceCmd::Start => out(json, &start(c)?),
+        DeviceCmd::Stop => out(json, &stop(c)?),
         DeviceCmd::Scene { cmd: SceneCmd::Get } => match expect(c.call(Request::GetContact)?)? {
             Response::Contact(k) => out(json, &render::contact(&k)),
             other => Err(unexpected(other)),
@@ -405,14 +407,7 @@ fn dispatch(
             other => Err(unexpected(other)),
         },
         DeviceCmd::Config { allow_liftoff, .. } => config_cmd(c, *allow_liftoff, json),
-        DeviceCmd::ResetFaults => out(
-            json,
-            &done(
-                c.call(Request::ResetFaults)?,
-                "reset-faults",
-                "latched faults cleared",
-            )?,
-        ),
+        DeviceCmd::ResetFaults => out(json, &reset_faults(c)?),
         DeviceCmd::Reset => out(
             json,
             &done(
@@ -443,14 +438,41 @@ fn dispatch(
             control::run(c, req, a, json)
         }
         DeviceCmd::Tune(a) => control::tune(c, a, json),
+        DeviceCmd::View(_) => Err(CliError::failure(
+            "device view needs the link to itself (answered by `run`)",
+        )),
         DeviceCmd::Ports => print_ports(json, &link::ports()?),
         DeviceCmd::ControlBench(a) => control::bench(a, json),
     }
 }
 
+/// `start`: the drive on (soft start).
+pub(crate) fn start(c: &mut Client) -> CliResult<Report> {
+    done(
+        c.call(Request::Start)?,
+        "start",
+        "drive starting (soft start; `status` shows when settled)",
+    )
+}
+
+/// `stop`: the drive off (ramped).
+pub(crate) fn stop(c: &mut Client) -> CliResult<Report> {
+    done(c.call(Request::Stop)?, "stop", "drive stopping (ramped)")
+}
+
+/// `reset-faults`: the latched faults cleared.
+pub(crate) fn reset_faults(c: &mut Client) -> CliResult<Report> {
+    done(
+        c.call(Request::ResetFaults)?,
+        "reset-faults",
+        "latched faults cleared",
+    )
+}
+
 /// `drive set`: the drive mode (voltage with `--open-loop`, else
-/// displacement with the tracking and headroom), then the drive.
-fn drive_set(c: &mut Client, cmd: &DriveCmd, json: bool) -> CliResult {
+/// displacement with the tracking and headroom), then the drive; the drive
+/// as the device accepted it. `device view`'s setpoints call this.
+pub(crate) fn drive_set(c: &mut Client, cmd: &DriveCmd) -> CliResult<Report> {
     let DriveCmd::Set {
         freq,
         amp_z,
@@ -502,7 +524,7 @@ fn drive_set(c: &mut Client, cmd: &DriveCmd, json: bool) -> CliResult {
     }
     // The mode, the options, then the drive: all or nothing (a refused
     // drive puts the mode and the options back as they were).
-    let report = device_host::state::all_or_nothing(c, |c| {
+    device_host::state::all_or_nothing(c, |c| {
         identify::select_mode(c, *open_loop)?;
         if !*open_loop {
             expect(c.call(Request::SetDisplacementOptions(
@@ -513,8 +535,7 @@ fn drive_set(c: &mut Client, cmd: &DriveCmd, json: bool) -> CliResult {
             ))?)?;
         }
         drive_report(c.call(Request::SetDrive(d))?)
-    })?;
-    out(json, &report)
+    })
 }
 
 /// `scene set`: the contact, then the contact as set.
@@ -631,6 +652,12 @@ pub struct SimArgs {
     /// Stop after this many seconds (default: run until killed)
     #[arg(long, value_parser = Real::non_negative().at_most(1e9).because("about 30 years; omit it to run until killed"))]
     pub seconds: Option<f64>,
+    /// A side channel that provokes faults (loopback addresses only): each
+    /// line sent to it, a fault's name (`external`, `dac_underrun`,
+    /// `watchdog_reset`, `adc_overrun`, …) or bit, latches that fault
+    /// (docs/protocol.md, "Provoking each fault on the virtual device")
+    #[arg(long, value_name = "ADDR")]
+    pub fault_listen: Option<String>,
 }
 
 /// `fricctl sim-device`: the virtual device in real time on a pty or TCP.
@@ -642,6 +669,11 @@ pub fn serve(a: &SimArgs) -> CliResult {
     if let Some(addr) = &a.tcp {
         link::check_host_port(addr)?;
     }
+    let faults = a
+        .fault_listen
+        .as_deref()
+        .map(fault_side_channel)
+        .transpose()?;
     let mut dev = VirtualDevice::new(plant);
     // Ctrl-C, SIGTERM or SIGHUP end the server (exit 130), also when the
     // shell that started it ignores SIGINT (a background job): the handler
@@ -661,7 +693,7 @@ pub fn serve(a: &SimArgs) -> CliResult {
         let _ = std::io::stdout().flush();
         eprintln!("virtual device serving on {name}");
         let _keep = slave;
-        serve::serve_pty(&mut dev, &mut master, deadline)
+        serve::serve_pty(&mut dev, &mut master, deadline, faults)
     } else if let Some(addr) = &a.tcp {
         let l = std::net::TcpListener::bind(addr)
             .map_err(|e| CliError::failure(format!("--tcp: {addr}: {e}")))?;
@@ -670,8 +702,27 @@ pub fn serve(a: &SimArgs) -> CliResult {
             l.local_addr().map(|a| a.to_string()).unwrap_or_default()
         );
         let _ = std::io::stdout().flush();
-        serve::serve_tcp(&mut dev, l, deadline)
+        serve::serve_tcp(&mut dev, l, deadline, faults)
     } else {
         Err(CliError::usage("--pty: give --pty or --tcp ADDR"))
     }
+}
+
+/// `sim-device --fault-listen ADDR`: the side channel, bound before the
+/// device starts (a bad or taken address is named); its address on stderr.
+fn fault_side_channel(addr: &str) -> CliResult<serve::FaultSource> {
+    link::check_host_port(addr)
+        .map_err(|e| CliError::usage(e.msg.replace("--tcp", "--fault-listen")))?;
+    let l = std::net::TcpListener::bind(addr)
+        .map_err(|e| CliError::failure(format!("--fault-listen: {addr}: {e}")))?;
+    let local = l
+        .local_addr()
+        .map_err(|e| CliError::failure(format!("--fault-listen: {addr}: {e}")))?;
+    if !local.ip().is_loopback() {
+        return Err(CliError::usage(format!(
+            "--fault-listen: {addr} is not a loopback address (127.0.0.1, ::1): the side channel has no authentication"
+        )));
+    }
+    eprintln!("fault side channel on {local} (one fault name or bit per line)");
+    Ok(serve::fault_listener(l))
 }
