@@ -1518,3 +1518,36 @@ fn the_docs_request_table_is_the_endpoint_table() {
         assert_eq!(row[4], format!("{:?}", ep.answer));
     }
 }
+
+#[test]
+fn fault_bits_are_the_spec_values() {
+    // docs/protocol.md, "Fault bits: 1 = ADC saturated …, 256 = self-test":
+    // each constant is the value the spec gives its name (a constant that
+    // changed — a shift the other way — would still compare equal to
+    // itself everywhere else), and ALL is their union, 511.
+    use board::device::faults::*;
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/protocol.md"))
+        .unwrap();
+    let para = &doc[doc
+        .find("Fault bits: ")
+        .expect("the spec's fault paragraph")..];
+    let para = &para[..para.find("\n\n").unwrap_or(para.len())];
+    let para = para.split_whitespace().collect::<Vec<_>>().join(" ");
+    for (value, name) in [
+        (ADC_SATURATED, "ADC saturated"),
+        (DAC_UNDERRUN, "DAC underrun"),
+        (WATCHDOG_RESET, "watchdog reset"),
+        (EXTERNAL, "external"),
+        (ADC_OVERRUN, "ADC overrun"),
+        (MEASURED_LIFTOFF, "measured lift-off"),
+        (LOSS_OF_LOCK, "loss of lock"),
+        (PICKUP_OPEN, "open pickup"),
+        (SELF_TEST, "self-test"),
+    ] {
+        assert!(
+            para.contains(&format!("{value} = {name}")),
+            "{name}: {value} is not the spec's bit"
+        );
+    }
+    assert_eq!(ALL, 511);
+}
