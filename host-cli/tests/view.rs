@@ -349,4 +349,26 @@ fn fault_side_channel_latches_a_named_fault() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("a fault is latched (bits 0x18)"));
     dev(&["reset-faults"]);
     assert_eq!(dev(&["status"])["faults"], serde_json::json!([]));
+    // Every bit the protocol cannot provoke on the virtual device (issue 41
+    // §7: 2, 4, 8, 16, 128, 256), by name and by bit, each alone: it
+    // latches, stops the running drive and is named by `status`; then
+    // `reset-faults` clears it (self_test included: the virtual device
+    // latches it once).
+    for (name, bit) in [
+        ("dac_underrun", 2),
+        ("watchdog_reset", 4),
+        ("external", 8),
+        ("adc_overrun", 16),
+        ("pickup_open", 128),
+        ("self_test", 256),
+    ] {
+        dev(&["start"]);
+        assert_eq!(ask(&bit.to_string()), format!("latched {name}"));
+        std::thread::sleep(Duration::from_millis(300));
+        let st = dev(&["status"]);
+        assert_eq!(st["faults"], serde_json::json!([name]), "{name}");
+        assert_eq!(st["running"], false, "{name}");
+        dev(&["reset-faults"]);
+        assert_eq!(dev(&["status"])["faults"], serde_json::json!([]), "{name}");
+    }
 }
