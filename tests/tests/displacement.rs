@@ -24,7 +24,7 @@
 //! within the arcsine of the sum of the two channels' relative errors.
 
 use board::dds::SineTable;
-use board::device::displacement::{HOLD_TOLERANCE, SMOOTHING_S};
+use board::device::displacement::SMOOTHING_S;
 use board::device::{
     faults, Contact, Device, DeviceConfig, DriveMode, DriveSetting, TransducerModel, Transducers,
 };
@@ -55,7 +55,9 @@ fn check_holds(b: &mut Bench<'_>, s: &DriveSetting, n: usize) {
     for _ in 0..lag {
         b.step();
     }
-    let tol = f64::from(HOLD_TOLERANCE);
+    // The holding tolerance as documented (docs/transducers.md: within 0.4 %
+    // of the setting), not the implementation's constant.
+    let tol = 0.004;
     let (ez, ex) = (
         tol + rounding(f64::from(s.amp_z_m)),
         tol + rounding(f64::from(s.amp_x_m)),

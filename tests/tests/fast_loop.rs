@@ -209,7 +209,6 @@ fn an_open_pickup_latches_the_safe_state() {
 #[test]
 fn a_two_half_buffer_estimate_never_covers_the_transition() {
     use board::control;
-    use board::device::displacement::HOLD_TOLERANCE;
     use board::device::{estimate_samples, HALF_BUFFER};
     use board::protocol::ControlSetting;
     let table = SineTable::<1024>::libm();
@@ -261,7 +260,8 @@ fn a_two_half_buffer_estimate_never_covers_the_transition() {
             // the amplitude at the end of half k), with `cmd` in force.
             let k = amps.len() - 1;
             if moved {
-                let tol = (f64::from(HOLD_TOLERANCE) + 0.001) * cmd;
+                // 0.4 %: the documented holding tolerance (docs/transducers.md).
+                let tol = (0.004 + 0.001) * cmd;
                 for j in [k - 2, k] {
                     assert!(
                         (amps[j] - cmd).abs() <= tol,
