@@ -150,6 +150,8 @@
 //!   point lies near f_r; not g·Q itself, which a spurious resonance far
 //!   narrower than the frequency step could make as large as it likes
 //!   between two points) exceeds [`FitConfig::max_rel_rms`] (5 %);
+//! * [`FitError::QualityUndetermined`] when Q's 95 % interval is wider
+//!   than a factor [`MAX_Q_SPREAD`] (2);
 //! * [`FitError::ChiSquareTooLarge`] when σ is given and the weighted
 //!   `χ² = SSR` exceeds the upper quantile of χ²_ν at the one-sided normal
 //!   deviate [`FitConfig::chi2_z`] (4.753: false refusal 1e-6 when σ is
@@ -392,6 +394,15 @@ pub enum FitError {
         /// The limit ([`FitConfig::max_rel_rms`]).
         limit: f64,
     },
+    /// The record does not determine Q: its 95 % interval is wider than a
+    /// factor [`MAX_Q_SPREAD`] (the points miss the mode's band: a mode far
+    /// narrower than the frequency step).
+    QualityUndetermined {
+        /// Lower end of Q's interval.
+        lo: f64,
+        /// Upper end of Q's interval.
+        hi: f64,
+    },
     /// With σ given, χ² exceeds its quantile (eq. 16).
     ChiSquareTooLarge {
         /// The weighted χ².
@@ -446,6 +457,11 @@ impl core::fmt::Display for FitError {
                 rel_rms * 100.0,
                 limit * 100.0
             ),
+            FitError::QualityUndetermined { lo, hi } => write!(
+                f,
+                "Q is not determined by the record: its 95 % interval [{lo:.3e}, {hi:.3e}] is \
+                 wider than a factor {MAX_Q_SPREAD} (a mode far narrower than the frequency step?)"
+            ),
             FitError::ChiSquareTooLarge { chi2, limit, dof } => write!(
                 f,
                 "residual too large for the given noise: chi-square {chi2:.1} > {limit:.1} ({dof} degrees of freedom)"
@@ -497,8 +513,19 @@ pub fn fit(
             });
         }
     }
+    let (q_lo, q_hi) = (fit.q.lo, fit.q.hi);
+    if !(q_hi <= MAX_Q_SPREAD * q_lo) {
+        return Err(FitError::QualityUndetermined { lo: q_lo, hi: q_hi });
+    }
     Ok(fit)
 }
+
+/// The widest interval of Q a fit is accepted with, as the ratio of its
+/// ends (2: Q known to about ±18 % at one standard error). A record whose
+/// points straddle the mode's band gives ±0.1 %; one that misses a mode far
+/// narrower than its step gives intervals over decades (seen: [0.5, 6e11]
+/// for a Q-10⁵ mode swept in 13 Hz steps).
+pub const MAX_Q_SPREAD: f64 = 2.0;
 
 /// The fit of [`fit`] without its verdict on the result (the span, Q and
 /// residual checks), e.g. to plot a refused fit with its record.

@@ -11,6 +11,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use board::device::DriveSetting;
+use board::identify::FitError;
 use board::protocol::{Request, Response};
 use device_host::client::Client;
 use device_host::identify::{identify, Channels, IdentifyOptions};
@@ -200,9 +201,10 @@ fn a_high_q_tangential_mode_identifies() {
 /// Beyond the Q the plan holds (eq. I1 with Q_MAX = 2000), the watch of
 /// eq. I4 is what keeps the contact: at Q 5000 the cuts bring each point
 /// back and the mode still identifies; at Q 10⁵ (τ = 1.6 s: a cut voltage
-/// does not stop the ring for seconds) the sweep gives up by name after
-/// its cuts, with no fault latched, nothing stored, the drive stopped, and
-/// the true excursion within B all along.
+/// does not stop the ring for seconds) nothing is stored — the sweep gives
+/// up by name after its cuts, or its fit refuses the undetermined Q — with
+/// no fault latched, the drive stopped, and the true excursion within B all
+/// along.
 #[test]
 fn a_mode_beyond_the_planned_q_is_cut_before_the_limit() {
     identifies(Channels::Z, 20_050.0, 5_000.0, f64::INFINITY);
@@ -242,9 +244,27 @@ fn a_mode_beyond_the_planned_q_is_cut_before_the_limit() {
         channels: Channels::Z,
         ..IdentifyOptions::default()
     };
-    let e = identify(&mut c, &o).unwrap_err().to_string();
-    assert!(e.contains("kept passing 80 % of its bound"), "{e}");
-    assert!(e.contains("nothing stored"), "{e}");
+    // Two ways out, as the cuts and the ring meet (the in-process device's
+    // time per poll follows the host's speed): the sweep gives up after its
+    // cuts, or it ends and the fit refuses a Q its record does not determine
+    // (seen: Q 5e5 with a 95 % interval [0.5, 6e11], rel. RMS 2.7 %).
+    let e = match identify(&mut c, &o) {
+        Err(e) => {
+            let e = e.to_string();
+            assert!(e.contains("kept passing 80 % of its bound"), "{e}");
+            assert!(e.contains("nothing stored"), "{e}");
+            e
+        }
+        Ok(id) => {
+            let fit = &id.channels[0].fit;
+            assert!(
+                matches!(fit, Err(FitError::QualityUndetermined { .. })),
+                "{fit:?}"
+            );
+            assert_eq!(id.transducers, None);
+            fit.as_ref().unwrap_err().to_string()
+        }
+    };
     let w = *watch.lock().unwrap();
     eprintln!("Q 1e5: {e}; true peak {:.3} µm", w.peak_m * 1e6);
     assert_eq!(w.above, 0);
