@@ -1293,7 +1293,10 @@ fn check_8s_reported_maximum_is_itself_accepted() {
     let r: f64 = 2e4 / 4e4;
     let h = f64::from(1e-6f32) / ((1.0 - r * r).powi(2) + (r / 10.0).powi(2)).sqrt();
     let want = 2000.0 * (3.3 / 4095.0) * h;
-    assert!((f64::from(mz) - want).abs() <= 2e-6 * want, "{mz} vs {want}");
+    assert!(
+        (f64::from(mz) - want).abs() <= 2e-6 * want,
+        "{mz} vs {want}"
+    );
     let r = ask(
         &mut s,
         &mut dev,

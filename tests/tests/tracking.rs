@@ -169,7 +169,10 @@ fn a_lost_lock_goes_to_the_safe_state() {
     // documented 2 ms of windows (`LOSS_S`, docs/protocol.md "Tracking and
     // headroom") after the exit, less one window and one half-buffer of
     // counting.
-    assert!(t >= exit + 0.002 - window - b.t_half(), "latched early, at {t} s");
+    assert!(
+        t >= exit + 0.002 - window - b.t_half(),
+        "latched early, at {t} s"
+    );
     assert!(!st.running && !st.locked);
     assert!(worst <= 1.0, "{worst}");
     assert!(b.dev.start().is_err());
