@@ -1332,7 +1332,11 @@ fn tracking_on_the_firmware() {
     let q = qemu_with("FIRMWARE_DRIFT_ELF", "qemu-drift");
     ok(&q, &drive_set("20100", "0", "0", "4e-6", None));
     let t0 = Instant::now();
-    let id = ok(&q, &["identify"]);
+    // Each point settles 20 ms (≈ 5 τ of this Q-261 mode): the default
+    // plans for a Q-2000 mode (160 ms a coarse point), during which the
+    // resonance drifts 3 Hz a point and the fine pass, ±2 coarse steps
+    // around the coarse peak, can miss it ("no resonance in the span").
+    let id = ok(&q, &["identify", "--settle-ms", "20"]);
     let f_id = id["resonance_z_hz"].as_f64().unwrap();
     eprintln!(
         "identify under QEMU with drift: {:.1} s, f_r {f_id} Hz",
