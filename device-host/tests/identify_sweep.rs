@@ -72,24 +72,10 @@ fn bound_m() -> f64 {
     f64::from((1.0 - 0.05f32) * OFFSET_M)
 }
 
-/// One identification of channel `ch` on a plant whose `ch` mode has
-/// resonance `fr`, Q `q`, load `load` (`inf` for none), the other mode at
-/// its default; the drive at 20 kHz on u_z0 = 4 µm. Asserts the true
-/// normal excursion stayed within B at every sample, the fit within 0.5 %
-/// of f_r and of the effective Q `1/(1/Q + 1/Q_load)` (the issue's
-/// figure for a plant that identified before). (The fit's 95 % intervals
-/// are printed, not asserted: they count the noise, not the plant's
-/// departures from eq. 1, which reach 0.14 % in Q at Q 50.)
-fn identifies(ch: Channels, fr: f64, q: f64, load: f64) {
-    let mut t = TransducerSpec {
-        plant_load_q: Some(load),
-        ..TransducerSpec::default()
-    };
-    if ch == Channels::Z {
-        (t.plant_resonance_z, t.plant_q_z) = (Some(fr), Some(q));
-    } else {
-        (t.plant_resonance_x, t.plant_q_x) = (Some(fr), Some(q));
-    }
+/// A virtual device with the transducers `t`, its true normal excursion
+/// watched against B at every sample, the preload u_z0 = 4 µm at 20 kHz set
+/// in voltage mode; its client and the watch.
+fn preloaded(t: TransducerSpec) -> (Client, Arc<Mutex<Watch>>) {
     let spec = PlantSpec {
         transducers: t,
         ..PlantSpec::default()
@@ -117,6 +103,28 @@ fn identifies(ch: Channels, fr: f64, q: f64, load: f64) {
         c.call(Request::SetDrive(d)).unwrap(),
         Response::Drive { .. }
     ));
+    (c, watch)
+}
+
+/// One identification of channel `ch` on a plant whose `ch` mode has
+/// resonance `fr`, Q `q`, load `load` (`inf` for none), the other mode at
+/// its default; the drive at 20 kHz on u_z0 = 4 µm. Asserts the true
+/// normal excursion stayed within B at every sample, the fit within 0.5 %
+/// of f_r and of the effective Q `1/(1/Q + 1/Q_load)` (the issue's
+/// figure for a plant that identified before). (The fit's 95 % intervals
+/// are printed, not asserted: they count the noise, not the plant's
+/// departures from eq. 1, which reach 0.14 % in Q at Q 50.)
+fn identifies(ch: Channels, fr: f64, q: f64, load: f64) {
+    let mut t = TransducerSpec {
+        plant_load_q: Some(load),
+        ..TransducerSpec::default()
+    };
+    if ch == Channels::Z {
+        (t.plant_resonance_z, t.plant_q_z) = (Some(fr), Some(q));
+    } else {
+        (t.plant_resonance_x, t.plant_q_x) = (Some(fr), Some(q));
+    }
+    let (mut c, watch) = preloaded(t);
     let o = IdentifyOptions {
         channels: ch,
         ..IdentifyOptions::default()
@@ -207,38 +215,12 @@ fn a_high_q_tangential_mode_identifies() {
 #[test]
 fn a_mode_beyond_the_planned_q_is_cut_before_the_limit() {
     identifies(Channels::Z, 20_050.0, 5_000.0, f64::INFINITY);
-    let spec = PlantSpec {
-        transducers: TransducerSpec {
-            plant_resonance_z: Some(20_050.0),
-            plant_q_z: Some(1e5),
-            plant_load_q: Some(f64::INFINITY),
-            ..TransducerSpec::default()
-        },
-        ..PlantSpec::default()
-    };
-    let opts = spec
-        .options(0.0, 0.0, 0.0, ["v0", "noise", "offset"])
-        .unwrap();
-    let mut dev = VirtualDevice::new(opts);
-    dev.plant_mut().excursion_limit_m = bound_m();
-    let watch = Arc::new(Mutex::new(Watch::default()));
-    let link = WatchedSim {
-        dev,
-        pending: Vec::new(),
-        watch: watch.clone(),
-    };
-    let mut c = Client::new(Box::new(link), Duration::from_secs(2), 3);
-    let d = DriveSetting {
-        freq_hz: 20_000.0,
-        amp_z_m: 0.0,
-        amp_x_m: 0.0,
-        offset_z_m: OFFSET_M,
-        phase_rad: 0.0,
-    };
-    assert!(matches!(
-        c.call(Request::SetDrive(d)).unwrap(),
-        Response::Drive { .. }
-    ));
+    let (mut c, watch) = preloaded(TransducerSpec {
+        plant_resonance_z: Some(20_050.0),
+        plant_q_z: Some(1e5),
+        plant_load_q: Some(f64::INFINITY),
+        ..TransducerSpec::default()
+    });
     let o = IdentifyOptions {
         channels: Channels::Z,
         ..IdentifyOptions::default()
