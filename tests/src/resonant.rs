@@ -99,6 +99,9 @@ pub struct Bench<'t> {
     pub plant: Plant<f64>,
     /// Pickup samples forced to these counts (an open wire), per channel.
     pub pickup_stuck: [Option<u16>; 2],
+    /// Pickup gain errors: each sample's counts from the calibration's zero
+    /// are scaled by this, per channel (1: the calibrated pickup).
+    pub pickup_gain: [f64; 2],
     half: usize,
     /// Half-buffers run.
     pub halves: usize,
@@ -137,6 +140,7 @@ impl<'t> Bench<'t> {
             dev,
             plant,
             pickup_stuck: [None; 2],
+            pickup_gain: [1.0; 2],
             half: 0,
             halves: 0,
         }
@@ -162,7 +166,20 @@ impl<'t> Bench<'t> {
             &mut forces,
             &mut pickups,
         );
+        let zero = [
+            f64::from(self.cfg.pickup_z.offset),
+            f64::from(self.cfg.pickup_x.offset),
+        ];
+        let scale = |c: u16, ch: usize| {
+            let g = self.pickup_gain[ch];
+            if g == 1.0 {
+                c
+            } else {
+                (zero[ch] + (f64::from(c) - zero[ch]) * g).round() as u16
+            }
+        };
         for p in &mut pickups {
+            *p = (scale(p.0, 0), scale(p.1, 1));
             if let Some(c) = self.pickup_stuck[0] {
                 p.0 = c;
             }

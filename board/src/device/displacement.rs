@@ -39,7 +39,10 @@
 //! undriven one, against [`HOLD_FLOOR_M`]) within [`HOLD_TOLERANCE`] for
 //! [`HOLD_S`] of windows in a row (the error is averaged over
 //! the windows with [`SMOOTHING_S`], as the status reports it in this
-//! mode, so a single noisy window neither makes nor breaks it).
+//! mode, so a single noisy window neither makes nor breaks it); once
+//! holding, the drive is released only when an error leaves the twice
+//! wider [`RELEASE_TOLERANCE`] (or [`RELEASE_FLOOR_M`]): hysteresis, so
+//! that the smoothed error's noise never releases a held drive.
 //!
 //! **Transitions** (v6, eqs. D4–D6). Each mode's complex envelope (the
 //! phasor in the frame of the drive, at the drive frequency ω) obeys, for a
@@ -113,6 +116,23 @@ use model_core::float::{FastF32, Math};
 /// amplitude is within 0.4 % and φ within 0.23° of the setting per channel
 /// (0.46° between the two modes).
 pub const HOLD_TOLERANCE: f32 = 0.004;
+
+/// Largest relative error `|X − D|/|D|` of a channel of a drive that
+/// holds: 0.8 %, twice [`HOLD_TOLERANCE`] (hysteresis). The 1 ms-smoothed
+/// error's noise is σ ≈ 0.07–0.08 % at a 0.3 µm tangential setting with
+/// the virtual plant's ±1 count of pickup noise (its status over 0.4 s of
+/// holding at each of 7 phases); against 0.4 % (5–6σ) a holding drive
+/// was still released by noise alone about once per 30 s of device time (a
+/// tail heavier than the Gaussian's `exp(−(0.4/σ)²/2)`, 1e-7–4e-6 per
+/// millisecond), marking a measurement `not_settled` (3 of 20 Python lab
+/// sessions' sweeps). At 10σ
+/// the tail, `exp(−(0.8/0.08)²/2)` ≈ 2e-22, is nil, while a disturbance
+/// beyond 0.8 % still releases the hold.
+pub const RELEASE_TOLERANCE: f32 = 2.0 * HOLD_TOLERANCE;
+
+/// An undriven channel of a drive that holds is released above this, m
+/// (twice [`HOLD_FLOOR_M`], as [`RELEASE_TOLERANCE`]).
+pub const RELEASE_FLOOR_M: f32 = 2.0 * HOLD_FLOOR_M;
 
 /// Time of windows in a row within [`HOLD_TOLERANCE`] before the drive
 /// holds, s (four windows of 128 µs before windows took four blocks;
@@ -693,13 +713,21 @@ impl<const N: usize> Device<'_, N> {
         };
         self.loops.avg = Some(avg);
         let mut within = true;
+        // Hysteresis: a holding drive is released only beyond the wider
+        // bounds (RELEASE_TOLERANCE, RELEASE_FLOOR_M).
+        let holding = self.loops.good >= HOLD_S * (1.0 - 1e-3);
+        let (tol, floor) = if holding {
+            (RELEASE_TOLERANCE, RELEASE_FLOOR_M)
+        } else {
+            (HOLD_TOLERANCE, HOLD_FLOOR_M)
+        };
         let models = self.tracker.models(&t);
         for (ch, m) in models.iter().enumerate() {
             let dn = norm(target[ch]);
             within &= if dn > 0.0 {
-                norm((avg[ch] - target[ch]) / target[ch]) <= HOLD_TOLERANCE
+                norm((avg[ch] - target[ch]) / target[ch]) <= tol
             } else {
-                norm(avg[ch]) <= HOLD_FLOOR_M
+                norm(avg[ch]) <= floor
             };
             let mn = norm(mean[ch]);
             // An open pickup: the model says the mode moves, the pickup not.
