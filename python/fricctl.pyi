@@ -193,7 +193,8 @@ class Scene:
         """The exact static interval of the equilibrium displacement u_x0
         (lo, hi) in m (``fricctl static``'s interval_lo_m, interval_hi_m);
         None when it is empty or the contact lifts off. Flat punch only
-        (ValueError for a curved profile)."""
+        (ValueError for a curved profile, whose static interval is the held
+        force μ/μ0 in [μ(0⁻), μ(0⁺)]: ``mu_limits``)."""
     def regime(self, v0: float) -> Literal["rest", "stick_slip", "sliding"]:
         """The contact's state at sliding velocity v0: "rest" (v0 = 0),
         "stick_slip" (|v0| below the critical velocity of its direction) or

@@ -168,6 +168,9 @@ pub struct Classified {
     /// The permanent contact's static analysis (None with lift-off: there is
     /// no static interval, the force at rest is unique).
     pub statics: Option<model_core::analytic::StaticFriction<f64>>,
+    /// A curved profile's limits at rest and static interval (None for the
+    /// flat punch).
+    pub profile_statics: Option<ProfileStatics>,
 }
 
 /// Classifies a scene: `regime::classify` for a permanent contact,
@@ -184,6 +187,7 @@ pub fn classify_scene(s: &Scene<f64>) -> Result<Classified> {
             c_backward: c.c_backward,
             asymmetry: c.asymmetry,
             statics: None,
+            profile_statics: None,
         });
     }
     let c = regime::classify(s, &ClassifyOptions::default()).map_err(exact_failure)?;
@@ -195,6 +199,7 @@ pub fn classify_scene(s: &Scene<f64>) -> Result<Classified> {
         c_backward: c.c_backward,
         asymmetry: c.asymmetry,
         statics: Some(c.statics),
+        profile_statics: None,
     })
 }
 
@@ -630,6 +635,56 @@ pub fn mdr_failure(e: MdrError) -> Error {
     }
 }
 
+/// A curved profile at rest (docs/guide/lift-off-and-profiles.md, "Curved
+/// profiles at rest", eqs. S1–S4): the one-sided limits μ(0±)/μ0 of the
+/// MDR quadrature with their bound, the critical velocities (the flat
+/// punch's with the same drive, eq. S1) over ωW0, and whether the static
+/// interval — the held forces `μ/μ0 ∈ [μ(0⁻), μ(0⁺)]` (units of μ0 times the
+/// mean normal force) at which the body stays at rest on average — has a
+/// width (eq. S2: the central spring is permanent, `a < 1`, and sticks,
+/// `c + c' < 2`; its width is eq. S3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProfileStatics {
+    /// μ(0⁺)/μ0 (with `a ≥ 1`: μ(0)/μ0, unique).
+    pub mu_0plus: f64,
+    /// μ(0⁻)/μ0 (with `a ≥ 1`: μ(0)/μ0, unique).
+    pub mu_0minus: f64,
+    /// The larger of the two limits' bounds, units of μ0.
+    pub bound: f64,
+    /// The forward critical velocity over ωW0 (eq. S1).
+    pub c_forward: f64,
+    /// The backward critical velocity over ωW0.
+    pub c_backward: f64,
+    /// The static interval has a width (eq. S2).
+    pub exists: bool,
+}
+
+/// [`ProfileStatics`] of a scene with a curved profile `p`, at the
+/// tolerance the CLI's `mu --v0 0` uses ([`profile_tol_at_rest`]).
+///
+/// # Errors
+/// The MDR's refusal as one line ([`mdr_failure`]); the flat punch is
+/// refused (its static analysis is `model_core::analytic::StaticFriction`).
+pub fn profile_statics(s: &Scene<f64>, p: &Profile<f64>) -> Result<ProfileStatics> {
+    if *p == Profile::Flat {
+        return Err(Error::failure(
+            "profile_statics is for a curved profile; the flat punch has StaticFriction",
+        ));
+    }
+    let d = s.drive();
+    let (c, cb) = mdr::critical_velocities::<f64, Libm>(&d, p).map_err(mdr_failure)?;
+    let tol = profile_tol(s, p).max(profile_tol_at_rest(s, p));
+    let (plus, minus) = mdr::limits_at_zero::<f64, Libm>(&d, p, tol).map_err(mdr_failure)?;
+    Ok(ProfileStatics {
+        mu_0plus: plus.mu_over_mu0,
+        mu_0minus: minus.mu_over_mu0,
+        bound: plus.bound.max(minus.bound),
+        c_forward: c,
+        c_backward: cb,
+        exists: mdr::static_interval_exists::<f64, Libm>(&d),
+    })
+}
+
 /// Classifies a scene with a contact profile: [`classify_scene`] for the
 /// flat punch; for a curved profile the same definitions as
 /// `model_core::regime` from the MDR quadrature: μ(0±) (one μ(0) for
@@ -644,22 +699,14 @@ pub fn classify_scene_profile(s: &Scene<f64>, p: &Profile<f64>) -> Result<Classi
     let d = s.drive();
     let tol = profile_tol(s, p);
     let mut worst = 0.0f64;
-    let mut limits_bound = 0.0f64;
     let mut mu = |v: f64| -> Result<f64> {
         let r = mdr::mu_over_mu0::<f64, Libm>(&d, p, v, tol).map_err(mdr_failure)?;
         worst = worst.max(r.bound);
         Ok(r.mu_over_mu0)
     };
-    let (c, cb) = mdr::critical_velocities::<f64, Libm>(&d, p).map_err(mdr_failure)?;
-    let (plus, minus) = if d.a >= 1.0 {
-        let m0 = mu(0.0)?;
-        (m0, m0)
-    } else {
-        let tol_rest = tol.max(profile_tol_at_rest(s, p));
-        let (pl, mi) = mdr::limits_at_zero::<f64, Libm>(&d, p, tol_rest).map_err(mdr_failure)?;
-        limits_bound = pl.bound.max(mi.bound);
-        (pl.mu_over_mu0, mi.mu_over_mu0)
-    };
+    let st = profile_statics(s, p)?;
+    let (c, cb, plus, minus) = (st.c_forward, st.c_backward, st.mu_0plus, st.mu_0minus);
+    let limits_bound = st.bound;
     let mut asymmetry = (plus + minus).abs();
     let vmax = c.max(cb);
     let samples = ClassifyOptions::<f64>::default().samples.max(1);
@@ -689,6 +736,7 @@ pub fn classify_scene_profile(s: &Scene<f64>, p: &Profile<f64>) -> Result<Classi
         c_backward: cb,
         asymmetry,
         statics: None,
+        profile_statics: Some(st),
     })
 }
 

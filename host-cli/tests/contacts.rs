@@ -596,9 +596,46 @@ fn profile_flags_and_refusals() {
     ] {
         refused(&with(&[&v[..], extra].concat(), &s), want);
     }
-    refused(
-        &with(&["static", "--profile", "sphere"], &s),
-        "--profile: the static analysis is for the flat punch; for a sphere profile `fricctl mu --v0 0` gives mu(0+) and mu(0-)",
+    // `static` on a curved profile (docs/guide/lift-off-and-profiles.md,
+    // eqs. S1–S3): a = 0.5, b = 0.8, φ = 30°: c = 1.25810, c' = 0.44405
+    // (eq. 8), σ = c + c' = 1.70215 < 2, so the interval exists (S2), and
+    // its width μ(0+) − μ(0−) is eq. S3 by hand: ξ_m = (1 − σ/2)^{1/2},
+    // ((2 − σ)ξ_m − 2ξ_m³/3)/D with D = (2/3)⟨(1 − a cos θ)^{3/2}⟩ (M5, by
+    // the trapezoid rule, spectrally exact here).
+    let st = json(&with(&["static", "--profile", "sphere", "--json"], &s));
+    assert_eq!(st["profile"], "sphere");
+    assert_eq!(st["static_exists"], true);
+    assert_eq!(st["lifts_off"], false);
+    let (lo, hi) = (f(&st, "static_lo_over_mu0"), f(&st, "static_hi_over_mu0"));
+    assert_eq!(
+        (lo, hi),
+        (f(&st, "mu_0minus_over_mu0"), f(&st, "mu_0plus_over_mu0"))
+    );
+    let (a, b, phi) = (0.5f64, 0.8f64, 30f64.to_radians());
+    let c = ((a + b * phi.cos()).powi(2) + (b * phi.sin()).powi(2)).sqrt();
+    let cb = ((b * phi.cos() - a).powi(2) + (b * phi.sin()).powi(2)).sqrt();
+    assert!((f(&st, "vc_forward") - c).abs() < 1e-12 && (f(&st, "vc_backward") - cb).abs() < 1e-12);
+    let sigma = c + cb;
+    let xm = (1.0 - sigma / 2.0).sqrt();
+    let k = 4096;
+    let d = (0..k)
+        .map(|j| (1.0 - a * (TAU * j as f64 / k as f64).cos()).powf(1.5))
+        .sum::<f64>()
+        / k as f64
+        * (2.0 / 3.0);
+    let width = ((2.0 - sigma) * xm - 2.0 * xm.powi(3) / 3.0) / d;
+    let bound = f(&st, "error_bound_over_mu0");
+    assert!(
+        ((hi - lo) - width).abs() <= 2.0 * bound + 1e-12,
+        "width {} vs eq. S3 {width} (bound {bound:e})",
+        hi - lo
+    );
+    // `classify` reports the same interval under the same keys.
+    let cl = json(&with(&["classify", "--profile", "sphere", "--json"], &s));
+    assert_eq!(cl["static_exists"], true);
+    assert_eq!(
+        (f(&cl, "static_lo_over_mu0"), f(&cl, "static_hi_over_mu0")),
+        (lo, hi)
     );
     let mut file_bad = std::fs::read_to_string(&p).unwrap();
     file_bad = file_bad.replace("sphere", "cube");
@@ -626,9 +663,14 @@ fn classify_and_curve_with_a_profile() {
     ]);
     assert_eq!(c["regime"], "active_control", "{c}");
     assert_eq!(c["profile"], "sphere");
-    assert!(c["static_exists"].is_null());
+    // c = c' = a = 0.5, σ = 1 < 2: a static interval (eq. S2), [μ(0−), μ(0+)].
+    assert_eq!(c["static_exists"], true);
     assert!(c["rule_of_thumb"].is_null());
     let (p, m) = (f(&c, "mu_0plus_over_mu0"), f(&c, "mu_0minus_over_mu0"));
+    assert_eq!(
+        (f(&c, "static_lo_over_mu0"), f(&c, "static_hi_over_mu0")),
+        (m, p)
+    );
     // Closed form at b = 0, V → 0⁺: a permanent spring (d > a) is the flat
     // punch scaled by d with b/d = 0, so ⟨s⟩ = d·(1 − a/d) = d − a; an
     // intermittent one lands at s = 0 and the drive does not move it, ⟨s⟩ = 0.

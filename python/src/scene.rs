@@ -350,7 +350,7 @@ impl Scene {
     fn static_interval(&self) -> PyResult<Option<(f64, f64)>> {
         if self.rs.profile != Profile::Flat {
             return Err(to_py(Error::usage(format!(
-                "--profile: the static analysis is for the flat punch; for a {} profile `fricctl mu --v0 0` gives mu(0+) and mu(0-)",
+                "--profile: the interval of u_x0 is the flat punch's (the springs of a {} profile hold different stretches); its static interval is the held force mu/mu0 in [mu(0-), mu(0+)], Scene.mu_limits() (fricctl static --profile)",
                 self.rs.profile.name()
             ))));
         }

@@ -32,12 +32,17 @@ struct ClassifyOut {
     regime: &'static str,
     mu_0plus_over_mu0: f64,
     mu_0minus_over_mu0: f64,
-    /// Whether a static equilibrium exists (false with lift-off; null for a
-    /// curved profile: no static analysis there).
+    /// Whether a static interval exists (false with lift-off; for a curved
+    /// profile eq. S2 of docs/guide/lift-off-and-profiles.md).
     static_exists: Option<bool>,
-    /// The static interval's ends over W0 (null with lift-off: no static interval).
+    /// The flat punch's static interval's ends over W0 (null with lift-off
+    /// and for a curved profile, whose springs hold different stretches).
     static_lo_over_w0: Option<f64>,
     static_hi_over_w0: Option<f64>,
+    /// The static interval as held forces μ/μ0, [μ(0−), μ(0+)] (null
+    /// when it does not exist), for every profile.
+    static_lo_over_mu0: Option<f64>,
+    static_hi_over_mu0: Option<f64>,
     vc_forward: f64,
     vc_backward: f64,
     vc_forward_over_omega_w0: f64,
@@ -68,17 +73,23 @@ impl ClassifyCmd {
         let g = s.groups();
         let flat = rs.profile == Profile::Flat;
         let rot = (!s.lifts_off() && flat).then(|| rule_of_thumb(s));
+        // The static interval as held forces μ/μ0: the flat punch's
+        // [lo, hi], a curved profile's [μ(0−), μ(0+)] (eq. S2).
+        let exists = match (c.statics, c.profile_statics) {
+            (Some(st), _) => st.exists(),
+            (None, Some(ps)) => ps.exists,
+            (None, None) => false,
+        };
+        let held = exists.then_some((c.mu_0minus, c.mu_0plus));
         let o = ClassifyOut {
             regime: c.regime.name(),
             mu_0plus_over_mu0: c.mu_0plus,
             mu_0minus_over_mu0: c.mu_0minus,
-            static_exists: match (c.statics, flat) {
-                (Some(st), _) => Some(st.exists()),
-                (None, true) => Some(false),
-                (None, false) => None,
-            },
+            static_exists: Some(exists),
             static_lo_over_w0: c.statics.map(|x| x.lo),
             static_hi_over_w0: c.statics.map(|x| x.hi),
+            static_lo_over_mu0: held.map(|h| h.0),
+            static_hi_over_mu0: held.map(|h| h.1),
             vc_forward: vc.forward,
             vc_backward: vc.backward,
             vc_forward_over_omega_w0: c.c_forward,
@@ -129,7 +140,7 @@ fn write_text(
     if *p != Profile::Flat {
         writeln!(
             out,
-            "profile                {} (MDR quadrature; no static analysis for a curved profile)",
+            "profile                {} (MDR quadrature; static interval over the springs, eq. S2)",
             profile_text(p)
         )?;
     }
@@ -162,10 +173,18 @@ fn write_text(
         // The static interval (paper §2.2): the held forces at which the
         // contact sticks. An actuator may have one (0 outside it: held, it
         // sticks; free, it moves) or none (it slips at every force).
-        match (o.static_exists, o.static_lo_over_w0, o.static_hi_over_w0) {
-            (Some(true), Some(lo), Some(hi)) => writeln!(
+        let (what, why) = if *p == Profile::Flat {
+            ("sticks when held", "c + c' > 2")
+        } else {
+            (
+                "rests on average when held",
+                "c + c' > 2 at the central spring, eq. S2",
+            )
+        };
+        match (o.static_lo_over_mu0, o.static_hi_over_mu0) {
+            (Some(lo), Some(hi)) => writeln!(
                 out,
-                "static interval        sticks when held at mu/mu0 in [{}, {}]; {}",
+                "static interval        {what} at mu/mu0 in [{}, {}]; {}",
                 Rounded(lo),
                 Rounded(hi),
                 if lo <= 0.0 && 0.0 <= hi {
@@ -174,11 +193,10 @@ fn write_text(
                     "free (zero force), it moves"
                 }
             )?,
-            (Some(_), _, _) => writeln!(
+            _ => writeln!(
                 out,
-                "static interval        none: it slips at every held force (c + c' > 2)"
+                "static interval        none: it slips at every held force ({why})"
             )?,
-            _ => writeln!(out, "static interval        n/a (curved profile)")?,
         }
     }
     writeln!(

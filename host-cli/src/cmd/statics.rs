@@ -74,10 +74,7 @@ impl StaticCmd {
         let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         let s = &rs.scene;
         if rs.profile != model_core::mdr::Profile::Flat {
-            return Err(crate::error::CliError::usage(format!(
-                "--profile: the static analysis is for the flat punch; for a {} profile `fricctl mu --v0 0` gives mu(0+) and mu(0-)",
-                rs.profile.name()
-            )));
+            return self.curved(&rs, out);
         }
         if s.lifts_off() {
             return self.lift_off(s, out, Units::of(rs.dimensionless));
@@ -132,6 +129,123 @@ impl StaticCmd {
         }
         write_lift_off_text(out, &o, s, u).map_err(stdout_error)
     }
+}
+
+/// The JSON document of `fricctl static` for a curved profile (MDR): the
+/// static interval as held forces over μ0 times the mean normal force.
+#[derive(Serialize)]
+struct ProfileStaticOut {
+    /// `sphere`, `cone` or `power`.
+    profile: &'static str,
+    /// The profile's exponent n.
+    exponent: Option<f64>,
+    /// The central spring lifts off (duz ≥ uz0): every spring is
+    /// intermittent and the force at rest is unique.
+    lifts_off: bool,
+    /// The static interval has a width (eq. S2).
+    static_exists: bool,
+    /// The interval's ends μ(0−)/μ0 and μ(0+)/μ0 (null without a width).
+    static_lo_over_mu0: Option<f64>,
+    static_hi_over_mu0: Option<f64>,
+    /// The body held with zero force rests on average (0 in the interval).
+    rests_free: bool,
+    mu_0plus_over_mu0: f64,
+    mu_0minus_over_mu0: f64,
+    /// The larger bound of the two limits, units of μ0 (MDR quadrature).
+    error_bound_over_mu0: f64,
+    /// The critical velocities (the flat punch's with the same drive, eq. S1), m/s.
+    vc_forward: f64,
+    vc_backward: f64,
+    w0_m: f64,
+}
+
+impl StaticCmd {
+    /// A curved profile (docs/guide/lift-off-and-profiles.md, eqs. S1–S4).
+    fn curved(&self, rs: &crate::scene_args::ResolvedScene, out: &mut impl Write) -> CliResult {
+        let s = &rs.scene;
+        let st = fric_analysis::eval::profile_statics(s, &rs.profile)?;
+        let unit = s.velocity_scale();
+        let exists = st.exists;
+        let o = ProfileStaticOut {
+            profile: rs.profile.name(),
+            exponent: rs.profile.exponent(),
+            lifts_off: s.lifts_off(),
+            static_exists: exists,
+            static_lo_over_mu0: exists.then_some(st.mu_0minus),
+            static_hi_over_mu0: exists.then_some(st.mu_0plus),
+            rests_free: st.mu_0minus <= 0.0 && 0.0 <= st.mu_0plus,
+            mu_0plus_over_mu0: st.mu_0plus,
+            mu_0minus_over_mu0: st.mu_0minus,
+            error_bound_over_mu0: st.bound,
+            vc_forward: st.c_forward * unit,
+            vc_backward: st.c_backward * unit,
+            w0_m: s.w0(),
+        };
+        if self.json {
+            return write_json(out, &o);
+        }
+        write_profile_text(out, &o, &rs.profile, Units::of(rs.dimensionless)).map_err(stdout_error)
+    }
+}
+
+fn write_profile_text(
+    out: &mut impl Write,
+    o: &ProfileStaticOut,
+    p: &model_core::mdr::Profile<f64>,
+    u: Units,
+) -> std::io::Result<()> {
+    let b = Short(round_up_sig(o.error_bound_over_mu0, 3));
+    writeln!(
+        out,
+        "profile                {} (MDR quadrature over the springs; bound {b} mu0)",
+        crate::scene_args::profile_text(p)
+    )?;
+    writeln!(
+        out,
+        "v_c forward            {} {} (the flat punch's with the same drive, eq. S1)",
+        Rounded(o.vc_forward),
+        u.velocity
+    )?;
+    writeln!(
+        out,
+        "v_c backward           {} {}",
+        Rounded(o.vc_backward),
+        u.velocity
+    )?;
+    if o.lifts_off {
+        writeln!(
+            out,
+            "static interval        none: the central spring lifts off too (duz >= uz0), every spring's stretch resets at its landing"
+        )?;
+        return writeln!(
+            out,
+            "force at rest          unique: mu(0)/mu0 = {} (± {b})",
+            Rounded(o.mu_0plus_over_mu0)
+        );
+    }
+    match (o.static_lo_over_mu0, o.static_hi_over_mu0) {
+        (Some(lo), Some(hi)) => writeln!(
+            out,
+            "static interval        rests on average when held at mu/mu0 in [{}, {}] (± {b}); free (zero force), it {}",
+            Rounded(lo),
+            Rounded(hi),
+            if o.rests_free { "rests" } else { "moves (an actuator)" }
+        )?,
+        _ => writeln!(
+            out,
+            "static interval        none: it slips at every held force (c + c' > 2 at the central spring, eq. S2)"
+        )?,
+    }
+    writeln!(
+        out,
+        "mu(0+)/mu0             {} (± {b}; mu: held force over the mean normal force)",
+        Rounded(o.mu_0plus_over_mu0)
+    )?;
+    writeln!(
+        out,
+        "mu(0-)/mu0             {} (± {b})",
+        Rounded(o.mu_0minus_over_mu0)
+    )
 }
 
 /// Units of the text output: SI, or the scene's own for a dimensionless one.

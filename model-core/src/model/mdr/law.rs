@@ -120,6 +120,15 @@ pub fn critical_velocities<T: Float, M: Math<T>>(
     ))
 }
 
+/// Whether a curved profile's static interval `[μ(0⁻), μ(0⁺)]` has a width
+/// (docs/guide/lift-off-and-profiles.md, eq. S2): a permanent spring of band
+/// offset `d > a` sticks at rest for stretches in `[c' − d, d − c]`, so
+/// some spring does iff the central one (`d = 1`) does: `a < 1` and
+/// `c + c' < 2` — the flat punch's own condition with the same drive.
+pub fn static_interval_exists<T: Float, M: Math<T>>(d: &Drive<T>) -> bool {
+    d.a < T::ONE && d.c_forward::<M>() + d.c_backward::<M>() < T::TWO
+}
+
 /// The mean normal force `F̄z/(k_z u_z0)` of a profile at `a` with its
 /// bound (units of `k_z u_z0`): `⟨w⁺⟩` of eq. L4 (1 for `a < 1`) for
 /// [`Profile::Flat`], else `D` of eq. M5 ([`normal::mean_normal_force`],

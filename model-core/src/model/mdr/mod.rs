@@ -160,6 +160,6 @@ pub use error::{MdrError, MdrResult};
 pub(crate) use law::check_moving;
 pub use law::{
     critical_velocities, limits_at_zero, mean_normal_force, mu_over_mu0, spring_means,
-    spring_means_at_rest,
+    spring_means_at_rest, static_interval_exists,
 };
 pub use profile::{kappa, mean_contact_radius, Profile};
