@@ -740,6 +740,73 @@ pub fn classify_scene_profile(s: &Scene<f64>, p: &Profile<f64>) -> Result<Classi
     })
 }
 
+/// The class [`classify_scene_profile`] gives, without its asymmetry
+/// figure, at a fraction of its cost (a regime map's cell). The full
+/// classification's "zero" is at least `z₀ = max(1e-9, 4·β₀)` (β₀ the
+/// limits' bound) and at most `Z = max(1e-9, 4·tol)` (every bound is within
+/// the tolerance `tol` asked for), so its class is known early:
+/// an actuator when `μ(0⁺) < −Z` or `μ(0⁻) > Z`; a dynamic ratchet when it
+/// is surely not an actuator (`μ(0⁺) ≥ −z₀`, `μ(0⁻) ≤ z₀`) and one of the
+/// full classification's own samples `|μ(v) + μ(−v)|` (or `|μ(0⁺) +
+/// μ(0⁻)|`) exceeds `Z` — tried first where one side slides freely
+/// (`min(v_c) ≤ v < max(v_c)`, one quadrature). Anything else is classified
+/// in full. Same class as [`classify_scene_profile`] always (tested).
+///
+/// Returns the class and the limits at rest (`None` for the flat punch).
+///
+/// # Errors
+/// As [`classify_scene_profile`].
+pub fn regime_of_profile(
+    s: &Scene<f64>,
+    p: &Profile<f64>,
+) -> Result<(Regime, Option<ProfileStatics>)> {
+    if *p == Profile::Flat {
+        return classify_scene(s).map(|c| (c.regime, None));
+    }
+    let d = s.drive();
+    let st = profile_statics(s, p)?;
+    let early = |r| Ok((r, Some(st)));
+    let tol = profile_tol(s, p);
+    let floor = ClassifyOptions::<f64>::default().tol;
+    let big = floor.max(4.0 * tol.max(profile_tol_at_rest(s, p)));
+    let small = floor.max(4.0 * st.bound);
+    let (plus, minus) = (st.mu_0plus, st.mu_0minus);
+    if plus < -big || minus > big {
+        return early(Regime::Actuator);
+    }
+    if plus >= -small && minus <= small {
+        if (plus + minus).abs() > big {
+            return early(Regime::DynamicRatchet);
+        }
+        let (c, cb) = (st.c_forward, st.c_backward);
+        let vmax = c.max(cb);
+        let samples = ClassifyOptions::<f64>::default().samples.max(1);
+        let v_at = |i: u32| vmax * f64::from(i) / f64::from(samples + 1);
+        // One side free first (one quadrature each), nearest the smaller
+        // critical velocity; at most four tries before the full work.
+        let tries = (1..=samples)
+            .filter(|&i| {
+                let v = v_at(i);
+                v >= c.min(cb) && v < vmax
+            })
+            .take(4);
+        for i in tries {
+            let v = v_at(i);
+            let mu = |v: f64| {
+                mdr::mu_over_mu0::<f64, Libm>(&d, p, v, tol)
+                    .map(|r| r.mu_over_mu0)
+                    .map_err(mdr_failure)
+            };
+            let f = if v >= c { 1.0 } else { mu(v)? };
+            let b = if v >= cb { -1.0 } else { mu(-v)? };
+            if (f + b).abs() > big {
+                return early(Regime::DynamicRatchet);
+            }
+        }
+    }
+    classify_scene_profile(s, p).map(|c| (c.regime, c.profile_statics))
+}
+
 /// The one-line message for a lift-off solver failure.
 pub fn lift_off_failure(e: LiftOffError) -> Error {
     match e {

@@ -15,7 +15,10 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::eval::{classify_scene_profile, critical_velocity, from_rel, mu_at, v_rel, MethodArgs};
+use crate::eval::{
+    classify_scene_profile, critical_velocity, from_rel, mu_at, regime_of_profile, v_rel,
+    MethodArgs,
+};
 use crate::numbers::Short;
 
 /// The `i`-th of `n` evenly spaced values from `a` to `b` inclusive (the last
@@ -222,20 +225,24 @@ pub struct Cell {
     pub mu_0plus_over_mu0: f64,
     /// μ(0⁻)/μ0.
     pub mu_0minus_over_mu0: f64,
-    /// max |μ(v) + μ(−v)|/μ0.
-    pub asymmetry: f64,
+    /// max |μ(v) + μ(−v)|/μ0 (None where it was not asked for: a curved
+    /// profile's map without it, [`cells`]).
+    pub asymmetry: Option<f64>,
 }
 
 /// The regime of every map cell (row-major: ratio rows, phase columns,
 /// degrees) at `Δu_z/u_z0 = a` for the contact `profile`, in parallel, with
 /// the class index (0 active control, 1 ratchet, 2 actuator). `tick` is
 /// called once per cell classified, from rayon's threads (a progress bar's
-/// step). A refusal names the cell (`ratio …, φ …°`).
+/// step). A refusal names the cell (`ratio …, φ …°`). Without `asymmetry`
+/// a curved profile's cells are classified by [`regime_of_profile`] (the
+/// same class, a fraction of the quadratures; `Cell::asymmetry` None).
 pub fn cells(
     a: f64,
     ratios: &[f64],
     phis_deg: &[f64],
     profile: &Profile<f64>,
+    asymmetry: bool,
     tick: &(dyn Fn() + Sync),
 ) -> Result<(Vec<Cell>, Vec<u8>)> {
     let n = ratios.len() * phis_deg.len();
@@ -244,10 +251,20 @@ pub fn cells(
         .map(|i| {
             let (r, phi) = (ratios[i / phis_deg.len()], phis_deg[i % phis_deg.len()]);
             let s = cell_scene(a, r, phi)?;
-            let c = classify_scene_profile(&s, profile)
-                .map_err(|e| e.with_context(&format!("ratio {}, φ {}°", Short(r), Short(phi))))?;
+            let at = |e: crate::error::Error| {
+                e.with_context(&format!("ratio {}, φ {}°", Short(r), Short(phi)))
+            };
+            let c = if asymmetry || *profile == Profile::Flat {
+                let c = classify_scene_profile(&s, profile).map_err(at)?;
+                (c.regime, c.mu_0plus, c.mu_0minus, Some(c.asymmetry))
+            } else {
+                let (regime, st) = regime_of_profile(&s, profile).map_err(at)?;
+                let st =
+                    st.ok_or_else(|| crate::error::Error::failure("no limits at rest (internal)"))?;
+                (regime, st.mu_0plus, st.mu_0minus, None)
+            };
             tick();
-            let k = match c.regime {
+            let k = match c.0 {
                 Regime::ActiveControl => 0,
                 Regime::DynamicRatchet => 1,
                 Regime::Actuator => 2,
@@ -256,10 +273,10 @@ pub fn cells(
                 Cell {
                     phi_deg: phi,
                     ratio: r,
-                    regime: c.regime.name(),
-                    mu_0plus_over_mu0: c.mu_0plus,
-                    mu_0minus_over_mu0: c.mu_0minus,
-                    asymmetry: c.asymmetry,
+                    regime: c.0.name(),
+                    mu_0plus_over_mu0: c.1,
+                    mu_0minus_over_mu0: c.2,
+                    asymmetry: c.3,
                 },
                 k,
             ))

@@ -121,7 +121,10 @@ impl MapCmd {
         }
         let ratios = centres(r.lo, r.hi, a.res);
         let phis = centres(phi.lo, phi.hi, a.res);
-        let (cells, class) = classify_cells(a.duz_rel, &ratios, &phis, &a.how.profile)?;
+        // The CSV's asymmetry column costs a curved profile 64 more pairs
+        // of quadratures per cell; the plot needs the class only.
+        let (cells, class) =
+            classify_cells(a.duz_rel, &ratios, &phis, &a.how.profile, a.csv.is_some())?;
         let counts = [0u8, 1, 2].map(|k| class.iter().filter(|&&c| c == k).count());
         eprintln!(
             "{} cells: {} active control, {} dynamic ratchet, {} actuator",
@@ -151,11 +154,12 @@ pub fn classify_cells(
     ratios: &[f64],
     phis: &[f64],
     profile: &Profile<f64>,
+    asymmetry: bool,
 ) -> CliResult<(Vec<Cell>, Vec<u8>)> {
     let n = ratios.len() * phis.len();
-    estimate_up_front(a, ratios, phis, profile)?;
+    estimate_up_front(a, ratios, phis, profile, asymmetry)?;
     let pb = progress_bar(n as u64, "classifying {bar:40} {pos}/{len} cells ({eta})");
-    let res = cells(a, ratios, phis, profile, &|| pb.inc(1));
+    let res = cells(a, ratios, phis, profile, asymmetry, &|| pb.inc(1));
     pb.finish_and_clear();
     res
 }
@@ -169,6 +173,7 @@ fn estimate_up_front(
     ratios: &[f64],
     phis: &[f64],
     profile: &Profile<f64>,
+    asymmetry: bool,
 ) -> CliResult<()> {
     let n = ratios.len() * phis.len();
     if n <= 256 || !std::io::IsTerminal::is_terminal(&std::io::stderr()) {
@@ -176,7 +181,7 @@ fn estimate_up_front(
     }
     let pick = |v: &[f64]| -> Vec<f64> { (0..4).map(|k| v[(2 * k + 1) * v.len() / 8]).collect() };
     let t0 = std::time::Instant::now();
-    cells(a, &pick(ratios), &pick(phis), profile, &|| {})?;
+    cells(a, &pick(ratios), &pick(phis), profile, asymmetry, &|| {})?;
     let total = t0.elapsed().as_secs_f64() * n as f64 / 16.0;
     if total > 5.0 {
         let (v, unit) = if total >= 7200.0 {

@@ -730,7 +730,7 @@ pub fn run(out: &Path, map_res: usize) -> CliResult {
     // The regime map at Δu_z/u_z0 = 0.5.
     let ratios = centres(0.0, 3.0, map_res);
     let phis = centres(0.0, 360.0, map_res);
-    let (cs, class) = classify_cells(0.5, &ratios, &phis, &model_core::mdr::Profile::Flat)?;
+    let (cs, class) = classify_cells(0.5, &ratios, &phis, &model_core::mdr::Profile::Flat, true)?;
     for ext in ["svg", "png"] {
         let p = out.join(format!("regime_map.{ext}"));
         write_map(
