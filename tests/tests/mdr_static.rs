@@ -192,3 +192,24 @@ fn the_static_interval_against_the_brute_force_and_eq_s3() {
     }
     assert_eq!(with_interval, 6);
 }
+
+/// Eq. S2's boundary: at `c + c' = 2` exactly the central spring's interval
+/// is a point (S3's width is 0) and there is no static interval; just below
+/// it there is one. (`a = 0.6, b = 0.8, φ = 90°`: `c = c' = |0.6 ± 0.8i|`
+/// = 1 in f64 too, asserted.) And `c + c' ≥ 2a`, so `a ≥ 1` never has one.
+#[test]
+fn the_static_interval_begins_below_c_plus_c_prime_two() {
+    let d = Drive::new::<Libm>(0.6, 0.8, std::f64::consts::FRAC_PI_2);
+    assert_eq!(d.c_forward::<Libm>() + d.c_backward::<Libm>(), 2.0);
+    assert!(!mdr::static_interval_exists::<f64, Libm>(&d));
+    assert_eq!(width_s3(2.0, &d), 0.0);
+    let below = Drive::new::<Libm>(0.6, 0.8 - 1e-9, std::f64::consts::FRAC_PI_2);
+    assert!(below.c_forward::<Libm>() + below.c_backward::<Libm>() < 2.0);
+    assert!(mdr::static_interval_exists::<f64, Libm>(&below));
+    assert!(width_s3(2.0, &below) > 0.0);
+    for (a, b, phi) in [(1.0, 0.0, 0.0), (1.0, 1e-3, 1.0), (1.2, 0.1, 2.0)] {
+        assert!(!mdr::static_interval_exists::<f64, Libm>(
+            &Drive::new::<Libm>(a, b, phi)
+        ));
+    }
+}

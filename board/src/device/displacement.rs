@@ -260,6 +260,13 @@ impl Default for Loops {
 }
 
 impl Loops {
+    /// The drive holds: [`HOLD_S`] of windows in a row within the bounds
+    /// (the sum of the windows' lengths, with room for its rounding: one
+    /// part in 10³ of `HOLD_S`, far below one window).
+    pub(super) fn holding(&self) -> bool {
+        self.good >= HOLD_S * (1.0 - 1e-3)
+    }
+
     /// The model starts over from the motion `x` the pickups measured last
     /// (m; at rest after a stop, moving after a mode switch while running),
     /// with the voltages `u` (V) in force as the braking bound's reference.
@@ -715,8 +722,7 @@ impl<const N: usize> Device<'_, N> {
         let mut within = true;
         // Hysteresis: a holding drive is released only beyond the wider
         // bounds (RELEASE_TOLERANCE, RELEASE_FLOOR_M).
-        let holding = self.loops.good >= HOLD_S * (1.0 - 1e-3);
-        let (tol, floor) = if holding {
+        let (tol, floor) = if self.loops.holding() {
             (RELEASE_TOLERANCE, RELEASE_FLOOR_M)
         } else {
             (HOLD_TOLERANCE, HOLD_FLOOR_M)
@@ -819,7 +825,7 @@ impl<const N: usize> Device<'_, N> {
     /// finished.
     pub fn drive_settled(&self) -> bool {
         if self.displacement_mode() && self.running {
-            self.loops.good >= HOLD_S * (1.0 - 1e-3)
+            self.loops.holding()
         } else {
             self.dds.settled()
         }
