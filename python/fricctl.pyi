@@ -242,7 +242,9 @@ def tune(
     for v_rel < 0) (``target_mu_rel`` = μ/μ0
     in (−1, 1), or ``target_mu``), or that maximises the ratchet asymmetry or
     the forward stall force, with every drive keeping Δu_z ≤
-    (1 − liftoff_margin)·u_z0. Permanent-contact flat-punch scenes.
+    (1 − liftoff_margin)·u_z0. Permanent-contact scenes; a scene with a
+    curved profile (sphere, cone, power) is searched on its MDR quadrature
+    (``method`` = ``"mdr"``, the keys ``profile`` and ``exponent`` name it).
 
     The result's fields are ``fricctl tune --json``'s keys (duz, dux, phi_deg,
     mu, residual_over_mu0, error_bound_over_mu0, solutions, …). A residual

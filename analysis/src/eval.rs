@@ -11,7 +11,7 @@ use model_core::mdr::{self, MdrError, Profile};
 use model_core::model::liftoff::{self, stepping, LiftOffError};
 use model_core::regime::{self, ClassifyOptions, Regime};
 use model_core::select::{self, SelectError, Value};
-use model_core::{Libm, Scene};
+use model_core::{Drive, Libm, Scene};
 use serde::Serialize;
 
 use crate::error::{Error, Result};
@@ -548,8 +548,13 @@ fn lift_off_at(scene: &Scene<f64>, v0: f64, m: &MethodArgs, out: &mut MuOutcome)
 /// The tolerance of the MDR quadrature when none is given: [`PROFILE_TOL`],
 /// or twice the per-spring solvers' part of its bound where that is larger.
 pub fn profile_tol(scene: &Scene<f64>, p: &Profile<f64>) -> f64 {
+    profile_tol_of(&scene.drive(), p)
+}
+
+/// [`profile_tol`] of a dimensionless drive.
+pub fn profile_tol_of(d: &Drive<f64>, p: &Profile<f64>) -> f64 {
     match p.exponent() {
-        Some(n) => PROFILE_TOL.max(2.0 * mdr::solver_bound::<f64, Libm>(&scene.drive(), n)),
+        Some(n) => PROFILE_TOL.max(2.0 * mdr::solver_bound::<f64, Libm>(d, n)),
         None => PROFILE_TOL,
     }
 }
@@ -559,8 +564,13 @@ pub fn profile_tol(scene: &Scene<f64>, p: &Profile<f64>) -> f64 {
 /// `mdr::solver_bound`: the springs at rest are checked at the same
 /// per-spring precision).
 pub fn profile_tol_at_rest(scene: &Scene<f64>, p: &Profile<f64>) -> f64 {
+    profile_tol_of_at_rest(&scene.drive(), p)
+}
+
+/// [`profile_tol_at_rest`] of a dimensionless drive.
+pub fn profile_tol_of_at_rest(d: &Drive<f64>, p: &Profile<f64>) -> f64 {
     match p.exponent() {
-        Some(n) => PROFILE_TOL.max(2.0 * mdr::solver_bound_at_rest::<f64, Libm>(&scene.drive(), n)),
+        Some(n) => PROFILE_TOL.max(2.0 * mdr::solver_bound_at_rest::<f64, Libm>(d, n)),
         None => PROFILE_TOL,
     }
 }

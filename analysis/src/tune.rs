@@ -8,16 +8,30 @@
 //! falsi on each monotone piece that straddles the target. All solutions are
 //! listed; the one nearest the scene's own value of the adjusted quantity is
 //! reported as *the* result (the scene value is only that starting point).
+//!
+//! A curved profile (`--profile sphere|cone|power`) runs the same search on
+//! its MDR quadrature (`model_core::mdr`; docs/guide/lift-off-and-profiles.md):
+//! μ at each knob value to the tolerance [`crate::eval::profile_tol`] of that
+//! drive, which is then the stated bound (the quadrature's estimate is within
+//! it); the objectives from the same definitions as `fricctl static` and
+//! `fricctl classify` ([`crate::eval::profile_statics`],
+//! [`crate::eval::classify_scene_profile`]). The lift-off margin keeps the
+//! centre of the contact pressed (`Δu_z ≤ (1 − m)·d₀`); the rim of a curved
+//! contact lifts off at any drive.
 
 use model_core::analytic::StaticFriction;
 use model_core::exact;
+use model_core::mdr::{self, Profile};
 use model_core::model::inverse::{self, InverseError, Knob, Objective, Point, Problem};
-use model_core::regime::{classify_drive, ClassifyOptions};
-use model_core::{Libm, Scene};
+use model_core::regime::{classify_drive, ClassifyOptions, Regime};
+use model_core::{Drive, Libm, Scene};
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::eval::{critical_velocity, exact_failure, from_rel};
+use crate::eval::{
+    classify_scene_profile, critical_velocity, exact_failure, from_rel, mdr_failure,
+    profile_statics, profile_tol_of, profile_tol_of_at_rest,
+};
 use crate::numbers::{short, Real};
 use crate::scene::{check, check_reach, ResolvedScene};
 
@@ -131,6 +145,10 @@ pub enum TuneOutcome {
 /// part of the CLI contract; shared by both kinds of result).
 #[derive(Serialize, Debug, Clone)]
 pub struct DriveOut {
+    /// The contact's profile: `flat`, `sphere`, `cone` or `power`.
+    pub profile: &'static str,
+    /// The exponent n of the profile `f = c·rⁿ` (`null` for the flat punch).
+    pub exponent: Option<f64>,
     /// `duz`, `dux` or `phase`.
     pub adjust: &'static str,
     /// Δu_z, m.
@@ -163,15 +181,16 @@ pub struct TargetOut {
     pub target_mu: f64,
     /// Target μ/μ0.
     pub target_mu_over_mu0: f64,
-    /// μ at the reported drive (exact solver).
+    /// μ at the reported drive (exact solver, or the profile's MDR quadrature).
     pub mu: f64,
     /// μ/μ0 at the reported drive.
     pub mu_over_mu0: f64,
     /// `mu_over_mu0 − target_mu_over_mu0`.
     pub residual_over_mu0: f64,
-    /// Always `exact`.
+    /// `exact` (flat punch) or `mdr` (a curved profile's quadrature).
     pub method: &'static str,
-    /// The exact solver's bound on `mu_over_mu0`, units of μ0.
+    /// The bound on `mu_over_mu0`, units of μ0: the exact solver's, or the
+    /// tolerance the quadrature met at the reported drive.
     pub error_bound_over_mu0: f64,
     /// Every solution, in the adjusted quantity's unit (m, or deg).
     pub solutions: Vec<f64>,
@@ -195,7 +214,8 @@ pub struct MaximizeOut {
     pub objective: &'static str,
     /// The objective's value at the reported drive (units of μ0, resp. μ0·F̄z).
     pub value: f64,
-    /// Bound on `value`, units of μ0 (two exact-solver bounds for the asymmetry, one for the stall force).
+    /// Bound on `value`, units of μ0 (two solver bounds for the asymmetry, one for the stall force;
+    /// a curved profile's are its quadrature's).
     pub error_bound_over_mu0: f64,
     /// Regime of the reported drive.
     pub regime: &'static str,
@@ -213,6 +233,8 @@ pub struct MaximizeOut {
 struct Setup {
     scene: Scene<f64>,
     problem: Problem<f64>,
+    /// The contact's profile (`Flat`: the exact solver).
+    profile: Profile<f64>,
     /// Length of one dimensionless unit of the knob: u_z0 (duz), W0 (dux), 1 rad (phase).
     unit: f64,
 }
@@ -346,6 +368,7 @@ impl TuneRequest {
         Ok(Setup {
             scene,
             problem,
+            profile: rs.profile,
             unit,
         })
     }
@@ -363,6 +386,8 @@ impl TuneRequest {
         let p = s.scene.params();
         let (lo, hi) = s.problem.range();
         DriveOut {
+            profile: s.profile.name(),
+            exponent: s.profile.exponent(),
             adjust: s.problem.knob().name(),
             duz: g.duz_rel * p.uz0,
             dux: g.dux_rel * s.scene.w0(),
@@ -400,7 +425,21 @@ impl TuneRequest {
         let mu0 = s.scene.mu0();
         let v = rs.velocity(v0, vflag)?;
         let mut scan = vec![0.0; self.scan_points()];
-        let r = match inverse::solve_target::<f64, Libm>(&s.problem, v, t, &mut scan) {
+        let found = match s.profile {
+            Profile::Flat => inverse::solve_target::<f64, Libm>(&s.problem, v, t, &mut scan),
+            p => {
+                if !v.is_finite() {
+                    return Err(Error::usage(format!("{vflag}: must be a finite number")));
+                }
+                let tol = |x: f64| profile_tol_of(&s.problem.drive_at::<Libm>(x), &p);
+                let mut mu = |x: f64| {
+                    let d = s.problem.drive_at::<Libm>(x);
+                    Ok(mdr::mu_over_mu0::<f64, Libm>(&d, &p, v, tol(x))?.mu_over_mu0)
+                };
+                inverse::solve_target_with(&s.problem, t, &mut scan, &mut mu, &tol)
+            }
+        };
+        let r = match found {
             Ok(r) => r,
             Err(InverseError::OutOfReach { min, max }) => {
                 let (lo, hi) = s.problem.range();
@@ -428,7 +467,13 @@ impl TuneRequest {
         let best = r
             .nearest(s.problem.knob(), start)
             .ok_or_else(|| Error::failure("tune: no solution kept (internal)"))?;
-        let bound = s.problem.bound_at::<Libm>(best.x);
+        let (bound, method) = match s.profile {
+            Profile::Flat => (s.problem.bound_at::<Libm>(best.x), "exact"),
+            p => (
+                profile_tol_of(&s.problem.drive_at::<Libm>(best.x), &p),
+                "mdr",
+            ),
+        };
         let o = TargetOut {
             drive: self.drive_out(s, best.x),
             v0,
@@ -437,7 +482,7 @@ impl TuneRequest {
             mu: best.value * mu0,
             mu_over_mu0: best.value,
             residual_over_mu0: best.value - t,
-            method: "exact",
+            method,
             error_bound_over_mu0: bound,
             solutions: r.solutions.iter().map(|q| self.shown(s, q.x)).collect(),
             solutions_found: r.found,
@@ -460,7 +505,30 @@ impl TuneRequest {
             Maximize::StallForce => Objective::StallForce,
         };
         let mut scan = vec![0.0; self.scan_points()];
-        let best = match inverse::maximize::<f64, Libm>(&s.problem, objective, &mut scan) {
+        let searched = match s.profile {
+            Profile::Flat => inverse::maximize::<f64, Libm>(&s.problem, objective, &mut scan),
+            p => {
+                // The profile's objective from the one implementation of
+                // each (`static`, `classify`); its first failure is kept
+                // whole and stops the search.
+                let mut failure = None;
+                let mut f = |x: f64| -> std::result::Result<Option<f64>, InverseError<f64>> {
+                    match profile_objective(&s.problem, &p, objective, x) {
+                        Ok(v) => Ok(v),
+                        Err(e) => {
+                            failure = Some(e);
+                            Err(InverseError::Infeasible)
+                        }
+                    }
+                };
+                let r = inverse::maximize_with(&s.problem, &mut scan, &mut f);
+                if let Some(e) = failure {
+                    return Err(e);
+                }
+                r
+            }
+        };
+        let best = match searched {
             Ok(b) => b,
             Err(InverseError::Infeasible) => {
                 return Err(Error::usage(format!(
@@ -494,6 +562,27 @@ impl TuneRequest {
         let d = s.problem.drive_at::<Libm>(best.x);
         let scene = Scene::dimensionless(s.problem.groups_at(best.x))
             .map_err(|e| Error::failure(format!("tune: {e}")))?;
+        if s.profile != Profile::Flat {
+            let c = classify_scene_profile(&scene, &s.profile)?;
+            let st = profile_statics(&scene, &s.profile)?;
+            let moving = profile_tol_of(&d, &s.profile);
+            return Ok(MaximizeOut {
+                drive: self.drive_out(s, best.x),
+                objective: name,
+                value: best.value,
+                error_bound_over_mu0: match m {
+                    // Each sample |μ(v) + μ(−v)| is two quadratures (or the
+                    // two limits at rest).
+                    Maximize::Asymmetry => 2.0 * moving.max(st.bound),
+                    Maximize::StallForce => st.bound,
+                },
+                regime: c.regime.name(),
+                asymmetry: c.asymmetry,
+                stall_force_forward: (-c.mu_0plus).max(0.0),
+                mu_0plus_over_mu0: c.mu_0plus,
+                mu_0minus_over_mu0: c.mu_0minus,
+            });
+        }
         let c = classify_drive::<f64, Libm>(
             &d,
             StaticFriction::of(&scene),
@@ -537,6 +626,31 @@ impl TuneRequest {
     }
 }
 
+/// A curved profile's objective with the knob at `x` (`None` where
+/// infeasible: an actuator for the asymmetry), from the same computations
+/// as `fricctl static` and `fricctl classify`.
+fn profile_objective(
+    pb: &Problem<f64>,
+    p: &Profile<f64>,
+    objective: Objective,
+    x: f64,
+) -> Result<Option<f64>> {
+    match objective {
+        Objective::StallForce => {
+            let d: Drive<f64> = pb.drive_at::<Libm>(x);
+            let (plus, _) = mdr::limits_at_zero::<f64, Libm>(&d, p, profile_tol_of_at_rest(&d, p))
+                .map_err(mdr_failure)?;
+            Ok(Some(-plus.mu_over_mu0))
+        }
+        Objective::Asymmetry => {
+            let scene = Scene::dimensionless(pb.groups_at(x))
+                .map_err(|e| Error::failure(format!("tune: {e}")))?;
+            let c = classify_scene_profile(&scene, p)?;
+            Ok((c.regime != Regime::Actuator).then_some(c.asymmetry))
+        }
+    }
+}
+
 fn wrap_deg(d: f64) -> f64 {
     let w = d.rem_euclid(360.0);
     if w >= 360.0 {
@@ -549,6 +663,7 @@ fn wrap_deg(d: f64) -> f64 {
 fn inverse_failure(e: InverseError<f64>) -> Error {
     match e {
         InverseError::Exact(x) => exact_failure(x),
+        InverseError::Mdr(x) => mdr_failure(x),
         other => Error::failure(format!("tune: {other}")),
     }
 }

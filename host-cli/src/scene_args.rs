@@ -175,12 +175,6 @@ impl SceneArgs {
         }
     }
 
-    /// Validates and builds a permanent-contact flat-punch scene
-    /// ([`SceneInput::resolve`]).
-    pub fn resolve(&self) -> CliResult<ResolvedScene> {
-        self.input().resolve()
-    }
-
     /// Validates and builds the scene ([`SceneInput::resolve_with`]).
     pub fn resolve_with(&self, contact: ContactMode) -> CliResult<ResolvedScene> {
         self.input().resolve_with(contact)

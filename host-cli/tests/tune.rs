@@ -4,7 +4,7 @@
 
 use integration_tests::fixed_warm;
 use model_core::exact;
-use model_core::{Libm, Scene, SceneParams};
+use model_core::{Drive, Libm, Scene, SceneParams};
 use serde_json::Value;
 
 mod common;
@@ -598,4 +598,140 @@ fn dimensionless_scene_prints_no_si_units() {
             .any(|l| l.starts_with("duz") && l.contains(" m   (duz/uz0 = ")),
         "{t}"
     );
+}
+
+/// Issue 39: `tune --profile` runs the search on the profile's MDR
+/// quadrature. The reported drive, rebuilt from the JSON's own `duz_rel`,
+/// `dux_rel` and `phi_deg` (a dimensionless scene: V is `--v0`), gives the
+/// target under the brute force over springs (`integration_tests::springs`,
+/// each spring a fixed-step run; refined to an estimated error `e ≤ 4·bound`)
+/// within `e + bound + |residual|`; the residual is within the bound, the
+/// method is `mdr`, and the profile is named in JSON and text.
+#[test]
+fn profile_target_meets_the_target_by_the_brute_force_over_springs() {
+    use integration_tests::springs;
+    let scene = ["--duz-rel", "0.5", "--dux-rel", "1", "--phi-deg", "17.2"];
+    for (profile, n, adjust, target) in [
+        ("sphere", 2.0, "dux", "0.4"),
+        ("cone", 1.0, "phase", "-0.3"),
+    ] {
+        let args = [
+            &scene[..],
+            &["--profile", profile, "--adjust", adjust],
+            &[
+                "--v0",
+                if target.starts_with('-') {
+                    "-0.1"
+                } else {
+                    "0.2"
+                },
+            ],
+            &["--target-mu-rel", target],
+        ]
+        .concat();
+        let v = common::cli::json(&[&["tune"][..], &args, &["--json"]].concat());
+        assert_eq!(v["profile"], profile);
+        assert_eq!(f(&v, "exponent"), n);
+        assert_eq!(v["method"], "mdr");
+        let t: f64 = target.parse().unwrap();
+        let (bound, residual) = (f(&v, "error_bound_over_mu0"), f(&v, "residual_over_mu0"));
+        // The tolerance asked of the quadrature: 1e-9 unless the springs' part is larger.
+        assert!((1e-9..=1e-8).contains(&bound), "{v}");
+        assert!(residual.abs() <= bound, "{v}");
+        assert_eq!(f(&v, "mu_over_mu0"), t + residual);
+        let scene = (
+            f(&v, "duz_rel"),
+            f(&v, "dux_rel"),
+            f(&v, "phi_deg").to_radians(),
+            f(&v, "v0"),
+        );
+        let mut steps = 1 << 12;
+        let bf = loop {
+            let bf = springs::mu_extrapolated(n, scene, bound, steps, 64);
+            if bf.err <= 4.0 * bound || steps >= 1 << 15 {
+                break bf;
+            }
+            steps *= 2;
+        };
+        assert!(
+            bf.err <= 4.0 * bound,
+            "brute force not refined: {:e}",
+            bf.err
+        );
+        let allowed = bf.err + bound + residual.abs();
+        assert!(
+            (bf.mu - t).abs() <= allowed,
+            "{profile}: brute force {} vs target {t} (allowed {allowed:e})",
+            bf.mu
+        );
+        // A result off by 10× its bound would fail.
+        assert!((bf.mu - (t + 10.0 * bound)).abs() > allowed);
+        let o = fricctl().args(["tune"]).args(&args).output().unwrap();
+        assert_eq!(o.status.code(), Some(0), "{o:?}");
+        let text = String::from_utf8(o.stdout).unwrap();
+        assert!(
+            text.contains(&format!("profile         {profile} (MDR quadrature over the springs; uz0 = mean indentation d0)\n")),
+            "{text}"
+        );
+        assert!(text.contains("(units of mu0, method mdr)"), "{text}");
+    }
+}
+
+/// Issue 39: `tune --profile cone --maximize stall-force` is no worse than
+/// a dense scan (4× the search's cells) of the profile's μ(0⁺) over the
+/// phase, within the limits' bound, and what it reports at the maximum is
+/// what `fricctl static --profile` says of that drive.
+#[test]
+fn profile_stall_force_is_no_worse_than_a_dense_scan() {
+    use model_core::mdr::{self, Profile};
+    let scene = ["--duz-rel", "0.5", "--dux-rel", "1", "--phi-deg", "0"];
+    let v = common::cli::json(
+        &[
+            &["tune"][..],
+            &scene,
+            &[
+                "--profile",
+                "cone",
+                "--adjust",
+                "phase",
+                "--maximize",
+                "stall-force",
+                "--json",
+            ],
+        ]
+        .concat(),
+    );
+    assert_eq!(v["profile"], "cone");
+    let (best, bound) = (f(&v, "value"), f(&v, "error_bound_over_mu0"));
+    assert!(bound > 0.0 && bound <= 1e-8, "{v}");
+    let mut dense = f64::MIN;
+    for k in 0..1024 {
+        let phi = std::f64::consts::TAU * f64::from(k) / 1024.0;
+        let d = Drive::new::<Libm>(0.5, 1.0, phi);
+        let (plus, _) = mdr::limits_at_zero::<f64, Libm>(&d, &Profile::Cone, 1e-8).unwrap();
+        dense = dense.max(-plus.mu_over_mu0);
+    }
+    assert!(
+        best >= dense - 2.0 * 1e-8,
+        "search {best} below dense {dense}"
+    );
+    // At the maximum: the statics of the same drive.
+    let phi = format!("{}", f(&v, "phi_deg"));
+    let st = common::cli::json(&[
+        "static",
+        "--duz-rel",
+        "0.5",
+        "--dux-rel",
+        "1",
+        "--phi-deg",
+        &phi,
+        "--profile",
+        "cone",
+        "--json",
+    ]);
+    assert!(
+        (f(&st, "mu_0plus_over_mu0") + best).abs() <= 2.0 * bound,
+        "{st}"
+    );
+    assert_eq!(f(&v, "stall_force_forward"), best);
 }

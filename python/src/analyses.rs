@@ -57,7 +57,8 @@ pub fn tune(
         liftoff_margin,
     };
     let input = scene.input().clone();
-    let out = py.detach(|| run(|| tuning::tune(&input.resolve()?, &req)))?;
+    let out =
+        py.detach(|| run(|| tuning::tune(&input.resolve_with(ContactMode::Permanent)?, &req)))?;
     match out {
         TuneOutcome::Target(o) => {
             if let Some(e) = o.doubtful() {

@@ -716,3 +716,82 @@ fn rim_sliver_is_counted_in_the_bound() {
         l.bound
     );
 }
+
+/// Inverse design on a curved profile (`fricctl tune --profile`): the
+/// search of `model::inverse` over the MDR's law, each evaluation to the
+/// tolerance [`tol_for`] of its drive, which is the bound the search
+/// stops against. At the reported knob value the brute force over springs
+/// (refined to `e ≤ 4·tol`) must give the target within `e + tol +
+/// |residual|` (the MDR's bound covers `|μ_MDR − μ|`, the residual
+/// `|μ_MDR − μ*|`), with the residual itself within the tolerance; and a
+/// knob value that misses the target by 10× the tolerance would fail
+/// (the slope times the knob's offset that moves μ by 10·tol, checked as
+/// in [`check_against_brute_force`]). Sphere, cone and a power law; each
+/// knob; `V` of both signs.
+#[test]
+fn tune_on_a_profile_meets_the_target_by_the_brute_force() {
+    use model_core::model::inverse::{solve_target_with, Knob, Problem};
+    use model_core::Groups;
+    let cases = [
+        // (exponent, profile, knob, (a, b, φ), V, target μ/μ₀)
+        (2.0, Profile::Sphere, Knob::Dux, (0.5, 1.0, 0.3), 0.2, 0.4),
+        (1.0, Profile::Cone, Knob::Phase, (0.5, 1.0, 0.3), -0.1, -0.3),
+        (
+            3.5,
+            Profile::Power(3.5),
+            Knob::Duz,
+            (0.5, 0.6, 2.0),
+            0.15,
+            0.65,
+        ),
+    ];
+    for (n, p, knob, (a, b, phi), v, target) in cases {
+        let groups = Groups {
+            duz_rel: a,
+            dux_rel: b,
+            phi,
+        };
+        let hi = match knob {
+            Knob::Duz => 0.95,
+            Knob::Dux => 3.0,
+            Knob::Phase => TAU,
+        };
+        let pb = Problem::new::<Libm>(groups, knob, 0.0, hi).unwrap();
+        let tol = |x: f64| {
+            let g = pb.groups_at(x);
+            tol_for(n, g.duz_rel, g.dux_rel, g.phi)
+        };
+        let mut mu = |x: f64| {
+            let d = pb.drive_at::<Libm>(x);
+            Ok(mdr::mu_over_mu0::<f64, Libm>(&d, &p, v, tol(x))?.mu_over_mu0)
+        };
+        let mut scan = vec![0.0; if knob == Knob::Phase { 256 } else { 257 }];
+        let out = solve_target_with(&pb, target, &mut scan, &mut mu, &tol)
+            .unwrap_or_else(|e| panic!("n={n} {knob:?}: {e}"));
+        assert!(out.found >= 1);
+        for s in &out.solutions {
+            let g = pb.groups_at(s.x);
+            let beta = tol(s.x);
+            let residual = s.value - target;
+            assert!(
+                residual.abs() <= beta,
+                "n={n} {knob:?}: residual {residual:e} above the bound {beta:e}"
+            );
+            let scene = (g.duz_rel, g.dux_rel, g.phi, v);
+            let bf = refined(n, scene, 4.0 * beta);
+            let gap = (bf.mu - target).abs();
+            let allowed = bf.err + beta + residual.abs();
+            println!(
+                "n={n} {knob:?} x={:.9}: target {target}, brute {:.12} (±{:.1e}), gap {gap:.1e} (allowed {allowed:.1e})",
+                s.x, bf.mu, bf.err
+            );
+            assert!(gap <= allowed, "n={n} {knob:?}: gap {gap:e} > {allowed:e}");
+            for wrong in [target + 10.0 * beta, target - 10.0 * beta] {
+                assert!(
+                    (bf.mu - wrong).abs() > allowed,
+                    "a target missed by 10× the bound would pass"
+                );
+            }
+        }
+    }
+}

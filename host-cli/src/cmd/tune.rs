@@ -9,6 +9,8 @@ use fric_analysis::tune::{
     self, knob_text, DriveOut, MaximizeOut, TargetOut, TuneOutcome, TuneRequest,
 };
 
+use model_core::scene::ContactMode;
+
 use crate::args::{round_up_sig, Real, Rounded, Short};
 use crate::error::CliResult;
 use crate::output::{stdout_error, write_json};
@@ -106,7 +108,9 @@ impl TuneCmd {
 
     /// Runs the command.
     pub fn run(self, out: &mut impl Write) -> CliResult {
-        let rs = self.scene.resolve()?;
+        // The flat punch or a curved profile (its MDR quadrature), the
+        // contact pressed throughout (the centre, for a profile).
+        let rs = self.scene.resolve_with(ContactMode::Permanent)?;
         let u = Units::of(rs.dimensionless);
         match tune::tune(&rs, &self.request())? {
             TuneOutcome::Target(o) => finish_target(out, &o, self.json, u),
@@ -171,6 +175,14 @@ impl Units {
 }
 
 fn write_drive(out: &mut impl Write, d: &DriveOut, u: Units) -> std::io::Result<()> {
+    if d.profile != "flat" {
+        // uz0 is the mean indentation d0 and kz/kx is E*/G* (MDR).
+        writeln!(
+            out,
+            "profile         {} (MDR quadrature over the springs; uz0 = mean indentation d0)",
+            profile_name(d)
+        )?;
+    }
     if u.dimensionless {
         // duz/uz0 and kx·dux/(mu0·kz·uz0) are duz and dux themselves.
         writeln!(
@@ -257,6 +269,24 @@ fn write_target_text(out: &mut impl Write, o: &TargetOut, u: Units) -> std::io::
     )
 }
 
+/// A profile's name with its exponent (`power n=2.5`).
+fn profile_name(d: &DriveOut) -> String {
+    match d.exponent {
+        Some(n) if d.profile == "power" => format!("power n={}", Rounded(n)),
+        _ => d.profile.to_string(),
+    }
+}
+
+/// The unit of a force over μ0: the flat punch's k_z·u_z0, a curved
+/// profile's mean normal force (`fricctl static`'s `mean_normal_force`).
+fn force_unit(d: &DriveOut) -> &'static str {
+    if d.profile == "flat" {
+        "mu0·kz·uz0"
+    } else {
+        "mu0·(mean normal force)"
+    }
+}
+
 fn write_maximize_text(out: &mut impl Write, o: &MaximizeOut, u: Units) -> std::io::Result<()> {
     let unit = u.knob(o.drive.adjust);
     writeln!(out, "adjust          {}", o.drive.adjust)?;
@@ -269,7 +299,7 @@ fn write_maximize_text(out: &mut impl Write, o: &MaximizeOut, u: Units) -> std::
         if o.objective == "asymmetry" {
             "mu0"
         } else {
-            "mu0·kz·uz0"
+            force_unit(&o.drive)
         }
     )?;
     write_drive(out, &o.drive, u)?;
@@ -277,8 +307,9 @@ fn write_maximize_text(out: &mut impl Write, o: &MaximizeOut, u: Units) -> std::
     writeln!(out, "asymmetry       {}", Rounded(o.asymmetry))?;
     writeln!(
         out,
-        "stall force     {} (units of mu0·kz·uz0, forward)",
-        Rounded(o.stall_force_forward)
+        "stall force     {} (units of {}, forward)",
+        Rounded(o.stall_force_forward),
+        force_unit(&o.drive)
     )?;
     writeln!(out, "mu(0+)/mu0      {}", Rounded(o.mu_0plus_over_mu0))?;
     writeln!(out, "mu(0-)/mu0      {}", Rounded(o.mu_0minus_over_mu0))?;

@@ -43,6 +43,7 @@ use heapless::Vec;
 use crate::model::analytic::static_friction::StaticFriction;
 use crate::model::exact::{self, ExactError};
 use crate::model::float::{Float, Math};
+use crate::model::mdr::MdrError;
 use crate::model::regime::{classify_drive, ClassifyOptions, Regime};
 use crate::model::root::{illinois, Probe};
 use crate::model::scene::{Drive, Groups, Scene, SceneError};
@@ -123,6 +124,9 @@ pub enum InverseError<T> {
     Infeasible,
     /// The exact solver failed.
     Exact(ExactError),
+    /// The MDR quadrature of a curved profile failed (the search of
+    /// [`solve_target_with`] or [`maximize_with`] over a profile's law).
+    Mdr(MdrError),
 }
 
 impl<T: Float> core::fmt::Display for InverseError<T> {
@@ -154,6 +158,7 @@ impl<T: Float> core::fmt::Display for InverseError<T> {
                     "exact solver: the drive is too large to resolve in this float type",
                 ),
             },
+            InverseError::Mdr(e) => write!(f, "profile quadrature: {e}"),
         }
     }
 }
@@ -163,6 +168,12 @@ impl<T: Float> core::error::Error for InverseError<T> {}
 impl<T> From<ExactError> for InverseError<T> {
     fn from(e: ExactError) -> Self {
         InverseError::Exact(e)
+    }
+}
+
+impl<T> From<MdrError> for InverseError<T> {
+    fn from(e: MdrError) -> Self {
+        InverseError::Mdr(e)
     }
 }
 
@@ -371,8 +382,10 @@ impl<T: Float> TargetOutcome<T> {
     }
 }
 
-/// All drives of `p` at which `μ(v)/μ₀ = target` (module docs for the method).
-/// `scan` is the work buffer; its length sets the scan resolution.
+/// All drives of `p` at which `μ(v)/μ₀ = target` (module docs for the method):
+/// [`solve_target_with`] on the flat punch's exact law ([`Problem::mu_at`],
+/// bound [`Problem::bound_at`]). `scan` is the work buffer; its length sets
+/// the scan resolution.
 ///
 /// # Errors
 /// [`InverseError::BadVelocity`], [`InverseError::BadTarget`],
@@ -387,10 +400,36 @@ pub fn solve_target<T: Float, M: Math<T>>(
     if !v.is_finite() || v == T::ZERO {
         return Err(InverseError::BadVelocity);
     }
+    let mut mu = |x: T| Ok(p.mu_at::<M>(x, v)?);
+    solve_target_with(p, target, scan, &mut mu, &|x| p.bound_at::<M>(x))
+}
+
+/// All knob values of `p` at which a velocity law gives `target` (module
+/// docs for the method): `mu(x)` is `μ/μ₀` with the knob at `x` and the
+/// velocity fixed by the caller, `bound(x)` a bound on its error there —
+/// the flat punch's exact law and [`exact::error_bound`] ([`solve_target`]),
+/// or a curved profile's MDR quadrature
+/// ([`crate::model::mdr::mu_over_mu0`]) and the tolerance it was asked
+/// for. A breakpoint within its bound of the target is a solution; a root
+/// is refined to a residual of a sixteenth of the bound at the iterate (or
+/// a bracket of `8ε` relative).
+///
+/// # Errors
+/// [`InverseError::BadTarget`], [`InverseError::BadScan`],
+/// [`InverseError::OutOfReach`], and the law's own errors.
+pub fn solve_target_with<T: Float>(
+    p: &Problem<T>,
+    target: T,
+    scan: &mut [T],
+    mu: &mut impl FnMut(T) -> Result<T, InverseError<T>>,
+    bound: &impl Fn(T) -> T,
+) -> Result<TargetOutcome<T>, InverseError<T>> {
     if !(target.is_finite() && target > -T::ONE && target < T::ONE) {
         return Err(InverseError::BadTarget);
     }
-    let mut f = |x: T| p.mu_at::<M>(x, v).map_err(InverseError::Exact);
+    // The scan and the root searches take turns (never nested).
+    let mu = core::cell::RefCell::new(mu);
+    let mut f = |x: T| (mu.borrow_mut())(x);
     let mut out = TargetOutcome {
         solutions: Vec::new(),
         found: 0,
@@ -411,14 +450,14 @@ pub fn solve_target<T: Float, M: Math<T>>(
         out.found += 1;
         let _ = out.solutions.push(q);
     };
-    let tol = |x: T| p.bound_at::<M>(x);
+    let tol = |x: T| bound(x);
     let on_piece =
         |l: Point<T>, r: Point<T>, out: &mut TargetOutcome<T>| -> Result<(), InverseError<T>> {
             let (gl, gr) = (l.value - target, r.value - target);
             if gl.abs() <= tol(l.x) {
                 push(out, l);
             } else if gl * gr < T::ZERO && gr.abs() > tol(r.x) {
-                let root = bracketed::<T, M>(p, v, target, l, r)?;
+                let root = bracketed_with(target, l, r, &mut |x| (mu.borrow_mut())(x), bound)?;
                 push(out, root);
             }
             Ok(())
@@ -445,11 +484,8 @@ pub fn solve_target<T: Float, M: Math<T>>(
 }
 
 /// The root of `μ(v)/μ₀ = target` between two drives whose values straddle
-/// it: Illinois regula falsi to a residual of `bound/16` (bound
-/// [`exact::error_bound`] at the iterate) or a bracket of `8ε` relative; at
-/// most 200 evaluations. The law is continuous in the knob, so a root exists;
-/// on a monotone bracket it is the only one. This is the step a controller's
-/// feedforward uses on a range known to be monotone.
+/// it: [`bracketed_with`] on the flat punch's exact law. This is the step a
+/// controller's feedforward uses on a range known to be monotone.
 ///
 /// # Errors
 /// [`InverseError::Exact`].
@@ -459,6 +495,25 @@ pub fn bracketed<T: Float, M: Math<T>>(
     target: T,
     l: Point<T>,
     r: Point<T>,
+) -> Result<Point<T>, InverseError<T>> {
+    let mut mu = |x: T| Ok(p.mu_at::<M>(x, v)?);
+    bracketed_with(target, l, r, &mut mu, &|x| p.bound_at::<M>(x))
+}
+
+/// The root of `mu(x) = target` between two points whose values straddle
+/// it: Illinois regula falsi to a residual of `bound(x)/16` at the iterate
+/// or a bracket of `8ε` relative; at most 200 evaluations. The law is
+/// continuous in the knob, so a root exists; on a monotone bracket it is
+/// the only one. Returns the best evaluated point.
+///
+/// # Errors
+/// The law's own.
+pub fn bracketed_with<T: Float>(
+    target: T,
+    l: Point<T>,
+    r: Point<T>,
+    mu: &mut impl FnMut(T) -> Result<T, InverseError<T>>,
+    bound: &impl Fn(T) -> T,
 ) -> Result<Point<T>, InverseError<T>> {
     let mut best = if (l.value - target).abs() <= (r.value - target).abs() {
         l
@@ -470,12 +525,12 @@ pub fn bracketed<T: Float, M: Math<T>>(
         |lo: T, hi: T| T::from_f64(8.0) * T::EPSILON * (lo.abs() + hi.abs()),
         MAX_REFINE,
         |x| {
-            let fx = p.mu_at::<M>(x, v)?;
+            let fx = mu(x)?;
             let g = fx - target;
             if g.abs() < (best.value - target).abs() {
                 best = Point { x, value: fx };
             }
-            Ok::<_, ExactError>(if g.abs() <= p.bound_at::<M>(x) / T::from_f64(16.0) {
+            Ok::<_, InverseError<T>>(if g.abs() <= bound(x) / T::from_f64(16.0) {
                 Probe::Stop
             } else {
                 Probe::Value(g)
@@ -486,7 +541,7 @@ pub fn bracketed<T: Float, M: Math<T>>(
 }
 
 /// The drive of `p` that maximises `objective` (module docs for the method):
-/// the best evaluated point over the scan and the refined local maxima.
+/// [`maximize_with`] on the flat punch's [`Problem::objective_at`].
 ///
 /// # Errors
 /// [`InverseError::BadScan`], [`InverseError::Infeasible`] (no feasible
@@ -496,8 +551,23 @@ pub fn maximize<T: Float, M: Math<T>>(
     objective: Objective,
     scan: &mut [T],
 ) -> Result<Point<T>, InverseError<T>> {
-    let mut f = |x: T| Ok(p.objective_at::<M>(objective, x)?.unwrap_or(-T::MAX));
-    let (_, max, _) = walk(p, scan, &mut f, &mut |_, _| Ok(()))?;
+    maximize_with(p, scan, &mut |x| p.objective_at::<M>(objective, x))
+}
+
+/// The knob value of `p` that maximises `f` (`None` where infeasible; the
+/// flat punch's objectives, or a curved profile's from its MDR quadrature):
+/// the best evaluated point over the scan and the refined local maxima.
+///
+/// # Errors
+/// [`InverseError::BadScan`], [`InverseError::Infeasible`] (no feasible
+/// point found), and `f`'s own.
+pub fn maximize_with<T: Float>(
+    p: &Problem<T>,
+    scan: &mut [T],
+    f: &mut impl FnMut(T) -> Result<Option<T>, InverseError<T>>,
+) -> Result<Point<T>, InverseError<T>> {
+    let mut g = |x: T| Ok(f(x)?.unwrap_or(-T::MAX));
+    let (_, max, _) = walk(p, scan, &mut g, &mut |_, _| Ok(()))?;
     if max.value <= -T::MAX {
         return Err(InverseError::Infeasible);
     }
