@@ -132,6 +132,17 @@ def test_tune_matches_cli(cli):
     assert m.to_dict() == out
 
 
+def test_tune_on_a_curved_profile_matches_cli(cli):
+    kw = dict(PAPER, profile="sphere")
+    r = fricctl.tune(scene(kw), adjust="dux", target_mu_rel=0.2, v0=0.01)
+    _, out, _ = cli("tune", *flags(**kw), "--adjust", "dux", "--target-mu-rel", "0.2", "--v0", "0.01", "--json")
+    assert r.to_dict() == out
+    assert (r.profile, r.method) == ("sphere", "mdr")
+    # The drive found gives the target: a new scene's own MDR evaluation.
+    s2 = fricctl.Scene(**dict(kw, dux=r.dux))
+    assert abs(s2.mu(0.01) / 0.3 - 0.2) <= 2 * r.error_bound_over_mu0
+
+
 @pytest.mark.parametrize("kw", [PAPER, dict(PAPER, phi_deg=-90.0), dict(PAPER, duz=7e-6, phi_deg=-90.0)])
 def test_load_line_matches_cli(cli, kw):
     r = fricctl.load_line(scene(kw))
