@@ -428,12 +428,22 @@ fn the_mu_loop_holds_a_command_the_dac_cannot_take() {
 /// reports, and whether the drive held at every half.
 fn gain_step(b: &mut Bench<'_>, s: &DriveSetting, g: f64, n: usize) -> (f64, bool) {
     b.pickup_gain[0] = g;
+    let z = f64::from(s.amp_z_m);
+    run_held(b, n, |m| (f64::from(m.amp_z_m) / z - 1.0).abs())
+}
+
+/// `n` half-buffers: the largest of `err` over the measured drive, and
+/// whether the drive stayed held throughout.
+fn run_held(
+    b: &mut Bench<'_>,
+    n: usize,
+    err: impl Fn(&board::protocol::MeasuredDrive) -> f64,
+) -> (f64, bool) {
     let (mut worst, mut held) = (0.0f64, true);
     for _ in 0..n {
         b.step();
         let st = b.dev.status();
-        let m = st.measured.expect("a window measured");
-        worst = worst.max((f64::from(m.amp_z_m) / f64::from(s.amp_z_m) - 1.0).abs());
+        worst = worst.max(err(&st.measured.expect("a window measured")));
         held &= st.settled;
     }
     (worst, held)
@@ -495,14 +505,7 @@ fn crosstalk_step(b: &mut Bench<'_>, k: f64, n: usize) -> (f64, bool) {
         .expect("resonant plant")
         .opts
         .crosstalk = k;
-    let (mut worst, mut held) = (0.0f64, true);
-    for _ in 0..n {
-        b.step();
-        let st = b.dev.status();
-        worst = worst.max(f64::from(st.measured.expect("a window").amp_x_m));
-        held &= st.settled;
-    }
-    (worst, held)
+    run_held(b, n, |m| f64::from(m.amp_x_m))
 }
 
 /// The hysteresis of an undriven channel (`displacement::RELEASE_FLOOR_M`):

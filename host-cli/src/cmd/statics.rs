@@ -200,17 +200,11 @@ fn write_profile_text(
         "profile                {} (MDR quadrature over the springs; bound {b} mu0)",
         crate::scene_args::profile_text(p)
     )?;
-    writeln!(
+    write_vc(
         out,
-        "v_c forward            {} {} (the flat punch's with the same drive, eq. S1)",
-        Rounded(o.vc_forward),
-        u.velocity
-    )?;
-    writeln!(
-        out,
-        "v_c backward           {} {}",
-        Rounded(o.vc_backward),
-        u.velocity
+        (o.vc_forward, o.vc_backward),
+        u.velocity,
+        " (the flat punch's with the same drive, eq. S1)",
     )?;
     if o.lifts_off {
         writeln!(
@@ -229,7 +223,7 @@ fn write_profile_text(
             "static interval        rests on average when held at mu/mu0 in [{}, {}] (± {b}); free (zero force), it {}",
             Rounded(lo),
             Rounded(hi),
-            if o.rests_free { "rests" } else { "moves (an actuator)" }
+            free_text(o.rests_free)
         )?,
         _ => writeln!(
             out,
@@ -312,18 +306,37 @@ fn write_lift_off_text(
         Rounded(o.mu_at_rest_over_mu0 * s.mu0() * o.mean_normal_force_over_kz_uz0 * p.kz * p.uz0),
         u.tangential
     )?;
-    writeln!(
+    write_vc(
         out,
-        "v_c forward            {} {} (contact window, eq. L5)",
-        Rounded(o.vc_forward),
-        u.velocity
-    )?;
-    writeln!(
-        out,
-        "v_c backward           {} {}",
-        Rounded(o.vc_backward),
-        u.velocity
+        (o.vc_forward, o.vc_backward),
+        u.velocity,
+        " (contact window, eq. L5)",
     )
+}
+
+/// The two critical-velocity lines (`note` follows the forward one).
+fn write_vc(
+    out: &mut impl Write,
+    (forward, backward): (f64, f64),
+    unit: &str,
+    note: &str,
+) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "v_c forward            {} {unit}{note}",
+        Rounded(forward)
+    )?;
+    writeln!(out, "v_c backward           {} {unit}", Rounded(backward))
+}
+
+/// What a body held with zero force does: it rests when 0 lies in the
+/// static interval, otherwise it is an actuator.
+fn free_text(rests: bool) -> &'static str {
+    if rests {
+        "rests"
+    } else {
+        "moves (an actuator)"
+    }
 }
 
 fn write_text(
@@ -333,18 +346,7 @@ fn write_text(
     st: &StaticFriction<f64>,
     u: Units,
 ) -> std::io::Result<()> {
-    writeln!(
-        out,
-        "v_c forward            {} {}",
-        Rounded(o.vc_forward),
-        u.velocity
-    )?;
-    writeln!(
-        out,
-        "v_c backward           {} {}",
-        Rounded(o.vc_backward),
-        u.velocity
-    )?;
+    write_vc(out, (o.vc_forward, o.vc_backward), u.velocity, "")?;
     // The static interval (paper §2.2): the spring stretches u_x0, and so the
     // held forces k_x u_x0 = mu/mu0 · μ0 k_z u_z0, at which the contact
     // sticks. Its ends are μ(0−) and μ(0+); an actuator may have one (0
@@ -363,11 +365,7 @@ fn write_text(
                 "held force mu/mu0      [{}, {}]: free (zero force), it {}",
                 Rounded(st.lo),
                 Rounded(st.hi),
-                if st.lo <= 0.0 && 0.0 <= st.hi {
-                    "rests"
-                } else {
-                    "moves (an actuator)"
-                }
+                free_text(st.lo <= 0.0 && 0.0 <= st.hi)
             )?;
         }
         None => writeln!(
