@@ -350,11 +350,12 @@ pub fn setpoint(d: &DriveSetting) -> [C; 2] {
     [C::new(-d.amp_z_m, 0.0), polar(d.amp_x_m, d.phase_rad)]
 }
 
-/// The DDS level and phase word of a voltage phasor `u` (V) on a channel
-/// with DC `dc` (codes): `A = |U|/v`, `p = arg U + π/2` (D2's convention).
-fn level_of(u: C, dc: f32) -> (Level, u32) {
+/// The DDS level and phase word of a voltage phasor `u` (V) of magnitude
+/// `un` ([`norm`] of `u`) on a channel with DC `dc` (codes): `A = |U|/v`,
+/// `p = arg U + π/2` (D2's convention).
+fn level_of(u: C, un: f32, dc: f32) -> (Level, u32) {
     let v = DAC_VOLTS_PER_CODE as f32;
-    let amp = norm(u) / v;
+    let amp = un / v;
     let word = phase_word_f32(arg(u) + core::f32::consts::FRAC_PI_2);
     (Level { amp, dc }, word)
 }
@@ -493,7 +494,8 @@ impl<const N: usize> Device<'_, N> {
         let wanted = [d.amp_z_m, d.amp_x_m];
         for ch in 0..2 {
             let h = h_model[ch] * c[ch];
-            let (mut lv, w) = level_of(target[ch] / h, dc[ch]);
+            let u = target[ch] / h;
+            let (mut lv, w) = level_of(u, norm(u), dc[ch]);
             let room = dc[ch].min(f32::from(crate::dds::DAC_MAX) - dc[ch]);
             // The largest displacement that fits, in the f32 the refusal
             // reports: the amplitude is compared with it (inclusive, so the
@@ -648,7 +650,7 @@ impl<const N: usize> Device<'_, N> {
             // own check must pass after the f32 round trip).
             let room = dc.min(f32::from(crate::dds::DAC_MAX) - dc).max(0.0) * v * 0.9999;
             let bound = (h_room * norm(d[ch] / hc).max(self.loops.u_prev[ch])).min(room);
-            let un = norm(u);
+            let mut un = norm(u);
             let cut = un > bound || un.is_nan();
             moving[ch] =
                 cut || usize::from(self.loops.since_change[ch]) < super::measure::FILL_RING;
@@ -660,10 +662,13 @@ impl<const N: usize> Device<'_, N> {
                 } else {
                     C::new(0.0, 0.0)
                 };
+                un = norm(u);
             }
-            let (lv, word) = level_of(u, dc);
+            // |u| formed once per fill and channel (issue 35: each `norm` is
+            // a fast hypot, ≈ 90 instructions on the M4F).
+            let (lv, word) = level_of(u, un, dc);
             if self.dds.set_level(ch, lv).is_ok() {
-                if norm(u) > 0.0 {
+                if un > 0.0 {
                     self.dds.set_phase(ch, word);
                 }
             } else {
