@@ -456,3 +456,65 @@ fn integer_ramps_follow_the_slew_closed_form() {
     }
     assert!(d.settled(), "after {total} samples");
 }
+
+/// Eq. Q4 with a slew of one whole step (the displacement loops' fills,
+/// `Dds::fill`'s one-step path): a change of every level and phase made
+/// between fills gives sample 0 at the levels before and samples 1… at the
+/// new ones — each code within (Q5) of the exact `dc + amp·sin` formed in
+/// f64 from the phase words alone — and the DDS settled after the fill.
+/// A DC change beyond one sample's slew takes the general ramp (checked
+/// by `integer_ramps_follow_the_slew_closed_form`); here it stays within.
+#[test]
+fn a_one_step_change_fills_the_old_levels_once_then_the_new() {
+    let t = SineTable::<1024>::libm();
+    let eps_t = table_error(&t);
+    let read_err = (TAU / 1024.0).powi(2) / 8.0;
+    let mut rng = Lcg(0x5eed_0f0e_5eed_0f0e);
+    for case in 0..200 {
+        let mut d = Dds::new(&t, FS, fast_slew()).unwrap();
+        d.set_frequency(1e3 + 2e5 * rng.next()).unwrap();
+        let mut levels = |d: &mut Dds<'_, 1024>, rng: &mut Lcg| {
+            let mut out = [(0.0f32, 0.0f32, 0u32); 2];
+            for (ch, l) in out.iter_mut().enumerate() {
+                let amp = (4094.0 * rng.next() - 2047.0) as f32;
+                let room = 4095.0 - 2.0 * f64::from(amp.abs());
+                let dc = (f64::from(amp.abs()) + room * rng.next()) as f32;
+                let ph = (rng.next() * 4_294_967_296.0) as u32;
+                d.set_level(ch, Level { amp, dc }).unwrap();
+                d.set_phase(ch, ph);
+                *l = (amp, dc, ph);
+            }
+            out
+        };
+        let before = levels(&mut d, &mut rng);
+        d.next_codes();
+        assert!(d.settled());
+        // New targets, the DC kept within one sample's DC slew.
+        let mut after = levels(&mut d, &mut rng);
+        for (ch, a) in after.iter_mut().enumerate() {
+            let dc = before[ch].1 + (a.1 - before[ch].1).clamp(-0.5, 0.5);
+            let dc = dc.clamp(a.0.abs(), 4095.0 - a.0.abs());
+            d.set_level(ch, Level { amp: a.0, dc }).unwrap();
+            a.1 = dc;
+        }
+        let (acc0, tw) = (d.accumulator(), d.tuning_word());
+        let mut buf = [0u32; 64];
+        d.fill(&mut buf);
+        assert!(d.settled(), "case {case}: not settled after the fill");
+        for (i, &w) in buf.iter().enumerate() {
+            let p = acc0.wrapping_add(tw.wrapping_mul(i as u32));
+            let codes = unpack_dual(w);
+            let lv = if i == 0 { before } else { after };
+            for (ch, code) in [codes.0, codes.1].into_iter().enumerate() {
+                let (amp, dc, ph) = (f64::from(lv[ch].0), f64::from(lv[ch].1), lv[ch].2);
+                let exact = dc + amp * phase_rad(p.wrapping_add(ph)).sin();
+                let bound = 0.5 + amp.abs() * (eps_t + read_err + 2f64.powi(-29)) + 2f64.powi(-15);
+                let err = (f64::from(code) - exact).abs();
+                assert!(
+                    err <= bound,
+                    "case {case} ch {ch} sample {i}: {code} vs {exact} (bound {bound})"
+                );
+            }
+        }
+    }
+}
