@@ -206,6 +206,32 @@ fn the_board_converts_its_pickups_15_adc_clocks_after_the_forces() {
         zero.pickup_reference_word(1000, tw),
         1000u32.wrapping_sub(tw)
     );
+    // The window's integer form (issue 35): within one word of tw·δ·f_s
+    // formed here in f64 (the docs' bound), for the board's delay and a
+    // delay of almost a whole sample, over tuning words from 0 to 2³² − 1;
+    // zero for no delay.
+    let mut worst: f64 = 0.0;
+    for c in [
+        cfg,
+        DeviceConfig {
+            pickup_delay_s: 0.999 / 500e3,
+            ..cfg
+        },
+    ] {
+        let k = c.pickup_delay_factor();
+        let samples = c.pickup_delay_s * c.sample_rate_hz;
+        for i in 0..=4096u64 {
+            let tw = (i * 1_048_575).min(u64::from(u32::MAX)) as u32;
+            let got = board::device::config::pickup_delay_words_of(k, tw);
+            let exact = f64::from(tw) * samples;
+            let err = (f64::from(got) - exact).abs();
+            assert!(err <= 1.0, "tw {tw}: {got} vs {exact}");
+            worst = worst.max(err);
+        }
+    }
+    assert!(worst > 0.5, "the rounding is exercised ({worst})");
+    assert_eq!(zero.pickup_delay_factor(), 0);
+    assert_eq!(board::device::config::pickup_delay_words_of(0, tw), 0);
 }
 
 /// Hand-made pickup samples at `t_k + δ` through the device (voltage mode,

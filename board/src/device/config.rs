@@ -186,6 +186,20 @@ impl DeviceConfig {
         (f64::from(tw) * samples + 0.5) as u32
     }
 
+    /// [`DeviceConfig::pickup_delay_s`]·[`DeviceConfig::sample_rate_hz`] in
+    /// units of 2⁻³², rounded: the factor `K` of
+    /// [`pickup_delay_words_of`] (0 where [`DeviceConfig::pickup_delay_words`]
+    /// gives 0; a delay of a whole sample or more saturates). Formed once
+    /// (soft-float f64 on the M4), so that a window's close, which follows
+    /// every retune of the tracker, needs no f64 (issue 35).
+    pub fn pickup_delay_factor(&self) -> u64 {
+        let samples = self.pickup_delay_s * self.sample_rate_hz;
+        if !(samples.is_finite() && samples > 0.0) {
+            return 0;
+        }
+        (samples * 4_294_967_296.0 + 0.5).min(4_294_967_295.0) as u64
+    }
+
     /// The accumulator word of the drive phase at which the pickups of ADC
     /// sample 0 of a block were taken: [`DeviceConfig::adc_reference_word`]
     /// advanced by [`DeviceConfig::pickup_delay_words`]. Everything that
@@ -262,4 +276,14 @@ impl Info {
             self_test: crate::protocol::messages::SelfTest::NOT_RUN,
         }
     }
+}
+
+/// [`DeviceConfig::pickup_delay_words`] in integers from the factor `k` of
+/// [`DeviceConfig::pickup_delay_factor`]: `⌊(tw·k + 2³¹)/2³²⌋`. `k` is
+/// within ½ of `2³²·δ·f_s`, so `tw·k/2³²` is within `tw/2³³ < ½` word of
+/// `tw·δ·f_s`, and the result within one word of it (the f64 form's
+/// rounding, ½ word, and this): 1.5e-9 rad, `tests/tests/pickup_delay.rs`.
+pub fn pickup_delay_words_of(k: u64, tw: u32) -> u32 {
+    // tw·k ≤ (2³² − 1)² = 2⁶⁴ − 2³³ + 1: the half word added stays in u64.
+    ((u64::from(tw) * k + (1 << 31)) >> 32) as u32
 }

@@ -55,11 +55,14 @@ pub(super) struct Motion {
     peak_z: f32,
     windows: u32,
     /// The pickups' delay for a tuning word, `(tw, words, cos δ, sin δ)`
-    /// ([`super::DeviceConfig::pickup_delay_words`], soft-float f64 on
-    /// the M4; the cosine and sine from the DDS's table, Q30): formed
-    /// again only when the tuning word changes (`(0, 0, 0, 0)` at
-    /// power-up: a zero tuning word spans no phase and closes no window).
+    /// ([`super::config::pickup_delay_words_of`], in integers; the cosine
+    /// and sine from the DDS's table, Q30): formed again only when the
+    /// tuning word changes (`(0, 0, 0, 0)` at power-up: a zero tuning word
+    /// spans no phase and closes no window).
     delay: (u32, u32, f32, f32),
+    /// [`super::DeviceConfig::pickup_delay_factor`], formed at the first
+    /// window (the configuration is fixed for the device's life).
+    delay_factor: Option<u64>,
     /// The tuning word of the last block taken.
     tw: u32,
     /// ADC blocks in the open window.
@@ -100,7 +103,12 @@ impl<const N: usize> Device<'_, N> {
         // reference, its phasor leads by ω·δ; the fit is turned back by
         // δ in words (formed again only when the tuning word changes).
         if self.motion.delay.0 != tw {
-            let d = self.cfg.pickup_delay_words(tw);
+            let cfg = &self.cfg;
+            let k = *self
+                .motion
+                .delay_factor
+                .get_or_insert_with(|| cfg.pickup_delay_factor());
+            let d = super::config::pickup_delay_words_of(k, tw);
             let q30 = 1.0 / 1_073_741_824.0;
             let (c, s) = (
                 self.table.sin_q30(d.wrapping_add(1 << 30)) as f32 * q30,
