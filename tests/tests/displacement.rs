@@ -551,3 +551,50 @@ fn an_undriven_channel_is_released_only_beyond_twice_the_floor() {
         "6e-8 m wanted: {x:e} m (expected above {release_floor:e}), held {held}"
     );
 }
+
+/// The reach a refusal reports uses the learned correction c (D2): with
+/// the 10 %-wrong model, once the loop holds, the largest tangential
+/// displacement `SetDrive` accepts is the plant's own — the DAC's room
+/// around the channel's DC times its volts per code times the true
+/// response |X/U|, read from the plant's state (true amplitude over the
+/// DDS's amplitude) — within the hold's 0.4 % and the lock-in's rounding
+/// (module docs), 1 % in all. The drive is at 20.5 kHz, 4 % above the
+/// tangential resonance, where that reach (≈ 0.8 µm) is below the
+/// calibration's own limit on Δu_x. Measured: −2.2e-4; a plan that divided
+/// by c instead of multiplying (a mutant the suite let through) +6.4 %.
+#[test]
+fn the_reach_of_a_new_setting_is_the_plants_once_learned() {
+    let table = SineTable::<1024>::libm();
+    let mut b = Bench::new(&table, opts(), wrong_model());
+    let s = DriveSetting {
+        freq_hz: 20_500.0,
+        ..setting(2e-6)
+    };
+    b.dev.set_drive(s).unwrap();
+    b.dev.start().unwrap();
+    b.until_settled(20_000);
+    let n = (20e-3 / b.t_half()).ceil() as usize;
+    for _ in 0..n {
+        b.step();
+    }
+    let t = b.step();
+    let ch = b.dev.dds().channels()[1];
+    let v = board::dds::DAC_VOLTS_PER_CODE;
+    let h_true = t.amp_x / (f64::from(ch.amp) * v);
+    let room = f64::from(ch.dc.min(4095.0 - ch.dc));
+    let reach = room * v * h_true;
+    assert!(reach < 0.9 * f64::from(DeviceConfig::driver_board(1).max_amp_x_m()));
+    // Beyond the plant's reach, within the calibration's limit.
+    let far = DriveSetting {
+        amp_x_m: 1.5e-6,
+        ..s
+    };
+    match b.dev.set_drive(far) {
+        Err(board::device::DeviceError::OutOfRange { max, .. }) => {
+            let rel = f64::from(max) / reach - 1.0;
+            println!("reach {max:e} m vs the plant's {reach:e} m: {rel:+.2e}");
+            assert!(rel.abs() <= 0.01, "reach {max:e} vs {reach:e} ({rel:+.2e})");
+        }
+        other => panic!("1.5 µm accepted or refused otherwise: {other:?}"),
+    }
+}

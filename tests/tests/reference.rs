@@ -67,7 +67,14 @@ fn the_q15_reference_is_within_its_derived_bound() {
         };
         let inner = seed + r3(tw) + 2f64.powi(-16);
         // The saturation's share only near +1 (R1: only +2¹⁵ is clamped).
-        let bound = |x: f64| inner + if x >= 1.0 - inner { 2f64.powi(-15) } else { 0.0 };
+        let bound = |x: f64| {
+            inner
+                + if x >= 1.0 - inner {
+                    2f64.powi(-15)
+                } else {
+                    0.0
+                }
+        };
         let r = Reference::new(&t, acc0, tw, BLOCK);
         for (i, &w) in r.words().iter().enumerate() {
             let th = phase_rad(acc0.wrapping_add(tw.wrapping_mul(i as u32)));
