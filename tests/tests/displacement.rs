@@ -560,7 +560,8 @@ fn an_undriven_channel_is_released_only_beyond_twice_the_floor() {
 /// DDS's amplitude) — within the hold's 0.4 % and the lock-in's rounding
 /// (module docs), 1 % in all. The drive is at 20.5 kHz, 4 % above the
 /// tangential resonance, where that reach (≈ 0.8 µm) is below the
-/// calibration's own limit on Δu_x. Measured: −2.2e-4; a plan that divided
+/// calibration's own limit on Δu_x; half that reach is accepted with the
+/// voltage the plant needs for it. Measured: −2.2e-4; a plan that divided
 /// by c instead of multiplying (a mutant the suite let through) +6.4 %.
 #[test]
 fn the_reach_of_a_new_setting_is_the_plants_once_learned() {
@@ -597,4 +598,17 @@ fn the_reach_of_a_new_setting_is_the_plants_once_learned() {
         }
         other => panic!("1.5 µm accepted or refused otherwise: {other:?}"),
     }
+    // Half the reach is accepted, and its planned voltage (the DDS's target
+    // before the next fill's dead-beat level) is the setting over the
+    // plant's response, within the same 1 %.
+    let half = DriveSetting {
+        amp_x_m: (0.5 * reach) as f32,
+        ..s
+    };
+    b.dev.set_drive(half).unwrap();
+    let planned = f64::from(b.dev.dds().channels()[1].amp_target) * v;
+    let want = 0.5 * reach / h_true;
+    let rel = planned / want - 1.0;
+    println!("planned {planned:e} V vs {want:e} V: {rel:+.2e}");
+    assert!(rel.abs() <= 0.01, "planned {planned:e} V vs {want:e} V");
 }
