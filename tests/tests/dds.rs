@@ -473,7 +473,7 @@ fn a_one_step_change_fills_the_old_levels_once_then_the_new() {
     for case in 0..200 {
         let mut d = Dds::new(&t, FS, fast_slew()).unwrap();
         d.set_frequency(1e3 + 2e5 * rng.next()).unwrap();
-        let mut levels = |d: &mut Dds<'_, 1024>, rng: &mut Lcg| {
+        let levels = |d: &mut Dds<'_, 1024>, rng: &mut Lcg| {
             let mut out = [(0.0f32, 0.0f32, 0u32); 2];
             for (ch, l) in out.iter_mut().enumerate() {
                 let amp = (4094.0 * rng.next() - 2047.0) as f32;

@@ -332,6 +332,8 @@ mod tests {
     fn result(residual: f64) -> TargetOut {
         TargetOut {
             drive: DriveOut {
+                profile: "flat",
+                exponent: None,
                 adjust: "duz",
                 duz: 1e-6,
                 dux: 7e-7,
