@@ -381,6 +381,39 @@ fn integer_fill_is_within_the_derived_bound_of_the_exact_sine() {
 /// of DC per sample (|sin| ≤ 1).
 #[test]
 fn integer_ramps_follow_the_slew_closed_form() {
+    ramp_case(
+        [(1800.0, 2047.0), (-1000.0, 1500.0)],
+        [40_000_000, 4_200_000_000],
+        6,
+    );
+}
+
+/// [`integer_ramps_follow_the_slew_closed_form`] with one quantity ramping
+/// at a time while the others stay (the board's voltage mode ramps the
+/// amplitude alone): each takes the general ramp, never the one-step
+/// fill, whose condition must hold for all three. The amplitude also
+/// through zero (+300 → −300 codes: the one-step test's distance, not the
+/// sum of the two factors, decides).
+#[test]
+fn one_quantity_ramping_alone_follows_the_slew_closed_form() {
+    // (amplitude, DC) targets of both channels from (300, 2000), phase
+    // targets from 0; fills until settled.
+    ramp_case([(1800.0, 2000.0), (1000.0, 2000.0)], [0, 0], 6);
+    ramp_case([(-300.0, 2000.0), (-300.0, 2000.0)], [0, 0], 2);
+    ramp_case([(300.0, 2047.0), (300.0, 1950.0)], [0, 0], 2);
+    ramp_case(
+        [(300.0, 2000.0), (300.0, 2000.0)],
+        [40_000_000, 4_200_000_000],
+        2,
+    );
+}
+
+/// From both channels settled at amplitude 300, DC 2000 codes, phase 0
+/// (39 880 Hz), slews 7.3 codes, 1.9 codes and 3e6 words per sample toward
+/// `targets` and `ph_target`: `fills` fills of 64, each code against the
+/// closed form of eq. Q4 in f64, the state after each fill likewise, and
+/// settled at the end.
+fn ramp_case(targets: [(f32, f32); 2], ph_target: [u32; 2], fills: usize) {
     let t = SineTable::<1024>::libm();
     let eps = table_error(&t) + (TAU / 1024.0).powi(2) / 8.0 + 2f64.powi(-29);
     let mut d = Dds::new(&t, FS, fast_slew()).unwrap();
@@ -397,8 +430,6 @@ fn integer_ramps_follow_the_slew_closed_form() {
         phase_per_sample: 3_000_000,
     };
     d.set_slew(slew);
-    let targets = [(1800.0f32, 2047.0f32), (-1000.0, 1500.0)];
-    let ph_target = [40_000_000u32, 4_200_000_000];
     for ch in 0..2 {
         let (amp, dc) = targets[ch];
         d.set_level(ch, Level { amp, dc }).unwrap();
@@ -407,7 +438,7 @@ fn integer_ramps_follow_the_slew_closed_form() {
     let mut total = 0usize;
     // Fills until settled: the amplitude's 1500 codes at 7.3 per sample take
     // 206 samples, four fills.
-    for _ in 0..6 {
+    for _ in 0..fills {
         let before = *d.channels();
         let (acc0, tw) = (d.accumulator(), d.tuning_word());
         let mut buf = [0u32; 64];
