@@ -1561,3 +1561,47 @@ fn fault_bits_are_the_spec_values() {
     }
     assert_eq!(ALL, 511);
 }
+
+/// `encode` against a frame built by hand from the spec (postcard bytes,
+/// their CRC-32 little-endian, COBS, one zero): the same bytes for a
+/// short request, a drive setting and the device's `Info`; and for every
+/// output buffer shorter than the encoded frame `TooLarge`, for every one
+/// as long or longer the frame.
+#[test]
+fn encode_is_the_spec_and_refuses_exactly_the_short_buffers() {
+    use board::protocol::EncodeError;
+    let frames = [
+        Frame {
+            version: PROTOCOL_VERSION,
+            seq: 0,
+            body: Body::Request(Request::Hello),
+        },
+        Frame {
+            version: PROTOCOL_VERSION,
+            seq: 0xFFFF_FFFF,
+            body: Body::Request(Request::SetDrive(good_drive())),
+        },
+        Frame {
+            version: PROTOCOL_VERSION,
+            seq: 300,
+            body: Body::Response(Response::Info(info())),
+        },
+    ];
+    for f in &frames {
+        let mut b = [0u8; MAX_FRAME];
+        let raw = postcard::to_slice(f, &mut b).unwrap();
+        let want = frame_of_raw(raw);
+        let mut out = [0u8; MAX_FRAME];
+        let got = encode(f, &mut out).unwrap().to_vec();
+        assert_eq!(got, want);
+        for len in 0..want.len() + 3 {
+            let mut buf = vec![0u8; len];
+            let r = encode(f, &mut buf).map(|b| b.to_vec());
+            if len < want.len() {
+                assert_eq!(r, Err(EncodeError::TooLarge), "{len} bytes");
+            } else {
+                assert_eq!(r.as_deref(), Ok(&want[..]), "{len} bytes");
+            }
+        }
+    }
+}
