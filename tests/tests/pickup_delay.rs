@@ -231,6 +231,19 @@ fn the_board_converts_its_pickups_15_adc_clocks_after_the_forces() {
     }
     assert!(worst > 0.5, "the rounding is exercised ({worst})");
     assert_eq!(zero.pickup_delay_factor(), 0);
+    // A delay the configuration check refuses gives no delay at all, in
+    // both forms (documented: 0 for a delay not finite or not > 0).
+    for bad in [f64::INFINITY, f64::NAN, -1e-7] {
+        let c = DeviceConfig {
+            pickup_delay_s: bad,
+            ..cfg
+        };
+        assert_eq!(
+            (c.pickup_delay_factor(), c.pickup_delay_words(tw)),
+            (0, 0),
+            "{bad}"
+        );
+    }
     assert_eq!(board::device::config::pickup_delay_words_of(0, tw), 0);
 }
 
