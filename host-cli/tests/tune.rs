@@ -638,7 +638,11 @@ fn profile_target_meets_the_target_by_the_brute_force_over_springs() {
         // The tolerance asked of the quadrature: 1e-9 unless the springs' part is larger.
         assert!((1e-9..=1e-8).contains(&bound), "{v}");
         assert!(residual.abs() <= bound, "{v}");
-        assert_eq!(f(&v, "mu_over_mu0"), t + residual);
+        // The reported μ is the target plus the residual, to rounding.
+        assert!(
+            (f(&v, "mu_over_mu0") - (t + residual)).abs() <= 1e-15,
+            "{v}"
+        );
         let scene = (
             f(&v, "duz_rel"),
             f(&v, "dux_rel"),

@@ -508,6 +508,17 @@ fn crosstalk_step(b: &mut Bench<'_>, k: f64, n: usize) -> (f64, bool) {
     run_held(b, n, |m| f64::from(m.amp_x_m))
 }
 
+/// A bench with `model` driving `s`, started and run until it holds; with
+/// the half-buffers of 20 ms (the tests' observation span).
+fn held(table: &SineTable<1024>, model: Transducers, s: DriveSetting) -> (Bench<'_>, usize) {
+    let mut b = Bench::new(table, opts(), model);
+    b.dev.set_drive(s).unwrap();
+    b.dev.start().unwrap();
+    b.until_settled(20_000);
+    let n = (20e-3 / b.t_half()).ceil() as usize;
+    (b, n)
+}
+
 /// The hysteresis of an undriven channel (`displacement::RELEASE_FLOOR_M`):
 /// with Δu_x = 0 the tangential channel holds while its smoothed amplitude
 /// is below 2e-8 m and, once held, is released only above 4e-8 m. The
@@ -518,15 +529,11 @@ fn crosstalk_step(b: &mut Bench<'_>, k: f64, n: usize) -> (f64, bool) {
 #[test]
 fn an_undriven_channel_is_released_only_beyond_twice_the_floor() {
     let table = SineTable::<1024>::libm();
-    let mut b = Bench::new(&table, opts(), exact_model(true_modes()));
     let s = DriveSetting {
         amp_x_m: 0.0,
         ..setting(2e-6)
     };
-    b.dev.set_drive(s).unwrap();
-    b.dev.start().unwrap();
-    b.until_settled(20_000);
-    let n = (20e-3 / b.t_half()).ceil() as usize;
+    let (mut b, n) = held(&table, exact_model(true_modes()), s);
     let (calm, held) = crosstalk_step(&mut b, 0.0, n);
     assert!(
         held && calm < 1e-8,
@@ -566,15 +573,11 @@ fn an_undriven_channel_is_released_only_beyond_twice_the_floor() {
 #[test]
 fn the_reach_of_a_new_setting_is_the_plants_once_learned() {
     let table = SineTable::<1024>::libm();
-    let mut b = Bench::new(&table, opts(), wrong_model());
     let s = DriveSetting {
         freq_hz: 20_500.0,
         ..setting(2e-6)
     };
-    b.dev.set_drive(s).unwrap();
-    b.dev.start().unwrap();
-    b.until_settled(20_000);
-    let n = (20e-3 / b.t_half()).ceil() as usize;
+    let (mut b, n) = held(&table, wrong_model(), s);
     for _ in 0..n {
         b.step();
     }
