@@ -36,6 +36,7 @@ pub struct Client {
 impl Client {
     /// A client over `link`.
     pub fn new(link: Box<dyn Link>, timeout: Duration, attempts: u32) -> Self {
+        let opened = link.now();
         Client {
             link,
             seq: session_seq(),
@@ -43,7 +44,7 @@ impl Client {
             timeout,
             attempts: attempts.max(1),
             telemetry: VecDeque::new(),
-            opened: Instant::now(),
+            opened,
             interrupt: None,
             poll: None,
         }
@@ -125,8 +126,8 @@ impl Client {
             .to_vec();
         for _ in 0..self.attempts {
             self.link.send(&bytes).map_err(|e| gone(&*self.link, &e))?;
-            let deadline = Instant::now() + self.timeout;
-            while Instant::now() < deadline {
+            let deadline = self.link.now() + self.timeout;
+            while self.link.now() < deadline {
                 if let Some(f) = self.next_frame(deadline)? {
                     match f.body {
                         Body::Response(r) if f.seq == seq => return Ok(r),
@@ -169,8 +170,8 @@ impl Client {
         if let Some(t) = self.telemetry.pop_front() {
             return Ok(Some(t));
         }
-        let deadline = Instant::now() + timeout;
-        while Instant::now() < deadline {
+        let deadline = self.link.now() + timeout;
+        while self.link.now() < deadline {
             self.check_interrupt()?;
             if let Some(f) = self.next_frame(deadline)? {
                 if let Body::Telemetry(t) = f.body {
@@ -183,7 +184,7 @@ impl Client {
 
     fn next_frame(&mut self, deadline: Instant) -> Result<Option<Frame>, Error> {
         let mut b = [0u8; 1];
-        let left = deadline.saturating_duration_since(Instant::now());
+        let left = deadline.saturating_duration_since(self.link.now());
         let n = self
             .link
             .recv(&mut b, left)
@@ -191,8 +192,12 @@ impl Client {
         if n == 0 {
             return Ok(None);
         }
-        // The host's clock for the inter-byte timeout: µs since the client opened.
-        let now_us = self.opened.elapsed().as_micros() as u32;
+        // The link's clock for the inter-byte timeout: µs since the client opened.
+        let now_us = self
+            .link
+            .now()
+            .saturating_duration_since(self.opened)
+            .as_micros() as u32;
         match self.deframer.push(b[0], now_us) {
             Deframed::Frame(f) => Ok(decode(f).ok()),
             _ => Ok(None),

@@ -19,6 +19,13 @@ pub trait Link: Send {
     fn recv(&mut self, buf: &mut [u8], timeout: Duration) -> io::Result<usize>;
     /// What answered (for messages).
     fn describe(&self) -> String;
+    /// The clock the client's timeouts run on: the host's, except for a
+    /// link whose device keeps its own simulated time and runs it while
+    /// the client waits (a test's bench), where a wait of `d` is `d` of the
+    /// device's time whatever the host's speed.
+    fn now(&self) -> Instant {
+        Instant::now()
+    }
 }
 
 /// A serial port (board or pty).
