@@ -2,8 +2,10 @@
 //! board's DDS ([`board::dds`]); `fricctl bench dac` writes its CSV, table
 //! and chart.
 //!
-//! For every sine table size `N` (16 … 65 536), interpolation (nearest entry,
-//! linear) and table backend (libm, micromath), the DDS produces 2²⁰ samples
+//! For every sine table size `N` (16 … 65 536), reading (the table's nearest
+//! entry or linear interpolation per channel, eqs. Q1–Q5, or the drive
+//! phase's reference words, eqs. Q6–Q7: the board's) and table backend
+//! (libm, micromath), the DDS produces 2²⁰ samples
 //! ([`SAMPLES`]) of one channel at the board's sample rate ([`FS`], 500 kS/s)
 //! near full scale (amplitude 2047, DC 2047.5 codes) at [`CYCLES`] cycles
 //! (40.0 kHz; an odd count, so the sampling is coherent and visits 2²⁰
@@ -49,7 +51,7 @@ const DC: f32 = 2047.5;
 pub struct DacPoint {
     /// Table entries (0 for direct computation).
     pub table: usize,
-    /// `nearest`, `linear` or `direct`.
+    /// `nearest`, `linear`, `reference` or `direct`.
     pub interp: &'static str,
     /// `libm` or `micromath`.
     pub backend: &'static str,
@@ -125,6 +127,7 @@ fn table_point<const N: usize>(
             interp: match interp {
                 Interp::Nearest => "nearest",
                 Interp::Linear => "linear",
+                Interp::Reference => "reference",
             },
             backend,
             sfdr_db: sfdr,
@@ -179,7 +182,7 @@ fn tables<const N: usize>(out: &mut Vec<(DacPoint, Timer)>) -> Result {
     // The tables live as long as the bench process (≤ 1 MiB each).
     let l: &'static SineTable<N> = Box::leak(Box::new(SineTable::<N>::libm()));
     let m: &'static SineTable<N> = Box::leak(Box::new(SineTable::<N>::micromath()));
-    for interp in [Interp::Nearest, Interp::Linear] {
+    for interp in [Interp::Nearest, Interp::Linear, Interp::Reference] {
         out.push(table_point(l, interp, "libm")?);
         out.push(table_point(m, interp, "micromath")?);
     }

@@ -1141,7 +1141,8 @@ fn bench_methods_reports_times_and_mix() {
 /// table look-up (amp = 2047 codes): nearest entry ≈ amp·sin(π/N) plus
 /// rounding, linear ≤ amp·(2π/N)²/8 + 0.5; SFDR rises ≈ 6 dB per doubling of N
 /// (nearest) and ≈ 12 dB (linear) until the 12-bit floor; micromath tables
-/// are limited by its sine error (≤ 1.1e-3 ≈ 2.3 LSB).
+/// are limited by its sine error (≤ 1.1e-3 ≈ 2.3 LSB); the codes formed
+/// from the reference words (the board's) stay within eq. Q7.
 #[test]
 fn bench_dac_matches_table_lookup_theory() {
     let dir = tempfile::tempdir().unwrap();
@@ -1161,7 +1162,7 @@ fn bench_dac_matches_table_lookup_theory() {
         .skip(1)
         .map(|l| l.split(',').map(str::to_string).collect())
         .collect();
-    assert_eq!(rows.len(), 7 * 4 + 2);
+    assert_eq!(rows.len(), 7 * 6 + 2);
     let get = |n: usize, interp: &str, backend: &str| -> (f64, f64) {
         let r = rows
             .iter()
@@ -1221,6 +1222,38 @@ fn bench_dac_matches_table_lookup_theory() {
     assert!(floor > 90.0 && worst <= 0.52, "{floor} {worst}");
     let (direct, worst) = get(0, "direct", "libm");
     assert!(direct > 90.0 && worst <= 0.5 + 1e-3, "{direct} {worst}");
+    // From the reference words (the board's, eq. Q6): within eq. Q7,
+    // 1/2 + √2·amp·(ε_r + ε_φ + 3·2⁻²⁴) + √2/16 + 2⁻¹⁹, with the table's
+    // entries within ε_t (libm: π·2⁻²³ + 2⁻²⁴; micromath: its sine error
+    // 1.1e-3), ε_φ = ε_t + (2π/N)²/8 + 2⁻²⁹ and ε_r (eqs. R2–R3) = ε_φ +
+    // 15·(2ε_Δ + 2⁻²⁸) + 2⁻¹⁶ + 2⁻¹⁵, ε_Δ = 6.8e-8 + |Δ|·3·2⁻²⁴ + 2⁻³¹ at
+    // this frequency's step Δ = 2π·CYCLES/2²⁰.
+    let delta = 2.0 * std::f64::consts::PI * 83_885.0 / (1u64 << 20) as f64;
+    let eps_d = 6.8e-8 + delta * 3.0 * 2f64.powi(-24) + 2f64.powi(-31);
+    for (backend, eps_t) in [
+        (
+            "libm",
+            std::f64::consts::PI * 2f64.powi(-23) + 2f64.powi(-24),
+        ),
+        ("micromath", 1.1e-3),
+    ] {
+        for &n in &sizes {
+            let eps_phi =
+                eps_t + (2.0 * std::f64::consts::PI / n as f64).powi(2) / 8.0 + 2f64.powi(-29);
+            let eps_r =
+                eps_phi + 15.0 * (2.0 * eps_d + 2f64.powi(-28)) + 2f64.powi(-16) + 2f64.powi(-15);
+            let q7 = 0.5
+                + 2f64.sqrt() * amp * (eps_r + eps_phi + 3.0 * 2f64.powi(-24))
+                + 2f64.sqrt() / 16.0
+                + 2f64.powi(-19);
+            let (_, worst) = get(n, "reference", backend);
+            assert!(worst <= q7, "reference {backend} {n}: {worst} > {q7}");
+        }
+    }
+    // The board's setting: as clean as the linear table's (≤ 0.81 LSB by
+    // Q7; the 12-bit floor's SFDR).
+    let (floor, worst) = get(1024, "reference", "libm");
+    assert!(floor > 90.0 && worst <= 0.81, "{floor} {worst}");
 }
 
 /// Runs fricctl expecting bad input: exit 2, nothing on stdout, and exactly

@@ -5,11 +5,11 @@
 //! backends is measured by `fricctl bench dac` and checked against the
 //! closed forms in `host-cli/tests/cli.rs`.
 
-use std::f64::consts::{PI, TAU};
+use std::f64::consts::{PI, SQRT_2, TAU};
 
 use board::dds::{
-    pack_dual, phase_rad, phase_word, quantise, unpack_dual, Dds, DdsError, Interp, Level,
-    SineTable, Slew,
+    pack_dual, phase_rad, phase_word, quantise, unpack_dual, Dds, DdsError, FillPath, Interp,
+    Level, SineTable, Slew,
 };
 
 const FS: f64 = 1_000_000.0;
@@ -295,21 +295,54 @@ fn table_error<const N: usize>(t: &SineTable<N>) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// Eq. Q5 (board::dds; derived in docs/transducers.md, "The DDS in
-/// integers"): |code − (dc + amp·sin 2πp/2³²)| ≤ 1/2 + |amp|·(ε_t +
-/// (2π/N)²/8 + 2⁻²⁹) + 2⁻¹⁵, the exact value formed here in f64 from the
-/// phase words alone (accumulator, tuning word, offsets), never through the
-/// DDS's table. A code that differs from `round(exact)` must sit within the
-/// bound's excess over 1/2 of a tie.
-fn check_fill_against_f64<const N: usize>(t: &SineTable<N>, interp: Interp, cases: u32) -> f64 {
+/// Eqs. R2–R3 (board::reference): the largest error of a reference word's
+/// cosine or sine at tuning word `tw` on table `t` — the table's seed, the
+/// rotation between seeds (`(RUN − 1)·(2ε_Δ + 2⁻²⁸)`, `ε_Δ = 6.8e-8 +
+/// |Δ|·3·2⁻²⁴ + 2⁻³¹`), the Q15 rounding and the clamp of +2¹⁵.
+fn eps_r<const N: usize>(t: &SineTable<N>, tw: u32) -> f64 {
+    let delta = (f64::from(tw as i32) * TAU / 4_294_967_296.0).abs();
+    let eps_d = 6.8e-8 + delta * 3.0 * 2f64.powi(-24) + 2f64.powi(-31);
+    let r3 = (board::reference::RUN as f64 - 1.0) * (2.0 * eps_d + 2f64.powi(-28));
+    table_error(t)
+        + (TAU / N as f64).powi(2) / 8.0
+        + 2f64.powi(-29)
+        + r3
+        + 2f64.powi(-16)
+        + 2f64.powi(-15)
+}
+
+/// Eq. Q7 (board::dds, the fills formed from the reference): `1/2 +
+/// √2·|amp|·(ε_r + ε_φ + 3·2⁻²⁴) + √2/16 + 2⁻¹⁹`, `ε_φ` the table's
+/// interpolated read (Q1).
+fn q7<const N: usize>(t: &SineTable<N>, tw: u32, amp: f64) -> f64 {
+    let eps_phi = table_error(t) + (TAU / N as f64).powi(2) / 8.0 + 2f64.powi(-29);
+    0.5 + SQRT_2 * amp.abs() * (eps_r(t, tw) + eps_phi + 3.0 * 2f64.powi(-24))
+        + SQRT_2 / 16.0
+        + 2f64.powi(-19)
+}
+
+/// A settled fill against its bound: with [`Interp::Reference`] (the
+/// board's, `FillPath::Reference`, eq. Q6) eq. Q7, [`q7`]; reading the table
+/// (`FillPath::Table`, eqs. Q1–Q3) eq. Q5, `1/2 + |amp|·(ε_t + e_read +
+/// 2⁻²⁹) + 2⁻¹⁵` with `e_read` = `(2π/N)²/8` (linear) or `π/N` (nearest).
+/// The exact value is formed here in f64 from the phase words alone
+/// (accumulator, tuning word, offsets), never through the DDS's table or
+/// reference. A code that differs from `round(exact)` must sit within the
+/// bound's excess over 1/2 of a tie. Returns the worst error and the worst
+/// ratio of error to bound.
+fn check_fill_against_f64<const N: usize>(
+    t: &SineTable<N>,
+    interp: Interp,
+    cases: u32,
+) -> (f64, f64) {
     let eps_t = table_error(t);
     let step = TAU / N as f64;
     let read_err = match interp {
-        Interp::Linear => step * step / 8.0,
         Interp::Nearest => step / 2.0,
+        _ => step * step / 8.0,
     };
     let mut rng = Lcg(0x0123_4567_89ab_cdef);
-    let mut worst: f64 = 0.0;
+    let (mut worst, mut ratio): (f64, f64) = (0.0, 0.0);
     for _ in 0..cases {
         let mut d = Dds::new(t, FS, fast_slew()).unwrap();
         d.set_interp(interp);
@@ -326,6 +359,12 @@ fn check_fill_against_f64<const N: usize>(t: &SineTable<N>, interp: Interp, case
         // One sample applies the targets (fast slew): settled from here.
         d.next_codes();
         assert!(d.settled());
+        let path = d.fill_path();
+        assert_eq!(
+            path == FillPath::Reference,
+            interp == Interp::Reference,
+            "{interp:?}"
+        );
         let (acc0, tw) = (d.accumulator(), d.tuning_word());
         let ph = [d.channels()[0].phase, d.channels()[1].phase];
         let mut buf = [0u32; 64];
@@ -337,7 +376,12 @@ fn check_fill_against_f64<const N: usize>(t: &SineTable<N>, interp: Interp, case
                 let (amp, dc) = (f64::from(lv[ch].0), f64::from(lv[ch].1));
                 let theta = phase_rad(p.wrapping_add(ph[ch]));
                 let exact = dc + amp * theta.sin();
-                let bound = 0.5 + amp.abs() * (eps_t + read_err + 2f64.powi(-29)) + 2f64.powi(-15);
+                let bound = match path {
+                    FillPath::Reference => q7(t, tw, amp),
+                    FillPath::Table => {
+                        0.5 + amp.abs() * (eps_t + read_err + 2f64.powi(-29)) + 2f64.powi(-15)
+                    }
+                };
                 let err = (f64::from(code) - exact).abs();
                 assert!(
                     err <= bound,
@@ -348,10 +392,11 @@ fn check_fill_against_f64<const N: usize>(t: &SineTable<N>, interp: Interp, case
                     assert!(tie <= bound - 0.5, "{code} vs {exact}: not a near tie");
                 }
                 worst = worst.max(err);
+                ratio = ratio.max(err / bound);
             }
         }
     }
-    worst
+    (worst, ratio)
 }
 
 #[test]
@@ -362,16 +407,28 @@ fn integer_fill_is_within_the_derived_bound_of_the_exact_sine() {
     // the sine by one ulp (2⁻²⁴ below 1): ε_t ≤ π·2⁻²³ + 2⁻²⁴ = 4.3e-7.
     let eps_t = table_error(&t);
     assert!(eps_t <= PI * 2f64.powi(-23) + 2f64.powi(-24), "{eps_t}");
-    let worst = check_fill_against_f64(&t, Interp::Linear, 300);
+    let (worst, _) = check_fill_against_f64(&t, Interp::Linear, 300);
     // Eq. Q5 at |amp| ≤ 2047 (ε_t = 2.0e-7 measured): ≈ 0.5101 LSB.
     let at_full =
         0.5 + 2047.0 * (eps_t + (TAU / 1024.0).powi(2) / 8.0 + 2f64.powi(-29)) + 2f64.powi(-15);
     assert!(worst <= at_full && at_full < 0.5102, "{worst} {at_full}");
     check_fill_against_f64(&t, Interp::Nearest, 50);
-    // A coarse table, where interpolation dominates: 2047·(2π/64)²/8 = 2.47 LSB.
+    // The board's: eq. Q7 at |amp| ≤ 2047, any step (ε_r ≤ 7.0e-5,
+    // `tests/tests/reference.rs`): ≤ 0.81 LSB.
+    let (worst, _) = check_fill_against_f64(&t, Interp::Reference, 300);
+    let at_full = q7(&t, 1 << 31, 2047.0);
+    assert!(worst <= at_full && at_full < 0.81, "{worst} {at_full}");
+    // A coarse table, where its reads dominate: 2047·(2π/64)²/8 = 2.47 LSB
+    // (Q5); Q7 ≈ 7.7 LSB (ε_r and ε_φ near 1.2e-3 each). Each bound is
+    // reached within a factor of three.
     let t64 = SineTable::<64>::libm();
-    let worst = check_fill_against_f64(&t64, Interp::Linear, 100);
-    assert!(worst > 1.5, "{worst}: the bound is not loose by a factor");
+    let (worst, ratio) = check_fill_against_f64(&t64, Interp::Linear, 100);
+    assert!(worst > 1.5 && ratio > 1.0 / 3.0, "{worst} {ratio}");
+    let (worst, ratio) = check_fill_against_f64(&t64, Interp::Reference, 100);
+    assert!(
+        ratio > 1.0 / 3.0,
+        "{worst} {ratio}: the bound is loose by a factor"
+    );
 }
 
 /// Eq. Q4: while ramping, sample `i` of a fill uses amplitude, DC and phase
@@ -441,6 +498,10 @@ fn ramp_case(targets: [(f32, f32); 2], ph_target: [u32; 2], fills: usize) {
     for _ in 0..fills {
         let before = *d.channels();
         let (acc0, tw) = (d.accumulator(), d.tuning_word());
+        // A ramp reads the table (Q5 plus the slews' rounding); a fill whose
+        // levels all arrive within a sample, or a settled one, is formed from
+        // the reference (Q7): the ramp's last fill may be either.
+        let path = d.fill_path();
         let mut buf = [0u32; 64];
         d.fill(&mut buf);
         for (i, &w) in buf.iter().enumerate() {
@@ -461,8 +522,14 @@ fn ramp_case(targets: [(f32, f32); 2], ph_target: [u32; 2], fills: usize) {
                     .phase
                     .wrapping_add(dph.clamp(-lim, lim) as i64 as i32 as u32);
                 let exact = (dc + amp * phase_rad(p.wrapping_add(ph)).sin()).clamp(0.0, 4095.0);
-                let bound =
-                    0.5 + amp.abs() * eps + 2f64.powi(-15) + n * (2f64.powi(-18) + 2f64.powi(-16));
+                let bound = match path {
+                    FillPath::Table => {
+                        0.5 + amp.abs() * eps
+                            + 2f64.powi(-15)
+                            + n * (2f64.powi(-18) + 2f64.powi(-16))
+                    }
+                    FillPath::Reference => q7(&t, tw, amp),
+                };
                 let err = (f64::from(code) - exact).abs();
                 assert!(
                     err <= bound,
@@ -502,7 +569,15 @@ fn a_one_step_change_fills_the_old_levels_once_then_the_new() {
     let read_err = (TAU / 1024.0).powi(2) / 8.0;
     let mut rng = Lcg(0x5eed_0f0e_5eed_0f0e);
     for case in 0..200 {
+        // The board's fills from the reference (Q7), and from the table
+        // (Q5), in turn.
+        let interp = if case % 2 == 0 {
+            Interp::Reference
+        } else {
+            Interp::Linear
+        };
         let mut d = Dds::new(&t, FS, fast_slew()).unwrap();
+        d.set_interp(interp);
         d.set_frequency(1e3 + 2e5 * rng.next()).unwrap();
         let levels = |d: &mut Dds<'_, 1024>, rng: &mut Lcg| {
             let mut out = [(0.0f32, 0.0f32, 0u32); 2];
@@ -529,6 +604,12 @@ fn a_one_step_change_fills_the_old_levels_once_then_the_new() {
             a.1 = dc;
         }
         let (acc0, tw) = (d.accumulator(), d.tuning_word());
+        let path = d.fill_path();
+        assert_eq!(
+            path == FillPath::Reference,
+            interp == Interp::Reference,
+            "case {case}"
+        );
         let mut buf = [0u32; 64];
         d.fill(&mut buf);
         assert!(d.settled(), "case {case}: not settled after the fill");
@@ -539,7 +620,12 @@ fn a_one_step_change_fills_the_old_levels_once_then_the_new() {
             for (ch, code) in [codes.0, codes.1].into_iter().enumerate() {
                 let (amp, dc, ph) = (f64::from(lv[ch].0), f64::from(lv[ch].1), lv[ch].2);
                 let exact = dc + amp * phase_rad(p.wrapping_add(ph)).sin();
-                let bound = 0.5 + amp.abs() * (eps_t + read_err + 2f64.powi(-29)) + 2f64.powi(-15);
+                let bound = match path {
+                    FillPath::Reference => q7(&t, tw, amp),
+                    FillPath::Table => {
+                        0.5 + amp.abs() * (eps_t + read_err + 2f64.powi(-29)) + 2f64.powi(-15)
+                    }
+                };
                 let err = (f64::from(code) - exact).abs();
                 assert!(
                     err <= bound,
@@ -548,4 +634,71 @@ fn a_one_step_change_fills_the_old_levels_once_then_the_new() {
             }
         }
     }
+}
+
+/// `Dds::fill_with_reference` writes the reference words (eq. R1) of the
+/// fill's own phases `acc0 + i·tw`: sample `i`'s to `head[i]`, then the
+/// rest to `tail` (the device lays them out as the ADC sees them, `L`
+/// samples late). Each word's cosine and sine within ε_r (eqs. R2–R3) of
+/// the exact ones formed in f64 from the phase words alone, over settled
+/// fills, fills changed within one sample and ramps, every split of the 64
+/// samples from 0 to 64, and a retune between fills (the next fill starts
+/// where the last ended). A `head` and `tail` too short for `buf` leave
+/// both untouched and fill `buf` all the same.
+#[test]
+fn a_fill_writes_the_reference_words_of_its_own_phases() {
+    let t = SineTable::<1024>::libm();
+    let mut rng = Lcg(0x0dd5_eed5_0dd5_eed5);
+    let mut d = Dds::new(&t, FS, fast_slew()).unwrap();
+    d.set_frequency(20_000.0).unwrap();
+    for fill in 0..130usize {
+        match fill % 5 {
+            // A ramp (slow slew), a change within one sample, a retune.
+            0 => d.set_slew(Slew {
+                amp_per_sample: 0.7,
+                dc_per_sample: 0.7,
+                phase_per_sample: 100_000,
+            }),
+            1 => d.set_slew(fast_slew()),
+            2 => {
+                d.set_frequency(1e3 + 9e4 * rng.next()).unwrap();
+            }
+            _ => {}
+        }
+        if fill % 5 < 2 {
+            for ch in 0..2 {
+                let amp = (1000.0 * rng.next()) as f32;
+                d.set_level(ch, Level { amp, dc: 2047.0 }).unwrap();
+                d.set_phase(ch, (rng.next() * 4_294_967_296.0) as u32);
+            }
+        }
+        let (acc0, tw) = (d.accumulator(), d.tuning_word());
+        let split = fill % 65;
+        let (mut head, mut tail) = ([0u32; 64], [0u32; 64]);
+        let mut buf = [0u32; 64];
+        assert!(d.fill_with_reference(&mut buf, &mut head[..split], &mut tail[..64 - split]));
+        assert_eq!(d.accumulator(), acc0.wrapping_add(tw.wrapping_mul(64)));
+        let bound = eps_r(&t, tw);
+        for i in 0..64 {
+            let w = if i < split { head[i] } else { tail[i - split] };
+            let th = phase_rad(acc0.wrapping_add(tw.wrapping_mul(i as u32)));
+            let (c, s) = (
+                f64::from(board::reference::cos_of(w)) / 32_768.0,
+                f64::from(board::reference::sin_of(w)) / 32_768.0,
+            );
+            assert!(
+                (c - th.cos()).abs() <= bound && (s - th.sin()).abs() <= bound,
+                "fill {fill} sample {i}: ({c}, {s}) vs θ {th} (bound {bound})"
+            );
+        }
+    }
+    // Too few words: `buf` is filled, nothing written to them.
+    let (mut head, mut tail) = ([7u32; 10], [7u32; 10]);
+    let mut buf = [0u32; 64];
+    let mut other = d.clone();
+    assert!(!d.fill_with_reference(&mut buf, &mut head, &mut tail));
+    assert_eq!((head, tail), ([7u32; 10], [7u32; 10]));
+    let mut want = [0u32; 64];
+    other.fill(&mut want);
+    assert_eq!(buf, want);
 }

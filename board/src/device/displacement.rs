@@ -649,7 +649,9 @@ impl<const N: usize> Device<'_, N> {
             // The DAC's room around the DC, less a part in 10⁴ (the level's
             // own check must pass after the f32 round trip).
             let room = dc.min(f32::from(crate::dds::DAC_MAX) - dc).max(0.0) * v * 0.9999;
-            let bound = (h_room * norm(d[ch] / hc).max(self.loops.u_prev[ch])).min(room);
+            // |d/hc| = √(|d|²/|hc|²): one root, no complex division and hypot.
+            let steady = FastF32::sqrt(d[ch].norm_sqr() / hc.norm_sqr());
+            let bound = (h_room * steady.max(self.loops.u_prev[ch])).min(room);
             let mut un = norm(u);
             let cut = un > bound || un.is_nan();
             moving[ch] =
@@ -692,13 +694,14 @@ impl<const N: usize> Device<'_, N> {
     /// "reached").
     pub(super) fn model_reached(&self) -> bool {
         let d = setpoint(&self.drive);
+        // Squared, as in `displacement_step`.
         (0..2).all(|ch| {
-            let dn = norm(d[ch]);
-            let e = norm(self.loops.env[ch] - d[ch]);
-            if dn > 0.0 {
-                e <= HOLD_TOLERANCE * dn && self.loops.last_d[ch] == d[ch]
+            let dn2 = d[ch].norm_sqr();
+            let e2 = (self.loops.env[ch] - d[ch]).norm_sqr();
+            if dn2 > 0.0 {
+                e2 <= HOLD_TOLERANCE * HOLD_TOLERANCE * dn2 && self.loops.last_d[ch] == d[ch]
             } else {
-                e <= HOLD_FLOOR_M
+                e2 <= HOLD_FLOOR_M * HOLD_FLOOR_M
             }
         })
     }
@@ -734,15 +737,20 @@ impl<const N: usize> Device<'_, N> {
         };
         let models = self.tracker.models(&t);
         for (ch, m) in models.iter().enumerate() {
-            let dn = norm(target[ch]);
-            within &= if dn > 0.0 {
-                norm((avg[ch] - target[ch]) / target[ch]) <= tol
+            // Magnitudes compared squared (issue 35: a fast hypot is ≈ 90
+            // instructions on the M4F, a square two): |a/b| ≤ t as
+            // |a|² ≤ t²·|b|², NaN false either way.
+            let dn2 = target[ch].norm_sqr();
+            within &= if dn2 > 0.0 {
+                (avg[ch] - target[ch]).norm_sqr() <= tol * tol * dn2
             } else {
-                norm(avg[ch]) <= floor
+                avg[ch].norm_sqr() <= floor * floor
             };
-            let mn = norm(mean[ch]);
+            let mn2 = mean[ch].norm_sqr();
             // An open pickup: the model says the mode moves, the pickup not.
-            if mn > OPEN_FLOOR_M && norm(x[ch]) < OPEN_FRACTION * mn {
+            if mn2 > OPEN_FLOOR_M * OPEN_FLOOR_M
+                && x[ch].norm_sqr() < OPEN_FRACTION * OPEN_FRACTION * mn2
+            {
                 self.loops.open[ch] += window_s;
                 if self.loops.open[ch] >= OPEN_S * (1.0 - 1e-3) {
                     self.fault(super::faults::PICKUP_OPEN);
@@ -757,7 +765,7 @@ impl<const N: usize> Device<'_, N> {
             // error then holds the model's dynamics error too, τ̂ and ω̂_r,
             // which the dead-beat fills would otherwise leave to die out
             // with the mode's own τ).
-            if dn <= 0.0 || mn < 0.05 * dn {
+            if dn2 <= 0.0 || mn2 < 0.05 * 0.05 * dn2 {
                 continue;
             }
             if moving[ch] {
@@ -767,8 +775,8 @@ impl<const N: usize> Device<'_, N> {
             let tau = m.q / (core::f32::consts::PI * m.resonance_hz);
             let k = (window_s / (4.0 * tau)).min(0.5);
             let c = self.loops.c[ch] * (C::new(1.0, 0.0) + e * k);
-            let cn = norm(c);
-            if (1.0 / C_MAX..=C_MAX).contains(&cn) {
+            let cn2 = c.norm_sqr();
+            if (1.0 / (C_MAX * C_MAX)..=C_MAX * C_MAX).contains(&cn2) {
                 self.loops.c[ch] = c;
                 self.loops.saturated[ch] = false;
             } else {

@@ -35,7 +35,34 @@ impl<const N: usize> Device<'_, N> {
             cond |= reasons::FAULT;
         }
         self.half_conditions[slot] = cond;
-        self.dds.fill(buf);
+        // The reference words the codes are formed from are kept for the
+        // ADC blocks this fill drives, as they see them (`kept_reference`):
+        // its first BLOCK − L words end block `fill`'s, its last L begin
+        // block `fill + 1`'s.
+        let lag = self.cfg.adc_lag_samples as usize;
+        if buf.len() == BLOCK && lag < BLOCK {
+            let next = (slot + 1) % FILL_RING;
+            let (cur, nxt) = two_slots(&mut self.fill_refs, slot, next);
+            self.dds
+                .fill_with_reference(buf, &mut cur[lag..], &mut nxt[..lag]);
+            self.fill_refs_by[slot].1 = fill;
+            self.fill_refs_by[next].0 = fill;
+        } else {
+            self.dds.fill(buf);
+        }
+    }
+
+    /// Whether ADC block `block` of `len` samples has its reference words
+    /// whole in its slot of `fill_refs`: `L` words from fill `block − 1`
+    /// and the rest from fill `block` (sample `i` saw DAC word `i − L`, `L`
+    /// = [`DeviceConfig::adc_lag_samples`], each word formed at the tuning
+    /// word it was played at). Not for a block of another length, or before
+    /// both fills ran (power-up), or once a later fill reused the slot.
+    ///
+    /// [`DeviceConfig::adc_lag_samples`]: super::DeviceConfig::adc_lag_samples
+    fn kept_reference(&self, block: u32, len: usize) -> bool {
+        let slot = block as usize % FILL_RING;
+        len == BLOCK && self.fill_refs_by[slot] == (block.wrapping_sub(1), block)
     }
 
     /// The DAC interrupt's work: refills the half `ev` names with
@@ -118,22 +145,37 @@ impl<const N: usize> Device<'_, N> {
         if self.control_on() && samples.iter().any(|&(x, z)| self.est.railed(x, z)) {
             self.fault(faults::ADC_SATURATED);
         }
+        // The fill's own words when they are kept whole (one rotation per
+        // sample for the DAC and the ADC), else formed here (`r`).
+        let kept = self.kept_reference(block, samples.len());
         let mut r = Reference::EMPTY;
         for (k, chunk) in samples.chunks(BLOCK).enumerate() {
             let start = k * BLOCK;
             let a = acc.wrapping_add(tw.wrapping_mul(start as u32));
-            r.set(self.table, a, tw, chunk.len());
+            if !kept {
+                r.set(self.table, a, tw, chunk.len());
+            }
+            // The words, borrowed afresh at each use (the device is
+            // changed in between).
+            macro_rules! words {
+                () => {
+                    if kept {
+                        &self.fill_refs[slot][..]
+                    } else {
+                        r.words()
+                    }
+                };
+            }
             if let Some(p) = pickups.get(start..start + chunk.len()) {
-                self.motion_sums(&r, p, tw);
+                self.motion.push_block(words!(), p, tw);
             }
             // Split where the μ loop opens its estimate (`control_open`).
             let cut = open_at
                 .filter(|&o| (start..start + chunk.len()).contains(&o))
                 .map_or(chunk.len(), |o| o - start);
-            let words = r.words();
             if self
                 .est
-                .push_block(&words[..cut], a, tw, &chunk[..cut])
+                .push_block(&words!()[..cut], a, tw, &chunk[..cut])
                 .is_some()
             {
                 closed = true;
@@ -143,7 +185,7 @@ impl<const N: usize> Device<'_, N> {
                 let a = a.wrapping_add(tw.wrapping_mul(cut as u32));
                 if self
                     .est
-                    .push_block(&words[cut..], a, tw, &chunk[cut..])
+                    .push_block(&words!()[cut..], a, tw, &chunk[cut..])
                     .is_some()
                 {
                     closed = true;
@@ -229,5 +271,16 @@ pub fn check_periods(periods: u32) -> Result<(), DeviceError> {
             min: lo as f32,
             max: hi as f32,
         })
+    }
+}
+
+/// Slots `a` and `b` (different) of `r`, both mutable.
+fn two_slots<T>(r: &mut [T; FILL_RING], a: usize, b: usize) -> (&mut T, &mut T) {
+    if a < b {
+        let (lo, hi) = r.split_at_mut(b);
+        (&mut lo[a], &mut hi[0])
+    } else {
+        let (lo, hi) = r.split_at_mut(a);
+        (&mut hi[0], &mut lo[b])
     }
 }

@@ -71,6 +71,7 @@ pub use crate::protocol::messages::{
 
 use crate::dds::{Achieved, Dds, Level, SineTable, Slew};
 use crate::estimator::Estimator;
+use crate::reference::BLOCK;
 use model_core::scene::{self, ContactMode, Scene, SceneParams};
 
 /// The device.
@@ -96,6 +97,15 @@ pub struct Device<'t, const N: usize> {
     half: [(u32, u32); measure::FILL_RING],
     /// Estimate reasons that held while those fills were made.
     half_conditions: [u32; measure::FILL_RING],
+    /// Per ADC block (same slots): its reference words (eq. R1) as the DAC
+    /// fills formed them for their codes, laid out as the ADC sees them:
+    /// `L` = [`DeviceConfig::adc_lag_samples`] words from the end of fill
+    /// `n − 1`, then fill `n`'s first `BLOCK − L` (`measure.rs`,
+    /// `kept_reference`).
+    fill_refs: [[u32; BLOCK]; measure::FILL_RING],
+    /// Which fills wrote each slot's two parts: `(n − 1, n)` when block
+    /// `n`'s words are whole.
+    fill_refs_by: [(u32, u32); measure::FILL_RING],
     /// +1 per command that sets new DDS targets (accepted `set_drive`,
     /// `start`, `stop`, `fault`).
     ramp_generation: u32,
@@ -174,6 +184,8 @@ impl<'t, const N: usize> Device<'t, N> {
             est,
             half: [(0, 0); measure::FILL_RING],
             half_conditions: [0; measure::FILL_RING],
+            fill_refs: [[0; BLOCK]; measure::FILL_RING],
+            fill_refs_by: [(1, 1); measure::FILL_RING],
             ramp_generation: 0,
             control: None,
             fills: 0,

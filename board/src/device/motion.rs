@@ -24,7 +24,7 @@
 use super::Device;
 use crate::lockin::LockInQ;
 pub use crate::protocol::messages::MeasuredDrive;
-use crate::reference::{Gram, PairSums, Reference};
+use crate::reference::{Gram, PairSums};
 use model_core::float::FastF32;
 use num_complex::Complex32 as C;
 
@@ -69,6 +69,18 @@ pub(super) struct Motion {
     blocks: u32,
 }
 
+impl Motion {
+    /// A chunk of the pickups' samples into the lock-ins, against the
+    /// forces' reference words `words` (eq. R1: the pickups' own phase is
+    /// δ later; [`Device::motion_window`] turns the fit by δ).
+    pub(super) fn push_block(&mut self, words: &[u32], pickups: &[(u16, u16)], tw: u32) {
+        let g = Gram::of(words);
+        let p = PairSums::of(words, pickups);
+        self.lock.push_sums(&g, &p, tw);
+        self.tw = tw;
+    }
+}
+
 impl<const N: usize> Device<'_, N> {
     /// [`Device::adc_block`] with the motion pickups' samples `(z, x)` of the
     /// same ticks (on the board the same DMA transfer: ADC1 and ADC2 scan the
@@ -80,16 +92,6 @@ impl<const N: usize> Device<'_, N> {
         pickups: &[(u16, u16)],
     ) {
         self.intake(forces, pickups);
-    }
-
-    /// A chunk of the pickups' samples into the lock-ins, against the
-    /// forces' reference `r` (eq. R1: the pickups' own phase is δ later;
-    /// [`Device::motion_window`] turns the fit by δ).
-    pub(super) fn motion_sums(&mut self, r: &Reference, pickups: &[(u16, u16)], tw: u32) {
-        let g = Gram::of(r.words());
-        let p = PairSums::of(r.words(), pickups);
-        self.motion.lock.push_sums(&g, &p, tw);
-        self.motion.tw = tw;
     }
 
     /// After a block's pickups: closes the lock-ins' window once it spans

@@ -51,6 +51,7 @@
 //! `cos(θ + φ)` for the tangential one; [`phase_word`] turns radians into
 //! offsets (`−cos θ = sin(θ − π/2)`, `cos(θ+φ) = sin(θ + φ + π/2)`).
 
+use crate::reference::BLOCK;
 use model_core::float::{Libm, Math, Micromath};
 
 /// Largest DAC code (12 bits).
@@ -149,7 +150,8 @@ impl<const N: usize> SineTable<N> {
     pub fn sin_with(&self, interp: Interp, phase: u32) -> f32 {
         match interp {
             Interp::Nearest => self.sin_nearest(phase),
-            Interp::Linear => self.sin(phase),
+            // A single phase's read is interpolated.
+            Interp::Linear | Interp::Reference => self.sin(phase),
         }
     }
 
@@ -214,7 +216,7 @@ impl<const N: usize> SineTable<N> {
     pub fn sin_q30_with(&self, interp: Interp, phase: u32) -> i32 {
         match interp {
             Interp::Nearest => self.sin_q30_nearest(phase),
-            Interp::Linear => self.sin_q30(phase),
+            Interp::Linear | Interp::Reference => self.sin_q30(phase),
         }
     }
 }
@@ -269,16 +271,95 @@ impl Fixed {
     }
 }
 
-/// How a [`SineTable`] is read between its entries.
+/// A channel's factors for the fills formed from the drive phase's
+/// reference ([`crate::reference`], eq. R1), eq. (Q6): with `(c, s)` the
+/// Q15 cosine and sine of the accumulator,
+///
+/// ```text
+/// k_c = round(8·amp·sin φ),  k_s = round(8·amp·cos φ),
+/// k_d = round(2¹⁸·dc) + 2¹⁷                                                  (Q6)
+/// code = clamp(⌊(k_d + c·k_c + s·k_s)/2¹⁸⌋, 0, 4095)
+/// ```
+///
+/// (`sin(θ + φ) = sin θ cos φ + cos θ sin φ`; `sin φ`, `cos φ` the table's
+/// Q30 read of the phase offset, eq. Q1). In i32: `|c·k_c + s·k_s| ≤
+/// 2¹⁵·|(k_c, k_s)| ≤ 2¹⁵·(8·4095 + 1) < 2³⁰` and `k_d ≤ 2¹⁸·4095 + 2¹⁷ <
+/// 2³⁰`. Two multiply-accumulates per channel and sample, on the
+/// reference the ADC's lock-ins use too (one rotation per sample for
+/// both: issue 35). The error against the exact waveform, with `ε_r` the
+/// reference's (eq. R2) and `ε_φ` the table read's (Q1):
+///
+/// ```text
+/// |code − (dc + amp·sin(θ + φ))| ≤ 1/2 + √2·|amp|·(ε_r + ε_φ + 3·2⁻²⁴) + √2/16 + 2⁻¹⁹   (Q7)
+/// ```
+///
+/// (the floor with `2¹⁷` added is a rounding, ½; each `(c, s)` component
+/// within `ε_r` of the exact cosine and sine and each factor's sine within
+/// `ε_φ + 3·2⁻²⁴` (the table read, then two f32 roundings of the product),
+/// so `amp·(e_c sin φ + e_s cos φ)` stays within `√2·|amp|·(…)`; each
+/// factor's rounding to an integer, ½ of ⅛ code, adds at most
+/// `½·(|c| + |s|)/2¹⁸ ≤ √2/16`; `k_d`'s, `2⁻¹⁹`): ≤ 0.81 code at
+/// |amp| ≤ 2047.5, `ε_r ≤ 7.0e-5` (eq. R2) and `ε_φ = ε_t + (2π/N)²/8 +
+/// 2⁻²⁹` (N = 1024).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct RefCoef {
+    kc: i32,
+    ks: i32,
+    kd: i32,
+}
+
+impl RefCoef {
+    /// Eq. (Q6) of an amplitude, a DC level (codes, within `±4095` and
+    /// `0..=4095`: [`Level::check`]) and a phase offset word.
+    #[inline(always)]
+    fn of<const N: usize>(t: &SineTable<N>, amp: f32, dc: f32, ph: u32) -> Self {
+        let (c, s) = t.cos_sin_q30(ph);
+        let a = amp.clamp(-4095.0, 4095.0) * (8.0 / Q30_F32);
+        RefCoef {
+            kc: round_i32(a * s as f32),
+            ks: round_i32(a * c as f32),
+            kd: round_i32(dc.clamp(0.0, 4095.0) * 262_144.0) + (1 << 17),
+        }
+    }
+
+    /// Eq. (Q6): the code of the packed reference word `w` (R1).
+    #[inline(always)]
+    fn code(&self, w: u32) -> u32 {
+        let (c, s) = (crate::reference::cos_of(w), crate::reference::sin_of(w));
+        let v = self.kd + c * self.kc + s * self.ks;
+        (v >> 18).clamp(0, DAC_MAX as i32) as u32
+    }
+}
+
+/// Which equations a fill's codes follow ([`Dds::fill_path`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FillPath {
+    /// From the drive phase's reference words, eq. (Q6): settled channels,
+    /// or levels that reach their targets within one sample (sample 0 at
+    /// the levels now, the rest at the targets').
+    Reference,
+    /// From the table at each channel's phase, eqs. (Q1–Q4): a ramp.
+    Table,
+}
+
+/// How a fill forms its codes: from the drive phase's reference words
+/// (the board's choice), or by reading a [`SineTable`] at each channel's
+/// phase, between its entries or at the nearest one.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Interp {
     /// The nearest entry: one load per sample, error `≈ π/N` of full scale.
     Nearest,
     /// Linear between neighbouring entries: a load pair and a multiply-add,
-    /// error `≈ (π/N)²/2` (the board's choice).
-    #[default]
+    /// error `≈ (π/N)²/2` (eqs. Q1–Q5).
     Linear,
+    /// Settled fills, and fills whose levels all arrive within one sample,
+    /// from the reference words the fill forms for the ADC anyway (eq. Q6,
+    /// bound Q7: two multiply-accumulates per channel and sample); ramps
+    /// as [`Interp::Linear`] (the board's choice, issue 35).
+    #[default]
+    Reference,
 }
 
 /// Converts a phase in radians to a 32-bit phase word (wrapping).
@@ -495,7 +576,7 @@ impl<'t, const N: usize> Dds<'t, N> {
             tw: 0,
             ch: [Channel::default(); 2],
             slew,
-            interp: Interp::Linear,
+            interp: Interp::Reference,
         })
     }
 
@@ -643,71 +724,109 @@ impl<'t, const N: usize> Dds<'t, N> {
     /// `plant::HalfDrive` reconstructs. The channels' state is then moved
     /// on by `buf.len()` steps.
     pub fn fill(&mut self, buf: &mut [u32]) {
-        if self.settled() {
-            // The interpolation is chosen once per buffer, outside the loop.
-            // (A const parameter, not a function argument: at opt-level
-            // "z" a function passed in stays a call per sample.)
-            match self.interp {
-                Interp::Nearest => self.fill_settled::<false>(buf),
-                Interp::Linear => self.fill_settled::<true>(buf),
-            }
-            return;
-        }
-        if let Some(f) = self.one_step() {
-            match self.interp {
-                Interp::Nearest => self.fill_one_step::<false>(buf, f),
-                Interp::Linear => self.fill_one_step::<true>(buf, f),
-            }
-            return;
-        }
-        match self.interp {
-            Interp::Nearest => self.fill_ramping::<false>(buf),
-            Interp::Linear => self.fill_ramping::<true>(buf),
+        let mut refs = [0u32; BLOCK];
+        for chunk in buf.chunks_mut(BLOCK) {
+            let n = chunk.len();
+            self.fill_with_reference(chunk, &mut refs[..n], &mut []);
         }
     }
 
-    /// Each channel's scale factors now and at its targets (Q2) if every
-    /// quantity reaches its target within one sample's slew (eq. Q4 with
-    /// `n ≤ 1` for all six: the displacement loops' fills, whose slew is a
-    /// whole step): then sample 0 has the factors now and every later one
-    /// the targets'.
-    fn one_step(&self) -> Option<[(Fixed, Fixed); 2]> {
+    /// [`Dds::fill`] that also writes the packed reference words (eq. R1)
+    /// of the fill's samples — the DDS's own phases `acc + i·tw` — for the
+    /// ADC block this fill drives (issue 35: one rotation per sample serves
+    /// the DAC and the ADC's lock-ins): sample `i`'s word goes to `head[i]`
+    /// for `i < head.len()`, then to `tail[i − head.len()]` (two places, so
+    /// that a caller can lay them out as the ADC sees them, `L` samples
+    /// late). Settled fills, and fills whose levels all arrive within one
+    /// sample ([`Dds::fill_path`]), form their codes from those words (eq.
+    /// Q6, bound Q7; the table's reading `interp` is then not used); a ramp
+    /// reads the table (Q1–Q4).
+    ///
+    /// Returns `false`, with `buf` filled by [`Dds::fill`] and `head`,
+    /// `tail` untouched, when they hold fewer words than `buf`.
+    pub fn fill_with_reference(
+        &mut self,
+        buf: &mut [u32],
+        head: &mut [u32],
+        tail: &mut [u32],
+    ) -> bool {
+        let n = buf.len();
+        if head.len() + tail.len() < n {
+            self.fill(buf);
+            return false;
+        }
+        let k = head.len().min(n);
+        let (head, tail) = (&mut head[..k], &mut tail[..n - k]);
+        let t = self.table;
+        let (acc, tw) = (self.acc, self.tw);
+        crate::reference::fill(t, acc, tw, head);
+        crate::reference::fill(t, acc.wrapping_add(tw.wrapping_mul(k as u32)), tw, tail);
+        if self.fill_path() == FillPath::Table {
+            // The accumulator and the channels move in the table's loops.
+            match self.interp {
+                Interp::Nearest => self.fill_table::<false>(buf),
+                Interp::Linear | Interp::Reference => self.fill_table::<true>(buf),
+            }
+            return true;
+        }
+        // Sample 0 at the levels now, the rest at the targets' (the same
+        // when settled).
+        let now = self.ch.map(|c| RefCoef::of(t, c.amp, c.dc, c.phase));
+        let to = if self.settled() {
+            now
+        } else {
+            self.ch
+                .map(|c| RefCoef::of(t, c.amp_target, c.dc_target, c.phase_target))
+        };
+        let (b_head, b_tail) = buf.split_at_mut(k);
+        if k > 0 {
+            synthesize(b_head, head, now, to);
+            synthesize(b_tail, tail, to, to);
+        } else {
+            synthesize(b_tail, tail, now, to);
+        }
+        let s = self.slew;
+        for c in &mut self.ch {
+            c.advance(&s, n as u32);
+        }
+        self.acc = acc.wrapping_add(tw.wrapping_mul(n as u32));
+        true
+    }
+
+    /// Which equations the next fill's codes follow: [`FillPath::Reference`]
+    /// (Q6, bound Q7) with [`Interp::Reference`] when both channels are
+    /// settled or every quantity reaches its target within one sample's
+    /// slew, else [`FillPath::Table`] (Q1–Q4, bound Q5 plus the ramp's
+    /// rounding).
+    pub fn fill_path(&self) -> FillPath {
+        if self.interp == Interp::Reference && (self.settled() || self.one_step()) {
+            FillPath::Reference
+        } else {
+            FillPath::Table
+        }
+    }
+
+    /// Whether every quantity reaches its target within one sample's slew
+    /// (eq. Q4 with `n ≤ 1` for all six, in the units of Q2: the
+    /// displacement loops' fills, whose slew is a whole step): then sample
+    /// 0 has the levels now and every later one the targets'.
+    fn one_step(&self) -> bool {
         let s = &self.slew;
         let (sa, sd) = (
             step_of(s.amp_per_sample, 262_144.0),
             step_of(s.dc_per_sample, 65_536.0),
         );
         let sp = s.phase_per_sample.min(i32::MAX as u32);
-        let mut out = [(Fixed::of(0.0, 0.0, 0), Fixed::of(0.0, 0.0, 0)); 2];
-        for (o, c) in out.iter_mut().zip(&self.ch) {
+        self.ch.iter().all(|c| {
             let (from, to) = (
                 Fixed::of(c.amp, c.dc, c.phase),
                 Fixed::of(c.amp_target, c.dc_target, c.phase_target),
             );
             // Q4's n = ⌈|dist|/step⌉ ≤ 1 (0 for no distance).
-            let within = (to.ka - from.ka).unsigned_abs() <= sa
+            (to.ka - from.ka).unsigned_abs() <= sa
                 && (to.kd - from.kd).unsigned_abs() <= sd
-                && (to.ph.wrapping_sub(from.ph) as i32).unsigned_abs() <= sp;
-            if !within {
-                return None;
-            }
-            *o = (from, to);
-        }
-        Some(out)
-    }
-
-    /// [`Dds::fill_ramping`] when [`Dds::one_step`] holds (the same codes:
-    /// sample 0 at the factors now, the rest at the targets'), without
-    /// the general ramp's segments (issue 35: ≈ 900 instructions a fill).
-    fn fill_one_step<const LINEAR: bool>(&mut self, buf: &mut [u32], f: [(Fixed, Fixed); 2]) {
-        let [(from0, to0), (from1, to1)] = f;
-        let (head, tail) = buf.split_at_mut(buf.len().min(1));
-        let acc = Self::fill_fixed::<LINEAR>(self.table, self.tw, head, from0, from1, self.acc);
-        self.acc = Self::fill_fixed::<LINEAR>(self.table, self.tw, tail, to0, to1, acc);
-        let (n, s) = (buf.len() as u32, self.slew);
-        for c in &mut self.ch {
-            c.advance(&s, n);
-        }
+                && (to.ph.wrapping_sub(from.ph) as i32).unsigned_abs() <= sp
+        })
     }
 }
 
@@ -847,10 +966,29 @@ impl<const N: usize> Dds<'_, N> {
         }
     }
 
-    /// Both channels settled: one set of scale factors for the fill.
-    fn fill_settled<const LINEAR: bool>(&mut self, buf: &mut [u32]) {
-        let [f0, f1] = self.ch.map(|c| Fixed::of(c.amp, c.dc, c.phase));
-        self.acc = Self::fill_fixed::<LINEAR>(self.table, self.tw, buf, f0, f1, self.acc);
+    /// A fill from the table (eqs. Q1–Q4): settled channels at one set of
+    /// scale factors, a change within one sample's slew as sample 0 at the
+    /// factors now and the rest at the targets' (Q4 with `n ≤ 1`, without
+    /// the general ramp's segments), else the ramp.
+    fn fill_table<const LINEAR: bool>(&mut self, buf: &mut [u32]) {
+        let t = self.table;
+        let now = self.ch.map(|c| Fixed::of(c.amp, c.dc, c.phase));
+        if self.settled() {
+            self.acc = Self::fill_fixed::<LINEAR>(t, self.tw, buf, now[0], now[1], self.acc);
+        } else if self.one_step() {
+            let to = self
+                .ch
+                .map(|c| Fixed::of(c.amp_target, c.dc_target, c.phase_target));
+            let (head, tail) = buf.split_at_mut(buf.len().min(1));
+            let acc = Self::fill_fixed::<LINEAR>(t, self.tw, head, now[0], now[1], self.acc);
+            self.acc = Self::fill_fixed::<LINEAR>(t, self.tw, tail, to[0], to[1], acc);
+            let (n, s) = (buf.len() as u32, self.slew);
+            for c in &mut self.ch {
+                c.advance(&s, n);
+            }
+        } else {
+            self.fill_ramping::<LINEAR>(buf);
+        }
     }
 
     /// `buf` at fixed scale factors from accumulator `acc`; the
@@ -939,6 +1077,28 @@ impl<const N: usize> Dds<'_, N> {
             c.advance(&s, n);
         }
     }
+}
+
+/// `buf[i]` = the packed codes (eq. Q6) of reference word `refs[i]`: the
+/// channels' factors `first` for sample 0, `rest` after.
+#[inline(always)]
+fn synthesize(buf: &mut [u32], refs: &[u32], first: [RefCoef; 2], rest: [RefCoef; 2]) {
+    let n = buf.len().min(refs.len());
+    if n == 0 {
+        return;
+    }
+    buf[0] = packed_codes(first[0], first[1], refs[0]);
+    let [f0, f1] = rest;
+    for (w, &r) in buf[1..n].iter_mut().zip(&refs[1..n]) {
+        *w = packed_codes(f0, f1, r);
+    }
+}
+
+/// The DHR12RD word (channel 1 low, channel 2 high) of reference word `r`
+/// for the factors `f0`, `f1` (eq. Q6).
+#[inline(always)]
+fn packed_codes(f0: RefCoef, f1: RefCoef, r: u32) -> u32 {
+    f0.code(r) | (f1.code(r) << 16)
 }
 
 /// Rounds a real code to the nearest integer and clamps it to `0..=4095`.

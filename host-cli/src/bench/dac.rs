@@ -1,7 +1,8 @@
 //! `fricctl bench dac`: the DAC waveform path — spectral purity against cost.
 //!
 //! [`device_host::dac_bench`] measures the board's DDS ([`board::dds`]) for
-//! every sine table size, interpolation and table backend, and sin per
+//! every sine table size, reading (nearest entry, linear interpolation,
+//! or from the drive phase's reference words) and table backend, and sin per
 //! sample without a table: SFDR (dBc), worst error (LSB) and host time per
 //! sample. This module writes `dac.csv`, the table on stdout and the chart
 //! (SVG + PNG), the board's setting marked in every panel.
@@ -63,7 +64,7 @@ pub fn run(a: &DacArgs) -> CliResult {
 }
 
 /// The table series: (interp, backend, palette index, marker, legend text).
-const TABLE_SERIES: [(&str, &str, usize, Marker, &str); 4] = [
+const TABLE_SERIES: [(&str, &str, usize, Marker, &str); 6] = [
     (
         "nearest",
         "libm",
@@ -92,6 +93,20 @@ const TABLE_SERIES: [(&str, &str, usize, Marker, &str); 4] = [
         Marker::Ring,
         "linear interpolation, micromath table",
     ),
+    (
+        "reference",
+        "libm",
+        2,
+        Marker::Triangle,
+        "from the reference words (eq. Q6), libm table",
+    ),
+    (
+        "reference",
+        "micromath",
+        3,
+        Marker::OpenTriangle,
+        "from the reference words (eq. Q6), micromath table",
+    ),
 ];
 /// The direct rows: (backend, palette index, legend text).
 const DIRECT_SERIES: [(&str, usize, &str); 2] = [
@@ -99,7 +114,7 @@ const DIRECT_SERIES: [(&str, usize, &str); 2] = [
     ("micromath", 8, "sin per sample, micromath (no table)"),
 ];
 /// The board's setting, marked in every panel.
-const CHOSEN: (usize, &str, &str) = (1024, "linear", "libm");
+const CHOSEN: (usize, &str, &str) = (1024, "reference", "libm");
 
 /// The table size axis of every panel.
 const N_RANGE: (f64, f64) = (10.0, 1.0e5);
@@ -178,7 +193,7 @@ fn legend() -> Vec<Series> {
         color,
     }));
     legend.push(Series {
-        label: "the board's setting: libm table, N = 1024, linear".to_string(),
+        label: "the board's setting: libm table, N = 1024, from the reference".to_string(),
         points: Vec::new(),
         mark: Mark::Markers(Marker::Highlight),
         color: 6,
@@ -235,12 +250,17 @@ fn chart(pts: &[DacPoint]) -> Figure {
         cols: 3,
         size: (1800, 740),
         legend: legend(),
-        caption: vec![format!(
-            "DDS of the board: 12-bit DAC at {:.0} kS/s, {:.1} kHz ({CYCLES} cycles in {SAMPLES} \
-             samples, coherent), amplitude 2047 codes; SFDR over the {SAMPLES}-point FFT; \
-             error against the ideal sine in f64 (0.5 LSB = rounding alone).",
-            FS / 1e3,
-            f64::from(CYCLES) * FS / SAMPLES as f64 / 1e3
-        )],
+        caption: vec![
+            format!(
+                "DDS of the board: 12-bit DAC at {:.0} kS/s, {:.1} kHz ({CYCLES} cycles in \
+                 {SAMPLES} samples, coherent), amplitude 2047 codes, DC 2047.5 codes.",
+                FS / 1e3,
+                f64::from(CYCLES) * FS / SAMPLES as f64 / 1e3
+            ),
+            format!(
+                "SFDR over the {SAMPLES}-point FFT; error against the ideal sine in f64 \
+                 (0.5 LSB = rounding alone)."
+            ),
+        ],
     }
 }
