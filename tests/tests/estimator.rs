@@ -338,3 +338,68 @@ fn short_windows_span_exact_periods_at_non_integer_samples_per_period() {
     }
     println!("largest error / bound: {worst:.3}");
 }
+
+/// μ from the window's integer sums without f64 (eq. E2: each sum taken
+/// about an integer near its offset, exactly, before any rounding): a
+/// constant force, whose exact means are its counts whatever the window's
+/// fractional edges, against μ = g_x(c_x − o_x)/(g_z(c_z − o_z)) in f64 —
+/// with the tangential count 0.7 above its offset (the cancellation a mean
+/// formed in f32 first would lose: 2048·2⁻²⁴/0.7 ≈ 1.7e-4 relative) and
+/// windows long enough that the raw sums pass 2²⁴ (f32's exact integers).
+/// The bound: D, e₁ − e₀·k and the quotient each rounded once in f32, so δ
+/// is within (|D| + 2·(|e₁| + |e₀ k|))·2⁻²³/W + |δ|·2⁻²², which carries to
+/// μ relatively through each signal's δ − (o − k) (the difference of an
+/// f32 and an integer near it, exact), and four roundings more.
+#[test]
+fn mu_from_integer_sums_keeps_a_small_force_exact() {
+    let table = SineTable::<1024>::libm();
+    let tw = (4_294_967_296.0 / 25.0013) as u32;
+    for (periods, cx, cz, ox, oz) in [
+        (2_000u32, 2048u16, 3000u16, 2047.3f32, 150.25f32),
+        (20_000, 2048, 3000, 2047.3, 150.25),
+        (1, 301, 4000, 300.5, 2.0),
+        (500, 4094, 2049, 100.0, 2048.9),
+    ] {
+        let (gx, gz) = (0.01f32, 0.02f32);
+        let mut est = Estimator::new(
+            Calibration {
+                gain: gx,
+                offset: ox,
+            },
+            Calibration {
+                gain: gz,
+                offset: oz,
+            },
+            FULL,
+        )
+        .unwrap();
+        let r = run(&mut est, &table, tw, periods, |_| (cx, cz));
+        let exact = f64::from(gx) * (f64::from(cx) - f64::from(ox))
+            / (f64::from(gz) * (f64::from(cz) - f64::from(oz)));
+        // W ≥ samples; |e₁| ≤ 2·4095, |e₀ k| ≤ 2·4095 (two edges of weight < 1).
+        let w = f64::from(r.samples);
+        let rel = |c: f64, o: f64| {
+            let (k, delta) = (o.trunc(), c - o.trunc());
+            let d = w * delta.abs();
+            let err = (d + 4.0 * 4095.0) * 2f64.powi(-23) / w + delta.abs() * 2f64.powi(-22);
+            err / (c - o).abs()
+        };
+        let bound = exact.abs()
+            * (rel(f64::from(cx), f64::from(ox))
+                + rel(f64::from(cz), f64::from(oz))
+                + 4.0 * 2f64.powi(-24));
+        let err = (f64::from(r.mu) - exact).abs();
+        eprintln!(
+            "periods {periods}: mu {} vs {exact}, error {err:.2e} of bound {bound:.2e}",
+            r.mu
+        );
+        assert!(
+            err <= bound,
+            "periods {periods}: {} vs {exact} ({bound})",
+            r.mu
+        );
+        // A constant force: every batch the same, the standard error 0 to
+        // f32's rounding of the residuals.
+        assert!(f64::from(r.std_error) <= 1e-6 * exact.abs(), "{r:?}");
+    }
+}

@@ -526,26 +526,48 @@ impl Estimator {
         self.mu_estimate().map(|m| m.estimate)
     }
 
-    /// μ and the means in f64 (the sums are exact; the few soft-float
-    /// operations on the M4 keep μ to ≈ 1e-16, so that the standard error
-    /// of a noiseless window is 0 to f32's rounding), the standard error
-    /// from the batches' integer deviations ([`Estimator::std_error`]).
+    /// μ and the means from the exact integer sums with no soft-float f64
+    /// (issue 35: ≈ 1 900 instructions of soft-float on the M4 before):
+    /// each signal's sum is first taken about an integer `k` near its zero
+    /// offset, in i64, exactly,
+    ///
+    /// ```text
+    /// D = Σcounts − n·k,   δ = (D + e₁ − e₀·k)/W,   ⟨f⟩ = g·(δ − (o − k))       (E2)
+    /// ```
+    ///
+    /// (`W = n + e₀` the window's weight with its fractional edges `e₀`, `e₁`
+    /// the edges' weighted counts; `o` the calibration's offset, `g` its
+    /// gain), so the large common part `n·k` never meets a float: `D` is
+    /// exact before its one rounding to f32, and δ, the mean count above
+    /// `k`, is a number of counts near the force's own (tens), rounded at
+    /// ≈ 6e-8 of itself. μ = ⟨f_x⟩/⟨f_z⟩ is then within a few f32 roundings
+    /// of the exact ratio of the sums (≈ 4e-7 relative; the f64 path's μ
+    /// was rounded to f32 for the answer too). The means the standard error
+    /// takes are `k + δ`, in Q16 as `k·2¹⁶ + round(δ·2¹⁶)`
+    /// ([`Estimator::std_error`]).
     fn mu_estimate(&self) -> Result<MuEstimate, EstimateError> {
         if self.state != State::Done || self.sums.n == 0 {
             return Err(EstimateError::NotReady);
         }
         let s = &self.sums;
-        // The window's weight and sums with its fractional edges.
-        let n = s.n as f64 + f64::from(s.edge[0]);
-        let mean_x = (s.raw_x as f64 + f64::from(s.edge[1])) / n;
-        let mean_z = (s.raw_z as f64 + f64::from(s.edge[2])) / n;
-        let fx = f64::from(self.cal_x.gain) * (mean_x - f64::from(self.cal_x.offset));
-        let fz = f64::from(self.cal_z.gain) * (mean_z - f64::from(self.cal_z.offset));
+        let w = s.n as f32 + s.edge[0];
+        // (E2) for one signal: (k, δ) of its sum `raw` and edge sum `e1`
+        // about the integer `k` nearest below its offset.
+        let about = |raw: u64, e1: f32, offset: f32| {
+            let k = offset as i32;
+            let d = raw as i64 - i64::from(s.n) * i64::from(k);
+            let delta = (d as f32 + (e1 - s.edge[0] * k as f32)) / w;
+            (k, delta, delta - (offset - k as f32))
+        };
+        let (kx, dx, ax) = about(s.raw_x, s.edge[1], self.cal_x.offset);
+        let (kz, dz, az) = about(s.raw_z, s.edge[2], self.cal_z.offset);
+        let fx = self.cal_x.gain * ax;
+        let fz = self.cal_z.gain * az;
         if fz.is_nan() || fz <= 0.0 {
             return Err(EstimateError::NoNormalForce);
         }
         let mu = fx / fz;
-        let std_error = self.std_error(mu, (mean_x, mean_z), n * fz);
+        let std_error = self.std_error(mu, [(kx, dx), (kz, dz)], w * fz);
         let mut reasons = self.reasons;
         if self.saturated {
             reasons |= reasons::SATURATED;
@@ -558,17 +580,17 @@ impl Estimator {
             phase: 0.0,
         };
         Ok(MuEstimate {
-            weight: n as f32,
+            weight: w,
             estimate: Estimate {
-                mu: mu as f32,
-                fx_mean: fx as f32,
-                fz_mean: fz as f32,
+                mu,
+                fx_mean: fx,
+                fz_mean: fz,
                 fx_h1: none,
                 fz_h1: none,
                 samples: s.n,
                 periods: self.periods,
                 saturated: self.saturated,
-                std_error: std_error as f32,
+                std_error,
                 reasons,
             },
         })
@@ -576,11 +598,11 @@ impl Estimator {
 
     /// `σ_μ = √(B/(B−1)·Σ(X_b − μZ_b)²)/|Z|` over the non-empty batches
     /// (module docs); 0 for fewer than two. `means` are the window's mean
-    /// counts `(m_x, m_z)` that `μ` was formed from, `z` the window's
-    /// calibrated normal sum `Z = W·⟨f_z⟩`. Each batch's residual is formed
-    /// from its deviations from the window's means, `d = S_b − W_b·m`
-    /// (counts; the integer part exact in i64 with the means in Q16, the
-    /// edges in f32), as
+    /// counts that `μ` was formed from, as `(k, δ)`: `m = k + δ` (eq. E2),
+    /// `z` the window's calibrated normal sum `Z = W·⟨f_z⟩`. Each batch's
+    /// residual is formed from its deviations from the window's means,
+    /// `d = S_b − W_b·m` (counts; the integer part exact in i64 with the
+    /// means in Q16, the edges in f32), as
     ///
     /// ```text
     /// X_b − μ·Z_b = g_x·d_x − μ·g_z·d_z                             (E1)
@@ -589,11 +611,15 @@ impl Estimator {
     /// — exact, because `g_x(m_x − o_x) = μ·g_z(m_z − o_z)` defines μ — so
     /// the calibrated sums' large common part never meets f32 (issue 35:
     /// per batch a few integer and f32 operations, not soft-float f64).
-    fn std_error(&self, mu: f64, means: (f64, f64), z: f64) -> f64 {
-        let q16 = |m: f64| (m * 65_536.0 + 0.5) as i64;
-        let (qx, qz) = (q16(means.0), q16(means.1));
-        let (mx, mz) = (means.0 as f32, means.1 as f32);
-        let (gx, gz, muf) = (self.cal_x.gain, self.cal_z.gain, mu as f32);
+    fn std_error(&self, mu: f32, means: [(i32, f32); 2], z: f32) -> f32 {
+        let q16 = |(k, delta): (i32, f32)| {
+            let x = delta * 65_536.0;
+            (i64::from(k) << 16) + (if x >= 0.0 { x + 0.5 } else { x - 0.5 }) as i64
+        };
+        let (qx, qz) = (q16(means[0]), q16(means[1]));
+        let m = |(k, delta): (i32, f32)| k as f32 + delta;
+        let (mx, mz) = (m(means[0]), m(means[1]));
+        let (gx, gz, muf) = (self.cal_x.gain, self.cal_z.gain, mu);
         let (mut used, mut sum_sq) = (0u32, 0.0f32);
         let edges = self.sums.edge_b.iter();
         for (&(n, rx, rz), e) in self.sums.batch.iter().zip(edges).filter(|b| b.0 .0 > 0) {
@@ -610,8 +636,8 @@ impl Estimator {
             return 0.0;
         }
         let b = used as f32;
-        // Reported as f32: the root in f32 (FastF32, relative error a few ulps).
-        f64::from(FastF32::sqrt(b / (b - 1.0) * sum_sq)) / z.abs()
+        // The root in f32 (FastF32, relative error a few ulps).
+        FastF32::sqrt(b / (b - 1.0) * sum_sq) / z.abs()
     }
 }
 
