@@ -379,7 +379,7 @@ fn mu_from_integer_sums_keeps_a_small_force_exact() {
         // W ≥ samples; |e₁| ≤ 2·4095, |e₀ k| ≤ 2·4095 (two edges of weight < 1).
         let w = f64::from(r.samples);
         let rel = |c: f64, o: f64| {
-            let (k, delta) = (o.trunc(), c - o.trunc());
+            let delta = c - o.trunc();
             let d = w * delta.abs();
             let err = (d + 4.0 * 4095.0) * 2f64.powi(-23) / w + delta.abs() * 2f64.powi(-22);
             err / (c - o).abs()
