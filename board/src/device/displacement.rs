@@ -171,6 +171,32 @@ pub const OPEN_S: f32 = 1.0e-3;
 /// 20 kHz: the noise falls by ≈ √(2·1 ms/128 µs) ≈ 4).
 pub const SMOOTHING_S: f32 = 1e-3;
 
+/// The bounds the loops compare squared magnitudes with (issue 35: `|a| ≤
+/// t` as `|a|² ≤ t²`, two multiplies instead of a fast hypot's ≈ 90
+/// instructions on the M4F): the squares of the constants above.
+pub(super) mod sq {
+    /// `HOLD_TOLERANCE²`.
+    pub const HOLD_TOLERANCE: f32 = super::HOLD_TOLERANCE * super::HOLD_TOLERANCE;
+    /// `RELEASE_TOLERANCE²`.
+    pub const RELEASE_TOLERANCE: f32 = super::RELEASE_TOLERANCE * super::RELEASE_TOLERANCE;
+    /// `HOLD_FLOOR_M²`, m².
+    pub const HOLD_FLOOR_M: f32 = super::HOLD_FLOOR_M * super::HOLD_FLOOR_M;
+    /// `RELEASE_FLOOR_M²`, m².
+    pub const RELEASE_FLOOR_M: f32 = super::RELEASE_FLOOR_M * super::RELEASE_FLOOR_M;
+    /// `OPEN_FLOOR_M²`, m².
+    pub const OPEN_FLOOR_M: f32 = super::OPEN_FLOOR_M * super::OPEN_FLOOR_M;
+    /// `OPEN_FRACTION²`.
+    pub const OPEN_FRACTION: f32 = super::OPEN_FRACTION * super::OPEN_FRACTION;
+    /// `STEADY_FRACTION²`.
+    pub const STEADY_FRACTION: f32 = super::STEADY_FRACTION * super::STEADY_FRACTION;
+    /// `C_MAX²`.
+    pub const C_MAX: f32 = super::C_MAX * super::C_MAX;
+    /// `1/C_MAX²`.
+    pub const C_MIN: f32 = 1.0 / (super::C_MAX * super::C_MAX);
+    /// The twentieth of the setting below which D3 waits, squared.
+    pub const D3_FROM: f32 = 0.05 * 0.05;
+}
+
 /// The model's responses and envelope dynamics at one DDS frequency
 /// (and tracked resonance): computed once per change, not per fill.
 #[derive(Debug, Clone, Copy)]
@@ -699,9 +725,9 @@ impl<const N: usize> Device<'_, N> {
             let dn2 = d[ch].norm_sqr();
             let e2 = (self.loops.env[ch] - d[ch]).norm_sqr();
             if dn2 > 0.0 {
-                e2 <= HOLD_TOLERANCE * HOLD_TOLERANCE * dn2 && self.loops.last_d[ch] == d[ch]
+                e2 <= sq::HOLD_TOLERANCE * dn2 && self.loops.last_d[ch] == d[ch]
             } else {
-                e2 <= HOLD_FLOOR_M * HOLD_FLOOR_M
+                e2 <= sq::HOLD_FLOOR_M
             }
         })
     }
@@ -730,10 +756,10 @@ impl<const N: usize> Device<'_, N> {
         let mut within = true;
         // Hysteresis: a holding drive is released only beyond the wider
         // bounds (RELEASE_TOLERANCE, RELEASE_FLOOR_M).
-        let (tol, floor) = if self.loops.holding() {
-            (RELEASE_TOLERANCE, RELEASE_FLOOR_M)
+        let (tol2, floor2) = if self.loops.holding() {
+            (sq::RELEASE_TOLERANCE, sq::RELEASE_FLOOR_M)
         } else {
-            (HOLD_TOLERANCE, HOLD_FLOOR_M)
+            (sq::HOLD_TOLERANCE, sq::HOLD_FLOOR_M)
         };
         let models = self.tracker.models(&t);
         for (ch, m) in models.iter().enumerate() {
@@ -742,15 +768,13 @@ impl<const N: usize> Device<'_, N> {
             // |a|² ≤ t²·|b|², NaN false either way.
             let dn2 = target[ch].norm_sqr();
             within &= if dn2 > 0.0 {
-                (avg[ch] - target[ch]).norm_sqr() <= tol * tol * dn2
+                (avg[ch] - target[ch]).norm_sqr() <= tol2 * dn2
             } else {
-                avg[ch].norm_sqr() <= floor * floor
+                avg[ch].norm_sqr() <= floor2
             };
             let mn2 = mean[ch].norm_sqr();
             // An open pickup: the model says the mode moves, the pickup not.
-            if mn2 > OPEN_FLOOR_M * OPEN_FLOOR_M
-                && x[ch].norm_sqr() < OPEN_FRACTION * OPEN_FRACTION * mn2
-            {
+            if mn2 > sq::OPEN_FLOOR_M && x[ch].norm_sqr() < sq::OPEN_FRACTION * mn2 {
                 self.loops.open[ch] += window_s;
                 if self.loops.open[ch] >= OPEN_S * (1.0 - 1e-3) {
                     self.fault(super::faults::PICKUP_OPEN);
@@ -765,7 +789,7 @@ impl<const N: usize> Device<'_, N> {
             // error then holds the model's dynamics error too, τ̂ and ω̂_r,
             // which the dead-beat fills would otherwise leave to die out
             // with the mode's own τ).
-            if dn2 <= 0.0 || mn2 < 0.05 * 0.05 * dn2 {
+            if dn2 <= 0.0 || mn2 < sq::D3_FROM * dn2 {
                 continue;
             }
             if moving[ch] {
@@ -776,7 +800,7 @@ impl<const N: usize> Device<'_, N> {
             let k = (window_s / (4.0 * tau)).min(0.5);
             let c = self.loops.c[ch] * (C::new(1.0, 0.0) + e * k);
             let cn2 = c.norm_sqr();
-            if (1.0 / (C_MAX * C_MAX)..=C_MAX * C_MAX).contains(&cn2) {
+            if (sq::C_MIN..=sq::C_MAX).contains(&cn2) {
                 self.loops.c[ch] = c;
                 self.loops.saturated[ch] = false;
             } else {
