@@ -171,32 +171,6 @@ pub const OPEN_S: f32 = 1.0e-3;
 /// 20 kHz: the noise falls by ≈ √(2·1 ms/128 µs) ≈ 4).
 pub const SMOOTHING_S: f32 = 1e-3;
 
-/// The bounds the loops compare squared magnitudes with (issue 35: `|a| ≤
-/// t` as `|a|² ≤ t²`, two multiplies instead of a fast hypot's ≈ 90
-/// instructions on the M4F): the squares of the constants above.
-pub(super) mod sq {
-    /// `HOLD_TOLERANCE²`.
-    pub const HOLD_TOLERANCE: f32 = super::HOLD_TOLERANCE * super::HOLD_TOLERANCE;
-    /// `RELEASE_TOLERANCE²`.
-    pub const RELEASE_TOLERANCE: f32 = super::RELEASE_TOLERANCE * super::RELEASE_TOLERANCE;
-    /// `HOLD_FLOOR_M²`, m².
-    pub const HOLD_FLOOR_M: f32 = super::HOLD_FLOOR_M * super::HOLD_FLOOR_M;
-    /// `RELEASE_FLOOR_M²`, m².
-    pub const RELEASE_FLOOR_M: f32 = super::RELEASE_FLOOR_M * super::RELEASE_FLOOR_M;
-    /// `OPEN_FLOOR_M²`, m².
-    pub const OPEN_FLOOR_M: f32 = super::OPEN_FLOOR_M * super::OPEN_FLOOR_M;
-    /// `OPEN_FRACTION²`.
-    pub const OPEN_FRACTION: f32 = super::OPEN_FRACTION * super::OPEN_FRACTION;
-    /// `STEADY_FRACTION²`.
-    pub const STEADY_FRACTION: f32 = super::STEADY_FRACTION * super::STEADY_FRACTION;
-    /// `C_MAX²`.
-    pub const C_MAX: f32 = super::C_MAX * super::C_MAX;
-    /// `1/C_MAX²`.
-    pub const C_MIN: f32 = 1.0 / (super::C_MAX * super::C_MAX);
-    /// The twentieth of the setting below which D3 waits, squared.
-    pub const D3_FROM: f32 = 0.05 * 0.05;
-}
-
 /// The model's responses and envelope dynamics at one DDS frequency
 /// (and tracked resonance): computed once per change, not per fill.
 #[derive(Debug, Clone, Copy)]
@@ -675,9 +649,7 @@ impl<const N: usize> Device<'_, N> {
             // The DAC's room around the DC, less a part in 10⁴ (the level's
             // own check must pass after the f32 round trip).
             let room = dc.min(f32::from(crate::dds::DAC_MAX) - dc).max(0.0) * v * 0.9999;
-            // |d/hc| = √(|d|²/|hc|²): one root, no complex division and hypot.
-            let steady = FastF32::sqrt(d[ch].norm_sqr() / hc.norm_sqr());
-            let bound = (h_room * steady.max(self.loops.u_prev[ch])).min(room);
+            let bound = (h_room * norm(d[ch] / hc).max(self.loops.u_prev[ch])).min(room);
             let mut un = norm(u);
             let cut = un > bound || un.is_nan();
             moving[ch] =
@@ -720,14 +692,13 @@ impl<const N: usize> Device<'_, N> {
     /// "reached").
     pub(super) fn model_reached(&self) -> bool {
         let d = setpoint(&self.drive);
-        // Squared, as in `displacement_step`.
         (0..2).all(|ch| {
-            let dn2 = d[ch].norm_sqr();
-            let e2 = (self.loops.env[ch] - d[ch]).norm_sqr();
-            if dn2 > 0.0 {
-                e2 <= sq::HOLD_TOLERANCE * dn2 && self.loops.last_d[ch] == d[ch]
+            let dn = norm(d[ch]);
+            let e = norm(self.loops.env[ch] - d[ch]);
+            if dn > 0.0 {
+                e <= HOLD_TOLERANCE * dn && self.loops.last_d[ch] == d[ch]
             } else {
-                e2 <= sq::HOLD_FLOOR_M
+                e <= HOLD_FLOOR_M
             }
         })
     }
@@ -756,25 +727,22 @@ impl<const N: usize> Device<'_, N> {
         let mut within = true;
         // Hysteresis: a holding drive is released only beyond the wider
         // bounds (RELEASE_TOLERANCE, RELEASE_FLOOR_M).
-        let (tol2, floor2) = if self.loops.holding() {
-            (sq::RELEASE_TOLERANCE, sq::RELEASE_FLOOR_M)
+        let (tol, floor) = if self.loops.holding() {
+            (RELEASE_TOLERANCE, RELEASE_FLOOR_M)
         } else {
-            (sq::HOLD_TOLERANCE, sq::HOLD_FLOOR_M)
+            (HOLD_TOLERANCE, HOLD_FLOOR_M)
         };
         let models = self.tracker.models(&t);
         for (ch, m) in models.iter().enumerate() {
-            // Magnitudes compared squared (issue 35: a fast hypot is ≈ 90
-            // instructions on the M4F, a square two): |a/b| ≤ t as
-            // |a|² ≤ t²·|b|², NaN false either way.
-            let dn2 = target[ch].norm_sqr();
-            within &= if dn2 > 0.0 {
-                (avg[ch] - target[ch]).norm_sqr() <= tol2 * dn2
+            let dn = norm(target[ch]);
+            within &= if dn > 0.0 {
+                norm((avg[ch] - target[ch]) / target[ch]) <= tol
             } else {
-                avg[ch].norm_sqr() <= floor2
+                norm(avg[ch]) <= floor
             };
-            let mn2 = mean[ch].norm_sqr();
+            let mn = norm(mean[ch]);
             // An open pickup: the model says the mode moves, the pickup not.
-            if mn2 > sq::OPEN_FLOOR_M && x[ch].norm_sqr() < sq::OPEN_FRACTION * mn2 {
+            if mn > OPEN_FLOOR_M && norm(x[ch]) < OPEN_FRACTION * mn {
                 self.loops.open[ch] += window_s;
                 if self.loops.open[ch] >= OPEN_S * (1.0 - 1e-3) {
                     self.fault(super::faults::PICKUP_OPEN);
@@ -789,7 +757,7 @@ impl<const N: usize> Device<'_, N> {
             // error then holds the model's dynamics error too, τ̂ and ω̂_r,
             // which the dead-beat fills would otherwise leave to die out
             // with the mode's own τ).
-            if dn2 <= 0.0 || mn2 < sq::D3_FROM * dn2 {
+            if dn <= 0.0 || mn < 0.05 * dn {
                 continue;
             }
             if moving[ch] {
@@ -799,8 +767,8 @@ impl<const N: usize> Device<'_, N> {
             let tau = m.q / (core::f32::consts::PI * m.resonance_hz);
             let k = (window_s / (4.0 * tau)).min(0.5);
             let c = self.loops.c[ch] * (C::new(1.0, 0.0) + e * k);
-            let cn2 = c.norm_sqr();
-            if (sq::C_MIN..=sq::C_MAX).contains(&cn2) {
+            let cn = norm(c);
+            if (1.0 / C_MAX..=C_MAX).contains(&cn) {
                 self.loops.c[ch] = c;
                 self.loops.saturated[ch] = false;
             } else {

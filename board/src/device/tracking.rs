@@ -38,7 +38,7 @@
 
 use num_complex::Complex32 as C;
 
-use super::displacement::{arg, sq, HOLD_FLOOR_M};
+use super::displacement::{arg, norm, HOLD_FLOOR_M, STEADY_FRACTION};
 use super::{Device, TransducerModel, Transducers};
 pub use crate::protocol::messages::Track;
 use model_core::float::{FastF32, Math};
@@ -60,9 +60,6 @@ pub const LOSS_S: f32 = 2.0e-3;
 /// it had. `SetDrive` refuses a smaller setting while tracking is on
 /// (`DeviceError::OutOfRange` with this as its least value).
 pub const TRACK_MIN_AMP_M: f32 = 10.0 * HOLD_FLOOR_M;
-
-/// `TRACK_MIN_AMP_M²`, m² (compared with a squared magnitude).
-const TRACK_MIN_AMP_M2: f32 = TRACK_MIN_AMP_M * TRACK_MIN_AMP_M;
 
 /// Envelope time constants τ̂ the tracking may take to lock.
 pub const ACQUIRE_TAUS: f32 = 40.0;
@@ -131,7 +128,7 @@ impl<const N: usize> Device<'_, N> {
         let ch = if self.options.track == Track::X { 1 } else { 0 };
         let id = if ch == 0 { t.z } else { t.x };
         let d = super::displacement::setpoint(&self.drive)[ch];
-        if d.norm_sqr() <= 0.0 {
+        if norm(d) <= 0.0 {
             // Nothing to track on an undriven mode.
             return;
         }
@@ -151,12 +148,11 @@ impl<const N: usize> Device<'_, N> {
         let models = self.tracker.models(t);
         let h = super::displacement::model_response(&models[ch], f) * self.loops.c[ch];
         let steady = h * u[ch];
-        // Magnitudes compared squared (a fast hypot is ≈ 90 instructions).
-        let gap2 = (mean[ch] - steady).norm_sqr();
-        if gap2.is_nan() || gap2 > sq::STEADY_FRACTION * steady.norm_sqr() {
+        let gap = norm(mean[ch] - steady);
+        if gap.is_nan() || gap > STEADY_FRACTION * norm(steady) {
             return;
         }
-        let usable = u[ch].norm_sqr() > 0.0 && x[ch].norm_sqr() > TRACK_MIN_AMP_M2;
+        let usable = norm(u[ch]) > 0.0 && norm(x[ch]) > TRACK_MIN_AMP_M;
         let estimate = if usable {
             resonance_of(x[ch] / u[ch], f, &id)
         } else {
