@@ -673,11 +673,41 @@ fn a_fill_writes_the_reference_words_of_its_own_phases() {
             }
         }
         let (acc0, tw) = (d.accumulator(), d.tuning_word());
-        let split = fill % 65;
+        // The empty head and the empty tail, then splits across the block,
+        // each on every kind of fill (five fills in a row share one).
+        let split = match fill / 5 {
+            0 => 0,
+            1 => 64,
+            k => (k * 11) % 65,
+        };
         let (mut head, mut tail) = ([0u32; 64], [0u32; 64]);
         let mut buf = [0u32; 64];
+        let (path, before) = (d.fill_path(), *d.channels());
         assert!(d.fill_with_reference(&mut buf, &mut head[..split], &mut tail[..64 - split]));
         assert_eq!(d.accumulator(), acc0.wrapping_add(tw.wrapping_mul(64)));
+        // A fill from the words: sample 0 at the levels now, the rest at the
+        // targets', each code within Q7 of the exact value in f64.
+        if path == FillPath::Reference {
+            for (i, &w) in buf.iter().enumerate() {
+                let p = acc0.wrapping_add(tw.wrapping_mul(i as u32));
+                let codes = unpack_dual(w);
+                for (ch, code) in [codes.0, codes.1].into_iter().enumerate() {
+                    let c = before[ch];
+                    let (amp, dc, ph) = if i == 0 {
+                        (c.amp, c.dc, c.phase)
+                    } else {
+                        (c.amp_target, c.dc_target, c.phase_target)
+                    };
+                    let (amp, dc) = (f64::from(amp), f64::from(dc));
+                    let exact = dc + amp * phase_rad(p.wrapping_add(ph)).sin();
+                    let bound = q7(&t, tw, amp);
+                    assert!(
+                        (f64::from(code) - exact).abs() <= bound,
+                        "fill {fill} split {split} ch {ch} sample {i}: {code} vs {exact}"
+                    );
+                }
+            }
+        }
         let bound = eps_r(&t, tw);
         for i in 0..64 {
             let w = if i < split { head[i] } else { tail[i - split] };

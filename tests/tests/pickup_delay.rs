@@ -93,6 +93,18 @@ fn run_fed(
     true_delay_s: f64,
     windows: usize,
 ) -> (Vec<MeasuredDrive>, f64) {
+    let (ms, wd, _) = run_fed_counted(cfg, d, true_delay_s, windows);
+    (ms, wd)
+}
+
+/// [`run_fed`], with the count of blocks whose reference the ADC formed
+/// itself (`Device::adc_references_formed`) and the blocks taken.
+fn run_fed_counted(
+    cfg: DeviceConfig,
+    d: DriveSetting,
+    true_delay_s: f64,
+    windows: usize,
+) -> (Vec<MeasuredDrive>, f64, (u32, u32)) {
     let table = SineTable::<1024>::libm();
     let mut dev = Device::new(cfg, &table, CONTACT).unwrap();
     dev.set_drive(d).unwrap();
@@ -135,7 +147,7 @@ fn run_fed(
             seen = m.windows;
         }
     }
-    (out, wd)
+    (out, wd, (dev.adc_references_formed(), dev.adc_blocks()))
 }
 
 /// The device's measured response `X/U` of channel `ch` as `(|H|, arg H)`.
@@ -259,9 +271,10 @@ fn the_board_converts_its_pickups_15_adc_clocks_after_the_forces() {
 /// * the counts' rounding, ≤ ½ count of `gain` per sample: ≤ ½·gain·G on
 ///   the phasor, G the window's error gain (`lockin_error_gain`, from the
 ///   fit's weights), so ≤ ½·gain·G/A on the phase;
-/// * the reference from the 1024-entry table, linear interpolation:
-///   `(2π/N)²/8 = 4.7e-6` per value, plus the table's f32 rounding (2⁻²⁴),
-///   moves the phasor by ≤ √2·G·(4.8e-6)·A: ≤ 1.4e-5 rad with G ≈ 2;
+/// * the reference words (eq. R1 of `board::reference`, formed by the DAC
+///   fill and kept for the ADC): each cosine and sine within ε_r ≤ 6.0e-5
+///   up to 100 kHz (R2), which moves the phasor by ≤ √2·G·ε_r·A: ≤ 1.7e-4
+///   rad with G ≈ 2;
 /// * the f32 arithmetic (the lock-in's sums of 64 terms, ≤ 64·2⁻²⁴·2 ≈
 ///   8e-6 relative; the phase word in f32, 2⁻²⁴·2π = 3.7e-7 rad; fast-f32
 ///   sin/cos ≤ 1e-7) and the delay rounded to a whole accumulator word
@@ -278,7 +291,7 @@ fn the_device_measures_the_response_of_delayed_pickups() {
     let g = lockin_error_gain(HALF_BUFFER, TAU * tw / WORDS);
     let cal = [cfg.pickup_z.gain, cfg.pickup_x.gain];
     let bound =
-        |ch: usize| 0.5 * f64::from(cal[ch]) * g / SIGNAL[ch].0 + 2f64.sqrt() * g * 4.8e-6 + 1e-4;
+        |ch: usize| 0.5 * f64::from(cal[ch]) * g / SIGNAL[ch].0 + 2f64.sqrt() * g * 6.0e-5 + 1e-4;
     // ω·δ at the DDS's 40 kHz: 10.29°.
     assert!(
         (wd.to_degrees() - 10.29).abs() < 0.01,
@@ -587,4 +600,40 @@ fn the_partial_hold_step_is_exact() {
     assert_eq!(m.update_for(0.0).err(), Some(ModeError::Step));
     assert_eq!(m.update_for(-dl).err(), Some(ModeError::Step));
     assert_eq!(m.update_for(f64::NAN).err(), Some(ModeError::Step));
+}
+
+/// The ADC takes the reference words its DAC fills formed (one rotation per
+/// sample for both: issue 35), laid out as it sees them: ADC sample `k`
+/// saw DAC word `k − L`. With L = 0, 1 and 3 samples, the pickups fed at
+/// the drive phase of word `k − L` (`run_fed`, in f64) are measured within
+/// the bound of `the_device_measures_the_response_of_delayed_pickups` —
+/// a layout off by one sample would turn every phase by ω/f_s = 29°, and a
+/// lag misapplied in either direction likewise — and only the first block,
+/// which has no fill before it, forms its own reference.
+#[test]
+fn the_adc_takes_the_reference_words_its_fills_formed() {
+    for lag in [0u32, 1, 3] {
+        let cfg = DeviceConfig::driver_board(lag);
+        let d = drive_40k();
+        let u = volts(&cfg, &d);
+        let (ms, _, (formed, blocks)) = run_fed_counted(cfg, d, cfg.pickup_delay_s, 10);
+        let tw = (40e3 / cfg.sample_rate_hz * WORDS).round();
+        let g = lockin_error_gain(HALF_BUFFER, TAU * tw / WORDS);
+        let cal = [cfg.pickup_z.gain, cfg.pickup_x.gain];
+        let bound = |ch: usize| {
+            0.5 * f64::from(cal[ch]) * g / SIGNAL[ch].0 + 2f64.sqrt() * g * 6.0e-5 + 1e-4
+        };
+        for m in &ms {
+            for ch in 0..2 {
+                let (_, arg) = response(m, ch);
+                let e = wrap(arg - wrap(SIGNAL[ch].1 - u[ch].1));
+                assert!(e.abs() <= bound(ch), "lag {lag} ch {ch}: error {e} rad");
+            }
+        }
+        assert!(blocks > 10, "{blocks}");
+        assert_eq!(
+            formed, 1,
+            "lag {lag}: {formed} of {blocks} blocks formed their own"
+        );
+    }
 }

@@ -106,6 +106,9 @@ pub struct Device<'t, const N: usize> {
     /// Which fills wrote each slot's two parts: `(n − 1, n)` when block
     /// `n`'s words are whole.
     fill_refs_by: [(u32, u32); measure::FILL_RING],
+    /// ADC blocks whose reference the ADC handler formed itself (their
+    /// fills' words not kept: `measure.rs`, `kept_reference`).
+    references_formed: u32,
     /// +1 per command that sets new DDS targets (accepted `set_drive`,
     /// `start`, `stop`, `fault`).
     ramp_generation: u32,
@@ -186,6 +189,7 @@ impl<'t, const N: usize> Device<'t, N> {
             half_conditions: [0; measure::FILL_RING],
             fill_refs: [[0; BLOCK]; measure::FILL_RING],
             fill_refs_by: [(1, 1); measure::FILL_RING],
+            references_formed: 0,
             ramp_generation: 0,
             control: None,
             fills: 0,
