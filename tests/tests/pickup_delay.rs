@@ -636,4 +636,18 @@ fn the_adc_takes_the_reference_words_its_fills_formed() {
             "lag {lag}: {formed} of {blocks} blocks formed their own"
         );
     }
+    // Half-buffers of 32 samples: no fill's words are kept (the board's
+    // are 64), and every block forms its own.
+    let cfg = DeviceConfig::driver_board(1);
+    let table = SineTable::<1024>::libm();
+    let mut dev = Device::new(cfg, &table, CONTACT).unwrap();
+    dev.set_drive(drive_40k()).unwrap();
+    dev.start().unwrap();
+    let mut dac = [0u32; 32];
+    let (forces, pickups) = ([(2048u16, 100u16); 32], [(2048u16, 2048u16); 32]);
+    for k in 0..20 {
+        dev.fill_dac(k % 2, &mut dac);
+        dev.adc_block_with_pickups(k % 2, &forces, &pickups);
+    }
+    assert_eq!((dev.adc_references_formed(), dev.adc_blocks()), (20, 20));
 }
