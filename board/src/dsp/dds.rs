@@ -145,16 +145,6 @@ impl<const N: usize> SineTable<N> {
         self.t[idx & (N - 1)]
     }
 
-    /// `sin(2π·phase/2³²)` by the chosen [`Interp`].
-    #[inline(always)]
-    pub fn sin_with(&self, interp: Interp, phase: u32) -> f32 {
-        match interp {
-            Interp::Nearest => self.sin_nearest(phase),
-            // A single phase's read is interpolated.
-            Interp::Linear | Interp::Reference => self.sin(phase),
-        }
-    }
-
     /// Linearly interpolated `sin(2π·phase/2³²)` (worst error `≈ (π/N)²/2`).
     #[inline(always)]
     pub fn sin(&self, phase: u32) -> f32 {
