@@ -359,6 +359,8 @@ fn mu_from_integer_sums_keeps_a_small_force_exact() {
         (20_000, 2048, 3000, 2047.3, 150.25),
         (1, 301, 4000, 300.5, 2.0),
         (500, 4094, 2049, 100.0, 2048.9),
+        // Below the integer k = 300: δ < 0, μ < 0.
+        (300, 299, 3000, 300.5, 150.25),
     ] {
         let (gx, gz) = (0.01f32, 0.02f32);
         let mut est = Estimator::new(
@@ -402,4 +404,57 @@ fn mu_from_integer_sums_keeps_a_small_force_exact() {
         // f32's rounding of the residuals.
         assert!(f64::from(r.std_error) <= 1e-6 * exact.abs(), "{r:?}");
     }
+}
+
+/// The standard error against its definition (estimator docs, eq. E1),
+/// computed here in f64 from the samples fed: 64 samples per period exactly
+/// (no fractional edges), 320 periods in 32 batches of 10, the normal force
+/// constant and the tangential count `2048 + d_b` constant within batch `b`
+/// (d_b from −5 to 5 counts): `σ_μ = √(B/(B−1)·Σ r_b²)/|Z|` with `r_b =
+/// g_x·640·(d_b − d̄)` and `Z = W·⟨f_z⟩`. The estimator's residuals are exact
+/// integers in Q16 and its sums of 32 squares in f32: within 1e-5 relative.
+/// (Without the B/(B−1) factor the value is 1.6 % low.)
+#[test]
+fn the_std_error_is_its_definition_on_batches_known_exactly() {
+    use board::estimator::BATCHES;
+    let table = SineTable::<1024>::libm();
+    let (cx, cz) = (
+        Calibration {
+            gain: 0.01,
+            offset: 2047.5,
+        },
+        Calibration {
+            gain: 0.02,
+            offset: 100.0,
+        },
+    );
+    let mut est = Estimator::new(cx, cz, FULL).unwrap();
+    let d = |b: usize| ((b * 7) % 11) as f64 - 5.0;
+    let periods = 320u32;
+    let per_batch = 64 * periods as usize / BATCHES;
+    // The window opens at the first wrap after the start at phase 0: sample 64.
+    let mut i = 0usize;
+    let r = run_from(&mut est, &table, 1 << 26, periods, 0, |_| {
+        let b = (i.saturating_sub(64) / per_batch).min(BATCHES - 1);
+        i += 1;
+        ((2048.0 + d(b)) as u16, 2000)
+    });
+    let w = 64.0 * f64::from(periods);
+    assert_eq!(f64::from(r.samples), w);
+    let mean_d = (0..BATCHES).map(d).sum::<f64>() / BATCHES as f64;
+    let (gx, gz) = (f64::from(cx.gain), f64::from(cz.gain));
+    let sum_sq: f64 = (0..BATCHES)
+        .map(|b| (gx * per_batch as f64 * (d(b) - mean_d)).powi(2))
+        .sum();
+    let bb = BATCHES as f64;
+    let fz = gz * (2000.0 - f64::from(cz.offset));
+    let want = (bb / (bb - 1.0) * sum_sq).sqrt() / (w * fz);
+    let mu = gx * (2048.0 + mean_d - f64::from(cx.offset)) / fz;
+    assert!(
+        (f64::from(r.mu) / mu - 1.0).abs() <= 1e-6,
+        "{} vs {mu}",
+        r.mu
+    );
+    let got = f64::from(r.std_error);
+    assert!((got / want - 1.0).abs() <= 1e-5, "σ_μ {got} vs {want}");
 }
