@@ -408,10 +408,11 @@ fn mu_from_integer_sums_keeps_a_small_force_exact() {
 
 /// The standard error against its definition (estimator docs, eq. E1),
 /// computed here in f64 from the samples fed: 64 samples per period exactly
-/// (no fractional edges), 320 periods in 32 batches of 10, the normal force
-/// constant and the tangential count `2048 + d_b` constant within batch `b`
-/// (d_b from −5 to 5 counts): `σ_μ = √(B/(B−1)·Σ r_b²)/|Z|` with `r_b =
-/// g_x·640·(d_b − d̄)` and `Z = W·⟨f_z⟩`. The estimator's residuals are exact
+/// (no fractional edges), 320 periods in 32 batches of 10, the counts
+/// `2048 + d_b` (tangential) and `2000 + e_b` (normal) constant within
+/// batch `b` (d_b from −5 to 5, e_b from −3 to 3): `σ_μ = √(B/(B−1)·Σ
+/// r_b²)/|Z|` with `r_b = 640·(g_x·(d_b − d̄) − μ·g_z·(e_b − ē))` and `Z =
+/// W·⟨f_z⟩`. The estimator's residuals are exact
 /// integers in Q16 and its sums of 32 squares in f32: within 1e-5 relative.
 /// (Without the B/(B−1) factor the value is 1.6 % low.)
 #[test]
@@ -430,6 +431,7 @@ fn the_std_error_is_its_definition_on_batches_known_exactly() {
     );
     let mut est = Estimator::new(cx, cz, FULL).unwrap();
     let d = |b: usize| ((b * 7) % 11) as f64 - 5.0;
+    let e = |b: usize| ((b * 3) % 7) as f64 - 3.0;
     let periods = 320u32;
     let per_batch = 64 * periods as usize / BATCHES;
     // The window opens at the first wrap after the start at phase 0: sample 64.
@@ -437,19 +439,20 @@ fn the_std_error_is_its_definition_on_batches_known_exactly() {
     let r = run_from(&mut est, &table, 1 << 26, periods, 0, |_| {
         let b = (i.saturating_sub(64) / per_batch).min(BATCHES - 1);
         i += 1;
-        ((2048.0 + d(b)) as u16, 2000)
+        ((2048.0 + d(b)) as u16, (2000.0 + e(b)) as u16)
     });
     let w = 64.0 * f64::from(periods);
     assert_eq!(f64::from(r.samples), w);
     let mean_d = (0..BATCHES).map(d).sum::<f64>() / BATCHES as f64;
+    let mean_e = (0..BATCHES).map(e).sum::<f64>() / BATCHES as f64;
     let (gx, gz) = (f64::from(cx.gain), f64::from(cz.gain));
+    let fz = gz * (2000.0 + mean_e - f64::from(cz.offset));
+    let mu = gx * (2048.0 + mean_d - f64::from(cx.offset)) / fz;
     let sum_sq: f64 = (0..BATCHES)
-        .map(|b| (gx * per_batch as f64 * (d(b) - mean_d)).powi(2))
+        .map(|b| (per_batch as f64 * (gx * (d(b) - mean_d) - mu * gz * (e(b) - mean_e))).powi(2))
         .sum();
     let bb = BATCHES as f64;
-    let fz = gz * (2000.0 - f64::from(cz.offset));
     let want = (bb / (bb - 1.0) * sum_sq).sqrt() / (w * fz);
-    let mu = gx * (2048.0 + mean_d - f64::from(cx.offset)) / fz;
     assert!(
         (f64::from(r.mu) / mu - 1.0).abs() <= 1e-6,
         "{} vs {mu}",
