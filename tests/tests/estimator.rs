@@ -461,3 +461,113 @@ fn the_std_error_is_its_definition_on_batches_known_exactly() {
     let got = f64::from(r.std_error);
     assert!((got / want - 1.0).abs() <= 1e-5, "σ_μ {got} vs {want}");
 }
+
+/// The standard error and μ against their definitions (estimator docs) on
+/// a window whose periods are not whole samples (`f_s/f` = 24.9013…), so
+/// that the window's two edge samples and the sample before each inner
+/// wrap are split between batches: each sample `s` stands for `[s, s + 1)`,
+/// wrap `j` is at `t_j = (j·2³² − a₀)/tw` samples, the window spans
+/// `[t₁, t_{P+1}]`, period `k` goes to batch `⌊k·B/P⌋` with `B = min(32,
+/// P)`, and a sample's weight in a batch is the length of its interval
+/// inside the batch's time — all formed here in f64 from those rules, not
+/// from the estimator's sums. The counts are levels that step every 40
+/// samples plus a ripple from sample to sample, so the batches' residuals
+/// `r_b = X_b − μZ_b` differ. P = 2, 3, 5 (fewer batches than [`BATCHES`]:
+/// the empty ones must not count, and two batches are the fewest with a
+/// σ_μ) and 40; P = 1 gives σ_μ = 0.
+///
+/// Tolerance on σ_μ, relative: 2·10⁻⁴. σ_μ is `√(B/(B−1))·‖r‖/|Z|`, so an
+/// error `Δ` in the residuals moves it by at most `‖Δ‖/‖r‖ ≤ max|Δ_b| /
+/// rms(r_b)`. Each residual carries the means' Q16 rounding (`W_b·2⁻¹⁷`
+/// counts, ≤ 0.002 for 250 samples) and the f32 edge sums (`≈ 2048·2⁻²⁴`
+/// counts per edge, three per batch): ≤ 0.003 counts, against an rms of
+/// ≥ 30 counts here (printed): 10⁻⁴; the f32 sum of squares and its root
+/// add ~10⁻⁶. An edge term dropped or with its sign flipped moves a
+/// residual by `(count − mean)·ε` or `2·mean·ε` counts, and an empty batch
+/// counted changes `B/(B − 1)` (by 4 % at P = 5 with 32): each far outside.
+#[test]
+fn the_std_error_is_its_definition_on_fractional_edges_and_few_batches() {
+    use board::estimator::BATCHES;
+    let table = SineTable::<1024>::libm();
+    let (cx, cz) = (
+        Calibration {
+            gain: 0.01,
+            offset: 2047.5,
+        },
+        Calibration {
+            gain: 0.02,
+            offset: 100.0,
+        },
+    );
+    let tw = (4_294_967_296.0 / 24.9013) as u32;
+    let acc0 = 12_345u32;
+    // A level that steps every 40 samples, and a ripple from sample to sample.
+    let x_of = |s: usize| 2048.0 + ((s / 40 * 7) % 13) as f64 - 6.0 + ((s * 37) % 11) as f64 - 5.0;
+    let z_of = |s: usize| 2000.0 + ((s / 40 * 5) % 9) as f64 - 4.0 + ((s * 13) % 7) as f64 - 3.0;
+    let (gx, gz) = (f64::from(cx.gain), f64::from(cz.gain));
+    for periods in [1u32, 2, 3, 5, 40] {
+        let mut est = Estimator::new(cx, cz, FULL).unwrap();
+        let mut s = 0usize;
+        let r = run_from(&mut est, &table, tw, periods, acc0, |_| {
+            let c = (x_of(s) as u16, z_of(s) as u16);
+            s += 1;
+            c
+        });
+        // The definitions, in f64.
+        let p = periods as usize;
+        let b_count = p.min(BATCHES);
+        let t = |j: usize| (j as f64 * 4_294_967_296.0 - f64::from(acc0)) / f64::from(tw);
+        let mut xb = vec![0.0f64; b_count];
+        let mut zb = vec![0.0f64; b_count];
+        for k in 0..p {
+            let b = k * b_count / p;
+            let (t0, t1) = (t(1 + k), t(2 + k));
+            for smp in (t0.floor() as usize)..=(t1.floor() as usize) {
+                let w = (t1.min(smp as f64 + 1.0) - t0.max(smp as f64)).max(0.0);
+                xb[b] += w * gx * (x_of(smp) - f64::from(cx.offset));
+                zb[b] += w * gz * (z_of(smp) - f64::from(cz.offset));
+            }
+        }
+        let (x, z): (f64, f64) = (xb.iter().sum(), zb.iter().sum());
+        let mu = x / z;
+        let sum_sq: f64 = (0..b_count)
+            .map(|b| {
+                let r = xb[b] - mu * zb[b];
+                r * r
+            })
+            .sum();
+        let want = if b_count < 2 {
+            0.0
+        } else {
+            let bb = b_count as f64;
+            (bb / (bb - 1.0) * sum_sq).sqrt() / z.abs()
+        };
+        let rms = (sum_sq / b_count as f64).sqrt() / gx;
+        println!(
+            "P = {periods}: σ_μ {} vs {want:e}, residuals' rms {rms:.1} counts",
+            r.std_error
+        );
+        if b_count >= 2 {
+            assert!(rms >= 30.0, "the test's own premise: rms {rms}");
+        }
+        assert_eq!(r.periods, periods);
+        assert!(
+            (t(1 + p) - t(1) - f64::from(r.samples)).abs() <= 1.0,
+            "{r:?}"
+        );
+        assert!(
+            (f64::from(r.mu) / mu - 1.0).abs() <= 1e-6,
+            "P = {periods}: μ {} vs {mu}",
+            r.mu
+        );
+        let got = f64::from(r.std_error);
+        if want == 0.0 {
+            assert_eq!(got, 0.0, "P = {periods}");
+        } else {
+            assert!(
+                (got / want - 1.0).abs() <= 2e-4,
+                "P = {periods}: σ_μ {got} vs {want}"
+            );
+        }
+    }
+}
