@@ -16,10 +16,11 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::eval::{
-    classify_scene_profile, critical_velocity, from_rel, mu_at, regime_of_profile, v_rel,
-    MethodArgs,
+    classify_scene_profile, critical_velocity, from_rel, mu_at, profile_tol, regime_of_profile,
+    v_rel, Method, MethodArgs,
 };
 use crate::numbers::Short;
+use crate::profile_curve::profile_curve;
 
 /// The `i`-th of `n` evenly spaced values from `a` to `b` inclusive (the last
 /// is `b` exactly; `n` = 1 gives `b`).
@@ -61,17 +62,57 @@ pub struct Row {
     pub error_bound_over_mu0: f64,
 }
 
+/// The `method` of a curve's row answered by the interpolant of
+/// [`profile_curve`] (a curved profile; its bound is eq. C1 there).
+pub const INTERPOLATED: &str = "mdr-interpolated";
+
 /// Rows of μ(v) for the velocities `vs` (two rows, μ(0⁻) then μ(0⁺), at
 /// v0 = 0), each by the method choice of `how` ([`mu_at`]), computed in
-/// parallel. A velocity the method refuses is named as `--v0` (the caller
+/// parallel; for a curved profile, runs of velocities where μ(v) is smooth
+/// by [`profile_curve`]'s interpolant ([`INTERPOLATED`]). A velocity the method refuses is named as `--v0` (the caller
 /// renames it to its own flag); a fixed-step run that reaches no steady
 /// state is a failure.
 pub fn curve_rows(scene: &Scene<f64>, vs: &[f64], how: &MethodArgs) -> Result<Vec<Row>> {
+    curve_rows_with(scene, vs, how, true)
+}
+
+/// [`curve_rows`], with a curved profile's interpolant (`interpolate`) or
+/// every velocity by its own quadrature (`fricctl curve --per-point`).
+pub fn curve_rows_with(
+    scene: &Scene<f64>,
+    vs: &[f64],
+    how: &MethodArgs,
+    interpolate: bool,
+) -> Result<Vec<Row>> {
     let vc = critical_velocity(scene)?;
     let mu0 = scene.mu0();
+    // A curved profile: runs of smooth μ(v) from an interpolant
+    // (`profile_curve`, method "mdr-interpolated"), the rest point by point.
+    let tol = match (how.method, how.tol) {
+        (Method::Auto, Some(t)) => Some(t),
+        (Method::Auto | Method::Exact, _) => Some(profile_tol(scene, &how.profile)),
+        _ => None,
+    };
+    let pre = match tol {
+        Some(t) if interpolate && how.profile != Profile::Flat => {
+            profile_curve(scene, &how.profile, vs, t)
+        }
+        _ => vec![None; vs.len()],
+    };
     let rows: Vec<Result<Vec<Row>>> = vs
         .par_iter()
-        .map(|&v| {
+        .zip(pre)
+        .map(|(&v, pre)| {
+            if let Some(c) = pre {
+                return Ok(vec![Row {
+                    v0: v,
+                    v_rel: v_rel(&vc, v),
+                    mu: c.mu_over_mu0 * mu0,
+                    mu_over_mu0: c.mu_over_mu0,
+                    method: if c.interpolated { INTERPOLATED } else { "mdr" },
+                    error_bound_over_mu0: c.bound,
+                }]);
+            }
             let o = mu_at(scene, v, how)?;
             if let (Some(p), Some(m)) = (o.mu_0plus_over_mu0, o.mu_0minus_over_mu0) {
                 let b = o.error_bound_over_mu0.unwrap_or(0.0);

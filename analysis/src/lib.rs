@@ -9,6 +9,8 @@
 //! * [`eval`]: μ at one velocity by a method, critical velocities (eq. 8, L5), regimes;
 //! * [`grid`]: evenly spaced velocities and cell centres, μ over a velocity grid (the
 //!   curve's rows), μ and the regime over a map's cells, which method answered where;
+//! * [`profile_curve`]: μ(v) of a curved profile along a curve, by an interpolant
+//!   through MDR answers where μ(v) is smooth;
 //! * [`fit`], [`sweep_file`]: identification of (μ0, kx/kz) from a measured sweep;
 //! * [`tune`]: inverse design (the drive that attains a target μ, or maximises an objective);
 //! * [`load_line`]: the contact as an actuator;
@@ -26,6 +28,7 @@ pub mod grid;
 pub mod load_line;
 pub mod motion;
 pub mod numbers;
+pub mod profile_curve;
 pub mod scene;
 pub mod sweep_file;
 pub mod tune;

@@ -777,3 +777,83 @@ fn profile_mu_map_cells_match_the_brute_force() {
         );
     }
 }
+
+/// `curve --profile`: runs where μ(v) is smooth come from the interpolant
+/// (`mdr-interpolated`, bound eq. C1 ≤ the tolerance), `--per-point` gives
+/// each velocity its own quadrature (`mdr`), and the two agree within
+/// their bounds except where the quadrature's own estimate fails
+/// (docs/guide/speed.md: 0.1–0.35 % of velocities on dense curves; here
+/// at most 2 of 601, counted). `--per-point` on a flat punch is refused,
+/// naming the flag, before any output.
+#[test]
+fn a_profile_curve_interpolates_and_per_point_does_not() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = |name: &str, extra: &[&str]| {
+        let path = dir.path().join(name);
+        let p = path.to_str().unwrap().to_string();
+        let base = [
+            "curve",
+            "--profile",
+            "sphere",
+            "--duz-rel",
+            "0.5",
+            "--dux-rel",
+            "0.7",
+            "--phi-deg",
+            "60",
+            "--v-rel-min",
+            "0.01",
+            "--v-rel-max",
+            "0.99",
+            "--points",
+            "601",
+            "--csv",
+            &p,
+        ];
+        run_ok(&[&base[..], extra].concat());
+        csv_rows(&path)
+    };
+    let interp = csv("i.csv", &[]);
+    let each = csv("p.csv", &["--per-point"]);
+    assert_eq!(interp.len(), 601);
+    assert_eq!(each.len(), 601);
+    let n_interp = interp
+        .iter()
+        .filter(|r| r.get("method") == "mdr-interpolated")
+        .count();
+    // 441 here: the runs next to the ends, where μ(v) is not smooth, go to
+    // the quadrature.
+    assert!(n_interp >= 400, "{n_interp} of 601 interpolated");
+    assert!(each.iter().all(|r| r.get("method") == "mdr"));
+    let mut disagree = 0;
+    for (i, p) in interp.iter().zip(&each) {
+        assert_eq!(i.get("v0"), p.get("v0"));
+        assert!(i.num("error_bound_over_mu0") <= 1e-9, "{i}");
+        let gap = (i.num("mu_over_mu0") - p.num("mu_over_mu0")).abs();
+        if gap > i.num("error_bound_over_mu0") + p.num("error_bound_over_mu0") {
+            disagree += 1;
+        }
+    }
+    assert!(disagree <= 2, "{disagree} of 601 disagree");
+    let out = fricctl()
+        .args([
+            "curve",
+            "--duz-rel",
+            "0.5",
+            "--dux-rel",
+            "0.7",
+            "--v-rel-min",
+            "0",
+            "--v-rel-max",
+            "0.5",
+            "--points",
+            "3",
+            "--per-point",
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.starts_with("error: --per-point: only for a curved --profile"), "{err}");
+    assert!(out.stdout.is_empty());
+}

@@ -6,6 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use clap::Args;
+use model_core::mdr::Profile;
 use model_core::scene::ContactMode;
 
 use crate::args::{Count, Real, Rounded};
@@ -14,7 +15,7 @@ use crate::eval::{critical_velocity, from_rel, MethodArgs};
 use crate::output::{csv_bytes, stdout_error, AtomicFile};
 use crate::plot::{render_panels, Mark, Panel, Series};
 use crate::progress::progress_bar;
-use fric_analysis::grid::{curve_rows, linspace_at, MethodMix};
+use fric_analysis::grid::{curve_rows_with, linspace_at, MethodMix};
 
 /// Flags of `fricctl curve`.
 #[derive(Args, Debug, Clone)]
@@ -38,6 +39,9 @@ pub struct CurveCmd {
     points: usize,
     #[command(flatten)]
     how: MethodArgs,
+    /// A curved --profile: compute every velocity by its own MDR quadrature (default: runs of velocities where μ(v) is smooth come from an interpolant through quadratures, method mdr-interpolated, with its bound)
+    #[arg(long)]
+    per_point: bool,
     /// Write the CSV to FILE instead of stdout
     #[arg(long, value_name = "FILE")]
     csv: Option<PathBuf>,
@@ -80,6 +84,11 @@ impl CurveCmd {
     pub fn run(mut self, out: &mut impl Write) -> CliResult {
         let rs = self.scene.resolve_with(ContactMode::Intermittent)?;
         self.how.profile = rs.profile;
+        if self.per_point && rs.profile == Profile::Flat {
+            return Err(CliError::usage(
+                "--per-point: only for a curved --profile (a flat punch is computed point by point)",
+            ));
+        }
         let n = self.points;
         if let Some(p) = &self.plot {
             crate::plot::ext(p)?;
@@ -163,7 +172,7 @@ impl CurveCmd {
                 Axis::Absolute(..) => "--v-max",
                 Axis::Relative(..) => "--v-rel-max",
             };
-            let rows = curve_rows(&rs.scene, &vs, &self.how.options())
+            let rows = curve_rows_with(&rs.scene, &vs, &self.how.options(), !self.per_point)
                 .map_err(|e| e.renamed("--v0", upper))?;
             for r in &rows {
                 mix.add(r.method);
