@@ -854,6 +854,9 @@ fn a_profile_curve_interpolates_and_per_point_does_not() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.starts_with("error: --per-point: only for a curved --profile"), "{err}");
+    assert!(
+        err.starts_with("error: --per-point: only for a curved --profile"),
+        "{err}"
+    );
     assert!(out.stdout.is_empty());
 }

@@ -445,8 +445,10 @@ fn liftoff_is_refused_until_allowed_and_refusals_change_nothing() {
     }
     assert_eq!(snapshot(&d), before);
     // Allowed on purpose: accepted.
+    assert!(!d.liftoff_allowed(), "refused at power-up");
     d.set_liftoff_allowed(true).unwrap();
     assert!(d.status().liftoff_allowed);
+    assert!(d.liftoff_allowed());
     d.set_drive(liftoff_drive()).unwrap();
     assert_eq!(d.drive(), liftoff_drive());
     let accepted = snapshot(&d);
@@ -484,6 +486,7 @@ fn liftoff_is_refused_until_allowed_and_refusals_change_nothing() {
     d.set_drive(drive()).unwrap();
     d.set_liftoff_allowed(false).unwrap();
     assert!(!d.status().liftoff_allowed);
+    assert!(!d.liftoff_allowed());
     assert!(matches!(
         d.set_drive(liftoff_drive()),
         Err(DeviceError::LiftOff { .. })

@@ -368,6 +368,14 @@ fn integer_lock_in_refuses_what_it_cannot_fit() {
         l.push(c, s, tw, [2000]);
     }
     assert!(l.span_rad() < MIN_SPAN_RAD as f32);
+    // The span is the phase from the first sample to the last: 63 steps,
+    // 63·2π·tw/2³² (f32: a few ulps).
+    let span = 63.0 * TAU * f64::from(tw) / 4_294_967_296.0;
+    assert!(
+        (f64::from(l.span_rad()) - span).abs() <= 1e-6 * span,
+        "{}",
+        l.span_rad()
+    );
     assert_eq!(l.solve(), Err(LockInError::ShortWindow));
     // More than MAX_Q_SAMPLES: refused, not overflowed.
     let mut l = LockInQ::<1>::new();

@@ -18,11 +18,11 @@ struct Plan {
 }
 
 impl<const N: usize> Device<'_, N> {
-    /// The lift-off guard: `Δu_z ≤ (1 − margin)·u_z0` (f32, inclusive), and no
-    /// normal amplitude on a zero offset.
+    /// The lift-off guard: `Δu_z ≤ (1 − margin)·u_z0` (f32, inclusive) — so
+    /// no normal amplitude on a zero offset, whose limit is 0.
     pub(super) fn check_liftoff(&self, d: &DriveSetting) -> Result<(), DeviceError> {
         let limit = self.cfg.liftoff_limit_m(d.offset_z_m);
-        if d.amp_z_m > limit || (d.amp_z_m > 0.0 && d.offset_z_m == 0.0) {
+        if d.amp_z_m > limit {
             return Err(DeviceError::LiftOff {
                 amp_z_m: d.amp_z_m,
                 limit_m: limit,
