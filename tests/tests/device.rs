@@ -282,10 +282,26 @@ fn closed_loop_measurement_agrees_with_prediction() {
     }
     d.measure(400).unwrap();
     assert_eq!(d.measure(10), Err(DeviceError::Busy));
+    // The μ loop is refused while a host measurement runs (the estimator is
+    // the measurement's), and while the server says it is busy (a stream);
+    // accepted once neither holds (its other checks pass: running, a target
+    // within ±μ₀).
+    let control = board::protocol::ControlSetting {
+        on: true,
+        target_mu: 0.1,
+        v0_m_s: v0,
+        gain: 0.7,
+        periods: 4,
+        rate_m_per_s: 1e-4,
+    };
+    assert_eq!(d.check_control(&control, false), Err(DeviceError::Busy));
+    assert_eq!(d.check_control(&control, true), Err(DeviceError::Busy));
     while d.status().measuring {
         run_half(&mut d, half);
         half ^= 1;
     }
+    assert_eq!(d.check_control(&control, true), Err(DeviceError::Busy));
+    assert_eq!(d.check_control(&control, false), Ok(()));
     let e = d.estimate().unwrap();
     let measured = f64::from(e.mu) / 0.3;
     // Reference: the same discrete plant (the paper's scheme at the DDS's

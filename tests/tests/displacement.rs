@@ -125,6 +125,22 @@ fn the_loop_holds_the_measured_drive_despite_a_wrong_model() {
     assert!(peak < limit, "peak {peak:e} ≥ lift-off limit {limit:e}");
     check_holds(&mut b, &s, 400);
     assert_eq!(b.dev.status().faults, 0);
+    // Holding in displacement mode, a prediction takes the measured drive
+    // (`Device::prediction_inputs`): Status' amplitudes and φ, the
+    // setting's offset, ω = 2π·f of the DDS (f32: a part in 10⁷).
+    let st = b.dev.status();
+    let m = st.measured.unwrap();
+    let p = b.dev.prediction_inputs().params;
+    assert_eq!(
+        (p.duz, p.dux, p.phi, p.uz0),
+        (m.amp_z_m, m.amp_x_m, m.phase_rad, s.offset_z_m)
+    );
+    let omega = 2.0 * PI * f64::from(st.frequency_hz);
+    assert!(
+        (f64::from(p.omega) / omega - 1.0).abs() <= 1e-6,
+        "ω {} vs {omega}",
+        p.omega
+    );
 }
 
 /// A setpoint step after the loop has learned the model's error: the new

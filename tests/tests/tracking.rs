@@ -61,6 +61,8 @@ fn tracking_follows_a_drifting_resonance() {
     let table = SineTable::<1024>::libm();
     let drift = -20.0;
     let mut b = tracking_bench(&table, drift, F_R);
+    // Tracking from the start, not locked yet: Status says so.
+    assert!(!b.dev.status().locked, "{:?}", b.dev.status());
     let halves = (5.0 / b.t_half()) as usize;
     let mut lock_at = None;
     let mut worst_after = 0.0f64;
@@ -380,4 +382,42 @@ fn tracking_switched_off_while_running_keeps_the_tracked_frequency() {
     let f = f64::from(b.dev.status().frequency_hz);
     assert!((f - (F_R - off)).abs() <= 0.002, "{f} Hz");
     eprintln!("tracked {tracked} Hz, then {f} Hz");
+}
+
+/// `tracking::resonance_of` (eqs. T1, T2) against the resonator's own
+/// response: a response measured at `f` from a mode at `f_r` with the chain
+/// lag `θ` (`H = g/(1 − r² + j r/Q)·e^{−jθ}`, `r = f/f_r`, formed here in
+/// f64) gives `f_r` back — also where `arg H` wraps past −π (θ + the mode's
+/// lag > π), so the angle is brought back into (−π, π] from below. The
+/// tolerance: f32's rounding through the angle, its `sin_cos` and the root
+/// (a few parts in 10⁶; 10⁻⁵ allowed).
+#[test]
+fn the_resonance_a_response_implies_is_the_modes() {
+    use board::device::tracking::resonance_of;
+    use board::device::TransducerModel;
+    use num_complex::Complex32;
+    let (fr, q) = (20_000.0f64, 300.0f64);
+    for (theta, f) in [
+        (0.3f64, 19_990.0f64),
+        (2.5, 20_010.0),
+        (-2.9, 19_995.0),
+        (3.0, 20_000.0),
+    ] {
+        let r = f / fr;
+        let h = num_complex::Complex64::new(1.0 - r * r, r / q).inv()
+            * 2e-7
+            * num_complex::Complex64::from_polar(1.0, -theta);
+        let model = TransducerModel {
+            resonance_hz: 20_100.0,
+            q: q as f32,
+            gain_m_per_v: 2e-7,
+            phase_lag_rad: theta as f32,
+        };
+        let got = resonance_of(Complex32::new(h.re as f32, h.im as f32), f as f32, &model)
+            .unwrap_or_else(|| panic!("θ = {theta}: none"));
+        assert!(
+            (f64::from(got) / fr - 1.0).abs() <= 1e-5,
+            "θ = {theta}, f = {f}: {got} Hz"
+        );
+    }
 }
