@@ -230,6 +230,15 @@ fn out_of_range_levels_are_refused_and_change_nothing() {
         assert_eq!(*d.channels(), before);
     }
     assert_eq!(Slew::from_rates(1e6, 0.0, 1.0, 1.0), Err(DdsError::Slew));
+    // A sample rate of zero (or below, or not finite) would give infinite
+    // steps per sample.
+    for fs in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+        assert_eq!(
+            Slew::from_rates(fs, 1.0, 1.0, 1.0),
+            Err(DdsError::SampleRate),
+            "{fs}"
+        );
+    }
     assert!(Dds::new(&t, f64::NAN, fast_slew()).is_err());
 }
 

@@ -120,6 +120,12 @@ fn too_short_windows_are_refused() {
     let l = window(64, dth, 0.0, 1.0, 1.0, 0.0);
     assert!(l.span_rad() < MIN_SPAN_RAD);
     assert_eq!(l.solve(), Err(LockInError::ShortWindow));
+    // Exactly a quarter period (three samples π/4 apart; the sum is exact):
+    // taken, the limit is inclusive — and the fit is exact there too.
+    let l = window(3, std::f64::consts::FRAC_PI_4, 0.0, 1.0, 1.0, 0.0);
+    assert_eq!(l.span_rad(), MIN_SPAN_RAD);
+    let [ph] = l.solve().unwrap();
+    assert!((ph.amplitude::<Libm>() - 1.0).abs() <= 1e-12, "{ph:?}");
     // Eight such windows accumulated (368°) are long enough.
     let l = window(8 * 64, dth, 0.0, 1.0, 1.0, 0.3);
     let [ph] = l.solve().unwrap();
@@ -384,4 +390,31 @@ fn integer_lock_in_refuses_what_it_cannot_fit() {
         l.push(c, s, tw, [4095]);
     }
     assert_eq!(l.solve(), Err(LockInError::LongWindow));
+}
+
+/// `LockInQ::reference` (eq. LQ1) against f64 at 10 000 phase words: each
+/// of `(c, s)` within `½` (the rounding to Q15) plus `2¹⁵·(ε_t + (2π/N)²/8 +
+/// 2⁻²⁹)` (the table read of eq. Q1: its entries' error, measured here, its
+/// interpolation, its floor) of `2¹⁵·(cos θ, sin θ)`. A floor for the
+/// rounding would miss by up to a whole unit.
+#[test]
+fn the_integer_reference_is_the_rounded_table_read() {
+    let t = SineTable::<1024>::libm();
+    let eps_t = (0..1024)
+        .map(|i| (f64::from(t.entry(i)) - (TAU * i as f64 / 1024.0).sin()).abs())
+        .fold(0.0, f64::max);
+    let q15 = 32_768.0;
+    let bound = 0.5 + q15 * (eps_t + (TAU / 1024.0).powi(2) / 8.0 + 2f64.powi(-29));
+    let mut worst = 0.0f64;
+    let mut p = 0x9E37_79B9u32;
+    for _ in 0..10_000 {
+        p = p.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        let th = TAU * f64::from(p) / 4_294_967_296.0;
+        let (c, s) = LockInQ::<1>::reference(&t, p);
+        worst = worst
+            .max((f64::from(c) - q15 * th.cos()).abs())
+            .max((f64::from(s) - q15 * th.sin()).abs());
+    }
+    assert!(worst <= bound, "{worst} > {bound}");
+    assert!(worst > 0.4, "the rounding is exercised: {worst}");
 }
