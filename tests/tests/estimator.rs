@@ -485,6 +485,8 @@ fn the_std_error_is_its_definition_on_batches_known_exactly() {
 /// add ~10⁻⁶. An edge term dropped or with its sign flipped moves a
 /// residual by `(count − mean)·ε` or `2·mean·ε` counts, and an empty batch
 /// counted changes `B/(B − 1)` (by 4 % at P = 5 with 32): each far outside.
+/// The two forces' first harmonics are checked against their definition on
+/// the same samples (bound in the body).
 #[test]
 fn the_std_error_is_its_definition_on_fractional_edges_and_few_batches() {
     use board::estimator::BATCHES;
@@ -519,6 +521,9 @@ fn the_std_error_is_its_definition_on_fractional_edges_and_few_batches() {
         let t = |j: usize| (j as f64 * 4_294_967_296.0 - f64::from(acc0)) / f64::from(tw);
         let mut xb = vec![0.0f64; b_count];
         let mut zb = vec![0.0f64; b_count];
+        // The harmonics' sums Σ w·count·(cos θ, sin θ) of each force, and
+        // Σ w·count for their bound.
+        let (mut hx, mut hz, mut mass) = ([0.0f64; 2], [0.0f64; 2], 0.0f64);
         for k in 0..p {
             let b = k * b_count / p;
             let (t0, t1) = (t(1 + k), t(2 + k));
@@ -526,7 +531,34 @@ fn the_std_error_is_its_definition_on_fractional_edges_and_few_batches() {
                 let w = (t1.min(smp as f64 + 1.0) - t0.max(smp as f64)).max(0.0);
                 xb[b] += w * gx * (x_of(smp) - f64::from(cx.offset));
                 zb[b] += w * gz * (z_of(smp) - f64::from(cz.offset));
+                let acc = acc0.wrapping_add(tw.wrapping_mul(smp as u32));
+                let th = TAU * f64::from(acc) / 4_294_967_296.0;
+                hx[0] += w * x_of(smp) * th.cos();
+                hx[1] += w * x_of(smp) * th.sin();
+                hz[0] += w * z_of(smp) * th.cos();
+                hz[1] += w * z_of(smp) * th.sin();
+                mass += w * (x_of(smp) + z_of(smp));
             }
+        }
+        // The harmonics (estimator docs): `re = 2g/W·Σ w·count·cos θ`, `im =
+        // −2g/W·Σ w·count·sin θ`, W the window's length in samples. The
+        // estimator's reference words are each within ε_r ≤ 7·10⁻⁵ (eq. R2)
+        // of cos θ and sin θ: its sums are within Σ w·count·ε_r of these,
+        // plus f32's rounding of the edges and the result (10⁻⁶ of them).
+        // A wrong edge term moves them by ≈ w·count ~ 10³ counts.
+        let w_len = t(1 + p) - t(1);
+        for (h, sums, g, what) in [(r.fx_h1, hx, gx, "f_x"), (r.fz_h1, hz, gz, "f_z")] {
+            let k = 2.0 * g / w_len;
+            let (re, im) = (k * sums[0], -k * sums[1]);
+            let (a, ph) = (f64::from(h.amplitude), f64::from(h.phase));
+            let err = (a * ph.cos() - re).hypot(a * ph.sin() - im);
+            let bound = k * mass * 7e-5 + 1e-6 * (re.hypot(im) + k * mass);
+            assert!(
+                err <= bound,
+                "P = {periods}: {what}'s harmonic ({}, {}) vs ({re}, {im}): off by {err:e} > {bound:e}",
+                a * ph.cos(),
+                a * ph.sin()
+            );
         }
         let (x, z): (f64, f64) = (xb.iter().sum(), zb.iter().sum());
         let mu = x / z;
