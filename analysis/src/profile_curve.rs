@@ -22,7 +22,7 @@
 //! *Approximation Theory and Approximation Practice*, Thm 4.2). The tail is
 //! not known; it is **estimated** from the interpolant's own coefficients
 //! (their size at degrees 12–16 and their decay since degrees 6–10:
-//! [`truncation`]; a run whose coefficients decay more slowly than by 0.8
+//! `truncation`; a run whose coefficients decay more slowly than by 0.8
 //! per degree is not taken), and that estimate is **checked**: μ is computed by the quadrature
 //! at the run's points one third and two thirds along it, and the run is
 //! taken only if both lie within (C1) plus their own bound of `p`. A run whose
