@@ -406,6 +406,22 @@ fn mu_from_integer_sums_keeps_a_small_force_exact() {
     }
 }
 
+/// The calibrations of the standard-error tests: x about mid-scale (offset
+/// 2047.5 counts, 0.01 N/count), z with a large normal force (offset 100,
+/// 0.02 N/count).
+fn batch_calibrations() -> (Calibration, Calibration) {
+    (
+        Calibration {
+            gain: 0.01,
+            offset: 2047.5,
+        },
+        Calibration {
+            gain: 0.02,
+            offset: 100.0,
+        },
+    )
+}
+
 /// The standard error against its definition (estimator docs, eq. E1),
 /// computed here in f64 from the samples fed: 64 samples per period exactly
 /// (no fractional edges), 320 periods in 32 batches of 10, the counts
@@ -419,16 +435,7 @@ fn mu_from_integer_sums_keeps_a_small_force_exact() {
 fn the_std_error_is_its_definition_on_batches_known_exactly() {
     use board::estimator::BATCHES;
     let table = SineTable::<1024>::libm();
-    let (cx, cz) = (
-        Calibration {
-            gain: 0.01,
-            offset: 2047.5,
-        },
-        Calibration {
-            gain: 0.02,
-            offset: 100.0,
-        },
-    );
+    let (cx, cz) = batch_calibrations();
     let mut est = Estimator::new(cx, cz, FULL).unwrap();
     let d = |b: usize| ((b * 7) % 11) as f64 - 5.0;
     let e = |b: usize| ((b * 3) % 7) as f64 - 3.0;
@@ -491,16 +498,7 @@ fn the_std_error_is_its_definition_on_batches_known_exactly() {
 fn the_std_error_is_its_definition_on_fractional_edges_and_few_batches() {
     use board::estimator::BATCHES;
     let table = SineTable::<1024>::libm();
-    let (cx, cz) = (
-        Calibration {
-            gain: 0.01,
-            offset: 2047.5,
-        },
-        Calibration {
-            gain: 0.02,
-            offset: 100.0,
-        },
-    );
+    let (cx, cz) = batch_calibrations();
     let tw = (4_294_967_296.0 / 24.9013) as u32;
     let acc0 = 12_345u32;
     // A level that steps every 40 samples, and a ripple from sample to sample.
