@@ -50,11 +50,71 @@
 //!
 //! ## Cargo features
 //! - `defmt` — derive `defmt::Format` for the public types (firmware logging).
+//! - `probe` — profiling marks in the handlers' work ([`probe`](mod@probe)), for
+//!   `predict_cost`'s breakdown of a half-buffer; never in a shipped build.
 //!
 //! The crate is `no_std` and allocation-free.
 #![cfg_attr(not(test), no_std)]
 #![deny(missing_docs)]
-#![forbid(unsafe_code)]
+#![cfg_attr(not(feature = "probe"), forbid(unsafe_code))]
+
+/// Profiling marks (feature `probe`, for `predict_cost --features probe`
+/// only; no other build has them): the device calls [`probe::mark`] at the
+/// borders of its handlers' parts, and a hook the firmware sets times the
+/// stretch since the previous mark (issue 35's breakdown of a half-buffer).
+#[cfg(feature = "probe")]
+pub mod probe {
+    use core::sync::atomic::{AtomicUsize, Ordering::Relaxed};
+
+    /// The hook, a `fn(u8)` as an address (0: none).
+    static HOOK: AtomicUsize = AtomicUsize::new(0);
+
+    /// The marks: a part's number is the mark that ends it; 0 and 10 start
+    /// the DAC's and the ADC's handler.
+    pub const PARTS: [(u8, &str); 9] = [
+        (1, "DAC: the mu loop's fill (control_fill)"),
+        (
+            2,
+            "DAC: the displacement loops' dead-beat (displacement_fill)",
+        ),
+        (
+            3,
+            "DAC: the reference words and the codes (fill_with_reference)",
+        ),
+        (11, "ADC: the block's set-up and the rail check"),
+        (12, "ADC: the pickups' sums (Gram, pair sums)"),
+        (13, "ADC: the force estimator's sums"),
+        (14, "ADC: the saturation check"),
+        (15, "ADC: the pickups' window close (motion_window)"),
+        (16, "ADC: the mu loop's block end (control_block_end)"),
+    ];
+
+    /// Sets the hook every mark calls.
+    pub fn set_hook(f: fn(u8)) {
+        HOOK.store(f as usize, Relaxed)
+    }
+
+    /// Mark `id`: calls the hook, if one is set.
+    #[inline(always)]
+    pub fn mark(id: u8) {
+        let h = HOOK.load(Relaxed);
+        if h != 0 {
+            // SAFETY: `HOOK` only ever holds 0 or a `fn(u8)` stored by
+            // `set_hook`, and fn pointers are address-sized.
+            #[allow(unsafe_code)]
+            let f: fn(u8) = unsafe { core::mem::transmute::<usize, fn(u8)>(h) };
+            f(id)
+        }
+    }
+}
+
+/// A profiling mark ([`probe`]); nothing without the feature.
+macro_rules! probe {
+    ($id:expr) => {
+        #[cfg(feature = "probe")]
+        $crate::probe::mark($id);
+    };
+}
 
 pub mod control;
 pub mod device;

@@ -8,7 +8,9 @@ use std::f64::consts::TAU;
 
 use board::dds::{phase_rad, SineTable};
 use board::estimator::{Calibration, Estimator};
-use board::reference::{cos_of, sin_of, Gram, PairSums, Reference, ADC_FULL_SCALE, BLOCK};
+use board::reference::{
+    any_railed, cos_of, sin_of, Gram, PairSums, Reference, ADC_FULL_SCALE, BLOCK,
+};
 use integration_tests::Rng;
 
 /// The table's own error against f64: `max |t_i − sin(2πi/N)|`.
@@ -154,6 +156,7 @@ fn the_rail_check_flags_exactly_the_rails() {
                 let want = railed(x) || railed(z);
                 let one = PairSums::of(&r.words()[..1], &[(x, z)]);
                 assert_eq!(one.railed, want, "({x}, {z})");
+                assert_eq!(any_railed(&[(x, z)]), want, "any_railed ({x}, {z})");
                 // Inside a block of clean samples, at position 37.
                 let mut block = vec![(1000u16, 3000u16); BLOCK];
                 block[37] = (x, z);
@@ -162,6 +165,7 @@ fn the_rail_check_flags_exactly_the_rails() {
                     want,
                     "({x}, {z}) in a block"
                 );
+                assert_eq!(any_railed(&block), want, "any_railed ({x}, {z}) in a block");
             }
         }
     }

@@ -16,10 +16,13 @@ impl<const N: usize> Device<'_, N> {
     /// the drive phase of its first sample for the ADC intake (per fill
     /// number: ADC block `n` is the output of the `n`-th fill).
     pub fn fill_dac(&mut self, _half: usize, buf: &mut [u32]) {
+        probe!(0);
         let fill = self.fills;
         self.fills = fill.wrapping_add(1);
         self.control_fill(fill);
+        probe!(1);
         self.displacement_fill(fill, buf.len());
+        probe!(2);
         let slot = fill as usize % FILL_RING;
         self.half[slot] = (self.dds.accumulator(), self.dds.tuning_word());
         // Settled before the fill stays settled through it (targets change
@@ -50,6 +53,7 @@ impl<const N: usize> Device<'_, N> {
         } else {
             self.dds.fill(buf);
         }
+        probe!(3);
     }
 
     /// Whether ADC block `block` of `len` samples has its reference words
@@ -137,6 +141,7 @@ impl<const N: usize> Device<'_, N> {
     /// pickups' window, if it spans enough phase, and the μ loop's update,
     /// if its estimate closed.
     pub(super) fn intake(&mut self, samples: &[(u16, u16)], pickups: &[(u16, u16)]) {
+        probe!(10);
         let block = self.adc_blocks;
         self.adc_blocks = block.wrapping_add(1);
         let open_at = self.control_block_start(block, samples.len());
@@ -152,13 +157,14 @@ impl<const N: usize> Device<'_, N> {
         // transitions, the wait for a period start, the sample that closes
         // a window: `closed_loop.rs`); while it runs every sample is
         // checked, and a railed one latches the fault at once.
-        if self.control_on() && samples.iter().any(|&(x, z)| self.est.railed(x, z)) {
+        if self.control_on() && crate::reference::any_railed(samples) {
             self.fault(faults::ADC_SATURATED);
         }
         // The fill's own words when they are kept whole (one rotation per
         // sample for the DAC and the ADC), else formed here (`r`).
         let kept = self.kept_reference(block, samples.len());
         let mut r = Reference::EMPTY;
+        probe!(11);
         for (k, chunk) in samples.chunks(BLOCK).enumerate() {
             let start = k * BLOCK;
             let a = acc.wrapping_add(tw.wrapping_mul(start as u32));
@@ -180,6 +186,7 @@ impl<const N: usize> Device<'_, N> {
             if let Some(p) = pickups.get(start..start + chunk.len()) {
                 self.motion.push_block(words!(), p, tw);
             }
+            probe!(12);
             // Split where the μ loop opens its estimate (`control_open`).
             let cut = open_at
                 .filter(|&o| (start..start + chunk.len()).contains(&o))
@@ -202,16 +209,20 @@ impl<const N: usize> Device<'_, N> {
                     closed = true;
                 }
             }
+            probe!(13);
         }
         // A railed sample in the window: the contact is pressed too hard
         // (or a sensor is broken): the safe state, through the one path.
         if closed && self.est.saturated() {
             self.fault(faults::ADC_SATURATED);
         }
+        probe!(14);
         if !pickups.is_empty() {
             self.motion_window(block);
         }
+        probe!(15);
         self.control_block_end(block, samples.len(), closed);
+        probe!(16);
     }
 
     /// Starts a measurement over `periods` drive periods.

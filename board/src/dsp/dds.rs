@@ -544,6 +544,9 @@ pub struct Dds<'t, const N: usize> {
     fs: f64,
     acc: u32,
     tw: u32,
+    /// The reference's rotation by one sample at `tw`
+    /// ([`crate::reference::step`], formed when `tw` is set, not per fill).
+    rot: (i32, i32),
     /// Channel 1 (normal transducer) and channel 2 (tangential).
     ch: [Channel; 2],
     slew: Slew,
@@ -564,6 +567,7 @@ impl<'t, const N: usize> Dds<'t, N> {
             fs,
             acc: 0,
             tw: 0,
+            rot: crate::reference::step(0),
             ch: [Channel::default(); 2],
             slew,
             interp: Interp::Reference,
@@ -610,7 +614,7 @@ impl<'t, const N: usize> Dds<'t, N> {
     /// As [`Dds::plan_frequency`]; the state is unchanged on error.
     pub fn set_frequency(&mut self, hz: f64) -> Result<Achieved, DdsError> {
         let a = self.plan_frequency(hz)?;
-        self.tw = a.tuning_word;
+        self.set_tuning_word(a.tuning_word);
         Ok(a)
     }
 
@@ -618,6 +622,9 @@ impl<'t, const N: usize> Dds<'t, N> {
     /// runs on), for a frequency the caller keeps inside `(0, f_s/2)`
     /// (the resonance tracking's small steps).
     pub fn set_tuning_word(&mut self, tw: u32) {
+        if tw != self.tw {
+            self.rot = crate::reference::step(tw);
+        }
         self.tw = tw;
     }
 
@@ -749,8 +756,10 @@ impl<'t, const N: usize> Dds<'t, N> {
         let (head, tail) = (&mut head[..k], &mut tail[..n - k]);
         let t = self.table;
         let (acc, tw) = (self.acc, self.tw);
-        crate::reference::fill(t, acc, tw, head);
-        crate::reference::fill(t, acc.wrapping_add(tw.wrapping_mul(k as u32)), tw, tail);
+        let rot = self.rot;
+        crate::reference::fill_rotating(t, acc, tw, rot, head);
+        let acc_k = acc.wrapping_add(tw.wrapping_mul(k as u32));
+        crate::reference::fill_rotating(t, acc_k, tw, rot, tail);
         if self.fill_path() == FillPath::Table {
             // The accumulator and the channels move in the table's loops.
             match self.interp {

@@ -227,7 +227,6 @@ impl Sums {
 pub struct Estimator {
     cal_x: Calibration,
     cal_z: Calibration,
-    full_scale: u16,
     periods: u32,
     state: State,
     sums: Sums,
@@ -277,7 +276,6 @@ impl Estimator {
         Ok(Estimator {
             cal_x,
             cal_z,
-            full_scale,
             periods: 0,
             state: State::Idle,
             sums: Sums::default(),
@@ -457,12 +455,6 @@ impl Estimator {
     /// estimate's `saturated` will say).
     pub fn saturated(&self) -> bool {
         self.saturated
-    }
-
-    /// A sample at an ADC rail (0 or full scale) on either channel.
-    #[inline]
-    pub fn railed(&self, x: u16, z: u16) -> bool {
-        x == 0 || z == 0 || x >= self.full_scale || z >= self.full_scale
     }
 
     /// Adds `w` (±ε) of sample `prev` (raw x, z; its reference word

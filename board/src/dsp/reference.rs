@@ -90,7 +90,19 @@ pub fn step(tw: u32) -> (i32, i32) {
 /// in Q30 (eq. R3: two 32×32→64 multiply-accumulates per component, not
 /// two table reads per sample).
 pub fn fill<const N: usize>(t: &SineTable<N>, acc0: u32, tw: u32, out: &mut [u32]) {
-    let (sc, ss) = step(tw);
+    fill_rotating(t, acc0, tw, step(tw), out);
+}
+
+/// [`fill`] with the rotation `rot` = [`step`]`(tw)` formed by the caller
+/// (the DDS keeps it per tuning word: one `sin_cos` per retune, not two
+/// per fill).
+pub fn fill_rotating<const N: usize>(
+    t: &SineTable<N>,
+    acc0: u32,
+    tw: u32,
+    (sc, ss): (i32, i32),
+    out: &mut [u32],
+) {
     // The high word of a 32×32 product (`SMMUL`, and `SMMLA`/`SMMLS` with
     // the add): Q30 × Q31 / 2³² is Q29, doubled back to Q30 — each
     // component truncated twice, within 2⁻²⁸ per step.
@@ -251,6 +263,20 @@ impl PairSums {
         out.railed = rails & RAIL_BITS != 0;
         out
     }
+}
+
+/// Whether a sample of `pairs` sat at a rail (a count 0 or ≥
+/// [`ADC_FULL_SCALE`]): [`PairSums::of`]'s `railed` without the sums, one
+/// packed word per pair ([`RAIL_BITS`]; ≈ 7 instructions a pair on the M4
+/// against ≈ 15 for the four comparisons). The closed μ loop checks every
+/// block with it, including the samples its estimates leave out.
+pub fn any_railed(pairs: &[(u16, u16)]) -> bool {
+    let mut rails = 0u32;
+    for &(x, z) in pairs {
+        let p = u32::from(x) | (u32::from(z) << 16);
+        rails |= p.wrapping_add(0x1_0001) | p.wrapping_sub(0x1_0001);
+    }
+    rails & RAIL_BITS != 0
 }
 
 /// The bits of a run's `rails` that only a railed sample sets: for a pair

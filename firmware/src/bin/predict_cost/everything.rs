@@ -235,6 +235,8 @@ pub fn run(b: &mut Bench<'_, '_>, drive: DriveSetting) -> Option<Load> {
     // Per event: (largest, sum, count).
     let mut by = [(0u32, 0u64, 0u32); 3];
     let (mut after, mut fill_after) = (false, (0u32, 0u32));
+    #[cfg(feature = "probe")]
+    board::probe::set_hook(prof::hook);
     for _ in 0..HALVES {
         let (u, w) = events(b);
         let h = analog.half(b, &mut frames);
@@ -265,6 +267,8 @@ pub fn run(b: &mut Bench<'_, '_>, drive: DriveSetting) -> Option<Load> {
         largest.poll = largest.poll.max(h.poll);
         sum += u64::from(h.total());
     }
+    #[cfg(feature = "probe")]
+    prof::print(b);
     let d = &*b.acc.dev;
     let st = d.status();
     Some(Load {
@@ -346,4 +350,41 @@ pub fn report(l: &Load) -> f32 {
         }
     );
     pct(n)
+}
+
+/// The probe's hook (feature `probe`): the time since the previous mark,
+/// summed and maximised per part (`board::probe::PARTS`).
+#[cfg(feature = "probe")]
+mod prof {
+    use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
+    use cortex_m::peripheral::SYST;
+    static LAST: AtomicU32 = AtomicU32::new(0);
+    static SUM: [AtomicU32; 17] = [const { AtomicU32::new(0) }; 17];
+    static MAX: [AtomicU32; 17] = [const { AtomicU32::new(0) }; 17];
+    pub fn hook(id: u8) {
+        let now = SYST::get_current();
+        let i = id as usize;
+        if i != 0 && i != 10 {
+            let d = LAST.load(Relaxed).wrapping_sub(now) & 0x00FF_FFFF;
+            SUM[i].fetch_add(d, Relaxed);
+            if d > MAX[i].load(Relaxed) {
+                MAX[i].store(d, Relaxed);
+            }
+        }
+        LAST.store(SYST::get_current(), Relaxed);
+    }
+    pub fn print(b: &super::Bench<'_, '_>) {
+        cortex_m_semihosting::hprintln!(
+            "  parts (probe marks; each mark adds its own cost to the totals below), mean / largest instructions:"
+        );
+        for (i, name) in board::probe::PARTS {
+            let i = usize::from(i);
+            cortex_m_semihosting::hprintln!(
+                "    {:<64} {:>5} / {:>5}",
+                name,
+                b.insn(SUM[i].load(Relaxed) / super::HALVES),
+                b.insn(MAX[i].load(Relaxed))
+            );
+        }
+    }
 }
