@@ -71,7 +71,7 @@ pub mod probe {
 
     /// The marks: a part's number is the mark that ends it; 0 and 10 start
     /// the DAC's and the ADC's handler.
-    pub const PARTS: [(u8, &str); 9] = [
+    pub const PARTS: [(u8, &str); 15] = [
         (1, "DAC: the mu loop's fill (control_fill)"),
         (
             2,
@@ -85,7 +85,13 @@ pub mod probe {
         (12, "ADC: the pickups' sums (Gram, pair sums)"),
         (13, "ADC: the force estimator's sums"),
         (14, "ADC: the saturation check"),
-        (15, "ADC: the pickups' window close (motion_window)"),
+        (20, "ADC window close: the delay's turn, the span check"),
+        (21, "ADC window close: the fit (LockInQ::solve, turned)"),
+        (22, "ADC window close: metres, amplitude, lift-off guard"),
+        (23, "ADC window close: the fills' records, smoothing"),
+        (24, "ADC window close: D3, open pickups, hold"),
+        (25, "ADC window close: tracking (T1-T3)"),
+        (15, "ADC: the rest of the window close"),
         (16, "ADC: the mu loop's block end (control_block_end)"),
     ];
 

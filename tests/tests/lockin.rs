@@ -7,7 +7,7 @@
 use std::f64::consts::TAU;
 
 use board::dds::SineTable;
-use board::lockin::{LockIn, LockInError, LockInQ, MAX_Q_SAMPLES, MIN_SPAN_RAD};
+use board::lockin::{f32_of, LockIn, LockInError, LockInQ, MAX_Q_SAMPLES, MIN_SPAN_RAD};
 use model_core::Libm;
 
 /// Samples of d + A cos(θ + ψ) at θ_i = θ0 + i·dθ, into a lock-in.
@@ -417,4 +417,46 @@ fn the_integer_reference_is_the_rounded_table_read() {
     }
     assert!(worst <= bound, "{worst} > {bound}");
     assert!(worst > 0.4, "the rounding is exercised: {worst}");
+}
+
+/// The solve's i64 → f32 conversion (`lockin::f32_of`) is Rust's own
+/// `as f32` (round to nearest, ties to even), bit for bit: at every power
+/// of two and its neighbours, at the halfway points between neighbouring
+/// f32 values (ties, and one above and below), at the ends of i64 and of
+/// i32, and at 10⁶ random values of every bit length.
+#[test]
+fn the_solves_conversion_is_the_correctly_rounded_one() {
+    let check = |v: i64| {
+        assert_eq!(f32_of(v).to_bits(), (v as f32).to_bits(), "{v}");
+    };
+    for v in [0, 1, -1, i64::MAX, i64::MIN, i64::MIN + 1] {
+        check(v);
+    }
+    for k in 0..63 {
+        let p = 1i64 << k;
+        for d in -3..=3 {
+            for v in [p.saturating_add(d), (-p).saturating_add(d)] {
+                check(v);
+            }
+        }
+        // Halfway between the f32 neighbours above 2^k (k ≥ 24: an ulp of
+        // 2^(k−23)), for odd and even significands, and one either side.
+        if k >= 24 {
+            let ulp = 1i64 << (k - 23);
+            for m in [0i64, 1, 2, 3, 0x7F_FFFE, 0x7F_FFFF] {
+                let tie = p + m * ulp + ulp / 2;
+                for v in [tie - 1, tie, tie + 1] {
+                    check(v);
+                    check(-v);
+                }
+            }
+        }
+    }
+    let mut rng = integration_tests::Rng::new(35);
+    for i in 0..1_000_000u32 {
+        let bits = (rng.uniform() * 2f64.powi(53)) as u64;
+        let mixed = bits ^ (bits << 11) ^ ((i as u64) << 40);
+        check((mixed >> (i % 64)) as i64);
+        check(-((mixed >> (i % 64)) as i64 >> 1));
+    }
 }

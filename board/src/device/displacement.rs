@@ -290,6 +290,49 @@ pub fn norm(c: C) -> f32 {
     FastF32::hypot(c.re, c.im)
 }
 
+/// `|c|²`, one multiply and one multiply-add.
+#[inline]
+fn norm_sq(c: C) -> f32 {
+    c.re * c.re + c.im * c.im
+}
+
+/// Whether `|a| ≤ k·|b|` (`k ≥ 0`): from the squares, `|a|² ≤ k²·|b|²`,
+/// when both are normal f32 (no overflow, no precision lost to
+/// underflow), else from [`norm`] (issue 35: a comparison needs no square
+/// root, and each `norm` is a fast hypot of ≈ 40 instructions; the
+/// loops' comparisons were ≈ 900 of a window's close). The two differ only
+/// by rounding, a few parts in 10⁷ of the bound.
+pub fn norm_le(a: C, k: f32, b: C) -> bool {
+    let (a2, b2) = (norm_sq(a), k * k * norm_sq(b));
+    if a2.is_normal() && b2.is_normal() {
+        a2 <= b2
+    } else {
+        norm(a) <= k * norm(b)
+    }
+}
+
+/// Whether `|a| > k·|b|` (`k ≥ 0`), as [`norm_le`] (false for NaN, like
+/// the comparison of the norms).
+pub fn norm_gt(a: C, k: f32, b: C) -> bool {
+    let (a2, b2) = (norm_sq(a), k * k * norm_sq(b));
+    if a2.is_normal() && b2.is_normal() {
+        a2 > b2
+    } else {
+        norm(a) > k * norm(b)
+    }
+}
+
+/// Whether `|a| ≤ bound` (`bound ≥ 0`): [`norm_le`] against a real bound.
+pub fn norm_le_real(a: C, bound: f32) -> bool {
+    norm_le(a, bound, C::new(1.0, 0.0))
+}
+
+/// Whether `c ≠ 0` (`|c| > 0`, without the square root).
+#[inline]
+pub fn nonzero(c: C) -> bool {
+    c.re != 0.0 || c.im != 0.0
+}
+
 /// arg c in (−π, π], fast f32 backend.
 pub fn arg(c: C) -> f32 {
     FastF32::atan2(c.im, c.re)
@@ -693,12 +736,11 @@ impl<const N: usize> Device<'_, N> {
     pub(super) fn model_reached(&self) -> bool {
         let d = setpoint(&self.drive);
         (0..2).all(|ch| {
-            let dn = norm(d[ch]);
-            let e = norm(self.loops.env[ch] - d[ch]);
-            if dn > 0.0 {
-                e <= HOLD_TOLERANCE * dn && self.loops.last_d[ch] == d[ch]
+            let e = self.loops.env[ch] - d[ch];
+            if nonzero(d[ch]) {
+                norm_le(e, HOLD_TOLERANCE, d[ch]) && self.loops.last_d[ch] == d[ch]
             } else {
-                e <= HOLD_FLOOR_M
+                norm_le_real(e, HOLD_FLOOR_M)
             }
         })
     }
@@ -732,17 +774,19 @@ impl<const N: usize> Device<'_, N> {
         } else {
             (HOLD_TOLERANCE, HOLD_FLOOR_M)
         };
+        probe!(23);
         let models = self.tracker.models(&t);
         for (ch, m) in models.iter().enumerate() {
-            let dn = norm(target[ch]);
-            within &= if dn > 0.0 {
-                norm((avg[ch] - target[ch]) / target[ch]) <= tol
+            let driven = nonzero(target[ch]);
+            within &= if driven {
+                norm_le(avg[ch] - target[ch], tol, target[ch])
             } else {
-                norm(avg[ch]) <= floor
+                norm_le_real(avg[ch], floor)
             };
-            let mn = norm(mean[ch]);
             // An open pickup: the model says the mode moves, the pickup not.
-            if mn > OPEN_FLOOR_M && norm(x[ch]) < OPEN_FRACTION * mn {
+            let one = C::new(1.0, 0.0);
+            if norm_gt(mean[ch], OPEN_FLOOR_M, one) && norm_gt(mean[ch], 1.0 / OPEN_FRACTION, x[ch])
+            {
                 self.loops.open[ch] += window_s;
                 if self.loops.open[ch] >= OPEN_S * (1.0 - 1e-3) {
                     self.fault(super::faults::PICKUP_OPEN);
@@ -757,7 +801,7 @@ impl<const N: usize> Device<'_, N> {
             // error then holds the model's dynamics error too, τ̂ and ω̂_r,
             // which the dead-beat fills would otherwise leave to die out
             // with the mode's own τ).
-            if dn <= 0.0 || mn < 0.05 * dn {
+            if !driven || norm_gt(target[ch], 20.0, mean[ch]) {
                 continue;
             }
             if moving[ch] {
@@ -767,15 +811,16 @@ impl<const N: usize> Device<'_, N> {
             let tau = m.q / (core::f32::consts::PI * m.resonance_hz);
             let k = (window_s / (4.0 * tau)).min(0.5);
             let c = self.loops.c[ch] * (C::new(1.0, 0.0) + e * k);
-            let cn = norm(c);
-            if (1.0 / C_MAX..=C_MAX).contains(&cn) {
+            if norm_le(one, C_MAX, c) && norm_le_real(c, C_MAX) {
                 self.loops.c[ch] = c;
                 self.loops.saturated[ch] = false;
             } else {
                 self.loops.saturated[ch] = true;
             }
         }
+        probe!(24);
         self.tracking_step(&t, x, mean, u_fill, window_s);
+        probe!(25);
         self.loops.good = if within {
             self.loops.good + window_s
         } else {

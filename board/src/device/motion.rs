@@ -134,6 +134,7 @@ impl<const N: usize> Device<'_, N> {
             return;
         }
         let window_s = m.lock.samples() as f32 / self.cfg.sample_rate_hz as f32;
+        probe!(20);
         let [z, x] = match m.lock.solve() {
             Ok(fit) => fit.map(|p| p.turned(m.delay.2, m.delay.3)),
             // Too long for the integer sums (never within the drives'
@@ -146,6 +147,7 @@ impl<const N: usize> Device<'_, N> {
             // A singular window: it grows on until it solves.
             Err(_) => return,
         };
+        probe!(21);
         m.lock.reset();
         let blocks = core::mem::take(&mut m.blocks);
         // Counts to metres: the pickups' calibrations (offset, gain).
@@ -181,6 +183,7 @@ impl<const N: usize> Device<'_, N> {
             self.fault(super::faults::MEASURED_LIFTOFF);
             return;
         }
+        probe!(22);
         self.displacement_step(block, blocks, [xz, xx], window_s);
     }
 

@@ -38,7 +38,7 @@
 
 use num_complex::Complex32 as C;
 
-use super::displacement::{arg, norm, HOLD_FLOOR_M, STEADY_FRACTION};
+use super::displacement::{arg, nonzero, norm_gt, norm_le, HOLD_FLOOR_M, STEADY_FRACTION};
 use super::{Device, TransducerModel, Transducers};
 pub use crate::protocol::messages::Track;
 use model_core::float::{FastF32, Math};
@@ -128,7 +128,7 @@ impl<const N: usize> Device<'_, N> {
         let ch = if self.options.track == Track::X { 1 } else { 0 };
         let id = if ch == 0 { t.z } else { t.x };
         let d = super::displacement::setpoint(&self.drive)[ch];
-        if norm(d) <= 0.0 {
+        if !nonzero(d) {
             // Nothing to track on an undriven mode.
             return;
         }
@@ -148,11 +148,12 @@ impl<const N: usize> Device<'_, N> {
         let models = self.tracker.models(t);
         let h = super::displacement::model_response(&models[ch], f) * self.loops.c[ch];
         let steady = h * u[ch];
-        let gap = norm(mean[ch] - steady);
-        if gap.is_nan() || gap > STEADY_FRACTION * norm(steady) {
+        // (Not within, or NaN.)
+        if !norm_le(mean[ch] - steady, STEADY_FRACTION, steady) {
             return;
         }
-        let usable = norm(u[ch]) > 0.0 && norm(x[ch]) > TRACK_MIN_AMP_M;
+        let one = C::new(1.0, 0.0);
+        let usable = nonzero(u[ch]) && norm_gt(x[ch], TRACK_MIN_AMP_M, one);
         let estimate = if usable {
             resonance_of(x[ch] / u[ch], f, &id)
         } else {

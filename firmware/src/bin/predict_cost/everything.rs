@@ -359,8 +359,8 @@ mod prof {
     use core::sync::atomic::{AtomicU32, Ordering::Relaxed};
     use cortex_m::peripheral::SYST;
     static LAST: AtomicU32 = AtomicU32::new(0);
-    static SUM: [AtomicU32; 17] = [const { AtomicU32::new(0) }; 17];
-    static MAX: [AtomicU32; 17] = [const { AtomicU32::new(0) }; 17];
+    static SUM: [AtomicU32; 32] = [const { AtomicU32::new(0) }; 32];
+    static MAX: [AtomicU32; 32] = [const { AtomicU32::new(0) }; 32];
     pub fn hook(id: u8) {
         let now = SYST::get_current();
         let i = id as usize;
