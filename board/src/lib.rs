@@ -71,12 +71,11 @@ pub mod probe {
 
     /// The marks: a part's number is the mark that ends it; 0 and 10 start
     /// the DAC's and the ADC's handler.
-    pub const PARTS: [(u8, &str); 15] = [
+    pub const PARTS: [(u8, &str); 17] = [
         (1, "DAC: the mu loop's fill (control_fill)"),
-        (
-            2,
-            "DAC: the displacement loops' dead-beat (displacement_fill)",
-        ),
+        (30, "DAC dead-beat: the model at the frequency (cached)"),
+        (31, "DAC dead-beat: the poles where c places them (D8)"),
+        (2, "DAC dead-beat: the voltages (D4-D6), levels, phases"),
         (
             3,
             "DAC: the reference words and the codes (fill_with_reference)",

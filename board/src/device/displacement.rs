@@ -659,6 +659,7 @@ impl<const N: usize> Device<'_, N> {
             return;
         };
         let mut m = self.model_at(&t, n);
+        probe!(30);
         // D8: the envelope's pole where the learned c places it (the
         // observer's propagation uses the same, through the cache).
         for ch in 0..2 {
@@ -668,6 +669,7 @@ impl<const N: usize> Device<'_, N> {
             }
         }
         self.loops.model = Some(m);
+        probe!(31);
         let d = setpoint(&self.drive);
         let v = DAC_VOLTS_PER_CODE as f32;
         let one = C::new(1.0, 0.0);
@@ -692,14 +694,21 @@ impl<const N: usize> Device<'_, N> {
             // The DAC's room around the DC, less a part in 10⁴ (the level's
             // own check must pass after the f32 round trip).
             let room = dc.min(f32::from(crate::dds::DAC_MAX) - dc).max(0.0) * v * 0.9999;
-            let bound = (h_room * norm(d[ch] / hc).max(self.loops.u_prev[ch])).min(room);
+            // The bound min(h·max(|d/hc|, u_prev), room): `un` beyond it iff
+            // beyond the room, or beyond both h·u_prev and h·|d/hc| — the
+            // last compared as |u·hc| > h·|d| (`norm_gt`: no division, no
+            // root; issue 35), the bound itself formed only for a cut.
+            let u_prev = self.loops.u_prev[ch];
             let mut un = norm(u);
-            let cut = un > bound || un.is_nan();
+            let cut = un.is_nan()
+                || un > room
+                || (un > h_room * u_prev && norm_gt(u * hc, h_room, d[ch]));
             moving[ch] =
                 cut || usize::from(self.loops.since_change[ch]) < super::measure::FILL_RING;
             if cut {
                 // Beyond the bound (or not finite): the magnitude cut, the
                 // phase kept (NaN: no drive).
+                let bound = (h_room * norm(d[ch] / hc).max(u_prev)).min(room);
                 u = if un.is_finite() && un > 0.0 {
                     u * (bound / un)
                 } else {
