@@ -317,3 +317,80 @@ fn liftoff_stepping_constant_by_self_convergence() {
     );
     assert!(k <= stepping::DISCRETISATION_K / 2.0, "K = {k}");
 }
+
+/// `fixed_step::Stepper` (the simulated device's plant: the same scheme with an
+/// arbitrary phase step δ, its `(cos θ, sin θ)` advanced by rotation and
+/// renormalised every 1 024 steps) against the scheme written out here with
+/// direct `cos`/`sin` of `θ_k = θ₀ + kδ` at every step: stick trial
+/// `s + Vδ + ΔX` with `X = b cos φ cos θ − b sin φ sin θ`, clamp to `±w`,
+/// `w = 1 − a cos θ` (§2). `K = 3 000` steps at a δ that divides no period, so
+/// the renormalisation runs twice and both clamps and stick arcs occur.
+///
+/// Tolerance. One rotation adds at most ≈ 4ε to the error of `(cos θ, sin θ)`
+/// (two products and a sum, and `cos δ`, `sin δ` correct to an ulp); a
+/// rotation does not grow an error and the renormalisation only shrinks its
+/// radial part, so after `k` steps the pair is within `4kε` of the direct
+/// values (whose own error, `ε·θ_k` from the phase sum, is below `ε·θ_K`
+/// ≈ 20ε). So `|cos θ − cos θ_k|` and `|w − w_k|/a ≤ (4K + 20)ε = 2.7·10⁻¹²`.
+/// The clamp is 1-Lipschitz in the trial and the band, so the stretch error
+/// grows per step by at most the two `X` errors and the band's,
+/// `(2b + a)(4K + 20)ε`: after K steps `≤ K(2b + a)(4K + 20)ε = 1.7·10⁻⁸`
+/// for `a = 0.5, b = 0.8`.
+#[test]
+fn stepper_matches_the_scheme_with_direct_trig() {
+    use model_core::fixed_step::Stepper;
+    let (a, b, phi): (f64, f64, f64) = (0.5, 0.8, 0.7);
+    let d = Drive::new::<Libm>(a, b, phi);
+    let (bc, bs) = (d.bc, d.bs);
+    // A fifth of the forward critical velocity: stick–slip in each period.
+    let v = 0.2 * d.c_forward::<Libm>();
+    let delta = 2.0 * PI / 1000.37;
+    let (theta0, s0) = (0.3, 0.1);
+    let k_steps = 3000u32;
+    let eps = f64::EPSILON;
+    let trig_tol = f64::from(4 * k_steps + 20) * eps;
+    let stretch_tol = f64::from(k_steps) * (2.0 * b + a) * trig_tol;
+
+    let mut stepper = Stepper::<f64>::new::<Libm>(d, v, theta0, s0, delta);
+    let x_of = |t: f64| bc * t.cos() - bs * t.sin();
+    let mut x_prev = x_of(theta0);
+    let mut s = s0.clamp(-(1.0 - a * theta0.cos()), 1.0 - a * theta0.cos());
+    let (mut clamps, mut sticks) = (0u32, 0u32);
+    let (mut worst_c, mut worst_s) = (0.0f64, 0.0f64);
+    for k in 1..=k_steps {
+        let t = theta0 + f64::from(k) * delta;
+        let x = x_of(t);
+        let w = 1.0 - a * t.cos();
+        let trial = s + v * delta + (x - x_prev);
+        s = trial.clamp(-w, w);
+        if s == trial {
+            sticks += 1;
+        } else {
+            clamps += 1;
+        }
+        x_prev = x;
+        let (c_got, s_got, w_got) = stepper.step();
+        worst_c = worst_c.max((c_got - t.cos()).abs());
+        worst_s = worst_s.max((s_got - s).abs());
+        assert!(
+            (c_got - t.cos()).abs() <= trig_tol,
+            "step {k}: cos θ {c_got} vs {} (tol {trig_tol:e})",
+            t.cos()
+        );
+        assert!(
+            (w_got - w).abs() <= a * trig_tol,
+            "step {k}: w {w_got} vs {w} (tol {:e})",
+            a * trig_tol
+        );
+        assert!(
+            (s_got - s).abs() <= stretch_tol,
+            "step {k}: stretch {s_got} vs {s} (tol {stretch_tol:e})"
+        );
+    }
+    println!("Stepper vs direct trig: worst |Δcos θ| {worst_c:.1e} (tol {trig_tol:.1e}), worst |Δs| {worst_s:.1e} (tol {stretch_tol:.1e}); {clamps} clamped, {sticks} stuck");
+    // The run exercised both the stick trial and the clamp.
+    assert!(
+        clamps > 100 && sticks > 100,
+        "clamps {clamps}, sticks {sticks}"
+    );
+}
