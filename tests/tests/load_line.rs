@@ -134,6 +134,50 @@ fn powers_match_an_independent_simulation() {
     assert_eq!(checked, 78);
 }
 
+/// `Powers::efficiency` where the contact brakes the body: documented as
+/// `η = P_out/P_in` where the contact delivers power (`P_out > 0`), **else 0**.
+/// At Fig. 6's a = 0.5, ratio 2, φ = 0 and V = c/2 (above the no-load
+/// velocity) friction opposes the motion, μ > 0, so `P_out = −μV < 0`, while
+/// the tangential transducer still puts power in, `P_in > 0`. Both signs are
+/// taken from the simulation written here (not from `powers`), each clear of
+/// zero by more than its allowance (the one of
+/// `powers_match_an_independent_simulation`: 1.5|f_N − f_2N| + 10(1 + b)/(2N)²,
+/// times (1 + b) for a power); `powers` must match the simulation within the
+/// same allowance, and η must be exactly 0 — the documented value, not the
+/// negative ratio `P_out/P_in` (≈ −3.5 here).
+#[test]
+fn efficiency_is_zero_where_the_contact_brakes() {
+    let d = scene_ratio(0.5, 2.0, 0.0).drive();
+    let v = 0.5 * d.c_forward::<Libm>();
+    let n = 20_000;
+    let (m1, i1, _) = simulate(d.a, d.bc, d.bs, v, n);
+    let (m2, i2, _) = simulate(d.a, d.bc, d.bs, v, 2 * n);
+    let grid = 10.0 * (1.0 + d.b) / (2.0 * f64::from(n)).powi(2);
+    let allow_mu = 1.5 * (m1 - m2).abs() + grid + 1e-12;
+    let allow_in = 1.5 * (i1 - i2).abs() + grid * (1.0 + d.b) + 1e-12;
+    // The state: braking (μ > 0 at V > 0) with power going in.
+    assert!(m2 > allow_mu, "μ = {m2} ± {allow_mu:e}: not braking");
+    assert!(i2 > allow_in, "P_in = {i2} ± {allow_in:e}: no input");
+    let pw = powers::<f64, Libm>(&d, v).unwrap();
+    assert!(
+        (pw.mu_over_mu0 - m2).abs() <= allow_mu,
+        "μ {} vs {m2}",
+        pw.mu_over_mu0
+    );
+    assert!(
+        (pw.input - i2).abs() <= allow_in,
+        "P_in {} vs {i2}",
+        pw.input
+    );
+    assert!(
+        (pw.output + m2 * v).abs() <= allow_mu * v,
+        "P_out {} vs {}",
+        pw.output,
+        -m2 * v
+    );
+    assert_eq!(pw.efficiency(), 0.0, "η where P_out < 0 < P_in: {pw:?}");
+}
+
 #[test]
 fn stall_forces_and_no_load_velocities() {
     // Fig. 6's scenes (ratio 2) push; ratio 0.5 at φ = 0 does not (a ratchet).
