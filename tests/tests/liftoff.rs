@@ -131,6 +131,92 @@ fn stepping_is_second_order_and_within_its_bound() {
     assert!((1.8..=2.3).contains(&order), "fitted order {order}");
 }
 
+/// The stepping scheme as its module documents it, written out here: the
+/// window `[θ_c, 2π − θ_c]`, `cos θ_c = 1/a` (eq. L1), cut into steps of
+/// `δ = 2π/N` from the landing (`s = 0`) and **one last shorter step** (length
+/// in `(0, δ]`) ending at the lift-off; per step the stick trial and the clamp
+/// to `±w`, with direct `cos`/`sin` of `θ_c + jδ`; trapezoid `∫s`, and `∫w`
+/// in closed form, `2π − 2θ_c + 2√(a² − 1)` (eq. L4). Returns `(μ/μ₀, steps)`.
+fn stepping_as_documented(a: f64, b: f64, phi: f64, v: f64, n: u32) -> (f64, u32) {
+    let tc = (1.0 / a).acos();
+    let (t0, t1) = (tc, TAU - tc);
+    let h = TAU / f64::from(n);
+    let ux = |t: f64| v * t + b * (t + phi).cos();
+    let w = |t: f64| 1.0 - a * t.cos();
+    let (mut t, mut s, mut int_s, mut steps) = (t0, 0.0f64, 0.0, 0u32);
+    while t < t1 {
+        let t_next = (t0 + f64::from(steps + 1) * h).min(t1);
+        let band = if t_next == t1 { 0.0 } else { w(t_next) };
+        let s_next = (s + ux(t_next) - ux(t)).clamp(-band, band);
+        int_s += 0.5 * (t_next - t) * (s + s_next);
+        s = s_next;
+        t = t_next;
+        steps += 1;
+    }
+    let int_w = TAU - 2.0 * tc + 2.0 * (a * a - 1.0).sqrt();
+    ((int_s / int_w).clamp(-1.0, 1.0), steps)
+}
+
+/// `stepping::mu_over_mu0` is the scheme its module documents: the step count
+/// is `⌈(2π − 2θ_c)/δ⌉` (whole steps of δ and one last shorter step; the N
+/// here keep `(2π − 2θ_c)/δ` at least 0.05 from an integer, so rounding of
+/// the window cannot move the ceiling), and μ equals the scheme written out
+/// here with direct trig.
+///
+/// Tolerance on μ: the two differ only by rounding. The model advances
+/// `(cos θ, sin θ)` by rotation (≤ 4ε per step, not growing: ≤ (4N + 20)ε
+/// after N steps, with the direct `θ_c + jδ` and `θ_c`'s own few ε); the
+/// clamp is 1-Lipschitz, so the stretch drifts by at most `(2b + a)` times
+/// that per step, `N(2b + a)(4N + 20)ε` in all; `∫s` over the window (< 2π)
+/// then differs by 2π times that, and μ by that over `∫w`. A scheme with
+/// any other cut of the window (e.g. the last step merged into the one
+/// before) differs at `O(δ²)`, far above this.
+#[test]
+fn stepping_is_the_documented_scheme() {
+    let eps = f64::EPSILON;
+    let (mut checked, mut worst) = (0, 0.0f64);
+    for (a, b, phi, x) in [
+        (1.5, 0.5, 0.3, 0.2),
+        (1.0005, 0.8, -1.2, -0.5),
+        (2.5, 2.0, 2.0, 0.0),
+        (3.7, 0.05, 1.0, 0.9),
+    ] {
+        let d = Drive::new::<Libm>(a, b, phi);
+        let (cp, cm) = liftoff::critical_velocities::<f64, Libm>(&d).unwrap();
+        let v = if x >= 0.0 { x * cp } else { x * cm };
+        let span = TAU - 2.0 * (1.0 / a).acos();
+        for n in [64u32, 100, 257, 1000, 4096] {
+            if n < stepping::min_steps_per_period(&d) {
+                continue;
+            }
+            let q = span / (TAU / f64::from(n));
+            if (q - q.round()).abs() < 0.05 {
+                continue;
+            }
+            let out = stepping::mu_over_mu0::<f64, Libm>(&d, v, n).unwrap();
+            let (mu, steps) = stepping_as_documented(a, b, phi, v, n);
+            assert_eq!(
+                steps,
+                q.ceil() as u32,
+                "a={a} N={n}: the scheme's own count"
+            );
+            assert_eq!(out.steps, steps, "a={a} b={b} φ={phi} V={v} N={n}: steps");
+            let nf = f64::from(n);
+            let int_w = TAU - 2.0 * (1.0 / a).acos() + 2.0 * (a * a - 1.0).sqrt();
+            let tol = TAU * nf * (2.0 * b + a) * (4.0 * nf + 20.0) * eps / int_w;
+            assert!(
+                (out.mu_over_mu0 - mu).abs() <= tol,
+                "a={a} b={b} φ={phi} V={v} N={n}: μ {} vs {mu} (tol {tol:e})",
+                out.mu_over_mu0
+            );
+            worst = worst.max((out.mu_over_mu0 - mu).abs() / tol);
+            checked += 1;
+        }
+    }
+    println!("stepping vs the documented scheme: {checked} runs, worst |Δμ|/tol = {worst:.1e}");
+    assert!(checked >= 16, "only {checked} runs compared");
+}
+
 #[test]
 fn continuous_across_a_equal_one() {
     // Module docs: |μ(1 ± ε) − μ(1)| = O(ε) (the state at θ = 0 differs by at
