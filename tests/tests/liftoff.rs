@@ -606,6 +606,78 @@ fn regimes_with_lift_off() {
     }
 }
 
+/// The class at the tie of the critical-velocity tolerance. The module's
+/// tolerances are inclusive (`|μ(0)| = tol` is "zero", asymmetry `= tol` is
+/// "symmetric"), and so is "equal": at `|V_c⁺ − V_c⁻| = tol·(1 + max V_c)`
+/// exactly the critical velocities count as equal and the law's symmetry is
+/// checked at the sampled velocities. The scene (a = 1.11, b = 1.09,
+/// φ = 1.05 rad) has both peaks inside the window, so eq. L5 gives
+/// `V_c± = |a ± b e^{iφ}|` (checked to 4ε); `tol` is the float that makes the
+/// tie exact (≈ 0.276). The brute force (N = 2¹⁴, error below
+/// `2|f_N − f_2N| + 2(1 + a + b)/N²` as in `exact_agrees_with_brute_force`,
+/// each value's own, subtracted) gives `|μ(0)| ≈ 0.116 ≤ tol` — not an actuator —
+/// and `|μ(V) + μ(−V)|` above `tol` by far more than its error at a velocity
+/// of the sampled range (≈ 0.385 at the worst of 16 velocities in
+/// `(0, max V_c)`): the law is not symmetric, so by the module's definitions
+/// the class is a dynamic ratchet, not active control. (A `tol` one ulp lower
+/// takes the other branch, whose estimate `max(2|μ(0)|, 1 − |μ(min V_c)|)` =
+/// 0.231 ≤ tol gives active control for the same law: that branch
+/// under-reports the asymmetry of this law. Noted; not asserted here.)
+#[test]
+fn regime_at_the_tie_of_the_critical_velocities() {
+    use model_core::model::liftoff::regime::classify;
+    use model_core::regime::{ClassifyOptions, Regime};
+    let (a, b, phi): (f64, f64, f64) = (1.11, 1.09, 1.05);
+    let d = Drive::new::<Libm>(a, b, phi);
+    let (c, cb) = liftoff::critical_velocities::<f64, Libm>(&d).unwrap();
+    let (re, im) = (b * phi.cos(), b * phi.sin());
+    assert!((c - (a + re).hypot(im)).abs() <= 4.0 * f64::EPSILON * c);
+    assert!((cb - (a - re).hypot(im)).abs() <= 4.0 * f64::EPSILON * cb);
+    let vmax = c.max(cb);
+    let gap = (c - cb).abs();
+    let guess = gap / (1.0 + vmax);
+    let tol = (-8i64..=8)
+        .map(|k| f64::from_bits((guess.to_bits() as i64 + k) as u64))
+        .find(|t| t * (1.0 + vmax) == gap)
+        .expect("a float tol at the tie");
+    let brute = |v: f64| {
+        let n = 1 << 14;
+        let (f1, f2) = (
+            brute_force(a, b, phi, v, n),
+            brute_force(a, b, phi, v, 2 * n),
+        );
+        let n2 = f64::from(2 * n);
+        (f2, 2.0 * (f1 - f2).abs() + (1.0 + a + b) * 2.0 / (n2 * n2))
+    };
+    let (m0, e0) = brute(0.0);
+    assert!(m0.abs() + e0 <= tol, "μ(0) = {m0} ± {e0:e}: tol {tol}");
+    let worst = (1..=16)
+        .map(|i| {
+            let v = vmax * f64::from(i) / 17.0;
+            let ((f, ef), (g, eg)) = (brute(v), brute(-v));
+            (f + g).abs() - ef - eg
+        })
+        .fold(0.0, f64::max);
+    println!(
+        "tie: tol {tol:.4}, |μ(0)| {:.4}, brute-force asymmetry ≥ {worst:.4}",
+        m0.abs()
+    );
+    assert!(
+        worst > 1.2 * tol,
+        "asymmetry {worst} not clear of tol {tol}"
+    );
+    let opts = ClassifyOptions {
+        tol,
+        ..ClassifyOptions::default()
+    };
+    let got = classify::<f64, Libm>(&d, &opts).unwrap();
+    assert_eq!(
+        got.regime,
+        Regime::DynamicRatchet,
+        "tol {tol}, brute-force asymmetry ≥ {worst}: {got:?}"
+    );
+}
+
 #[test]
 fn mean_normal_force_closed_form() {
     // ⟨w⁺⟩ (eq. L4) against the midpoint rule of max(1 − a cos θ, 0) over a
