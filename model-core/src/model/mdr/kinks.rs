@@ -427,4 +427,132 @@ mod tests {
         }
         assert!(checked >= 3, "{checked}");
     }
+
+    /// The pinches (the last stick of a window reaching the lift-off with
+    /// `s = 0`, from the landing or from a slip inside the window: the last
+    /// two zero sets of [`kink_candidates`]) are candidates where the event
+    /// walk's arc structure changes. Nine drives whose intermittent springs
+    /// have such a kink (found by a scan over 300 random drives, 23 kinks, of
+    /// which one had no candidate near it: the 1 in 132 of the module docs),
+    /// with landing phases `θ_c` from 0.26 to 2.8 rad: the signatures are
+    /// scanned at 4000 offsets across `d ∈ (−a, min(a, 1))`; at each change
+    /// where only the window's last slip turns from forward to backward (or
+    /// back) — the stick before it meets the lift-off point, where both bands
+    /// close — a candidate must lie in the layer between the two codes'
+    /// regions, each edge bisected on the signatures to 10⁻¹³; and each drive
+    /// must show such a change. Why there: the walk's arcs, not the
+    /// candidates, are the reference; the signatures drop arcs shorter than
+    /// 10⁻⁶ rad (`liftoff::SIGNATURE_MIN_ARC`), so next to the kink neither
+    /// slip shows, and the kink, where both have zero length, lies inside that
+    /// layer (seen 10⁻⁷ to 2·10⁻⁵ wide: how fast the slips grow depends on the
+    /// slope of the pinch condition, so the width has no simple closed form).
+    /// Slack 10⁻¹⁰ in `d` either side: the candidate's own refinement is
+    /// 10⁻¹³ rad in `θ_c` (`d = a cos θ_c`, so ≤ 3·10⁻¹³ in `d`), the
+    /// bisection 10⁻¹³.
+    #[test]
+    fn pinches_are_candidates_at_the_walks_arc_changes() {
+        // (a, b, φ, V): four pinches after a slip with θ_c past π/2, three
+        // before it, two from the landing.
+        let drives = [
+            (
+                1.386_145_305_242_113_5,
+                1.614_770_542_262_740_7,
+                3.689_116_834_826_463,
+                0.807_266_038_718_036_8,
+            ),
+            (
+                1.631_094_769_531_622,
+                4.872_139_072_817_446,
+                3.831_386_212_246_653,
+                3.537_917_644_013_905_5,
+            ),
+            (
+                0.424_805_949_951_917_9,
+                2.265_335_014_931_619,
+                -2.445_517_808_501_305_6,
+                1.883_667_622_557_258,
+            ),
+            (
+                0.563_269_817_182_083_1,
+                1.496_667_431_434_648_9,
+                -2.508_573_746_417_526,
+                1.056_954_884_947_099_3,
+            ),
+            (
+                0.928_452_126_681_349_6,
+                1.102_442_084_699_159_8,
+                2.939_390_167_425_133_6,
+                0.264_440_026_563_076_8,
+            ),
+            (
+                0.619_673_262_562_157_5,
+                3.141_914_393_694_939,
+                3.034_509_724_916_193,
+                2.483_042_334_817_35,
+            ),
+            (
+                1.916_341_174_664_837_3,
+                1.555_209_285_862_763_7,
+                -2.478_885_007_907_387_6,
+                0.396_277_125_265_595_9,
+            ),
+            (
+                0.825_988_086_178_038,
+                0.184_524_092_239_235_8,
+                -2.679_140_962_990_061,
+                0.066_698_578_475_972_2,
+            ),
+            (
+                1.343_509_026_520_937,
+                0.817_465_407_964_331_9,
+                -2.706_539_191_461_682,
+                0.337_271_303_231_719_67,
+            ),
+        ];
+        for &(a, b, phi, v) in &drives {
+            let d = Drive::new::<Libm>(a, b, phi);
+            let shape = Shape::of::<Libm>(&d, v);
+            let mut cands: heapless::Vec<f64, MAX_CANDIDATES> = heapless::Vec::new();
+            kink_candidates::<f64, Libm>(&d, v, |x| {
+                let _ = cands.push(x);
+            });
+            let sig = |x: f64| spring::signature::<f64, Libm>(&shape, &d, x, v);
+            // The edge of `code`'s region between `inside` (that code) and `outside`.
+            let edge = |code: Option<u32>, mut inside: f64, mut outside: f64| {
+                while (inside - outside).abs() > 1e-13 {
+                    let m = 0.5 * (inside + outside);
+                    if sig(m) == code {
+                        inside = m;
+                    } else {
+                        outside = m;
+                    }
+                }
+                inside
+            };
+            let top = a.min(1.0) - 1e-9;
+            let span = top + a - 1e-9;
+            let n = 4000;
+            let mut pinches = 0;
+            let (mut prev, mut prev_d) = (sig(top), top);
+            for i in 1..=n {
+                let dd = top - span * (f64::from(i) / f64::from(n));
+                let s = sig(dd);
+                if let (Some(p), Some(q)) = (prev, s) {
+                    let last = (p % 4, q % 4);
+                    if p / 4 == q / 4 && p / 4 > 0 && (last == (2, 3) || last == (3, 2)) {
+                        let hi = edge(prev, prev_d, dd) + 1e-10;
+                        let lo = edge(s, dd, prev_d) - 1e-10;
+                        assert!(
+                            cands.iter().any(|&c| c >= lo && c <= hi),
+                            "a={a} b={b} φ={phi} V={v}: arcs {p} -> {q} in d ∈ [{lo}, {hi}], no candidate: {cands:?}"
+                        );
+                        pinches += 1;
+                    }
+                }
+                prev = s;
+                prev_d = dd;
+            }
+            assert!(pinches > 0, "a={a} b={b} φ={phi} V={v}: no pinch seen");
+        }
+    }
 }
