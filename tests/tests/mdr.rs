@@ -554,6 +554,100 @@ fn refusals() {
     }
 }
 
+/// `MdrError::ToleranceTooTight { best }` names a usable tolerance, the
+/// per-spring part of the bound by hand: for a cone at `a ≤ 1` (eq. M6,
+/// `D = (1 + a²/2)/2`, `ξ_max = 1 + a`) that part is
+/// `P = ε_s ξ_max/D + 64ε` with `ε_s = SPRING_PRECISION·(1 + a + b)`
+/// (Libm adds no backend error; `mdr::solver_bound`'s doc and the module
+/// docs of `mdr`, "Quadrature and its error bound"). A tolerance of 10⁻¹³, below `P ≈ 6.7·10⁻¹¹`, is refused
+/// at `V > 0` and at rest, each with `P < best ≤ 1.02 P`: not below what the
+/// solvers guarantee, and within a small margin of it (the code adds 1 %; the
+/// rest of the 2 % is slack, rounding is ~10⁻¹⁶ relative). Asked again at
+/// `tol = best` (what `analysis`' motion law does), the MDR answers with a
+/// bound `≤ best`.
+#[test]
+fn tolerance_too_tight_names_the_per_spring_part_of_the_bound() {
+    let (a, b, phi, v) = (0.5, 1.0, 0.3, 0.2);
+    let d = Drive::new::<Libm>(a, b, phi);
+    let p = mdr::SPRING_PRECISION * (1.0 + a + b) * (1.0 + a) / ((1.0 + a * a / 2.0) / 2.0)
+        + 64.0 * f64::EPSILON;
+    let moving = mdr::mu_over_mu0::<f64, Libm>(&d, &Profile::Cone, v, 1e-13);
+    let at_rest = mdr::limits_at_zero::<f64, Libm>(&d, &Profile::Cone, 1e-13).map(|r| r.0);
+    for (what, r) in [("V > 0", moving), ("at rest", at_rest)] {
+        let Err(MdrError::ToleranceTooTight { best }) = r else {
+            panic!("{what}: tol 1e-13 gave {r:?}");
+        };
+        assert!(
+            best > p && best <= 1.02 * p,
+            "{what}: best {best:e}, per-spring part by hand {p:e}"
+        );
+        let again = if what == "V > 0" {
+            mdr::mu_over_mu0::<f64, Libm>(&d, &Profile::Cone, v, best)
+        } else {
+            mdr::limits_at_zero::<f64, Libm>(&d, &Profile::Cone, best).map(|r| r.0)
+        };
+        let again = again.unwrap_or_else(|e| panic!("{what}: tol = best {best:e} gave {e}"));
+        assert!(
+            again.bound <= best,
+            "{what}: bound {:e} > best {best:e}",
+            again.bound
+        );
+    }
+}
+
+/// `MdrError::IllConditioned` is "precision part of the bound above 1 % of
+/// μ₀", the precision part being the flat solvers' `10⁻⁹·(1 + a + b)` in f64
+/// (`exact::precision_constant`, `exact::ILL_CONDITIONED_AT = 10⁻²`). At
+/// `a = 0.5`, `b = 9 999 998.5` the sum `1 + a + b` is exactly 10⁷ and
+/// `10⁻⁹ · 10⁷` rounds to exactly `0.01`: not above, so answered. At
+/// `V = 2·10⁷ > c = |a + b e^{iφ}| ≤ a + b` every spring slides (eq. 8), so
+/// μ/μ₀ is exactly 1 with bound 0, for the flat punch and the sphere. One
+/// ulp more of `b` (the part then rounds to `0.01 + 1 ulp`) is refused.
+#[test]
+fn ill_conditioned_begins_just_above_one_percent() {
+    let (a, b, phi, v): (f64, f64, f64, f64) = (0.5, 9_999_998.5, 0.3, 2e7);
+    assert_eq!(1e-9 * (1.0 + a + b), 1e-2);
+    let next_b = f64::from_bits(b.to_bits() + 1);
+    assert!(1e-9 * (1.0 + a + next_b) > 1e-2);
+    for p in [Profile::Flat, Profile::Sphere] {
+        let d = Drive::new::<Libm>(a, b, phi);
+        assert!(d.c_forward::<Libm>() < v);
+        let r = mdr::mu_over_mu0::<f64, Libm>(&d, &p, v, 1e-6)
+            .unwrap_or_else(|e| panic!("{p:?} at exactly 1 %: {e}"));
+        assert_eq!((r.mu_over_mu0, r.bound), (1.0, 0.0), "{p:?}");
+        let over = Drive::new::<Libm>(a, next_b, phi);
+        assert_eq!(
+            mdr::mu_over_mu0::<f64, Libm>(&over, &p, v, 1e-6),
+            Err(MdrError::IllConditioned),
+            "{p:?} one ulp above 1 %"
+        );
+    }
+}
+
+/// `mdr::normal::mean_normal_force` (eq. M5 in the exponent `n`) refuses
+/// an exponent that is not a finite number `> 0` with
+/// `MdrError::BadExponent`, as its doc states — also when called directly,
+/// without `Profile::validate` in front (`mdr::mean_normal_force` checks the
+/// profile first). A valid exponent at `a = 0` gives Hertz's `n/(n + 1)`
+/// (every spring in permanent contact; closed form, within the stated
+/// bound plus one rounding).
+#[test]
+fn normal_force_refuses_a_bad_exponent() {
+    use model_core::mdr::normal::mean_normal_force;
+    for n in [0.0, -0.0, -1.5, f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
+        assert_eq!(
+            mean_normal_force::<f64, Libm>(n, 0.5, 1e-8),
+            Err(MdrError::BadExponent),
+            "n = {n}"
+        );
+    }
+    let (dn, bound) = mean_normal_force::<f64, Libm>(1.5, 0.0, 1e-8).unwrap();
+    assert!(
+        (dn - 0.6).abs() <= bound + 1e-16,
+        "D = {dn}, bound {bound:e}"
+    );
+}
+
 /// Profile names and exponents of the contract; κₙ against its known values.
 #[test]
 fn profile_names_and_kappa() {
