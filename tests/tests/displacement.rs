@@ -631,3 +631,67 @@ fn the_reach_of_a_new_setting_is_the_plants_once_learned() {
     println!("planned {planned:e} V vs {want:e} V: {rel:+.2e}");
     assert!(rel.abs() <= 0.01, "planned {planned:e} V vs {want:e} V");
 }
+
+/// The loops' magnitude comparisons (`norm_le`, `norm_gt`: squares where
+/// they are normal f32, the norms otherwise) against the comparison of the
+/// exact f64 magnitudes, `|a|` against `k·|b|`: over 200 000 random pairs
+/// and factors k ∈ [0, 40) at magnitudes from 10⁻³⁰ to 10³⁰ (subnormal and
+/// overflowing squares included), they agree wherever the exact sides
+/// differ by more than 1e-6 of the larger (the f32 rounding of a square,
+/// a product and a sum, or of a fast hypot, is a few parts in 10⁷); the
+/// rounding band is counted and must stay small. Exact cases: zero
+/// against zero (`|0| ≤ k·|0|`), NaN (never ≤, never >), and the loops'
+/// own factors (20 for D3's gate, 10 for an open pickup, C_MAX for c).
+#[test]
+fn magnitude_comparisons_are_those_of_the_exact_norms() {
+    use board::device::displacement::{norm_gt, norm_le, norm_le_real};
+    use num_complex::Complex32 as C;
+    let mut rng = integration_tests::Rng::new(9);
+    let mut band = 0u32;
+    let n = 200_000u32;
+    for i in 0..n as usize {
+        let mag = |rng: &mut integration_tests::Rng| 10f64.powf(rng.range(-30.0, 30.0));
+        let (ma, mb) = (mag(&mut rng), mag(&mut rng));
+        // Half the cases near the boundary |a| = k·|b|.
+        let k = [rng.range(0.0, 40.0), 20.0, 10.0, 2.0][i % 4];
+        let mb = if i % 2 == 0 {
+            ma / k.max(1e-30) * rng.range(0.9, 1.1)
+        } else {
+            mb
+        };
+        let (pa, pb) = (rng.range(0.0, TAU), rng.range(0.0, TAU));
+        let a = C::new((ma * pa.cos()) as f32, (ma * pa.sin()) as f32);
+        let b = C::new((mb * pb.cos()) as f32, (mb * pb.sin()) as f32);
+        let k = k as f32;
+        let lhs = f64::from(a.re).hypot(f64::from(a.im));
+        let rhs = f64::from(k) * f64::from(b.re).hypot(f64::from(b.im));
+        if !(lhs.is_finite() && rhs.is_finite()) {
+            continue;
+        }
+        if (lhs - rhs).abs() <= 1e-6 * lhs.max(rhs) {
+            band += 1;
+            continue;
+        }
+        assert_eq!(norm_le(a, k, b), lhs <= rhs, "norm_le({a}, {k}, {b})");
+        assert_eq!(norm_gt(a, k, b), lhs > rhs, "norm_gt({a}, {k}, {b})");
+    }
+    // The band: pairs drawn within ±10 % of the boundary land in a 2e-6
+    // wide band about 1e-5 of the time; far below 1 % of all pairs.
+    assert!(band < n / 100, "{band} of {n} in the rounding band");
+    let (zero, one) = (C::new(0.0, 0.0), C::new(1.0, 0.0));
+    let nan = C::new(f32::NAN, 0.0);
+    assert!(norm_le(zero, 3.0, zero) && !norm_gt(zero, 3.0, zero));
+    assert!(!norm_le(nan, 1.0, one) && !norm_gt(nan, 1.0, one));
+    assert!(!norm_le(one, 1.0, nan) && !norm_gt(one, 1.0, nan));
+    // Exactly at the boundary: |3 + 4i| = 5 = 2.5·|2|.
+    let (a, b) = (C::new(3.0, 4.0), C::new(0.0, 2.0));
+    assert!(norm_le(a, 2.5, b) && !norm_gt(a, 2.5, b));
+    assert!(!norm_le(a, 2.4, b) && norm_gt(a, 2.4, b));
+    assert!(norm_le_real(a, 5.0) && !norm_le_real(a, 4.99));
+    // The same at magnitudes whose squares underflow or overflow.
+    for s in [1e-25f32, 1e25] {
+        let (a, b) = (a * s, b * s);
+        assert!(norm_le(a, 2.5001, b) && !norm_gt(a, 2.5001, b), "{s}");
+        assert!(!norm_le(a, 2.4999, b) && norm_gt(a, 2.4999, b), "{s}");
+    }
+}

@@ -217,6 +217,17 @@ fn special_values_follow_libm() {
         <Libm as Math<f32>>::hypot(3e-30, 4e-30)
     );
     assert_eq!(trig::hypot(f32::INFINITY, 1.0), f32::INFINITY);
+    // NaN as C99 Annex F (and libm): NaN, unless the other is ±∞. A NaN
+    // beside a zero once came out 0 (the larger of |NaN| and 0 was 0).
+    for (x, y) in [
+        (f32::NAN, 0.0),
+        (0.0, f32::NAN),
+        (f32::NAN, 1.0),
+        (-0.0, f32::NAN),
+    ] {
+        assert!(trig::hypot(x, y).is_nan(), "hypot({x}, {y})");
+    }
+    assert_eq!(trig::hypot(f32::NAN, f32::INFINITY), f32::INFINITY);
 }
 
 /// μ/μ₀ of the f32 solver with `M` against the f64 solver on the

@@ -296,30 +296,31 @@ fn norm_sq(c: C) -> f32 {
     c.re * c.re + c.im * c.im
 }
 
-/// Whether `|a| ≤ k·|b|` (`k ≥ 0`): from the squares, `|a|² ≤ k²·|b|²`,
-/// when both are normal f32 (no overflow, no precision lost to
+/// `|a|` against `k·|b|` (`k ≥ 0`): from the squares, `|a|²` against
+/// `k²·|b|²`, when both are normal f32 (no overflow, no precision lost to
 /// underflow), else from [`norm`] (issue 35: a comparison needs no square
-/// root, and each `norm` is a fast hypot of ≈ 40 instructions; the
-/// loops' comparisons were ≈ 900 of a window's close). The two differ only
-/// by rounding, a few parts in 10⁷ of the bound.
-pub fn norm_le(a: C, k: f32, b: C) -> bool {
+/// root, and each `norm` is a fast hypot; the loops' comparisons were
+/// ≈ 900 instructions of a window's close). The two differ only by
+/// rounding, a few parts in 10⁷ of the bound; `None` for NaN.
+fn compare(a: C, k: f32, b: C) -> Option<core::cmp::Ordering> {
     let (a2, b2) = (norm_sq(a), k * k * norm_sq(b));
     if a2.is_normal() && b2.is_normal() {
-        a2 <= b2
+        a2.partial_cmp(&b2)
     } else {
-        norm(a) <= k * norm(b)
+        norm(a).partial_cmp(&(k * norm(b)))
     }
 }
 
-/// Whether `|a| > k·|b|` (`k ≥ 0`), as [`norm_le`] (false for NaN, like
-/// the comparison of the norms).
+/// Whether `|a| ≤ k·|b|` (`k ≥ 0`; false for NaN), without a square root
+/// where the squares are normal ([`compare`]).
+pub fn norm_le(a: C, k: f32, b: C) -> bool {
+    compare(a, k, b).is_some_and(|o| o.is_le())
+}
+
+/// Whether `|a| > k·|b|` (`k ≥ 0`; false for NaN, like the comparison of
+/// the norms), as [`norm_le`].
 pub fn norm_gt(a: C, k: f32, b: C) -> bool {
-    let (a2, b2) = (norm_sq(a), k * k * norm_sq(b));
-    if a2.is_normal() && b2.is_normal() {
-        a2 > b2
-    } else {
-        norm(a) > k * norm(b)
-    }
+    compare(a, k, b).is_some_and(|o| o.is_gt())
 }
 
 /// Whether `|a| ≤ bound` (`bound ≥ 0`): [`norm_le`] against a real bound.

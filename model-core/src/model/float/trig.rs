@@ -256,7 +256,13 @@ pub fn hypot(x: f32, y: f32) -> f32 {
     let (ax, ay) = (x.abs(), y.abs());
     let big = if ax > ay { ax } else { ay };
     if !(TWO_POW_M50..=TWO_POW_50).contains(&big) {
-        return if big == 0.0 { 0.0 } else { libm::hypotf(x, y) };
+        // Both zero: 0. A NaN beside a zero makes `big` the zero (NaN
+        // compares false), so the test is on both, not on `big`.
+        return if ax == 0.0 && ay == 0.0 {
+            0.0
+        } else {
+            libm::hypotf(x, y)
+        };
     }
     sqrt(ax * ax + ay * ay)
 }
