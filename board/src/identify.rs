@@ -1178,6 +1178,104 @@ mod tests {
         }
     }
 
+    /// A record of eq. 1 written out by hand (not through `eval_h`):
+    /// `H = g·e^{−jθ}·conj(D)/|D|²`, `D = 1 − r² + j·r/Q`, at `lo + i·step`.
+    fn exact_record(fr: f64, q: f64, lo: f64, step: f64, n: usize) -> Vec<Sample> {
+        let (g, theta) = (1e-7, 0.7f64);
+        (0..n)
+            .map(|i| {
+                let f = lo + step * i as f64;
+                let r = f / fr;
+                let (dr, di) = (1.0 - r * r, r / q);
+                let m = dr * dr + di * di;
+                let (cr, ci) = (g * theta.cos(), -g * theta.sin());
+                Sample {
+                    freq_hz: f,
+                    re_m_per_v: (cr * dr + ci * di) / m,
+                    im_m_per_v: (ci * dr - cr * di) / m,
+                }
+            })
+            .collect()
+    }
+
+    /// The start's `(f_r, Q)` (eq. 6) for `samples`, unweighted.
+    fn start_of(samples: &[Sample]) -> (f64, f64) {
+        let n = samples.len();
+        let peak = samples
+            .iter()
+            .map(|s| s.re_m_per_v.hypot(s.im_m_per_v))
+            .fold(0.0, f64::max);
+        let rec = Record {
+            samples,
+            sigma: None,
+            scale: 1.0 / peak,
+            fc: 0.5 * (samples[0].freq_hz + samples[n - 1].freq_hz),
+            span: samples[n - 1].freq_hz - samples[0].freq_hz,
+        };
+        let p = start(&rec).expect("a start");
+        (rec.fc + rec.span * p[0], p[1].exp())
+    }
+
+    /// Closed forms of eq. 2 for a mode `(f_r, Q)`: with `s = r²`,
+    /// `|D|² = (s − s*)² + c²`, `s* = 1 − 1/(2Q²)`, `c² = 1 − s*²`, so |H|
+    /// peaks at `f_p = f_r·√s*` and is at half power (|H|² = peak/2) at
+    /// `f_r·√(s* ∓ c)`. Returns `(f_p, lower, upper)` half-power points.
+    fn peak_and_half_power(fr: f64, q: f64) -> (f64, f64, f64) {
+        let s_star = 1.0 - 0.5 / (q * q);
+        let c = (1.0 - s_star * s_star).sqrt();
+        (
+            fr * s_star.sqrt(),
+            fr * (s_star - c).sqrt(),
+            fr * (s_star + c).sqrt(),
+        )
+    }
+
+    /// The start of eq. 6 against the closed forms of an exact record of
+    /// eq. 1 (f_r = 20 003 Hz off the 10 Hz grid, Q = 200: half-power band
+    /// B = 100 Hz, grid step h = 0.2 half-bands). f_r: the peak f_p. Near
+    /// the peak ln|H| = −½ ln(1 + u²) + const (u in half-bands, exact in
+    /// s = r², to O(1/Q) in f); its u⁴/4 term moves the vertex of the
+    /// parabola through three points h apart by ≤ 0.1·h³ half-bands
+    /// (0.04 Hz here), the O(1/Q) skew by ~h²/Q half-bands (0.01 Hz):
+    /// allowed 0.1 Hz = 1/100 of the grid step. Q: `f_p/(upper − lower)`
+    /// of the closed forms. Linear interpolation of |H|² = 1/(1 + u²)
+    /// (curvature ½, slope −½ at u = ±1) puts each crossing within h²/8
+    /// half-bands: the width within h²/8 = 0.5 % relative; allowed 1 %.
+    #[test]
+    fn the_start_is_the_peak_and_half_power_width_of_an_exact_record() {
+        let (fr, q) = (20_003.0, 200.0);
+        let (f0, q0) = start_of(&exact_record(fr, q, 19_000.0, 10.0, 201));
+        let (fp, lo, hi) = peak_and_half_power(fr, q);
+        let want_q = fp / (hi - lo);
+        println!("start: f_r {f0} (peak {fp}), Q {q0} (half-power {want_q})");
+        assert!((f0 - fp).abs() <= 0.1, "start f_r {f0}, peak {fp}");
+        assert!(
+            (q0 / want_q - 1.0).abs() <= 0.01,
+            "start Q {q0}, half-power {want_q}"
+        );
+    }
+
+    /// The same with the record ending inside the upper half-power band
+    /// (last point 20 040 Hz, u = 0.74: |H|² = 0.65 of the peak), so only
+    /// the lower crossing is in it and eq. 6 takes twice the one-sided
+    /// width `2·(f_p − lower)`. The closed form of that width is
+    /// `2·(f_p − lower)` from the closed forms above; the crossing within
+    /// h²/8 half-bands as before and f_p within 0.04 Hz: ≤ 0.6 % of the
+    /// width; allowed 1 %.
+    #[test]
+    fn the_start_takes_twice_the_one_sided_width_when_one_crossing_is_missing() {
+        let (fr, q) = (20_003.0, 200.0);
+        let (f0, q0) = start_of(&exact_record(fr, q, 19_000.0, 10.0, 105));
+        let (fp, lo, _) = peak_and_half_power(fr, q);
+        let want_q = fp / (2.0 * (fp - lo));
+        println!("one-sided start: f_r {f0} (peak {fp}), Q {q0} (half-power {want_q})");
+        assert!((f0 - fp).abs() <= 0.1, "start f_r {f0}, peak {fp}");
+        assert!(
+            (q0 / want_q - 1.0).abs() <= 0.01,
+            "start Q {q0}, one-sided half-power {want_q}"
+        );
+    }
+
     #[test]
     fn wrap_is_in_the_half_open_interval() {
         use core::f64::consts::PI;

@@ -504,3 +504,194 @@ fn the_noise_is_the_specified_xorshift_uniform() {
     let se_var = (4.0f64 / 45.0).sqrt() * a * a / nn;
     assert!((var - a * a / 3.0).abs() <= 5.0 * se_var, "variance {var}");
 }
+
+/// The ideal transducers' first-order amplitude lag (module docs: `keep` =
+/// e^(−T_s/τ) per sample, exact for a constant target over one sample). On
+/// a settled drive the DAC's levels are the same before and after the fill,
+/// so the target of both channels is constant over a half; from amplitudes
+/// set to zero, after the half's n samples each is the closed form
+/// `Δu·(1 − keepⁿ)`, Δu the set amplitude (2 µm, 0.3 µm). The DAC levels
+/// are Δu/metres_per_code in f32 (relative rounding ≤ 6e-8) and the n
+/// updates in f64 add ~n ulps: allowed 1e-6 relative.
+#[test]
+fn ideal_transducers_lag_their_targets_by_the_closed_form() {
+    let cfg = DeviceConfig::driver_board(0);
+    let table = SineTable::<1024>::libm();
+    let contact = Contact {
+        mu0: MU0 as f32,
+        kz: 1e7,
+        kx: 1e7,
+    };
+    let setting = drive(0.7);
+    let mut dev = Device::new(cfg, &table, contact).unwrap();
+    dev.set_drive(setting).unwrap();
+    dev.start().unwrap();
+    let mut plant = Plant::<f64>::new(MU0, 1e7, 1e7);
+    let mut dac = [0u32; HALF_BUFFER];
+    let mut block = [(0u16, 0u16); HALF_BUFFER];
+    let conditions = |_| SampleConditions {
+        mu0: MU0,
+        v0: 0.2,
+        counts_z: 0.0,
+        counts_x: 0.0,
+    };
+    let mut half = 0;
+    // Settle with no lag, then two more halves so that the fill is steady.
+    let mut after = 0;
+    while after < 2 {
+        let d = HalfDrive::fill(&mut dev, half, &mut dac);
+        half ^= 1;
+        plant.run_half::<Libm>(&cfg, &d, 4, 0.0, conditions, &mut block);
+        if dev.status().settled {
+            after += 1;
+        }
+    }
+    // τ = 20 samples: keep = e^(−1/20); 64 samples leave e^(−3.2) = 4 %.
+    let keep = (-1.0f64 / 20.0).exp();
+    plant.amp = (0.0, 0.0);
+    let d = HalfDrive::fill(&mut dev, half, &mut dac);
+    plant.run_half::<Libm>(&cfg, &d, 4, keep, conditions, &mut block);
+    let left = keep.powi(HALF_BUFFER as i32);
+    let (want_z, want_x) = (
+        f64::from(setting.amp_z_m) * (1.0 - left),
+        f64::from(setting.amp_x_m) * (1.0 - left),
+    );
+    assert!(
+        (plant.amp.0 / want_z - 1.0).abs() <= 1e-6,
+        "Δu_z {:e} vs {want_z:e}",
+        plant.amp.0
+    );
+    assert!(
+        (plant.amp.1 / want_x - 1.0).abs() <= 1e-6,
+        "Δu_x {:e} vs {want_x:e}",
+        plant.amp.1
+    );
+}
+
+/// Self-heating of resonant transducers (module docs: a shift of f_r per
+/// squared amplitude, filtered with `THERMAL_TAU_S`): the heat of a mode
+/// follows its squared amplitude A² (µm²) through a first-order filter, so
+/// from the heat h₁ at t₁, with A² constant at its mean Ā², `h(t) = Ā² +
+/// (h₁ − Ā²)·e^{−(t − t₁)/τ}`, and f_r = f_base + k·h (read through
+/// `params_now`). Both modes sit at the drive's 20 kHz, so the motion is a
+/// steady sinusoid at their own ω and A² = x² + (ẋ/ω)² from the plant's
+/// true state, read before every half (when the plant takes it). The
+/// filter is a weighted mean of the inputs with weights summing to 1 −
+/// e^{−(t − t₁)/τ}, so the inputs' deviation from Ā² (the DAC hold's
+/// ripple, measured as max − min over the run) moves the heat by at most
+/// that sum times max − min; the DDS frequency (20 kHz within 1.2e-4 Hz)
+/// and the heat's own shift of f_r (≤ 0.02 Hz) make the plant's ω_r differ
+/// from ω by ≤ 1e-6 relative, 2e-6 on (ẋ/ω)²: allowed 1e-5 of Ā² for it.
+#[test]
+fn self_heating_follows_the_squared_amplitude_with_its_time_constant() {
+    use board::plant::{Resonant, ResonantOptions, THERMAL_TAU_S};
+    use board::resonator::ModeParams;
+    use std::f64::consts::TAU;
+    let cfg = DeviceConfig::driver_board(0);
+    let table = SineTable::<1024>::libm();
+    let contact = Contact {
+        mu0: MU0 as f32,
+        kz: 1e7,
+        kx: 1e7,
+    };
+    let mut dev = Device::new(cfg, &table, contact).unwrap();
+    dev.set_drive(drive(0.7)).unwrap();
+    dev.start().unwrap();
+    let f_drive = 20_000.0;
+    let modes = [
+        ModeParams {
+            resonance_hz: f_drive,
+            q: 100.0,
+            gain_m_per_v: 4e-8,
+        },
+        ModeParams {
+            resonance_hz: f_drive,
+            q: 100.0,
+            gain_m_per_v: 2e-8,
+        },
+    ];
+    let k = 1e-3; // Hz per µm²
+    let opts = ResonantOptions {
+        modes,
+        drift_hz_per_s: [0.0; 2],
+        thermal_hz_per_um2: k,
+        crosstalk: 0.0,
+        load_q: f64::INFINITY,
+    };
+    let sub = 4;
+    let mut plant = Plant::<f64>::new(MU0, 1e7, 1e7);
+    plant.resonant =
+        Some(Resonant::new(opts, 1.0 / (cfg.sample_rate_hz * f64::from(sub))).unwrap());
+    let mut dac = [0u32; HALF_BUFFER];
+    let mut block = [(0u16, 0u16); HALF_BUFFER];
+    let t_half = HALF_BUFFER as f64 / cfg.sample_rate_hz;
+    let mut half = 0;
+    let mut run = |plant: &mut Plant<f64>, dev: &mut Device<'_, 1024>| {
+        let d = HalfDrive::fill(dev, half, &mut dac);
+        half ^= 1;
+        plant.run_half::<Libm>(
+            &cfg,
+            &d,
+            sub,
+            0.0,
+            |_| SampleConditions {
+                mu0: MU0,
+                v0: 0.2,
+                counts_z: 0.0,
+                counts_x: 0.0,
+            },
+            &mut block,
+        );
+    };
+    let w = TAU * f_drive;
+    let amp2 = |plant: &Plant<f64>| -> [f64; 2] {
+        let r = plant.resonant.as_ref().unwrap();
+        core::array::from_fn(|c| {
+            let (x, v) = (r.modes[c].x() * 1e6, r.modes[c].v() / w * 1e6);
+            x * x + v * v
+        })
+    };
+    // Settled drive, then 40 τ of the modes (τ = Q/(π f_r) = 1.6 ms).
+    while !dev.status().settled {
+        run(&mut plant, &mut dev);
+    }
+    for _ in 0..(40.0 * 100.0 / (std::f64::consts::PI * f_drive) / t_half) as usize {
+        run(&mut plant, &mut dev);
+    }
+    let shift = |plant: &Plant<f64>| -> [f64; 2] {
+        let p = plant.resonant.as_ref().unwrap().params_now();
+        [p[0].resonance_hz - f_drive, p[1].resonance_hz - f_drive]
+    };
+    let h1 = shift(&plant).map(|s| s / k);
+    let halves = 2000; // 0.256 s, a quarter of the thermal time
+    let (mut sum, mut lo, mut hi) = ([0.0; 2], [f64::INFINITY; 2], [0.0f64; 2]);
+    for _ in 0..halves {
+        let a = amp2(&plant);
+        for c in 0..2 {
+            sum[c] += a[c];
+            lo[c] = lo[c].min(a[c]);
+            hi[c] = hi[c].max(a[c]);
+        }
+        run(&mut plant, &mut dev);
+    }
+    let decay = (-(halves as f64) * t_half / THERMAL_TAU_S).exp();
+    let s2 = shift(&plant);
+    for c in 0..2 {
+        let a2 = sum[c] / halves as f64;
+        let want = a2 + (h1[c] - a2) * decay;
+        println!(
+            "mode {c}: A² {a2:.6} µm² (spread {:.1e}), heat {:.6} → {:.6} µm², want {want:.6} ({:.1e} off)",
+            (hi[c] - lo[c]) / a2,
+            h1[c],
+            s2[c] / k,
+            (s2[c] / k - want) / a2
+        );
+        let tol = (1.0 - decay) * (hi[c] - lo[c]) + 1e-5 * a2;
+        assert!(
+            (s2[c] / k - want).abs() <= tol,
+            "mode {c}: heat {} µm², want {want} (A² {a2}, h₁ {})",
+            s2[c] / k,
+            h1[c]
+        );
+    }
+}
