@@ -730,4 +730,97 @@ fn a_start_beyond_the_dacs_room_is_cut_to_it_and_holds() {
     assert!(at_room > 0, "the start never reached the room");
     assert_eq!(b.dev.status().faults, 0);
     check_holds(&mut b, &s, 400);
+
+/// |Ĥ(f)| of a device model by eq. 1 written out (`g/|1 − r² + j r/Q|`,
+/// r = f/f_r), in f64.
+fn model_gain(m: &TransducerModel, f: f64) -> f64 {
+    let r = f / f64::from(m.resonance_hz);
+    let (re, im) = (1.0 - r * r, r / f64::from(m.q));
+    f64::from(m.gain_m_per_v) / (re * re + im * im).sqrt()
+}
+
+/// D3 corrects a channel only while it is driven ("from a twentieth of the
+/// setting up"): an undriven tangential channel, moved only by 2 % of
+/// cross-talk from the driven normal one (≈ 19 nm, the plant's own
+/// motion), keeps its correction c = 1 however long it runs. So when it is
+/// then driven at the same frequency (c is kept, `displacement` docs), the
+/// plan's voltage is D2 with c = 1 on the exact model: the DDS's target
+/// level `Δu_x/(|Ĥ_x(f)|·v)` codes, Ĥ_x by eq. 1 here. The f32 model
+/// response loses ≤ 1e-6 relative in `1 − r²` (r² to an ulp against
+/// |1 − r²| = 0.03) and a few ulps in the division and norm: allowed 1e-5.
+/// (Correcting the undriven channel from its cross-talk learns a c
+/// far from 1: the first fills of the step then miss Δu_x by tens of %.)
+#[test]
+fn an_undriven_channel_learns_no_correction() {
+    use board::plant::DAC_VOLTS_PER_CODE;
+    let table = SineTable::<1024>::libm();
+    let mut o = opts();
+    o.crosstalk = 0.02;
+    let model = exact_model(true_modes());
+    let mut b = Bench::new(&table, o, model);
+    let mut s = setting(2e-6);
+    s.amp_x_m = 0.0;
+    b.dev.set_drive(s).unwrap();
+    b.dev.start().unwrap();
+    b.until_settled(2_000);
+    let mut xtalk = 0.0f64;
+    for _ in 0..400 {
+        xtalk = xtalk.max(b.step().amp_x);
+    }
+    // The undriven channel does move (so D3 would have something to learn).
+    assert!(xtalk > 1e-8, "cross-talk motion {xtalk:e}");
+    s.amp_x_m = 0.3e-6;
+    b.dev.set_drive(s).unwrap();
+    let f = b.dev.applied().achieved.freq_hz;
+    let want = f64::from(s.amp_x_m) / (model_gain(&model.x, f) * DAC_VOLTS_PER_CODE);
+    let got = f64::from(b.dev.dds().channels()[1].amp_target);
+    assert!(
+        (got / want - 1.0).abs() <= 1e-5,
+        "tangential level {got} codes, D2 with c = 1: {want}"
+    );
+}
+
+/// The largest displacement a new frequency allows is the model's at that
+/// frequency (`displacement` docs: a setting whose voltage does not fit the
+/// DAC is refused with the largest displacement the model gives there),
+/// also while running, when the device holds the model's response at the
+/// old frequency: from 20 kHz (Δu_z = 2 µm held), 15 kHz asks 2 µm, which
+/// the model reaches at 20 kHz but not at 15 kHz. The refusal's maximum is
+/// `room·v·|Ĥ_z(15 kHz)|` (c starts over at a new frequency), the room the
+/// normal channel's DC codes to the nearer DAC end (u_z0 = 4 µm), Ĥ_z by
+/// eq. 1 here; the DDS frequency is 15 kHz within 1.2e-4 Hz (|Ĥ| moves by
+/// 1e-8 relative); f32 products and the model response's rounding: allowed
+/// 1e-5 relative.
+#[test]
+fn a_new_frequency_is_refused_with_the_models_reach_there() {
+    use board::device::DeviceError;
+    use board::plant::DAC_VOLTS_PER_CODE;
+    let table = SineTable::<1024>::libm();
+    let model = exact_model(true_modes());
+    let mut b = Bench::new(&table, opts(), model);
+    let mut s = setting(2e-6);
+    b.dev.set_drive(s).unwrap();
+    b.dev.start().unwrap();
+    b.until_settled(2_000);
+    s.freq_hz = 15_000.0;
+    let z = b.cfg.dac_z;
+    let dc = f64::from(z.zero_code) + f64::from(s.offset_z_m) / f64::from(z.metres_per_code);
+    let room = dc.min(4095.0 - dc);
+    let want = room * DAC_VOLTS_PER_CODE * model_gain(&model.z, s.freq_hz);
+    assert!(want < 2e-6 && want > 0.1e-6, "reach at 15 kHz {want:e}");
+    match b.dev.set_drive(s) {
+        Err(DeviceError::OutOfRange {
+            param: board::device::DriveParam::AmpZ,
+            max,
+            ..
+        }) => assert!(
+            (f64::from(max) / want - 1.0).abs() <= 1e-5,
+            "reported reach {max:e}, eq. 1: {want:e}"
+        ),
+        other => panic!("2 µm at 15 kHz: {other:?} (reach {want:e})"),
+    }
+    // Within the reach it is taken (Δu_x within its own, 0.16 µm there).
+    s.amp_z_m = (0.9 * want) as f32;
+    s.amp_x_m = 0.1e-6;
+    b.dev.set_drive(s).unwrap();
 }

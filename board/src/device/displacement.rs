@@ -975,3 +975,105 @@ impl<const N: usize> Device<'_, N> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dds::SineTable;
+    use crate::device::{Contact, DeviceConfig, HALF_BUFFER};
+
+    /// The observer's carry (D7, `observe`): a window of fill `b` read
+    /// after fill `b + a − 1` (the ADC block arriving late, as it may on
+    /// the board: `FILL_RING`) moves the model's envelope by the gain
+    /// (0.5, docs/protocol.md) times the error, carried through the mode's
+    /// free decay `p` once per fill: the records of fills `b + k` by
+    /// `0.5·err·pᵏ` (k = 1 … a − 1) and the envelope now by `0.5·err·pᵃ`.
+    /// p by D4 written out in f64: `p = e^{sT}`, `s = −1/τ̂ + j(ω̂_r − ω)`,
+    /// `τ̂ = Q̂/(π f̂_r)`, T = 64 samples (c = 1: no window has moved the
+    /// pole, D8). The device forms sT, e^{sT} and the products in f32
+    /// (relative rounding ~1e-7 each, the fast sin/cos within 1e-6):
+    /// allowed 1e-5 of |0.5·err|.
+    #[test]
+    fn the_observer_carries_its_correction_through_the_free_decay() {
+        let table = SineTable::<1024>::libm();
+        let cfg = DeviceConfig::driver_board(0);
+        let contact = Contact {
+            mu0: 0.3,
+            kz: 1e7,
+            kx: 1e7,
+        };
+        let mut dev = Device::new(cfg, &table, contact).unwrap();
+        let z = TransducerModel {
+            resonance_hz: 20_300.0,
+            q: 273.0,
+            gain_m_per_v: 8e-8,
+            phase_lag_rad: 0.1,
+        };
+        let x = TransducerModel {
+            resonance_hz: 19_700.0,
+            q: 182.0,
+            gain_m_per_v: 4e-8,
+            phase_lag_rad: 0.1,
+        };
+        dev.set_transducers(Some(Transducers { z, x })).unwrap();
+        dev.set_drive_mode(DriveMode::Displacement).unwrap();
+        dev.set_drive(DriveSetting {
+            freq_hz: 20_000.0,
+            amp_z_m: 2e-6,
+            amp_x_m: 0.3e-6,
+            offset_z_m: 4e-6,
+            phase_rad: 0.7,
+        })
+        .unwrap();
+        dev.start().unwrap();
+        let mut buf = [0u32; HALF_BUFFER];
+        for h in 0..6 {
+            dev.fill_dac(h % 2, &mut buf);
+        }
+        let f = dev.applied().achieved.freq_hz;
+        let t = HALF_BUFFER as f64 / cfg.sample_rate_hz;
+        let err = C::new(3e-8, -2e-8);
+        let g = 0.5;
+        for (ch, m) in [z, x].iter().enumerate() {
+            let (fr, q) = (f64::from(m.resonance_hz), f64::from(m.q));
+            let tau = q / (core::f64::consts::PI * fr);
+            let (re, im) = (-t / tau, core::f64::consts::TAU * (fr - f) * t);
+            let p = (re.exp() * im.cos(), re.exp() * im.sin());
+            let pow = |k: i32| {
+                let (mut a, mut b) = (1.0f64, 0.0f64);
+                for _ in 0..k {
+                    (a, b) = (a * p.0 - b * p.1, a * p.1 + b * p.0);
+                }
+                // 0.5·err·pᵏ
+                let (er, ei) = (g * f64::from(err.re), g * f64::from(err.im));
+                (er * a - ei * b, er * b + ei * a)
+            };
+            let zero = [C::new(0.0, 0.0); 2];
+            dev.loops.at_fill = [(zero, zero); super::super::measure::FILL_RING];
+            dev.loops.env = zero;
+            // Six fills made (0 … 5): the window of fill 3 is three behind.
+            assert_eq!(dev.fills, 6);
+            dev.observe(ch, 3, err);
+            let tol = 1e-5 * g * f64::from(norm(err));
+            let close =
+                |c: C, w: (f64, f64)| (f64::from(c.re) - w.0).hypot(f64::from(c.im) - w.1) <= tol;
+            for (k, slot) in [(1, 0), (2, 1)] {
+                let got = dev.loops.at_fill[slot].0[ch];
+                assert!(
+                    close(got, pow(k)),
+                    "ch {ch} fill 3+{k}: {got} vs {:?}",
+                    pow(k)
+                );
+            }
+            let got = dev.loops.env[ch];
+            assert!(
+                close(got, pow(3)),
+                "ch {ch} envelope: {got} vs {:?}",
+                pow(3)
+            );
+            // The window's own fill and the other channel are left alone.
+            assert_eq!(dev.loops.at_fill[3].0[ch], C::new(0.0, 0.0));
+            assert_eq!(dev.loops.env[1 - ch], C::new(0.0, 0.0));
+        }
+    }
+}
