@@ -317,6 +317,47 @@ fn noisy_records_meet_the_issue_targets_and_intervals_cover_at_95_percent() {
     );
 }
 
+/// Levenberg–Marquardt's damping (eq. 7, Nielsen's rule on the gain ratio
+/// ρ) on a long way to the optimum. A noise-free record of a mode 5·10⁴
+/// times narrower than its 200 Hz step (f_r = 20 kHz, Q = 5·10⁶, 11 points
+/// over 19–21 kHz, one of them at f_r): the peak point gives g·Q and the
+/// flanks g and f_r, so the record determines the mode exactly, but the
+/// start of eq. 6 sees a half-power width of about one step (Q ≈ 100), and
+/// LM has to move ln Q by ≈ 10.8 along a curved valley. With λ following
+/// ρ it arrives within the iteration cap (200; it takes 90), and then to
+/// the stopping step as `noise_free_records_are_recovered_to_the_stopping_step`
+/// argues: zero residual, so f_r within 2·xtol·S/f_r relative, Q and g
+/// within 2·xtol relative, θ within 2·xtol rad. (A damping that ignores ρ —
+/// λ/3 after every accepted step — or that raises λ too much for ρ < ½ and
+/// lowers it too much for ρ > ½ runs into the cap on this record.)
+#[test]
+fn a_long_way_to_the_optimum_converges_within_the_iteration_cap() {
+    let t = Truth {
+        fr: 20_000.0,
+        q: 5e6,
+        g: 1e-7,
+        theta: 0.3,
+    };
+    let cfg = FitConfig::DEFAULT;
+    let (lo, hi) = (19_000.0, 21_000.0);
+    let rec = record(&t, freqs(lo, hi, 11), 0.0, &mut Gauss::new(0));
+    let fit = fit(&rec, None, &cfg).unwrap_or_else(|e| panic!("{t:?}: {e}"));
+    let e = errors(&fit, &t);
+    println!(
+        "Q = 5e6 on 200 Hz steps: {} iterations; errors f_r {:.1e}, Q {:.1e}, g {:.1e}, θ {:.1e}",
+        fit.iterations, e[0], e[1], e[2], e[3]
+    );
+    let tol = [
+        2.0 * cfg.xtol * (hi - lo) / t.fr,
+        2.0 * cfg.xtol,
+        2.0 * cfg.xtol,
+        2.0 * cfg.xtol,
+    ];
+    for k in 0..4 {
+        assert!(e[k] <= tol[k], "parameter {k}: {:e} > {:e}", e[k], tol[k]);
+    }
+}
+
 #[test]
 fn a_span_with_the_peak_near_its_end_still_fits() {
     // The span starts half a bandwidth below f_r: the peak is the span's
