@@ -730,6 +730,7 @@ fn a_start_beyond_the_dacs_room_is_cut_to_it_and_holds() {
     assert!(at_room > 0, "the start never reached the room");
     assert_eq!(b.dev.status().faults, 0);
     check_holds(&mut b, &s, 400);
+}
 
 /// |Ĥ(f)| of a device model by eq. 1 written out (`g/|1 − r² + j r/Q|`,
 /// r = f/f_r), in f64.

@@ -312,7 +312,7 @@ fn compare(a: C, k: f32, b: C) -> Option<core::cmp::Ordering> {
 }
 
 /// Whether `|a| ≤ k·|b|` (`k ≥ 0`; false for NaN), without a square root
-/// where the squares are normal ([`compare`]).
+/// where the squares are normal (`compare`).
 pub fn norm_le(a: C, k: f32, b: C) -> bool {
     compare(a, k, b).is_some_and(|o| o.is_le())
 }

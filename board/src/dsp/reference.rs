@@ -267,7 +267,7 @@ impl PairSums {
 
 /// Whether a sample of `pairs` sat at a rail (a count 0 or ≥
 /// [`ADC_FULL_SCALE`]): [`PairSums::of`]'s `railed` without the sums, one
-/// packed word per pair ([`RAIL_BITS`]; ≈ 7 instructions a pair on the M4
+/// packed word per pair (`RAIL_BITS`; ≈ 7 instructions a pair on the M4
 /// against ≈ 15 for the four comparisons). The closed μ loop checks every
 /// block with it, including the samples its estimates leave out.
 pub fn any_railed(pairs: &[(u16, u16)]) -> bool {
