@@ -825,3 +825,43 @@ fn a_new_frequency_is_refused_with_the_models_reach_there() {
     s.amp_x_m = 0.1e-6;
     b.dev.set_drive(s).unwrap();
 }
+
+/// D3 keeps the correction within its bounds, 1/C_MAX ≤ |c| ≤ C_MAX (C_MAX
+/// = 2, `displacement` D3): a normal-mode model whose gain is four times
+/// the true one would need |c| = ¼. Each window moves c by a factor
+/// 1 + e·k with e ≈ ¼/|c| − 1 and k = window/(4τ̂) ≈ 0.03 (τ̂ ≈ 4 ms), so
+/// the last step taken leaves |c| in [0.5, 0.5/(1 − 0.5·0.03)] ⊂ [0.5,
+/// 0.51], and a step that would cross the bound is refused. Read through
+/// D2: a new amplitude at the same frequency is planned at
+/// |d|/(|Ĥ_z|·|c|·v) codes (Ĥ_z by eq. 1 written out), so within [0.5,
+/// 0.52] of |c| the planned level lies between its values there (f32
+/// products: 1e-5 more). A correction let past its bound (¼) would plan
+/// twice the level.
+#[test]
+fn the_correction_stops_at_its_lower_bound() {
+    use board::plant::DAC_VOLTS_PER_CODE;
+    let table = SineTable::<1024>::libm();
+    let m = true_modes();
+    let model = Transducers {
+        z: model_of(m[0], 0.0, 1.0, 4.0),
+        x: model_of(m[1], 0.0, 1.0, 1.0),
+    };
+    let mut b = Bench::new(&table, opts(), model);
+    let mut s = setting(1e-6);
+    b.dev.set_drive(s).unwrap();
+    b.dev.start().unwrap();
+    for _ in 0..3_000 {
+        b.step();
+    }
+    assert_eq!(b.dev.status().faults, 0);
+    s.amp_z_m = 1.2e-6;
+    b.dev.set_drive(s).unwrap();
+    let f = b.dev.applied().achieved.freq_hz;
+    let level = |c: f64| f64::from(s.amp_z_m) / (model_gain(&model.z, f) * c * DAC_VOLTS_PER_CODE);
+    let got = f64::from(b.dev.dds().channels()[0].amp_target);
+    let (lo, hi) = (level(0.52) * (1.0 - 1e-5), level(0.5) * (1.0 + 1e-5));
+    assert!(
+        got >= lo && got <= hi,
+        "normal level {got} codes; with |c| in [0.5, 0.52]: [{lo}, {hi}]"
+    );
+}

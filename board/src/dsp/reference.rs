@@ -265,6 +265,13 @@ impl PairSums {
     }
 }
 
+/// A sample pair as the DMA packs it: `x` in the low half, `z` in the
+/// high half.
+#[inline(always)]
+fn packed_pair(x: u16, z: u16) -> u32 {
+    u32::from(x) | (u32::from(z) << 16)
+}
+
 /// Whether a sample of `pairs` sat at a rail (a count 0 or ≥
 /// [`ADC_FULL_SCALE`]): [`PairSums::of`]'s `railed` without the sums, one
 /// packed word per pair (`RAIL_BITS`; ≈ 7 instructions a pair on the M4
@@ -273,7 +280,7 @@ impl PairSums {
 pub fn any_railed(pairs: &[(u16, u16)]) -> bool {
     let mut rails = 0u32;
     for &(x, z) in pairs {
-        let p = u32::from(x) | (u32::from(z) << 16);
+        let p = packed_pair(x, z);
         rails |= p.wrapping_add(0x1_0001) | p.wrapping_sub(0x1_0001);
     }
     rails & RAIL_BITS != 0
@@ -316,7 +323,7 @@ fn run(w: &[u32], pairs: &[(u16, u16)]) -> Run {
         rails: 0,
     };
     for (&r, &(x, z)) in w.iter().zip(pairs) {
-        let p = u32::from(x) | (u32::from(z) << 16);
+        let p = packed_pair(x, z);
         let (c, s) = (cos_of(r), sin_of(r));
         let (x, z) = (i32::from(p as u16 as i16), (p as i32) >> 16);
         o.rails |= p.wrapping_add(0x1_0001) | p.wrapping_sub(0x1_0001);
