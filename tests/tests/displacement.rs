@@ -697,7 +697,7 @@ fn magnitude_comparisons_are_those_of_the_exact_norms() {
 }
 
 /// A setting whose dead-beat start asks for more voltage than the DAC
-/// has: Δu_z = 3 µm on the exact model needs ≈ 1.11 V steady on the normal
+/// has: Δu_z = 2.8 µm on the exact model needs ≈ 1.04 V steady on the normal
 /// channel (|H| ≈ 2.7 µm/V at 20 kHz, 300 Hz below its resonance), the
 /// start within the headroom h = 2 twice that — beyond the room of
 /// min(dc, 4095 − dc) codes at 3.3/4095 V a code (1.65 V at mid-scale).
@@ -708,28 +708,45 @@ fn magnitude_comparisons_are_those_of_the_exact_norms() {
 #[test]
 fn a_start_beyond_the_dacs_room_is_cut_to_it_and_holds() {
     let table = SineTable::<1024>::libm();
-    let mut b = Bench::new(&table, opts(), exact_model(true_modes()));
-    let s = setting(3e-6);
-    b.dev.set_drive(s).unwrap();
-    b.dev.start().unwrap();
-    let (mut at_room, mut worst) = (0u32, 0.0f64);
-    for _ in 0..4_000 {
-        b.step();
-        let c = b.dev.dds().channels()[0];
-        let dc = f64::from(c.dc_target);
-        // The room in codes, as D5 states it (0.9999 of the DC's distance
-        // to the nearer rail), rounded to f32 on the way through volts.
-        let room = dc.min(4095.0 - dc) * 0.9999;
-        let a = f64::from(c.amp_target);
-        worst = worst.max(a / room);
-        if (a / room - 1.0).abs() <= 1e-5 {
-            at_room += 1;
+    // The normal channel's DC below mid-scale (u_z0 = 4 µm: the room is
+    // the DC itself) and above it (DC at code 2 600: the room is the
+    // distance to the top, 1 495 codes, 1.20 V, still below the start's
+    // ≈ 2.1 V and above the 1.04 V steady).
+    let mpc = f64::from(
+        integration_tests::resonant::Bench::new(&table, opts(), exact_model(true_modes()))
+            .cfg
+            .dac_z
+            .metres_per_code,
+    );
+    for offset in [4e-6, 2600.0 * mpc] {
+        let mut b = Bench::new(&table, opts(), exact_model(true_modes()));
+        let mut s = setting(2.8e-6);
+        s.offset_z_m = offset as f32;
+        b.dev.set_drive(s).unwrap();
+        b.dev.start().unwrap();
+        let (mut at_room, mut worst) = (0u32, 0.0f64);
+        for _ in 0..4_000 {
+            b.step();
+            let c = b.dev.dds().channels()[0];
+            let dc = f64::from(c.dc_target);
+            // The room in codes, as D5 states it (0.9999 of the DC's
+            // distance to the nearer rail).
+            let room = dc.min(4095.0 - dc) * 0.9999;
+            let a = f64::from(c.amp_target);
+            worst = worst.max(a / room);
+            if (a / room - 1.0).abs() <= 1e-5 {
+                at_room += 1;
+            }
         }
+        let dc = f64::from(b.dev.dds().channels()[0].dc_target);
+        assert!(
+            worst <= 1.0 + 1e-5,
+            "DC {dc}: a fill asked {worst} of the room"
+        );
+        assert!(at_room > 0, "DC {dc}: the start never reached the room");
+        assert_eq!(b.dev.status().faults, 0, "DC {dc}");
+        check_holds(&mut b, &s, 400);
     }
-    assert!(worst <= 1.0 + 1e-5, "a fill asked {worst} of the room");
-    assert!(at_room > 0, "the start never reached the room");
-    assert_eq!(b.dev.status().faults, 0);
-    check_holds(&mut b, &s, 400);
 }
 
 /// |Ĥ(f)| of a device model by eq. 1 written out (`g/|1 − r² + j r/Q|`,

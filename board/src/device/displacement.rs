@@ -394,6 +394,15 @@ pub fn setpoint(d: &DriveSetting) -> [C; 2] {
     [C::new(-d.amp_z_m, 0.0), polar(d.amp_x_m, d.phase_rad)]
 }
 
+/// Whether a dead-beat voltage of magnitude `un` (V) lies beyond D5's
+/// bound `min(h·max(|d/hc|, u_prev), room)`, or is not a number: beyond the
+/// room, or beyond both `h·u_prev` and `h·|d/hc|` — the last compared as
+/// `|u·hc| > h·|d|` (`u_hc` = u·hc; [`norm_gt`]: no division, no root;
+/// issue 35).
+fn beyond_bound(un: f32, room: f32, h: f32, u_prev: f32, u_hc: C, d: C) -> bool {
+    un.is_nan() || un > room || (un > h * u_prev && norm_gt(u_hc, h, d))
+}
+
 /// The DDS level and phase word of a voltage phasor `u` (V) of magnitude
 /// `un` ([`norm`] of `u`) on a channel with DC `dc` (codes): `A = |U|/v`,
 /// `p = arg U + π/2` (D2's convention).
@@ -695,15 +704,10 @@ impl<const N: usize> Device<'_, N> {
             // The DAC's room around the DC, less a part in 10⁴ (the level's
             // own check must pass after the f32 round trip).
             let room = dc.min(f32::from(crate::dds::DAC_MAX) - dc).max(0.0) * v * 0.9999;
-            // The bound min(h·max(|d/hc|, u_prev), room): `un` beyond it iff
-            // beyond the room, or beyond both h·u_prev and h·|d/hc| — the
-            // last compared as |u·hc| > h·|d| (`norm_gt`: no division, no
-            // root; issue 35), the bound itself formed only for a cut.
+            // The bound itself is formed only for a cut.
             let u_prev = self.loops.u_prev[ch];
             let mut un = norm(u);
-            let cut = un.is_nan()
-                || un > room
-                || (un > h_room * u_prev && norm_gt(u * hc, h_room, d[ch]));
+            let cut = beyond_bound(un, room, h_room, u_prev, u * hc, d[ch]);
             moving[ch] =
                 cut || usize::from(self.loops.since_change[ch]) < super::measure::FILL_RING;
             if cut {
