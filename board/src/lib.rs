@@ -50,7 +50,7 @@
 //!
 //! ## Cargo features
 //! - `defmt` — derive `defmt::Format` for the public types (firmware logging).
-//! - `probe` — profiling marks in the handlers' work ([`probe`](mod@probe)), for
+//! - `probe` — profiling marks in the handlers' work (module `probe`), for
 //!   `predict_cost`'s breakdown of a half-buffer; never in a shipped build.
 //!
 //! The crate is `no_std` and allocation-free.
