@@ -451,3 +451,42 @@ fn exact_rejects_bad_velocity() {
         );
     }
 }
+
+#[test]
+fn the_prediction_shares_the_critical_velocities_without_changing_a_bit() {
+    // `exact::solve_with_critical` (the board's prediction) computes c and c'
+    // once and hands them to the solver, which mirrors them for v0 < 0: its μ
+    // must be the bits of `solve_with`'s, and its critical velocities those of
+    // eq. 8, c = |b e^{iφ} ± a| = √(a² ± 2ab cos φ + b²) (times ωW₀ = 1 in
+    // these dimensionless scenes), to the rounding of the two forms (a few ε
+    // of a + b). Both directions, every regime of CASES, f64 with libm and
+    // f32 with the board's FastF32.
+    use model_core::float::FastF32;
+    for &(a, b, phi) in CASES {
+        let s = scene(a, b, phi);
+        let sf = Scene::<f32>::dimensionless(Groups {
+            duz_rel: a as f32,
+            dux_rel: b as f32,
+            phi: phi as f32,
+        });
+        let eq8 = |sgn: f64| (a * a + sgn * 2.0 * a * b * phi.cos() + b * b).sqrt();
+        for &x in FRACTIONS {
+            let vc = CriticalVelocity::of(&s);
+            let v = x * vc.for_velocity(x);
+            let (got, got_vc) = exact::solve_with_critical::<f64, Libm>(&s, v).unwrap();
+            assert_eq!(got, solve(&s, v).unwrap(), "a={a} b={b} φ={phi} x={x}");
+            for (c, want) in [(got_vc.forward, eq8(1.0)), (got_vc.backward, eq8(-1.0))] {
+                assert!(
+                    (c - want).abs() <= 8.0 * f64::EPSILON * (a + b),
+                    "a={a} b={b} φ={phi}: {c} vs eq. 8 {want}"
+                );
+            }
+            let Ok(sf) = &sf else { continue };
+            let vf = (x as f32) * CriticalVelocity::of_with::<FastF32>(sf).for_velocity(x as f32);
+            let (got, got_vc) = exact::solve_with_critical::<f32, FastF32>(sf, vf).unwrap();
+            let want = exact::solve_with::<f32, FastF32>(sf, vf).unwrap();
+            assert_eq!(got, want, "f32: a={a} b={b} φ={phi} x={x}");
+            assert_eq!(got_vc, CriticalVelocity::of_with::<FastF32>(sf));
+        }
+    }
+}

@@ -483,6 +483,27 @@ fn refusals() {
     };
     assert_eq!(Scene::dimensionless(g), Err(SceneError::LiftOff));
     assert!(Scene::dimensionless_with_contact(g, ContactMode::Intermittent).is_ok());
+    // The permanent solver refuses a lift-off scene, from the drive's a ≥ 1
+    // (a scene's drive is otherwise valid by construction, and the solver
+    // checks only that), at a = 1 exactly too, at rest and moving, and in
+    // both solvers' entries (the board's prediction uses the second).
+    for duz_rel in [1.0, 1.5] {
+        let s =
+            Scene::dimensionless_with_contact(Groups { duz_rel, ..g }, ContactMode::Intermittent)
+                .unwrap();
+        for v in [0.0, 0.05, -0.05] {
+            assert_eq!(
+                exact::solve(&s, v),
+                Err(exact::ExactError::BadDrive),
+                "a = {duz_rel}, v = {v}"
+            );
+            assert_eq!(
+                exact::solve_with_critical::<f64, Libm>(&s, v).map(|r| r.0),
+                Err(exact::ExactError::BadDrive),
+                "a = {duz_rel}, v = {v}"
+            );
+        }
+    }
     let bad = Groups {
         duz_rel: f64::NAN,
         ..g

@@ -89,8 +89,9 @@ pub fn predict(s: &Scene<f32>, v0: f32) -> Result<Prediction, DeviceError> {
             liftoff: true,
         });
     }
-    let vc = model_core::analytic::CriticalVelocity::of_with::<FastF32>(s);
-    let (m, m_minus) = match exact::solve_with::<f32, FastF32>(s, v0).map_err(DeviceError::Model)? {
+    let (solution, vc) =
+        exact::solve_with_critical::<f32, FastF32>(s, v0).map_err(DeviceError::Model)?;
+    let (m, m_minus) = match solution {
         Solution::Sliding { mu_over_mu0 } | Solution::StickSlip { mu_over_mu0 } => {
             (mu_over_mu0, mu_over_mu0)
         }

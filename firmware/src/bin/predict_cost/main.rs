@@ -65,8 +65,8 @@ fn nops_1000() {
 /// solver's μ/μ₀), with a chosen backend.
 #[inline(never)]
 fn predict_with<M: Math<f32>>(scene: &Scene<f32>, v0: f32) -> Option<(f32, f32, f32)> {
-    let vc = CriticalVelocity::of_with::<M>(scene);
-    let m = match exact::solve_with::<f32, M>(scene, v0).ok()? {
+    let (solution, vc) = exact::solve_with_critical::<f32, M>(scene, v0).ok()?;
+    let m = match solution {
         Solution::Sliding { mu_over_mu0 } | Solution::StickSlip { mu_over_mu0 } => mu_over_mu0,
         Solution::AtRest { mu_0plus, .. } => mu_0plus,
     };

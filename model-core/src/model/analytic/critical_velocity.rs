@@ -53,6 +53,14 @@ impl<T: Float> CriticalVelocity<T> {
     /// [`CriticalVelocity::of`] with a chosen math backend.
     pub fn of_with<M: Math<T>>(scene: &Scene<T>) -> Self {
         let d = scene.drive();
+        Self::of_dimensionless(scene, d.c_forward::<M>(), d.c_backward::<M>())
+    }
+
+    /// The scene's critical velocities from its drive's dimensionless ones,
+    /// `c = |b e^{iφ} + a|` and `c' = |b e^{iφ} − a|`: each times `ωW₀`, or
+    /// exactly 0 where [`is_zero_critical_velocity`] says so.
+    pub(crate) fn of_dimensionless(scene: &Scene<T>, c_forward: T, c_backward: T) -> Self {
+        let d = scene.drive();
         let scale = scene.velocity_scale();
         let zeroed = |c: T| {
             if is_zero_critical_velocity(c, d.a, d.b) {
@@ -62,8 +70,8 @@ impl<T: Float> CriticalVelocity<T> {
             }
         };
         CriticalVelocity {
-            forward: scale * zeroed(d.c_forward::<M>()),
-            backward: scale * zeroed(d.c_backward::<M>()),
+            forward: scale * zeroed(c_forward),
+            backward: scale * zeroed(c_backward),
         }
     }
 

@@ -33,6 +33,7 @@
 
 use heapless::Vec;
 
+use crate::model::analytic::critical_velocity::CriticalVelocity;
 use crate::model::analytic::static_friction::StaticFriction;
 use crate::model::float::{Float, Libm, Math};
 use crate::model::scene::{Drive, Scene, SceneError};
@@ -203,13 +204,39 @@ pub fn solve_with<T: Float, M: Math<T>>(
     let v = scene
         .dimensionless_velocity(v0)
         .map_err(ExactError::BadVelocity)?;
-    solve_dimensionless::<T, M>(&scene.drive(), v, scene)
+    solve_dimensionless::<T, M>(&scene.drive(), v, scene, None)
 }
 
+/// [`solve_with`] and the scene's [`CriticalVelocity`] (eq. 8) together, as
+/// the board's prediction reports them: the two critical velocities are
+/// computed once (one `hypot` each) and serve the solver too, which
+/// otherwise computes them again. The same numbers as
+/// [`solve_with`] and [`CriticalVelocity::of_with`] called apart.
+///
+/// # Errors
+/// As [`solve`].
+pub fn solve_with_critical<T: Float, M: Math<T>>(
+    scene: &Scene<T>,
+    v0: T,
+) -> Result<(Solution<T>, CriticalVelocity<T>), ExactError> {
+    let v = scene
+        .dimensionless_velocity(v0)
+        .map_err(ExactError::BadVelocity)?;
+    let d = scene.drive();
+    let c = (d.c_forward::<M>(), d.c_backward::<M>());
+    let solution = solve_dimensionless::<T, M>(&d, v, scene, Some(c))?;
+    Ok((
+        solution,
+        CriticalVelocity::of_dimensionless(scene, c.0, c.1),
+    ))
+}
+
+/// `known`: the drive's `(c, c')` (`|b e^{iφ} ± a|`), when the caller has them.
 fn solve_dimensionless<T: Float, M: Math<T>>(
     d: &Drive<T>,
     v: T,
     scene: &Scene<T>,
+    known: Option<(T, T)>,
 ) -> Result<Solution<T>, ExactError> {
     if v == T::ZERO {
         let (mu_0plus, mu_0minus) = limits_at_zero::<T, M>(d)?;
@@ -219,7 +246,7 @@ fn solve_dimensionless<T: Float, M: Math<T>>(
             statics: StaticFriction::of_with::<M>(scene),
         });
     }
-    match Oriented::of::<M>(d, v)? {
+    match Oriented::of_scene::<M>(d, v, known)? {
         Oriented::Sliding { sign } => Ok(Solution::Sliding { mu_over_mu0: sign }),
         Oriented::StickSlip(problem) => Ok(Solution::StickSlip {
             mu_over_mu0: problem.sign * period::mean_stretch::<T, M>(&problem, None)?,
@@ -234,7 +261,7 @@ fn solve_dimensionless<T: Float, M: Math<T>>(
 /// [`ExactError::BadVelocity`] for `V = 0` or non-finite `V`; [`ExactError::Inconsistent`].
 #[inline]
 pub fn mu_over_mu0<T: Float, M: Math<T>>(d: &Drive<T>, v: T) -> Result<T, ExactError> {
-    match Oriented::of::<M>(d, v)? {
+    match Oriented::of::<M>(d, v, None)? {
         Oriented::Sliding { sign } => Ok(sign),
         Oriented::StickSlip(problem) => {
             Ok(problem.sign * period::mean_stretch::<T, M>(&problem, None)?)
@@ -252,19 +279,9 @@ pub fn limits_at_zero<T: Float, M: Math<T>>(d: &Drive<T>) -> Result<(T, T), Exac
     }
     check_conditioning(d)?;
     // μ(0±) is the forward-convention period at V = 0 of the drive and of its mirror.
-    let limit = |drive: Drive<T>, sign: T| {
-        let c = drive.c_forward::<M>();
-        if c == T::ZERO {
-            Ok(sign)
-        } else {
-            let problem = Forward {
-                drive,
-                v: T::ZERO,
-                c,
-                sign,
-            };
-            Ok(sign * period::mean_stretch::<T, M>(&problem, None)?)
-        }
+    let limit = |drive: Drive<T>, sign: T| match Forward::at_rest::<M>(drive, sign) {
+        None => Ok(sign),
+        Some(problem) => Ok(sign * period::mean_stretch::<T, M>(&problem, None)?),
     };
     let plus = limit(*d, T::ONE)?;
     let minus = limit(d.mirrored(), -T::ONE)?;
@@ -281,7 +298,7 @@ pub fn steady_state<T: Float, M: Math<T>>(
     v: T,
 ) -> Result<(T, Vec<Arc<T>, MAX_ARCS>), ExactError> {
     let mut arcs: Vec<Arc<T>, MAX_ARCS> = Vec::new();
-    let problem = match Oriented::of::<M>(d, v)? {
+    let problem = match Oriented::of::<M>(d, v, None)? {
         Oriented::Sliding { sign } => {
             let kind = if sign > T::ZERO {
                 ArcKind::SlipForward
@@ -321,8 +338,30 @@ pub(crate) struct Forward<T> {
     pub(crate) v: T,
     /// The forward critical velocity of `drive`, `c = |b e^{iφ} + a|`.
     pub(crate) c: T,
+    /// The backward critical velocity of `drive`, `c' = |b e^{iφ} − a|`
+    /// (it places the backward slip window).
+    pub(crate) c_back: T,
     /// `+1`, or `−1` for a mirrored problem: `μ/μ₀ = sign · ⟨s⟩`.
     pub(crate) sign: T,
+}
+
+impl<T: Float> Forward<T> {
+    /// The `V → 0⁺` problem of `drive` (the period whose mean is `μ(0⁺)/μ₀`
+    /// in the forward convention); `None` when `c = 0` (no stick–slip at any
+    /// `V > 0`, `μ(0⁺)/μ₀ = 1`).
+    pub(crate) fn at_rest<M: Math<T>>(drive: Drive<T>, sign: T) -> Option<Self> {
+        let c = drive.c_forward::<M>();
+        if c == T::ZERO {
+            return None;
+        }
+        Some(Forward {
+            drive,
+            v: T::ZERO,
+            c,
+            c_back: drive.c_backward::<M>(),
+            sign,
+        })
+    }
 }
 
 /// A validated velocity and drive, turned to the forward convention.
@@ -334,14 +373,36 @@ enum Oriented<T> {
 }
 
 impl<T: Float> Oriented<T> {
-    /// Validates the drive and `V ≠ 0`, mirrors `V < 0` to the forward
-    /// convention, and decides sliding (`|V| ≥ c`) or stick–slip (which must
-    /// pass the conditioning check).
+    /// Validates the drive ([`Drive::is_valid`]: it may be built by hand) and
+    /// orients the problem ([`Oriented::orient`]).
     #[inline]
-    fn of<M: Math<T>>(d: &Drive<T>, v: T) -> Result<Self, ExactError> {
+    fn of<M: Math<T>>(d: &Drive<T>, v: T, known: Option<(T, T)>) -> Result<Self, ExactError> {
         if !d.is_valid() {
             return Err(ExactError::BadDrive);
         }
+        Self::orient::<M>(d, v, known)
+    }
+
+    /// [`Oriented::of`] for the drive of a [`Scene`], which its constructor
+    /// validated (finite, `b ≥ 0`, on its circle): only the permanent
+    /// contact's `a < 1` is checked, since a scene may be an intermittent one
+    /// (a ≥ 1). Saves [`Drive::is_valid`]'s divisions and tests on the
+    /// board's prediction path.
+    #[inline]
+    fn of_scene<M: Math<T>>(d: &Drive<T>, v: T, known: Option<(T, T)>) -> Result<Self, ExactError> {
+        // A scene's `a` is finite (never NaN).
+        if d.a >= T::ONE {
+            return Err(ExactError::BadDrive);
+        }
+        Self::orient::<M>(d, v, known)
+    }
+
+    /// Checks `V ≠ 0`, mirrors `V < 0` to the forward convention, and decides
+    /// sliding (`|V| ≥ c`) or stick–slip (which must pass the conditioning
+    /// check). `known`: `d`'s `(c_forward, c_backward)` if the caller has
+    /// computed them.
+    #[inline]
+    fn orient<M: Math<T>>(d: &Drive<T>, v: T, known: Option<(T, T)>) -> Result<Self, ExactError> {
         if !v.is_finite() || v == T::ZERO {
             return Err(ExactError::BadVelocity(SceneError::NonFinite(
                 crate::model::scene::Param::Velocity,
@@ -352,11 +413,20 @@ impl<T: Float> Oriented<T> {
         } else {
             (d.mirrored(), -v, -T::ONE)
         };
-        let c = drive.c_forward::<M>();
+        // The mirror swaps the two critical velocities.
+        let known = known.map(|(f, b)| if sign > T::ZERO { (f, b) } else { (b, f) });
+        let c = known.map_or_else(|| drive.c_forward::<M>(), |k| k.0);
         if v >= c {
             return Ok(Oriented::Sliding { sign });
         }
         check_conditioning(d)?;
-        Ok(Oriented::StickSlip(Forward { drive, v, c, sign }))
+        let c_back = known.map_or_else(|| drive.c_backward::<M>(), |k| k.1);
+        Ok(Oriented::StickSlip(Forward {
+            drive,
+            v,
+            c,
+            c_back,
+            sign,
+        }))
     }
 }

@@ -328,7 +328,7 @@ impl<T: Float> BackwardWindow<T> {
         };
         // c' e^{iψ'} = b e^{iφ} − a = backward_re + i·bs.
         let backward_re = bc - a;
-        let c_back = M::hypot(backward_re, bs);
+        let c_back = problem.c_back;
         if v >= c_back {
             return window;
         }

@@ -149,15 +149,8 @@ pub(crate) fn signature<T: Float, M: Math<T>>(
         let s = scaled(drive, d);
         let arcs = if v == T::ZERO {
             // The V → 0⁺ period of `exact::limits_at_zero`.
-            let c = s.c_forward::<M>();
-            if c == T::ZERO {
+            let Some(problem) = exact::Forward::at_rest::<M>(s, T::ONE) else {
                 return Some(2);
-            }
-            let problem = exact::Forward {
-                drive: s,
-                v: T::ZERO,
-                c,
-                sign: T::ONE,
             };
             let mut arcs: heapless::Vec<exact::Arc<T>, { exact::MAX_ARCS }> = heapless::Vec::new();
             let mut push = |arc: exact::Arc<T>| {
