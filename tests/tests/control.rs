@@ -378,3 +378,113 @@ fn a_disturbance_is_not_learned_as_gain() {
     let m = plant(0.216, f64::from(ctl.output().command_m));
     assert!((m - 0.10).abs() <= 0.002, "μ {m}");
 }
+
+/// C5's cap on a secant, `clamp(r, max(RHO_MIN, ρ̂/2), min(RHO_MAX, 2ρ̂))`,
+/// and C6's update, on a hand-made plan (s = −2.5·10⁴ /m, u_ff = 2 µm,
+/// μ* = 0.1, μ₀ = 0.3) fed measurements chosen so that each secant lies
+/// beyond a cap: r = 3 from ρ̂ = 1 (cut to 2ρ̂ = 2), then r = 10 from
+/// ρ̂ ≈ 2 (cut to 2ρ̂ ≈ 4, inside RHO_MAX), then r = 0.1 (cut to ρ̂/2, above
+/// RHO_MIN). ρ̂ after each pair against C5–C6 written out in f64 from the
+/// commands in force (C5's `m = μ* + s·(u − u_ff)`); f32 arithmetic: 1e-5
+/// relative.
+#[test]
+fn each_secant_is_capped_at_twice_and_half_the_learned_gain() {
+    let p = Plan {
+        target_mu: 0.1,
+        feedforward_m: 2e-6,
+        slope_per_m: -2.5e4,
+        limit_m: LIMIT as f32,
+        mu0: 0.3,
+    };
+    let gains = Gains {
+        kappa: 0.5,
+        rate_m_per_s: 1.0,
+    };
+    let mut ctl = Controller::new(p, gains, 1e-6);
+    let s = f64::from(p.slope_per_m);
+    let model = |u: f64| f64::from(p.target_mu) + s * (u - f64::from(p.feedforward_m));
+    let p0 = (f64::from(control::LEARN_MIN_REL) * 0.3).powi(2);
+    let forget = f64::from(control::FORGET);
+    // The first update only records its pair.
+    let mut last = (model(f64::from(ctl.output().command_m)), f64::from(0.15f32));
+    ctl.update(0.15, 1e-3);
+    assert_eq!(ctl.plant_gain(), 1.0);
+    let (mut rho, mut weight) = (1.0f64, p0);
+    // Each secant r, and which cap must cut it (true: the upper one).
+    for (r, upper) in [(3.0, true), (10.0, true), (0.1, false)] {
+        let m = model(f64::from(ctl.output().command_m));
+        let d = m - last.0;
+        assert!(d.abs() >= 0.003, "Δ {d} too small to learn from");
+        let mu = f64::from((last.1 + r * d) as f32);
+        let r = (mu - last.1) / d;
+        let (lo, hi) = (
+            f64::from(control::RHO_MIN).max(0.5 * rho),
+            f64::from(control::RHO_MAX).min(2.0 * rho),
+        );
+        if upper {
+            assert!(r > hi && hi < f64::from(control::RHO_MAX), "r {r}, cap {hi}");
+        } else {
+            assert!(r < lo && lo > f64::from(control::RHO_MIN), "r {r}, cap {lo}");
+        }
+        let rk = r.clamp(lo, hi);
+        weight = forget * weight + d * d;
+        rho += d * d / weight * (rk - rho);
+        ctl.update(mu as f32, 1e-3);
+        let got = f64::from(ctl.plant_gain());
+        assert!(
+            (got - rho).abs() <= 1e-5 * rho,
+            "secant {r}: ρ̂ {got}, C5–C6 give {rho}"
+        );
+        last = (m, mu);
+    }
+}
+
+/// The least gain (C5's `|s| ≥ S_MIN_REL·μ₀/u_z0`) where the law is flat:
+/// sliding at v₀ = 1 m/s against a tangential vibration of 0.01 µm at
+/// 40 kHz (2.5 mm/s) never reverses, so μ = μ₀ at every Δu_z (the exact law
+/// in f64 says so to 1e-12 on the range; the plan's reach is `[μ₀, μ₀]`).
+/// The central difference is then 0, and the plan must carry the floor
+/// 0.05·0.3/4 µm = 3 750 /m (positive: the sign of a zero slope), never 0.
+#[test]
+fn a_flat_law_gets_the_least_gain_not_zero() {
+    let params = |duz: f64| SceneParams {
+        mu0: 0.3,
+        kz: 1e7,
+        kx: 1e7,
+        uz0: 4e-6,
+        duz,
+        dux: 0.01e-6,
+        omega: std::f64::consts::TAU * 40e3,
+        phi: 40f64.to_radians(),
+    };
+    for j in 0..=19 {
+        let s = Scene::<f64>::new(params(j as f64 * 0.2e-6)).expect("valid scene");
+        let v = s.dimensionless_velocity(1.0).unwrap();
+        let mu = 0.3 * exact::mu_over_mu0::<f64, Libm>(&s.drive(), v).unwrap();
+        assert!((mu - 0.3).abs() <= 1e-12, "μ {mu} at Δu_z {j}·0.2 µm");
+    }
+    let p0 = params(0.0);
+    let sc = Scene::<f32>::new(SceneParams {
+        mu0: p0.mu0 as f32,
+        kz: p0.kz as f32,
+        kx: p0.kx as f32,
+        uz0: p0.uz0 as f32,
+        duz: 0.0,
+        dux: p0.dux as f32,
+        omega: p0.omega as f32,
+        phi: p0.phi as f32,
+    })
+    .expect("valid scene");
+    let below = control::plan(&sc, 0.2999, 1.0, 2e-6, LIMIT as f32);
+    assert_eq!(
+        below,
+        Err(control::ControlError::OutOfReach { min: 0.3, max: 0.3 })
+    );
+    let p = control::plan(&sc, 0.3, 1.0, 2e-6, LIMIT as f32).expect("μ₀ is reached");
+    let floor = f64::from(control::S_MIN_REL) * 0.3 / 4e-6;
+    assert!(
+        (f64::from(p.slope_per_m) - floor).abs() <= 1e-6 * floor,
+        "slope {} /m, the floor {floor} /m",
+        p.slope_per_m
+    );
+}

@@ -6,7 +6,9 @@
 use std::f64::consts::TAU;
 
 use board::dds::{unpack_dual, SineTable};
-use board::device::{faults, Contact, Device, DeviceConfig, DeviceError, DriveParam, DriveSetting};
+use board::device::{
+    faults, ConfigError, Contact, Device, DeviceConfig, DeviceError, DriveParam, DriveSetting,
+};
 use model_core::fixed_step::{run_dimensionless, FixedStepConfig, Start, State, Stepper};
 use model_core::{exact, Libm, Scene, SceneParams};
 
@@ -28,6 +30,25 @@ fn drive() -> DriveSetting {
         offset_z_m: 4e-6,
         phase_rad: 0.7,
     }
+}
+
+/// The frequency range must lie strictly below half the sample rate
+/// (`ConfigError::FreqRange`'s text): at 1 MHz a top of exactly 500 kHz is
+/// refused, the next f64 below it accepted.
+#[test]
+fn a_frequency_range_up_to_half_the_sample_rate_is_refused() {
+    let t = SineTable::<1024>::libm();
+    let nyquist = cfg().sample_rate_hz / 2.0;
+    assert_eq!(nyquist, 500_000.0);
+    let with_top = |hi: f64| DeviceConfig {
+        freq_range_hz: (1_000.0, hi),
+        ..cfg()
+    };
+    assert!(matches!(
+        Device::new(with_top(nyquist), &t, CONTACT),
+        Err(DeviceError::Config(ConfigError::FreqRange))
+    ));
+    assert!(Device::new(with_top(nyquist.next_down()), &t, CONTACT).is_ok());
 }
 
 #[test]
