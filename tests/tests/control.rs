@@ -422,9 +422,15 @@ fn each_secant_is_capped_at_twice_and_half_the_learned_gain() {
             f64::from(control::RHO_MAX).min(2.0 * rho),
         );
         if upper {
-            assert!(r > hi && hi < f64::from(control::RHO_MAX), "r {r}, cap {hi}");
+            assert!(
+                r > hi && hi < f64::from(control::RHO_MAX),
+                "r {r}, cap {hi}"
+            );
         } else {
-            assert!(r < lo && lo > f64::from(control::RHO_MIN), "r {r}, cap {lo}");
+            assert!(
+                r < lo && lo > f64::from(control::RHO_MIN),
+                "r {r}, cap {lo}"
+            );
         }
         let rk = r.clamp(lo, hi);
         weight = forget * weight + d * d;
