@@ -1276,6 +1276,46 @@ mod tests {
         );
     }
 
+    /// A record inside the half-power band (19 985–20 025 Hz every 5 Hz
+    /// around f_r = 20 003 Hz, Q = 200: |H|² ≥ 0.56 of the peak everywhere),
+    /// so eq. 6 has no crossing and takes the width `2/slope` from the phase
+    /// slope `−Δarg H/Δf` over the peak's neighbours. The closed form of that
+    /// slope: `arg H = −θ − atan2(r/Q, 1 − r²)` of eq. 1, at the neighbours of
+    /// the largest |H| (found here by scanning the closed form); Q is then
+    /// `f_p·slope/2` with f_p as above (the start's f_r within 0.1 Hz of it:
+    /// 5e-6 relative); allowed 1e-4.
+    #[test]
+    fn the_start_takes_the_phase_slope_when_no_crossing_is_in_the_record() {
+        let (fr, q) = (20_003.0, 200.0);
+        let (lo, step, n) = (19_985.0, 5.0, 9);
+        let (f0, q0) = start_of(&exact_record(fr, q, lo, step, n));
+        let (fp, _, _) = peak_and_half_power(fr, q);
+        let f = |i: usize| lo + step * i as f64;
+        let d = |i: usize| {
+            let r = f(i) / fr;
+            (1.0 - r * r, r / q)
+        };
+        let mag2 = |i: usize| {
+            let (dr, di) = d(i);
+            1.0 / (dr * dr + di * di)
+        };
+        let k = (0..n).fold(0, |k, i| if mag2(i) > mag2(k) { i } else { k });
+        let peak = mag2(k);
+        assert!((0..n).all(|i| mag2(i) >= 0.5 * peak), "a crossing");
+        let lag = |i: usize| {
+            let (dr, di) = d(i);
+            di.atan2(dr)
+        };
+        let slope = (lag(k + 1) - lag(k - 1)) / (f(k + 1) - f(k - 1));
+        let want_q = fp * slope / 2.0;
+        println!("phase-slope start: f_r {f0} (peak {fp}), Q {q0} (closed form {want_q})");
+        assert!((f0 - fp).abs() <= 0.1, "start f_r {f0}, peak {fp}");
+        assert!(
+            (q0 / want_q - 1.0).abs() <= 1e-4,
+            "start Q {q0}, phase slope {want_q}"
+        );
+    }
+
     #[test]
     fn wrap_is_in_the_half_open_interval() {
         use core::f64::consts::PI;
