@@ -132,7 +132,7 @@ def main():
         fault_addr = stderr_line(sim_err, r"fault side channel on (\S+)").group(1)
         log(f"sim-device on {addr}, fault side channel on {fault_addr}")
 
-        # The CLI's session: preload, identification (≈ 8 s), the drive.
+        # The CLI's session: preload, identification (≈ 50 s of device time, in real time), the drive.
         cli(a.fricctl, addr, "drive", "set", "--freq", "20000", "--amp-z", "0", "--amp-x", "0",
             "--offset-z", "4e-6", "--open-loop")
         t0 = time.time()

@@ -695,3 +695,62 @@ fn self_heating_follows_the_squared_amplitude_with_its_time_constant() {
         );
     }
 }
+
+#[test]
+fn a_rung_down_resonant_mode_comes_to_rest_exactly_at_the_next_half() {
+    // A mode ringing in the subnormals (what an undriven mode ends in,
+    // tests/resonator.rs) costs ~100 cycles an operation on x86: the plant
+    // sets a mode under `SUBNORMAL_FLOOR_M` to rest at each half-buffer. A
+    // mode above it decays by the closed form e^{−T/τ} over the half.
+    use board::plant::{Resonant, ResonantOptions, SUBNORMAL_FLOOR_M};
+    use std::f64::consts::PI;
+    let cfg = DeviceConfig::driver_board(0);
+    let table = SineTable::<1024>::libm();
+    let contact = Contact {
+        mu0: MU0 as f32,
+        kz: 1e7,
+        kx: 1e7,
+    };
+    let mut dev = Device::new(cfg, &table, contact).unwrap(); // never started: no drive
+    let sub = 32;
+    let opts = ResonantOptions::<f64>::bench(&cfg);
+    let mut plant = Plant::<f64>::new(MU0, 1e7, 1e7);
+    plant.resonant =
+        Some(Resonant::new(opts, 1.0 / (cfg.sample_rate_hz * f64::from(sub))).unwrap());
+    let x_above = 100.0 * SUBNORMAL_FLOOR_M;
+    {
+        let r = plant.resonant.as_mut().unwrap();
+        r.modes[0].set_state(1e-310, 0.0);
+        r.modes[1].set_state(x_above, 0.0);
+    }
+    let mut dac = [0u32; HALF_BUFFER];
+    let mut block = [(0u16, 0u16); HALF_BUFFER];
+    let d = HalfDrive::fill(&mut dev, 0, &mut dac);
+    plant.run_half::<Libm>(
+        &cfg,
+        &d,
+        sub,
+        0.0,
+        |_| SampleConditions {
+            mu0: MU0,
+            v0: 0.0,
+            counts_z: 0.0,
+            counts_x: 0.0,
+        },
+        &mut block,
+    );
+    let r = plant.resonant.as_ref().unwrap();
+    assert_eq!((r.modes[0].x(), r.modes[0].v()), (0.0, 0.0));
+    // The tangential mode rings on: its energy amplitude √(x² + (v/ω)²)
+    // after T = 64 µs is x₀·e^{−T/τ} to O(1/Q) (the energy's oscillation
+    // at 2ω_d has relative size 1/(2Q) = 0.3 %), τ = Q_loaded/(π f_r).
+    let p = r.modes[1].params();
+    let w = 2.0 * PI * p.resonance_hz;
+    let amp = r.modes[1].x().hypot(r.modes[1].v() / w);
+    let t = HALF_BUFFER as f64 / cfg.sample_rate_hz;
+    let want = x_above * (-t * PI * p.resonance_hz / p.q).exp();
+    assert!(
+        (amp / want - 1.0).abs() < 1.0 / p.q,
+        "amplitude {amp:e}, closed form {want:e}"
+    );
+}

@@ -251,3 +251,56 @@ fn bad_parameters_are_refused_by_name() {
     assert_eq!(bad(ok, 0.0), Some(ModeError::Step));
     assert_eq!(bad(ok, -H), Some(ModeError::Step));
 }
+
+/// The plant's sub-step: one sample of 2 µs in 32 (the virtual device's).
+const H_SUB: f64 = H / 32.0;
+
+#[test]
+fn an_undriven_mode_rings_in_the_subnormals_for_ever_without_the_floor() {
+    // The premise of `Mode::settle_below`: from x = 10⁻³¹⁸ m (a subnormal,
+    // 2·10⁵ quanta of 4.9·10⁻³²⁴), 2·10⁶ undriven sub-steps (125 ms ≈ 27 τ,
+    // τ = Q/(π f_r) = 4.7 ms) would decay the exact amplitude by e⁻²⁷ to
+    // 3·10⁻³³⁰, far under half a quantum: rounded, zero. In floating point the
+    // damping per step, 1 − e^{−h/τ} = 1.3·10⁻⁵, is below half a quantum
+    // once the amplitude is under ~4·10⁴ quanta, and rounding keeps it ringing.
+    let mut m = Mode::new(params(), H_SUB).unwrap();
+    m.set_state(1e-318, 0.0);
+    let tau = Q / (PI * FR);
+    let steps = 2_000_000;
+    // In logarithms (the product itself would underflow): e^{−t/τ} < ½ quantum/x₀.
+    let quantum = f64::from_bits(1);
+    assert!(-(steps as f64) * H_SUB / tau < (quantum / 1e-318).ln() + 0.5f64.ln());
+    let mut peak_late: f64 = 0.0;
+    for k in 0..steps {
+        m.step(0.0);
+        if k >= steps - 10_000 {
+            peak_late = peak_late.max(m.x().abs());
+        }
+    }
+    assert!(peak_late > 0.0, "the mode came to rest by itself");
+    assert!(
+        peak_late < f64::MIN_POSITIVE,
+        "{peak_late:e} is not subnormal"
+    );
+}
+
+#[test]
+fn settle_below_rests_a_mode_under_the_floor_in_displacement_and_velocity() {
+    let w = TAU * FR;
+    let floor = 1e-30;
+    // (x, v) → whether it is set to rest: both below the floor (v over ω).
+    for (x, v, rests) in [
+        (0.9e-30, 0.0, true),
+        (-0.9e-30, 0.9e-30 * w, true),
+        (0.0, -0.9e-30 * w, true),
+        (1.1e-30, 0.0, false),
+        (0.0, 1.1e-30 * w, false),
+        (-1.1e-30, 0.5e-30 * w, false),
+    ] {
+        let mut m = Mode::new(params(), H_SUB).unwrap();
+        m.set_state(x, v);
+        assert_eq!(m.settle_below(floor), rests, "({x:e}, {v:e})");
+        let want = if rests { (0.0, 0.0) } else { (x, v) };
+        assert_eq!((m.x(), m.v()), want, "({x:e}, {v:e})");
+    }
+}

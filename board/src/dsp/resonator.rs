@@ -234,6 +234,31 @@ impl<F: Float> Mode<F> {
         self.v = v;
     }
 
+    /// Sets the state to exactly zero when both the displacement and the
+    /// velocity over ω = 2π f_r are below `floor_m` (m); returns whether it
+    /// did.
+    ///
+    /// An undriven mode does not decay to zero in floating point: once its
+    /// amplitude is a few thousand subnormal quanta, one step's damping
+    /// (1 − e^{−πf_r h/Q}, 1.6·10⁻⁵ for the bench's sub-step) is less than
+    /// half a quantum and rounding sustains the oscillation for ever (the
+    /// zero-input limit cycle of a recursive filter). On x86 every
+    /// operation on a subnormal costs about a hundred cycles: once a mode
+    /// had rung down, the virtual device could no longer keep real time
+    /// (`fricctl device identify` on `fricctl sim-device` took 187 s of
+    /// wall time with the simulator at 100 % of a core, 51 s with the
+    /// floor, the simulator using 8 s of CPU). The plant calls this once per half-buffer with
+    /// [`SUBNORMAL_FLOOR_M`](crate::plant::SUBNORMAL_FLOOR_M).
+    pub fn settle_below(&mut self, floor_m: F) -> bool {
+        let w = F::TAU * self.params.resonance_hz;
+        let quiet = self.x.abs() < floor_m && self.v.abs() < floor_m * w;
+        if quiet {
+            self.x = F::ZERO;
+            self.v = F::ZERO;
+        }
+        quiet
+    }
+
     /// One step with the drive `u` (V) held over it; returns the new
     /// displacement, m.
     pub fn step(&mut self, u: F) -> F {

@@ -262,6 +262,14 @@ impl<F: Float> ResonantOptions<F> {
 /// thermal time is seconds to minutes; one second keeps tests short).
 pub const THERMAL_TAU_S: f64 = 1.0;
 
+/// A resonant mode whose displacement and velocity over ω are both below
+/// this (m) at the start of a half-buffer is set to rest
+/// ([`Mode::settle_below`](crate::dsp::resonator::Mode::settle_below)):
+/// 10⁻³⁰ m is twenty decades below one ADC count of the pickups and eight
+/// above `f32`'s smallest normal number, so neither precision's
+/// arithmetic reaches the subnormal range through a ringing-down mode.
+pub const SUBNORMAL_FLOOR_M: f64 = 1e-30;
+
 /// Resonant transducers: two modes driven by the DAC channels' AC voltage
 /// (the normal channel's DC offset acts quasi-statically through the
 /// calibration, as before).
@@ -379,6 +387,7 @@ impl<F: Float> Resonant<F> {
         let now = self.params_now();
         for (m, p) in self.modes.iter_mut().zip(now) {
             let _ = m.retune(p, h);
+            m.settle_below(F::from_f64(SUBNORMAL_FLOOR_M));
         }
     }
 }
