@@ -280,8 +280,7 @@ fn packed_pair(x: u16, z: u16) -> u32 {
 pub fn any_railed(pairs: &[(u16, u16)]) -> bool {
     let mut rails = 0u32;
     for &(x, z) in pairs {
-        let p = packed_pair(x, z);
-        rails |= p.wrapping_add(0x1_0001) | p.wrapping_sub(0x1_0001);
+        rails |= rail_word(packed_pair(x, z));
     }
     rails & RAIL_BITS != 0
 }
@@ -292,6 +291,13 @@ pub fn any_railed(pairs: &[(u16, u16)]) -> bool {
 /// bit 12 (`z`: 28), `x = 0` borrows through bits 12–15 (`z = 0`: 28–31),
 /// and a count above 4095 has a bit above 11 of its own.
 const RAIL_BITS: u32 = 0xF000_F000;
+
+/// A packed pair's rail word: only a railed sample sets one of its
+/// [`RAIL_BITS`].
+#[inline(always)]
+fn rail_word(p: u32) -> u32 {
+    p.wrapping_add(0x1_0001) | p.wrapping_sub(0x1_0001)
+}
 
 /// One run's sums in i32 (at most [`RUN`] samples: module docs).
 struct Run {
@@ -326,7 +332,7 @@ fn run(w: &[u32], pairs: &[(u16, u16)]) -> Run {
         let p = packed_pair(x, z);
         let (c, s) = (cos_of(r), sin_of(r));
         let (x, z) = (i32::from(p as u16 as i16), (p as i32) >> 16);
-        o.rails |= p.wrapping_add(0x1_0001) | p.wrapping_sub(0x1_0001);
+        o.rails |= rail_word(p);
         o.xz = o.xz.wrapping_add(p);
         o.xc = o.xc.wrapping_add(x * c);
         o.xs = o.xs.wrapping_add(x * s);

@@ -237,13 +237,8 @@ pub fn atan2(y: f32, x: f32) -> f32 {
 /// over every positive normal `f32`).
 #[inline]
 pub fn sqrt(x: f32) -> f32 {
-    // x ∈ [MIN_POSITIVE, MAX] (a positive normal) as one unsigned compare of
-    // the bits: zero, subnormals, ∞, NaN and every negative (sign bit set)
-    // wrap outside. (Two float compares and their flag moves cost twice as
-    // many instructions on the M4F.)
-    if x.to_bits().wrapping_sub(f32::MIN_POSITIVE.to_bits())
-        > f32::MAX.to_bits() - f32::MIN_POSITIVE.to_bits()
-    {
+    // Outside the positive normals: zero, subnormals, ∞, NaN, negatives.
+    if outside(x, f32::MIN_POSITIVE, f32::MAX) {
         return libm::sqrtf(x);
     }
     let y = f32::from_bits(0x5f37_5a86 - (x.to_bits() >> 1));
@@ -254,6 +249,17 @@ pub fn sqrt(x: f32) -> f32 {
     s + (0.5 * y) * (x - s * s)
 }
 
+/// Whether `x` lies outside `[lo, hi]` (`0 < lo ≤ hi`, both finite), as
+/// one unsigned compare of the bits: the bits of non-negative floats are
+/// ordered as their values, so zero and anything below `lo` wrap to large
+/// differences, and ∞, NaN and every negative (sign bit set) lie above
+/// `hi`'s. Two float compares and their flag moves cost twice as many
+/// instructions on the M4F.
+#[inline(always)]
+fn outside(x: f32, lo: f32, hi: f32) -> bool {
+    x.to_bits().wrapping_sub(lo.to_bits()) > hi.to_bits() - lo.to_bits()
+}
+
 /// `√(x² + y²)`: direct for `max(|x|, |y|) ∈ [2⁻⁵⁰, 2⁵⁰]` (no overflow, and an
 /// underflowing square is below half an ulp of the sum), `libm::hypotf`
 /// otherwise (and for ±∞, NaN). Relative error ≤ [`ERR_HYPOT`].
@@ -261,11 +267,8 @@ pub fn sqrt(x: f32) -> f32 {
 pub fn hypot(x: f32, y: f32) -> f32 {
     let (ax, ay) = (x.abs(), y.abs());
     let big = if ax > ay { ax } else { ay };
-    // big ∈ [2⁻⁵⁰, 2⁵⁰] as one unsigned compare of the bits (as in `sqrt`;
-    // `big` is non-negative or NaN, whose bits lie above 2⁵⁰'s).
-    if big.to_bits().wrapping_sub(TWO_POW_M50.to_bits())
-        > TWO_POW_50.to_bits() - TWO_POW_M50.to_bits()
-    {
+    // `big` is non-negative or NaN (whose bits lie above 2⁵⁰'s).
+    if outside(big, TWO_POW_M50, TWO_POW_50) {
         // Both zero: 0. A NaN beside a zero makes `big` the zero (NaN
         // compares false), so the test is on both, not on `big`.
         return if ax == 0.0 && ay == 0.0 {
