@@ -494,3 +494,150 @@ fn a_flat_law_gets_the_least_gain_not_zero() {
         p.slope_per_m
     );
 }
+
+/// μ* beyond ±μ₀ is no target (`BadTarget`), not a target out of this
+/// drive's reach (`OutOfReach`): |μ| ≤ μ₀ holds for every drive (eq. 7).
+#[test]
+fn a_target_beyond_mu0_is_refused_as_a_bad_target() {
+    let sc = scene::<f32>(MODEL_MU0, 0.0);
+    for t in [0.3001f32, -0.31, 0.5, f32::INFINITY, f32::NAN] {
+        assert_eq!(
+            control::plan(&sc, t, V0 as f32, 2e-6, LIMIT as f32),
+            Err(control::ControlError::BadTarget),
+            "target {t}"
+        );
+    }
+}
+
+/// A law that falls and rises again (φ = 90°, Δu_x = 1 µm, v₀ = 4 mm/s:
+/// μ falls from 0.061 to ≈ 0.009 near Δu_z = 2.4 µm and rises to 0.048 at
+/// the limit, the exact law in f64) crosses μ* = 0.03 twice; the plan
+/// takes the crossing nearer the present command `near_m`. Each crossing
+/// is found here by bisection of the f64 law on its side of the minimum
+/// (independent of the plan's f32 scan); the plan's f32 law is within
+/// 10⁻⁵·μ₀ of it (tests/device.rs) and its slope here is ≥ 2·10⁴ /m, so
+/// its root is within 1.5·10⁻¹⁰ m: allowed 1 nm.
+#[test]
+fn a_law_with_two_crossings_takes_the_one_nearest_the_present_command() {
+    let params = |duz: f64| SceneParams {
+        mu0: 0.3,
+        kz: 1e7,
+        kx: 1e7,
+        uz0: 4e-6,
+        duz,
+        dux: 1e-6,
+        omega: std::f64::consts::TAU * 40e3,
+        phi: 90f64.to_radians(),
+    };
+    let (v0, target) = (0.004, 0.03);
+    let law = |duz: f64| {
+        let s = Scene::<f64>::new(params(duz)).expect("valid scene");
+        let v = s.dimensionless_velocity(v0).unwrap();
+        0.3 * exact::mu_over_mu0::<f64, Libm>(&s.drive(), v).unwrap()
+    };
+    // The minimum on a fine grid, then each side's root by bisection.
+    let grid: Vec<f64> = (0..=380).map(|i| LIMIT * f64::from(i) / 380.0).collect();
+    let x_min = *grid
+        .iter()
+        .min_by(|a, b| law(**a).total_cmp(&law(**b)))
+        .unwrap();
+    assert!(law(0.0) > target && law(x_min) < target && law(LIMIT) > target);
+    let root = |(mut a, mut b): (f64, f64)| {
+        let falling_at_a = law(a) > target;
+        for _ in 0..60 {
+            let m = 0.5 * (a + b);
+            if (law(m) > target) == falling_at_a {
+                a = m;
+            } else {
+                b = m;
+            }
+        }
+        0.5 * (a + b)
+    };
+    let (lower, upper) = (root((0.0, x_min)), root((x_min, LIMIT)));
+    let p0 = params(0.0);
+    let sc = Scene::<f32>::new(SceneParams {
+        mu0: p0.mu0 as f32,
+        kz: p0.kz as f32,
+        kx: p0.kx as f32,
+        uz0: p0.uz0 as f32,
+        duz: 0.0,
+        dux: p0.dux as f32,
+        omega: p0.omega as f32,
+        phi: p0.phi as f32,
+    })
+    .expect("valid scene");
+    for (near, want) in [
+        (0.5e-6, lower),
+        (3.7e-6, upper),
+        (lower + 0.1e-6, lower),
+        (upper - 0.1e-6, upper),
+    ] {
+        let p = control::plan(&sc, target as f32, v0 as f32, near as f32, LIMIT as f32)
+            .expect("reachable");
+        let got = f64::from(p.feedforward_m);
+        assert!(
+            (got - want).abs() <= 1e-9,
+            "near {near:e}: feedforward {got:e}, the crossing {want:e} (the other: {:e})",
+            if want == lower { upper } else { lower }
+        );
+    }
+}
+
+/// The least gain keeps the law's sign: where μ falls gently (φ = 90°,
+/// Δu_x = 1 µm, v₀ = 1 mm/s: μ = 0.0530 at Δu_z = 0 and 0.0526 at 0.17 µm,
+/// the exact law in f64), the central difference at the plan's
+/// feedforward is negative and below the floor S_MIN_REL·μ₀/u_z0 in size
+/// (checked here on the f64 law over the plan's own ±1 % of the range,
+/// −2 250 /m at Δu_z = 0.1 µm, within the f32 law's slack of 80 /m),
+/// so the plan must carry −3 750 /m, not +3 750.
+#[test]
+fn a_gently_falling_law_gets_the_least_gain_with_its_sign() {
+    let params = |duz: f64| SceneParams {
+        mu0: 0.3,
+        kz: 1e7,
+        kx: 1e7,
+        uz0: 4e-6,
+        duz,
+        dux: 1e-6,
+        omega: std::f64::consts::TAU * 40e3,
+        phi: 90f64.to_radians(),
+    };
+    let v0 = 0.001;
+    let law = |duz: f64| {
+        let s = Scene::<f64>::new(params(duz)).expect("valid scene");
+        let v = s.dimensionless_velocity(v0).unwrap();
+        0.3 * exact::mu_over_mu0::<f64, Libm>(&s.drive(), v).unwrap()
+    };
+    let target = law(0.1e-6) as f32;
+    let p0 = params(0.0);
+    let sc = Scene::<f32>::new(SceneParams {
+        mu0: p0.mu0 as f32,
+        kz: p0.kz as f32,
+        kx: p0.kx as f32,
+        uz0: p0.uz0 as f32,
+        duz: 0.0,
+        dux: p0.dux as f32,
+        omega: p0.omega as f32,
+        phi: p0.phi as f32,
+    })
+    .expect("valid scene");
+    let p = control::plan(&sc, target, v0 as f32, 0.0, LIMIT as f32).expect("reachable");
+    let floor = f64::from(control::S_MIN_REL) * 0.3 / 4e-6;
+    let x = f64::from(p.feedforward_m);
+    let h = 0.01 * LIMIT;
+    let (a, b) = ((x - h).max(0.0), (x + h).min(LIMIT));
+    let s = (law(b) - law(a)) / (b - a);
+    // The plan's f32 law is within 10⁻⁵·μ₀ of this one at each end
+    // (tests/device.rs): its difference quotient within 2·10⁻⁵·μ₀/(b − a).
+    let slack = 2.0 * 1e-5 * 0.3 / (b - a);
+    assert!(
+        s + slack < 0.0 && s.abs() + slack < floor,
+        "the premise: f64 slope {s} /m (± {slack}) at {x:e} m"
+    );
+    assert!(
+        (f64::from(p.slope_per_m) + floor).abs() <= 1e-6 * floor,
+        "slope {} /m, the floor −{floor} /m",
+        p.slope_per_m
+    );
+}
