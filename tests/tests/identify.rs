@@ -737,3 +737,52 @@ fn a_resonance_drifting_during_the_sweep_biases_q_and_the_residual_cannot_tell()
     }
     assert!((0.5 * (qs[0] + qs[1]) / t.q - 1.0).abs() < 1e-3);
 }
+
+/// The residual figures of a fit from its own point estimates: the SSR of
+/// eq. 1 written out here (`Truth::h`, not the module's model) at the fitted
+/// f_r, Q, g, θ over a noisy record (σ = 1 % of the peak), then
+/// `noise = √(SSR/ν)`, ν = 2N − 4, and `ρ_rms = √(SSR/N)/max|H(f_i)|`
+/// (eq. 15). Both sums of 402 squares agree to rounding: allowed 10⁻⁹
+/// relative.
+#[test]
+fn the_noise_and_rms_figures_are_the_residual_of_the_fitted_model() {
+    for (ci, t) in CASES.iter().enumerate() {
+        let sigma = 0.01 * t.peak();
+        let rec = record(
+            t,
+            freqs(F_LO, F_HI, N),
+            sigma,
+            &mut Gauss::new(77 + ci as u64),
+        );
+        let fit = fit(&rec, None, &FitConfig::DEFAULT).expect("a fit");
+        let m = fit.model;
+        let model = Truth {
+            fr: m.resonance_hz,
+            q: m.q,
+            g: m.gain_m_per_v,
+            theta: m.phase_lag_rad,
+        };
+        let (mut ssr, mut largest) = (0.0f64, 0.0f64);
+        for s in &rec {
+            let (re, im) = model.h(s.freq_hz);
+            ssr += (re - s.re_m_per_v).powi(2) + (im - s.im_m_per_v).powi(2);
+            largest = largest.max(re.hypot(im));
+        }
+        assert_eq!((fit.points, fit.dof), (N, 2 * N - 4));
+        let noise = (ssr / (2 * N - 4) as f64).sqrt();
+        let rms = (ssr / N as f64).sqrt() / largest;
+        assert!(
+            (fit.noise_m_per_v / noise - 1.0).abs() <= 1e-9,
+            "case {ci}: noise {:e}, from the SSR {noise:e}",
+            fit.noise_m_per_v
+        );
+        assert!(
+            (fit.rel_rms / rms - 1.0).abs() <= 1e-9,
+            "case {ci}: ρ_rms {:e}, from the SSR {rms:e}",
+            fit.rel_rms
+        );
+        // And the noise is the record's σ, within its χ² spread (ν = 398:
+        // √(SSR/ν)/σ within ±4·√(1/(2ν)) = ±14 %).
+        assert!((noise / sigma - 1.0).abs() <= 4.0 * (0.5 / (2 * N - 4) as f64).sqrt());
+    }
+}
