@@ -786,3 +786,180 @@ fn the_noise_and_rms_figures_are_the_residual_of_the_fitted_model() {
         assert!((noise / sigma - 1.0).abs() <= 4.0 * (0.5 / (2 * N - 4) as f64).sqrt());
     }
 }
+
+/// The fit is the least-squares optimum, checked on the SSR of eq. 1
+/// written out here: from the fitted (f_r, Q, g, θ), a step of a tenth of a
+/// standard error in either direction of each parameter does not lower the
+/// SSR (at an interior minimum it rises by ≈ ½·(0.1)²·2σ² = 0.01σ², far
+/// above the sums' rounding, 10⁻¹²·SSR; a stationary point of a wrong
+/// gradient lowers it to first order on one side). A low-Q mode over a
+/// wide span (Q = 3, r from 0.5 to 1.5), where the model's derivative in
+/// f_r, ∝ 2r² − jr/Q, is far from its value at r = 1, and the bench's
+/// Q = 300, with noise of 1 % of the peak.
+#[test]
+fn the_fit_is_a_minimum_of_the_sum_of_squares_in_every_parameter() {
+    let modes = [
+        (
+            Truth {
+                fr: 20_000.0,
+                q: 3.0,
+                g: 1e-7,
+                theta: 0.4,
+            },
+            (10_000.0, 30_000.0),
+        ),
+        (CASES[0], (F_LO, F_HI)),
+    ];
+    for (ci, (t, (lo, hi))) in modes.into_iter().enumerate() {
+        let sigma = 0.01 * t.peak();
+        let rec = record(&t, freqs(lo, hi, N), sigma, &mut Gauss::new(5 + ci as u64));
+        let fit = fit(&rec, None, &FitConfig::DEFAULT).expect("a fit");
+        let ssr = |m: Truth| -> f64 {
+            rec.iter()
+                .map(|s| {
+                    let (re, im) = m.h(s.freq_hz);
+                    (re - s.re_m_per_v).powi(2) + (im - s.im_m_per_v).powi(2)
+                })
+                .sum()
+        };
+        let m = fit.model;
+        let at = Truth {
+            fr: m.resonance_hz,
+            q: m.q,
+            g: m.gain_m_per_v,
+            theta: m.phase_lag_rad,
+        };
+        let s0 = ssr(at);
+        // (Q's and g's standard errors are in their units: value·SE(ln).)
+        let steps = [
+            0.1 * fit.resonance_hz.std_error,
+            0.1 * fit.q.std_error,
+            0.1 * fit.gain_m_per_v.std_error,
+            0.1 * fit.phase_lag_rad.std_error,
+        ];
+        for (k, d) in steps.into_iter().enumerate() {
+            assert!(d > 0.0 && d.is_finite(), "case {ci}: step {k} {d}");
+            for sgn in [-1.0, 1.0] {
+                let mut p = at;
+                match k {
+                    0 => p.fr += sgn * d,
+                    1 => p.q += sgn * d,
+                    2 => p.g += sgn * d,
+                    _ => p.theta += sgn * d,
+                }
+                let s1 = ssr(p);
+                assert!(
+                    s1 >= s0 * (1.0 - 1e-12),
+                    "case {ci}: parameter {k} {sgn:+} step: SSR {s1:e} below the fit's {s0:e} (by {:e} σ²)",
+                    (s0 - s1) / (sigma * sigma)
+                );
+            }
+        }
+    }
+}
+
+/// The standard errors of a fit (eq. 9 without σ: `C = s²(JᵀJ)⁻¹`, `s² =
+/// SSR/ν`) against a Jacobian formed here by central differences of eq. 1
+/// written out (`Truth::h`) in (f_r, ln Q, ln g, θ) at the fitted point, and
+/// a 4×4 Gauss–Jordan inverse: the differences' error is O(h²) = 10⁻¹²
+/// relative, the inverse's a few ulps times JᵀJ's condition (≤ 10⁶ here):
+/// allowed 10⁻⁵ relative. The low-Q mode over a wide span (Q = 3, r from
+/// 0.5 to 1.5) makes the f_r column's r-dependence, ∝ 2r² − jr/Q, count.
+#[test]
+fn the_standard_errors_are_those_of_the_model_s_own_jacobian() {
+    let modes = [
+        (
+            Truth {
+                fr: 20_000.0,
+                q: 3.0,
+                g: 1e-7,
+                theta: 0.4,
+            },
+            (10_000.0, 30_000.0),
+        ),
+        (CASES[0], (F_LO, F_HI)),
+    ];
+    for (ci, (t, (lo, hi))) in modes.into_iter().enumerate() {
+        let sigma = 0.01 * t.peak();
+        let rec = record(&t, freqs(lo, hi, N), sigma, &mut Gauss::new(5 + ci as u64));
+        let fit = fit(&rec, None, &FitConfig::DEFAULT).expect("a fit");
+        let m = fit.model;
+        let p0 = [
+            m.resonance_hz,
+            m.q.ln(),
+            m.gain_m_per_v.ln(),
+            m.phase_lag_rad,
+        ];
+        let at = |p: [f64; 4]| Truth {
+            fr: p[0],
+            q: p[1].exp(),
+            g: p[2].exp(),
+            theta: p[3],
+        };
+        let h = [1e-6 * p0[0], 1e-6, 1e-6, 1e-6];
+        // JᵀJ and the SSR.
+        let mut jtj = [[0.0f64; 4]; 4];
+        let mut ssr = 0.0;
+        for s in &rec {
+            let (re0, im0) = at(p0).h(s.freq_hz);
+            ssr += (re0 - s.re_m_per_v).powi(2) + (im0 - s.im_m_per_v).powi(2);
+            let col = |k: usize| {
+                let (mut a, mut b) = (p0, p0);
+                a[k] += h[k];
+                b[k] -= h[k];
+                let ((ra, ia), (rb, ib)) = (at(a).h(s.freq_hz), at(b).h(s.freq_hz));
+                ((ra - rb) / (2.0 * h[k]), (ia - ib) / (2.0 * h[k]))
+            };
+            let cols = [col(0), col(1), col(2), col(3)];
+            for j in 0..4 {
+                for k in 0..4 {
+                    jtj[j][k] += cols[j].0 * cols[k].0 + cols[j].1 * cols[k].1;
+                }
+            }
+        }
+        // Gauss–Jordan with partial pivoting on [JᵀJ | I].
+        let mut a = [[0.0f64; 8]; 4];
+        for j in 0..4 {
+            a[j][..4].copy_from_slice(&jtj[j]);
+            a[j][4 + j] = 1.0;
+        }
+        for c in 0..4 {
+            let piv = (c..4)
+                .max_by(|&x, &y| a[x][c].abs().total_cmp(&a[y][c].abs()))
+                .unwrap();
+            a.swap(c, piv);
+            let d = a[c][c];
+            for x in a[c].iter_mut() {
+                *x /= d;
+            }
+            for r in 0..4 {
+                if r != c {
+                    let f = a[r][c];
+                    let row = a[c];
+                    for (x, y) in a[r].iter_mut().zip(row) {
+                        *x -= f * y;
+                    }
+                }
+            }
+        }
+        let s2 = ssr / (2 * N - 4) as f64;
+        // Q's and g's standard errors are reported in their units, by the
+        // delta method: value·SE(ln value).
+        let scale = [1.0, m.q, m.gain_m_per_v, 1.0];
+        let se: [f64; 4] = core::array::from_fn(|k| scale[k] * (s2 * a[k][4 + k]).sqrt());
+        let got = [
+            fit.resonance_hz.std_error,
+            fit.q.std_error,
+            fit.gain_m_per_v.std_error,
+            fit.phase_lag_rad.std_error,
+        ];
+        for k in 0..4 {
+            assert!(
+                (got[k] / se[k] - 1.0).abs() <= 1e-5,
+                "case {ci}: parameter {k}: SE {:e}, from the Jacobian {:e}",
+                got[k],
+                se[k]
+            );
+        }
+    }
+}
