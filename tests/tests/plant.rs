@@ -754,3 +754,40 @@ fn a_rung_down_resonant_mode_comes_to_rest_exactly_at_the_next_half() {
         "amplitude {amp:e}, closed form {want:e}"
     );
 }
+
+#[test]
+fn the_bench_transducers_identified_are_the_closed_forms() {
+    // What an exact identification finds (eq. 1 of board::identify): the
+    // resonances, the loaded Q = 1/(1/Q + 1/2000) (300 → 260.87, 200 →
+    // 181.82), the static gains (a thirtieth of the calibration per DAC volt)
+    // and the zero-order hold's lag of half a sample at the resonance,
+    // θ = π f_r/f_s (0.12755 and 0.12378 rad at 500 kS/s), each rounded
+    // once to f32: allowed one f32 ulp (2⁻²³ relative).
+    use board::plant::ResonantOptions;
+    let cfg = DeviceConfig::driver_board(0);
+    let t = ResonantOptions::<f64>::bench(&cfg).identified(cfg.sample_rate_hz);
+    let fs = 500_000.0;
+    assert_eq!(cfg.sample_rate_hz, fs);
+    // RM0090 §14.2: DAC output = V_REF·DOR/4095, V_REF = 3.3 V.
+    let volts_per_code = 3.3 / 4095.0;
+    for (m, fr, q, cal) in [
+        (t.z, 20_300.0, 300.0, cfg.dac_z.metres_per_code),
+        (t.x, 19_700.0, 200.0, cfg.dac_x.metres_per_code),
+    ] {
+        let want = [
+            fr,
+            1.0 / (1.0 / q + 1.0 / 2000.0),
+            f64::from(cal) / volts_per_code / 30.0,
+            std::f64::consts::PI * fr / fs,
+        ];
+        let got = [m.resonance_hz, m.q, m.gain_m_per_v, m.phase_lag_rad].map(f64::from);
+        for k in 0..4 {
+            assert!(
+                (got[k] / want[k] - 1.0).abs() <= f64::from(f32::EPSILON),
+                "field {k}: {} against {}",
+                got[k],
+                want[k]
+            );
+        }
+    }
+}
