@@ -791,3 +791,68 @@ fn the_bench_transducers_identified_are_the_closed_forms() {
         }
     }
 }
+
+#[test]
+fn the_excursion_count_is_the_samples_beyond_the_limit() {
+    // Ideal transducers at the settled drive (Δu_z = 2 µm, 20 kHz: 25
+    // samples a period at 500 kS/s, the phases 2π/25 apart): |u_z − u_z0| =
+    // 2 µm·|sin θ_i| exceeds 1 µm where |sin θ| > ½, on 2/3 of the circle,
+    // so 16 or 17 of each 25 consecutive samples; a negative limit counts
+    // every sample, an infinite one none. The peak of a half-buffer's 64
+    // samples is within 2 µm·[cos(π/25), 1].
+    let cfg = DeviceConfig::driver_board(0);
+    let table = SineTable::<1024>::libm();
+    let contact = Contact {
+        mu0: MU0 as f32,
+        kz: 1e7,
+        kx: 1e7,
+    };
+    for (limit, per_25) in [(-1.0, 25..=25), (f64::INFINITY, 0..=0), (1e-6, 16..=17)] {
+        let mut dev = Device::new(cfg, &table, contact).unwrap();
+        dev.set_drive(drive(0.7)).unwrap();
+        dev.start().unwrap();
+        let mut plant = Plant::<f64>::new(MU0, 1e7, 1e7);
+        let mut dac = [0u32; HALF_BUFFER];
+        let mut block = [(0u16, 0u16); HALF_BUFFER];
+        let mut half = 0;
+        let mut step = |plant: &mut Plant<f64>, dev: &mut Device<'_, 1024>| {
+            let d = HalfDrive::fill(dev, half, &mut dac);
+            half ^= 1;
+            plant.run_half::<Libm>(
+                &cfg,
+                &d,
+                4,
+                0.0,
+                |_| SampleConditions {
+                    mu0: MU0,
+                    v0: 0.0,
+                    counts_z: 0.0,
+                    counts_x: 0.0,
+                },
+                &mut block,
+            );
+        };
+        while !dev.status().settled {
+            step(&mut plant, &mut dev);
+        }
+        // 25 halves = 1 600 samples = 64 periods exactly.
+        assert_eq!(HALF_BUFFER, 64);
+        plant.excursion_limit_m = limit;
+        plant.samples_above = 0;
+        for _ in 0..25 {
+            step(&mut plant, &mut dev);
+            let peak = plant.peak_excursion_m;
+            let lowest = 2e-6 * (std::f64::consts::PI / 25.0).cos();
+            assert!(
+                (lowest * (1.0 - 1e-9)..=2e-6 * (1.0 + 1e-6)).contains(&peak),
+                "peak {peak:e}"
+            );
+        }
+        let (lo, hi) = (*per_25.start() * 64, *per_25.end() * 64);
+        assert!(
+            (lo..=hi).contains(&plant.samples_above),
+            "limit {limit:e}: {} samples above, {lo}..={hi} expected",
+            plant.samples_above
+        );
+    }
+}
