@@ -856,3 +856,71 @@ fn the_excursion_count_is_the_samples_beyond_the_limit() {
         );
     }
 }
+
+#[test]
+fn each_channel_adds_its_own_count_offset() {
+    // `SampleConditions.counts_z/x` (the virtual device's noise and offset)
+    // add to their own channel's reading before the rounding: a whole
+    // number of counts shifts every reading of that channel by exactly that
+    // many (away from the rails) and leaves the other's unchanged, for ideal
+    // and resonant transducers.
+    use board::plant::{Resonant, ResonantOptions};
+    let cfg = DeviceConfig::driver_board(0);
+    let table = SineTable::<1024>::libm();
+    let contact = Contact {
+        mu0: MU0 as f32,
+        kz: 1e7,
+        kx: 1e7,
+    };
+    let mut dev = Device::new(cfg, &table, contact).unwrap();
+    dev.set_drive(drive(0.7)).unwrap();
+    dev.start().unwrap();
+    let mut dac = [0u32; HALF_BUFFER];
+    // A settled drive (the offset reached: the normal force mid-range).
+    let mut half = 0;
+    let d = loop {
+        let d = HalfDrive::fill(&mut dev, half, &mut dac);
+        half ^= 1;
+        if dev.status().settled {
+            break d;
+        }
+    };
+    let mut resonant = Plant::<f64>::new(MU0, 1e7, 1e7);
+    resonant.resonant = Some(
+        Resonant::new(
+            ResonantOptions::bench(&cfg),
+            1.0 / (cfg.sample_rate_hz * 4.0),
+        )
+        .unwrap(),
+    );
+    for plant in [Plant::<f64>::new(MU0, 1e7, 1e7), resonant] {
+        let run = |cz: f64, cx: f64| {
+            let mut p = plant;
+            let mut out = [(0u16, 0u16); HALF_BUFFER];
+            p.run_half::<Libm>(
+                &cfg,
+                &d,
+                4,
+                0.0,
+                |_| SampleConditions {
+                    mu0: MU0,
+                    v0: 0.004,
+                    counts_z: cz,
+                    counts_x: cx,
+                },
+                &mut out,
+            );
+            out
+        };
+        let (base, z5, x7) = (run(0.0, 0.0), run(5.0, 0.0), run(0.0, -7.0));
+        for i in 0..HALF_BUFFER {
+            let (x, z) = base[i];
+            assert!(
+                (10..4085).contains(&x) && (10..4085).contains(&z),
+                "{i}: ({x}, {z}) near a rail"
+            );
+            assert_eq!(z5[i], (x, z + 5), "sample {i}");
+            assert_eq!(x7[i], (x - 7, z), "sample {i}");
+        }
+    }
+}
