@@ -440,3 +440,35 @@ impl<const N: usize> Device<'_, N> {
         };
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The documented values at 500 kHz: 25 samples a period at 20 kHz fit
+    /// one period (2·25 + 2 = 52 ≤ 64, 3·25 + 2 > 64); 12.5 at 40 kHz fit
+    /// four (⌊5·2³²/tw⌋ + 2 = 64 with tw = ⌊0.08·2³²⌋); and at every
+    /// frequency the answer is the largest p whose estimate fits the half
+    /// (or the cap), at least 1; outside the tuning word's range, 1.
+    #[test]
+    fn the_periods_are_the_most_whose_estimate_fits_one_half_buffer() {
+        let fs = 500_000.0;
+        assert_eq!(periods_in_half_buffer(20_000.0, fs), 1);
+        assert_eq!(periods_in_half_buffer(40_000.0, fs), 4);
+        let len = super::super::HALF_BUFFER as u64;
+        for k in 1..=500 {
+            let f = 500.0 * f64::from(k);
+            let p = periods_in_half_buffer(f, fs);
+            let tw = (f / fs * 4_294_967_296.0) as u32;
+            assert!((1..=CONTROL_MAX_PERIODS).contains(&p), "{f} Hz: {p}");
+            assert!(p == 1 || estimate_samples(p, tw) <= len, "{f} Hz: {p}");
+            assert!(
+                p == CONTROL_MAX_PERIODS || estimate_samples(p + 1, tw) > len,
+                "{f} Hz: {p}"
+            );
+        }
+        for f in [0.0, -1.0, fs, 2.0 * fs, f64::NAN] {
+            assert_eq!(periods_in_half_buffer(f, fs), 1, "{f} Hz");
+        }
+    }
+}
