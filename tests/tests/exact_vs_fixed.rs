@@ -454,8 +454,9 @@ fn exact_rejects_bad_velocity() {
 
 #[test]
 fn the_prediction_shares_the_critical_velocities_without_changing_a_bit() {
-    // `exact::solve_with_critical` (the board's prediction) computes c and c'
-    // once and hands them to the solver, which mirrors them for v0 < 0: its μ
+    // `exact::solve_with_critical` (the board's prediction) takes c and c'
+    // from the scene (formed once, with libm) and hands them to the solver,
+    // which mirrors them for v0 < 0: its μ
     // must be the bits of `solve_with`'s, and its critical velocities those of
     // eq. 8, c = |b e^{iφ} ± a| = √(a² ± 2ab cos φ + b²) (times ωW₀ = 1 in
     // these dimensionless scenes), to the rounding of the two forms (a few ε
@@ -486,7 +487,9 @@ fn the_prediction_shares_the_critical_velocities_without_changing_a_bit() {
             let (got, got_vc) = exact::solve_with_critical::<f32, FastF32>(sf, vf).unwrap();
             let want = exact::solve_with::<f32, FastF32>(sf, vf).unwrap();
             assert_eq!(got, want, "f32: a={a} b={b} φ={phi} x={x}");
-            assert_eq!(got_vc, CriticalVelocity::of_with::<FastF32>(sf));
+            // The scene's own c, c' (formed once with libm): eq. 8 to
+            // libm's hypot, not FastF32's.
+            assert_eq!(got_vc, CriticalVelocity::of(sf));
         }
     }
 }

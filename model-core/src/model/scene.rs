@@ -377,6 +377,11 @@ pub struct Scene<T> {
     /// W₀ = μ₀ k_z u_z0 / k_x, m.
     w0: T,
     drive: Drive<T>,
+    /// The drive's dimensionless critical velocities `(c, c')` =
+    /// `(|b e^{iφ} + a|, |b e^{iφ} − a|)` (eq. 8 divided by ωW₀), with
+    /// [`Libm`]: formed once here, where they are checked, so that each
+    /// prediction does not form them again.
+    critical: (T, T),
 }
 
 /// The dimensionless drive of a scene: `w(θ) = 1 − a cos θ`,
@@ -536,9 +541,8 @@ impl<T: Float> Scene<T> {
         let drive = Drive::new::<Libm>(a, b, p.phi);
         // The critical velocities must be finite too (b ≤ MAX, a < 1 ⇒ hypot finite
         // unless b is within a factor 2 of MAX).
-        if !(drive.c_forward::<Libm>() * p.omega * w0).is_finite()
-            || !(drive.c_backward::<Libm>() * p.omega * w0).is_finite()
-        {
+        let critical = (drive.c_forward::<Libm>(), drive.c_backward::<Libm>());
+        if !(critical.0 * p.omega * w0).is_finite() || !(critical.1 * p.omega * w0).is_finite() {
             return Err(SceneError::OutOfRange(Param::Dux));
         }
         Ok(Scene {
@@ -546,6 +550,7 @@ impl<T: Float> Scene<T> {
             contact,
             w0,
             drive,
+            critical,
         })
     }
 
@@ -662,6 +667,15 @@ impl<T: Float> Scene<T> {
     #[inline]
     pub fn drive(&self) -> Drive<T> {
         self.drive
+    }
+
+    /// The drive's dimensionless critical velocities `(c, c')`: eq. 8
+    /// divided by ωW₀ for sliding forward and backward, `|b e^{iφ} ± a|`
+    /// ([`Drive::c_forward`], [`Drive::c_backward`] with [`Libm`], formed
+    /// once when the scene is).
+    #[inline]
+    pub fn dimensionless_critical(&self) -> (T, T) {
+        self.critical
     }
 
     /// The dimensionless groups (eq. 25).

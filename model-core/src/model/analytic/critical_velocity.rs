@@ -1,6 +1,6 @@
 //! Critical velocity of controllability (paper §2.1, eq. 8).
 
-use crate::model::float::{Float, Libm, Math};
+use crate::model::float::{Float, Math};
 use crate::model::scene::Scene;
 
 /// How many units of rounding (`ε`, the type's machine epsilon) of
@@ -47,7 +47,10 @@ impl<T: Float> CriticalVelocity<T> {
     /// (the same number, without cancellation in the sum of squares); each
     /// is exactly 0 where [`is_zero_critical_velocity`] says so.
     pub fn of(scene: &Scene<T>) -> Self {
-        Self::of_with::<Libm>(scene)
+        // The scene's own, formed with Libm when it was (the same numbers as
+        // `of_with::<Libm>`).
+        let (c, cb) = scene.dimensionless_critical();
+        Self::of_dimensionless(scene, c, cb)
     }
 
     /// [`CriticalVelocity::of`] with a chosen math backend.
@@ -102,6 +105,7 @@ pub fn vc_min<T: Float>(scene: &Scene<T>) -> T {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::float::Libm;
     use crate::model::scene::Groups;
 
     fn scene<T: Float>(ratio: T, phi: T) -> Scene<T> {

@@ -204,14 +204,16 @@ pub fn solve_with<T: Float, M: Math<T>>(
     let v = scene
         .dimensionless_velocity(v0)
         .map_err(ExactError::BadVelocity)?;
-    solve_dimensionless::<T, M>(&scene.drive(), v, scene, None)
+    let c = scene.dimensionless_critical();
+    solve_dimensionless::<T, M>(&scene.drive(), v, scene, Some(c))
 }
 
 /// [`solve_with`] and the scene's [`CriticalVelocity`] (eq. 8) together, as
-/// the board's prediction reports them: the two critical velocities are
-/// computed once (one `hypot` each) and serve the solver too, which
-/// otherwise computes them again. The same numbers as
-/// [`solve_with`] and [`CriticalVelocity::of_with`] called apart.
+/// the board's prediction reports them: the scene's critical velocities
+/// ([`Scene::dimensionless_critical`], formed once with [`Libm`] when the
+/// scene was) serve the solver and the report, with no `hypot` per call.
+/// The same numbers as [`solve_with`] and [`CriticalVelocity::of`] called
+/// apart.
 ///
 /// # Errors
 /// As [`solve`].
@@ -223,7 +225,8 @@ pub fn solve_with_critical<T: Float, M: Math<T>>(
         .dimensionless_velocity(v0)
         .map_err(ExactError::BadVelocity)?;
     let d = scene.drive();
-    let c = (d.c_forward::<M>(), d.c_backward::<M>());
+    // The scene's own (Libm, formed once): not again per prediction.
+    let c = scene.dimensionless_critical();
     let solution = solve_dimensionless::<T, M>(&d, v, scene, Some(c))?;
     Ok((
         solution,

@@ -107,7 +107,8 @@ impl<T: Float> PeriodGeometry<T> {
         let forward_re = a + bc;
         // Forward window end: α = asin(V/c), θ_e = α − ψ.
         let sin_alpha = (v / c).min(T::ONE);
-        let cos_alpha = M::sqrt(((T::ONE - sin_alpha) * (T::ONE + sin_alpha)).max(T::ZERO));
+        // 0 < V < c: sin α ∈ (0, 1], so both factors are ≥ 0 (no clamp).
+        let cos_alpha = M::sqrt((T::ONE - sin_alpha) * (T::ONE + sin_alpha));
         let alpha = M::asin(sin_alpha);
         let (cos_psi, sin_psi) = (forward_re / c, bs / c);
         let sin_end = sin_alpha * cos_psi - cos_alpha * sin_psi; // sin θ_e
@@ -244,6 +245,7 @@ impl<T: Float> PeriodGeometry<T> {
             left.at - at_left / self.above_upper_band_slope(&left)
         };
         Some(root::<T, M>(
+            &left,
             (left.at, period_end.at, at_left, at_right),
             guess,
             self.root_tolerance(k),
@@ -291,6 +293,7 @@ impl<T: Float> PeriodGeometry<T> {
                     left.at - at_left / self.above_lower_band_slope(&left)
                 };
                 let touch = root::<T, M>(
+                    &left,
                     (left.at, piece_end.at, at_left, at_right),
                     guess,
                     self.root_tolerance(k),
@@ -333,7 +336,8 @@ impl<T: Float> BackwardWindow<T> {
             return window;
         }
         let sin_alpha_b = (v / c_back).min(T::ONE);
-        let cos_alpha_b = M::sqrt(((T::ONE - sin_alpha_b) * (T::ONE + sin_alpha_b)).max(T::ZERO));
+        // 0 < V < c': as in the forward window, both factors are ≥ 0.
+        let cos_alpha_b = M::sqrt((T::ONE - sin_alpha_b) * (T::ONE + sin_alpha_b));
         let alpha_b = M::asin(sin_alpha_b);
         window.curvature = c_back * cos_alpha_b;
         // δ = ψ − ψ' = arg(P·conj P'), P·conj P' = (forward_re·backward_re + bs²) − i·2a·bs.
@@ -409,7 +413,7 @@ pub(crate) fn mean_stretch<T: Float, M: Math<T>>(
     let window_end = if record.is_some() {
         geometry.forward.alpha - M::atan2(d.bs, d.a + d.bc)
     } else {
-        T::ZERO
+        T::from_f64(1.0 / 512.0)
     };
     let mut emit = |kind: ArcKind, x0: &Phase<T>, x1: &Phase<T>| {
         if let Some(r) = record.as_mut() {
@@ -479,20 +483,100 @@ fn checked_mean<T: Float>(total: T) -> Result<T, ExactError> {
 }
 
 /// Bracketed root `(lo, hi, f(lo), f(hi))` of a stick→slip function, returned
-/// with its trig. `f_and_slope` gives `(f, f', f'')` at a phase.
+/// with its trig. `f_and_slope` gives `(f, f', f'')` at a phase; `near` is
+/// the bracket's end `lo` with its trig, as the caller has it.
+///
+/// The trig of an iterate closer than [`rotate_max`] to the previous one (the
+/// first: of `near`) is that one's turned by the step ([`rotate`]), at most
+/// [`ROTATIONS_MAX`] times in a row; otherwise `M::sin_cos` (issue 35: a
+/// Halley step is small, and a rotation costs a quarter of a `sin_cos`).
+/// A rotation keeps the length of the error vector it carries (to the
+/// series' truncation) and adds its own rounding, so an iterate's trig
+/// stays within
+///
+/// ```text
+/// ε_trig ≤ √2·(ε₀ + 3·ε_rot)                                            (P1)
+/// ```
+///
+/// of the exact, `ε₀` the error of the trig it started from (`M::sin_cos`'s,
+/// 6.8e-8 with [`crate::model::float::FastF32`], or `near`'s, a phase the
+/// solver already evaluates its functions at) and `ε_rot` ≤
+/// [`ROTATE_ERR_F32`] (f32): 5.6e-7 from FastF32's — about half the f32
+/// precision constant, 1e-6, against the 7e-8 measured before rotations, for
+/// functions that are sums of terms ≤ `1 + b` times the trig.
 #[inline(always)]
 pub(crate) fn root<T: Float, M: Math<T>>(
+    near: &Phase<T>,
     bracket: (T, T, T, T),
     guess: T,
     f_tol: T,
     f_and_slope: impl Fn(&Phase<T>) -> (T, T, T),
 ) -> Phase<T> {
+    // The previous iterate with its trig (first `near`), and the rotations
+    // in a row since the last `sin_cos`.
+    let mut prev = *near;
+    let mut turns = 0u32;
+    let reach = rotate_max::<T>();
     let (at, sin, cos) = newton_bracketed(bracket, guess, f_tol, 100, |at| {
-        let (sin, cos) = M::sin_cos(at);
-        let (f, slope, curvature) = f_and_slope(&Phase { at, sin, cos });
-        (f, slope, curvature, sin, cos)
+        let x = if turns < ROTATIONS_MAX && (at - prev.at).abs() < reach {
+            turns += 1;
+            rotate(&prev, at)
+        } else {
+            turns = 0;
+            let (sin, cos) = M::sin_cos(at);
+            Phase { at, sin, cos }
+        };
+        prev = x;
+        let (f, slope, curvature) = f_and_slope(&x);
+        (f, slope, curvature, x.sin, x.cos)
     });
     Phase { at, sin, cos }
+}
+
+/// The largest step [`root`] turns the previous iterate's trig by instead of
+/// calling `sin_cos`, rad (strictly less): 2⁻³ for f32; 0 for f64 — the
+/// host's f64 solver keeps `M::sin_cos` at every iterate, bit for bit as
+/// before rotations (its μ feeds searches, such as the load line's maximum
+/// efficiency, whose results moved by 2e-9 with rotations of 2⁻⁹ and
+/// errors of a few f64 ulps).
+#[inline(always)]
+pub(crate) fn rotate_max<T: Float>() -> T {
+    if T::EPSILON < T::from_f64(1e-10) {
+        T::ZERO
+    } else {
+        T::from_f64(0.125)
+    }
+}
+
+/// The most rotations [`root`] makes in a row before it calls `sin_cos`
+/// again (bounds the error they carry, eq. P1).
+pub(crate) const ROTATIONS_MAX: u32 = 3;
+
+/// The error a [`rotate`] in f32 adds to `(sin, cos)`, absolute: the
+/// series' truncation (`d⁷/5040 + d⁶/720 ≤ 5.3e-9` at `|d| ≤ 2⁻³`), the
+/// step `d = at − p.at` rounded (`2⁻²⁴·|d| ≤ 7.5e-9`), the correction (below
+/// `|d| + d²/2 ≤ 0.133`, formed within 4 ulps of its size, `4·2⁻²⁴·0.133 =
+/// 3.2e-8`) and the sum rounded once (`2⁻²⁴ = 6.0e-8`): 1.05e-7, taken as
+/// 1.1e-7 (`rotation_adds_at_most_its_error` checks it against f64).
+#[allow(dead_code)] // the bound of eq. P1, asserted by the tests below
+pub(crate) const ROTATE_ERR_F32: f64 = 1.1e-7;
+
+/// The trig of `at` from that of the nearby phase `p` (`|at − p.at| ≤`
+/// [`rotate_max`]): `sin(p + d) = sin p + (cos p·sin d − sin p·(1 − cos d))`,
+/// `cos(p + d) = cos p − (sin p·sin d + cos p·(1 − cos d))`, with
+/// `sin d = d(1 − d²/6·(1 − d²/20))` and `1 − cos d = d²/2·(1 − d²/12)`
+/// (Taylor series; error [`ROTATE_ERR_F32`] in f32).
+#[inline(always)]
+fn rotate<T: Float>(p: &Phase<T>, at: T) -> Phase<T> {
+    let d = at - p.at;
+    let d2 = d * d;
+    let sd = d * (T::ONE - d2 * T::from_f64(1.0 / 6.0) * (T::ONE - d2 * T::from_f64(1.0 / 20.0)));
+    let vd = d2 * T::HALF * (T::ONE - d2 * T::from_f64(1.0 / 12.0));
+    Phase {
+        at,
+        sin: p.sin + (p.cos * sd - p.sin * vd),
+        cos: p.cos - (p.sin * sd + p.cos * vd),
+    }
 }
 
 /// Wraps `x` (|x| < 8π) into `[0, 2π)`.
@@ -508,4 +592,55 @@ pub(crate) fn wrap_tau<T: Float>(mut x: T) -> T {
         x -= T::TAU;
     }
     x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `rotate` in f32 against f64's own sine and cosine: from a seed rounded
+    /// to f32 (each component within 2⁻²⁵, the vector within √2·2⁻²⁵), every
+    /// turn within the reach lands within that vector's length plus
+    /// [`ROTATE_ERR_F32`] of the exact (eq. P1, one step), over a grid of
+    /// phases around the circle and steps of both signs up to the reach.
+    #[test]
+    fn rotation_adds_at_most_its_error() {
+        let reach = rotate_max::<f32>();
+        let seed_err = core::f64::consts::SQRT_2 * 2f64.powi(-25);
+        let mut worst = 0.0f64;
+        for i in 0..997 {
+            let p_at = (i as f32) * (core::f32::consts::TAU / 997.0);
+            let p = Phase {
+                at: p_at,
+                sin: f64::from(p_at).sin() as f32,
+                cos: f64::from(p_at).cos() as f32,
+            };
+            for j in -64..=64 {
+                let at = p_at + reach * (j as f32 / 64.0);
+                let r = rotate(&p, at);
+                let (s, c) = f64::from(at).sin_cos();
+                let e = (f64::from(r.sin) - s)
+                    .abs()
+                    .max((f64::from(r.cos) - c).abs());
+                worst = worst.max(e);
+                assert!(
+                    e <= seed_err + ROTATE_ERR_F32,
+                    "rotate({p_at}, {at}): error {e:e}"
+                );
+                assert_eq!(r.at, at);
+            }
+        }
+        // The bound is not loose by orders: the rounding is there.
+        assert!(worst > 2f64.powi(-25), "worst {worst:e}");
+    }
+
+    /// The reach keeps the series' truncation, `d⁶/720 + d⁷/5040`, below one
+    /// f32 rounding (5.3e-9 < 1.2e-7 at 2⁻³); f64 does not rotate.
+    #[test]
+    fn the_rotation_reach_keeps_the_truncation_below_rounding() {
+        let trunc = |d: f64| d.powi(6) / 720.0 + d.powi(7) / 5040.0;
+        assert_eq!(rotate_max::<f32>(), 0.125);
+        assert!(trunc(f64::from(rotate_max::<f32>())) < f64::from(f32::EPSILON));
+        assert_eq!(rotate_max::<f64>(), 0.0);
+    }
 }

@@ -684,6 +684,7 @@ impl<T: Float> ContactWindow<T> {
             let at_right = f(&right).0;
             if at_right > T::ZERO {
                 let touch = root::<T, M>(
+                    &left,
                     (left.at, right.at, at_left, at_right),
                     taylor_guess::<T, M>(left.at, at_left, slope, curvature),
                     self.root_tolerance(k),
@@ -728,6 +729,7 @@ impl<T: Float> ContactWindow<T> {
             let at_right = f(&right).0;
             if at_right < T::ZERO {
                 let touch = root::<T, M>(
+                    &left,
                     (left.at, right.at, at_left, at_right),
                     taylor_guess::<T, M>(left.at, -at_left, -slope, -curvature),
                     self.root_tolerance(k),
