@@ -634,6 +634,74 @@ mod tests {
         assert!(worst > 2f64.powi(-25), "worst {worst:e}");
     }
 
+    std::thread_local! {
+        /// `sin_cos` calls of [`Counting`] on this thread.
+        static CALLS: core::cell::Cell<u32> = const { core::cell::Cell::new(0) };
+    }
+
+    /// FastF32, counting its `sin_cos` calls.
+    struct Counting;
+
+    impl Math<f32> for Counting {
+        const NAME: &'static str = "counting";
+        const MAX_REL_ERROR: f64 = crate::model::float::FastF32::MAX_REL_ERROR;
+        fn sqrt(x: f32) -> f32 {
+            crate::model::float::FastF32::sqrt(x)
+        }
+        fn sin_cos(x: f32) -> (f32, f32) {
+            CALLS.with(|c| c.set(c.get() + 1));
+            crate::model::float::FastF32::sin_cos(x)
+        }
+        fn asin(x: f32) -> f32 {
+            crate::model::float::FastF32::asin(x)
+        }
+        fn atan2(y: f32, x: f32) -> f32 {
+            crate::model::float::FastF32::atan2(y, x)
+        }
+        fn hypot(x: f32, y: f32) -> f32 {
+            crate::model::float::FastF32::hypot(x, y)
+        }
+    }
+
+    /// A root found by bisection alone (the function reports no slope), in
+    /// a bracket of 0.2 rad: every step is below the reach, so `root` turns
+    /// the trig three times and calls `sin_cos` on every fourth evaluation
+    /// (the first turns the bracket's end `near`): ⌊E/4⌋ calls for E
+    /// evaluations. The root's trig is within eq. P1 of the exact (the seed
+    /// exact to f32 rounding, ε₀ = 2⁻²⁵; FastF32's 6.8e-8 after a call).
+    #[test]
+    fn root_calls_sin_cos_after_three_turns_in_a_row() {
+        let target = 1.234_567f32;
+        let (lo, hi) = (1.15f32, 1.35f32);
+        let near = Phase {
+            at: lo,
+            sin: f64::from(lo).sin() as f32,
+            cos: f64::from(lo).cos() as f32,
+        };
+        let evals = core::cell::Cell::new(0u32);
+        CALLS.with(|c| c.set(0));
+        let r = root::<f32, Counting>(&near, (lo, hi, lo - target, hi - target), 1.2, 0.0, |x| {
+            evals.set(evals.get() + 1);
+            (x.at - target, 0.0, 0.0)
+        });
+        let (e, calls) = (evals.get(), CALLS.with(|c| c.get()));
+        assert!(e >= 12, "bisection to f32 resolution takes many steps: {e}");
+        assert_eq!(calls, e / 4, "{e} evaluations");
+        assert!((r.at - target).abs() <= 4.0 * f32::EPSILON * 2.0);
+        let bound = core::f64::consts::SQRT_2 * (6.8e-8 + 3.0 * ROTATE_ERR_F32);
+        let (s, c) = f64::from(r.at).sin_cos();
+        assert!(
+            (f64::from(r.sin) - s).abs() <= bound,
+            "sin {} vs {s}",
+            r.sin
+        );
+        assert!(
+            (f64::from(r.cos) - c).abs() <= bound,
+            "cos {} vs {c}",
+            r.cos
+        );
+    }
+
     /// The reach keeps the series' truncation, `d⁶/720 + d⁷/5040`, below one
     /// f32 rounding (5.3e-9 < 1.2e-7 at 2⁻³); f64 does not rotate.
     #[test]
