@@ -413,7 +413,7 @@ pub(crate) fn mean_stretch<T: Float, M: Math<T>>(
     let window_end = if record.is_some() {
         geometry.forward.alpha - M::atan2(d.bs, d.a + d.bc)
     } else {
-        T::from_f64(1.0 / 512.0)
+        T::ZERO
     };
     let mut emit = |kind: ArcKind, x0: &Phase<T>, x1: &Phase<T>| {
         if let Some(r) = record.as_mut() {
