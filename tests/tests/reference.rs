@@ -275,3 +275,35 @@ fn the_estimator_in_blocks_meets_the_closed_form() {
     );
     assert!(!e.saturated);
 }
+
+/// A reference holds the samples asked for, at most a block
+/// (`Reference::new`'s documented cut): its length, its emptiness and its
+/// words agree for 0, 1, a part, a whole block and more than one; forming
+/// it again in place (`set`) takes the new length, and a cut reference's
+/// words are a whole block's at the same start.
+#[test]
+fn a_reference_holds_the_samples_asked_for_at_most_a_block() {
+    let t = SineTable::<1024>::libm();
+    let (acc0, tw) = (123_456_789u32, 85_899_346u32);
+    let whole = Reference::new(&t, acc0, tw, BLOCK);
+    for (asked, held) in [
+        (0, 0),
+        (1, 1),
+        (37, 37),
+        (BLOCK, BLOCK),
+        (BLOCK + 1, BLOCK),
+        (1000, BLOCK),
+    ] {
+        let r = Reference::new(&t, acc0, tw, asked);
+        assert_eq!(r.len(), held, "asked {asked}");
+        assert_eq!(r.words().len(), held, "asked {asked}");
+        assert_eq!(r.is_empty(), held == 0, "asked {asked}");
+        assert_eq!(r.words(), &whole.words()[..held], "asked {asked}");
+    }
+    let mut r = Reference::new(&t, acc0, tw, 5);
+    r.set(&t, acc0, tw, 0);
+    assert!(r.is_empty() && r.len() == 0);
+    r.set(&t, acc0, tw, 9);
+    assert!(!r.is_empty() && r.len() == 9);
+    assert!(Reference::EMPTY.is_empty() && Reference::EMPTY.len() == 0);
+}
