@@ -426,6 +426,13 @@ fn bad_inputs_are_refused() {
         solve_target::<f64, Libm>(&p, 0.1, 0.3, &mut scan[..2]),
         Err(InverseError::BadScan)
     );
+    // MIN_SCAN_POINTS (3) is the least accepted, as documented: a scan of
+    // exactly that many runs (whatever it finds), one fewer is refused.
+    assert_eq!(model_core::model::inverse::MIN_SCAN_POINTS, 3);
+    assert!(!matches!(
+        solve_target::<f64, Libm>(&p, 0.1, 0.3, &mut scan[..3]),
+        Err(InverseError::BadScan)
+    ));
 }
 
 /// The f32 build (the firmware's feedforward): targets attained in f64 at a

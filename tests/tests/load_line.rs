@@ -770,3 +770,61 @@ fn profile_powers_balance_and_brute_force() {
     }
     println!("profile powers: worst balance gap {worst:e}");
 }
+
+/// `best_of` over a law that pushes both ways (a synthetic contact, as
+/// `best_of` takes any law's powers): `μ = −s_f(1 − V/v_f)` on
+/// `(0, v_f)` and `μ = s_b(1 + V/v_b)` on `(−v_b, 0)`, so
+/// `P_out = −μV` peaks in closed form at `V = v_f/2`, `s_f·v_f/4` forward
+/// and at `V = −v_b/2`, `s_b·v_b/4` backward; friction 1 makes
+/// `η = P/(P + 1)`, with the same maximiser. The better side's peak is
+/// returned (velocity within 1e-6 of the closed form: the maximiser's
+/// bracket of a smooth peak is ~√ε wide; power within 1e-12), and with
+/// both sides equal (the same law mirrored: bit-identical searches) the
+/// forward one, as documented.
+#[test]
+fn the_best_of_both_lines_is_the_better_sides_peak() {
+    use model_core::model::load_line::{best_of, LoadLine};
+    let law = |(sf, vf, sb, vb): (f64, f64, f64, f64)| {
+        move |v: f64| -> Result<Powers<f64>, ()> {
+            let mu = if v > 0.0 {
+                -sf * (1.0 - v / vf)
+            } else {
+                sb * (1.0 + v / vb)
+            };
+            let output = -mu * v;
+            Ok(Powers {
+                mu_over_mu0: mu,
+                input: output + 1.0,
+                output,
+                friction: 1.0,
+            })
+        }
+    };
+    // (s_f, v_f, s_b, v_b) and the expected peak's velocity and power.
+    for (c, want_v, want_p) in [
+        ((1.0, 1.0, 2.0, 1.0), -0.5, 0.5),
+        ((2.0, 1.5, 1.0, 2.0), 0.75, 0.75),
+        ((1.0, 0.8, 3.0, 0.2), 0.4, 0.2),
+        ((1.0, 1.0, 1.0, 1.0), 0.5, 0.25),
+    ] {
+        let line = LoadLine {
+            stall_forward: c.0,
+            stall_backward: c.2,
+            no_load_forward: c.1,
+            no_load_backward: c.3,
+        };
+        for obj in [Objective::Power, Objective::Efficiency] {
+            let got = best_of(&line, obj, law(c)).unwrap().unwrap();
+            assert!(
+                (got.v - want_v).abs() <= 1e-6,
+                "{c:?} {obj:?}: V = {} (want {want_v})",
+                got.v
+            );
+            assert!(
+                (got.powers.output - want_p).abs() <= 1e-12,
+                "{c:?} {obj:?}: P = {} (want {want_p})",
+                got.powers.output
+            );
+        }
+    }
+}

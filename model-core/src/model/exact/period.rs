@@ -713,4 +713,36 @@ mod tests {
         assert!(trunc(f64::from(rotate_max::<f32>())) < f64::from(f32::EPSILON));
         assert_eq!(rotate_max::<f64>(), 0.0);
     }
+
+    /// `checked_mean`'s documented check: `⟨s⟩ = total/2π`, clamped to
+    /// `[−1, 1]` within rounding (`1e3·ε` beyond 1 is still rounding), and
+    /// `Inconsistent` beyond that or when not finite — for both widths,
+    /// totals formed from the mean in f64 so that the quotient lands where
+    /// asked (2π·x/2π is x within an ulp or two, far inside the margins).
+    #[test]
+    fn the_mean_is_clamped_within_rounding_and_refused_beyond() {
+        fn check<T: Float>() {
+            let eps = T::EPSILON.to_f64();
+            let total = |mu: f64| T::from_f64(mu * core::f64::consts::TAU);
+            for mu in [0.0, 0.25, -0.7, 1.0 - 4.0 * eps] {
+                let got = checked_mean(total(mu)).unwrap().to_f64();
+                assert!((got - mu).abs() <= 4.0 * eps, "{mu}: {got}");
+            }
+            for sign in [1.0, -1.0] {
+                // Beyond 1 by rounding: clamped to ±1 exactly.
+                let got = checked_mean(total(sign * (1.0 + 500.0 * eps))).unwrap();
+                assert_eq!(got.to_f64(), sign);
+                // Beyond 1 by more than the margin: refused.
+                assert_eq!(
+                    checked_mean(total(sign * (1.0 + 2000.0 * eps))),
+                    Err(ExactError::Inconsistent)
+                );
+            }
+            for bad in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN].map(T::from_f64) {
+                assert_eq!(checked_mean(bad), Err(ExactError::Inconsistent));
+            }
+        }
+        check::<f64>();
+        check::<f32>();
+    }
 }
