@@ -302,8 +302,10 @@ fn a_reference_holds_the_samples_asked_for_at_most_a_block() {
     }
     let mut r = Reference::new(&t, acc0, tw, 5);
     r.set(&t, acc0, tw, 0);
-    assert!(r.is_empty() && r.len() == 0);
+    assert!(r.is_empty());
+    assert_eq!(r.len(), 0);
     r.set(&t, acc0, tw, 9);
     assert!(!r.is_empty() && r.len() == 9);
-    assert!(Reference::EMPTY.is_empty() && Reference::EMPTY.len() == 0);
+    assert!(Reference::EMPTY.is_empty());
+    assert_eq!(Reference::EMPTY.len(), 0);
 }
