@@ -522,6 +522,19 @@ fn refusals() {
         mu(Profile::Sphere, &huge, 0.1, 1e-2),
         Err(MdrError::IllConditioned)
     );
+    // The flat punch's powers refuse the same drives by name, not as
+    // `Inconsistent`: the profile's check (precision·(1 + a + b) above 1 %)
+    // comes first, and covers the exact solver's own refusal (1 + b, a < 1)
+    // and the lift-off solver's (the same expression, a ≥ 1).
+    for a in [0.5, 1.5] {
+        let huge = Drive::new::<Libm>(a, 1e8, 0.3);
+        assert_eq!(
+            model_core::mdr::powers::profile_powers::<f64, Libm>(&huge, &Profile::Flat, 0.1, 1e-2)
+                .map(|p| p.bound),
+            Err(MdrError::IllConditioned),
+            "a = {a}"
+        );
+    }
     assert!(matches!(
         mu(Profile::Sphere, &d, 0.1, 1e-12),
         Err(MdrError::ToleranceTooTight { .. })
@@ -888,4 +901,36 @@ fn tune_on_a_profile_meets_the_target_by_the_brute_force() {
             }
         }
     }
+}
+
+/// `quadrature::integrate` stops at an interval the float type cannot
+/// split (its documented third stop), not only at `MAX_INTERVALS`: over
+/// `[1, 1 + 4u]` (u = 2⁻⁵², four representable steps) with a target no
+/// error meets, at most B = 3 bisections can happen (down to four one-ulp
+/// intervals, 2B + 1 = 7 intervals ever). The evaluations are 21 (the
+/// first `K₂₁`) + 42·B (two `K₂₁` per bisection) + 22·R (R ≤ 2B + 1 raises
+/// to `P₄₃`), a sum that fixes B (B mod 11, from 21B + 11R): it must
+/// decompose with B ≤ 3 (a fourth bisection splits a one-ulp interval).
+/// Not converged; the value is `∫x dx = 4u(1 + 2u)` to rounding (each
+/// node's x within 4u of 1, the rules exact for a line).
+#[test]
+fn quadrature_stops_at_an_interval_the_float_cannot_split() {
+    use model_core::mdr::quadrature::integrate;
+    let u = f64::EPSILON;
+    let (lo, hi) = (1.0, 1.0 + 4.0 * u);
+    let f = |x: f64| -> Result<[f64; 1], ()> { Ok([x]) };
+    let out = integrate(f, &[lo, hi], -1.0, |e: [f64; 1], _: [f64; 1]| e[0].abs()).unwrap();
+    assert!(!out.converged);
+    let e = out.evaluations;
+    let within = (0..=3u32).any(|b| (0..=2 * b + 1).any(|r| 21 + 42 * b + 22 * r == e));
+    assert!(
+        within,
+        "{e} evaluations are not 21 + 42·B + 22·R with B ≤ 3, R ≤ 2B + 1: refined past a one-ulp interval"
+    );
+    let exact = 4.0 * u * (1.0 + 2.0 * u);
+    assert!(
+        (out.value[0] - exact).abs() <= 1e-12 * exact,
+        "{} vs {exact}",
+        out.value[0]
+    );
 }

@@ -176,7 +176,10 @@ pub fn mean_normal_force<T: Float, M: Math<T>>(n: T, a: T, tol: T) -> Result<(T,
     let out = quadrature::integrate(f, &[T::ZERO, T::PI], tol, weight)?;
     let d = out.value[0] * scale;
     let rel = weight(out.error, out.value);
-    if !out.converged || rel.is_nan() || rel > tol || d.is_nan() || d <= T::ZERO {
+    // D > 0 holds exactly (the integrand is (1 + a)^p ≥ 1 at θ = π): a
+    // value that is not, or not a number, is the quadrature's failure.
+    let not_positive = d.is_nan() || d <= T::ZERO;
+    if !out.converged || rel.is_nan() || rel > tol || not_positive {
         return Err(MdrError::NotConverged {
             reached: rel.to_f64(),
         });
