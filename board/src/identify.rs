@@ -1276,6 +1276,23 @@ mod tests {
         );
     }
 
+    /// The mirror: the record starts inside the lower half-power band (first
+    /// point 19 980 Hz, u = −0.46: |H|² = 0.83 of the peak), so only the
+    /// upper crossing is in it and eq. 6 takes `2·(upper − f_p)`; the same
+    /// allowances as above.
+    #[test]
+    fn the_start_takes_twice_the_upper_width_when_the_lower_crossing_is_missing() {
+        let (fr, q) = (20_003.0, 200.0);
+        let (f0, q0) = start_of(&exact_record(fr, q, 19_980.0, 10.0, 103));
+        let (fp, _, hi) = peak_and_half_power(fr, q);
+        let want_q = fp / (2.0 * (hi - fp));
+        assert!((f0 - fp).abs() <= 0.1, "start f_r {f0}, peak {fp}");
+        assert!(
+            (q0 / want_q - 1.0).abs() <= 0.01,
+            "start Q {q0}, one-sided half-power {want_q}"
+        );
+    }
+
     /// A record inside the half-power band (19 985–20 025 Hz every 5 Hz
     /// around f_r = 20 003 Hz, Q = 200: |H|² ≥ 0.56 of the peak everywhere),
     /// so eq. 6 has no crossing and takes the width `2/slope` from the phase

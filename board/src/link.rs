@@ -188,6 +188,13 @@ pub fn has_work(rx_len: usize, tx_free: usize) -> bool {
     rx_len > 0 && tx_free >= MAX_FRAME
 }
 
+/// Whether the transmit ring's `tx_free` bytes hold the [`POLL_FRAMES`]
+/// frames of at most [`MAX_FRAME`] bytes the server's poll may send at
+/// once (its telemetry is sent whole or not at all).
+pub fn poll_fits(tx_free: usize) -> bool {
+    tx_free >= POLL_FRAMES * MAX_FRAME
+}
+
 /// One pass of the main loop: feeds up to [`SERVE_BUDGET`] received bytes to
 /// the server while the transmit ring has room for an answer (each byte
 /// completes at most one frame, answered with at most [`MAX_FRAME`] bytes),
@@ -208,7 +215,7 @@ pub fn serve<const N: usize, A: DeviceAccess<N>, L: LinkIo>(
         let Some(b) = io.pop_rx() else { break };
         server.receive(dev, &[b], now_us, |f| io.send(f));
     }
-    if io.tx_free() >= POLL_FRAMES * MAX_FRAME {
+    if poll_fits(io.tx_free()) {
         server.poll(dev, |f| io.send(f));
     }
 }

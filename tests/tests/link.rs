@@ -8,8 +8,8 @@
 use board::dds::SineTable;
 use board::device::{Contact, Device};
 use board::link::{
-    has_work, serve, sleep_unless, Core, LinkIo, Overflow, RxQueue, TxFull, TxRing, PIPELINE_DEPTH,
-    RX_CAPACITY, TX_CAPACITY,
+    has_work, poll_fits, serve, sleep_unless, Core, LinkIo, Overflow, RxQueue, TxFull, TxRing,
+    PIPELINE_DEPTH, POLL_FRAMES, RX_CAPACITY, TX_CAPACITY,
 };
 use board::protocol::{
     decode, Body, Deframed, Deframer, Frame, Info, Response, Telemetry, MAX_FRAME, PROTOCOL_VERSION,
@@ -162,6 +162,15 @@ impl LinkIo for Sim {
     fn send(&mut self, frame: &[u8]) {
         self.tx.push_frame(frame).unwrap();
     }
+}
+
+/// The poll runs only when its five frames of at most 256 bytes fit
+/// (docs/protocol.md's frame limit): 1 280 bytes free, not one fewer.
+#[test]
+fn the_poll_waits_for_room_for_all_its_frames() {
+    assert_eq!((POLL_FRAMES, MAX_FRAME), (5, 256));
+    assert!(poll_fits(1_280) && poll_fits(4_096));
+    assert!(!poll_fits(1_279) && !poll_fits(261) && !poll_fits(0));
 }
 
 #[test]

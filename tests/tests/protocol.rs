@@ -1245,6 +1245,52 @@ fn set_controls_target_limit_is_inclusive() {
     }
 }
 
+/// docs/protocol.md, SetControl check 3: `v0_m_s` finite, non-zero and
+/// `|v0| ≤ MAX_VELOCITY_M_S` (1 000 m/s), refused
+/// `OutOfRange{Velocity, −1000, 1000}`; the limit is inclusive (±1 000 and
+/// a tiny velocity pass check 3 and meet check 7, NotRunning, as the drive
+/// is stopped); 0, one ulp beyond the limit, ±∞ and NaN are refused.
+#[test]
+fn set_controls_velocity_limit_is_inclusive_and_excludes_zero() {
+    use board::device::{DeviceError, MAX_VELOCITY_M_S};
+    use board::protocol::{ControlSetting, DriveParam};
+    let t = SineTable::<256>::libm();
+    let dev = test_device(&t);
+    let setting = |v0_m_s| ControlSetting {
+        on: true,
+        target_mu: 0.1,
+        v0_m_s,
+        gain: 0.7,
+        periods: 4,
+        rate_m_per_s: 1e-3,
+    };
+    assert_eq!(MAX_VELOCITY_M_S, 1_000.0);
+    let refused = DeviceError::OutOfRange {
+        param: DriveParam::Velocity,
+        min: -1_000.0,
+        max: 1_000.0,
+    };
+    let up = |m: f32| f32::from_bits(m.to_bits() + 1);
+    for v0 in [1_000.0, -1_000.0, 1e-9, -4e-3] {
+        assert_eq!(
+            dev.check_control(&setting(v0), false),
+            Err(DeviceError::NotRunning),
+            "{v0} passes check 3"
+        );
+    }
+    for v0 in [
+        0.0,
+        -0.0,
+        up(1_000.0),
+        -up(1_000.0),
+        f32::NAN,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+    ] {
+        assert_eq!(dev.check_control(&setting(v0), false), Err(refused), "{v0}");
+    }
+}
+
 #[test]
 fn check_8s_reported_maximum_is_itself_accepted() {
     // docs/protocol.md, SetDrive check 8: every limit is inclusive, tested in
