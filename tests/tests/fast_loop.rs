@@ -280,3 +280,35 @@ fn a_two_half_buffer_estimate_never_covers_the_transition() {
     assert!(checked >= 6, "only {checked} updates after a move");
     assert_eq!(b.dev.status().faults, 0);
 }
+
+/// A new setting is a transition for `FILL_RING` = 4 fills (D4–D7: the
+/// records move from fill to fill), in which the pickups' window closes at
+/// every block, one period each; then windows take `WINDOW_MIN_SAMPLES` =
+/// 256 samples again, four blocks of 64. The step (2 → 2.01 µm at h = 4) is
+/// too small to be cut: its dead-beat voltage is `1 + 0.005/(T/τ) ≈ 1.16`
+/// times the steady one (T/τ = 0.128 ms / 4.09 ms), below h. Held before:
+/// one window every four blocks; after the change, windows at each of the
+/// next four blocks, then every fourth.
+#[test]
+fn a_new_setting_closes_a_window_at_each_block_of_its_transition() {
+    let table = SineTable::<1024>::libm();
+    let mut b = held_at(&table, 4.0, 2e-6);
+    let windows = |b: &Bench<'_>| b.dev.measured_drive().map_or(0, |m| m.windows);
+    let mut per_block = |b: &mut Bench<'_>, n: usize| -> Vec<u32> {
+        (0..n)
+            .map(|_| {
+                let w0 = windows(b);
+                b.step();
+                windows(b) - w0
+            })
+            .collect()
+    };
+    let held = per_block(&mut b, 8);
+    assert_eq!(held.iter().sum::<u32>(), 2, "held: {held:?}");
+    let mut s = setting(2.01e-6);
+    s.freq_hz = 20_300.0;
+    b.dev.set_drive(s).unwrap();
+    let after = per_block(&mut b, 8);
+    assert_eq!(after, [1, 1, 1, 1, 0, 0, 0, 1], "after the change");
+    assert_eq!(b.dev.status().faults, 0);
+}
