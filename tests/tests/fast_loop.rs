@@ -294,7 +294,7 @@ fn a_new_setting_closes_a_window_at_each_block_of_its_transition() {
     let table = SineTable::<1024>::libm();
     let mut b = held_at(&table, 4.0, 2e-6);
     let windows = |b: &Bench<'_>| b.dev.measured_drive().map_or(0, |m| m.windows);
-    let mut per_block = |b: &mut Bench<'_>, n: usize| -> Vec<u32> {
+    let per_block = |b: &mut Bench<'_>, n: usize| -> Vec<u32> {
         (0..n)
             .map(|_| {
                 let w0 = windows(b);
