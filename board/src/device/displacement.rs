@@ -339,6 +339,21 @@ pub fn arg(c: C) -> f32 {
     FastF32::atan2(c.im, c.re)
 }
 
+/// The phase between the modes' phasors, eq. M1 of [`super::motion`]:
+/// `φ = arg X_x − arg X_z + π`, wrapped to (−π, π] (rad; the normal
+/// drive is `−cos`, hence the π).
+pub fn phase_between(z: C, x: C) -> f32 {
+    let pi = core::f32::consts::PI;
+    let mut phi = arg(x) - arg(z) + pi;
+    while phi > pi {
+        phi -= 2.0 * pi;
+    }
+    while phi <= -pi {
+        phi += 2.0 * pi;
+    }
+    phi
+}
+
 /// `r·e^{jθ}`, fast f32 backend.
 pub fn polar(r: f32, theta: f32) -> C {
     let (s, c) = FastF32::sin_cos(theta);
@@ -966,16 +981,7 @@ impl<const N: usize> Device<'_, N> {
         if let (Some(m), Some(a)) = (s.measured.as_mut(), self.smoothed_motion()) {
             m.amp_z_m = norm(a[0]);
             m.amp_x_m = norm(a[1]);
-            // (M1) with ψ = arg X.
-            let pi = core::f32::consts::PI;
-            let mut phi = arg(a[1]) - arg(a[0]) + pi;
-            while phi > pi {
-                phi -= 2.0 * pi;
-            }
-            while phi <= -pi {
-                phi += 2.0 * pi;
-            }
-            m.phase_rad = phi;
+            m.phase_rad = phase_between(a[0], a[1]);
         }
     }
 }
@@ -985,6 +991,41 @@ mod tests {
     use super::*;
     use crate::dds::SineTable;
     use crate::device::{Contact, DeviceConfig, HALF_BUFFER};
+
+    /// Eq. M1 against f64: for phasors at angles ψ_z, ψ_x on a grid over
+    /// the circle (both sides of ±π, where the wrap acts), `phase_between`
+    /// is `ψ_x − ψ_z + π` reduced to (−π, π] in f64, within the fast
+    /// atan2's 2.9e-7 rad twice plus f32 rounding of angles ≤ 3π (4·2⁻²³·π):
+    /// allowed 1e-6, measured on the circle (a result at −π for +π, one
+    /// rounding apart, is the same phase).
+    #[test]
+    fn the_phase_between_the_modes_is_m1_wrapped() {
+        use core::f64::consts::PI;
+        let mut wrapped = 0;
+        for i in 0..64 {
+            for j in 0..64 {
+                let (pz, px) = (
+                    -PI + (i as f64 + 0.37) * PI / 32.0,
+                    -PI + (j as f64 + 0.61) * PI / 32.0,
+                );
+                let z = C::new(2.0 * pz.cos() as f32, 2.0 * pz.sin() as f32);
+                let x = C::new(0.5 * px.cos() as f32, 0.5 * px.sin() as f32);
+                let raw = px - pz + PI;
+                if raw > PI || raw <= -PI {
+                    wrapped += 1;
+                }
+                let got = f64::from(phase_between(z, x));
+                // In (−π, π] (to rounding), and the same phase as raw.
+                assert!(got > -PI - 1e-6 && got <= PI + 1e-6, "{got}");
+                let d = (got - raw).rem_euclid(2.0 * PI);
+                assert!(
+                    d.min(2.0 * PI - d) <= 1e-6,
+                    "ψ_z {pz}, ψ_x {px}: {got} vs {raw}"
+                );
+            }
+        }
+        assert!(wrapped > 1000, "{wrapped} cases wrapped");
+    }
 
     /// The observer's carry (D7, `observe`): a window of fill `b` read
     /// after fill `b + a − 1` (the ADC block arriving late, as it may on

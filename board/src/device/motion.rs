@@ -213,18 +213,10 @@ impl<const N: usize> Device<'_, N> {
     pub fn measured_drive(&self) -> Option<MeasuredDrive> {
         let w = self.motion.last?;
         let [xz, xx] = self.motion.phasors;
-        let pi = core::f32::consts::PI;
-        let mut phi = super::displacement::arg(xx) - super::displacement::arg(xz) + pi;
-        while phi > pi {
-            phi -= 2.0 * pi;
-        }
-        while phi <= -pi {
-            phi += 2.0 * pi;
-        }
         Some(MeasuredDrive {
             amp_z_m: w.amp_z_m,
             amp_x_m: super::displacement::norm(xx),
-            phase_rad: phi,
+            phase_rad: super::displacement::phase_between(xz, xx),
             amp_z_peak_m: w.amp_z_peak_m,
             windows: w.windows,
             response_z_m_per_v: Self::response(xz, w.voltages[0]),
