@@ -341,17 +341,18 @@ pub fn arg(c: C) -> f32 {
 
 /// The phase between the modes' phasors, eq. M1 of [`super::motion`]:
 /// `φ = arg X_x − arg X_z + π`, wrapped to (−π, π] (rad; the normal
-/// drive is `−cos`, hence the π).
+/// drive is `−cos`, hence the π). With both args in (−π, π] the
+/// difference `d` lies in (−2π, 2π), so `d + π` needs one turn back
+/// exactly when `d > 0`: `φ = d − π` there, `d + π` otherwise (π for two
+/// parallel phasors, zero ones included).
 pub fn phase_between(z: C, x: C) -> f32 {
     let pi = core::f32::consts::PI;
-    let mut phi = arg(x) - arg(z) + pi;
-    while phi > pi {
-        phi -= 2.0 * pi;
+    let d = arg(x) - arg(z);
+    if d > 0.0 {
+        d - pi
+    } else {
+        d + pi
     }
-    while phi <= -pi {
-        phi += 2.0 * pi;
-    }
-    phi
 }
 
 /// `r·e^{jθ}`, fast f32 backend.
@@ -1025,6 +1026,11 @@ mod tests {
             }
         }
         assert!(wrapped > 1000, "{wrapped} cases wrapped");
+        // Parallel phasors (zero ones too): the end of the range, +π.
+        let zero = C::new(0.0, 0.0);
+        assert_eq!(phase_between(zero, zero), core::f32::consts::PI);
+        let z = C::new(0.3, -0.4);
+        assert_eq!(phase_between(z, z * 2.0), core::f32::consts::PI);
     }
 
     /// The observer's carry (D7, `observe`): a window of fill `b` read
