@@ -339,7 +339,7 @@ pub fn arg(c: C) -> f32 {
     FastF32::atan2(c.im, c.re)
 }
 
-/// The phase between the modes' phasors, eq. M1 of [`super::motion`]:
+/// The phase between the modes' phasors, eq. M1 (`device::motion`):
 /// `φ = arg X_x − arg X_z + π`, wrapped to (−π, π] (rad; the normal
 /// drive is `−cos`, hence the π). With both args in (−π, π] the
 /// difference `d` lies in (−2π, 2π), so `d + π` needs one turn back
