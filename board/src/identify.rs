@@ -1255,42 +1255,31 @@ mod tests {
         );
     }
 
-    /// The same with the record ending inside the upper half-power band
-    /// (last point 20 040 Hz, u = 0.74: |H|² = 0.65 of the peak), so only
-    /// the lower crossing is in it and eq. 6 takes twice the one-sided
-    /// width `2·(f_p − lower)`. The closed form of that width is
-    /// `2·(f_p − lower)` from the closed forms above; the crossing within
-    /// h²/8 half-bands as before and f_p within 0.04 Hz: ≤ 0.6 % of the
-    /// width; allowed 1 %.
+    /// One crossing missing: eq. 6 takes twice the one-sided width. The
+    /// record ending inside the upper half-power band (last point 20 040
+    /// Hz, u = 0.74: |H|² = 0.65 of the peak) keeps only the lower
+    /// crossing, width `2·(f_p − lower)`; the record starting inside the
+    /// lower one (first point 19 980 Hz, u = −0.46: |H|² = 0.83) keeps only
+    /// the upper, `2·(upper − f_p)` — each from the closed forms above. The
+    /// crossing within h²/8 half-bands as before and f_p within 0.04 Hz:
+    /// ≤ 0.6 % of the width; allowed 1 %.
     #[test]
     fn the_start_takes_twice_the_one_sided_width_when_one_crossing_is_missing() {
         let (fr, q) = (20_003.0, 200.0);
-        let (f0, q0) = start_of(&exact_record(fr, q, 19_000.0, 10.0, 105));
-        let (fp, lo, _) = peak_and_half_power(fr, q);
-        let want_q = fp / (2.0 * (fp - lo));
-        println!("one-sided start: f_r {f0} (peak {fp}), Q {q0} (half-power {want_q})");
-        assert!((f0 - fp).abs() <= 0.1, "start f_r {f0}, peak {fp}");
-        assert!(
-            (q0 / want_q - 1.0).abs() <= 0.01,
-            "start Q {q0}, one-sided half-power {want_q}"
-        );
-    }
-
-    /// The mirror: the record starts inside the lower half-power band (first
-    /// point 19 980 Hz, u = −0.46: |H|² = 0.83 of the peak), so only the
-    /// upper crossing is in it and eq. 6 takes `2·(upper − f_p)`; the same
-    /// allowances as above.
-    #[test]
-    fn the_start_takes_twice_the_upper_width_when_the_lower_crossing_is_missing() {
-        let (fr, q) = (20_003.0, 200.0);
-        let (f0, q0) = start_of(&exact_record(fr, q, 19_980.0, 10.0, 103));
-        let (fp, _, hi) = peak_and_half_power(fr, q);
-        let want_q = fp / (2.0 * (hi - fp));
-        assert!((f0 - fp).abs() <= 0.1, "start f_r {f0}, peak {fp}");
-        assert!(
-            (q0 / want_q - 1.0).abs() <= 0.01,
-            "start Q {q0}, one-sided half-power {want_q}"
-        );
+        let (fp, lo, hi) = peak_and_half_power(fr, q);
+        for (first, n, width) in [
+            (19_000.0, 105, 2.0 * (fp - lo)),
+            (19_980.0, 103, 2.0 * (hi - fp)),
+        ] {
+            let (f0, q0) = start_of(&exact_record(fr, q, first, 10.0, n));
+            let want_q = fp / width;
+            println!("one-sided start from {first} Hz: f_r {f0} (peak {fp}), Q {q0} ({want_q})");
+            assert!((f0 - fp).abs() <= 0.1, "start f_r {f0}, peak {fp}");
+            assert!(
+                (q0 / want_q - 1.0).abs() <= 0.01,
+                "from {first} Hz: start Q {q0}, one-sided half-power {want_q}"
+            );
+        }
     }
 
     /// A record inside the half-power band (19 985–20 025 Hz every 5 Hz
