@@ -304,28 +304,23 @@ fn table_error<const N: usize>(t: &SineTable<N>) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// Eqs. R2–R3 (board::reference): the largest error of a reference word's
-/// cosine or sine at tuning word `tw` on table `t` — the table's seed, the
-/// rotation between seeds (`(RUN − 1)·(2ε_Δ + 2⁻²⁸)`, `ε_Δ = 6.8e-8 +
-/// |Δ|·3·2⁻²⁴ + 2⁻³¹`), the Q15 rounding and the clamp of +2¹⁵.
-fn eps_r<const N: usize>(t: &SineTable<N>, tw: u32) -> f64 {
-    let delta = (f64::from(tw as i32) * TAU / 4_294_967_296.0).abs();
-    let eps_d = 6.8e-8 + delta * 3.0 * 2f64.powi(-24) + 2f64.powi(-31);
-    let r3 = (board::reference::RUN as f64 - 1.0) * (2.0 * eps_d + 2f64.powi(-28));
-    table_error(t)
-        + (TAU / N as f64).powi(2) / 8.0
-        + 2f64.powi(-29)
-        + r3
-        + 2f64.powi(-16)
-        + 2f64.powi(-15)
+/// Eq. R2 (board::reference): the largest error of a reference word's
+/// cosine or sine on table `t` — the products (R3) of the run's first phase
+/// and its step, each read within `ε_s = ε_t + (2π/N)²/8 + 2⁻²⁹`, so
+/// `2√2·ε_s + 2ε_s²`; the high words' floors, 2⁻²⁷; the Q15 rounding, 2⁻¹⁶;
+/// and at least the clamp of +2¹⁵, 2⁻¹⁵. The same for every step.
+fn eps_r<const N: usize>(t: &SineTable<N>) -> f64 {
+    let eps_s = table_error(t) + (TAU / N as f64).powi(2) / 8.0 + 2f64.powi(-29);
+    (2.0 * SQRT_2 * eps_s + 2.0 * eps_s * eps_s + 2f64.powi(-27) + 2f64.powi(-16))
+        .max(2f64.powi(-15))
 }
 
 /// Eq. Q7 (board::dds, the fills formed from the reference): `1/2 +
 /// √2·|amp|·(ε_r + ε_φ + 3·2⁻²⁴) + √2/16 + 2⁻¹⁹`, `ε_φ` the table's
 /// interpolated read (Q1).
-fn q7<const N: usize>(t: &SineTable<N>, tw: u32, amp: f64) -> f64 {
+fn q7<const N: usize>(t: &SineTable<N>, amp: f64) -> f64 {
     let eps_phi = table_error(t) + (TAU / N as f64).powi(2) / 8.0 + 2f64.powi(-29);
-    0.5 + SQRT_2 * amp.abs() * (eps_r(t, tw) + eps_phi + 3.0 * 2f64.powi(-24))
+    0.5 + SQRT_2 * amp.abs() * (eps_r(t) + eps_phi + 3.0 * 2f64.powi(-24))
         + SQRT_2 / 16.0
         + 2f64.powi(-19)
 }
@@ -386,7 +381,7 @@ fn check_fill_against_f64<const N: usize>(
                 let theta = phase_rad(p.wrapping_add(ph[ch]));
                 let exact = dc + amp * theta.sin();
                 let bound = match path {
-                    FillPath::Reference => q7(t, tw, amp),
+                    FillPath::Reference => q7(t, amp),
                     FillPath::Table => {
                         0.5 + amp.abs() * (eps_t + read_err + 2f64.powi(-29)) + 2f64.powi(-15)
                     }
@@ -422,11 +417,11 @@ fn integer_fill_is_within_the_derived_bound_of_the_exact_sine() {
         0.5 + 2047.0 * (eps_t + (TAU / 1024.0).powi(2) / 8.0 + 2f64.powi(-29)) + 2f64.powi(-15);
     assert!(worst <= at_full && at_full < 0.5102, "{worst} {at_full}");
     check_fill_against_f64(&t, Interp::Nearest, 50);
-    // The board's: eq. Q7 at |amp| ≤ 2047, any step (ε_r ≤ 7.0e-5,
-    // `tests/tests/reference.rs`): ≤ 0.81 LSB.
+    // The board's: eq. Q7 at |amp| ≤ 2047, any step (ε_r ≤ 3.06e-5,
+    // `tests/tests/reference.rs`): ≤ 0.70 LSB.
     let (worst, _) = check_fill_against_f64(&t, Interp::Reference, 300);
-    let at_full = q7(&t, 1 << 31, 2047.0);
-    assert!(worst <= at_full && at_full < 0.81, "{worst} {at_full}");
+    let at_full = q7(&t, 2047.0);
+    assert!(worst <= at_full && at_full < 0.70, "{worst} {at_full}");
     // A coarse table, where its reads dominate: 2047·(2π/64)²/8 = 2.47 LSB
     // (Q5); Q7 ≈ 7.7 LSB (ε_r and ε_φ near 1.2e-3 each). Each bound is
     // reached within a factor of three.
@@ -537,7 +532,7 @@ fn ramp_case(targets: [(f32, f32); 2], ph_target: [u32; 2], fills: usize) {
                             + 2f64.powi(-15)
                             + n * (2f64.powi(-18) + 2f64.powi(-16))
                     }
-                    FillPath::Reference => q7(&t, tw, amp),
+                    FillPath::Reference => q7(&t, amp),
                 };
                 let err = (f64::from(code) - exact).abs();
                 assert!(
@@ -630,7 +625,7 @@ fn a_one_step_change_fills_the_old_levels_once_then_the_new() {
                 let (amp, dc, ph) = (f64::from(lv[ch].0), f64::from(lv[ch].1), lv[ch].2);
                 let exact = dc + amp * phase_rad(p.wrapping_add(ph)).sin();
                 let bound = match path {
-                    FillPath::Reference => q7(&t, tw, amp),
+                    FillPath::Reference => q7(&t, amp),
                     FillPath::Table => {
                         0.5 + amp.abs() * (eps_t + read_err + 2f64.powi(-29)) + 2f64.powi(-15)
                     }
@@ -648,7 +643,7 @@ fn a_one_step_change_fills_the_old_levels_once_then_the_new() {
 /// `Dds::fill_with_reference` writes the reference words (eq. R1) of the
 /// fill's own phases `acc0 + i·tw`: sample `i`'s to `head[i]`, then the
 /// rest to `tail` (the device lays them out as the ADC sees them, `L`
-/// samples late). Each word's cosine and sine within ε_r (eqs. R2–R3) of
+/// samples late). Each word's cosine and sine within ε_r (eq. R2) of
 /// the exact ones formed in f64 from the phase words alone, over settled
 /// fills, fills changed within one sample and ramps, every split of the 64
 /// samples from 0 to 64, and a retune between fills (the next fill starts
@@ -709,7 +704,7 @@ fn a_fill_writes_the_reference_words_of_its_own_phases() {
                     };
                     let (amp, dc) = (f64::from(amp), f64::from(dc));
                     let exact = dc + amp * phase_rad(p.wrapping_add(ph)).sin();
-                    let bound = q7(&t, tw, amp);
+                    let bound = q7(&t, amp);
                     assert!(
                         (f64::from(code) - exact).abs() <= bound,
                         "fill {fill} split {split} ch {ch} sample {i}: {code} vs {exact}"
@@ -717,7 +712,7 @@ fn a_fill_writes_the_reference_words_of_its_own_phases() {
                 }
             }
         }
-        let bound = eps_r(&t, tw);
+        let bound = eps_r(&t);
         for i in 0..64 {
             let w = if i < split { head[i] } else { tail[i - split] };
             let th = phase_rad(acc0.wrapping_add(tw.wrapping_mul(i as u32)));

@@ -275,8 +275,9 @@ fn integer_lock_in_is_within_its_derived_bound_of_the_f64_fit() {
 
 /// The board's pickup path (issue 35): the pickups summed against the
 /// forces' reference (`board::reference`, eq. R1: Q15 clamped at
-/// `2¹⁵ − 1`, rotated between table seeds, error `ε_r ≤ ε_t + (2π/N)²/8 +
-/// 2⁻²⁹ + R3 + 2⁻¹⁶ + 2⁻¹⁵`, R2–R3),
+/// `2¹⁵ − 1`, each run's first phase times its steps (R3), error
+/// `ε_r ≤ max(2√2·ε_s + 2ε_s² + 2⁻²⁷ + 2⁻¹⁶, 2⁻¹⁵)` with
+/// `ε_s = ε_t + (2π/N)²/8 + 2⁻²⁹`, R2),
 /// in blocks of 64 (`push_sums`), the fit turned by the pickups' delay δ
 /// with the table's cos δ and sin δ (each within `ε_δ = ε_t + (2π/N)²/8 +
 /// 2⁻²⁹` + f32 rounding 2⁻²⁴), against the f64 fit of the same integer
@@ -297,11 +298,11 @@ fn the_pickups_on_the_forces_reference_are_within_their_bound() {
     let mut noise = 0x2545_F491u32;
     for f in [8e3f64, 20e3, 20.1e3, 40e3, 61e3] {
         let tw = (f / 500e3 * 4_294_967_296.0).round() as u32;
-        // R2 with R3's rotation between the seeds (tests/reference.rs).
-        let delta = f64::from(tw) * TAU / 4_294_967_296.0;
-        let eps_step = 6.8e-8 + delta * 3.0 * 2f64.powi(-24) + 2f64.powi(-31);
-        let r3 = 15.0 * (2.0 * eps_step + 2f64.powi(-28));
-        let eps_r = eps_t + interp + r3 + 2f64.powi(-16) + 2f64.powi(-15);
+        // R2: the run's first phase times its step (tests/reference.rs).
+        let eps_s = eps_t + interp;
+        let eps_r =
+            (2.0 * 2f64.sqrt() * eps_s + 2.0 * eps_s * eps_s + 2f64.powi(-27) + 2f64.powi(-16))
+                .max(2f64.powi(-15));
         // δ = 0.714 µs of the drive in words (the board's ADC scan).
         let delay = (f64::from(tw) * 0.714e-6 * 500e3).round() as u32;
         let q30 = 1.0 / 1_073_741_824.0;

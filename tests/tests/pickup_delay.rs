@@ -272,9 +272,8 @@ fn the_board_converts_its_pickups_15_adc_clocks_after_the_forces() {
 ///   the phasor, G the window's error gain (`lockin_error_gain`, from the
 ///   fit's weights), so ≤ ½·gain·G/A on the phase;
 /// * the reference words (eq. R1 of `board::reference`, formed by the DAC
-///   fill and kept for the ADC): each cosine and sine within ε_r ≤ 6.0e-5
-///   up to 100 kHz (R2), which moves the phasor by ≤ √2·G·ε_r·A: ≤ 1.7e-4
-///   rad with G ≈ 2;
+///   fill and kept for the ADC): each cosine and sine within ε_r ≤ 3.06e-5
+///   (R2), which moves the phasor by ≤ √2·G·ε_r·A: ≤ 8.7e-5 rad with G ≈ 2;
 /// * the f32 arithmetic (the lock-in's sums of 64 terms, ≤ 64·2⁻²⁴·2 ≈
 ///   8e-6 relative; the phase word in f32, 2⁻²⁴·2π = 3.7e-7 rad; fast-f32
 ///   sin/cos ≤ 1e-7) and the delay rounded to a whole accumulator word
@@ -291,7 +290,7 @@ fn the_device_measures_the_response_of_delayed_pickups() {
     let g = lockin_error_gain(HALF_BUFFER, TAU * tw / WORDS);
     let cal = [cfg.pickup_z.gain, cfg.pickup_x.gain];
     let bound =
-        |ch: usize| 0.5 * f64::from(cal[ch]) * g / SIGNAL[ch].0 + 2f64.sqrt() * g * 6.0e-5 + 1e-4;
+        |ch: usize| 0.5 * f64::from(cal[ch]) * g / SIGNAL[ch].0 + 2f64.sqrt() * g * 3.06e-5 + 1e-4;
     // ω·δ at the DDS's 40 kHz: 10.29°.
     assert!(
         (wd.to_degrees() - 10.29).abs() < 0.01,
@@ -621,7 +620,7 @@ fn the_adc_takes_the_reference_words_its_fills_formed() {
         let g = lockin_error_gain(HALF_BUFFER, TAU * tw / WORDS);
         let cal = [cfg.pickup_z.gain, cfg.pickup_x.gain];
         let bound = |ch: usize| {
-            0.5 * f64::from(cal[ch]) * g / SIGNAL[ch].0 + 2f64.sqrt() * g * 6.0e-5 + 1e-4
+            0.5 * f64::from(cal[ch]) * g / SIGNAL[ch].0 + 2f64.sqrt() * g * 3.06e-5 + 1e-4
         };
         for m in &ms {
             for ch in 0..2 {

@@ -4,7 +4,7 @@
 //! (every count of the 12-bit converter), and the force estimator fed in
 //! blocks against the closed form of a synthetic force.
 
-use std::f64::consts::TAU;
+use std::f64::consts::{SQRT_2, TAU};
 
 use board::dds::{phase_rad, SineTable};
 use board::estimator::{Calibration, Estimator};
@@ -20,41 +20,27 @@ fn table_error<const N: usize>(t: &SineTable<N>) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// Eq. R3's growth between the table's seeds: `(RUN − 1)·(2·ε_Δ + 2⁻²⁸)`,
-/// `ε_Δ = 6.8e-8 + |Δ|·3·2⁻²⁴ + 2⁻³¹` (the step's cosine and sine: FastF32's
-/// `sin_cos` bound, Δ rounded in f32, Q31) for the step `tw` (signed).
-fn r3(tw: u32) -> f64 {
-    let delta = (f64::from(tw as i32) * TAU / 4_294_967_296.0).abs();
-    let eps_d = 6.8e-8 + delta * 3.0 * 2f64.powi(-24) + 2f64.powi(-31);
-    (board::reference::RUN as f64 - 1.0) * (2.0 * eps_d + 2f64.powi(-28))
-}
-
-/// Eqs. R2–R3: every word of a block's reference is within
-/// `ε_t + (2π/N)²/8 + 2⁻²⁹` (the table's seed every 16 samples) `+ R3`
-/// (the rotation between seeds) `+ 2⁻¹⁶` (Q15 rounding) `+ 2⁻¹⁵` (the
-/// saturation of `+2¹⁵`, only where the value can round to it: within
-/// `2⁻¹⁶ + ε_seed + R3` of +1; elsewhere a rounding that is a floor, or
-/// off by one unit, fails) of cos θ_i, sin θ_i, θ_i formed in f64 from the
-/// phase words alone: 3 000 blocks of 64 at random start words and steps (every step
-/// size up to half a turn and beyond, which turns backwards), and blocks
-/// starting just before 0 and a quarter turn, where the saturation acts.
-/// The bound is ≤ 7.0e-5 for any step and ≤ 6.0e-5 up to 100 kHz at
-/// 500 kS/s; it is reached within a factor of two.
+/// Eq. R2: every word of a block's reference is within `ε_r = 2√2·ε_s +
+/// 2ε_s² + 2⁻²⁷ + 2⁻¹⁶` (`ε_s = ε_t + (2π/N)²/8 + 2⁻²⁹`, each Q30 read of
+/// the run's first phase and of its steps; the high words' floors; the Q15
+/// rounding) of cos θ_i, sin θ_i, θ_i formed in f64 from the phase words
+/// alone, and within `max(ε_r, 2⁻¹⁵)` where the value is within `ε_r` of
+/// +1 (the saturation of `+2¹⁵`; elsewhere a rounding that is a floor, or
+/// off by one unit, fails): 3 000 blocks of 64 at random start words and
+/// steps (every step size up to half a turn and beyond, which turns
+/// backwards), and blocks starting just before 0 and a quarter turn, where
+/// the saturation acts. The bound is ≤ 3.06e-5 for any step; it is reached
+/// within a factor of two.
 #[test]
 fn the_q15_reference_is_within_its_derived_bound() {
     let t = SineTable::<1024>::libm();
     let eps_t = table_error(&t);
-    let seed = eps_t + (TAU / 1024.0).powi(2) / 8.0 + 2f64.powi(-29);
-    let out = 2f64.powi(-16) + 2f64.powi(-15);
-    assert!(
-        seed + r3(1 << 31) + out <= 7.0e-5,
-        "{}",
-        seed + r3(1 << 31) + out
-    );
+    let eps_s = eps_t + (TAU / 1024.0).powi(2) / 8.0 + 2f64.powi(-29);
+    let inner = 2.0 * SQRT_2 * eps_s + 2.0 * eps_s * eps_s + 2f64.powi(-27) + 2f64.powi(-16);
+    assert!(inner.max(2f64.powi(-15)) <= 3.06e-5, "{inner}");
     let board_max = (100e3 / 500e3 * 4_294_967_296.0) as u32;
-    assert!(seed + r3(board_max) + out <= 6.0e-5);
     let mut rng = Rng::new(7);
-    let mut worst: f64 = 0.0;
+    let (mut worst, mut worst_saturated) = (0.0f64, 0.0f64);
     for k in 0..3_000u32 {
         let tw = match k % 4 {
             0 => (rng.uniform() * 4_294_967_296.0) as u32,
@@ -67,15 +53,13 @@ fn the_q15_reference_is_within_its_derived_bound() {
             1 => (1u32 << 30).wrapping_sub((rng.uniform() * 1e7) as u32),
             _ => (rng.uniform() * 4_294_967_296.0) as u32,
         };
-        let inner = seed + r3(tw) + 2f64.powi(-16);
         // The saturation's share only near +1 (R1: only +2¹⁵ is clamped).
         let bound = |x: f64| {
-            inner
-                + if x >= 1.0 - inner {
-                    2f64.powi(-15)
-                } else {
-                    0.0
-                }
+            if x >= 1.0 - inner {
+                inner.max(2f64.powi(-15))
+            } else {
+                inner
+            }
         };
         let r = Reference::new(&t, acc0, tw, BLOCK);
         for (i, &w) in r.words().iter().enumerate() {
@@ -87,10 +71,18 @@ fn the_q15_reference_is_within_its_derived_bound() {
                 ec <= bc && es <= bs,
                 "tw {tw}, sample {i}: {ec:e} {es:e} > {bc:e} {bs:e}"
             );
-            worst = worst.max((ec / bc).max(es / bs));
+            // Away from the saturation: the products' bound alone.
+            for (e, x) in [(ec, th.cos()), (es, th.sin())] {
+                if x < 1.0 - inner {
+                    worst = worst.max(e / inner);
+                } else {
+                    worst_saturated = worst_saturated.max(e / bound(x));
+                }
+            }
         }
     }
     assert!(worst >= 0.5, "worst {worst} of the bound");
+    assert!(worst_saturated >= 0.5, "saturated: worst {worst_saturated}");
 }
 
 /// The pair sums and the reference's Gram sums equal straightforward i64

@@ -160,8 +160,8 @@ impl<const N: usize> Device<'_, N> {
         if self.control_on() && crate::reference::any_railed(samples) {
             self.fault(faults::ADC_SATURATED);
         }
-        // The fill's own words when they are kept whole (one rotation per
-        // sample for the DAC and the ADC), else formed here (`r`).
+        // The fill's own words when they are kept whole (one product per
+        // sample for the DAC and the ADC, eq. R3), else formed here (`r`).
         let kept = self.kept_reference(block, samples.len());
         let mut r = Reference::EMPTY;
         probe!(11);

@@ -275,8 +275,8 @@ impl Fixed {
 /// Q30 read of the phase offset, eq. Q1). In i32: `|c·k_c + s·k_s| ≤
 /// 2¹⁵·|(k_c, k_s)| ≤ 2¹⁵·(8·4095 + 1) < 2³⁰` and `k_d ≤ 2¹⁸·4095 + 2¹⁷ <
 /// 2³⁰`. Two multiply-accumulates per channel and sample, on the
-/// reference the ADC's lock-ins use too (one rotation per sample for
-/// both: issue 35). The error against the exact waveform, with `ε_r` the
+/// reference the ADC's lock-ins use too (one product per sample for
+/// both, eq. R3: issue 35). The error against the exact waveform, with `ε_r` the
 /// reference's (eq. R2) and `ε_φ` the table read's (Q1):
 ///
 /// ```text
@@ -288,13 +288,15 @@ impl Fixed {
 /// `ε_φ + 3·2⁻²⁴` (the table read, then two f32 roundings of the product),
 /// so `amp·(e_c sin φ + e_s cos φ)` stays within `√2·|amp|·(…)`; each
 /// factor's rounding to an integer, ½ of ⅛ code, adds at most
-/// `½·(|c| + |s|)/2¹⁸ ≤ √2/16`; `k_d`'s, `2⁻¹⁹`): ≤ 0.81 code at
-/// |amp| ≤ 2047.5, `ε_r ≤ 7.0e-5` (eq. R2) and `ε_φ = ε_t + (2π/N)²/8 +
+/// `½·(|c| + |s|)/2¹⁸ ≤ √2/16`; `k_d`'s, `2⁻¹⁹`): ≤ 0.70 code at
+/// |amp| ≤ 2047.5, `ε_r ≤ 3.06e-5` (eq. R2) and `ε_φ = ε_t + (2π/N)²/8 +
 /// 2⁻²⁹` (N = 1024).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct RefCoef {
-    kc: i32,
-    ks: i32,
+    /// Within ±32 760 (`8·4095`): 16 bits, so that each product of eq.
+    /// (Q6) is one 16-bit multiply-accumulate (`SMLABB`/`SMLATB`).
+    kc: i16,
+    ks: i16,
     kd: i32,
 }
 
@@ -306,8 +308,9 @@ impl RefCoef {
         let (c, s) = t.cos_sin_q30(ph);
         let a = amp.clamp(-4095.0, 4095.0) * (8.0 / Q30_F32);
         RefCoef {
-            kc: round_i32(a * s as f32),
-            ks: round_i32(a * c as f32),
+            // |a·s| ≤ 8·4095·(1 + 2⁻²³) < 32 761: the casts are exact.
+            kc: round_i32(a * s as f32) as i16,
+            ks: round_i32(a * c as f32) as i16,
             kd: round_i32(dc.clamp(0.0, 4095.0) * 262_144.0) + (1 << 17),
         }
     }
@@ -316,7 +319,7 @@ impl RefCoef {
     #[inline(always)]
     fn code(&self, w: u32) -> u32 {
         let (c, s) = (crate::reference::cos_of(w), crate::reference::sin_of(w));
-        let v = self.kd + c * self.kc + s * self.ks;
+        let v = self.kd + c * i32::from(self.kc) + s * i32::from(self.ks);
         (v >> 18).clamp(0, DAC_MAX as i32) as u32
     }
 }
@@ -544,9 +547,10 @@ pub struct Dds<'t, const N: usize> {
     fs: f64,
     acc: u32,
     tw: u32,
-    /// The reference's rotation by one sample at `tw`
-    /// ([`crate::reference::step`], formed when `tw` is set, not per fill).
-    rot: (i32, i32),
+    /// The reference's steps within a run at `tw`
+    /// ([`crate::reference::RunSteps`], formed when `tw` is set, not per
+    /// fill).
+    steps: crate::reference::RunSteps,
     /// Channel 1 (normal transducer) and channel 2 (tangential).
     ch: [Channel; 2],
     slew: Slew,
@@ -567,7 +571,7 @@ impl<'t, const N: usize> Dds<'t, N> {
             fs,
             acc: 0,
             tw: 0,
-            rot: crate::reference::step(0),
+            steps: crate::reference::RunSteps::new(table, 0),
             ch: [Channel::default(); 2],
             slew,
             interp: Interp::Reference,
@@ -623,7 +627,7 @@ impl<'t, const N: usize> Dds<'t, N> {
     /// (the resonance tracking's small steps).
     pub fn set_tuning_word(&mut self, tw: u32) {
         if tw != self.tw {
-            self.rot = crate::reference::step(tw);
+            self.steps = crate::reference::RunSteps::new(self.table, tw);
         }
         self.tw = tw;
     }
@@ -730,7 +734,7 @@ impl<'t, const N: usize> Dds<'t, N> {
 
     /// [`Dds::fill`] that also writes the packed reference words (eq. R1)
     /// of the fill's samples — the DDS's own phases `acc + i·tw` — for the
-    /// ADC block this fill drives (issue 35: one rotation per sample serves
+    /// ADC block this fill drives (issue 35: one product per sample serves
     /// the DAC and the ADC's lock-ins): sample `i`'s word goes to `head[i]`
     /// for `i < head.len()`, then to `tail[i − head.len()]` (two places, so
     /// that a caller can lay them out as the ADC sees them, `L` samples
@@ -756,10 +760,10 @@ impl<'t, const N: usize> Dds<'t, N> {
         let (head, tail) = (&mut head[..k], &mut tail[..n - k]);
         let t = self.table;
         let (acc, tw) = (self.acc, self.tw);
-        let rot = self.rot;
-        crate::reference::fill_rotating(t, acc, tw, rot, head);
+        let steps = &self.steps;
+        crate::reference::fill_steps(t, acc, steps, head);
         let acc_k = acc.wrapping_add(tw.wrapping_mul(k as u32));
-        crate::reference::fill_rotating(t, acc_k, tw, rot, tail);
+        crate::reference::fill_steps(t, acc_k, steps, tail);
         if self.fill_path() == FillPath::Table {
             // The accumulator and the channels move in the table's loops.
             match self.interp {

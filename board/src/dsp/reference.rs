@@ -9,27 +9,34 @@
 //! ```
 //!
 //! The table read of eq. (Q1) ([`crate::dds::SineTable::cos_sin_q30`], Q30)
-//! seeds the first sample of every run of [`RUN`] samples; between seeds
-//! the Q30 pair is turned by one sample's step per sample ([`step`]:
-//! `(cos Δ, sin Δ)` in Q31, `Δ = 2π·tw/2³²`; two high-word multiplies per
-//! component, `SMMUL`/`SMMLA`), and each value is rounded to Q15 and
-//! saturated to 16 bits, packed as two i16 in one word (`c` low, `s` high),
-//! so a pair of samples and its reference are two loads. The error of
+//! gives the first sample's phase of every run of [`RUN`] samples,
+//! `T = (cos θ_r, sin θ_r)`, and, once per tuning word ([`RunSteps`]), the
+//! run's steps `E_b = (cos bΔ, sin bΔ)`, `b < RUN`, `Δ = 2π·tw/2³²`, read at
+//! the exact phase words `b·tw`. Each sample is the complex product
+//!
+//! ```text
+//! c = ⌊(T_c·E_c − T_s·E_s)/2³²⌉,  s = ⌊(T_s·E_c + T_c·E_s)/2³²⌉  (Q28)       (R3)
+//! ```
+//!
+//! (four high-word multiplies, `SMMLA`/`SMMLS`, with the rounding constant
+//! as the first one's addend), rounded to Q15 and saturated to 16 bits
+//! (`+2¹⁵` becomes `2¹⁵ − 1`, one `SSAT`), packed as two i16 in one word
+//! (`c` low, `s` high), so a pair of samples and its reference are two
+//! loads. With `ε_s = ε_t + (2π/N)²/8 + 2⁻²⁹` the bound of each Q30 read
+//! (the table, its interpolation, the halved product's floor), the error of
 //! `c_i`, `s_i` against the exact cosine and sine is at most
 //!
 //! ```text
-//! ε_r = ε_t + (2π/N)²/8 + 2⁻²⁹ + R3 + 2⁻¹⁶ + 2⁻¹⁵·[the clamp]               (R2)
-//! R3  = (RUN − 1)·(2·ε_Δ + 2⁻²⁸),  ε_Δ = 6.8e-8 + |Δ|·3·2⁻²⁴ + 2⁻³¹          (R3)
+//! ε_r = 2√2·ε_s + 2ε_s² + 2⁻²⁷ + 2⁻¹⁶,  and max(ε_r, 2⁻¹⁵) where it saturates   (R2)
 //! ```
 //!
-//! of 1: the seed (the table, its interpolation, the halved product's
-//! floor), the rotation between seeds (each step's cosine and sine within
-//! `ε_Δ` — FastF32's `sin_cos` and Δ rounded in f32 — moving the vector by
-//! at most `2ε_Δ`, and the truncated high words `2⁻²⁸`, for at most 15
-//! steps; a rotation keeps the error it carries), the Q15 rounding, and
-//! the clamp of `+2¹⁵` to `2¹⁵ − 1` (at θ = 0 exactly, 2⁻¹⁵): ≤ 7.0e-5 for
-//! any step, ≤ 6.0e-5 up to 100 kHz at 500 kS/s, N = 1024 with the libm
-//! table (`tests/tests/reference.rs`).
+//! of 1: each product's factors within `ε_s` per component, so
+//! `|Re((T − e^{iθ_r})·E_b)| ≤ ε_s(|cos bΔ| + |sin bΔ|) ≤ √2·ε_s`, the same
+//! for `E_b`'s error and `2ε_s²` for both together; the two floors of the
+//! high words (within 2⁻²⁷); the Q15 rounding (2⁻¹⁶); the clamp of `+2¹⁵`
+//! to `2¹⁵ − 1` moves a value towards any true value below `1 − 2⁻¹⁵`, and
+//! is at most 2⁻¹⁵ from one above. No error grows along the run: ≤ 3.06e-5
+//! for any step at N = 1024 with the libm table (`tests/tests/reference.rs`).
 //!
 //! **The sums.** For a pair of signals `(x_i, z_i)` (ADC counts, `< 2¹²`):
 //! `Σx`, `Σz` and `Σx·c`, `Σx·s`, `Σz·c`, `Σz·s`, exact. Each product is
@@ -43,7 +50,6 @@
 //! handler (on the board, interrupt priority `DSP`), once per block.
 
 use super::dds::SineTable;
-use model_core::float::{FastF32, Math};
 
 /// The most samples of one block's reference (the board's ADC half-buffer).
 pub const BLOCK: usize = 64;
@@ -66,55 +72,67 @@ pub fn packed<const N: usize>(t: &SineTable<N>, p: u32) -> u32 {
     (q15(c) as u16 as u32) | ((q15(s) as u16 as u32) << 16)
 }
 
-/// The rotation by one sample's phase step, `(cos Δ, sin Δ)` in Q31
-/// (`Δ = 2π·tw/2³²`; `cos Δ = 1` saturates to `2³¹ − 1`): Δ formed in f32
-/// (the word, the constant and the product each rounded once: within
-/// `|Δ|·3·2⁻²⁴`), then [`FastF32`]'s `sin_cos` (absolute error ≤ 6.8e-8,
-/// `model_core`'s `ERR_SIN_COS`). Each component is within
-/// `ε_Δ = 6.8e-8 + |Δ|·3·2⁻²⁴ + 2⁻³¹` of the exact one (eq. R3).
-pub fn step(tw: u32) -> (i32, i32) {
-    // Taken as signed: a step above half a turn is the same rotation backwards.
-    let delta = tw as i32 as f32 * (core::f32::consts::TAU / 4_294_967_296.0);
-    let (s, c) = FastF32::sin_cos(delta);
-    let q31 = |v: f32| {
-        let x = v * 2_147_483_648.0;
-        // `as` saturates 2³¹ to 2³¹ − 1 (and keeps −2³¹).
-        (if x >= 0.0 { x + 0.5 } else { x - 0.5 }) as i32
-    };
-    (q31(c), q31(s))
+/// The steps of a run at one tuning word (eq. R3): `E_b = (cos bΔ, sin bΔ)`
+/// in Q30 for `b < RUN`, read from the table at the exact phase words
+/// `b·tw` (`E_0 = (2³⁰, 0)`, exact). Formed when the tuning word changes
+/// (15 table reads), not per fill.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RunSteps {
+    tw: u32,
+    e: [(i32, i32); RUN],
+}
+
+impl RunSteps {
+    /// The steps of tuning word `tw` on table `t`.
+    pub fn new<const N: usize>(t: &SineTable<N>, tw: u32) -> Self {
+        let mut e = [(1 << 30, 0); RUN];
+        for (b, x) in e.iter_mut().enumerate().skip(1) {
+            *x = t.cos_sin_q30(tw.wrapping_mul(b as u32));
+        }
+        RunSteps { tw, e }
+    }
+
+    /// The tuning word these steps belong to.
+    pub fn tuning_word(&self) -> u32 {
+        self.tw
+    }
 }
 
 /// Fills `out` with the packed reference words (R1) of the phases
-/// `acc0 + i·tw`: every [`RUN`] samples the cosine and sine from the
-/// table (eq. Q1, Q30), between them a rotation by [`step`] per sample
-/// in Q30 (eq. R3: two 32×32→64 multiply-accumulates per component, not
-/// two table reads per sample).
+/// `acc0 + i·tw`: each run of [`RUN`] samples the product (R3) of its first
+/// phase, read from the table (eq. Q1, Q30), with the run's steps.
 pub fn fill<const N: usize>(t: &SineTable<N>, acc0: u32, tw: u32, out: &mut [u32]) {
-    fill_rotating(t, acc0, tw, step(tw), out);
+    fill_steps(t, acc0, &RunSteps::new(t, tw), out);
 }
 
-/// [`fill`] with the rotation `rot` = [`step`]`(tw)` formed by the caller
-/// (the DDS keeps it per tuning word: one `sin_cos` per retune, not two
-/// per fill).
-pub fn fill_rotating<const N: usize>(
-    t: &SineTable<N>,
-    acc0: u32,
-    tw: u32,
-    (sc, ss): (i32, i32),
-    out: &mut [u32],
-) {
-    // The high word of a 32×32 product (`SMMUL`, and `SMMLA`/`SMMLS` with
-    // the add): Q30 × Q31 / 2³² is Q29, doubled back to Q30 — each
-    // component truncated twice, within 2⁻²⁸ per step.
-    let hi = |a: i32, b: i32| ((i64::from(a) * i64::from(b)) >> 32) as i32;
+/// [`fill`] with the steps formed by the caller (the DDS keeps them per
+/// tuning word: 15 table reads per retune, not per fill).
+pub fn fill_steps<const N: usize>(t: &SineTable<N>, acc0: u32, steps: &RunSteps, out: &mut [u32]) {
+    // `acc ± ⌊a·b/2³²⌋`-like high words (`SMMLA`, `SMMLS`: the 64-bit
+    // `acc·2³² ± a·b`, its high word): Q30 × Q30 / 2³² is Q28. With the
+    // rounding constant as the first addend, each component is the exact
+    // value plus two floors, within (−2, 0] units of Q28 (eq. R2's 2⁻²⁷).
+    let mla = |acc: i32, a: i32, b: i32| {
+        (((i64::from(acc) << 32) + i64::from(a) * i64::from(b)) >> 32) as i32
+    };
+    let mls = |acc: i32, a: i32, b: i32| {
+        (((i64::from(acc) << 32) - i64::from(a) * i64::from(b)) >> 32) as i32
+    };
+    // Q28 to Q15, the rounding constant already added: `>> 13`, saturated
+    // (`SSAT #16, ASR #13`).
+    let q15_of_q28 = |x: i32| (x >> 13).clamp(i32::from(i16::MIN), i32::from(i16::MAX));
+    // Opaque to the optimiser, so that it stays the first multiply's
+    // addend instead of an add per component after it.
+    let half = core::hint::black_box(1i32 << 12);
+    let tw = steps.tw;
     let mut acc = acc0;
     for run in out.chunks_mut(RUN) {
-        let (mut c, mut s) = t.cos_sin_q30(acc);
-        for w in run.iter_mut() {
-            *w = (q15(c) as u16 as u32) | ((q15(s) as u16 as u32) << 16);
-            let nc = (hi(c, sc) - hi(s, ss)) << 1;
-            s = (hi(s, sc) + hi(c, ss)) << 1;
-            c = nc;
+        let (tc, ts) = t.cos_sin_q30(acc);
+        for (w, &(ec, es)) in run.iter_mut().zip(&steps.e) {
+            let c = mls(mla(half, tc, ec), ts, es);
+            let s = mla(mla(half, ts, ec), tc, es);
+            *w = (q15_of_q28(c) as u16 as u32) | ((q15_of_q28(s) as u16 as u32) << 16);
         }
         acc = acc.wrapping_add(tw.wrapping_mul(run.len() as u32));
     }
