@@ -68,6 +68,7 @@ fn sliding_above_vc_is_exactly_mu0() {
 #[test]
 fn static_interval_matches_brute_force_and_paper() {
     let mut rng = Rng::new(7);
+    let (mut nonempty, mut empty) = (0, 0);
     for _ in 0..200 {
         let (a, b, phi) = (
             rng.range(0.0, 0.99),
@@ -108,7 +109,25 @@ fn static_interval_matches_brute_force_and_paper() {
             -lo
         );
         assert_eq!(st.exists(), lo <= hi || (lo - hi).abs() <= tol);
+        // The static coefficients: the grid's largest forward force `hi` and
+        // backward force `−lo` where the interval is not empty (beyond the
+        // grid's error), none where it is empty.
+        let (fwd, bwd) = (st.mu_s_forward_over_mu0(), st.mu_s_backward_over_mu0());
+        if hi - lo > 2.0 * tol {
+            let (f, b) = (fwd.unwrap(), bwd.unwrap());
+            assert!(
+                (f - hi).abs() <= tol && (b + lo).abs() <= tol,
+                "{f} {b} vs {hi} {}",
+                -lo
+            );
+            nonempty += 1;
+        } else if lo - hi > 2.0 * tol {
+            assert_eq!((fwd, bwd), (None, None));
+            empty += 1;
+        }
     }
+    // Both sides reached (62 and 138 of the 200 draws).
+    assert!(nonempty >= 40 && empty >= 40, "{nonempty} {empty}");
 }
 
 #[test]
@@ -117,6 +136,7 @@ fn static_interval_can_be_empty_where_paper_eq18_still_gives_a_number() {
     let st = StaticFriction::of(&scene(0.5, 1.0, FRAC_PI_2));
     assert!(!st.exists());
     assert_eq!(st.mu_s_forward_over_mu0(), None);
+    assert_eq!(st.mu_s_backward_over_mu0(), None);
     assert!((st.paper_eq18_forward - (1.0 - 1.25f64.sqrt())).abs() < 1e-15);
 }
 

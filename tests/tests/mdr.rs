@@ -934,3 +934,33 @@ fn quadrature_stops_at_an_interval_the_float_cannot_split() {
         out.value[0]
     );
 }
+
+/// The flat punch's powers keep the documented contract "a bound ≤ tol":
+/// the exact solver's bound `(10⁻⁹ + ε_libm)(1 + b)` (f64) scaled by the
+/// powers' size `1 + a + b + |V|`, ≈ 5e-9 here (1.3e-8 lifting off),
+/// below `tol` = 10⁻⁶ and
+/// above the solver's own bound (powers are larger than μ), for a drive in
+/// permanent contact (a < 1, stick–slip) and one that lifts off (a ≥ 1,
+/// whose bound is the lift-off solver's).
+#[test]
+fn flat_powers_report_a_bound_within_the_tolerance() {
+    use model_core::mdr::powers::profile_powers;
+    let tol = 1e-6;
+    for (a, v) in [(0.5, 0.1), (0.5, -0.3), (1.5, 0.2)] {
+        let d = Drive::new::<Libm>(a, 1.0, 0.7);
+        let r = profile_powers::<f64, Libm>(&d, &Profile::Flat, v, tol).unwrap();
+        let solver = exact::error_bound::<f64, Libm>(&d);
+        assert!(
+            r.bound <= tol,
+            "a = {a}, v = {v}: bound {:e} above tol {tol:e}",
+            r.bound
+        );
+        if a < 1.0 {
+            assert!(
+                r.bound >= solver,
+                "a = {a}, v = {v}: {:e} < {solver:e}",
+                r.bound
+            );
+        }
+    }
+}

@@ -92,11 +92,6 @@ impl RunSteps {
         }
         RunSteps { tw, e }
     }
-
-    /// The tuning word these steps belong to.
-    pub fn tuning_word(&self) -> u32 {
-        self.tw
-    }
 }
 
 /// Fills `out` with the packed reference words (R1) of the phases
