@@ -296,10 +296,9 @@ pub(super) fn kinks<T: Float, M: Math<T>>(
                 .filter(|&tk| tk - resolution * T::HALF > t_prev && tk + resolution * T::HALF < t)
                 .take(2)
                 .find(|&tk| side(tk, -T::ONE, s_prev) && side(tk, T::ONE, s));
-            if let Some(tk) = confirmed {
-                let (_, cos_t) = M::sin_cos(tk);
-                found(l + half * (T::ONE - cos_t));
-            } else {
+            // The confirmed candidate, else the bisection of the bracket
+            // down to the resolution; either in ξ through the segment's map.
+            let tk = confirmed.unwrap_or_else(|| {
                 let (mut lo, mut hi) = (t_prev, t);
                 while hi - lo > resolution {
                     let mid = (lo + hi) * T::HALF;
@@ -309,9 +308,10 @@ pub(super) fn kinks<T: Float, M: Math<T>>(
                         hi = mid;
                     }
                 }
-                let (_, cos_t) = M::sin_cos((lo + hi) * T::HALF);
-                found(l + half * (T::ONE - cos_t));
-            }
+                (lo + hi) * T::HALF
+            });
+            let (_, cos_t) = M::sin_cos(tk);
+            found(l + half * (T::ONE - cos_t));
         }
         t_prev = t;
         s_prev = s;
