@@ -161,27 +161,61 @@ pub(crate) fn signature<T: Float, M: Math<T>>(
         } else {
             exact::steady_state::<T, M>(&s, v / d).ok()?.1
         };
-        // The period is a cycle: merge neighbours of one kind (also across the
-        // period's start) and take the smallest rotation, so that an event
-        // crossing the phase where the period is cut changes nothing.
         let min = T::from_f64(liftoff::SIGNATURE_MIN_ARC);
-        let mut digits = [0u32; exact::MAX_ARCS];
-        let mut len = 0;
-        for arc in arcs.iter().filter(|x| x.end - x.start > min) {
-            let digit = liftoff::arc_digit(arc.kind);
-            if len == 0 || digits[len - 1] != digit {
-                digits[len] = digit;
-                len += 1;
-            }
-        }
-        while len > 1 && digits[0] == digits[len - 1] {
-            len -= 1;
-        }
-        let code = (0..len.max(1))
-            .map(|r| (0..len).fold(0u32, |c, i| c * 4 + digits[(r + i) % len]))
-            .min()
-            .unwrap_or(0);
-        return Some(code);
+        let arcs = arcs
+            .iter()
+            .map(|x| (x.end - x.start, liftoff::arc_digit(x.kind)));
+        return Some(cycle_code(arcs, min));
     }
     Some(liftoff::banded_signature::<T, M>(shape, d))
+}
+
+/// The base-4 code of a period's arcs `(length, digit)`: arcs of length
+/// `min` or less left out, neighbours of one kind merged, also across the
+/// period's start (the period is a cycle), and the smallest rotation taken,
+/// so that an event crossing the phase where the period is cut changes
+/// nothing. At most [`exact::MAX_ARCS`] arcs count.
+fn cycle_code<T: Float>(arcs: impl Iterator<Item = (T, u32)>, min: T) -> u32 {
+    let mut digits = [0u32; exact::MAX_ARCS];
+    let mut len = 0;
+    for (_, digit) in arcs.filter(|x| x.0 > min) {
+        if len == 0 || digits[len - 1] != digit {
+            let Some(slot) = digits.get_mut(len) else {
+                break;
+            };
+            *slot = digit;
+            len += 1;
+        }
+    }
+    while len > 1 && digits[0] == digits[len - 1] {
+        len -= 1;
+    }
+    (0..len.max(1))
+        .map(|r| (0..len).fold(0u32, |c, i| c * 4 + digits[(r + i) % len]))
+        .min()
+        .unwrap_or(0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::cycle_code;
+
+    /// Codes built by hand from the rule: digits stick 1, forward slip 2,
+    /// backward slip 3; slivers (≤ min) out, neighbours of one kind merged,
+    /// across the cut too, the smallest base-4 rotation.
+    #[test]
+    fn the_code_merges_neighbours_and_ignores_the_cut() {
+        let code = |arcs: &[(f64, u32)]| cycle_code(arcs.iter().copied(), 1e-6);
+        // stick, slip: "12" = 6 (rotation "21" = 9).
+        assert_eq!(code(&[(1.0, 1), (2.0, 2)]), 6);
+        // A sliver slip between two sticks leaves one stick: the same 6.
+        assert_eq!(code(&[(1.0, 1), (1e-7, 3), (1.0, 1), (2.0, 2)]), 6);
+        // Cut inside a stick: slip, stick, slip, stick → the cycle "12".
+        assert_eq!(code(&[(0.5, 1), (2.0, 2), (0.5, 1)]), 6);
+        // Three kinds: "123" = 27, its rotations 45 ("231") and 54 ("312").
+        assert_eq!(code(&[(1.0, 2), (1.0, 3), (1.0, 1)]), 27);
+        // One kind all round, and nothing at all.
+        assert_eq!(code(&[(3.0, 2), (1.0, 2)]), 2);
+        assert_eq!(code(&[]), 0);
+    }
 }
