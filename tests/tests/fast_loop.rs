@@ -312,3 +312,60 @@ fn a_new_setting_closes_a_window_at_each_block_of_its_transition() {
     assert_eq!(after, [1, 1, 1, 1, 0, 0, 0, 1], "after the change");
     assert_eq!(b.dev.status().faults, 0);
 }
+
+/// A pickup at an ADC rail while the displacement mode holds (the motion
+/// beyond the pickup's range: its window's amplitude clipped, so the loop
+/// would drive harder and the lift-off guard read too little): the block
+/// that carries it latches `ADC_SATURATED` and the safe state, at either
+/// rail and on either pickup — within the ADC lag of one half-buffer, long
+/// before an open pickup's `OPEN_S`. The same rail in the voltage mode
+/// (an unused pickup input) latches nothing.
+#[test]
+fn a_railed_pickup_latches_the_safe_state_in_the_displacement_mode() {
+    let table = SineTable::<1024>::libm();
+    for (ch, rail) in [(0, 4095u16), (0, 0), (1, 4095), (1, 0)] {
+        let mut b = held_at(&table, 2.0, 2e-6);
+        assert_eq!(b.dev.status().faults, 0);
+        b.pickup_stuck[ch] = Some(rail);
+        let mut at = None;
+        for k in 1..=8 {
+            b.step();
+            if b.dev.status().faults != 0 {
+                at = Some(k);
+                break;
+            }
+        }
+        let st = b.dev.status();
+        assert_eq!(
+            st.faults,
+            faults::ADC_SATURATED,
+            "pickup {ch} at {rail}: {st:?}"
+        );
+        assert!(
+            at.unwrap() <= 2,
+            "pickup {ch} at {rail}: after {at:?} half-buffers"
+        );
+        assert!(!st.running);
+    }
+    // The voltage mode (open loop) on the same bench: nothing latches.
+    let mut b = Bench::new(&table, opts(), exact());
+    b.dev
+        .set_drive_mode(board::device::DriveMode::OpenLoop)
+        .unwrap();
+    // Off resonance and small (the open loop's gain on resonance lifts off).
+    let mut s = setting(2e-7);
+    s.freq_hz = 10_000.0;
+    b.dev.set_drive(s).unwrap();
+    b.dev.start().unwrap();
+    for _ in 0..200 {
+        b.step();
+    }
+    assert_eq!(b.dev.status().faults, 0);
+    b.pickup_stuck[0] = Some(4095);
+    for _ in 0..8 {
+        b.step();
+    }
+    let st = b.dev.status();
+    assert_eq!(st.faults, 0, "{st:?}");
+    assert!(st.running);
+}

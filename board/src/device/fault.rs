@@ -6,7 +6,7 @@
 //!
 //! | bit | source | where it is raised |
 //! |---|---|---|
-//! | [`faults::ADC_SATURATED`] | a finished estimate saw a sample at an ADC rail | `Device::adc_block` |
+//! | [`faults::ADC_SATURATED`] | a finished estimate saw a sample at an ADC rail; in the displacement mode while running, a pickup sample at a rail | `Device::adc_block`, `Device::adc_block_with_pickups` |
 //! | [`faults::DAC_UNDERRUN`] | the DAC refill came a half-buffer late | [`Device::dac_half_done`] |
 //! | [`faults::WATCHDOG_RESET`] | the previous reset was by the watchdog | the firmware at power-up |
 //! | [`faults::EXTERNAL`] | the external fault input (amplifier alarm) | the firmware's input interrupt |
@@ -27,7 +27,8 @@ use super::Device;
 
 /// Latched fault bits (the protocol's `Status.faults`, `Fault` telemetry).
 pub mod faults {
-    /// An ADC sample hit the rail during a measurement.
+    /// An ADC sample hit the rail during a measurement, or a pickup's in the
+    /// displacement mode.
     pub const ADC_SATURATED: u32 = 1 << 0;
     /// The DAC buffer was refilled late (the DMA read a stale half).
     pub const DAC_UNDERRUN: u32 = 1 << 1;

@@ -164,6 +164,7 @@ impl<const N: usize> Device<'_, N> {
         // sample for the DAC and the ADC, eq. R3), else formed here (`r`).
         let kept = self.kept_reference(block, samples.len());
         let mut r = Reference::EMPTY;
+        let mut pickup_railed = false;
         probe!(11);
         for (k, chunk) in samples.chunks(BLOCK).enumerate() {
             let start = k * BLOCK;
@@ -184,7 +185,7 @@ impl<const N: usize> Device<'_, N> {
                 };
             }
             if let Some(p) = pickups.get(start..start + chunk.len()) {
-                self.motion.push_block(words!(), p, tw);
+                pickup_railed |= self.motion.push_block(words!(), p, tw);
             }
             probe!(12);
             // Split where the μ loop opens its estimate (`control_open`).
@@ -216,8 +217,19 @@ impl<const N: usize> Device<'_, N> {
         if closed && self.est.saturated() {
             self.fault(faults::ADC_SATURATED);
         }
+        // A railed pickup while the displacement loop acts on the pickups:
+        // the window's amplitude is clipped (too small), so the loop would
+        // drive harder and the lift-off guard would read too little — the
+        // safe state, through the one path. (Outside the mode an unused
+        // pickup input may sit at a rail: not a fault.)
+        // The window is not used: its sums are dropped.
+        let railed = pickup_railed && self.running && self.displacement_mode();
+        if railed {
+            self.fault(faults::ADC_SATURATED);
+            self.motion.discard();
+        }
         probe!(14);
-        if !pickups.is_empty() {
+        if !pickups.is_empty() && !railed {
             self.motion_window(block);
         }
         probe!(15);

@@ -73,11 +73,21 @@ impl Motion {
     /// A chunk of the pickups' samples into the lock-ins, against the
     /// forces' reference words `words` (eq. R1: the pickups' own phase is
     /// δ later; [`Device::motion_window`] turns the fit by δ).
-    pub(super) fn push_block(&mut self, words: &[u32], pickups: &[(u16, u16)], tw: u32) {
+    /// Drops the window's sums so far (a railed pickup's window).
+    pub(super) fn discard(&mut self) {
+        self.lock.reset();
+        self.blocks = 0;
+    }
+
+    /// Whether a pickup sample sat at an ADC rail (0 or full scale: the
+    /// motion beyond the pickup's range, or its input broken), from the
+    /// same pass as the sums.
+    pub(super) fn push_block(&mut self, words: &[u32], pickups: &[(u16, u16)], tw: u32) -> bool {
         let g = Gram::of(words);
         let p = PairSums::of(words, pickups);
         self.lock.push_sums(&g, &p, tw);
         self.tw = tw;
+        p.railed
     }
 }
 
