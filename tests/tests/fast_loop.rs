@@ -318,8 +318,9 @@ fn a_new_setting_closes_a_window_at_each_block_of_its_transition() {
 /// would drive harder and the lift-off guard read too little): the block
 /// that carries it latches `ADC_SATURATED` and the safe state, at either
 /// rail and on either pickup — within the ADC lag of one half-buffer, long
-/// before an open pickup's `OPEN_S`. The same rail in the voltage mode
-/// (an unused pickup input) latches nothing.
+/// before an open pickup's `OPEN_S` — and nothing more during the ring-down
+/// once the pickup is back in range. The same rail in the voltage mode (an
+/// unused pickup input) latches nothing.
 #[test]
 fn a_railed_pickup_latches_the_safe_state_in_the_displacement_mode() {
     let table = SineTable::<1024>::libm();
@@ -346,7 +347,25 @@ fn a_railed_pickup_latches_the_safe_state_in_the_displacement_mode() {
             "pickup {ch} at {rail}: after {at:?} half-buffers"
         );
         assert!(!st.running);
+        // The pickup back in range: the ring-down latches nothing more.
+        b.pickup_stuck[ch] = None;
+        for _ in 0..50 {
+            b.step();
+        }
+        assert_eq!(b.dev.status().faults, faults::ADC_SATURATED);
     }
+    // A pickup whose gain is six times its calibration (2 µm read as 12, beyond
+    // its ±10 µm): the sine clips at both rails while the drive holds, and
+    // the one fault is the saturation.
+    let mut b = held_at(&table, 2.0, 2e-6);
+    b.pickup_gain[0] = 6.0;
+    for _ in 0..8 {
+        b.step();
+        if b.dev.status().faults != 0 {
+            break;
+        }
+    }
+    assert_eq!(b.dev.status().faults, faults::ADC_SATURATED);
     // The voltage mode (open loop) on the same bench: nothing latches.
     let mut b = Bench::new(&table, opts(), exact());
     b.dev

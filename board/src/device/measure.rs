@@ -185,7 +185,7 @@ impl<const N: usize> Device<'_, N> {
                 };
             }
             if let Some(p) = pickups.get(start..start + chunk.len()) {
-                pickup_railed |= self.motion.push_block(words!(), p, tw);
+                pickup_railed = self.motion.push_block(words!(), p, tw) || pickup_railed;
             }
             probe!(12);
             // Split where the μ loop opens its estimate (`control_open`).
@@ -222,14 +222,11 @@ impl<const N: usize> Device<'_, N> {
         // drive harder and the lift-off guard would read too little — the
         // safe state, through the one path. (Outside the mode an unused
         // pickup input may sit at a rail: not a fault.)
-        // The window is not used: its sums are dropped.
-        let railed = pickup_railed && self.running && self.displacement_mode();
-        if railed {
+        if pickup_railed && self.running && self.displacement_mode() {
             self.fault(faults::ADC_SATURATED);
-            self.motion.discard();
         }
         probe!(14);
-        if !pickups.is_empty() && !railed {
+        if !pickups.is_empty() {
             self.motion_window(block);
         }
         probe!(15);

@@ -73,12 +73,6 @@ impl Motion {
     /// A chunk of the pickups' samples into the lock-ins, against the
     /// forces' reference words `words` (eq. R1: the pickups' own phase is
     /// δ later; [`Device::motion_window`] turns the fit by δ).
-    /// Drops the window's sums so far (a railed pickup's window).
-    pub(super) fn discard(&mut self) {
-        self.lock.reset();
-        self.blocks = 0;
-    }
-
     /// Whether a pickup sample sat at an ADC rail (0 or full scale: the
     /// motion beyond the pickup's range, or its input broken), from the
     /// same pass as the sums.
