@@ -112,10 +112,7 @@ impl Analog {
             // At rest until the plant's first half arrives (two fills
             // late): the pickups at their offset, no motion — not at a
             // rail, which the displacement mode takes for a fault.
-            pickups: [(
-                cfg.pickup_z.offset as u16,
-                cfg.pickup_x.offset as u16,
-            ); 64],
+            pickups: [(cfg.pickup_z.offset as u16, cfg.pickup_x.offset as u16); 64],
         }
     }
 
